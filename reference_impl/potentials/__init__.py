@@ -1,0 +1,7 @@
+"""Potential families: power laws, volumetric caps, user expressions, sums."""
+
+from .base import Potential, SumPotential, is_mp
+from .power import PowerLaw
+from .volumetric import Ellipsoid, Sphere
+
+__all__ = ["Potential", "SumPotential", "PowerLaw", "Ellipsoid", "Sphere", "is_mp"]

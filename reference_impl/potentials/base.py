@@ -1,0 +1,294 @@
+"""The contact potential base class and the sum of potentials.
+
+A potential is the one physical object of section 3 of the paper: a scalar
+U(q) on the overlap q >= 0 (metres, joules) with U(0) = 0, U' > 0 and a unique
+turning point q_max(E) for each energy E > 0.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Any
+
+import mpmath
+import numpy as np
+from scipy.optimize import elementwise
+
+from ..errors import DomainError, HCVInputError, NonMonotoneError, NoTurningPointError
+
+__all__ = ["Potential", "SumPotential", "is_mp"]
+
+# Grid used by `check_monotone`: log-spaced points resolve the q -> 0 end, linear
+# ones the rest of (0, q_max]. A grid cannot prove positivity, so potentials that
+# know better (power laws) override the check.
+_MONOTONE_LOG_POINTS = 600
+_MONOTONE_LIN_POINTS = 2000
+# Root tolerance for the numeric inverse of U: a few ulps of q.
+_INVERSE_XRTOL = 4.0 * np.finfo(float).eps
+# The bracket search doubles/halves at most this often (2**±1100 spans float64).
+_MAX_BRACKET_STEPS = 1100
+
+
+def is_mp(q: Any) -> bool:
+    """Return True when ``q`` is an mpmath number (the high-precision path)."""
+    return isinstance(q, (mpmath.mpf, mpmath.mpc))
+
+
+class Potential(ABC):
+    """Base class of a monotone one-dimensional contact potential U(q).
+
+    Contract for implementers (numbered, as the rest of the package relies on it):
+
+    1. Implement ``_U(q)``, ``_dU(q)`` and ``_d2U(q)``. They receive either a
+       float64 ``numpy.ndarray`` with every entry in ``[0, q_sup]`` or one
+       ``mpmath.mpf``, and return the same kind. Use only arithmetic, ``**`` and
+       the namespace returned by ``self._ns(q)`` (``numpy`` or ``mpmath``), so
+       that one formula serves both the float64 and the 50-digit path.
+    2. Set ``leading_exponent``: the n > 0 with U(q) ~ c q**n as q -> 0+.
+       The quadratures of `reference_impl.impact` substitute with it to remove
+       the endpoint singularity of dq/dx.
+    3. Set ``q_sup`` (metres) when U is defined only on ``[0, q_sup]``; the
+       public methods raise `DomainError` outside it.
+    4. Optionally override ``_inverse(u)`` with an exact inverse of U on
+       arrays; the default is a bracketed root finder (a few ulps accurate).
+    5. Set ``q_scale`` (metres), a typical overlap, used as the starting point of
+       bracket searches.
+    6. Implement ``params()`` returning the defining parameters as a dict.
+
+    The public methods ``U``, ``dU``, ``d2U`` validate the input (NaN, q < 0,
+    q > q_sup) and then call the hooks.
+    """
+
+    leading_exponent: float = 2.0
+    q_sup: float = math.inf
+    q_scale: float = 1.0
+
+    # -- hooks ------------------------------------------------------------
+    @abstractmethod
+    def _U(self, q):
+        """Potential energy (J) at overlap q (m)."""
+
+    @abstractmethod
+    def _dU(self, q):
+        """Elastic force U'(q) (N)."""
+
+    @abstractmethod
+    def _d2U(self, q):
+        """Tangent stiffness U''(q) (N/m)."""
+
+    @abstractmethod
+    def params(self) -> dict[str, Any]:
+        """Defining parameters, for reports and scene round-trips."""
+
+    def _inverse(self, u: np.ndarray) -> np.ndarray:
+        return self._numeric_inverse(u)
+
+    # -- helpers for implementers ------------------------------------------
+    @staticmethod
+    def _ns(q):
+        """Math namespace matching the kind of ``q`` (``mpmath`` or ``numpy``)."""
+        return mpmath if is_mp(q) else np
+
+    # -- public API -------------------------------------------------------
+    def U(self, q):
+        """Potential energy U(q) in joules.
+
+        Parameters
+        ----------
+        q : float, array_like or mpmath.mpf
+            Overlap (penetration) in metres, ``0 <= q <= q_sup``.
+
+        Returns
+        -------
+        float, numpy.ndarray or mpmath.mpf
+            U(q) in J, of the same kind as ``q``.
+        """
+        return self._call(self._U, q)
+
+    def dU(self, q):
+        """Elastic contact force U'(q) in newtons (same conventions as `U`)."""
+        return self._call(self._dU, q)
+
+    def d2U(self, q):
+        """Tangent stiffness U''(q) in N/m (same conventions as `U`)."""
+        return self._call(self._d2U, q)
+
+    def inverse(self, u):
+        """Overlap q (m) with U(q) = u, for energies u >= 0 (J); vectorised.
+
+        Raises
+        ------
+        NoTurningPointError
+            If some ``u`` exceeds the largest energy U reaches on its domain.
+        """
+        arr = np.asarray(u, dtype=float)
+        if np.any(~np.isfinite(arr)) or np.any(arr < 0):
+            bad = arr[~np.isfinite(arr) | (arr < 0)].flat[0]
+            raise HCVInputError(f"energy must be finite and >= 0, got {bad!r}")
+        out = self._inverse(np.atleast_1d(arr))
+        return float(out[0]) if arr.ndim == 0 else out.reshape(arr.shape)
+
+    def turning_point(self, E: float, *, check: bool = True) -> float:
+        """Turning point q_max(E) with U(q_max) = E (assumption 4 of section 3).
+
+        Parameters
+        ----------
+        E : float
+            Energy in J, finite and > 0.
+        check : bool
+            Also check U' > 0 on (0, q_max] (assumption 3); default True.
+
+        Returns
+        -------
+        float
+            q_max in metres.
+
+        Raises
+        ------
+        NoTurningPointError
+            U does not reach E on its domain.
+        NonMonotoneError
+            U' <= 0 somewhere in (0, q_max].
+        """
+        if not (isinstance(E, (int, float, np.floating)) and math.isfinite(E) and E > 0):
+            raise HCVInputError(f"energy E must be a finite number > 0, got {E!r}")
+        if math.isfinite(self.q_sup):
+            u_sup = float(self._U(np.array([self.q_sup]))[0])
+            if u_sup < E:
+                raise NoTurningPointError(
+                    f"U reaches only {u_sup:.6g} J at the end of its domain q = {self.q_sup:.6g} m, "
+                    f"below the requested energy E = {E:.6g} J: no turning point "
+                    "(lower the impact speed or stiffen the contact)"
+                )
+        q_max = float(self._inverse(np.array([float(E)]))[0])
+        if check:
+            self.check_monotone(q_max)
+        return q_max
+
+    def check_monotone(self, q_max: float) -> None:
+        """Check U(0) = 0 and U'(q) > 0 on a dense grid of (0, q_max].
+
+        Raises
+        ------
+        HCVInputError
+            U(0) is not 0 (assumption 2).
+        NonMonotoneError
+            U'(q) <= 0 or non-finite at some grid point (assumption 3); the
+            message names the first such q.
+        """
+        u0 = float(self._U(np.array([0.0]))[0])
+        if u0 != 0.0:
+            raise HCVInputError(f"U(0) must be 0 (assumption 2 of section 3), got U(0) = {u0!r} J")
+        grid = q_max * np.concatenate(
+            [np.logspace(-12, 0, _MONOTONE_LOG_POINTS), np.linspace(0, 1, _MONOTONE_LIN_POINTS)[1:]]
+        )
+        grid = np.unique(np.clip(grid, 0.0, self.q_sup))
+        grid = grid[grid > 0]
+        with np.errstate(all="ignore"):
+            f = self._dU(grid)
+        bad = ~(np.isfinite(f) & (f > 0))
+        if np.any(bad):
+            qb = grid[np.argmax(bad)]
+            raise NonMonotoneError(
+                f"U'(q) = {f[np.argmax(bad)]:.6g} N at q = {qb:.6g} m is not > 0: the potential is "
+                f"not monotone on (0, q_max = {q_max:.6g} m] (assumption 3 of section 3)"
+            )
+
+    def __add__(self, other: Potential) -> SumPotential:
+        if not isinstance(other, Potential):
+            return NotImplemented
+        left = self.terms if isinstance(self, SumPotential) else (self,)
+        right = other.terms if isinstance(other, SumPotential) else (other,)
+        return SumPotential(*left, *right)
+
+    # -- internals ----------------------------------------------------------
+    def _call(self, hook, q):
+        if is_mp(q):
+            if not mpmath.isfinite(q) or q < 0 or q > self.q_sup:
+                raise DomainError(
+                    f"overlap q = {q} m is outside the domain [0, {self.q_sup}] of {self!r}"
+                )
+            return hook(q)
+        arr = np.asarray(q, dtype=float)
+        bad = ~np.isfinite(arr) | (arr < 0) | (arr > self.q_sup)
+        if np.any(bad):
+            raise DomainError(
+                f"overlap q = {arr[bad].flat[0]!r} m is outside the domain [0, {self.q_sup}] "
+                f"of {self!r}"
+            )
+        out = hook(np.atleast_1d(arr))
+        return float(out[0]) if arr.ndim == 0 else out.reshape(arr.shape)
+
+    def _numeric_inverse(self, u: np.ndarray) -> np.ndarray:
+        """Invert U by bracketing (doubling/halving) and Chandrupatla's method."""
+        u = np.asarray(u, dtype=float)
+        out = np.zeros_like(u)
+        pos = u > 0
+        if not np.any(pos):
+            return out
+        target = u[pos]
+        hi = np.full_like(target, min(self.q_scale, self.q_sup))
+        for _ in range(_MAX_BRACKET_STEPS):
+            low = self._U(hi) < target
+            if not np.any(low):
+                break
+            at_sup = hi >= self.q_sup
+            if np.any(low & at_sup):
+                raise NoTurningPointError(
+                    f"U reaches only {float(self._U(np.array([self.q_sup]))[0]):.6g} J at "
+                    f"q_sup = {self.q_sup:.6g} m, below the energy {target[low & at_sup][0]:.6g} J:"
+                    " no turning point"
+                )
+            hi = np.where(low, np.minimum(2 * hi, self.q_sup), hi)
+        else:
+            raise NoTurningPointError(
+                f"U stays below the energy {target.max():.6g} J for every q up to {hi.max():.3g} m:"
+                " no turning point"
+            )
+        lo = hi.copy()
+        for _ in range(_MAX_BRACKET_STEPS):
+            high = self._U(lo) > target
+            if not np.any(high):
+                break
+            lo = np.where(high, lo / 2, lo)
+        exact = self._U(hi) == target
+        res = elementwise.find_root(
+            lambda q, t: self._U(q) - t,
+            (lo, hi),
+            args=(target,),
+            tolerances=dict(xatol=0.0, xrtol=_INVERSE_XRTOL, fatol=0.0, frtol=0.0),
+        )
+        out[pos] = np.where(exact, hi, res.x)
+        return out
+
+
+class SumPotential(Potential):
+    """Sum of potentials, U = sum_i U_i (built with ``+``).
+
+    Each term must satisfy the contract; the sum inherits the smallest domain
+    and the smallest leading exponent (the lowest power dominates as q -> 0).
+    """
+
+    def __init__(self, *terms: Potential):
+        if len(terms) < 2 or not all(isinstance(t, Potential) for t in terms):
+            raise HCVInputError("a sum of potentials needs at least two Potential terms")
+        self.terms = tuple(terms)
+        self.leading_exponent = min(t.leading_exponent for t in terms)
+        self.q_sup = min(t.q_sup for t in terms)
+        self.q_scale = min(t.q_scale for t in terms)
+
+    def _U(self, q):
+        return sum(t._U(q) for t in self.terms)
+
+    def _dU(self, q):
+        return sum(t._dU(q) for t in self.terms)
+
+    def _d2U(self, q):
+        return sum(t._d2U(q) for t in self.terms)
+
+    def params(self) -> dict[str, Any]:
+        return {"terms": [dict(family=type(t).__name__, **t.params()) for t in self.terms]}
+
+    def __repr__(self) -> str:
+        return " + ".join(repr(t) for t in self.terms)

@@ -1,0 +1,135 @@
+"""The section 6 time-step bound Delta t_safe and the geometry class.
+
+Delta t_safe = 2 sqrt(m) / max_{[0, q_max]} U'(q) / sqrt(2 U(q)): the paper's
+claim is that velocity Verlet is stable for any Delta t <= Delta t_safe. This
+module only evaluates the bound; whether it holds is measured in `dtcrit`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .potentials.base import Potential
+
+__all__ = ["SafeStep", "dt_safe", "dt_safe_shortcut", "geometry_class", "stiffening_indicator"]
+
+# Grid on which the supremum is located before a bounded scalar refinement; the
+# log part resolves q -> 0, where softening contacts take their supremum.
+_SUP_GRID_LIN = 801
+_SUP_GRID_LOG = 200
+# Relative band within which 2UU'' - U'^2 counts as zero (round-off of the
+# products, a few ulps times the size of U'^2).
+_INDICATOR_RTOL = 1e-10
+
+
+def _ratio(pot: Potential, q: np.ndarray) -> np.ndarray:
+    """U'(q) / sqrt(2 U(q)) (N / sqrt(J)); the limit value is used at q = 0."""
+    q = np.asarray(q, dtype=float)
+    U = pot._U(q)
+    dU = pot._dU(q)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = dU / np.sqrt(2 * U)
+    n = pot.leading_exponent
+    at0 = math.inf if n < 2 else (0.0 if n > 2 else math.sqrt(float(pot._d2U(np.array([0.0]))[0])))
+    return np.where(U > 0, r, at0)
+
+
+def stiffening_indicator(pot: Potential, q) -> np.ndarray:
+    """Relative sign function (2 U U'' - U'^2) / U'^2 (section 6).
+
+    Positive where U'/sqrt(2U) increases (stiffening), negative where it decreases.
+    """
+    q = np.atleast_1d(np.asarray(q, dtype=float))
+    U, dU, d2U = pot._U(q), pot._dU(q), pot._d2U(q)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (2 * U * d2U - dU**2) / dU**2
+
+
+def geometry_class(pot: Potential, q_max: float) -> str:
+    """'stiffening', 'softening', 'linear' or 'mixed' on (0, q_max] from 2UU'' - U'^2."""
+    q = q_max * np.concatenate([np.logspace(-8, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)[1:]])
+    s = stiffening_indicator(pot, q)
+    s = s[np.isfinite(s)]
+    pos, neg = np.any(s > _INDICATOR_RTOL), np.any(s < -_INDICATOR_RTOL)
+    if pos and neg:
+        return "mixed"
+    if pos:
+        return "stiffening"
+    if neg:
+        return "softening"
+    return "linear"
+
+
+@dataclass(frozen=True)
+class SafeStep:
+    """Result of `dt_safe`.
+
+    Attributes
+    ----------
+    dt_safe : float
+        2 sqrt(m) / sup U'/sqrt(2U) over [0, q_max] (s); 0 when the supremum is infinite.
+    q_star : float
+        Overlap at which the supremum is attained (m).
+    dt_shortcut : float
+        The endpoint formula 2 m v0 / U'(q_max) (s).
+    geometry : str
+        Geometry class on (0, q_max].
+    interior : bool
+        True when the supremum lies strictly inside (0, q_max).
+    """
+
+    dt_safe: float
+    q_star: float
+    dt_shortcut: float
+    geometry: str
+    interior: bool
+
+
+def dt_safe_shortcut(pot: Potential, m: float, v0: float, q_max: float | None = None) -> float:
+    """Endpoint shortcut 2 m v0 / U'(q_max) of section 6, item 1 (s)."""
+    if q_max is None:
+        q_max = pot.turning_point(0.5 * m * v0 * v0)
+    return 2.0 * m * v0 / float(pot._dU(np.array([q_max]))[0])
+
+
+def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
+    """Delta t_safe as the supremum over the whole path [0, q_max] (section 6).
+
+    Parameters
+    ----------
+    pot : Potential
+        Contact potential.
+    m : float
+        Mass (kg).
+    v0 : float
+        Impact speed (m/s); E = m v0^2 / 2 fixes q_max.
+    """
+    q_max = pot.turning_point(0.5 * m * v0 * v0)
+    grid = q_max * np.concatenate([np.logspace(-12, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)])
+    grid = np.unique(grid)
+    r = _ratio(pot, grid)
+    i = int(np.argmax(r))
+    q_star, r_star = float(grid[i]), float(r[i])
+    if math.isfinite(r_star) and 0 < i < len(grid) - 1:
+        # Refine an interior maximum between its grid neighbours.
+        res = minimize_scalar(
+            lambda q: -float(_ratio(pot, np.array([q]))[0]),
+            bounds=(grid[i - 1], grid[i + 1]),
+            method="bounded",
+            options={"xatol": 1e-14 * q_max},
+        )
+        if -res.fun > r_star:
+            q_star, r_star = float(res.x), float(-res.fun)
+    dt = 0.0 if not math.isfinite(r_star) else 2.0 * math.sqrt(m) / r_star
+    interior = 0 < q_star < q_max * (1 - 1e-9)
+    return SafeStep(
+        dt_safe=dt,
+        q_star=q_star,
+        dt_shortcut=dt_safe_shortcut(pot, m, v0, q_max),
+        geometry=geometry_class(pot, q_max),
+        interior=interior,
+    )

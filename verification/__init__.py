@@ -1,0 +1,1 @@
+"""Claim-by-claim verification suite for the hidden-harmonic paper."""
