@@ -1,0 +1,1 @@
+"""Independent reference integrators (Verlet lanes, scipy solve_ivp, mpmath Taylor)."""
