@@ -228,7 +228,14 @@ class Potential(ABC):
         if not np.any(pos):
             return out
         target = u[pos]
-        hi = np.full_like(target, min(self.q_scale, self.q_sup))
+        # Start from the leading power law U ~ U(q_s) (q/q_s)^n, which is close for
+        # small energies, so that the geometric bracket search below takes few steps.
+        q_s = min(self.q_scale, self.q_sup)
+        u_s = float(self._U(np.array([q_s]))[0])
+        with np.errstate(all="ignore"):
+            guess = q_s * (target / u_s) ** (1.0 / self.leading_exponent)
+        guess = np.where(np.isfinite(guess) & (guess > 0), guess, q_s)
+        hi = np.minimum(2.0 * guess, self.q_sup)
         for _ in range(_MAX_BRACKET_STEPS):
             low = self._U(hi) < target
             if not np.any(low):
@@ -240,18 +247,18 @@ class Potential(ABC):
                     f"q_sup = {self.q_sup:.6g} m, below the energy {target[low & at_sup][0]:.6g} J:"
                     " no turning point"
                 )
-            hi = np.where(low, np.minimum(2 * hi, self.q_sup), hi)
+            hi = np.where(low, np.minimum(4 * hi, self.q_sup), hi)
         else:
             raise NoTurningPointError(
                 f"U stays below the energy {target.max():.6g} J for every q up to {hi.max():.3g} m:"
                 " no turning point"
             )
-        lo = hi.copy()
+        lo = np.minimum(0.5 * guess, 0.5 * hi)
         for _ in range(_MAX_BRACKET_STEPS):
             high = self._U(lo) > target
             if not np.any(high):
                 break
-            lo = np.where(high, lo / 2, lo)
+            lo = np.where(high, lo / 4, lo)
         exact = self._U(hi) == target
         res = elementwise.find_root(
             lambda q, t: self._U(q) - t,
