@@ -26,24 +26,24 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
+import mpmath
 import numpy as np
 from scipy import integrate
 from scipy.optimize import elementwise
 
-from ._quadrature import DEFAULT_LEVEL, integrate_left_singular
+from ._quadrature import DEFAULT_LEVEL, integrate_left_singular, rule, sums_from_values
 from .damping import _check_zeta
 from .errors import HCVInputError
 from .potentials._checks import positive
 from .potentials.base import Potential
+from .potentials.power import PowerLaw
 
-__all__ = ["ImpactSolution", "solve_impact", "VirtualOscillator"]
+__all__ = ["ImpactSolution", "solve_impact", "solve_impact_mp", "VirtualOscillator"]
 
 # Relative tolerance for locating s(t) in `ImpactSolution.state`: a few ulps.
 _STATE_XRTOL = 8.0 * np.finfo(float).eps
 # Number of table points used to bracket s(t) before the root finder polishes it.
 _STATE_TABLE = 65
-# Virtual times are kept above this fraction of the branch, where dq/dx is finite.
-_TINY = 1e-300
 
 
 class VirtualOscillator:
@@ -228,13 +228,12 @@ class ImpactSolution:
         """Solve T(y) = target for y in [0, upper], T increasing, vectorised."""
         # Quadratic spacing puts table points where t(s) is steepest (near contact onset).
         grid = upper * np.linspace(0.0, 1.0, _STATE_TABLE) ** 2
-        grid[0] = _TINY * upper
         table = T(grid)
         idx = np.clip(np.searchsorted(table, targets), 1, _STATE_TABLE - 1)
         lo, hi = grid[idx - 1], grid[idx]
         exact_lo = targets <= table[0]
         res = elementwise.find_root(
-            lambda y, tg: T(np.maximum(y, _TINY * upper)) - tg,
+            lambda y, tg: T(y) - tg,
             (lo, hi),
             args=(targets,),
             tolerances=dict(xatol=0.0, xrtol=_STATE_XRTOL, fatol=0.0, frtol=0.0),
@@ -245,6 +244,12 @@ class ImpactSolution:
 def _dq_dx(pot: Potential, m: float, x):
     """dq/dx = sqrt(2 K U) / U' = m x / U'(q) with K = m, at q = U^-1(m x^2/2)."""
     x = np.asarray(x, dtype=float)
+    if type(pot) is PowerLaw:
+        # Closed form: q = (n m x^2 / 2k)^(1/n) gives dq/dx = c x^(2/n - 1), one power
+        # instead of an inverse and a force evaluation.
+        n = pot.leading_exponent
+        c = m / pot.k * (0.5 * n * m / pot.k) ** (-pot.p / n)
+        return c * x ** (2.0 / n - 1.0)
     q = pot._inverse((0.5 * m * x * x).ravel()).reshape(x.shape)
     return m * x / pot._dU(q)
 
@@ -288,11 +293,35 @@ def solve_impact(
     potential.turning_point(E)
     osc = VirtualOscillator(v0, zeta)
     beta = 2.0 / potential.leading_exponent - 1.0
-
-    def g_rise(d):
-        return _dq_dx(potential, m, osc.x(d))
-
-    t_peak, err_rise = integrate_left_singular(g_rise, osc.s_peak, beta, level)
+    r = rule(level, beta)
+    d = r.d
+    # Evaluate dq/dx on every branch in one call: the rising branch (singular at
+    # s = 0), the falling branch (singular at s_end, measured from it) and the
+    # smooth stretch from the peak to the zero-force instant. For zeta < 1 each
+    # branch is x = A exp(-zeta S) sin(wd Phi) with S, Phi affine in the node d.
+    falling = 0.0 < zeta < 1.0
+    sp = osc.s_peak
+    if zeta < 1.0:
+        # rows: (S0, S1, Phi0, Phi1, length) with S = S0 + S1 d, Phi = Phi0 + Phi1 d
+        rows = [(0.0, sp, 0.0, sp, sp)]
+        if falling:
+            lf = osc.s_end - sp
+            rows.append((osc.s_end, -lf, 0.0, lf, lf))
+        if zeta > 0.0:
+            rows.append((sp, sp, sp, sp, sp))
+        c = np.array(rows)
+        S = c[:, :1] + c[:, 1:2] * d
+        Phi = c[:, 2:3] + c[:, 3:4] * d
+        xs = (v0 / osc.wd) * np.exp(-zeta * S) * np.sin(osc.wd * Phi)
+        lengths = c[:, 4]
+    else:
+        lengths = np.array([sp, osc.s_zero_force - sp])
+        xs = np.stack([osc.x(sp * d), osc.x(sp + lengths[1] * d)])
+    betas = np.full(len(lengths), beta)
+    betas[-1] = 0.0 if zeta > 0.0 else beta
+    g = _dq_dx(potential, m, xs)
+    vals, errs = sums_from_values(g, lengths, betas, r)
+    t_peak, err_rise = float(vals[0]), float(errs[0])
     x_peak = float(osc.x(osc.s_peak))
     q_max = float(potential._inverse(np.array([0.5 * m * x_peak**2]))[0])
     max_force = float(potential._dU(np.array([q_max]))[0])
@@ -300,10 +329,8 @@ def solve_impact(
     if zeta == 0.0:
         # Symmetric: the falling branch mirrors the rising one.
         t_fall, err_fall = t_peak, err_rise
-    elif zeta < 1.0:
-        t_fall, err_fall = integrate_left_singular(
-            lambda d: _dq_dx(potential, m, osc.x_from_end(d)), osc.s_end - osc.s_peak, beta, level
-        )
+    elif falling:
+        t_fall, err_fall = float(vals[1]), float(errs[1])
     else:
         t_fall, err_fall = _overdamped_tail(potential, m, osc, beta), 0.0
     contact_time = t_peak + t_fall
@@ -312,15 +339,10 @@ def solve_impact(
         restitution = math.exp(-math.pi * zeta / osc.wd)
     else:
         restitution = 0.0
-    # From the peak to the zero-force instant the integrand is smooth (x > 0).
     if zeta == 0.0:
         t_zero_force, e_zero_force = contact_time, 1.0
     else:
-        span = osc.s_zero_force - osc.s_peak
-        extra, _ = integrate_left_singular(
-            lambda d: _dq_dx(potential, m, osc.x(osc.s_peak + d)), span, 0.0, level
-        )
-        t_zero_force = t_peak + extra
+        t_zero_force = t_peak + float(vals[-1])
         e_zero_force = float(-osc.dx(osc.s_zero_force) / v0)
     return ImpactSolution(
         v0=v0,
@@ -356,3 +378,57 @@ def _overdamped_tail(pot: Potential, m: float, osc: VirtualOscillator, beta: flo
         limit=200,
     )
     return val
+
+
+def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> dict:
+    """High-precision (mpmath) version of `solve_impact`, for ground truth.
+
+    The same virtual-time integral t_c = int_0^{s_end} (dq/dx)(x(s)) ds is
+    evaluated with mpmath's tanh-sinh quadrature at ``dps`` digits, split at the
+    peak; q(x) is found by a bracketing root finder at that precision.
+    Underdamped contacts only.
+
+    Returns
+    -------
+    dict
+        contact_time, max_penetration, restitution, contact_time_zero_force,
+        restitution_zero_force as mpmath numbers.
+    """
+    zeta_f = _check_zeta(float(zeta))
+    if zeta_f >= 1:
+        raise HCVInputError(f"solve_impact_mp needs zeta < 1, got {zeta!r}")
+    with mpmath.workdps(dps + 10):
+        m, v0, z = mpmath.mpf(m), mpmath.mpf(v0), mpmath.mpf(zeta)
+        wd = mpmath.sqrt(1 - z * z)
+        s_peak = mpmath.atan2(wd, z) / wd
+        s_end = mpmath.pi / wd
+
+        def x(s):
+            return v0 / wd * mpmath.exp(-z * s) * mpmath.sin(wd * s)
+
+        def q_of_x(xv):
+            u = m * xv * xv / 2
+            q0 = mpmath.mpf(float(potential._inverse(np.array([float(u)]))[0]))
+            if q0 == 0:
+                return q0
+            return mpmath.findroot(lambda q: potential._U(q) - u, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)),
+                                   solver="anderson")
+
+        def g(s):
+            xv = x(s)
+            return m * xv / potential._dU(q_of_x(xv)) if xv > 0 else mpmath.mpf(0)
+
+        t_peak = mpmath.quad(g, [0, s_peak])
+        t_end = t_peak + mpmath.quad(g, [s_peak, s_end])
+        t_zf = t_peak + mpmath.quad(g, [s_peak, 2 * s_peak]) if z > 0 else t_end
+
+        def dx(s):
+            return v0 / wd * mpmath.exp(-z * s) * (wd * mpmath.cos(wd * s) - z * mpmath.sin(wd * s))
+
+        return {
+            "contact_time": t_end,
+            "max_penetration": q_of_x(x(s_peak)),
+            "restitution": -dx(s_end) / v0,
+            "contact_time_zero_force": t_zf,
+            "restitution_zero_force": -dx(2 * s_peak) / v0 if z > 0 else mpmath.mpf(1),
+        }

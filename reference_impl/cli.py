@@ -1,0 +1,241 @@
+"""Command-line interface ``hcv``.
+
+Every input problem (missing or malformed scene, a potential that violates the
+paper's assumptions, NaN) is reported as one line on stderr with exit status 2;
+nothing is computed for a scene that fails validation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Sequence
+
+from .errors import HCVInputError
+
+__all__ = ["main", "solve_scene"]
+
+# Exit statuses (shared with `hcv bench --gate`).
+EXIT_OK = 0
+EXIT_FAIL = 1
+EXIT_USAGE = 2
+
+_SOLVE_COLUMNS = (
+    ("v0", "v0 [m/s]"),
+    ("max_penetration", "q_max [m]"),
+    ("max_force", "F_max [N]"),
+    ("dt_safe", "dt_safe [s]"),
+    ("dt_safe_shortcut", "dt_shortcut [s]"),
+    ("geometry", "geometry"),
+    ("contact_time", "t_c [s]"),
+    ("restitution", "e"),
+    ("contact_time_zero_force", "t_c,F=0 [s]"),
+    ("restitution_zero_force", "e_F=0"),
+    ("action", "J [J s]"),
+    ("period", "T [s]"),
+)
+
+
+def solve_scene(scene) -> list[dict]:
+    """Solve every velocity of an impact scene exactly; one dict per velocity.
+
+    Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
+    dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
+    geometry, contact_time and restitution (end at q = 0, the theory's
+    definition), contact_time_zero_force and restitution_zero_force (end when
+    the total force vanishes, as in codes that forbid tension), action J(E) and
+    period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
+    """
+    from .action import action, period
+    from .impact import solve_impact
+    from .stability import dt_safe
+
+    zeta = scene.zeta or 0.0
+    rows = []
+    for v0 in scene.velocities:
+        sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+        safe = dt_safe(scene.potential, scene.mass, v0)
+        E = 0.5 * scene.mass * v0 * v0
+        rows.append(
+            {
+                "v0": v0,
+                "zeta": zeta,
+                "max_penetration": sol.max_penetration,
+                "max_force": sol.max_force,
+                "dt_safe": safe.dt_safe,
+                "dt_safe_shortcut": safe.dt_shortcut,
+                "dt_safe_at_q": safe.q_star,
+                "geometry": safe.geometry,
+                "contact_time": sol.contact_time,
+                "restitution": sol.restitution,
+                "contact_time_zero_force": sol.contact_time_zero_force,
+                "restitution_zero_force": sol.restitution_zero_force,
+                "action": action(scene.potential, scene.mass, E),
+                "period": period(scene.potential, scene.mass, E),
+                "quadrature_error": sol.quadrature_error,
+            }
+        )
+    return rows
+
+
+def _json_safe(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+def _print_table(title: str, rows: list[dict], columns) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=title)
+    for _, header in columns:
+        table.add_column(header, justify="right")
+    for row in rows:
+        table.add_row(*(_fmt(row.get(key)) for key, _ in columns))
+    Console().print(table)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.10g}"
+    if isinstance(v, bool):
+        return "yes" if v else "NO"
+    return "" if v is None else str(v)
+
+
+def _cmd_solve(args) -> int:
+    from .scenes import load_scene
+
+    scene = load_scene(args.scene)
+    if scene.kind != "impact":
+        raise HCVInputError(
+            f"scene {scene.name!r} has kind = {scene.kind!r}; 'hcv solve' solves single impacts "
+            "(kind = \"impact\"); use 'hcv dt-crit' for sustained scenes"
+        )
+    rows = solve_scene(scene)
+    if args.json:
+        out = {
+            "scene": scene.to_dict(),
+            "end_of_contact": {
+                "contact_time/restitution": "q returns to 0 (theory; the damper may pull)",
+                "contact_time_zero_force/restitution_zero_force": "total force U' + C q' reaches 0",
+            },
+            "results": [{k: _json_safe(v) for k, v in r.items()} for r in rows],
+        }
+        json.dump(out, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        _print_table(f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']})",
+                     rows, _SOLVE_COLUMNS)
+        print("e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
+              "(codes that forbid tension). J, T: section 4 definitions.")
+    return EXIT_OK
+
+
+def _cmd_scenes(args) -> int:
+    from .scenes import embedded_scenes
+
+    for name in embedded_scenes():
+        print(name)
+    return EXIT_OK
+
+
+def _cmd_dt_crit(args) -> int:
+    from .dtcrit import Criterion, search_scene
+    from .scenes import load_scene
+
+    scene = load_scene(args.scene)
+    criterion = Criterion.from_cli(args.criterion) if args.criterion else Criterion()
+    with _progress(not args.json and sys.stderr.isatty()) as progress:
+        results = search_scene(
+            scene.potential,
+            scene.mass,
+            scene.velocities,
+            scene.kind,
+            gap=scene.gap,
+            zeta=scene.zeta,
+            criterion=criterion,
+            progress=progress,
+        )
+    rows = [r.to_dict() for r in results]
+    if args.json:
+        json.dump({"scene": scene.to_dict(), "results": rows}, sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+    else:
+        cols = [(k, k) for k in ("v0", "kind", "dt_safe", "dt_safe_shortcut", "dt_crit", "ratio",
+                                 "criterion", "holds")]
+        _print_table(f"hcv dt-crit: {scene.name}", rows, cols)
+        for r in rows:
+            if r.get("counterexample"):
+                print(f"v0 = {r['v0']}: counterexample {json.dumps(r['counterexample'], default=str)}")
+    return EXIT_OK
+
+
+class _progress:
+    """Context manager giving a rich progress callback, or None when not wanted."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self._bar = None
+
+    def __enter__(self):
+        if not self.enabled:
+            return None
+        from rich.progress import Progress
+
+        self._bar = Progress(transient=True)
+        self._bar.__enter__()
+        task = self._bar.add_task("searching", total=None)
+
+        def update(done: int, total: int, what: str = "searching") -> None:
+            self._bar.update(task, completed=done, total=total, description=what)
+
+        return update
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+        return False
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="hcv",
+        description="Verification, exact reference and benchmark gate for the hidden-harmonic "
+        "theory of contact dynamics.",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    s = sub.add_parser("solve", help="exact impact solution for each velocity of a scene")
+    s.add_argument("scene", help="scene TOML file, or the name of an embedded scene (hcv scenes)")
+    s.add_argument("--json", action="store_true", help="print one JSON object with a results list")
+    s.set_defaults(func=_cmd_solve)
+    d = sub.add_parser("dt-crit", help="measure the Verlet critical time step and test dt_safe")
+    d.add_argument("scene", help="scene TOML file, or the name of an embedded scene")
+    d.add_argument("--json", action="store_true", help="print one JSON object with a results list")
+    d.add_argument(
+        "--criterion",
+        help="instability criterion, e.g. 'factor=100,steps=100000' (sustained scenes) or "
+        "'tol=0.01' (single impact)",
+    )
+    d.set_defaults(func=_cmd_dt_crit)
+    ls = sub.add_parser("scenes", help="list the embedded scenes")
+    ls.set_defaults(func=_cmd_scenes)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``hcv`` console script; returns the exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except HCVInputError as exc:
+        print(f"hcv: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
