@@ -1,0 +1,35 @@
+"""Nox sessions: tests, lint, bench, report.
+
+``nox -s tests`` runs the suite with the CI hypothesis profile; ``nox -s bench``
+prints speed ratios measured in one process (never timed inside tests).
+"""
+
+from __future__ import annotations
+
+import nox
+
+nox.options.sessions = ["tests", "lint"]
+nox.options.default_venv_backend = "venv"
+
+
+@nox.session(python="3.11")
+def tests(session: nox.Session) -> None:
+    """Run the verification suite (hypothesis profile 'ci')."""
+    session.install("-e", ".[test]")
+    session.run("python", "-m", "pytest", *session.posargs, env={"HYPOTHESIS_PROFILE": "ci"})
+
+
+@nox.session(python="3.11")
+def lint(session: nox.Session) -> None:
+    """ruff over the package, the suite and the benchmarks."""
+    session.install("ruff")
+    session.run("ruff", "check", "reference_impl", "verification", "benchmarks", "noxfile.py",
+                "conftest.py")
+
+
+@nox.session(python="3.11")
+def bench(session: nox.Session) -> None:
+    """Speed against a baseline run in the same process; results as JSON in reports/bench/."""
+    session.install("-e", ".")
+    session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
+    session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
