@@ -307,8 +307,11 @@ def solve_impact(
         if falling:
             lf = osc.s_end - sp
             rows.append((osc.s_end, -lf, 0.0, lf, lf))
-        if zeta > 0.0:
-            rows.append((sp, sp, sp, sp, sp))
+        if falling:
+            # From the zero-force instant to s_end, measured back from the singular
+            # end: accurate even when the two instants nearly coincide (zeta -> 0).
+            lz = osc.s_end - osc.s_zero_force
+            rows.append((osc.s_end, -lz, 0.0, lz, lz))
         c = np.array(rows)
         S = c[:, :1] + c[:, 1:2] * d
         Phi = c[:, 2:3] + c[:, 3:4] * d
@@ -318,7 +321,8 @@ def solve_impact(
         lengths = np.array([sp, osc.s_zero_force - sp])
         xs = np.stack([osc.x(sp * d), osc.x(sp + lengths[1] * d)])
     betas = np.full(len(lengths), beta)
-    betas[-1] = 0.0 if zeta > 0.0 else beta
+    if zeta >= 1.0:
+        betas[-1] = 0.0  # the peak-to-zero-force stretch is smooth (x > 0)
     g = _dq_dx(potential, m, xs)
     vals, errs = sums_from_values(g, lengths, betas, r)
     t_peak, err_rise = float(vals[0]), float(errs[0])
@@ -342,7 +346,7 @@ def solve_impact(
     if zeta == 0.0:
         t_zero_force, e_zero_force = contact_time, 1.0
     else:
-        t_zero_force = t_peak + float(vals[-1])
+        t_zero_force = contact_time - float(vals[2]) if falling else t_peak + float(vals[-1])
         e_zero_force = float(-osc.dx(osc.s_zero_force) / v0)
     return ImpactSolution(
         v0=v0,

@@ -129,21 +129,22 @@ def test_table1_supremum_is_at_max_compression(v0):
 
 # -- Fig. 1 --------------------------------------------------------------------
 
-# DOP853 at rtol 1e-13 (the paper's ode45 used RelTol = AbsTol = 1e-13). The
-# transformed energy M x'^2/2 + K x^2/2 is algebraically the physical energy, so
-# its drift measures the integrator, not the theorem; the theorem is tested by the
-# sinusoid / spiral checks below and in test_sec5_harmonic.py.
+# The paper's run: ode45 (Dormand-Prince 5(4), scipy's RK45) with RelTol = AbsTol = 1e-13.
+# The transformed energy M x'^2/2 + K x^2/2 is algebraically the physical energy,
+# so its drift measures the integrator, not the theorem; the theorem is tested by
+# the sinusoid / spiral checks below and in test_sec5_harmonic.py.
 FIG1_RTOL = 1e-13
+FIG1_ATOL = 1e-13
 
 
-def _fig1_run(v0, C0):
+def _fig1_run(v0, C0, method="RK45"):
     from reference_impl.integrators.ivp import integrate_impact
 
     pot = paper_ellipsoid()
     hmap = HarmonicMap(pot, PAPER_MASS, K=FIG1["K"], M=FIG1["M"])
     damp = UniversalDamping(hmap, C0=C0) if C0 > 0 else None
     run = integrate_impact(pot, PAPER_MASS, v0, C=None if damp is None else damp.C,
-                           method="DOP853", rtol=FIG1_RTOL, hmap=hmap)
+                           method=method, rtol=FIG1_RTOL, atol=FIG1_ATOL, hmap=hmap)
     x = hmap.x(np.maximum(run.q, 0.0))
     xp = run.v * math.sqrt(PAPER_MASS / hmap.M)
     H = 0.5 * hmap.M * xp**2 + 0.5 * hmap.K * x**2
@@ -151,20 +152,56 @@ def _fig1_run(v0, C0):
 
 
 @pytest.mark.claim("fig1")
-@pytest.mark.parametrize("v0", FIG1["velocities"])
-def test_fig1_conservative_transformed_energy(v0):
-    hmap, _, run, x, xp, H = _fig1_run(v0, 0.0)
+def test_fig1_transformed_energy_is_the_physical_energy():
+    """M x'^2/2 + K x^2/2 = m q'^2/2 + U(q) pointwise: the paper's check cannot test Theorem 2."""
+    hmap, _, run, x, xp, H = _fig1_run(0.99, 0.0)
+    q = np.maximum(run.q, 0.0)
+    E_phys = 0.5 * PAPER_MASS * run.v**2 + paper_ellipsoid().U(q)
+    # Same quantity computed two ways: differences are round-off (a few ulps).
+    assert_close(H, E_phys, rtol=1e-14, claim="fig1", call="H_transformed vs physical energy")
+
+
+# Measured with scipy RK45 at the paper's tolerances (this environment):
+# drift 3.33e-13 (v0 = 0.50), 3.15e-13 (0.99), 2.03e-13 (1.50).
+_FIG1_DRIFT_ABOVE_CLAIM = {
+    0.50: "measured relative drift 3.33e-13 > 3e-13 with RK45 (ode45) at RelTol = AbsTol = 1e-13",
+    0.99: "measured relative drift 3.15e-13 > 3e-13 with RK45 (ode45) at RelTol = AbsTol = 1e-13",
+}
+
+
+@pytest.mark.claim("fig1")
+@pytest.mark.parametrize("v0", [
+    pytest.param(v, marks=[pytest.mark.xfail(strict=True, reason=_FIG1_DRIFT_ABOVE_CLAIM[v])]
+                 if v in _FIG1_DRIFT_ABOVE_CLAIM else [])
+    for v in FIG1["velocities"]
+])
+def test_fig1_conservative_drift_below_printed_bound(v0):
+    """The printed figure, literally: drift < 3e-13 with the paper's integrator settings."""
+    *_, H = _fig1_run(v0, 0.0)
     drift = float(np.max(np.abs(H / H[0] - 1)))
     assert_less(drift, FIG1["claimed_energy_error"], claim="fig1",
-                call=f"DOP853 rtol {FIG1_RTOL} ellipsoid v0={v0} C0=0", what="relative energy drift")
+                call=f"RK45 rtol=atol=1e-13 ellipsoid v0={v0} C0=0", what="relative energy drift")
+
+
+@pytest.mark.claim("fig1")
+@pytest.mark.parametrize("v0", FIG1["velocities"])
+@pytest.mark.parametrize("method", ["RK45", "DOP853"])
+def test_fig1_conservative_drift_at_integrator_level(v0, method):
+    """What does hold: the drift is at the integrator's tolerance level. Over ~300
+    steps of local error <= 1e-13 the accumulated energy error stays below 1e-11;
+    measured 6e-14 to 3e-12 across methods and atol scalings."""
+    *_, H = _fig1_run(v0, 0.0, method)
+    drift = float(np.max(np.abs(H / H[0] - 1)))
+    assert_less(drift, 1e-11, claim="fig1", call=f"{method} rtol=atol=1e-13 v0={v0}",
+                what="relative energy drift")
 
 
 @pytest.mark.claim("fig1")
 @pytest.mark.parametrize("v0", FIG1["velocities"])
 @pytest.mark.xfail(strict=True, reason="measured: with C0 = 0.5 the transformed energy is not "
                    "conserved, it decays to 0.1504 = e^2 of its initial value over the contact "
-                   "(relative change 0.85 at every speed); the paper's 'conserved to < 3e-13' holds "
-                   "only for the C0 = 0 runs (measured drift 1.7e-14, 6.4e-14, 1.7e-13)")
+                   "(relative change 0.85 at every speed); 'conserved to < 3e-13' can only refer to "
+                   "the C0 = 0 runs")
 def test_fig1_dissipative_transformed_energy_conserved_as_printed(v0):
     *_, H = _fig1_run(v0, FIG1["C0"][1])
     drift = float(np.max(np.abs(H / H[0] - 1)))
