@@ -10,28 +10,38 @@ from .errors import (
     SceneError,
 )
 from .harmonic_map import HarmonicMap
-from .potentials import Ellipsoid, Potential, PowerLaw, Sphere, SumPotential
+from .impact import ImpactSolution, solve_impact, solve_impact_mp
+from .potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+from .scenes import Scene, embedded_scenes, load_scene, parse_scene
 from .stability import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator
 
 __all__ = [
     "DomainError",
     "Ellipsoid",
+    "Expression",
     "ExpressionError",
     "HCVInputError",
     "HarmonicMap",
+    "ImpactSolution",
     "NoTurningPointError",
     "NonMonotoneError",
     "Potential",
     "PowerLaw",
     "SafeStep",
+    "Scene",
     "SceneError",
     "Sphere",
     "SumPotential",
     "UniversalDamping",
     "dt_safe",
     "dt_safe_shortcut",
+    "embedded_scenes",
     "geometry_class",
+    "load_scene",
+    "parse_scene",
     "restitution_from_zeta",
+    "solve_impact",
+    "solve_impact_mp",
     "stiffening_indicator",
     "tsuji_coefficient",
     "zeta_from_restitution",

@@ -113,8 +113,6 @@ def integrate_left_singular(f, length, beta: float, level: int = DEFAULT_LEVEL):
     # Zero-length intervals integrate to 0; evaluate them on a dummy unit interval.
     d = np.where(empty, 1.0, L)[..., None] * r.d
     value, err = sums_from_values(f(d), L, beta, r)
-    value = np.where(empty, 0.0, value)
-    err = np.where(empty, 0.0, err)
     if value.ndim == 0:
         return float(value), float(err)
     return value, err
@@ -140,6 +138,9 @@ def sums_from_values(fd, length, beta, r: TanhSinhRule):
         As in `integrate_left_singular`.
     """
     L = np.asarray(length, dtype=float)
+    empty = L <= 0
+    # An empty interval integrates to 0 whatever f returned on its (degenerate) nodes.
+    fd = np.where(empty[..., None], 0.0, fd)
     # Analytic tail on [0, d_min]: f ~ f(d_min) (d / d_min)^beta there.
     tail = fd[..., 0] * (L * r.d[0]) / (1.0 + np.asarray(beta, dtype=float))
     value = L * (fd @ r.w) + tail

@@ -310,7 +310,9 @@ def solve_impact(
         if falling:
             # From the zero-force instant to s_end, measured back from the singular
             # end: accurate even when the two instants nearly coincide (zeta -> 0).
-            lz = osc.s_end - osc.s_zero_force
+            # s_end - 2 s_peak = (pi - 2 psi)/wd = 2 atan2(zeta, wd)/wd, written without
+            # the cancellation that makes it 0 in floats for tiny zeta.
+            lz = 2.0 * math.atan2(zeta, osc.wd) / osc.wd
             rows.append((osc.s_end, -lz, 0.0, lz, lz))
         c = np.array(rows)
         S = c[:, :1] + c[:, 1:2] * d

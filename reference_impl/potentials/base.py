@@ -163,6 +163,10 @@ class Potential(ABC):
                     "(lower the impact speed or stiffen the contact)"
                 )
         q_max = float(self._inverse(np.array([float(E)]))[0])
+        if not (math.isfinite(q_max) and q_max > 0):
+            raise NoTurningPointError(
+                f"no finite turning point for E = {E:.6g} J (got q_max = {q_max!r})"
+            )
         if check:
             self.check_monotone(q_max)
         return q_max
@@ -238,7 +242,15 @@ class Potential(ABC):
         guess = np.where(np.isfinite(guess) & (guess > 0), guess, q_s)
         hi = np.minimum(2.0 * guess, self.q_sup)
         for _ in range(_MAX_BRACKET_STEPS):
-            low = self._U(hi) < target
+            with np.errstate(all="ignore"):
+                u_hi = self._U(hi)
+            if not np.all(np.isfinite(u_hi)):
+                bad = np.argmax(~np.isfinite(u_hi))
+                raise NoTurningPointError(
+                    f"U(q) = {u_hi[bad]!r} at q = {hi[bad]:.6g} m before reaching the energy "
+                    f"{target[bad]:.6g} J: no turning point (U must be finite and increasing)"
+                )
+            low = u_hi < target
             if not np.any(low):
                 break
             at_sup = hi >= self.q_sup
@@ -248,7 +260,8 @@ class Potential(ABC):
                     f"q_sup = {self.q_sup:.6g} m, below the energy {target[low & at_sup][0]:.6g} J:"
                     " no turning point"
                 )
-            hi = np.where(low, np.minimum(4 * hi, self.q_sup), hi)
+            with np.errstate(over="ignore"):
+                hi = np.where(low, np.minimum(4 * hi, self.q_sup), hi)
         else:
             raise NoTurningPointError(
                 f"U stays below the energy {target.max():.6g} J for every q up to {hi.max():.3g} m:"

@@ -1,0 +1,629 @@
+"""A contact potential U(q) written by the user as a formula, e.g. ``"k*q**3/3 + q**2/2"``.
+
+The text is never executed. It is parsed with `ast.parse` and the syntax tree
+is walked through a whitelist (numbers, ``q``, the declared parameters, a fixed
+set of functions, the constants ``pi`` and ``E``, and ``+ - * / **``); the
+sympy expression is built node by node from that walk. Derivatives come from
+`sympy.diff`; evaluation goes through `sympy.lambdify` of that tree, so the
+only code that runs is what sympy prints, and its only free name is ``q``
+(parameter values are substituted as exact numbers first).
+
+Numbers are exact: an integer literal is a sympy Integer and a float literal
+or parameter value the rational of its shortest decimal form (0.1 -> 1/10), so
+``q**3/3`` stays a rational cubic, identities such as ``(q + 0.1)**2 - 0.01``
+vanish exactly at 0, and the float64 path sees exactly the float the user
+wrote. The 50-digit path uses the decimal value, which differs from the binary
+float by < 1 ulp for non-dyadic numbers.
+"""
+
+from __future__ import annotations
+
+import ast
+import keyword
+import math
+from typing import Any
+
+import mpmath
+import numpy as np
+import sympy as sp
+from scipy.optimize import elementwise
+
+from ..errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
+from .base import Potential, is_mp
+
+__all__ = ["Expression"]
+
+# Longest accepted source: a contact law is a line of algebra; the cap keeps
+# parsing and sympy's work bounded on hostile or accidental input.
+_MAX_SOURCE_CHARS = 2000
+# Deepest accepted nesting of the syntax tree: a 100-term polynomial still fits,
+# sympy needs about 1 s for it, and the recursive walk stays far from Python's limit.
+_MAX_DEPTH = 100
+# Largest |exponent| of a numeric power: float64 spans 2**+-1074, so any larger
+# exponent is an overflow or a hang (9**9**9 has 370 million digits).
+_MAX_EXPONENT = 1074
+# Characters of the source quoted in a message, so errors stay one short line.
+_QUOTE_CHARS = 60
+# The numeric checks near q = 0 run in 60 digits (no power underflows) at these
+# overlaps (m); two values of q U'/U agreeing to _N_RTOL give the leading exponent.
+_N_DPS = 60
+_N_PROBES = ("1e-30", "1e-45")
+_N_RTOL = 1e-9
+# Digits used to check that each constant of U fits in float64 (magnitude only).
+_CONST_DPS = 15
+# Bracket steps of the inverse: 1100 doublings span float64.
+_MAX_BRACKET_STEPS = 1100
+# Smallest overlap (m) the downward bracket search tries: U <= 0 even there
+# means U does not rise from U(0) = 0.
+_TINY_Q = 1e-300
+# Root tolerance of the inverse of U: a few ulps of q, as in the base class.
+_INVERSE_XRTOL = 4.0 * np.finfo(float).eps
+# Grid that locates where U' <= 0 once U was seen to decrease: log points
+# resolve q -> 0, linear ones the rest (the sizes of Potential.check_monotone).
+_SCAN_LOG_POINTS = 600
+_SCAN_LIN_POINTS = 2000
+
+# Only real=True: with positive=True sympy's assumption system makes diff of a
+# 60-term polynomial take 13 s instead of 0.2 s. q > 0 enters where it matters,
+# through limits taken from the right.
+_Q = sp.Symbol("q", real=True)
+
+# name -> sympy function of one positional argument. min and max are left out
+# on purpose: sympy's limit at q -> 0+ of their piecewise form gives wrong
+# leading exponents (min(q, q**2) -> 1 instead of 2).
+_FUNCTIONS = {
+    "sqrt": sp.sqrt,
+    "exp": sp.exp,
+    "log": sp.log,
+    "sin": sp.sin,
+    "cos": sp.cos,
+    "tan": sp.tan,
+    "sinh": sp.sinh,
+    "cosh": sp.cosh,
+    "tanh": sp.tanh,
+    "atan": sp.atan,
+    "asinh": sp.asinh,
+    "abs": sp.Abs,
+}
+_CONSTANTS = {"pi": sp.pi, "E": sp.E}
+_BINOPS = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+}
+# Operators users plausibly type by mistake, with the fix to suggest.
+_BINOP_HINTS = {
+    ast.BitXor: "'^' is bitwise xor in Python; write ** for a power",
+    ast.FloorDiv: "'//' is floor division; write /",
+    ast.Mod: "'%' (modulo) is not a contact law operation",
+    ast.MatMult: "'@' is matrix multiplication",
+}
+# Plain words for rejected syntax, so the message says what was found.
+_NODE_NAMES = (
+    (ast.Attribute, "attribute access"),
+    (ast.Subscript, "subscript"),
+    (ast.Lambda, "lambda"),
+    (ast.IfExp, "conditional expression"),
+    (ast.Compare, "comparison"),
+    (ast.BoolOp, "boolean operator"),
+    (ast.NamedExpr, "assignment expression"),
+    ((ast.JoinedStr, ast.FormattedValue), "f-string"),
+    ((ast.List, ast.Tuple, ast.Set, ast.Dict), "container literal"),
+    ((ast.ListComp, ast.SetComp, ast.DictComp, ast.GeneratorExp), "comprehension"),
+)
+_FUNC_LIST = ", ".join(_FUNCTIONS)
+
+
+def _short(text: str) -> str:
+    """The text quoted for a message, cut to one short line."""
+    one = " ".join(text.split())
+    return repr(one if len(one) <= _QUOTE_CHARS else one[: _QUOTE_CHARS - 3] + "...")
+
+
+def _as_float(v) -> float:
+    """``v`` as a float: +-inf for oo or an int beyond float64, nan if it is not real."""
+    try:
+        return float(v)
+    except OverflowError:
+        return math.inf if v > 0 else -math.inf
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _exact(value) -> sp.Rational:
+    """Exact sympy value of an int, or of the shortest decimal that reads back as the float."""
+    if isinstance(value, (int, np.integer)):
+        return sp.Integer(int(value))
+    return sp.Rational(repr(float(value)))
+
+
+class _Builder:
+    """Walk an `ast` tree through the whitelist and build the sympy expression."""
+
+    def __init__(self, source: str, values: dict[str, sp.Expr]):
+        self.source = source
+        self.values = values  # parameter name -> exact value
+
+    def fail(self, node: ast.AST, what: str, hint: str) -> ExpressionError:
+        token = ast.get_source_segment(self.source, node) or type(node).__name__
+        col = getattr(node, "col_offset", None)
+        where = f" at column {col + 1}" if col is not None else ""
+        return ExpressionError(f"Expression: {what} {_short(token)}{where} is not allowed ({hint})")
+
+    def build(self, node: ast.AST, depth: int = 0) -> sp.Expr:
+        if depth > _MAX_DEPTH:
+            raise ExpressionError(
+                f"Expression: the formula is nested more than {_MAX_DEPTH} levels deep; "
+                "simplify it or split it into a sum of potentials"
+            )
+        d = depth + 1
+        if isinstance(node, ast.Expression):
+            return self.build(node.body, d)
+        if isinstance(node, ast.Constant):
+            return self._constant(node)
+        if isinstance(node, ast.Name):
+            return self._name(node)
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+            inner = self.build(node.operand, d)
+            return -inner if isinstance(node.op, ast.USub) else inner
+        if isinstance(node, ast.UnaryOp):
+            raise self.fail(node, "unary operator in", "only unary + and - are allowed")
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow):
+            return self._power(node, d)
+        if isinstance(node, ast.BinOp):
+            op = _BINOPS.get(type(node.op))
+            if op is None:
+                hint = _BINOP_HINTS.get(type(node.op), "allowed operators: + - * / **")
+                raise self.fail(node, "operator in", hint)
+            return op(self.build(node.left, d), self.build(node.right, d))
+        if isinstance(node, ast.Call):
+            return self._call(node, d)
+        what = next((t for c, t in _NODE_NAMES if isinstance(node, c)), type(node).__name__)
+        hint = f"allowed: numbers, names, + - * / ** and calls of {_FUNC_LIST}"
+        raise self.fail(node, what, hint)
+
+    def _constant(self, node: ast.Constant) -> sp.Expr:
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.fail(node, f"{type(v).__name__} constant", "only real numbers are allowed")
+        if not math.isfinite(_as_float(v)):
+            raise self.fail(node, "number", "it overflows float64")
+        return _exact(v)
+
+    def _name(self, node: ast.Name) -> sp.Expr:
+        name = node.id
+        if name == "q":
+            return _Q
+        if name in self.values:
+            return self.values[name]
+        if name in _CONSTANTS:
+            return _CONSTANTS[name]
+        if name in _FUNCTIONS:
+            raise self.fail(node, "bare function name", f"call it, e.g. {name}(q)")
+        allowed = ", ".join(["q", *self.values, *_FUNCTIONS, *_CONSTANTS])
+        raise ExpressionError(
+            f"Expression: name {name!r} is not allowed (allowed: {allowed}); give a value for it "
+            "if it is a parameter"
+        )
+
+    def _power(self, node: ast.BinOp, d: int) -> sp.Expr:
+        base, expo = self.build(node.left, d), self.build(node.right, d)
+        if expo.is_number:
+            mag = _as_float(abs(expo if expo.is_Rational else sp.N(expo, _CONST_DPS)))
+            if not mag <= _MAX_EXPONENT:
+                raise self.fail(node, "power", f"|exponent| must be <= {_MAX_EXPONENT}")
+        out = base**expo
+        if out.is_Rational and not math.isfinite(_as_float(abs(out))):
+            raise self.fail(node, "power", "its value overflows float64")
+        return out
+
+    def _call(self, node: ast.Call, d: int) -> sp.Expr:
+        if not isinstance(node.func, ast.Name) or node.func.id not in _FUNCTIONS:
+            raise self.fail(node.func, "call of", f"only {_FUNC_LIST} may be called")
+        name = node.func.id
+        if node.keywords or any(isinstance(a, ast.Starred) for a in node.args):
+            raise self.fail(node, "keyword or starred argument in", f"call {name}(q) plainly")
+        if len(node.args) != 1:
+            raise self.fail(node, "call", f"{name} takes 1 argument, got {len(node.args)}")
+        return _FUNCTIONS[name](self.build(node.args[0], d))
+
+
+def _check_inputs(source, params: dict[str, Any]) -> None:
+    """Reject a source that is not a short non-empty string, and unusable parameters."""
+    if not isinstance(source, str):
+        raise ExpressionError(f"Expression: the formula must be a string, got {source!r}")
+    if not source.strip():
+        raise ExpressionError("Expression: the formula is empty; write U(q), e.g. 'k*q**2/2'")
+    if len(source) > _MAX_SOURCE_CHARS:
+        raise ExpressionError(
+            f"Expression: the formula has {len(source)} characters, more than the limit "
+            f"{_MAX_SOURCE_CHARS}; simplify it or split it into a sum of potentials"
+        )
+    for name, value in params.items():
+        if not name.isidentifier() or keyword.iskeyword(name) or name.startswith("_"):
+            raise ExpressionError(
+                f"Expression: parameter name {name!r} is not allowed; use letters, digits and "
+                "'_' not at the start"
+            )
+        if name == "q" or name in _FUNCTIONS or name in _CONSTANTS:
+            raise ExpressionError(
+                f"Expression: parameter name {name!r} collides with the variable q or a built-in "
+                "function or constant; rename the parameter"
+            )
+        real = isinstance(value, (int, float, np.integer, np.floating))
+        if not real or isinstance(value, (bool, np.bool_)) or not math.isfinite(_as_float(value)):
+            raise ExpressionError(
+                f"Expression: parameter {name} = {repr(value)[:_QUOTE_CHARS]} must be a finite "
+                "real number"
+            )
+
+
+def _parse(source: str, params: dict[str, float]) -> sp.Expr:
+    """The sympy expression of ``source``, built through the whitelist (never executed)."""
+    text = source.strip()
+    try:
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError as e:
+        col = f" at column {e.offset}" if e.offset else ""
+        msg = f"Expression: syntax error{col}: {e.msg} in {_short(text)}"
+        raise ExpressionError(msg) from None
+    except (ValueError, RecursionError, MemoryError):
+        msg = f"Expression: cannot parse {_short(text)}; check the formula"
+        raise ExpressionError(msg) from None
+    # Every identifier first: a dunder anywhere (the usual sandbox escape) is
+    # reported as such, before any other complaint.
+    for node in ast.walk(tree):
+        for ident in (getattr(node, "id", None), getattr(node, "attr", None)):
+            if isinstance(ident, str) and ident.startswith("_"):
+                raise ExpressionError(
+                    f"Expression: name {ident!r} is not allowed (names starting with '_' never "
+                    f"are); write U(q) with q, parameters, numbers and {_FUNC_LIST}"
+                )
+    try:
+        expr = _Builder(text, {k: _exact(v) for k, v in params.items()}).build(tree)
+    except RecursionError:
+        raise ExpressionError(f"Expression: {_short(text)} is nested too deeply") from None
+    used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    unused = [k for k in params if k not in used]
+    if unused:
+        raise ExpressionError(
+            f"Expression: parameter {unused[0]!r} is not used in U = {_short(text)}; remove it "
+            "or fix its spelling"
+        )
+    return expr
+
+
+def _check_expr(expr: sp.Expr, source: str) -> None:
+    """Reject a formula that sympy reduced to something unusable as U(q)."""
+    src = _short(source)
+    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+        raise ExpressionError(
+            f"Expression: U = {src} contains a division by zero or an infinite constant (sympy "
+            f"reads it as {_short(str(expr))})"
+        )
+    if _Q not in expr.free_symbols:
+        raise ExpressionError(
+            f"Expression: U = {src} does not depend on q (it reduces to {_short(str(expr))}); "
+            "write the potential as a function of the overlap q"
+        )
+    for sub in sp.preorder_traversal(expr):
+        if (sub is expr or sub.is_number) and sub.is_extended_real is False:
+            raise ExpressionError(
+                f"Expression: U = {src} has the non-real part {_short(str(sub))}; U must be real "
+                "for q >= 0"
+            )
+        if sub.is_number and not math.isfinite(_as_float(abs(sp.N(sub, _CONST_DPS)))):
+            raise ExpressionError(
+                f"Expression: the constant {_short(str(sub))} in U = {src} overflows float64; "
+                "rescale the formula"
+            )
+
+
+def _limit0(expr: sp.Expr) -> sp.Expr | None:
+    """lim_{q -> 0+} expr, or None when sympy cannot find it."""
+    try:
+        val = sp.limit(expr, _Q, 0, "+")
+    except (NotImplementedError, ValueError, TypeError, RecursionError):
+        return None
+    if isinstance(val, sp.Limit) or val.has(sp.AccumBounds) or not val.is_number:
+        return None
+    return val
+
+
+def _to_mpf(value: sp.Expr | None) -> mpmath.mpf:
+    """A sympy constant (possibly +-oo) at the current mpmath precision; nan for None."""
+    if value is None:
+        return mpmath.nan
+    if value.is_infinite:
+        return mpmath.mpf(_as_float(value))
+    return mpmath.mpf(sp.N(value, mpmath.mp.dps + 5))
+
+
+def _mp_probe(func, probe: str):
+    """func(probe) in _N_DPS digits, as mpf, mpc (not real) or nan (not computable)."""
+    with mpmath.workdps(_N_DPS):
+        try:
+            value = func(mpmath.mpf(probe))
+        except (ZeroDivisionError, ValueError, TypeError, OverflowError):
+            return mpmath.nan
+        return +value if isinstance(value, (mpmath.mpf, mpmath.mpc)) else mpmath.mpf(value)
+
+
+class Expression(Potential):
+    """Contact potential given as a formula in the overlap ``q``.
+
+    Parameters
+    ----------
+    source : str
+        U(q) in joules as a Python-syntax formula in ``q`` (metres), e.g.
+        ``"k*q**3/3 + q**2/2"``. Allowed: int and float numbers, ``q``, the
+        names in ``params``, ``pi``, ``E``, the operators ``+ - * / **`` and
+        unary ``+ -``, and one-argument calls of ``sqrt, exp, log, sin, cos,
+        tan, sinh, cosh, tanh, atan, asinh, abs``. Nothing else; at most 2000
+        characters.
+    **params : float
+        Values of the named parameters in ``source`` (SI units consistent with
+        U in J and q in m). Every parameter must appear in ``source``.
+
+    Attributes
+    ----------
+    source : str
+        The formula as given.
+    expr, dexpr, d2expr : sympy.Expr
+        U, U' and U'' in the real symbol ``q``, parameters substituted.
+    leading_exponent : float
+        n of U ~ c q^n as q -> 0+ (lim q U'/U, by sympy or numerically).
+
+    Raises
+    ------
+    ExpressionError
+        The formula is malformed, uses a name or construct outside the
+        whitelist, does not depend on q, is not real, has a constant beyond
+        float64, or a parameter is invalid or unused.
+    HCVInputError
+        U(0) is not 0 (assumption 2 of section 3), or the leading exponent n
+        of U ~ c q^n at q -> 0+ cannot be found or is not > 0.
+    NonMonotoneError
+        U is not positive just above q = 0 (assumption 3 of section 3).
+
+    Notes
+    -----
+    Monotonicity (U' > 0) and the existence of a turning point for a given
+    energy are checked by `turning_point` / `check_monotone`, as for every
+    potential; ``q_sup`` is infinite and ``q_scale`` 1 m. The inverse of U
+    climbs from below the root, so the formula needs to be defined and
+    increasing only up to the turning point.
+
+    Examples
+    --------
+    >>> U = Expression("k*q**3/3 + q**2/2", k=2.0)
+    >>> U.dU(0.5)
+    1.0
+    """
+
+    def __init__(self, source: str, **params: float):
+        _check_inputs(source, params)
+        self.source = source
+        self._params = dict(params)
+        self.expr = _parse(source, self._params)
+        _check_expr(self.expr, source)
+        self.dexpr = sp.diff(self.expr, _Q)
+        self.d2expr = sp.diff(self.dexpr, _Q)
+        exprs = (self.expr, self.dexpr, self.d2expr)
+        # lambdify runs code that sympy prints from the whitelisted tree; the
+        # only free name in it is q (parameters are already numbers).
+        self._np_funcs = tuple(sp.lambdify(_Q, e, modules="numpy") for e in exprs)
+        self._mp_funcs = tuple(sp.lambdify(_Q, e, modules="mpmath") for e in exprs)
+        self._zero_limits: dict[int, sp.Expr | None] = {}
+        self._check_zero()
+        self.leading_exponent = self._find_leading_exponent()
+        self._check_onset()
+
+    # -- construction checks --------------------------------------------------
+    def _check_zero(self) -> None:
+        """U(0) = 0 exactly (assumption 2), by substitution or the limit q -> 0+."""
+        u0 = self.expr.subs(_Q, 0)
+        if not (u0.is_number and u0.is_finite):
+            u0 = _limit0(self.expr)
+        if u0 is not None and u0.is_zero is None:
+            # A constant sympy cannot decide, e.g. sqrt(2)**3 - 2*sqrt(2) unexpanded.
+            u0 = sp.Integer(0) if abs(sp.N(u0, _N_DPS)) < 10 ** -(_N_DPS - 5) else u0
+        if u0 is None or not u0.is_zero:
+            shown = "undetermined" if u0 is None else str(u0)
+            if u0 is not None and (len(shown) > 30 or not u0.is_Rational):
+                shown = f"{_as_float(u0):.6g}" if not math.isnan(_as_float(u0)) else _short(shown)
+            raise HCVInputError(
+                f"Expression: U(0) = {shown} but assumption (2) of section 3 needs U(0) = 0; "
+                f"subtract the constant from U = {_short(self.source)}"
+            )
+
+    def _find_leading_exponent(self) -> float:
+        """n with U ~ c q^n as q -> 0+: lim q U'/U, from sympy or numerically."""
+        n_sym = _limit0(_Q * self.dexpr / self.expr)
+        if n_sym is not None:
+            n = _as_float(n_sym)
+        else:
+            u, du = self._mp_funcs[:2]
+            a, b = (_mp_probe(lambda x: x * du(x) / u(x), p) for p in _N_PROBES)
+            agree = all(isinstance(v, mpmath.mpf) and mpmath.isfinite(v) for v in (a, b)) and (
+                abs(a - b) <= _N_RTOL * abs(b)
+            )
+            n = float(b) if agree else math.nan
+        where = f"of U = {_short(self.source)} at q -> 0+"
+        if math.isnan(n):
+            raise HCVInputError(
+                f"Expression: cannot determine the leading exponent n (U ~ c q^n) {where}; "
+                "the quadratures need a power-law onset, rewrite U so that it has one"
+            )
+        if not 0 < n < math.inf:
+            raise HCVInputError(
+                f"Expression: the leading exponent n = {n:.6g} {where} is not a finite number "
+                "> 0; the quadratures need U ~ c q^n with 0 < n < inf"
+            )
+        return n
+
+    def _check_onset(self) -> None:
+        """U > 0 just above q = 0, in 60 digits so that no power underflows."""
+        probe = _N_PROBES[-1]
+        value = _mp_probe(self._mp_funcs[0], probe)
+        if isinstance(value, mpmath.mpc) and value.imag != 0:
+            raise ExpressionError(
+                f"Expression: U({probe}) = {mpmath.nstr(value, 6)} J is not real; "
+                f"U = {_short(self.source)} must be real for q >= 0"
+            )
+        if not mpmath.re(value) > 0:
+            raise NonMonotoneError(
+                f"Expression: U(q) = {mpmath.nstr(value, 6)} J at q = {probe} m, but U must rise "
+                f"from U(0) = 0 (assumption 3 of section 3); check the sign of U = "
+                f"{_short(self.source)}"
+            )
+
+    # -- evaluation -----------------------------------------------------------
+    def _limit_at_zero(self, i: int) -> sp.Expr | None:
+        """lim q -> 0+ of formula i (cached: sympy's limit is slow); U(0) = 0 by construction."""
+        if i not in self._zero_limits:
+            exprs = (sp.Integer(0), self.dexpr, self.d2expr)
+            self._zero_limits[i] = exprs[0] if i == 0 else _limit0(exprs[i])
+        return self._zero_limits[i]
+
+    def _eval(self, i: int, q):
+        """Formula i (0: U, 1: U', 2: U'') at q; the exact limit where q = 0 gives inf/nan."""
+        if is_mp(q):
+            try:
+                out = mpmath.mpf(self._mp_funcs[i](q))
+            except (ZeroDivisionError, ValueError, TypeError):
+                out = mpmath.nan
+            if q == 0 and (i == 0 or not mpmath.isfinite(out)):
+                out = _to_mpf(self._limit_at_zero(i))
+            return out
+        q = np.asarray(q, dtype=float)
+        with np.errstate(all="ignore"):
+            out = np.asarray(self._np_funcs[i](q), dtype=float)
+        # A formula constant in q (U'' of a quadratic) comes back as a scalar.
+        out = np.array(np.broadcast_to(out, q.shape), dtype=float)
+        # U(0) = 0 was proved exactly at construction; round-off of a formula such
+        # as (q + 0.1)**2 - 0.01 must not turn it into 1.7e-18.
+        fix = (q == 0) & ((i == 0) | ~np.isfinite(out))
+        if np.any(fix):
+            out[fix] = _as_float(self._limit_at_zero(i))
+        return out
+
+    def _U(self, q):
+        return self._eval(0, q)
+
+    def _dU(self, q):
+        return self._eval(1, q)
+
+    def _d2U(self, q):
+        return self._eval(2, q)
+
+    # -- inverse ----------------------------------------------------------------
+    def _inverse(self, u: np.ndarray) -> np.ndarray:
+        """Overlap q with U(q) = u: a checked geometric bracket, then Chandrupatla.
+
+        The base class brackets from ``q_scale`` upwards, which presumes U is
+        monotone and finite everywhere. A formula may be increasing or defined
+        only up to some overlap, so this bracket climbs from below the root and
+        stops with a message naming where U decreases, levels off or stops
+        being a finite number.
+        """
+        u = np.asarray(u, dtype=float)
+        out = np.zeros_like(u)
+        pos = u > 0
+        if not np.any(pos):
+            return out
+        target = u[pos]
+        lo, hi = self._bracket(target)
+        res = elementwise.find_root(
+            lambda q, t: self._U(q) - t,
+            (lo, hi),
+            args=(target,),
+            tolerances=dict(xatol=0.0, xrtol=_INVERSE_XRTOL, fatol=0.0, frtol=0.0),
+        )
+        out[pos] = np.where(self._U(hi) == target, hi, res.x)
+        return out
+
+    def _bracket(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) with U(lo) < t <= U(hi), U increasing at the doubling points."""
+        lo = np.full_like(t, self.q_scale)
+        while True:
+            u_lo = self._U(lo)
+            bad = ~((u_lo > 0) & (u_lo < t))
+            if not np.any(bad):
+                break
+            if np.any(bad & (lo < _TINY_Q)):
+                i = int(np.argmax(bad & (lo < _TINY_Q)))
+                raise NonMonotoneError(
+                    f"Expression: U(q) = {u_lo[i]:.6g} J at q = {lo[i]:.3g} m, but U must rise "
+                    f"from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
+                )
+            lo = np.where(bad, lo / 4, lo)
+        hi, u_hi = lo.copy(), u_lo
+        for _ in range(_MAX_BRACKET_STEPS):
+            need = u_hi < t
+            if not np.any(need):
+                return lo, hi
+            with np.errstate(over="ignore"):
+                new = np.where(need, 2 * hi, hi)
+            u_new = self._U(new)
+            self._check_step(need, hi, u_hi, new, u_new, t)
+            lo, hi, u_hi = np.where(need, hi, lo), new, u_new
+        raise AssertionError("unreachable: 1100 doublings overflow float64")
+
+    def _check_step(self, need, q0, u0, q1, u1, t) -> None:
+        """Raise when U, stepping from q0 to q1 = 2 q0 while below the energy t, misbehaves."""
+        src = _short(self.source)
+        tail = "no turning point (assumption 4 of section 3); lower the impact speed"
+        endless = need & ~np.isfinite(q1)
+        if np.any(endless):
+            i = int(np.argmax(endless))
+            raise NoTurningPointError(
+                f"Expression: U = {src} stays below the energy {t[i]:.6g} J for every float64 "
+                f"overlap (U = {u0[i]:.6g} J at q = {q0[i]:.3g} m): {tail}"
+            )
+        broken = need & ~np.isfinite(u1)
+        if np.any(broken):
+            i = int(np.argmax(broken))
+            raise NoTurningPointError(
+                f"Expression: U(q) = {u1[i]:.6g} J is not a finite number at q = {q1[i]:.6g} m, "
+                f"reached before U = {src} gets to the energy {t[i]:.6g} J: {tail}"
+            )
+        if np.any(need & (u1 < u0)):
+            i = int(np.argmax(need & (u1 < u0)))
+            raise self._not_monotone(q1[i], t[i])
+        if np.any(need & (u1 == u0)):
+            i = int(np.argmax(need & (u1 == u0)))
+            raise NoTurningPointError(
+                f"Expression: U = {src} levels off at {u0[i]:.6g} J (equal at q = {q0[i]:.6g} m "
+                f"and {q1[i]:.6g} m) below the energy {t[i]:.6g} J: {tail}"
+            )
+
+    def _not_monotone(self, q_end: float, energy: float) -> NonMonotoneError:
+        """The error for U decreasing on (0, q_end], naming the first q with U' <= 0."""
+        grid = q_end * np.concatenate(
+            [np.logspace(-12, 0, _SCAN_LOG_POINTS), np.linspace(0, 1, _SCAN_LIN_POINTS)[1:]]
+        )
+        grid = np.unique(grid)
+        f = self._dU(grid)
+        bad = ~(np.isfinite(f) & (f > 0))
+        i = int(np.argmax(bad)) if np.any(bad) else len(grid) - 1
+        u_top = float(np.nanmax(self._U(grid[: i + 1])))
+        where = (
+            f"U'(q) = {f[i]:.6g} N at q = {grid[i]:.6g} m is not > 0"
+            if bad[i]
+            else f"U decreases before q = {q_end:.6g} m"
+        )
+        return NonMonotoneError(
+            f"Expression: {where}: U = {_short(self.source)} turns down at {u_top:.6g} J before "
+            f"reaching the energy {energy:.6g} J (assumption 3 of section 3); lower the impact "
+            "speed or fix U"
+        )
+
+    # -- description ------------------------------------------------------------
+    def params(self) -> dict[str, Any]:
+        return {"U": self.source, "params": dict(self._params)}
+
+    def __repr__(self) -> str:
+        extra = "".join(f", {k}={v!r}" for k, v in self._params.items())
+        return f"Expression({self.source!r}{extra})"

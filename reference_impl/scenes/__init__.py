@@ -1,0 +1,23 @@
+"""Scenes: validated descriptions of what to compute (see `_scene` for the file format).
+
+Embedded scenes ship as ``*.toml`` files in this package; list them with
+`embedded_scenes` and load one by name with `load_scene`.
+"""
+
+from ._scene import (
+    Scene,
+    embedded_scenes,
+    load_scene,
+    parse_scene,
+    potential_to_dict,
+    scene_from_dict,
+)
+
+__all__ = [
+    "Scene",
+    "embedded_scenes",
+    "load_scene",
+    "parse_scene",
+    "potential_to_dict",
+    "scene_from_dict",
+]

@@ -1,0 +1,370 @@
+"""Scene files: what to compute (mass, impact speeds, contact law, damping), validated.
+
+A scene is a small TOML document::
+
+    name = "paper-ellipsoid"
+    mass = 0.05                     # kg
+    velocities = [0.50, 0.99, 1.50] # m/s, impact speeds (> 0)
+    kind = "impact"                 # "impact" | "two-sided" | "two-walls"
+    # gap = 0.01                    # m, two-walls only: free-flight gap between the walls
+    [potential]
+    family = "ellipsoid"            # power | ellipsoid | sphere | expression | sum
+    a = 0.015
+    b = 0.008
+    c = 0.008
+    Kn = 1e8
+    alpha = 0.5
+    [damping]                       # optional; default law = "none"
+    law = "universal"               # "none" | "universal"
+    zeta = 0.2                      # or restitution = 0.8, or C0 with K and M
+
+Every problem raises `SceneError` (or, for a potential that breaks the
+paper's assumptions, the `HCVInputError` subclass the potential raised) with
+one line naming the scene and the offending key.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..damping import zeta_from_restitution
+from ..errors import HCVInputError, SceneError
+from ..potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+
+__all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
+
+# A scene is a few lines; refusing anything larger keeps a wrong path (a log,
+# a binary) from being read whole into memory.
+_MAX_SCENE_BYTES = 1_000_000
+_KINDS = ("impact", "two-sided", "two-walls")
+_LAWS = ("none", "universal")
+_TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
+_DAMPING_KEYS = ("law", "zeta", "restitution", "C0", "K", "M")
+# family -> (required keys, optional keys), besides "family" itself.
+_FAMILIES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "power": (("k", "p"), ()),
+    "ellipsoid": (("a", "b", "c", "Kn"), ("alpha",)),
+    "sphere": (("R", "Kn"), ("alpha",)),
+    "expression": (("U",), ("params",)),
+    "sum": (("terms",), ()),
+}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One validated scene.
+
+    Attributes
+    ----------
+    name : str
+        Scene name (the file stem when the file gives none).
+    mass : float
+        Particle mass m in kg (> 0).
+    velocities : tuple of float
+        Impact speeds v0 in m/s (> 0); each has a turning point.
+    kind : str
+        ``"impact"`` (one contact), ``"two-sided"`` (U(|q|), an oscillator
+        through q = 0) or ``"two-walls"`` (bouncing between two walls).
+    gap : float or None
+        Free-flight gap between the walls in m (``"two-walls"`` only).
+    potential : Potential
+        The contact potential U(q).
+    damping_law : str
+        ``"none"`` or ``"universal"`` (Theorem 3).
+    zeta : float or None
+        Damping ratio zeta = C0 / (2 sqrt(K M)) of the universal law; None
+        when ``damping_law == "none"``.
+    source : str
+        Where the scene came from (a path, ``<embedded>/name.toml`` or the
+        label given to `parse_scene`).
+    """
+
+    name: str
+    mass: float
+    velocities: tuple[float, ...]
+    kind: str
+    gap: float | None
+    potential: Potential
+    damping_law: str
+    zeta: float | None
+    source: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene in the schema of the TOML file, plus ``source`` (JSON-safe).
+
+        Without ``source`` the dict is accepted back by `scene_from_dict`.
+        """
+        out: dict[str, Any] = {
+            "name": self.name,
+            "mass": self.mass,
+            "velocities": list(self.velocities),
+            "kind": self.kind,
+        }
+        if self.gap is not None:
+            out["gap"] = self.gap
+        out["potential"] = potential_to_dict(self.potential)
+        out["damping"] = {"law": self.damping_law}
+        if self.zeta is not None:
+            out["damping"]["zeta"] = self.zeta
+        out["source"] = self.source
+        return out
+
+
+def potential_to_dict(pot: Potential) -> dict[str, Any]:
+    """A potential as a ``[potential]`` table of the scene schema."""
+    if isinstance(pot, SumPotential):
+        return {"family": "sum", "terms": [potential_to_dict(t) for t in pot.terms]}
+    family = {PowerLaw: "power", Ellipsoid: "ellipsoid", Sphere: "sphere", Expression: "expression"}
+    return {"family": family.get(type(pot), type(pot).__name__), **pot.params()}
+
+
+class _Where:
+    """Error factory that prefixes the scene source to every message."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def __call__(self, message: str) -> SceneError:
+        return SceneError(f"scene {self.source}: {message}")
+
+
+def _keys(err: _Where, table: dict, path: str, allowed, required=()) -> None:
+    """Reject unknown keys (naming the closest allowed one) and missing ones."""
+    for key in table:
+        if key not in allowed:
+            near = difflib.get_close_matches(key, allowed, n=1)
+            hint = f"did you mean {near[0]!r}?" if near else f"allowed: {', '.join(allowed)}"
+            raise err(f"unknown key {path + str(key)!r} ({hint})")
+    for key in required:
+        if key not in table:
+            raise err(f"missing key {path + key!r}")
+
+
+def _number(err: _Where, value, name: str, *, low: float = -math.inf, strict: bool = True,
+            high: float = math.inf) -> float:
+    """``value`` as a float, or SceneError unless it is finite and in (low, high]."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise err(f"{name} must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise err(f"{name} must be a finite number, got {value!r}")
+    if (v <= low if strict else v < low) or v > high:
+        rel = ">" if strict else ">="
+        bound = f"{rel} {low:g}" + (f" and <= {high:g}" if math.isfinite(high) else "")
+        raise err(f"{name} must be {bound}, got {value!r}")
+    return v
+
+
+def _string(err: _Where, value, name: str, choices=None) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise err(f"{name} must be a non-empty string, got {value!r}")
+    if choices is not None and value not in choices:
+        raise err(f"{name} = {value!r} is not one of {', '.join(repr(c) for c in choices)}")
+    return value
+
+
+def _table(err: _Where, value, name: str) -> dict:
+    if not isinstance(value, dict):
+        raise err(f"{name} must be a table, got {value!r}")
+    return value
+
+
+def _potential(err: _Where, table, path: str) -> Potential:
+    """Build the potential of one ``[potential]`` (or ``[[potential.terms]]``) table."""
+    table = _table(err, table, path)
+    if "family" not in table:
+        raise err(f"missing key '{path}.family' (one of {', '.join(_FAMILIES)})")
+    family = _string(err, table["family"], f"{path}.family", _FAMILIES)
+    required, optional = _FAMILIES[family]
+    _keys(err, table, f"{path}.", ("family", *required, *optional), required)
+    if family == "expression":
+        source = _string(err, table["U"], f"{path}.U")
+        params = _table(err, table.get("params", {}), f"{path}.params")
+        values = {k: _number(err, v, f"{path}.params.{k}") for k, v in params.items()}
+        return _construct(err, path, Expression, source, **values)
+    if family == "sum":
+        terms = table["terms"]
+        if not isinstance(terms, list) or len(terms) < 2:
+            raise err(f"{path}.terms must be an array of at least two potential tables")
+        parts = [_potential(err, t, f"{path}.terms[{i}]") for i, t in enumerate(terms)]
+        return _construct(err, path, SumPotential, *parts)
+    args = {k: _number(err, table[k], f"{path}.{k}", low=0.0) for k in (*required, *optional)
+            if k in table}
+    cls = {"power": PowerLaw, "ellipsoid": Ellipsoid, "sphere": Sphere}[family]
+    return _construct(err, path, cls, **args)
+
+
+def _construct(err: _Where, path: str, cls, *args, **kwargs) -> Potential:
+    """cls(*args, **kwargs); a potential's own error keeps its type, gains the scene name."""
+    try:
+        return cls(*args, **kwargs)
+    except SceneError:
+        raise
+    except HCVInputError as exc:
+        raise _with_context(exc, f"scene {err.source}: {path}") from exc
+
+
+def _damping(err: _Where, table) -> tuple[str, float | None]:
+    """(law, zeta) from the optional ``[damping]`` table."""
+    table = _table(err, table, "damping")
+    _keys(err, table, "damping.", _DAMPING_KEYS)
+    law = _string(err, table.get("law", "none"), "damping.law", _LAWS)
+    given = [k for k in ("zeta", "restitution", "C0", "K", "M") if k in table]
+    if law == "none":
+        if given:
+            raise err(f"damping.{given[0]} is set but damping.law is 'none'; set law = "
+                      "\"universal\" or remove it")
+        return law, None
+    forms = [k for k in ("zeta", "restitution", "C0") if k in table]
+    if len(forms) != 1:
+        what = "none" if not forms else " and ".join(forms)
+        raise err(f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
+                  f"(with K and M), got {what}")
+    if forms[0] != "C0" and ("K" in table or "M" in table):
+        raise err("damping.K and damping.M go with damping.C0 only; remove them")
+    if forms[0] == "zeta":
+        return law, _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
+    if forms[0] == "restitution":
+        e = _number(err, table["restitution"], "damping.restitution", low=0.0, high=1.0)
+        return law, zeta_from_restitution(e)
+    for key in ("K", "M"):
+        if key not in table:
+            raise err(f"damping.C0 needs damping.{key} too (zeta = C0 / (2 sqrt(K M)), section 8)")
+    c0 = _number(err, table["C0"], "damping.C0", low=0.0, strict=False)
+    K = _number(err, table["K"], "damping.K", low=0.0)
+    M = _number(err, table["M"], "damping.M", low=0.0)
+    return law, c0 / (2.0 * math.sqrt(K * M))
+
+
+def _with_context(exc: HCVInputError, prefix: str) -> HCVInputError:
+    """The same error type with the scene context in front of its message."""
+    return type(exc)(f"{prefix}: {exc}")
+
+
+def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
+    """Validate a parsed scene document and build the `Scene`.
+
+    Parameters
+    ----------
+    data : dict
+        The TOML document as a dict (see the module docstring for the keys).
+    source : str
+        Label used in error messages and stored as ``Scene.source``.
+
+    Raises
+    ------
+    SceneError
+        Missing, unknown or invalid keys and values.
+    HCVInputError
+        Its subclass raised by the potential (`ExpressionError`,
+        `NonMonotoneError`, `NoTurningPointError`, ...), with the scene named.
+    """
+    err = _Where(source)
+    data = _table(err, data, "the scene")
+    _keys(err, data, "", _TOP_KEYS, ("mass", "velocities", "potential"))
+    name = _string(err, data.get("name", Path(source).stem or "scene"), "name")
+    mass = _number(err, data["mass"], "mass", low=0.0)
+    vels = data["velocities"]
+    if not isinstance(vels, list) or not vels:
+        raise err(f"velocities must be a non-empty array of speeds in m/s, got {vels!r}")
+    velocities = tuple(_number(err, v, f"velocities[{i}]", low=0.0) for i, v in enumerate(vels))
+    kind = _string(err, data.get("kind", "impact"), "kind", _KINDS)
+    gap = None
+    if kind == "two-walls":
+        if "gap" not in data:
+            raise err("kind = 'two-walls' needs gap, the free-flight gap between the walls in m")
+        gap = _number(err, data["gap"], "gap", low=0.0)
+    elif "gap" in data:
+        raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
+    law, zeta = _damping(err, data.get("damping", {}))
+    potential = _potential(err, data["potential"], "potential")
+    for v in velocities:
+        energy = 0.5 * mass * v * v
+        try:
+            potential.turning_point(energy)
+        except HCVInputError as exc:
+            prefix = f"scene {source}: velocity {v:g} m/s (E = {energy:.6g} J)"
+            raise _with_context(exc, prefix) from exc
+    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source)
+
+
+def parse_scene(text: str, source: str = "<string>") -> Scene:
+    """Parse and validate the TOML text of a scene.
+
+    Parameters
+    ----------
+    text : str
+        TOML document.
+    source : str
+        Label for messages and ``Scene.source`` (e.g. the file path).
+    """
+    if not isinstance(text, str):
+        kind = type(text).__name__
+        raise SceneError(f"scene {source}: the scene text must be a string, got {kind}")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"scene {source}: TOML syntax error: {exc}") from None
+    return scene_from_dict(data, source)
+
+
+def embedded_scenes() -> list[str]:
+    """Names of the scenes shipped with the package (``load_scene(name)`` loads one)."""
+    root = resources.files(__package__)
+    return sorted(p.name[: -len(".toml")] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def load_scene(path_or_name: str | os.PathLike) -> Scene:
+    """Load a scene from a ``.toml`` file, or the embedded scene of that name.
+
+    Parameters
+    ----------
+    path_or_name : str or os.PathLike
+        A path (anything that is a path object, ends in ``.toml`` or contains a
+        directory separator, or names an existing file), else the name of an
+        embedded scene (see `embedded_scenes`).
+    """
+    if not isinstance(path_or_name, (str, os.PathLike)):
+        raise SceneError(f"scene {path_or_name!r}: give a file path or an embedded scene name")
+    text_arg = os.fspath(path_or_name)
+    looks_like_path = (
+        isinstance(path_or_name, os.PathLike)
+        or text_arg.endswith(".toml")
+        or os.sep in text_arg
+        or "/" in text_arg
+        or Path(text_arg).is_file()
+    )
+    if not looks_like_path:
+        names = embedded_scenes()
+        if text_arg not in names:
+            raise SceneError(
+                f"scene {text_arg!r}: no such file and no embedded scene of that name "
+                f"(embedded: {', '.join(names)})"
+            )
+        res = resources.files(__package__) / f"{text_arg}.toml"
+        return parse_scene(res.read_text(encoding="utf-8"), f"<embedded>/{text_arg}.toml")
+    path = Path(text_arg)
+    if not path.exists():
+        raise SceneError(f"scene file {text_arg}: not found; give an existing .toml file or an "
+                         "embedded scene name")
+    if not path.is_file():
+        raise SceneError(f"scene file {text_arg}: is not a regular file")
+    try:
+        size = path.stat().st_size
+        if size > _MAX_SCENE_BYTES:
+            raise SceneError(f"scene file {text_arg}: {size} bytes is too large for a scene "
+                             f"(limit {_MAX_SCENE_BYTES}); is this the right file?")
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"scene file {text_arg}: not UTF-8 text ({exc.reason} at byte "
+                         f"{exc.start})") from None
+    except OSError as exc:
+        raise SceneError(f"scene file {text_arg}: cannot be read ({exc.strerror})") from None
+    return parse_scene(text, text_arg)
