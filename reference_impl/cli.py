@@ -22,19 +22,18 @@ EXIT_OK = 0
 EXIT_FAIL = 1
 EXIT_USAGE = 2
 
-_SOLVE_COLUMNS = (
-    ("v0", "v0 [m/s]"),
-    ("max_penetration", "q_max [m]"),
-    ("max_force", "F_max [N]"),
-    ("dt_safe", "dt_safe [s]"),
-    ("dt_safe_shortcut", "dt_shortcut [s]"),
-    ("geometry", "geometry"),
-    ("contact_time", "t_c [s]"),
-    ("restitution", "e"),
-    ("contact_time_zero_force", "t_c,F=0 [s]"),
-    ("restitution_zero_force", "e_F=0"),
-    ("action", "J [J s]"),
-    ("period", "T [s]"),
+_SOLVE_ROWS = (
+    ("max_penetration", "max penetration q_max [m]"),
+    ("max_force", "max force U'(q_max) [N]"),
+    ("dt_safe", "dt_safe, sup over [0, q_max] [s]"),
+    ("dt_safe_shortcut", "dt_safe shortcut 2 m v0 / U'(q_max) [s]"),
+    ("geometry", "geometry (sec. 6)"),
+    ("contact_time", "contact time, end at q = 0 [s]"),
+    ("restitution", "restitution, end at q = 0"),
+    ("contact_time_zero_force", "contact time, end at zero force [s]"),
+    ("restitution_zero_force", "restitution, end at zero force"),
+    ("action", "action J(E) (sec. 4) [J s]"),
+    ("period", "period T(E) = 4 x quarter period [s]"),
 )
 
 
@@ -87,6 +86,7 @@ def _json_safe(value):
 
 
 def _print_table(title: str, rows: list[dict], columns) -> None:
+    """One row per result, one column per field."""
     from rich.console import Console
     from rich.table import Table
 
@@ -95,6 +95,20 @@ def _print_table(title: str, rows: list[dict], columns) -> None:
         table.add_column(header, justify="right")
     for row in rows:
         table.add_row(*(_fmt(row.get(key)) for key, _ in columns))
+    Console().print(table)
+
+
+def _print_transposed(title: str, rows: list[dict], fields, key: str, key_label: str) -> None:
+    """One row per field, one column per result (keeps wide result sets readable)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=title)
+    table.add_column(key_label, justify="left")
+    for row in rows:
+        table.add_column(_fmt(row[key]), justify="right")
+    for name, label in fields:
+        table.add_row(label, *(_fmt(row.get(name)) for row in rows))
     Console().print(table)
 
 
@@ -128,8 +142,10 @@ def _cmd_solve(args) -> int:
         json.dump(out, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        _print_table(f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']})",
-                     rows, _SOLVE_COLUMNS)
+        _print_transposed(
+            f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']:.6g})",
+            rows, _SOLVE_ROWS, "v0", "impact speed v0 [m/s]",
+        )
         print("e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
               "(codes that forbid tension). J, T: section 4 definitions.")
     return EXIT_OK
@@ -235,6 +251,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except HCVInputError as exc:
         print(f"hcv: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except BrokenPipeError:
+        # Output piped into e.g. `head`: stop quietly, as Unix tools do.
+        sys.stderr.close()
+        return EXIT_OK
 
 
 if __name__ == "__main__":  # pragma: no cover
