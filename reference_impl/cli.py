@@ -160,19 +160,21 @@ def _cmd_scenes(args) -> int:
 
 
 def _cmd_dt_crit(args) -> int:
-    from .dtcrit import Criterion, search_scene
+    from .dtcrit import default_criterion, parse_criterion, search_scene
     from .scenes import load_scene
 
     scene = load_scene(args.scene)
-    criterion = Criterion.from_cli(args.criterion) if args.criterion else Criterion()
-    with _progress(not args.json and sys.stderr.isatty()) as progress:
+    criterion = (parse_criterion(args.criterion, scene.kind) if args.criterion
+                 else default_criterion(scene.kind))
+    # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
+    with _progress(sys.stderr.isatty()) as progress:
         results = search_scene(
             scene.potential,
             scene.mass,
             scene.velocities,
             scene.kind,
             gap=scene.gap,
-            zeta=scene.zeta,
+            zeta=scene.zeta if scene.damping_law == "universal" else None,
             criterion=criterion,
             progress=progress,
         )
@@ -181,12 +183,22 @@ def _cmd_dt_crit(args) -> int:
         json.dump({"scene": scene.to_dict(), "results": rows}, sys.stdout, indent=2, default=str)
         sys.stdout.write("\n")
     else:
-        cols = [(k, k) for k in ("v0", "kind", "dt_safe", "dt_safe_shortcut", "dt_crit", "ratio",
-                                 "criterion", "holds")]
-        _print_table(f"hcv dt-crit: {scene.name}", rows, cols)
+        fields = [
+            ("kind", "scene kind"),
+            ("dt_safe", "dt_safe (paper, sec. 6) [s]"),
+            ("dt_safe_shortcut", "dt_safe shortcut [s]"),
+            ("dt_crit", "measured dt_crit (smallest failing) [s]"),
+            ("ratio", "dt_crit / dt_safe"),
+            ("holds", "bound holds"),
+            ("recommended_dt", "recommended dt (this suite) [s]"),
+            ("criterion", "criterion"),
+        ]
+        _print_transposed(f"hcv dt-crit: {scene.name} (m = {scene.mass} kg)", rows, fields, "v0",
+                          "impact speed v0 [m/s]")
         for r in rows:
-            if r.get("counterexample"):
-                print(f"v0 = {r['v0']}: counterexample {json.dumps(r['counterexample'], default=str)}")
+            ce = r.get("counterexample")
+            if ce:
+                print(f"v0 = {r['v0']}: counterexample {json.dumps(ce, default=str)}")
     return EXIT_OK
 
 
@@ -206,8 +218,8 @@ class _progress:
         self._bar.__enter__()
         task = self._bar.add_task("searching", total=None)
 
-        def update(done: int, total: int, what: str = "searching") -> None:
-            self._bar.update(task, completed=done, total=total, description=what)
+        def update(done: float, total: float) -> None:
+            self._bar.update(task, completed=done, total=total)
 
         return update
 
@@ -233,8 +245,8 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--json", action="store_true", help="print one JSON object with a results list")
     d.add_argument(
         "--criterion",
-        help="instability criterion, e.g. 'factor=100,steps=100000' (sustained scenes) or "
-        "'tol=0.01' (single impact)",
+        help="instability criterion: 'factor=100,n_steps=1e5' for two-sided / two-walls "
+        "(energy growth), 'tol=0.01,n_phases=16' for a single impact (energy gain)",
     )
     d.set_defaults(func=_cmd_dt_crit)
     ls = sub.add_parser("scenes", help="list the embedded scenes")

@@ -81,3 +81,24 @@ def test_missing_file_exit_2(tmp_path: Path):
 def test_usage_error_exit_2():
     r = _hcv("solve")
     assert r.returncode == 2
+
+
+@pytest.mark.claim("sec6-dt-safe-bound")
+def test_dt_crit_json_reports_each_velocity():
+    r = _hcv("dt-crit", "hertz", "--json")
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout)["results"]
+    assert [row["v0"] for row in rows] == [0.1, 1.0, 5.0]
+    for row in rows:
+        for key in ("dt_safe", "dt_safe_shortcut", "dt_crit", "ratio", "criterion", "holds",
+                    "counterexample"):
+            assert key in row, key
+        # Power laws are scale invariant: dt_crit/dt_safe cannot depend on v0. The
+        # bisection resolves the ratio to 0.1 % of dt_safe.
+        assert_close(row["ratio"], rows[0]["ratio"], rtol=2e-3, claim="sec6-dt-safe-bound",
+                     call="hcv dt-crit hertz --json")
+
+
+def test_dt_crit_bad_criterion_exit_2():
+    r = _hcv("dt-crit", "hertz", "--criterion", "factor=abc")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
