@@ -23,8 +23,9 @@ def tests(session: nox.Session) -> None:
 def lint(session: nox.Session) -> None:
     """ruff over the package, the suite and the benchmarks."""
     session.install("ruff")
-    session.run("ruff", "check", "reference_impl", "verification", "benchmarks", "noxfile.py",
-                "conftest.py")
+    session.run(
+        "ruff", "check", "reference_impl", "verification", "benchmarks", "noxfile.py", "conftest.py"
+    )
 
 
 @nox.session(python="3.11")

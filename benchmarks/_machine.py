@@ -12,10 +12,16 @@ from importlib import metadata
 def machine_info() -> dict:
     """Python, platform, CPU count, key package versions and the git commit."""
     try:
-        commit = subprocess.run(
-            ["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=False,
-            cwd=os.path.dirname(__file__),
-        ).stdout.strip() or None
+        commit = (
+            subprocess.run(
+                ["git", "rev-parse", "HEAD"],
+                capture_output=True,
+                text=True,
+                check=False,
+                cwd=os.path.dirname(__file__),
+            ).stdout.strip()
+            or None
+        )
     except OSError:
         commit = None
     versions = {}

@@ -62,8 +62,15 @@ def _dop853():
 
     touch.terminal, touch.direction = True, -1
     q_scale = ((p + 1) * 0.5 * m * V0**2 / k) ** (1 / (p + 1))
-    sol = solve_ivp(rhs, (0.0, 1.0), [0.0, V0], method="DOP853", rtol=RTOL_ODE,
-                    atol=[RTOL_ODE * q_scale, RTOL_ODE * V0], events=touch)
+    sol = solve_ivp(
+        rhs,
+        (0.0, 1.0),
+        [0.0, V0],
+        method="DOP853",
+        rtol=RTOL_ODE,
+        atol=[RTOL_ODE * q_scale, RTOL_ODE * V0],
+        events=touch,
+    )
     tc = float(sol.t_events[0][0])
     return tc, -float(sol.y_events[0][0][1]) / V0, sol.nfev
 
@@ -110,14 +117,22 @@ def main(argv=None) -> int:
     res = run(args.repeats)
     ex, od = res["exact"], res["dop853"]
     print(f"damped Hertz impact (zeta={ZETA}), truth: mpmath 30 digits")
-    print(f"  exact solver : {ex['seconds'] * 1e6:9.1f} us   rel err t_c {ex['contact_time_rel_error']:.2e}"
-          f"  e {ex['restitution_rel_error']:.2e}")
-    print(f"  DOP853 {RTOL_ODE:g}: {od['seconds'] * 1e6:9.1f} us   rel err t_c {od['contact_time_rel_error']:.2e}"
-          f"  e {od['restitution_rel_error']:.2e}  ({od['nfev']} f-evals)")
-    print(f"  speed-up     : {res['speedup']:.0f}x  (goal >= {GOAL_SPEEDUP:.0f}x at <= {GOAL_ERROR:g}):"
-          f" {'met' if res['goal_met'] else 'NOT met'}")
-    print(f"  machine      : {res['machine']['platform']}, {res['machine']['cpu_count']} cpus, "
-          f"commit {res['machine']['commit']}")
+    print(
+        f"  exact solver : {ex['seconds'] * 1e6:9.1f} us   rel err t_c {ex['contact_time_rel_error']:.2e}"
+        f"  e {ex['restitution_rel_error']:.2e}"
+    )
+    print(
+        f"  DOP853 {RTOL_ODE:g}: {od['seconds'] * 1e6:9.1f} us   rel err t_c {od['contact_time_rel_error']:.2e}"
+        f"  e {od['restitution_rel_error']:.2e}  ({od['nfev']} f-evals)"
+    )
+    print(
+        f"  speed-up     : {res['speedup']:.0f}x  (goal >= {GOAL_SPEEDUP:.0f}x at <= {GOAL_ERROR:g}):"
+        f" {'met' if res['goal_met'] else 'NOT met'}"
+    )
+    print(
+        f"  machine      : {res['machine']['platform']}, {res['machine']['cpu_count']} cpus, "
+        f"commit {res['machine']['commit']}"
+    )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(res, fh, indent=2)

@@ -1,6 +1,11 @@
 """Reference implementation of the hidden-harmonic theory of contact dynamics."""
 
-from .damping import UniversalDamping, restitution_from_zeta, tsuji_coefficient, zeta_from_restitution
+from .damping import (
+    UniversalDamping,
+    restitution_from_zeta,
+    tsuji_coefficient,
+    zeta_from_restitution,
+)
 from .errors import (
     DomainError,
     ExpressionError,

@@ -144,10 +144,15 @@ def _cmd_solve(args) -> int:
     else:
         _print_transposed(
             f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']:.6g})",
-            rows, _SOLVE_ROWS, "v0", "impact speed v0 [m/s]",
+            rows,
+            _SOLVE_ROWS,
+            "v0",
+            "impact speed v0 [m/s]",
         )
-        print("e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
-              "(codes that forbid tension). J, T: section 4 definitions.")
+        print(
+            "e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
+            "(codes that forbid tension). J, T: section 4 definitions."
+        )
     return EXIT_OK
 
 
@@ -164,8 +169,11 @@ def _cmd_dt_crit(args) -> int:
     from .scenes import load_scene
 
     scene = load_scene(args.scene)
-    criterion = (parse_criterion(args.criterion, scene.kind) if args.criterion
-                 else default_criterion(scene.kind))
+    criterion = (
+        parse_criterion(args.criterion, scene.kind)
+        if args.criterion
+        else default_criterion(scene.kind)
+    )
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
     with _progress(sys.stderr.isatty()) as progress:
         results = search_scene(
@@ -193,8 +201,13 @@ def _cmd_dt_crit(args) -> int:
             ("recommended_dt", "recommended dt (this suite) [s]"),
             ("criterion", "criterion"),
         ]
-        _print_transposed(f"hcv dt-crit: {scene.name} (m = {scene.mass} kg)", rows, fields, "v0",
-                          "impact speed v0 [m/s]")
+        _print_transposed(
+            f"hcv dt-crit: {scene.name} (m = {scene.mass} kg)",
+            rows,
+            fields,
+            "v0",
+            "impact speed v0 [m/s]",
+        )
         for r in rows:
             ce = r.get("counterexample")
             if ce:

@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from .errors import HCVInputError
-from .potentials.base import Potential, is_mp
 from .potentials._checks import positive
+from .potentials.base import Potential, is_mp
 
 __all__ = ["HarmonicMap"]
 
@@ -81,7 +81,9 @@ class HarmonicMap:
         """Inverse map q(x): the overlap with U(q) = K x^2 / 2 (x >= 0)."""
         x = np.asarray(x, dtype=float)
         if np.any(~np.isfinite(x)) or np.any(x < 0):
-            raise HCVInputError(f"x must be finite and >= 0, got {x[~np.isfinite(x) | (x < 0)].flat[0]!r}")
+            raise HCVInputError(
+                f"x must be finite and >= 0, got {x[~np.isfinite(x) | (x < 0)].flat[0]!r}"
+            )
         return self.potential.inverse(0.5 * self.K * x**2)
 
     def dtau_dt(self, q):

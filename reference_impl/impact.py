@@ -417,8 +417,9 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
             q0 = mpmath.mpf(float(potential._inverse(np.array([float(u)]))[0]))
             if q0 == 0:
                 return q0
-            return mpmath.findroot(lambda q: potential._U(q) - u, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)),
-                                   solver="anderson")
+            return mpmath.findroot(
+                lambda q: potential._U(q) - u, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)), solver="anderson"
+            )
 
         def g(s):
             xv = x(s)

@@ -63,12 +63,19 @@ class Table1Cell:
     @property
     def computed_rounded(self) -> str:
         """The computed value rounded to the printed number of decimals."""
-        return mpmath.nstr(self.computed, self.decimals + len(self.printed.split(".")[0]),
-                           strip_zeros=False, min_fixed=-1, max_fixed=1000)
+        return mpmath.nstr(
+            self.computed,
+            self.decimals + len(self.printed.split(".")[0]),
+            strip_zeros=False,
+            min_fixed=-1,
+            max_fixed=1000,
+        )
 
     @property
     def match(self) -> bool:
-        return abs(self.computed - mpmath.mpf(self.printed)) <= mpmath.mpf(10) ** (-self.decimals) / 2
+        return (
+            abs(self.computed - mpmath.mpf(self.printed)) <= mpmath.mpf(10) ** (-self.decimals) / 2
+        )
 
     @property
     def difference_in_last_digit(self) -> float:
@@ -104,8 +111,9 @@ def table1_cells(dps: int = 50) -> list[Table1Cell]:
             v0 = mpmath.mpf(v_str)
             E = m * v0**2 / 2
             q0 = mpmath.mpf(pot.turning_point(float(E)))
-            d = mpmath.findroot(lambda q: pot.U(q) - E, (q0 * (1 - 1e-6), q0 * (1 + 1e-6)),
-                                solver="anderson")
+            d = mpmath.findroot(
+                lambda q, E=E: pot.U(q) - E, (q0 * (1 - 1e-6), q0 * (1 + 1e-6)), solver="anderson"
+            )
             F = pot.dU(d)
             dt = 2 * m * v0 / F
             for col, unit, val, pr in (

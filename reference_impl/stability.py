@@ -51,7 +51,9 @@ def stiffening_indicator(pot: Potential, q) -> np.ndarray:
 
 def geometry_class(pot: Potential, q_max: float) -> str:
     """'stiffening', 'softening', 'linear' or 'mixed' on (0, q_max] from 2UU'' - U'^2."""
-    q = q_max * np.concatenate([np.logspace(-8, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)[1:]])
+    q = q_max * np.concatenate(
+        [np.logspace(-8, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)[1:]]
+    )
     s = stiffening_indicator(pot, q)
     s = s[np.isfinite(s)]
     pos, neg = np.any(s > _INDICATOR_RTOL), np.any(s < -_INDICATOR_RTOL)
@@ -109,7 +111,9 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
         Impact speed (m/s); E = m v0^2 / 2 fixes q_max.
     """
     q_max = pot.turning_point(0.5 * m * v0 * v0)
-    grid = q_max * np.concatenate([np.logspace(-12, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)])
+    grid = q_max * np.concatenate(
+        [np.logspace(-12, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)]
+    )
     grid = np.unique(grid)
     r = _ratio(pot, grid)
     i = int(np.argmax(r))

@@ -94,8 +94,9 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
         def q_of_x(xv):
             u = mpmath.mpf(m) * xv * xv / 2
             q0 = mpmath.mpf(float(pot._inverse(np.array([float(u)]))[0]))
-            return mpmath.findroot(lambda q: pot._U(q) - u, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)),
-                                   solver="anderson")
+            return mpmath.findroot(
+                lambda q: pot._U(q) - u, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)), solver="anderson"
+            )
 
         def g(s):
             xv = x(s)
@@ -108,8 +109,13 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
             pts = [0, s] if s <= s_peak else [0, s_peak, s]
             ts.append(float(mpmath.quad(g, pts)))
             qs.append(float(q_of_x(x(s))))
-    return GroundTruth(float(ref["contact_time"]), float(ref["restitution"]),
-                       float(ref["max_penetration"]), np.array(ts), np.array(qs))
+    return GroundTruth(
+        float(ref["contact_time"]),
+        float(ref["restitution"]),
+        float(ref["max_penetration"]),
+        np.array(ts),
+        np.array(qs),
+    )
 
 
 def _median_time(fn: Callable[[], object]) -> float:
@@ -150,8 +156,19 @@ def _exact_rows(sc: WPScene, truth: GroundTruth) -> list[dict]:
     sol = solve_impact(sc.potential, sc.m, sc.v0, sc.zeta)
     q, _ = sol.state(truth.t_samples)
     secs = _median_time(lambda: solve_impact(sc.potential, sc.m, sc.v0, sc.zeta))
-    return [_row(sc, "exact", "harmonic map", secs, truth, sol.contact_time, sol.restitution,
-                 sol.max_penetration, q)]
+    return [
+        _row(
+            sc,
+            "exact",
+            "harmonic map",
+            secs,
+            truth,
+            sol.contact_time,
+            sol.restitution,
+            sol.max_penetration,
+            q,
+        )
+    ]
 
 
 def _damping(sc: WPScene):
@@ -174,9 +191,12 @@ def _ivp_rows(sc: WPScene, truth: GroundTruth, methods, rtols) -> list[dict]:
     C = _damping(sc)
     for method in methods:
         for rtol in rtols:
+
             def run(method=method, rtol=rtol, dense=False):
-                return integrate_impact(sc.potential, sc.m, sc.v0, C=C, method=method, rtol=rtol,
-                                        dense_output=dense)
+                return integrate_impact(
+                    sc.potential, sc.m, sc.v0, C=C, method=method, rtol=rtol, dense_output=dense
+                )
+
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
@@ -184,16 +204,39 @@ def _ivp_rows(sc: WPScene, truth: GroundTruth, methods, rtols) -> list[dict]:
                     q = np.asarray(res.sol(truth.t_samples))[0] if res.sol is not None else np.nan
                     secs = _median_time(run)
             except Exception as exc:  # a method that fails at this tolerance is a data point
-                rows.append({"scene": sc.name, "method": method, "setting": f"rtol={rtol:g}",
-                             "seconds": math.nan, "failure": str(exc).splitlines()[0]})
+                rows.append(
+                    {
+                        "scene": sc.name,
+                        "method": method,
+                        "setting": f"rtol={rtol:g}",
+                        "seconds": math.nan,
+                        "failure": str(exc).splitlines()[0],
+                    }
+                )
                 continue
-            rows.append(_row(sc, method, f"rtol={rtol:g}", secs, truth, res.contact_time,
-                             res.restitution, res.q_max, q))
+            rows.append(
+                _row(
+                    sc,
+                    method,
+                    f"rtol={rtol:g}",
+                    secs,
+                    truth,
+                    res.contact_time,
+                    res.restitution,
+                    res.q_max,
+                    q,
+                )
+            )
     return rows
 
 
-def work_precision(scenes=None, *, quick: bool = False, verlet: Callable | None = None,
-                   progress: Callable[[str], None] | None = None) -> pd.DataFrame:
+def work_precision(
+    scenes=None,
+    *,
+    quick: bool = False,
+    verlet: Callable | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> pd.DataFrame:
     """Run the study and return one row per (scene, method, setting).
 
     Parameters

@@ -44,7 +44,9 @@ def assert_less(got, bound, *, claim: str, call: str, what: str = "value") -> No
     """Assert got < bound (elementwise) with a claim-tagged message."""
     g = np.asarray(got, dtype=float)
     if not np.all(g < bound):
-        raise AssertionError(f"got {what} = {_fmt(g.max())}, should be < {bound:.6g} [{claim}, {call}]")
+        raise AssertionError(
+            f"got {what} = {_fmt(g.max())}, should be < {bound:.6g} [{claim}, {call}]"
+        )
 
 
 def assert_true(cond: bool, *, got: str, should: str, claim: str, call: str) -> None:

@@ -48,7 +48,9 @@ def ellipsoids() -> st.SearchStrategy[Ellipsoid]:
 
 
 def spheres() -> st.SearchStrategy[Sphere]:
-    return st.builds(Sphere, R=log_uniform(1e-3, 1e-1), Kn=log_uniform(1e6, 1e12), alpha=st.floats(0.25, 1.5))
+    return st.builds(
+        Sphere, R=log_uniform(1e-3, 1e-1), Kn=log_uniform(1e6, 1e12), alpha=st.floats(0.25, 1.5)
+    )
 
 
 def sums() -> st.SearchStrategy[SumPotential]:
@@ -75,3 +77,41 @@ def speeds() -> st.SearchStrategy[float]:
 
 def zetas() -> st.SearchStrategy[float]:
     return st.floats(0.0, 0.9)
+
+
+# -- impacts (appended for the section 5/8 ODE tests) -----------------------------
+
+# Largest drawn turning point on a finite-domain potential, as a fraction of q_sup
+# (= 2a for the caps): 0.35 q_sup = 0.7 a keeps every impact inside the elastic
+# domain delta <= 0.735 a that section 10 calls physically valid.
+_CAP_QMAX_FRACTION_MAX = 0.35
+# Smallest drawn fraction: three decades below the largest.
+_CAP_QMAX_FRACTION_MIN = 3.5e-4
+
+
+@st.composite
+def impacts(draw, potentials=None):
+    """Impact cases ``(potential, m, v0)`` whose turning point exists.
+
+    Power laws and sums take ``v0`` from `speeds`; potentials with a finite
+    domain (the caps) draw the turning point q_max as a fraction of ``q_sup`` and
+    derive ``v0 = sqrt(2 U(q_max) / m)``, so that no case leaves the domain.
+
+    Parameters
+    ----------
+    potentials : SearchStrategy, optional
+        Strategy for the potential; default `monotone_potentials`.
+    """
+    import math
+
+    pot = draw(potentials if potentials is not None else monotone_potentials())
+    m = draw(masses())
+    if math.isfinite(pot.q_sup):
+        frac = draw(log_uniform(_CAP_QMAX_FRACTION_MIN, _CAP_QMAX_FRACTION_MAX))
+        v0 = math.sqrt(2.0 * float(pot.U(frac * pot.q_sup)) / m)
+    else:
+        v0 = draw(speeds())
+    return pot, m, v0
+
+
+__all__ += ["impacts"]

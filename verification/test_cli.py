@@ -11,13 +11,28 @@ import pytest
 
 from verification.assertions import assert_close, assert_true
 
-SOLVE_FIELDS = {"v0", "max_penetration", "max_force", "dt_safe", "dt_safe_shortcut", "geometry",
-                "contact_time", "restitution", "action", "period"}
+SOLVE_FIELDS = {
+    "v0",
+    "max_penetration",
+    "max_force",
+    "dt_safe",
+    "dt_safe_shortcut",
+    "geometry",
+    "contact_time",
+    "restitution",
+    "action",
+    "period",
+}
 
 
 def _hcv(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "reference_impl.cli", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+    )
 
 
 @pytest.mark.claim("table1")
@@ -26,16 +41,31 @@ def test_solve_json_embedded_paper_scene():
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     rows = out["results"]
-    assert_true([row["v0"] for row in rows] == [0.5, 0.99, 1.5], got=str([row["v0"] for row in rows]),
-                should="[0.5, 0.99, 1.5]", claim="table1", call="hcv solve paper-ellipsoid --json")
+    assert_true(
+        [row["v0"] for row in rows] == [0.5, 0.99, 1.5],
+        got=str([row["v0"] for row in rows]),
+        should="[0.5, 0.99, 1.5]",
+        claim="table1",
+        call="hcv solve paper-ellipsoid --json",
+    )
     for row in rows:
         missing = SOLVE_FIELDS - set(row)
-        assert_true(not missing, got=f"missing {missing}", should="all fields", claim="table1",
-                    call="hcv solve --json")
+        assert_true(
+            not missing,
+            got=f"missing {missing}",
+            should="all fields",
+            claim="table1",
+            call="hcv solve --json",
+        )
         # Conservative: the paper's T is four quarter periods = twice the contact time
         # (both from independent quadratures: action.py in q, impact.py in virtual time).
-        assert_close(row["period"], 2 * row["contact_time"], rtol=1e-13, claim="thm1-period",
-                     call="hcv solve --json period vs contact_time")
+        assert_close(
+            row["period"],
+            2 * row["contact_time"],
+            rtol=1e-13,
+            claim="thm1-period",
+            call="hcv solve --json period vs contact_time",
+        )
 
 
 def test_solve_table_output():
@@ -47,19 +77,39 @@ def test_solve_table_output():
 @pytest.mark.parametrize(
     "content, needle",
     [
-        ("mass = nan\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n", "nan"),
+        (
+            "mass = nan\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n",
+            "nan",
+        ),
         ("mass = 1.0\nvelocities = [1.0\n", "TOML"),
-        ("mass = 0.0\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n", "mass"),
+        (
+            "mass = 0.0\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n",
+            "mass",
+        ),
         ("mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'banana'\n", "banana"),
-        ("mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'expression'\nU = 'q**2 - q**3'\n",
-         "not > 0"),
-        ("mass = 1.0\nvelocities = [10.0]\n[potential]\nfamily = 'expression'\nU = '1 - exp(-q)'\n",
-         "turning point"),
-        ("mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'expression'\n"
-         "U = \"__import__('os').system('touch SENTINEL')\"\n", "__import__"),
+        (
+            "mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'expression'\nU = 'q**2 - q**3'\n",
+            "not > 0",
+        ),
+        (
+            "mass = 1.0\nvelocities = [10.0]\n[potential]\nfamily = 'expression'\nU = '1 - exp(-q)'\n",
+            "turning point",
+        ),
+        (
+            "mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'expression'\n"
+            "U = \"__import__('os').system('touch SENTINEL')\"\n",
+            "__import__",
+        ),
     ],
-    ids=["nan-mass", "bad-toml", "zero-mass", "unknown-family", "non-monotone", "no-turning-point",
-         "hostile-expression"],
+    ids=[
+        "nan-mass",
+        "bad-toml",
+        "zero-mass",
+        "unknown-family",
+        "non-monotone",
+        "no-turning-point",
+        "hostile-expression",
+    ],
 )
 def test_bad_input_exit_2_one_line(tmp_path: Path, content, needle):
     scene = tmp_path / "scene.toml"
@@ -90,13 +140,25 @@ def test_dt_crit_json_reports_each_velocity():
     rows = json.loads(r.stdout)["results"]
     assert [row["v0"] for row in rows] == [0.1, 1.0, 5.0]
     for row in rows:
-        for key in ("dt_safe", "dt_safe_shortcut", "dt_crit", "ratio", "criterion", "holds",
-                    "counterexample"):
+        for key in (
+            "dt_safe",
+            "dt_safe_shortcut",
+            "dt_crit",
+            "ratio",
+            "criterion",
+            "holds",
+            "counterexample",
+        ):
             assert key in row, key
         # Power laws are scale invariant: dt_crit/dt_safe cannot depend on v0. The
         # bisection resolves the ratio to 0.1 % of dt_safe.
-        assert_close(row["ratio"], rows[0]["ratio"], rtol=2e-3, claim="sec6-dt-safe-bound",
-                     call="hcv dt-crit hertz --json")
+        assert_close(
+            row["ratio"],
+            rows[0]["ratio"],
+            rtol=2e-3,
+            claim="sec6-dt-safe-bound",
+            call="hcv dt-crit hertz --json",
+        )
 
 
 def test_dt_crit_bad_criterion_exit_2():

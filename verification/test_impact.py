@@ -45,8 +45,13 @@ def test_conservative_power_law_closed_form(p):
     assert_close(sol.contact_time, t_ref, rtol=QUAD_RTOL, claim="thm2-harmonic", call=call)
     # q_max is x_peak mapped through the exact inverse: a few ulps.
     assert_close(sol.max_penetration, q_ref, rtol=1e-14, claim="thm2-harmonic", call=call)
-    assert_true(sol.restitution == 1.0, got=str(sol.restitution), should="1 (conservative)",
-                claim="thm2-harmonic", call=call)
+    assert_true(
+        sol.restitution == 1.0,
+        got=str(sol.restitution),
+        should="1 (conservative)",
+        claim="thm2-harmonic",
+        call=call,
+    )
 
 
 @pytest.mark.mpmath
@@ -65,10 +70,13 @@ def test_conservative_contact_time_vs_mpmath_physical_integral(pot, m, v0):
         E = mpmath.mpf(m) * mpmath.mpf(v0) ** 2 / 2
         q0 = mpmath.mpf(sol.max_penetration)
         # Bracketing solver: a secant step could leave the cap's domain [0, 2a].
-        q_max = mpmath.findroot(lambda q: pot.U(q) - E, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)),
-                                solver="anderson")
-        ref = 2 * mpmath.sqrt(mpmath.mpf(m) / 2) * mpmath.quad(
-            lambda q: 1 / mpmath.sqrt(E - pot.U(q)), [0, q_max / 2, q_max]
+        q_max = mpmath.findroot(
+            lambda q: pot.U(q) - E, (q0 * (1 - 1e-9), q0 * (1 + 1e-9)), solver="anderson"
+        )
+        ref = (
+            2
+            * mpmath.sqrt(mpmath.mpf(m) / 2)
+            * mpmath.quad(lambda q: 1 / mpmath.sqrt(E - pot.U(q)), [0, q_max / 2, q_max])
         )
     call = f"solve_impact({pot!r}, {m}, {v0})"
     assert_close(sol.contact_time, float(ref), rtol=QUAD_RTOL, claim="thm2-harmonic", call=call)
@@ -86,12 +94,27 @@ def test_power_law_scaling_law(p, zeta, v1, v2):
     a, b = solve_impact(pot, 0.02, v1, zeta), solve_impact(pot, 0.02, v2, zeta)
     expo = (1.0 - p) / (1.0 + p)
     call = f"solve_impact(PowerLaw(1e6, {p}), 0.02, v0 in ({v1}, {v2}), zeta={zeta})"
-    assert_close(b.contact_time, a.contact_time * (v2 / v1) ** expo, rtol=QUAD_RTOL,
-                 claim="thm3-damping-iff", call=call)
-    assert_close(b.contact_time_zero_force, a.contact_time_zero_force * (v2 / v1) ** expo,
-                 rtol=QUAD_RTOL, claim="thm3-damping-iff", call=call)
-    assert_close(b.max_penetration, a.max_penetration * (v2 / v1) ** (2 / (p + 1)), rtol=1e-14,
-                 claim="thm3-damping-iff", call=call)
+    assert_close(
+        b.contact_time,
+        a.contact_time * (v2 / v1) ** expo,
+        rtol=QUAD_RTOL,
+        claim="thm3-damping-iff",
+        call=call,
+    )
+    assert_close(
+        b.contact_time_zero_force,
+        a.contact_time_zero_force * (v2 / v1) ** expo,
+        rtol=QUAD_RTOL,
+        claim="thm3-damping-iff",
+        call=call,
+    )
+    assert_close(
+        b.max_penetration,
+        a.max_penetration * (v2 / v1) ** (2 / (p + 1)),
+        rtol=1e-14,
+        claim="thm3-damping-iff",
+        call=call,
+    )
 
 
 @pytest.mark.claim("thm3-damping-iff")
@@ -103,16 +126,26 @@ def test_restitution_closed_forms(pot, zeta, v0):
     except NoTurningPointError:
         return  # a cap too small for this energy: the scene is invalid, not the solver
     call = f"solve_impact({pot!r}, {m}, {v0}, {zeta})"
-    assert_close(sol.restitution, restitution_from_zeta(zeta), rtol=1e-15,
-                 claim="thm3-damping-iff", call=call)
+    assert_close(
+        sol.restitution,
+        restitution_from_zeta(zeta),
+        rtol=1e-15,
+        claim="thm3-damping-iff",
+        call=call,
+    )
     # Zero-force end: x''=0 at twice the peak virtual time, e_F = exp(-2 zeta acos(zeta)/wd).
     wd = math.sqrt(1 - zeta * zeta)
     e_f = math.exp(-2 * zeta * math.acos(zeta) / wd) if zeta > 0 else 1.0
     # The closed form and the solver's x'(2 s_peak) differ by the round-off of
     # exp/sin/cos at arguments O(1): a few ulps.
     assert_close(sol.restitution_zero_force, e_f, rtol=1e-14, claim="thm3-damping-iff", call=call)
-    assert_true(sol.contact_time_zero_force <= sol.contact_time, got=str(sol.contact_time_zero_force),
-                should=f"<= contact_time {sol.contact_time}", claim="thm3-damping-iff", call=call)
+    assert_true(
+        sol.contact_time_zero_force <= sol.contact_time,
+        got=str(sol.contact_time_zero_force),
+        should=f"<= contact_time {sol.contact_time}",
+        claim="thm3-damping-iff",
+        call=call,
+    )
 
 
 def test_state_endpoints_and_continuity():
@@ -125,8 +158,13 @@ def test_state_endpoints_and_continuity():
     t = np.linspace(0, sol.contact_time, 401)
     q, v = sol.state(t)
     # The peak of q(t) is the solver's max_penetration; q never exceeds it.
-    assert_true(q.max() <= sol.max_penetration * (1 + 1e-14), got=f"{q.max()!r}",
-                should=f"<= {sol.max_penetration!r}", claim="impl", call="state(t)")
+    assert_true(
+        q.max() <= sol.max_penetration * (1 + 1e-14),
+        got=f"{q.max()!r}",
+        should=f"<= {sol.max_penetration!r}",
+        claim="impl",
+        call="state(t)",
+    )
     # v = dq/dt: compare with a centred difference (error O(h^2 q''') ~ 1e-5 relative).
     h = t[1] - t[0]
     dq = (q[2:] - q[:-2]) / (2 * h)

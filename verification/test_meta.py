@@ -34,17 +34,32 @@ def _claim_tags() -> dict[str, list[str]]:
 def test_every_claim_has_a_test():
     tags = _claim_tags()
     missing = [c.id for c in CLAIMS if c.id not in tags]
-    assert_true(not missing, got=f"claims without tests {missing}", should="none",
-                claim="meta", call="_claim_tags()")
+    assert_true(
+        not missing,
+        got=f"claims without tests {missing}",
+        should="none",
+        claim="meta",
+        call="_claim_tags()",
+    )
 
 
 def test_every_tag_names_a_claim():
     unknown = {t: f for t, f in _claim_tags().items() if t not in set(claim_ids())}
-    assert_true(not unknown, got=f"unknown tags {unknown}", should="none", claim="meta",
-                call="_claim_tags()")
+    assert_true(
+        not unknown,
+        got=f"unknown tags {unknown}",
+        should="none",
+        claim="meta",
+        call="_claim_tags()",
+    )
 
 
 def test_claim_ids_unique():
     ids = claim_ids()
-    assert_true(len(ids) == len(set(ids)), got=f"{len(ids)} ids, {len(set(ids))} distinct",
-                should="all distinct", claim="meta", call="claim_ids()")
+    assert_true(
+        len(ids) == len(set(ids)),
+        got=f"{len(ids)} ids, {len(set(ids))} distinct",
+        should="all distinct",
+        claim="meta",
+        call="claim_ids()",
+    )

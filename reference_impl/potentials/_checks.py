@@ -14,9 +14,13 @@ def finite(name: str, value, owner: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise HCVInputError(f"{owner}: parameter {name} must be a real number, got {value!r}") from None
+        raise HCVInputError(
+            f"{owner}: parameter {name} must be a real number, got {value!r}"
+        ) from None
     if isinstance(value, bool) or not math.isfinite(v):
-        raise HCVInputError(f"{owner}: parameter {name} must be a finite real number, got {value!r}")
+        raise HCVInputError(
+            f"{owner}: parameter {name} must be a finite real number, got {value!r}"
+        )
     return v
 
 

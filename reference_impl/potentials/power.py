@@ -49,7 +49,9 @@ class PowerLaw(Potential):
 
     def _inverse(self, u: np.ndarray) -> np.ndarray:
         # Exact inverse; U is unbounded, so every energy has a turning point.
-        return (self.leading_exponent * np.asarray(u, float) / self.k) ** (1.0 / self.leading_exponent)
+        return (self.leading_exponent * np.asarray(u, float) / self.k) ** (
+            1.0 / self.leading_exponent
+        )
 
     def check_monotone(self, q_max: float) -> None:
         # U' = k q^p > 0 for every q > 0 whenever k > 0, which __init__ enforces.
