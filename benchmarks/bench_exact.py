@@ -134,6 +134,9 @@ def main(argv=None) -> int:
         f"commit {res['machine']['commit']}"
     )
     if args.json:
+        import os
+
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as fh:
             json.dump(res, fh, indent=2)
     return 0

@@ -94,7 +94,9 @@ def _search_time(pot, m, v0, kind) -> tuple[float, float, int]:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller workloads")
+    ap.add_argument("--json", help="also write the figures to this JSON file (with machine info)")
     args = ap.parse_args(argv)
+    out: dict = {"goals": {"lane_steps_per_s_per_core": 2e7, "search_seconds": 1.0}}
     print(_machine())
     t = time.perf_counter()
     _rate("numba", 4, 10)  # compile or load from the cache
@@ -103,11 +105,16 @@ def main(argv=None) -> None:
     r_nb, c_nb, w_nb = _rate("numba", lanes, steps)
     print(f"numba  engine, PowerLaw p={_P_GENERIC}, {lanes} lanes x {steps} steps: "
           f"{r_nb:.3g} lane-steps/s/core (cpu {c_nb:.2f} s, wall {w_nb:.2f} s)")
+    out["numba"] = {"lanes": lanes, "steps": steps, "lane_steps_per_s_per_core": r_nb}
+    out["numpy"] = []
     for nl, ns in ((1024, 500), (16384, 100)) if args.quick else ((1024, 2000), (16384, 300)):
         r_np, c_np, w_np = _rate("numpy", nl, ns)
         print(f"numpy  engine, PowerLaw p={_P_GENERIC}, {nl} lanes x {ns} steps: "
               f"{r_np:.3g} lane-steps/s/core (cpu {c_np:.2f} s, wall {w_np:.2f} s); "
               f"numba/numpy = {r_nb / r_np:.1f}")
+        out["numpy"].append({"lanes": nl, "steps": ns, "lane_steps_per_s_per_core": r_np,
+                             "numba_over_numpy": r_nb / r_np})
+    out["searches"] = []
     for label, pot, m, v0, kind in (
         ("Hertz p=1.5", PowerLaw(1.0, 1.5), 1.0, 1.0, "two-sided"),
         ("Hertz p=1.5", PowerLaw(1.0, 1.5), 1.0, 1.0, "two-walls"),
@@ -117,6 +124,17 @@ def main(argv=None) -> None:
         cpu, wall, work = _search_time(pot, m, v0, kind)
         print(f"one full search to 0.1 % of dt_safe, {label}, {kind}: cpu {cpu:.3f} s, "
               f"wall {wall:.3f} s ({work:.3g} lane-steps)")
+        out["searches"].append({"case": label, "kind": kind, "cpu_s": cpu, "wall_s": wall,
+                                "lane_steps": work})
+    if args.json:
+        import json
+
+        from benchmarks._machine import machine_info
+
+        out["machine"] = machine_info()
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        with open(args.json, "w") as fh:
+            json.dump(out, fh, indent=2)
 
 
 if __name__ == "__main__":
