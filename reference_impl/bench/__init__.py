@@ -1,0 +1,41 @@
+"""Benchmark and CI gate for third-party contact codes (``hcv bench``).
+
+`run_bench` runs scenes through an adapter (`reference_impl.adapters`) and
+through the exact solution, evaluates the scorecard metrics
+(`reference_impl.bench.metrics`) against tolerances (`load_tolerances`, defaults
+in ``tolerances.toml``), and writes JSON and JUnit reports
+(`reference_impl.bench.report`). ``BenchResult.exit_status(gate=True)`` is 0
+when every metric passes and 1 otherwise; usage and configuration errors raise
+`HCVInputError` (exit status 2).
+"""
+
+from .metrics import METRICS, MetricResult, metric_names
+from .report import (
+    plot_speed_error,
+    render_scorecard,
+    render_speed_error,
+    scorecard_markdown,
+    write_json,
+    write_junit,
+)
+from .runner import DEFAULT_SCENES, BenchResult, bench_scene_names, resolve_scenes, run_bench
+from .tolerances import default_tolerances, load_tolerances
+
+__all__ = [
+    "DEFAULT_SCENES",
+    "METRICS",
+    "BenchResult",
+    "MetricResult",
+    "bench_scene_names",
+    "default_tolerances",
+    "load_tolerances",
+    "metric_names",
+    "plot_speed_error",
+    "render_scorecard",
+    "render_speed_error",
+    "resolve_scenes",
+    "run_bench",
+    "scorecard_markdown",
+    "write_json",
+    "write_junit",
+]

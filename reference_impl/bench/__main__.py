@@ -1,0 +1,8 @@
+"""``python -m reference_impl.bench ADAPTER ...``: the ``hcv bench`` command stand-alone."""
+
+import sys
+
+from .command import main
+
+if __name__ == "__main__":
+    sys.exit(main())

