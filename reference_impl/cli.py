@@ -156,6 +156,26 @@ def _cmd_solve(args) -> int:
     return EXIT_OK
 
 
+def _cmd_report(args) -> int:
+    from rich.console import Console
+
+    from .report import build_report
+
+    with Console(stderr=True).status("hcv report: starting") as status:
+        results = build_report(
+            args.out,
+            quick=args.quick,
+            progress=lambda text: status.update(f"hcv report: {text}"),
+        )
+    for c in results["claims"]:
+        print(f"{c['verdict']:>12}  {c['id']}")
+    print(
+        f"wrote {args.out}/index.html, index.md, results.json, figures/ "
+        f"in {results['timings_seconds']['total']:.0f} s"
+    )
+    return EXIT_OK
+
+
 def _cmd_scenes(args) -> int:
     from .scenes import embedded_scenes
 
@@ -262,8 +282,17 @@ def _parser() -> argparse.ArgumentParser:
         "(energy growth), 'tol=0.01,n_phases=16' for a single impact (energy gain)",
     )
     d.set_defaults(func=_cmd_dt_crit)
+    rp = sub.add_parser(
+        "report", help="run every verification; write HTML, Markdown, JSON and figures"
+    )
+    rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
+    rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
+    rp.set_defaults(func=_cmd_report)
     ls = sub.add_parser("scenes", help="list the embedded scenes")
     ls.set_defaults(func=_cmd_scenes)
+    from .bench.command import add_bench_parser
+
+    add_bench_parser(sub)
     return p
 
 

@@ -30,8 +30,8 @@ from functools import lru_cache
 import mpmath
 import numpy as np
 from scipy import integrate
-from scipy.special import roots_jacobi
 from scipy.optimize import elementwise
+from scipy.special import roots_jacobi
 
 from ._quadrature import DEFAULT_LEVEL, integrate_left_singular, rule, sums_from_values
 from .damping import _check_zeta
