@@ -1,0 +1,399 @@
+"""HTML (self-contained) and Markdown renderings of the results dict.
+
+Both are built from the same section builders: each returns a list of blocks
+(heading, paragraph, table, image, list, details) that the two writers format.
+Every number shown comes from ``results``.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+
+from ._common import g
+
+VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
+TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
+
+
+# ----------------------------------------------------------------------------------
+# blocks
+# ----------------------------------------------------------------------------------
+def H(level, text, anchor=None):
+    return ("h", level, text, anchor)
+
+
+def P(text, cls=None):
+    return ("p", text, cls)
+
+
+def T(headers, rows, flags=None, cls=None):
+    """Table; flags[i][j] in {None, "bad", "good"} colours a cell."""
+    return ("table", headers, rows, flags, cls)
+
+
+def IMG(name, caption):
+    return ("img", name, caption)
+
+
+def UL(items):
+    return ("ul", items)
+
+
+def DETAILS(summary, blocks):
+    return ("details", summary, blocks)
+
+
+def _num(x, d=4):
+    return g(x, d) if not isinstance(x, (bool, str)) else ("yes" if x is True else
+                                                            "no" if x is False else x)
+
+
+# ----------------------------------------------------------------------------------
+# sections
+# ----------------------------------------------------------------------------------
+def _header(r) -> list:
+    env = r["environment"]
+    commit = env.get("git_commit") or "unknown"
+    dirty = " (with uncommitted changes)" if env.get("git_dirty") else ""
+    blocks = [
+        P(f"Generated {r['generated_utc']} by `hcv report`{' --quick' if r['mode'] == 'quick' else ''}"
+          f" in {r['timings_seconds']['total']:.1f} s on {env['cpu_count']} CPU(s); commit "
+          f"{commit[:12]}{dirty}. Every result below was computed by this run. Numbers typed in "
+          f"are inputs only: the paper's data (Table 1 as printed, the Fig. 1 settings, "
+          f"0.735 a, 3e-13), the parameters of the scenes and cases, and the tolerances of the "
+          f"verdict rules, which are stated with each verdict."),
+    ]
+    if r["mode"] == "quick":
+        blocks.append(P("Quick mode: this report leaves out part of the study:", "warn"))
+        blocks.append(UL(r["quick_drops"]))
+    counts = {v: sum(c["verdict"] == v for c in r["claims"]) for v in VERDICT_MARK}
+    blocks.append(P("Verdicts: " + ", ".join(f"{n} {v}" for v, n in counts.items() if n) + "."))
+    return blocks
+
+
+def _ledger(r) -> list:
+    rows, flags = [], []
+    for c in r["claims"]:
+        rows.append([c["id"], c["section"], VERDICT_MARK[c["verdict"]],
+                     c["evidence"], ", ".join(c["tests"]) or "–"])
+        flags.append([None, None, "good" if c["verdict"] == "verified" else
+                      "bad" if c["verdict"] == "refuted" else "warn", None, None])
+    statements = UL([f"{c['id']} ({c['section']}): {c['statement']} Rule: {c['rule']}."
+                     for c in r["claims"]])
+    return [H(2, "1. Claims ledger", "claims"),
+            T(["claim", "paper section", "verdict", "evidence (measured in this run)", "tests"],
+              rows, flags, cls="ledger"),
+            DETAILS("The claims as the paper states them, and the rule that decided each verdict",
+                    [statements])]
+
+
+def _table1(r) -> list:
+    headers = ["v0 [m/s]"]
+    for col in ("delta_max", "max_force", "dt_safe"):
+        unit = r["table1"][0][col]["unit"]
+        headers += [f"{TABLE1_NAMES[col]} printed [{unit}]", f"{TABLE1_NAMES[col]} computed",
+                    "Δ [last digit]"]
+    rows, flags, bad = [], [], 0
+    for row in r["table1"]:
+        cells, fl = [row["v0"]], [None]
+        for col in ("delta_max", "max_force", "dt_safe"):
+            c = row[col]
+            ok = c["match"]
+            bad += not ok
+            mark = "" if ok else "✘ "
+            cells += [c["printed"], f"{mark}{c['computed_rounded']} ({c['computed']})",
+                      f"{c['difference_in_last_digit']:+.2f}"]
+            fl += [None if ok else "bad", "good" if ok else "bad", None if ok else "bad"]
+        rows.append(cells)
+        flags.append(fl)
+    return [H(2, "2. Table 1 reproduced", "table1"),
+            P("The paper's ellipsoid (a = 0.015 m, b = c = 0.008 m, m = 0.05 kg, Kn = 1e8, "
+              "α = 0.5) recomputed at 50 digits: δmax solves U(δ) = m v0²/2, the force is "
+              "U'(δmax), Δt_safe = 2 m v0 / U'(δmax). Computed values are rounded to the printed "
+              "number of digits (15 significant digits in parentheses); Δ is computed − printed "
+              "in units of the printed last digit. Cells marked ✘ do not match."),
+            T(headers, rows, flags),
+            P(next(c["evidence"] for c in r["claims"] if c["id"] == "table1")
+              + f" ({bad} cells flagged above).")]
+
+
+def _fig1(r) -> list:
+    f = r["fig1"]
+    rows = [[_num(x["v0"], 3), _num(x["C0"]), _num(x["zeta"]), str(x["steps"]),
+             _num(x["drift"], 3), _num(x["H_end_over_H0"], 5), _num(x["restitution"], 6),
+             _num(x["restitution_theory"], 6), _num(x["identity_err"], 2),
+             _num(x["exact_dev"], 2)] for x in f["runs"]]
+    claimed = next(c for c in r["claims"] if c["id"] == "fig1")["measured"]["claimed"]
+    flags = [[None] * 4 + ["bad" if x["drift"] >= claimed else "good"] + [None] * 5
+             for x in f["runs"]]
+    return [H(2, "3. Fig. 1 regenerated", "fig1"),
+            P(f"Ellipsoid, α = 0.5, Kn = 1e8, K = 1, M = 0.75; C0 = 0 dashed and 0.5 solid; "
+              f"v0 = 0.50, 0.99, 1.50 m/s; physical ODE integrated with RK45 (Dormand–Prince "
+              f"5(4), as ode45) at RelTol = {g(f['rtol'])}, AbsTol = {g(f['atol'])}, with τ as "
+              f"an extra state. Panel (d) is not in the paper: the measured drift of "
+              f"H = M x'²/2 + K x²/2 at the solver's steps."),
+            IMG("fig1.png", "Fig. 1: (a) physical phase space, (b) transformed phase space, "
+                            "(c) time series, (d) transformed-energy drift (C0 = 0)."),
+            T(["v0 [m/s]", "C0", "ζ = C0/(2√(KM))", "RK45 steps", "max |H/H0 − 1|",
+               "H_end/H0", "e measured", "e = exp(−πζ/√(1−ζ²))", "|H/E_phys − 1|",
+               "max |x − x_exact(τ)| / amplitude"], rows, flags),
+            P(next(c["evidence"] for c in r["claims"] if c["id"] == "fig1"))]
+
+
+def _dtmap(r) -> list:
+    from ._dtmap import describe_recommendation
+
+    rows = r["dt_crit_map"]
+    by_scene = {}
+    for x in rows:
+        by_scene.setdefault(x["scene"], []).append(x)
+    summ = []
+    for scene, xs in by_scene.items():
+        usable = [x for x in xs if not x["degenerate"]]
+        fails = [x for x in usable if not x["holds"]]
+        ratios = [x["ratio"] for x in usable if isinstance(x["ratio"], float)]
+        rec = [x["recommended_ratio"] for x in xs if isinstance(x["recommended_ratio"], float)]
+        summ.append([scene, str(len(xs)), str(len(xs) - len(usable)),
+                     f"{len(fails)}/{len(usable)}", _num(min(ratios), 4) if ratios else "–",
+                     _num(max(ratios), 4) if ratios else "–", _num(min(rec), 3) if rec else "–"])
+    full = [[x["case"], _num(x["v0"], 3), x["scene"], x["geometry"], _num(x["dt_safe"]),
+             _num(x["dt_crit"]), _num(x["ratio"], 4), "yes" if x["holds"] else "NO",
+             _num(x["recommended_dt"]), _num(x["recommended_ratio"], 3),
+             x["counterexample_status"] or ""] for x in rows]
+    fflags = [[None] * 6 + ["bad" if not x["holds"] and not x["degenerate"] else None,
+                            "bad" if not x["holds"] else "good", None,
+                            "bad" if isinstance(x["recommended_ratio"], float)
+                            and x["recommended_ratio"] <= 1 else None, None] for x in rows]
+    crit = sorted({x["criterion"] for x in rows})
+    return [H(2, "4. Critical-step map", "dtcrit"),
+            P("Δt_crit is the smallest step at which velocity Verlet fails (searched on a grid and "
+              "refined to 0.1 % of Δt_safe), for one impact (`impact`), a particle oscillating "
+              "through a two-sided contact U(|q|) (`two-sided`) and repeated impacts between two "
+              "walls (`two-walls`). Criteria: " + "; ".join(crit) + "."),
+            IMG("dt_crit_map.png", "Δt_crit/Δt_safe against p for each scene, with the bound's "
+                                   "line (1) and the recommended corrected step (dashed/hollow)."),
+            P(describe_recommendation()),
+            T(["scene", "cases", "Δt_safe = 0 (degenerate)", "bound fails", "min Δt_crit/Δt_safe",
+               "max Δt_crit/Δt_safe", "min Δt_crit/Δt_rec"], summ),
+            P(next(c["evidence"] for c in r["claims"] if c["id"] == "sec6-dt-safe-bound")),
+            DETAILS(f"All {len(rows)} rows of the map (times in s)",
+                    [T(["case", "v0", "scene", "geometry", "Δt_safe", "Δt_crit",
+                        "Δt_crit/Δt_safe", "bound holds", "Δt_rec", "Δt_crit/Δt_rec",
+                        "failure"], full, fflags)])]
+
+
+def _wp(r) -> list:
+    present = list(dict.fromkeys(x["scene"] for x in r["work_precision"]))
+    scenes = {k: v for k, v in r["work_precision_scenes"].items() if k in present}
+    summ = r["work_precision_summary"]
+    tkeys = [k for k in summ[0] if k.startswith("fastest to")]
+    summ_rows = []
+    for x in summ:
+        row = [x["scene"], x["method"], _num(x["best max error"], 2), x["at setting"],
+               _num(x["time at best [s]"], 3)]
+        for k in tkeys:
+            t = x[k]
+            row += [t["setting"], _num(t["seconds"], 3),
+                    _num(t["exact_faster_by"], 3) if x["method"] != "exact" else "–"]
+        summ_rows.append(row)
+    headers = ["scene", "method", "best max error", "at setting", "time [s]"]
+    for k in tkeys:
+        tgt = k.replace("fastest to ", "")
+        headers += [f"fastest setting to {tgt}", "time [s]", "time / exact solver time"]
+    full = []
+    for x in r["work_precision"]:
+        full.append([x["scene"], x["method"], x["setting"], _num(x.get("seconds"), 3)]
+                    + [_num(x.get(k), 2) for k in ("err_contact_time", "err_restitution",
+                                                    "err_max_penetration", "err_trajectory")]
+                    + [x.get("failure") or ""])
+    blocks = [H(2, "5. Speed against error", "wp"),
+              P("Work-precision diagrams as SciMLBenchmarks draws them: relative error against "
+                "wall time per impact (median of repeats in one process), against a 30-digit "
+                "mpmath ground truth (`workprecision.ground_truth`). Runs: "
+                + r["work_precision_settings"] + ". Velocity Verlet is the lane engine's "
+                "algorithm and force kernel (compiled), with the contact starting at a step "
+                "boundary and the dashpot on the half-step velocity; its trajectory is "
+                "interpolated by cubic Hermite from (q_n, v_n). Scenes:"),
+              UL([f"{k}: {v}" for k, v in scenes.items()])]
+    caps = r.get("figure_captions", {})
+    for name in r["figures"]:
+        n = name.split("/")[-1]
+        if n.startswith("work_precision_"):
+            blocks.append(IMG(n, caps.get(n, n)))
+    blocks += [P("Summary: per scene and method, the smallest maximum error over the four "
+                 "metrics, and the fastest setting whose four errors are all at or below each "
+                 "target (its wall time, and that time divided by the exact solver's)."),
+               T(headers, summ_rows),
+               DETAILS(f"All {len(full)} rows (relative errors)",
+                       [T(["scene", "method", "setting", "seconds", "t_c", "e", "q_max",
+                           "q(t)", "failure"], full)])]
+    return blocks
+
+
+def _hard(r) -> list:
+    hc = r["hard_cases"]
+    rows = []
+    for x in hc["cases"]:
+        qa = x.get("q_max_over_a")
+        rows.append([x["case"], _num(x.get("v0"), 3), _num(x.get("q_max"), 3)
+                     + (f" ({qa:.5g} a)" if isinstance(qa, float) else ""),
+                     x.get("geometry", "–"), _num(x.get("dt_safe"), 3),
+                     _num(x.get("shortcut_over_safe"), 4), _num(x.get("dtcrit_over_safe"), 3),
+                     _num(x.get("dtcrit_over_rec"), 3), _num(x.get("exact_err_t_c"), 2),
+                     _num(x.get("ode_err_t_c"), 2), _num(x.get("verlet_err_t_c"), 2),
+                     "; ".join(x.get("notes", []))])
+    return [H(2, "6. Hard cases", "hard"),
+            P("Each case runs every part of the suite: the section 6 bound (`dt_safe`, its "
+              "geometry class and the endpoint shortcut 2 m v0/U'(q_max)), the measured critical "
+              "step of one impact, the exact solver and scipy DOP853 (rtol 1e-12) against a "
+              "25-digit mpmath contact time (the physical integral for conservative contacts, "
+              "`solve_impact_mp` for damped ones), and velocity Verlet at 1000 steps per "
+              "contact. For a fixed shape the dimensionless problem depends on Kn and v0 only "
+              "through q_max/a, so the depth sweep covers the stiffness range as well."),
+            T(["case", "v0 [m/s]", "q_max [m]", "geometry", "Δt_safe [s]", "shortcut/Δt_safe",
+               "Δt_crit/Δt_safe", "Δt_crit/Δt_rec", "exact t_c err", "DOP853 t_c err",
+               "Verlet t_c err", "notes"], rows),
+            P("Where accuracy is lost (measured):"),
+            UL(hc["accuracy"]),
+            IMG("hard_cases.png", "Errors against impact speed (Hertz) and penetration depth "
+                                  "(ellipsoid), and the bound near 2a.")]
+
+
+def _env(r) -> list:
+    env = r["environment"]
+    rows = [[k, str(v)] for k, v in env.items() if k not in ("packages", "seeds")]
+    rows += [[f"package {k}", str(v)] for k, v in env["packages"].items()]
+    rows += [[f"seed {k}", str(v)] for k, v in env["seeds"].items()]
+    trows = [[k, f"{v:.2f}"] for k, v in r["timings_seconds"].items()]
+    return [H(2, "7. Environment and provenance", "env"),
+            T(["item", "value"], rows),
+            P("Wall time of each step of this run (s):"),
+            T(["step", "seconds"], trows),
+            P("Reproduce: `hcv report` (full) or `hcv report --quick`; the machine-readable "
+              "results are in results.json next to this page. HYPOTHESIS_PROFILE and the "
+              "hypothesis seeds apply to the pytest suite; the report's only random draw is "
+              "the (K, M) pairs of the Theorem 2 check, with the seed above.")]
+
+
+def _sections(r) -> list:
+    return (_header(r) + _ledger(r) + _table1(r) + _fig1(r) + _dtmap(r) + _wp(r) + _hard(r)
+            + _env(r))
+
+
+# ----------------------------------------------------------------------------------
+# Markdown
+# ----------------------------------------------------------------------------------
+def _md_cell(s) -> str:
+    return str(s).replace("|", "\\|").replace("\n", " ")
+
+
+def _md(blocks, out: list[str]) -> None:
+    for b in blocks:
+        kind = b[0]
+        if kind == "h":
+            out.append(f"{'#' * b[1]} {b[2]}\n")
+        elif kind == "p":
+            out.append(("> " if b[2] == "warn" else "") + b[1] + "\n")
+        elif kind == "table":
+            _, headers, rows, flags, _cls = b
+            out.append("| " + " | ".join(_md_cell(h) for h in headers) + " |")
+            out.append("|" + "---|" * len(headers))
+            for i, row in enumerate(rows):
+                cells = []
+                for j, c in enumerate(row):
+                    f = flags[i][j] if flags else None
+                    c = _md_cell(c)
+                    cells.append(f"**{c}**" if f == "bad" and c else c)
+                out.append("| " + " | ".join(cells) + " |")
+            out.append("")
+        elif kind == "img":
+            out.append(f"![{b[2]}](figures/{b[1]})\n\n*{b[2]}*\n")
+        elif kind == "ul":
+            out += [f"- {it}" for it in b[1]] + [""]
+        elif kind == "details":
+            out.append(f"<details><summary>{html.escape(b[1])}</summary>\n")
+            _md(b[2], out)
+            out.append("</details>\n")
+
+
+def markdown(r: dict) -> str:
+    out = [f"# {r['title']}\n"]
+    _md(_sections(r), out)
+    return "\n".join(out) + "\n"
+
+
+# ----------------------------------------------------------------------------------
+# HTML
+# ----------------------------------------------------------------------------------
+_CSS = """
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1280px;
+margin:1.5em auto;padding:0 1em;color:#1a1a1a;line-height:1.45}
+h1{font-size:1.55em}h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margin-top:1.8em}
+table{border-collapse:collapse;margin:.8em 0;font-size:.86em}
+th,td{border:1px solid #ccc;padding:.25em .5em;vertical-align:top;text-align:left}
+th{background:#f2f2f2}td.bad{background:#fde0dc;color:#8a1c12;font-weight:600}
+td.good{background:#e3f4e1}td.warn{background:#fff3cd}
+table.ledger td:nth-child(3){white-space:nowrap;font-weight:700}
+p.warn{background:#fff3cd;padding:.5em;border-left:4px solid #e0a800}
+figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
+figcaption{font-size:.9em;color:#444}details{margin:.6em 0}summary{cursor:pointer;color:#124}
+code{background:#f4f4f4;padding:0 .2em}nav a{margin-right:1em}
+"""
+
+
+def _inline(text: str) -> str:
+    """Escape, then render `code` spans."""
+    parts = html.escape(text).split("`")
+    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
+
+
+def _html(blocks, fig_dir: Path, out: list[str]) -> None:
+    for b in blocks:
+        kind = b[0]
+        if kind == "h":
+            aid = f' id="{b[3]}"' if b[3] else ""
+            out.append(f"<h{b[1]}{aid}>{_inline(b[2])}</h{b[1]}>")
+        elif kind == "p":
+            cls = f' class="{b[2]}"' if b[2] else ""
+            out.append(f"<p{cls}>{_inline(b[1])}</p>")
+        elif kind == "table":
+            _, headers, rows, flags, cls = b
+            c = f' class="{cls}"' if cls else ""
+            out.append(f"<table{c}><thead><tr>"
+                       + "".join(f"<th>{_inline(h)}</th>" for h in headers) + "</tr></thead><tbody>")
+            for i, row in enumerate(rows):
+                tds = []
+                for j, cell in enumerate(row):
+                    f = flags[i][j] if flags else None
+                    fc = f' class="{f}"' if f else ""
+                    tds.append(f"<td{fc}>{_inline(str(cell))}</td>")
+                out.append("<tr>" + "".join(tds) + "</tr>")
+            out.append("</tbody></table>")
+        elif kind == "img":
+            data = base64.b64encode((fig_dir / b[1]).read_bytes()).decode("ascii")
+            out.append(f'<figure><img src="data:image/png;base64,{data}" '
+                       f'alt="{html.escape(b[2])}"><figcaption>{_inline(b[2])}</figcaption>'
+                       f"</figure>")
+        elif kind == "ul":
+            out.append("<ul>" + "".join(f"<li>{_inline(it)}</li>" for it in b[1]) + "</ul>")
+        elif kind == "details":
+            out.append(f"<details><summary>{_inline(b[1])}</summary>")
+            _html(b[2], fig_dir, out)
+            out.append("</details>")
+
+
+def html_page(r: dict, fig_dir: Path) -> str:
+    nav = ("<nav>" + "".join(f'<a href="#{a}">{t}</a>' for a, t in (
+        ("claims", "Claims"), ("table1", "Table 1"), ("fig1", "Fig. 1"),
+        ("dtcrit", "Critical step"), ("wp", "Speed vs error"), ("hard", "Hard cases"),
+        ("env", "Environment"))) + "</nav>")
+    out = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+           '<meta name="viewport" content="width=device-width, initial-scale=1">',
+           f"<title>{html.escape(r['title'])}</title>", f"<style>{_CSS}</style>", "</head>",
+           "<body>", f"<h1>{html.escape(r['title'])}</h1>", nav]
+    _html(_sections(r), fig_dir, out)
+    out += ["</body>", "</html>"]
+    return "\n".join(out) + "\n"
+

@@ -1,0 +1,140 @@
+"""Speed against error (work-precision diagrams) in the report."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from ..workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS, default_scenes, work_precision
+from ._common import g
+from ._verlet import verlet_row
+
+METRICS = (
+    ("err_contact_time", "contact time t_c"),
+    ("err_restitution", "restitution e"),
+    ("err_max_penetration", "max penetration q_max"),
+    ("err_trajectory", "trajectory max|q(t) − q_true(t)| / q_max"),
+)
+METHOD_STYLE = {
+    "exact": dict(color="k", marker="*", ms=13),
+    "RK45": dict(color="#1f77b4", marker="o", ms=5),
+    "DOP853": dict(color="#ff7f0e", marker="s", ms=5),
+    "Radau": dict(color="#2ca02c", marker="D", ms=5),
+    "LSODA": dict(color="#9467bd", marker="v", ms=6),
+    "Verlet": dict(color="#8c564b", marker="^", ms=6),
+}
+# Errors below this are drawn at it on the log axes (the exact solver can hit 0).
+FLOOR = 1e-17
+# Accuracy targets of the summary table (relative error in all four metrics).
+TARGETS = (1e-6, 1e-10)
+
+
+def settings_text(quick: bool) -> str:
+    """What the study ran (and what --quick drops)."""
+    methods = ("DOP853", "RK45") if quick else IVP_METHODS
+    rtols = IVP_RTOLS[::2] if quick else IVP_RTOLS
+    steps = VERLET_STEPS[::2] if quick else VERLET_STEPS
+    return (f"solve_ivp methods {', '.join(methods)} at rtol ∈ {{{', '.join(g(r) for r in rtols)}}}"
+            f" (atol = rtol × state scale); velocity Verlet at {', '.join(map(str, steps))} steps "
+            f"per contact; the exact harmonic-map solver at its default level")
+
+
+# Scene left out by --quick (its damped twin and the ellipsoid remain).
+QUICK_SKIP = ("hertz",)
+
+
+def run_wp(quick: bool, progress=None) -> pd.DataFrame:
+    """`work_precision` with the report's Verlet points (quick: without `QUICK_SKIP`)."""
+    scenes = [s for s in default_scenes() if not (quick and s.name in QUICK_SKIP)]
+    return work_precision(scenes, quick=quick, verlet=verlet_row, progress=progress)
+
+
+def _short(info: str) -> str:
+    """The scene description without the potential's repr (m, v0, zeta only)."""
+    return info.split("), ", 1)[-1] if "), " in info else info
+
+
+def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, str]]:
+    """One figure per scene, four log-log panels; returns [(file name, caption)]."""
+    from matplotlib.figure import Figure
+
+    out = []
+    for scene in dict.fromkeys(df.scene):
+        d = df[(df.scene == scene) & df.seconds.notna()]
+        fig = Figure(figsize=(11.5, 8.4), dpi=110)
+        axes = fig.subplots(2, 2)
+        fig.subplots_adjust(left=0.075, right=0.985, bottom=0.07, top=0.895, wspace=0.2,
+                            hspace=0.3)
+        for ax, (col, title) in zip(axes.flat, METRICS, strict=True):
+            for method, style in METHOD_STYLE.items():
+                s = d[d.method == method]
+                if s.empty or col not in s:
+                    continue
+                y = np.maximum(s[col].to_numpy(dtype=float), FLOOR)
+                x = s.seconds.to_numpy(dtype=float)
+                ok = np.isfinite(x) & np.isfinite(y)
+                if not ok.any():
+                    continue
+                ax.loglog(x[ok], y[ok], ls="-" if method != "exact" else "none", lw=1.3,
+                          label=method, **style)
+                if method != "exact" and ok.sum() > 1:
+                    sets = s.setting.to_numpy()[ok]
+                    for i in (0, ok.sum() - 1):
+                        txt = sets[i].replace("rtol=", "").replace(" steps/contact", "")
+                        ax.annotate(txt, (x[ok][i], y[ok][i]), fontsize=7, color=style["color"],
+                                    xytext=(4, 3), textcoords="offset points")
+            ax.set(xlabel="wall time per impact [s] (median of repeats)",
+                   ylabel="relative error", title=title)
+            ax.axhline(FLOOR, color="0.6", lw=0.6, ls=":")
+            ax.grid(True, which="major", alpha=0.3)
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=9.5,
+                   bbox_to_anchor=(0.5, 0.955), frameon=False)
+        info = scenes_info.get(scene, "")
+        fig.suptitle(f"Work-precision, scene {scene}: {_short(info)}; truth: mpmath, 30 digits",
+                     fontsize=11.5)
+        name = f"work_precision_{scene}.png"
+        fig.savefig(fig_dir / name)
+        out.append((name, f"Error against wall time, {scene} ({info}). Numbers at the ends of "
+                          f"each line: rtol (solve_ivp) or steps per contact (Verlet). Errors "
+                          f"below {g(FLOOR)} are drawn at {g(FLOOR)}."))
+    return out
+
+
+def _max_err(r) -> float:
+    vals = [r.get(c, math.nan) for c, _ in METRICS]
+    vals = [float(v) for v in vals if v is not None]
+    return max(vals) if vals and all(math.isfinite(v) for v in vals) else math.inf
+
+
+def wp_summary(df: pd.DataFrame) -> list[dict]:
+    """Per scene and method: best error, and the fastest setting reaching each target."""
+    rows = []
+    for scene in dict.fromkeys(df.scene):
+        d = df[df.scene == scene]
+        ex = d[d.method == "exact"]
+        t_exact = float(ex.seconds.iloc[0]) if len(ex) else math.nan
+        for method in dict.fromkeys(d.method):
+            s = d[(d.method == method) & d.seconds.notna()]
+            if s.empty:
+                continue
+            errs = s.apply(lambda r: _max_err(r.to_dict()), axis=1)
+            best = errs.idxmin()
+            row = {"scene": scene, "method": method,
+                   "best max error": float(errs[best]), "at setting": s.setting[best],
+                   "time at best [s]": float(s.seconds[best])}
+            for target in TARGETS:
+                reach = s[errs <= target]
+                if len(reach):
+                    f = reach.seconds.idxmin()
+                    row[f"fastest to ≤ {g(target)}"] = {
+                        "setting": s.setting[f], "seconds": float(s.seconds[f]),
+                        "exact_faster_by": float(s.seconds[f]) / t_exact}
+                else:
+                    row[f"fastest to ≤ {g(target)}"] = {
+                        "setting": "not reached", "seconds": math.nan,
+                        "exact_faster_by": math.nan}
+            rows.append(row)
+    return rows
