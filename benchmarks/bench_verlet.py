@@ -21,7 +21,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
 import numba  # noqa: E402
@@ -30,6 +29,7 @@ import numpy as np  # noqa: E402
 from reference_impl.dtcrit import search_scene  # noqa: E402
 from reference_impl.integrators.verlet import SCENE_WALLS, LaneBatch, run_lanes  # noqa: E402
 from reference_impl.potentials import Ellipsoid, PowerLaw  # noqa: E402
+from reference_impl.provenance import machine_info  # noqa: E402
 
 # A generic (non-integer, non-special) exponent, so no fast path of pow applies.
 _P_GENERIC = 1.37
@@ -41,18 +41,10 @@ _REPEATS = 3
 
 
 def _machine() -> str:
-    cpu = platform.processor() or "?"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return (f"machine: {cpu}; {os.cpu_count()} logical cores; {platform.system()} "
-            f"{platform.release()}; python {platform.python_version()}; numpy {np.__version__}; "
-            f"numba {numba.__version__}")
+    info = machine_info()
+    return (f"machine: {info['cpu']}; {info['cpu_count']} logical cores; {info['platform']}; "
+            f"python {info['python']}; numpy {np.__version__}; numba {numba.__version__}; "
+            f"commit {info['commit']}")
 
 
 def _batch(n_lanes: int, n_steps: int) -> tuple[PowerLaw, LaneBatch]:
@@ -128,8 +120,6 @@ def main(argv=None) -> None:
                                 "lane_steps": work})
     if args.json:
         import json
-
-        from benchmarks._machine import machine_info
 
         out["machine"] = machine_info()
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)

