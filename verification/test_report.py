@@ -221,3 +221,11 @@ def test_markdown_links_existing_figures(report):
     for cid in CLAIM_IDS:
         assert_true(f"| {cid} |" in md, got=f"{cid} missing from the ledger",
                     should="a ledger row per claim", claim="report", call="index.md")
+
+
+def test_dt_crit_sensitivity_rows(report):
+    """The criterion study (factor, N, tol) is in results.json, one row per criterion."""
+    _, results, _ = report
+    rows = results["dt_crit_sensitivity"]
+    assert {r["scene"] for r in rows} == {"two-sided", "two-walls", "impact"}
+    assert all(isinstance(r["ratio"], float) for r in rows)

@@ -178,6 +178,7 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         dmap = timed("critical-step map", _dtmap.run_map, quick, say)
     verdicts["sec6-dt-safe-bound"] = _dtmap.sec6_verdict(dmap)
     timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")
+    sens = timed("critical step against the criterion", _dtmap.run_sensitivity, quick)
 
     wp = timed("speed against error", _wp.run_wp, quick, say)
     wp_figs = timed("speed against error: figures", _wp.wp_figures, wp, fig_dir, _scene_info())
@@ -204,6 +205,7 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         "fig1": {"runs": _fig1.fig1_table(fig1_runs), "rtol": _fig1.RTOL, "atol": _fig1.ATOL,
                  "figure": "figures/fig1.png"},
         "dt_crit_map": records(dmap),
+        "dt_crit_sensitivity": records(sens),
         "dt_crit_map_coverage": [{"family": c.family, "case": c.label, "m": c.m,
                                   "velocities": list(c.velocities)} for c in coverage(quick)],
         "work_precision": records(wp),

@@ -149,3 +149,28 @@ def describe_recommendation() -> str:
             f"(leading exponent < 2) U''(q_max) is used with c = {fs}. The factors were set "
             f"from these measurements (smallest measured ratio / 1.3–1.7), so the margins "
             f"below are calibration margins; the suite also checks hold-out draws.")
+
+
+# How Delta t_crit moves with the definition of "unstable" (the issue asks for the
+# factor and N of the sustained scenes, and the tolerance of the single impact).
+_SENS_FACTORS = (10.0, 100.0, 1e4)
+_SENS_STEPS_FULL = (10_000, 100_000, 1_000_000)
+_SENS_STEPS_QUICK = (10_000,)
+_SENS_TOLS = (1e-3, 1e-2, 1e-1, 1.0)
+_SENS_CASES = (("Hertz p = 1.5", 1.5, "two-sided"), ("Hertz p = 1.5", 1.5, "two-walls"),
+               ("linear p = 1", 1.0, "two-sided"), ("Hertz p = 1.5", 1.5, "impact"))
+
+
+def run_sensitivity(quick: bool) -> pd.DataFrame:
+    """`criterion_sensitivity` for Hertz (two-sided, two-walls, impact) and the linear spring."""
+    from ..dtcrit_map import criterion_sensitivity
+    from ..potentials import PowerLaw
+
+    steps = _SENS_STEPS_QUICK if quick else _SENS_STEPS_FULL
+    frames = []
+    for label, p, kind in _SENS_CASES:
+        df = criterion_sensitivity(PowerLaw(1.0, p), 1.0, 1.0, kind, factors=_SENS_FACTORS,
+                                   n_steps=steps, tols=_SENS_TOLS)
+        df.insert(0, "case", label)
+        frames.append(df)
+    return pd.concat(frames, ignore_index=True)
