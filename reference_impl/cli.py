@@ -166,6 +166,7 @@ def _cmd_report(args) -> int:
             args.out,
             quick=args.quick,
             progress=lambda text: status.update(f"hcv report: {text}"),
+            adapters=args.adapter or (),
         )
     for c in results["claims"]:
         print(f"{c['verdict']:>12}  {c['id']}")
@@ -287,6 +288,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
     rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
+    rp.add_argument(
+        "--adapter",
+        action="append",
+        metavar="ADAPTER",
+        help="also benchmark this contact code (as for hcv bench) and add its scorecard; "
+        "repeatable",
+    )
     rp.set_defaults(func=_cmd_report)
     ls = sub.add_parser("scenes", help="list the embedded scenes")
     ls.set_defaults(func=_cmd_scenes)

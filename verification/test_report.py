@@ -229,3 +229,15 @@ def test_dt_crit_sensitivity_rows(report):
     rows = results["dt_crit_sensitivity"]
     assert {r["scene"] for r in rows} == {"two-sided", "two-walls", "impact"}
     assert all(isinstance(r["ratio"], float) for r in rows)
+
+
+def test_report_with_adapter_has_scorecard(tmp_path):
+    """``hcv report --adapter`` adds the adapter's scorecard, JSON and plot to the report."""
+    # Our own reference adapter keeps this to the quick study plus a few seconds.
+    results = build_report(tmp_path, quick=True, adapters=["reference"])
+    docs = results["adapters"]
+    assert len(docs) == 1 and docs[0]["adapter"].startswith("reference")
+    assert docs[0]["summary"]["pass"] > 0
+    md = (tmp_path / "index.md").read_text()
+    assert "Contact codes benchmarked" in md and "| reference" in md
+    assert (tmp_path / "bench").is_dir() and any((tmp_path / "bench").glob("*.json"))

@@ -91,8 +91,23 @@ def _finish_map(background):
         pool.shutdown()
 
 
+def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
+    """Run `hcv bench` on one adapter; its JSON goes to out/bench/, its plot to figures/."""
+    from ..bench.report import plot_speed_error, result_to_dict
+    from ..bench.runner import run_bench
+
+    safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(spec))[:60]
+    (out / "bench").mkdir(parents=True, exist_ok=True)
+    result = run_bench(spec, json_path=out / "bench" / f"{safe}.json")
+    name = None
+    if result.speed_error:
+        name = f"bench_{safe}.png"
+        plot_speed_error(result.speed_error, fig_dir / name)
+    return {"result": result_to_dict(result), "figure": name}
+
+
 def build_report(out_dir: str | Path = "reports", quick: bool = False,
-                 progress: Callable[[str], None] | None = None) -> dict:
+                 progress: Callable[[str], None] | None = None, adapters=()) -> dict:
     """Run every verification and write the report; returns the results dict.
 
     Parameters
@@ -103,6 +118,10 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         Smaller study (see `quick_drops`), for CI and ``hcv report --quick``.
     progress : callable, optional
         Called with a short description before each step (e.g. a rich status).
+    adapters : sequence of str
+        Contact codes to benchmark (as for ``hcv bench``: a registered name,
+        ``package.module:Class`` or ``cmd:COMMAND``); each scorecard becomes a
+        section of the report, its JSON goes to ``bench/`` and its plot to ``figures/``.
 
     Returns
     -------
@@ -193,7 +212,11 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
                        "verdict": v["verdict"], "evidence": v["evidence"], "rule": v["rule"],
                        "tests": tests.get(c.id, []), "measured": v["measured"]})
 
+    bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir)
+             for spec in adapters]
+
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
+    figures += [b["figure"] for b in bench if b.get("figure")]
     results = {
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
                  "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
@@ -218,6 +241,7 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         "figures": [f"figures/{n}" for n in figures],
         "figure_captions": {n: cap for n, cap in wp_figs},
         "environment": environment({"thm2_random_KM": _verdicts.SEED_KM}),
+        "adapters": [b["result"] for b in bench],
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings

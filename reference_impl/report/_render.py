@@ -279,6 +279,38 @@ def _hard(r) -> list:
                                   "(ellipsoid), and the bound near 2a.")]
 
 
+def _adapters(r) -> list:
+    """Scorecards of the contact codes given with ``hcv report --adapter``."""
+    docs = r.get("adapters") or []
+    if not docs:
+        return []
+    blocks = [H(2, "Contact codes benchmarked (hcv report --adapter)", "adapters"),
+              P("Each code ran the bench scenes through its adapter; every metric is compared "
+                "with the exact solution under the tolerance shown (`hcv bench`, "
+                "reference_impl/bench/tolerances.toml).")]
+    for d in docs:
+        s = d["summary"]
+        rows, flags = [], []
+        for m in d["metrics"]:
+            if m.get("status") == "skip":
+                continue
+            rows.append([m.get("variant", ""), m.get("scene", ""), m.get("metric", ""),
+                         _num(m.get("value")), _num(m.get("reference")), str(m.get("tolerance")),
+                         m.get("status", ""),
+                         m.get("explanation", "") if m.get("status") == "fail" else ""])
+            flags.append([None] * 6 + ["bad" if m.get("status") == "fail" else "good", None])
+        blocks += [H(3, f"{d['adapter']}: {s.get('pass', 0)} pass, {s.get('fail', 0)} fail, "
+                        f"{s.get('skip', 0)} skipped"),
+                   T(["variant", "scene", "metric", "value", "reference", "tolerance", "result",
+                      "why"], rows, flags)]
+        safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(d["adapter"]))[:60]
+        fig = f"bench_{safe}.png"
+        if any(f.endswith(fig) for f in r.get("figures", [])):
+            blocks.append(IMG(fig, f"Speed against error of {d['adapter']} against the exact "
+                                   "solution."))
+    return blocks
+
+
 def _env(r) -> list:
     env = r["environment"]
     rows = [[k, str(v)] for k, v in env.items() if k not in ("packages", "seeds")]
@@ -297,7 +329,7 @@ def _env(r) -> list:
 
 def _sections(r) -> list:
     return (_header(r) + _ledger(r) + _table1(r) + _fig1(r) + _dtmap(r) + _wp(r) + _hard(r)
-            + _env(r))
+            + _adapters(r) + _env(r))
 
 
 # ----------------------------------------------------------------------------------
