@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 
 import mpmath
+import numba
 import numpy as np
 from scipy import integrate
 from scipy.optimize import elementwise
@@ -414,14 +415,33 @@ def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, bet
     L = rows[:, 4]
     if L.min() <= 0:
         return None  # an empty stretch: the tanh-sinh path handles it
-    # f(s)/s^beta = c (x/s)^beta with s = L u.
-    ratio = _x_on_rows(osc, rows, u) / np.multiply.outer(L, u)
-    sums = (c_pl * L ** (beta + 1.0))[:, None] * ((ratio**beta) @ W)
+    sums = _gj_sums(rows, u, W, osc.zeta, osc.wd, osc.v0, beta, c_pl)
     coarse, fine = sums[:, 0], sums[:, 1]
     err = np.abs(fine - coarse)
     if err.max() > _GJ_RTOL * abs(fine[0]):
         return None
     return fine, err
+
+
+@numba.njit(cache=True)
+def _gj_sums(rows, u, W, zeta, wd, v0, beta, c_pl):  # pragma: no cover - compiled
+    """sum_j W[j, k] c (x(s_j)/s_j)^beta L^(beta+1) per branch row (see _x_on_rows).
+
+    Compiled: ~120 nodes make numpy's per-call overhead dominate (39 us vs ~5 us).
+    """
+    nr, nn = rows.shape[0], u.shape[0]
+    out = np.zeros((nr, W.shape[1]))
+    amp = v0 / wd
+    for i in range(nr):
+        s0, s1, p0, p1, L = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
+        scale = c_pl * L ** (beta + 1.0)
+        for j in range(nn):
+            d = u[j]
+            x = amp * np.exp(-zeta * (s0 + s1 * d)) * np.sin(wd * (p0 + p1 * d))
+            f = scale * (x / (L * d)) ** beta
+            for k in range(W.shape[1]):
+                out[i, k] += W[j, k] * f
+    return out
 
 
 def _tanh_sinh_branches(pot: Potential, m: float, osc: VirtualOscillator, beta: float, level: int):
