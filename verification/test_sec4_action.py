@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from reference_impl import action as act
+from reference_impl import action_closed as closed
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.taylor import taylor_impact, taylor_zero_crossings
 from reference_impl.potentials import Ellipsoid, PowerLaw, Sphere, SumPotential
@@ -192,10 +193,10 @@ def test_action_strictly_increasing(pot, m):
 @given(pot=power_laws(), m=masses(), E=log_uniform(1e-6, 1e3))
 def test_float_routes_match_powerlaw_closed_forms(pot, m, E):
     pairs = [
-        ("action", act.action, act.powerlaw_action_closed),
-        ("period", act.period, act.powerlaw_period_closed),
-        ("contact_duration", act.contact_duration, act.powerlaw_contact_duration_closed),
-        ("dJ_dE", act.dJ_dE, act.powerlaw_dJ_dE_closed),
+        ("action", act.action, closed.powerlaw_action_closed),
+        ("period", act.period, closed.powerlaw_period_closed),
+        ("contact_duration", act.contact_duration, closed.powerlaw_contact_duration_closed),
+        ("dJ_dE", act.dJ_dE, closed.powerlaw_dJ_dE_closed),
     ]
     for name, quad_fn, closed_fn in pairs:
         ref = float(closed_fn(pot, m, E, mp=True, dps=_CHECK_DPS))
@@ -240,10 +241,10 @@ def test_float_routes_match_mpmath_for_general_potentials(pot, m, frac):
 def test_mpmath_routes_match_powerlaw_closed_forms(p):
     pot, m, E = PowerLaw(2.5e7, p), 0.03, 0.0417
     for name, fn_mp, closed_fn in [
-        ("action_mp", act.action_mp, act.powerlaw_action_closed),
-        ("period_mp", act.period_mp, act.powerlaw_period_closed),
-        ("contact_duration_mp", act.contact_duration_mp, act.powerlaw_contact_duration_closed),
-        ("dJ_dE_mp", act.dJ_dE_mp, act.powerlaw_dJ_dE_closed),
+        ("action_mp", act.action_mp, closed.powerlaw_action_closed),
+        ("period_mp", act.period_mp, closed.powerlaw_period_closed),
+        ("contact_duration_mp", act.contact_duration_mp, closed.powerlaw_contact_duration_closed),
+        ("dJ_dE_mp", act.dJ_dE_mp, closed.powerlaw_dJ_dE_closed),
     ]:
         _assert_mp_close(
             fn_mp(pot, m, E, dps=_MP_DPS),
@@ -263,11 +264,11 @@ def test_closed_form_dJdE_is_derivative_of_closed_form_J():
         Em = mpmath.mpf(E)
         # J at the (raised) precision mpmath.diff works at, so the difference quotient keeps it.
         num = mpmath.diff(
-            lambda e: act.powerlaw_action_closed(pot, m, e, mp=True, dps=mpmath.mp.dps), Em
+            lambda e: closed.powerlaw_action_closed(pot, m, e, mp=True, dps=mpmath.mp.dps), Em
         )
     _assert_mp_close(
         num,
-        act.powerlaw_dJ_dE_closed(pot, m, E, mp=True, dps=_REF_DPS),
+        closed.powerlaw_dJ_dE_closed(pot, m, E, mp=True, dps=_REF_DPS),
         rtol=_MP_RTOL,
         call="mpmath.diff(powerlaw_action_closed)",
     )
@@ -456,7 +457,7 @@ def test_taylor_refuses_non_analytic_laws(pot, c_exponent):
         lambda: act.dJ_dE("not a potential", 0.05, 1.0),
         lambda: act.action_mp(PowerLaw(1e6, 1.5), -0.05, 1.0),
         lambda: act.period_mp(PowerLaw(1e6, 1.5), 0.05, 1.0, dps=0),
-        lambda: act.powerlaw_action_closed(_PAPER_ELLIPSOID, 0.05, 1.0),
+        lambda: closed.powerlaw_action_closed(_PAPER_ELLIPSOID, 0.05, 1.0),
         lambda: act.action(_PAPER_ELLIPSOID, 0.05, 1e9),  # beyond U(2a): no turning point
         lambda: act.action(SumPotential(PowerLaw(1.0, 1.0), PowerLaw(1.0, 2.0)), True, 1.0),
     ],
