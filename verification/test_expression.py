@@ -439,17 +439,22 @@ def test_malformed_formulas_are_refused(source, needle):
 
 
 def test_module_never_calls_eval():
-    """No eval/exec/compile/sympify/parse_expr call anywhere in the module's source."""
-    tree = ast.parse(Path(expression_module.__file__).read_text())
+    """No eval/exec/compile/sympify/parse_expr call anywhere in the modules' source
+    (the potential and its parser, `_expr_parse`)."""
+    from reference_impl.potentials import _expr_parse
+
     banned = {"eval", "exec", "compile", "sympify", "parse_expr", "S"}
-    calls = [
-        getattr(n.func, "id", getattr(n.func, "attr", ""))
-        for n in ast.walk(tree)
-        if isinstance(n, ast.Call)
-    ]
+    calls = []
+    for module in (expression_module, _expr_parse):
+        tree = ast.parse(Path(module.__file__).read_text())
+        calls += [
+            getattr(n.func, "id", getattr(n.func, "attr", ""))
+            for n in ast.walk(tree)
+            if isinstance(n, ast.Call)
+        ]
     hits = sorted(set(calls) & banned)
     assert_true(not hits, got=f"calls {hits}", should="none", claim="expression",
-                call="expression.py source")
+                call="expression.py and _expr_parse.py source")
 
 
 @pytest.mark.parametrize(
