@@ -182,8 +182,7 @@ class AdapterScene:
             "potential": dict(self.potential_spec),
             "mass": self.mass,
             "v0": self.v0,
-            "damping": {"law": self.damping, "zeta": self.zeta,
-                        "restitution": self.restitution},
+            "damping": {"law": self.damping, "zeta": self.zeta, "restitution": self.restitution},
             "dt": self.dt,
             "n_steps": int(self.n_steps),
             "velocities": list(self.velocities),
@@ -197,10 +196,17 @@ class AdapterScene:
         """Build from a validated `reference_impl.scenes.Scene` at one speed."""
         zeta = float(scene.zeta or 0.0) if scene.damping_law == "universal" else 0.0
         return cls(
-            name=scene.name, kind=scene.kind, potential=scene.potential,
-            potential_spec=potential_to_dict(scene.potential), mass=float(scene.mass),
-            v0=float(v0), damping=scene.damping_law if zeta > 0 else "none", zeta=zeta,
-            dt=float(dt), n_steps=int(n_steps), velocities=tuple(scene.velocities),
+            name=scene.name,
+            kind=scene.kind,
+            potential=scene.potential,
+            potential_spec=potential_to_dict(scene.potential),
+            mass=float(scene.mass),
+            v0=float(v0),
+            damping=scene.damping_law if zeta > 0 else "none",
+            zeta=zeta,
+            dt=float(dt),
+            n_steps=int(n_steps),
+            velocities=tuple(scene.velocities),
             gap=scene.gap,
         )
 
@@ -226,11 +232,17 @@ class Trajectory:
 
     def to_json(self) -> dict[str, Any]:
         """Plain lists (non-finite values as null)."""
+
         def lst(a):
             return [float(x) if math.isfinite(x) else None for x in np.asarray(a, float)]
 
-        return {"t": lst(self.t), "q": lst(self.q), "v": lst(self.v), "force": lst(self.force),
-                "meta": self.meta}
+        return {
+            "t": lst(self.t),
+            "q": lst(self.q),
+            "v": lst(self.v),
+            "force": lst(self.force),
+            "meta": self.meta,
+        }
 
 
 def _array(name: str, value, who: str) -> np.ndarray:
@@ -239,7 +251,8 @@ def _array(name: str, value, who: str) -> np.ndarray:
     try:
         a = np.asarray(
             [np.nan if x is None else x for x in value] if isinstance(value, list) else value,
-            dtype=float)
+            dtype=float,
+        )
     except (TypeError, ValueError):
         raise AdapterOutputError(f"{who}: {name!r} is not an array of numbers") from None
     if a.ndim != 1:
@@ -258,23 +271,32 @@ def check_staggering(value, who: str = "adapter") -> dict:
     if value is None:
         return {}
     if not isinstance(value, Mapping):
-        raise AdapterOutputError(f"{who}: 'staggering' must be a mapping such as "
-                                 f'{{"force": 1}}, got {value!r}')
+        raise AdapterOutputError(
+            f"{who}: 'staggering' must be a mapping such as {{\"force\": 1}}, got {value!r}"
+        )
     out: dict = {}
     for key, shift in value.items():
         if key not in _STAGGER_KEYS:
-            raise AdapterOutputError(f"{who}: staggering key {key!r} is not one of "
-                                     f"{', '.join(_STAGGER_KEYS)}")
+            raise AdapterOutputError(
+                f"{who}: staggering key {key!r} is not one of {', '.join(_STAGGER_KEYS)}"
+            )
         if key == "force":
-            if (isinstance(shift, bool) or not isinstance(shift, (int, float))
-                    or shift != int(shift) or not 0 <= shift <= _MAX_FORCE_LAG):
-                raise AdapterOutputError(f"{who}: staggering 'force' must be an integer lag in "
-                                         f"0..{_MAX_FORCE_LAG} steps, got {shift!r}")
+            if (
+                isinstance(shift, bool)
+                or not isinstance(shift, (int, float))
+                or shift != int(shift)
+                or not 0 <= shift <= _MAX_FORCE_LAG
+            ):
+                raise AdapterOutputError(
+                    f"{who}: staggering 'force' must be an integer lag in "
+                    f"0..{_MAX_FORCE_LAG} steps, got {shift!r}"
+                )
             if shift:
                 out["force"] = int(shift)
         elif shift not in (0, 0.0, 0.5):
-            raise AdapterOutputError(f"{who}: staggering 'v' must be 0 or 0.5 (half a step "
-                                     f"behind), got {shift!r}")
+            raise AdapterOutputError(
+                f"{who}: staggering 'v' must be 0 or 0.5 (half a step behind), got {shift!r}"
+            )
         elif shift:
             out["v"] = 0.5
     return out
@@ -312,14 +334,14 @@ def trajectory_from_mapping(obj, who: str = "adapter", staggering=None) -> Traje
         With one line saying what is wrong.
     """
     if isinstance(obj, Trajectory):
-        data: Mapping = {"t": obj.t, "q": obj.q, "v": obj.v, "force": obj.force,
-                         "meta": obj.meta}
+        data: Mapping = {"t": obj.t, "q": obj.q, "v": obj.v, "force": obj.force, "meta": obj.meta}
     elif isinstance(obj, Mapping):
         data = obj
     else:
         raise AdapterOutputError(
             f"{who}: returned {type(obj).__name__}, expected a Trajectory or a mapping with "
-            "t, q, v, force")
+            "t, q, v, force"
+        )
     arrays = {k: _array(k, data.get(k), who) for k in ("t", "q", "v", "force")}
     n = arrays["t"].size
     for k, a in arrays.items():
@@ -332,16 +354,18 @@ def trajectory_from_mapping(obj, who: str = "adapter", staggering=None) -> Traje
         raise AdapterOutputError(f"{who}: 't' contains non-finite values")
     if np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0))
-        raise AdapterOutputError(f"{who}: 't' must increase strictly (t[{i}] = {t[i]!r}, "
-                                 f"t[{i + 1}] = {t[i + 1]!r})")
+        raise AdapterOutputError(
+            f"{who}: 't' must increase strictly (t[{i}] = {t[i]!r}, t[{i + 1}] = {t[i + 1]!r})"
+        )
     if abs(t[0]) > _T0_RTOL * (t[-1] - t[0]):
         raise AdapterOutputError(f"{who}: 't' must start at 0 (contact onset), got {t[0]!r}")
     meta = data.get("meta") or {}
     if not isinstance(meta, Mapping):
         raise AdapterOutputError(f"{who}: 'meta' must be a mapping, got {type(meta).__name__}")
     declared = check_staggering(staggering, who)
-    declared.update(check_staggering(data.get("staggering"), who)
-                    if isinstance(data, Mapping) else {})
+    declared.update(
+        check_staggering(data.get("staggering"), who) if isinstance(data, Mapping) else {}
+    )
     tr = Trajectory(arrays["t"], arrays["q"], arrays["v"], arrays["force"], dict(meta))
     return align_staggered(tr, declared)
 
@@ -406,8 +430,9 @@ class ImplementedLaw:
                 raise HCVInputError("ImplementedLaw: give either zeta or C, not both")
             object.__setattr__(self, "zeta", None)
         elif self.zeta is None or not (math.isfinite(self.zeta) and self.zeta >= 0):
-            raise HCVInputError(f"ImplementedLaw: zeta must be >= 0 when C is not given, "
-                                f"got {self.zeta!r}")
+            raise HCVInputError(
+                f"ImplementedLaw: zeta must be >= 0 when C is not given, got {self.zeta!r}"
+            )
 
     def damping_coefficient(self, q):
         """C(q) (kg/s) at overlaps q > 0."""
@@ -424,13 +449,21 @@ class ImplementedLaw:
     def to_json(self) -> dict:
         damping: dict[str, Any]
         if self.C is not None:
-            damping = (self.C.to_json() if hasattr(self.C, "to_json")
-                       else {"law": "callable", "repr": repr(self.C)})
+            damping = (
+                self.C.to_json()
+                if hasattr(self.C, "to_json")
+                else {"law": "callable", "repr": repr(self.C)}
+            )
         else:
             damping = {"law": "universal" if self.zeta else "none", "zeta": self.zeta or 0.0}
-        return {"potential": potential_to_dict(self.potential), "mass": self.mass,
-                "damping": damping, "clips_tension": self.clips_tension,
-                "description": self.description, "params": self.params}
+        return {
+            "potential": potential_to_dict(self.potential),
+            "mass": self.mass,
+            "damping": damping,
+            "clips_tension": self.clips_tension,
+            "description": self.description,
+            "params": self.params,
+        }
 
 
 class ContactAdapter:
@@ -477,8 +510,12 @@ class ContactAdapter:
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         """The law the code integrates for this scene; default: exactly the scene's."""
-        return ImplementedLaw(scene.potential, scene.mass, zeta=scene.zeta,
-                              description="as asked (the adapter declares no other law)")
+        return ImplementedLaw(
+            scene.potential,
+            scene.mass,
+            zeta=scene.zeta,
+            description="as asked (the adapter declares no other law)",
+        )
 
     def variants(self) -> list[ContactAdapter]:
         """Configurations benchmarked separately; default: this adapter alone."""

@@ -100,8 +100,10 @@ def kratos_available() -> str | None:
     except metadata.PackageNotFoundError:
         dem = False
     if importlib.util.find_spec("KratosMultiphysics") is None or not dem:
-        return ("Kratos DEM is not installed; install it with pip install -e '.[kratos]' "
-                "(wheels KratosMultiphysics and KratosDEMApplication 10.4)")
+        return (
+            "Kratos DEM is not installed; install it with pip install -e '.[kratos]' "
+            "(wheels KratosMultiphysics and KratosDEMApplication 10.4)"
+        )
     return None
 
 
@@ -146,10 +148,20 @@ def kratos_gamma(law: str, e: float) -> float:
 
     if law == "hertz":
         return float(ExplicitStrategy.GammaForHertzThornton(None, e))
-    helper = type("_Bisect", (), {"coeff_of_rest_diff": staticmethod(
-        lambda g, d: ExplicitStrategy.coeff_of_rest_diff(None, g, d))})()
-    return float(ExplicitStrategy.RootByBisection(helper, helper.coeff_of_rest_diff, 0.0, 16.0,
-                                                  0.0001, 300, e))
+    helper = type(
+        "_Bisect",
+        (),
+        {
+            "coeff_of_rest_diff": staticmethod(
+                lambda g, d: ExplicitStrategy.coeff_of_rest_diff(None, g, d)
+            )
+        },
+    )()
+    return float(
+        ExplicitStrategy.RootByBisection(
+            helper, helper.coeff_of_rest_diff, 0.0, 16.0, 0.0001, 300, e
+        )
+    )
 
 
 class KratosAdapter(ContactAdapter):
@@ -172,8 +184,13 @@ class KratosAdapter(ContactAdapter):
     name = "kratos"
     isolate = True
 
-    def __init__(self, law: str | None = None, scheme: str | None = None,
-                 geometry: str = "wall", radius: float | None = None):
+    def __init__(
+        self,
+        law: str | None = None,
+        scheme: str | None = None,
+        geometry: str = "wall",
+        radius: float | None = None,
+    ):
         reason = kratos_available()
         if reason:
             raise HCVInputError(f"adapter kratos: {reason}")
@@ -181,8 +198,9 @@ class KratosAdapter(ContactAdapter):
         laws = _split("law", law, tuple(LAWS))
         schemes = _split("scheme", scheme, tuple(SCHEMES))
         geoms = _split("geometry", geometry, GEOMETRIES)
-        if radius is not None and not (isinstance(radius, (int, float))
-                                       and math.isfinite(radius) and radius > 0):
+        if radius is not None and not (
+            isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0
+        ):
             raise HCVInputError(f"adapter kratos: radius must be a number > 0, got {radius!r}")
         self.laws, self.schemes, self.geoms, self.radius = laws, schemes, geoms, radius
 
@@ -210,18 +228,26 @@ class KratosAdapter(ContactAdapter):
     def variants(self) -> list[ContactAdapter]:
         if self.single:
             return [self]
-        out: list[ContactAdapter] = [KratosAdapter(law=la, scheme=s, geometry=g,
-                                                   radius=self.radius)
-                                     for g in self.geoms for la in self.laws
-                                     for s in self.schemes]
+        out: list[ContactAdapter] = [
+            KratosAdapter(law=la, scheme=s, geometry=g, radius=self.radius)
+            for g in self.geoms
+            for la in self.laws
+            for s in self.schemes
+        ]
         if self._default_set:
-            out.append(KratosAdapter(law="hertz", scheme="euler", geometry="pair",
-                                     radius=self.radius))
+            out.append(
+                KratosAdapter(law="hertz", scheme="euler", geometry="pair", radius=self.radius)
+            )
         return out
 
     def describe(self) -> dict:
-        d = {"name": self.name, "label": self.label, "law": [LAWS[x] for x in self.laws],
-             "scheme": [SCHEMES[x] for x in self.schemes], "geometry": list(self.geoms)}
+        d = {
+            "name": self.name,
+            "label": self.label,
+            "law": [LAWS[x] for x in self.laws],
+            "scheme": [SCHEMES[x] for x in self.schemes],
+            "geometry": list(self.geoms),
+        }
         try:
             d["version"] = metadata.version("KratosDEMApplication")
         except Exception:  # pragma: no cover - metadata missing
@@ -236,8 +262,10 @@ class KratosAdapter(ContactAdapter):
         pot = scene.potential
         want = 1.5 if self.laws[0] == "hertz" else 1.0
         if type(pot) is not PowerLaw or pot.p != want:
-            return (f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
-                    f"{pot!r} has no equivalent in this variant")
+            return (
+                f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
+                f"{pot!r} has no equivalent in this variant"
+            )
         return None
 
     # -- the mapping ------------------------------------------------------------
@@ -259,29 +287,59 @@ class KratosAdapter(ContactAdapter):
         e = scene.restitution
         gamma = kratos_gamma(law, e)
         zeta = gamma * math.sqrt(1.2) if law == "hertz" else gamma
-        desc = (f"{LAWS[law]} ({SCHEMES[self.schemes[0]]}, {geom}): e = {e:.6g} -> gamma = "
-                f"{gamma:.6g}, universal law zeta = {zeta:.6g}, tension clipped")
-        return {"R": R, "R_eff": r_eff, "E": 2.0 * e_star, "density": density,
-                "body_mass": body_mass, "restitution": e, "gamma": gamma, "zeta": zeta,
-                "description": desc}
+        desc = (
+            f"{LAWS[law]} ({SCHEMES[self.schemes[0]]}, {geom}): e = {e:.6g} -> gamma = "
+            f"{gamma:.6g}, universal law zeta = {zeta:.6g}, tension clipped"
+        )
+        return {
+            "R": R,
+            "R_eff": r_eff,
+            "E": 2.0 * e_star,
+            "density": density,
+            "body_mass": body_mass,
+            "restitution": e,
+            "gamma": gamma,
+            "zeta": zeta,
+            "description": desc,
+        }
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         mp = self._mapping(scene)
-        return ImplementedLaw(scene.potential, scene.mass, zeta=mp["zeta"], clips_tension=True,
-                              description=mp["description"],
-                              params={k: v for k, v in mp.items() if k != "description"}
-                              | {"law": LAWS[self.laws[0]], "scheme": SCHEMES[self.schemes[0]],
-                                 "geometry": self.geoms[0]})
+        return ImplementedLaw(
+            scene.potential,
+            scene.mass,
+            zeta=mp["zeta"],
+            clips_tension=True,
+            description=mp["description"],
+            params={k: v for k, v in mp.items() if k != "description"}
+            | {
+                "law": LAWS[self.laws[0]],
+                "scheme": SCHEMES[self.schemes[0]],
+                "geometry": self.geoms[0],
+            },
+        )
 
     # -- running Kratos ---------------------------------------------------------
     def _impact_impl(self, scene: AdapterScene) -> Trajectory:
         mp = self._mapping(scene)
         with _stdout_to_stderr():
-            t, q, v, f, info = _run(mp, LAWS[self.laws[0]], SCHEMES[self.schemes[0]],
-                                    self.geoms[0], scene, _FORCE_LAG[self.schemes[0]])
-        meta = {"code": f"Kratos DEM {self.describe().get('version', '?')}",
-                "law": LAWS[self.laws[0]], "scheme": SCHEMES[self.schemes[0]],
-                "gamma": mp["gamma"], "R": mp["R"], "E": mp["E"], **info}
+            t, q, v, f, info = _run(
+                mp,
+                LAWS[self.laws[0]],
+                SCHEMES[self.schemes[0]],
+                self.geoms[0],
+                scene,
+                _FORCE_LAG[self.schemes[0]],
+            )
+        meta = {
+            "code": f"Kratos DEM {self.describe().get('version', '?')}",
+            "law": LAWS[self.laws[0]],
+            "scheme": SCHEMES[self.schemes[0]],
+            "gamma": mp["gamma"],
+            "R": mp["R"],
+            "E": mp["E"],
+            **info,
+        }
         return Trajectory(t, q, v, f, meta)
 
 
@@ -294,36 +352,79 @@ def _split(what: str, value, allowed: tuple) -> tuple:
 
 
 def _parameters(scheme: str, dt: float) -> dict:
-    return {"Dimension": 3, "BoundingBoxOption": False, "dem_inlet_option": False,
-            "GravityX": 0.0, "GravityY": 0.0, "GravityZ": 0.0, "RotationOption": False,
-            "CleanIndentationsOption": False, "TranslationalIntegrationScheme": scheme,
-            "RotationalIntegrationScheme": "Direct_Integration", "DeltaOption": "Absolute",
-            "SearchTolerance": 0.0, "MaxTimeStep": dt, "FinalTime": 1e30,
-            "NeighbourSearchFrequency": 1, "ElementType": "SphericPartDEMElement3D",
-            "do_print_results_option": False, "problem_name": "hcv",
-            "solver_settings": {"strategy": "sphere_strategy",
-                                "RemoveBallsInitiallyTouchingWalls": False,
-                                "material_import_settings": {"materials_filename": "none"}}}
+    return {
+        "Dimension": 3,
+        "BoundingBoxOption": False,
+        "dem_inlet_option": False,
+        "GravityX": 0.0,
+        "GravityY": 0.0,
+        "GravityZ": 0.0,
+        "RotationOption": False,
+        "CleanIndentationsOption": False,
+        "TranslationalIntegrationScheme": scheme,
+        "RotationalIntegrationScheme": "Direct_Integration",
+        "DeltaOption": "Absolute",
+        "SearchTolerance": 0.0,
+        "MaxTimeStep": dt,
+        "FinalTime": 1e30,
+        "NeighbourSearchFrequency": 1,
+        "ElementType": "SphericPartDEMElement3D",
+        "do_print_results_option": False,
+        "problem_name": "hcv",
+        "solver_settings": {
+            "strategy": "sphere_strategy",
+            "RemoveBallsInitiallyTouchingWalls": False,
+            "material_import_settings": {"materials_filename": "none"},
+        },
+    }
 
 
 def _materials(mp: dict, law: str) -> dict:
-    relation = {"COEFFICIENT_OF_RESTITUTION": mp["restitution"], "STATIC_FRICTION": 0.0,
-                "DYNAMIC_FRICTION": 0.0, "FRICTION_DECAY": 500.0, "ROLLING_FRICTION": 0.0,
-                "ROLLING_FRICTION_WITH_WALLS": 0.0,
-                "DEM_ROLLING_FRICTION_MODEL_NAME": "DEMRollingFrictionModelBounded",
-                "DEM_DISCONTINUUM_CONSTITUTIVE_LAW_NAME": law}
-    return {"materials": [
-        {"material_name": "ball", "material_id": 1,
-         "Variables": {"PARTICLE_DENSITY": mp["density"], "YOUNG_MODULUS": mp["E"],
-                       "POISSON_RATIO": 0.0}},
-        {"material_name": "wall", "material_id": 2,
-         "Variables": {"YOUNG_MODULUS": mp["E"], "POISSON_RATIO": 0.0, "COMPUTE_WEAR": False}}],
+    relation = {
+        "COEFFICIENT_OF_RESTITUTION": mp["restitution"],
+        "STATIC_FRICTION": 0.0,
+        "DYNAMIC_FRICTION": 0.0,
+        "FRICTION_DECAY": 500.0,
+        "ROLLING_FRICTION": 0.0,
+        "ROLLING_FRICTION_WITH_WALLS": 0.0,
+        "DEM_ROLLING_FRICTION_MODEL_NAME": "DEMRollingFrictionModelBounded",
+        "DEM_DISCONTINUUM_CONSTITUTIVE_LAW_NAME": law,
+    }
+    return {
+        "materials": [
+            {
+                "material_name": "ball",
+                "material_id": 1,
+                "Variables": {
+                    "PARTICLE_DENSITY": mp["density"],
+                    "YOUNG_MODULUS": mp["E"],
+                    "POISSON_RATIO": 0.0,
+                },
+            },
+            {
+                "material_name": "wall",
+                "material_id": 2,
+                "Variables": {
+                    "YOUNG_MODULUS": mp["E"],
+                    "POISSON_RATIO": 0.0,
+                    "COMPUTE_WEAR": False,
+                },
+            },
+        ],
         "material_relations": [
-            {"material_names_list": ["ball", "wall"], "material_ids_list": [1, 2],
-             "Variables": relation},
-            {"material_names_list": ["ball", "ball"], "material_ids_list": [1, 1],
-             "Variables": relation}],
-        "material_assignation_table": [["SpheresPart", "ball"], ["RigidFacePart", "wall"]]}
+            {
+                "material_names_list": ["ball", "wall"],
+                "material_ids_list": [1, 2],
+                "Variables": relation,
+            },
+            {
+                "material_names_list": ["ball", "ball"],
+                "material_ids_list": [1, 1],
+                "Variables": relation,
+            },
+        ],
+        "material_assignation_table": [["SpheresPart", "ball"], ["RigidFacePart", "wall"]],
+    }
 
 
 def _run(mp: dict, law: str, scheme: str, geom: str, scene: AdapterScene, lag: int):
@@ -378,7 +479,11 @@ def _run(mp: dict, law: str, scheme: str, geom: str, scene: AdapterScene, lag: i
             f = top.GetSolutionStepValue(km.TOTAL_FORCES_Z)
             if bottom is None:
                 return R - top.Z, -vz_top, f
-            return 2.0 * R - (top.Z - bottom.Z), bottom.GetSolutionStepValue(km.VELOCITY_Z) - vz_top, f
+            return (
+                2.0 * R - (top.Z - bottom.Z),
+                bottom.GetSolutionStepValue(km.VELOCITY_Z) - vz_top,
+                f,
+            )
 
         # Sample 0 is contact onset (q = 0, no force); Kratos' stored values follow per step.
         rows = [(0.0, scene.v0, 0.0)]
@@ -400,8 +505,13 @@ def _run(mp: dict, law: str, scheme: str, geom: str, scene: AdapterScene, lag: i
         t = scene.dt * np.arange(arr.shape[0])
         # The force is returned as Kratos stores it (lagged by `lag` steps for Symplectic
         # Euler); ContactAdapter.impact re-aligns it from the declared staggering.
-        return t, arr[:, 0], arr[:, 1], arr[:, 2], {"steps": int(arr.shape[0] - 1),
-                                                     "force_lag_steps": lag}
+        return (
+            t,
+            arr[:, 0],
+            arr[:, 1],
+            arr[:, 2],
+            {"steps": int(arr.shape[0] - 1), "force_lag_steps": lag},
+        )
     finally:
         with contextlib.suppress(Exception):
             model.Reset()

