@@ -180,3 +180,12 @@ def test_force_realignment_shifts_every_sample(n, lag, seed):
     expect = np.where(q[n - k :] <= 0, 0.0, np.nan)
     np.testing.assert_array_equal(np.isnan(tail), np.isnan(expect))
     np.testing.assert_array_equal(tail[~np.isnan(tail)], 0.0)
+
+
+def test_json_metrics_carry_the_separate_columns():
+    from reference_impl.bench.report import result_to_dict
+
+    doc = result_to_dict(_result())
+    m = doc["metrics"][0]
+    assert (m["measured"], m["expected"], m["at_v0"]) == (0.70, 0.7292, 5.0)
+    assert m["error"] == pytest.approx(0.04004) and m["tolerance"] == "rtol 0.01"

@@ -105,11 +105,20 @@ def result_to_dict(result) -> dict:
             "variants": result.variants,
             "scenes": result.scenes,
             "tolerances": result.tolerances,
-            "metrics": [m.to_dict() for m in result.metrics],
+            "metrics": [_metric_dict(result, m) for m in result.metrics],
             "records": contexts,
             "speed_error": result.speed_error,
         }
     )
+
+
+def _metric_dict(result, m) -> dict:
+    """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
+    reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
+    d = m.to_dict()
+    c = metric_columns(result, m)
+    d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])
+    return d
 
 
 def _atomic_write(path, text: str) -> None:
