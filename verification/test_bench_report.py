@@ -11,6 +11,12 @@ a ``cmd:`` response) may declare staggered samples, which the suite re-aligns.
 from __future__ import annotations
 
 import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -34,6 +40,7 @@ from reference_impl.bench.runner import BenchResult
 
 from .assertions import assert_true
 
+ROOT = Path(__file__).resolve().parent.parent
 CLAIM = "bench-report"  # the benchmark machinery, not a paper claim
 LONG = "lammps[viscoelastic,wall,limit_damping]"
 
@@ -189,3 +196,37 @@ def test_json_metrics_carry_the_separate_columns():
     m = doc["metrics"][0]
     assert (m["measured"], m["expected"], m["at_v0"]) == (0.70, 0.7292, 5.0)
     assert m["error"] == pytest.approx(0.04004) and m["tolerance"] == "rtol 0.01"
+
+
+# -- the second-language example of the protocol (issue 10, point 12) -------------------
+EXAMPLE_C = ROOT / "docs" / "examples" / "power_verlet.c"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not installed")
+def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
+    """docs/examples/power_verlet.c compiles warning-free and passes ``hcv bench --gate``."""
+    exe = tmp_path / "power_verlet"
+    cc = subprocess.run(
+        ["gcc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-o", str(exe),
+         str(EXAMPLE_C), "-lm"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert cc.returncode == 0, cc.stderr
+    js = tmp_path / "c.json"
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "bench", f"cmd:{exe}", "--gate",
+         "--scenes", "hooke-damped", "--json", str(js)],
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
+    doc = json.loads(js.read_text())
+    asked = next(m for m in doc["metrics"] if m["metric"] == "restitution_asked")
+    assert asked["status"] == "pass" and asked["expected"] == pytest.approx(0.5, rel=1e-12)
+    assert "restitution_asked" in r.stdout and "measured" in r.stdout.splitlines()[3]
+    # A request it cannot serve is answered with the protocol's one-line error.
+    bad = subprocess.run(
+        [str(exe)], input='{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
+        capture_output=True, text=True, timeout=30,
+    )  # fmt: skip
+    assert json.loads(bad.stdout) == {"error": "only power-law potentials"}
