@@ -91,7 +91,7 @@ def test_summary_first_with_failing_metrics_measured_against_expected():
     assert lines[0] == "hcv bench lammps: 1 pass, 1 fail, 1 skipped"
     assert lines[1].strip() == f"{LONG}: 1 pass, 1 fail, 1 skipped"
     fail = lines[2].strip()
-    assert fail.startswith("FAIL hertz-damped / restitution_asked: measured 0.7, expected 0.729")
+    assert fail.startswith("FAIL hertz-damped / restitution_asked: measured 0.7, expected 0.7292")
     assert "at v0 = 5 m/s" in fail and "tolerance rtol 0.01" in fail
     header = next(i for i, line in enumerate(lines) if line.startswith("adapter"))
     assert header > 2  # the details come after the summary
@@ -104,12 +104,12 @@ def test_columns_measured_reference_error_tolerance():
     assert header.split() == ["adapter", "scene", "metric", "measured", "reference", "error",
                               "tolerance", "result"]  # fmt: skip
     row = next(line for line in lines if "restitution_asked" in line and "FAIL" in line[-4:])
-    assert row.split()[3:6] == ["0.7", "0.729", "0.04"]
+    assert row.split()[3:6] == ["0.7", "0.7292", "0.04"]
     cols = metric_columns(res, res.metrics[0])
     assert (cols["measured"], cols["reference"], cols["v0"]) == (0.70, 0.7292, 5.0)
     md = scorecard_markdown(res)
     assert "| measured | reference | error | tolerance |" in md
-    assert "| 0.7 | 0.729 | 0.04 | rtol 0.01 | fail |" in md
+    assert "| 0.7 | 0.7292 | 0.04 | rtol 0.01 | fail |" in md
 
 
 def test_terminal_scorecard_is_a_table_with_the_same_columns():
@@ -230,3 +230,19 @@ def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
         capture_output=True, text=True, timeout=30,
     )  # fmt: skip
     assert json.loads(bad.stdout) == {"error": "only power-law potentials"}
+
+
+def test_side_by_side_puts_codes_in_columns():
+    """Two codes' JSON scorecards become one table, a column per variant (for the report)."""
+    from reference_impl.bench.report import result_to_dict, side_by_side, side_by_side_markdown
+
+    a = result_to_dict(_result())
+    b = result_to_dict(_result())
+    for m in b["metrics"]:
+        m["variant"] = "kratos[hertz,euler]"
+    header, rows = side_by_side([a, b])
+    assert header == ["scene", "metric", "reference", LONG, "kratos[hertz,euler]"]
+    assert rows[0] == ["hertz-damped", "restitution_asked", "0.7292", "0.7 FAIL", "0.7 FAIL"]
+    assert rows[1][1] == "restitution_v0_spread" and rows[1][3] == "0.0142 pass"
+    assert len(rows) == 2  # the skipped metric has no row
+    assert side_by_side_markdown([a, b]).splitlines()[0].startswith("| scene | metric |")

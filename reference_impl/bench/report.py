@@ -33,6 +33,8 @@ __all__ = [
     "result_to_dict",
     "scorecard_markdown",
     "scorecard_text",
+    "side_by_side",
+    "side_by_side_markdown",
     "write_json",
     "write_junit",
 ]
@@ -305,8 +307,13 @@ def metric_columns(result, m) -> dict:
     return out
 
 
+# Significant digits of measured values and references (errors keep 3): enough to see
+# a restitution of 0.72925 against 0.729248.
+_VALUE_DIGITS = 6
+
+
 def _fmt_v(v, unit: str = "") -> str:
-    s = _fmt(v)
+    s = f"{v:.{_VALUE_DIGITS}g}" if isinstance(v, float) and math.isfinite(v) else _fmt(v)
     return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
 
 
@@ -508,6 +515,70 @@ def scorecard_markdown(result) -> str:
                 f"{_fmt(r.get('err_max_penetration'))} |"
             )
     return "\n".join(out) + "\n"
+
+
+def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
+    """Several codes' scorecards as one table: a row per (scene, metric), a column per variant.
+
+    Parameters
+    ----------
+    docs : sequence of dict
+        JSON documents of `result_to_dict` (one per ``hcv bench`` run, e.g. lammps
+        and kratos).
+
+    Returns
+    -------
+    header, rows : list of str, list of list of str
+        ``header`` = ["scene", "metric", "reference", variant...]; a cell is the
+        measured value with "pass" / "FAIL", "-" when the variant did not run that
+        scene (skipped). ``reference`` is the asked value where it is the same for
+        every code (restitution_asked), else empty (each code's own exact law).
+    """
+    variants: list[str] = []
+    cells: dict[tuple[str, str], dict[str, str]] = {}
+    refs: dict[tuple[str, str], set] = {}
+    for doc in docs:
+        for m in doc.get("metrics", []):
+            v = m.get("variant", "")
+            if v not in variants:
+                variants.append(v)
+            if m.get("status") == "skip":
+                continue
+            key = (m.get("scene", ""), m.get("metric", ""))
+            measured = m.get("measured", m.get("value"))
+            unit = _UNITS.get(key[1], "")
+            status = {"pass": "pass", "fail": "FAIL"}.get(m.get("status"), m.get("status"))
+            cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
+            if key[1] == "restitution_asked" and m.get("expected") is not None:
+                refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
+    header = ["scene", "metric", "reference", *variants]
+    rows = []
+    for (scene, metric), by in cells.items():
+        ref = refs.get((scene, metric), set())
+        rows.append(
+            [
+                scene,
+                metric,
+                next(iter(ref)) if len(ref) == 1 else "",
+                *(by.get(v, "-") for v in variants),
+            ]
+        )
+    return header, rows
+
+
+def side_by_side_markdown(docs) -> str:
+    """`side_by_side` as a markdown table."""
+    header, rows = side_by_side(docs)
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def _num(x):
+    """A JSON number back as a float ("inf"/"nan" strings included), else unchanged."""
+    if isinstance(x, str) and x in ("inf", "-inf", "nan"):
+        return float(x)
+    return float(x) if isinstance(x, int) and not isinstance(x, bool) else x
 
 
 def plot_speed_error(rows, path) -> Path:
