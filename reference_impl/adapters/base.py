@@ -312,8 +312,9 @@ def align_staggered(tr: Trajectory, staggering: Mapping) -> Trajectory:
     done = {}
     k = int(staggering.get("force", 0))
     if k:
-        tail = np.where(out_of_contact[-k:], 0.0, np.nan) if q.size >= k else np.array([])
-        force = np.concatenate([force[k:], tail])[: q.size]
+        k_in = min(k, q.size)  # a lag longer than the run leaves no known force
+        tail = np.where(out_of_contact[q.size - k_in :], 0.0, np.nan)
+        force = np.concatenate([force[k_in:], tail])
         done["force"] = f"force[n] <- force[n + {k}]"
     if staggering.get("v"):
         last = v[-1] if out_of_contact[-1] else np.nan
