@@ -1,4 +1,4 @@
-"""Our Verlet lane engine against LAMMPS on the same collision and time step.
+"""Our Verlet lane engine against LAMMPS (and Kratos DEM) on the same collision and time step.
 
 Run:  /work/venv/bin/python -m benchmarks.bench_lammps [--quick] [--json FILE]
 
@@ -16,6 +16,10 @@ Measured in one process, each the best of a few repeats (wall time):
   (new instance, input script, run to separation, trajectory extracted);
 * LAMMPS batch: one LAMMPS run with one atom per speed (spaced apart, no pair
   interaction), run for the step count of the slowest collision.
+
+* Kratos DEM per collision (when ``.[kratos]`` is installed): one run of the
+  kratos adapter per speed (``DEM_D_Hertz_viscous_Coulomb``, Velocity_Verlet; its
+  own law: tension clipped, Thornton's gamma, so its restitution is not compared).
 
 Reported: steps per second (lane-steps or atom-steps) and collisions per second,
 the ratios, and the largest restitution difference between the codes (the same
@@ -81,6 +85,20 @@ def lammps_per_collision(scene, vels, dt, n_steps):
     steps = sum(int(t.t.size - 1) for t in trajs)
     e = np.array([-t.v[-1] / v for t, v in zip(trajs, vels, strict=True)])
     return secs, steps, e
+
+
+def kratos_per_collision(scene, vels, dt, n_steps):
+    """(seconds, steps) of one kratos-adapter run per speed, or None without Kratos."""
+    from reference_impl.adapters.kratos import KratosAdapter, kratos_available
+
+    if kratos_available() is not None:
+        return None
+    adapter = KratosAdapter(law="hertz", scheme="verlet")
+    scenes = [AdapterScene.from_scene(scene, v, dt, n_steps) for v in vels]
+    adapter.impact(scenes[0])  # load the library once
+
+    secs, trajs = _best(lambda: [adapter.impact(s) for s in scenes])
+    return secs, sum(int(t.t.size - 1) for t in trajs)
 
 
 def lammps_batch(scene, vels, dt, n_steps):
@@ -154,6 +172,9 @@ def main(argv=None) -> int:
         "LAMMPS, batch (with setup)": (steps_batch / (s_batch + setup_b),
                                        n_batch / (s_batch + setup_b)),
     }
+    kratos = kratos_per_collision(scene, sub, dt, n_steps)
+    if kratos is not None:
+        rows["Kratos DEM, one run per collision"] = (kratos[1] / kratos[0], n_single / kratos[0])
     print(f"{'':32s} {'steps/s':>12s} {'collisions/s':>14s} {'ours / this':>12s}")
     for name, (sps, cps) in rows.items():
         ratio = rows["ours (lane engine)"][1] / cps

@@ -54,6 +54,17 @@ Implementer contract
     stdout (use stderr for diagnostics; it is kept and shown when a run fails).
     A run that raises, crashes or exceeds the per-run timeout is reported as a
     failure of that run only; the benchmark goes on.
+11. Staggered quantities. Report q, v and force at the same instants t[n] when
+    you can. A code that stores some of them shifted in time may return them as
+    stored and declare the shift in ``staggering`` (a mapping, class or instance
+    attribute; the ``"staggering"`` key of a ``cmd:`` response does the same):
+    ``{"force": k}`` (integer k >= 1) when force[n] is the force at t[n - k] (a
+    force stored one step late, e.g. Kratos' Symplectic_Euler: k = 1);
+    ``{"v": 0.5}`` when v[n] is the velocity at t[n] - dt/2 (leapfrog). `impact`
+    re-aligns before anything is measured: force[n] <- force[n + k] and
+    v[n] <- (v[n] + v[n + 1]) / 2; the last k samples (last sample for v) keep 0
+    force / their own velocity when out of contact (q <= 0), NaN otherwise. The
+    run's ``meta["staggering_aligned"]`` records what was done.
 """
 
 from __future__ import annotations
@@ -79,11 +90,16 @@ __all__ = [
     "ImplementedLaw",
     "PowerDamping",
     "Trajectory",
+    "align_staggered",
+    "check_staggering",
     "trajectory_from_mapping",
 ]
 
 # t[0] must be 0 within this fraction of the trajectory's duration.
 _T0_RTOL = 1e-9
+# Declarable staggering (contract item 11): the quantity and the allowed shifts.
+_STAGGER_KEYS = ("force", "v")
+_MAX_FORCE_LAG = 4  # a larger lag is a mistake, not a scheme
 
 
 class AdapterError(RuntimeError):
@@ -166,8 +182,7 @@ class AdapterScene:
             "potential": dict(self.potential_spec),
             "mass": self.mass,
             "v0": self.v0,
-            "damping": {"law": self.damping, "zeta": self.zeta,
-                        "restitution": self.restitution},
+            "damping": {"law": self.damping, "zeta": self.zeta, "restitution": self.restitution},
             "dt": self.dt,
             "n_steps": int(self.n_steps),
             "velocities": list(self.velocities),
@@ -181,10 +196,17 @@ class AdapterScene:
         """Build from a validated `reference_impl.scenes.Scene` at one speed."""
         zeta = float(scene.zeta or 0.0) if scene.damping_law == "universal" else 0.0
         return cls(
-            name=scene.name, kind=scene.kind, potential=scene.potential,
-            potential_spec=potential_to_dict(scene.potential), mass=float(scene.mass),
-            v0=float(v0), damping=scene.damping_law if zeta > 0 else "none", zeta=zeta,
-            dt=float(dt), n_steps=int(n_steps), velocities=tuple(scene.velocities),
+            name=scene.name,
+            kind=scene.kind,
+            potential=scene.potential,
+            potential_spec=potential_to_dict(scene.potential),
+            mass=float(scene.mass),
+            v0=float(v0),
+            damping=scene.damping_law if zeta > 0 else "none",
+            zeta=zeta,
+            dt=float(dt),
+            n_steps=int(n_steps),
+            velocities=tuple(scene.velocities),
             gap=scene.gap,
         )
 
@@ -210,11 +232,17 @@ class Trajectory:
 
     def to_json(self) -> dict[str, Any]:
         """Plain lists (non-finite values as null)."""
+
         def lst(a):
             return [float(x) if math.isfinite(x) else None for x in np.asarray(a, float)]
 
-        return {"t": lst(self.t), "q": lst(self.q), "v": lst(self.v), "force": lst(self.force),
-                "meta": self.meta}
+        return {
+            "t": lst(self.t),
+            "q": lst(self.q),
+            "v": lst(self.v),
+            "force": lst(self.force),
+            "meta": self.meta,
+        }
 
 
 def _array(name: str, value, who: str) -> np.ndarray:
@@ -223,7 +251,8 @@ def _array(name: str, value, who: str) -> np.ndarray:
     try:
         a = np.asarray(
             [np.nan if x is None else x for x in value] if isinstance(value, list) else value,
-            dtype=float)
+            dtype=float,
+        )
     except (TypeError, ValueError):
         raise AdapterOutputError(f"{who}: {name!r} is not an array of numbers") from None
     if a.ndim != 1:
@@ -231,8 +260,74 @@ def _array(name: str, value, who: str) -> np.ndarray:
     return a
 
 
-def trajectory_from_mapping(obj, who: str = "adapter") -> Trajectory:
+def check_staggering(value, who: str = "adapter") -> dict:
+    """Validate a staggering declaration (contract item 11); returns a plain dict.
+
+    Raises
+    ------
+    AdapterOutputError
+        One line naming the offending key or value.
+    """
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise AdapterOutputError(
+            f"{who}: 'staggering' must be a mapping such as {{\"force\": 1}}, got {value!r}"
+        )
+    out: dict = {}
+    for key, shift in value.items():
+        if key not in _STAGGER_KEYS:
+            raise AdapterOutputError(
+                f"{who}: staggering key {key!r} is not one of {', '.join(_STAGGER_KEYS)}"
+            )
+        if key == "force":
+            if (
+                isinstance(shift, bool)
+                or not isinstance(shift, (int, float))
+                or shift != int(shift)
+                or not 0 <= shift <= _MAX_FORCE_LAG
+            ):
+                raise AdapterOutputError(
+                    f"{who}: staggering 'force' must be an integer lag in "
+                    f"0..{_MAX_FORCE_LAG} steps, got {shift!r}"
+                )
+            if shift:
+                out["force"] = int(shift)
+        elif shift not in (0, 0.0, 0.5):
+            raise AdapterOutputError(
+                f"{who}: staggering 'v' must be 0 or 0.5 (half a step behind), got {shift!r}"
+            )
+        elif shift:
+            out["v"] = 0.5
+    return out
+
+
+def align_staggered(tr: Trajectory, staggering: Mapping) -> Trajectory:
+    """Re-align staggered force / velocity samples onto t (contract item 11)."""
+    if not staggering:
+        return tr
+    q = tr.q
+    out_of_contact = q <= 0
+    force, v = tr.force, tr.v
+    done = {}
+    k = int(staggering.get("force", 0))
+    if k:
+        k_in = min(k, q.size)  # a lag longer than the run leaves no known force
+        tail = np.where(out_of_contact[q.size - k_in :], 0.0, np.nan)
+        force = np.concatenate([force[k_in:], tail])
+        done["force"] = f"force[n] <- force[n + {k}]"
+    if staggering.get("v"):
+        last = v[-1] if out_of_contact[-1] else np.nan
+        v = np.concatenate([0.5 * (v[:-1] + v[1:]), [last]])
+        done["v"] = "v[n] <- (v[n] + v[n + 1]) / 2"
+    return Trajectory(tr.t, q, v, force, {**tr.meta, "staggering_aligned": done})
+
+
+def trajectory_from_mapping(obj, who: str = "adapter", staggering=None) -> Trajectory:
     """Validate an adapter's output (a `Trajectory` or a mapping) and return a `Trajectory`.
+
+    A ``"staggering"`` key of a mapping, or the ``staggering`` argument (the
+    adapter's declaration), re-aligns shifted samples (contract item 11).
 
     Raises
     ------
@@ -240,14 +335,14 @@ def trajectory_from_mapping(obj, who: str = "adapter") -> Trajectory:
         With one line saying what is wrong.
     """
     if isinstance(obj, Trajectory):
-        data: Mapping = {"t": obj.t, "q": obj.q, "v": obj.v, "force": obj.force,
-                         "meta": obj.meta}
+        data: Mapping = {"t": obj.t, "q": obj.q, "v": obj.v, "force": obj.force, "meta": obj.meta}
     elif isinstance(obj, Mapping):
         data = obj
     else:
         raise AdapterOutputError(
             f"{who}: returned {type(obj).__name__}, expected a Trajectory or a mapping with "
-            "t, q, v, force")
+            "t, q, v, force"
+        )
     arrays = {k: _array(k, data.get(k), who) for k in ("t", "q", "v", "force")}
     n = arrays["t"].size
     for k, a in arrays.items():
@@ -260,14 +355,20 @@ def trajectory_from_mapping(obj, who: str = "adapter") -> Trajectory:
         raise AdapterOutputError(f"{who}: 't' contains non-finite values")
     if np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0))
-        raise AdapterOutputError(f"{who}: 't' must increase strictly (t[{i}] = {t[i]!r}, "
-                                 f"t[{i + 1}] = {t[i + 1]!r})")
+        raise AdapterOutputError(
+            f"{who}: 't' must increase strictly (t[{i}] = {t[i]!r}, t[{i + 1}] = {t[i + 1]!r})"
+        )
     if abs(t[0]) > _T0_RTOL * (t[-1] - t[0]):
         raise AdapterOutputError(f"{who}: 't' must start at 0 (contact onset), got {t[0]!r}")
     meta = data.get("meta") or {}
     if not isinstance(meta, Mapping):
         raise AdapterOutputError(f"{who}: 'meta' must be a mapping, got {type(meta).__name__}")
-    return Trajectory(arrays["t"], arrays["q"], arrays["v"], arrays["force"], dict(meta))
+    declared = check_staggering(staggering, who)
+    declared.update(
+        check_staggering(data.get("staggering"), who) if isinstance(data, Mapping) else {}
+    )
+    tr = Trajectory(arrays["t"], arrays["q"], arrays["v"], arrays["force"], dict(meta))
+    return align_staggered(tr, declared)
 
 
 @dataclass(frozen=True)
@@ -330,8 +431,9 @@ class ImplementedLaw:
                 raise HCVInputError("ImplementedLaw: give either zeta or C, not both")
             object.__setattr__(self, "zeta", None)
         elif self.zeta is None or not (math.isfinite(self.zeta) and self.zeta >= 0):
-            raise HCVInputError(f"ImplementedLaw: zeta must be >= 0 when C is not given, "
-                                f"got {self.zeta!r}")
+            raise HCVInputError(
+                f"ImplementedLaw: zeta must be >= 0 when C is not given, got {self.zeta!r}"
+            )
 
     def damping_coefficient(self, q):
         """C(q) (kg/s) at overlaps q > 0."""
@@ -348,13 +450,21 @@ class ImplementedLaw:
     def to_json(self) -> dict:
         damping: dict[str, Any]
         if self.C is not None:
-            damping = (self.C.to_json() if hasattr(self.C, "to_json")
-                       else {"law": "callable", "repr": repr(self.C)})
+            damping = (
+                self.C.to_json()
+                if hasattr(self.C, "to_json")
+                else {"law": "callable", "repr": repr(self.C)}
+            )
         else:
             damping = {"law": "universal" if self.zeta else "none", "zeta": self.zeta or 0.0}
-        return {"potential": potential_to_dict(self.potential), "mass": self.mass,
-                "damping": damping, "clips_tension": self.clips_tension,
-                "description": self.description, "params": self.params}
+        return {
+            "potential": potential_to_dict(self.potential),
+            "mass": self.mass,
+            "damping": damping,
+            "clips_tension": self.clips_tension,
+            "description": self.description,
+            "params": self.params,
+        }
 
 
 class ContactAdapter:
@@ -370,11 +480,16 @@ class ContactAdapter:
         subprocess adapter) or trusted (the reference) set it False.
     supports_sustained : bool
         Implements `_sustained_impl` (contract item 9).
+    staggering : dict
+        Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
+        when the force is stored one step late; `impact` re-aligns them. Empty:
+        every quantity is at t[n].
     """
 
     name: str = "adapter"
     isolate: bool = True
     supports_sustained: bool = False
+    staggering: Mapping = {}
 
     @property
     def label(self) -> str:
@@ -396,8 +511,12 @@ class ContactAdapter:
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         """The law the code integrates for this scene; default: exactly the scene's."""
-        return ImplementedLaw(scene.potential, scene.mass, zeta=scene.zeta,
-                              description="as asked (the adapter declares no other law)")
+        return ImplementedLaw(
+            scene.potential,
+            scene.mass,
+            zeta=scene.zeta,
+            description="as asked (the adapter declares no other law)",
+        )
 
     def variants(self) -> list[ContactAdapter]:
         """Configurations benchmarked separately; default: this adapter alone."""
@@ -417,12 +536,12 @@ class ContactAdapter:
             The output breaks the contract (one-line reason).
         """
         out = self._impact_impl(scene)
-        return trajectory_from_mapping(out, who=self.label)
+        return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
     def sustained(self, scene: AdapterScene) -> Trajectory:
         """Run one sustained scene (two-walls) and return the validated trajectory."""
         out = self._sustained_impl(scene)
-        return trajectory_from_mapping(out, who=self.label)
+        return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
     def close(self) -> None:
         """Release resources (called once at the end of a benchmark)."""

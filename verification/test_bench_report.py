@@ -1,0 +1,248 @@
+"""The benchmark's scorecard output and the staggering declaration of the adapter contract.
+
+Issue 10, points 6, 7 and 11: off a terminal (CI logs, pipes) the scorecard is
+full-width plain text, never cut to 80 columns, and leads with a summary per
+code (pass / fail counts, each failing metric with measured against expected
+values); measured value, reference, error and tolerance are separate labelled
+columns (the measured restitution is visible without the JSON); an adapter (or
+a ``cmd:`` response) may declare staggered samples, which the suite re-aligns.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from reference_impl.adapters.base import (
+    AdapterOutputError,
+    ContactAdapter,
+    Trajectory,
+    trajectory_from_mapping,
+)
+from reference_impl.bench.metrics import MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.report import (
+    metric_columns,
+    render_scorecard,
+    scorecard_markdown,
+    scorecard_text,
+)
+from reference_impl.bench.runner import BenchResult
+
+from .assertions import assert_true
+
+ROOT = Path(__file__).resolve().parent.parent
+CLAIM = "bench-report"  # the benchmark machinery, not a paper claim
+LONG = "lammps[viscoelastic,wall,limit_damping]"
+
+
+def _result() -> BenchResult:
+    """A scorecard with one failing restitution (0.70 measured, 0.7292 asked) and a pass."""
+    recs = [
+        SpeedRecord(v0=0.5, dt=1e-7, asked_e=0.7292, measured={"restitution": 0.71},
+                    exact={"restitution": 0.7101}),
+        SpeedRecord(v0=5.0, dt=1e-7, asked_e=0.7292, measured={"restitution": 0.70},
+                    exact={"restitution": 0.7001}),
+    ]  # fmt: skip
+    ctx = SceneContext(LONG, "hertz-damped", "impact", True, speeds=recs)
+    metrics = [
+        MetricResult(LONG, "hertz-damped", "restitution_asked", "fail", value=0.04004,
+                     reference=0.0, tolerance="rtol 0.01",
+                     explanation="e = 0.7 at v0 = 5 m/s but 0.7292 was asked"),
+        MetricResult(LONG, "hertz-damped", "restitution_v0_spread", "pass", value=0.0142,
+                     reference=0.0141, tolerance="rtol 0.02"),
+        MetricResult(LONG, "hertz-damped", "energy_drift", "skip", explanation="two-walls"),
+    ]  # fmt: skip
+    return BenchResult(adapter="lammps", metrics=metrics, contexts=[ctx])
+
+
+def _piped(result) -> str:
+    from rich.console import Console
+
+    buf = io.StringIO()
+    render_scorecard(result, console=Console(file=buf, force_terminal=False, width=80))
+    return buf.getvalue()
+
+
+def test_piped_scorecard_is_full_width_plain_text():
+    out = _piped(_result())
+    assert_true(
+        LONG in out and "restitution_v0_spread" in out and "…" not in out,
+        got=out[:400],
+        should="full names, nothing cut at 80 columns",
+        claim=CLAIM,
+        call="render_scorecard(piped)",
+    )
+    assert max(len(line) for line in out.splitlines()) > 80
+    assert "\x1b[" not in out and "┃" not in out  # plain text: no escapes, no box drawing
+
+
+def test_summary_first_with_failing_metrics_measured_against_expected():
+    lines = _piped(_result()).splitlines()
+    assert lines[0] == "hcv bench lammps: 1 pass, 1 fail, 1 skipped"
+    assert lines[1].strip() == f"{LONG}: 1 pass, 1 fail, 1 skipped"
+    fail = lines[2].strip()
+    assert fail.startswith("FAIL hertz-damped / restitution_asked: measured 0.7, expected 0.7292")
+    assert "at v0 = 5 m/s" in fail and "tolerance rtol 0.01" in fail
+    header = next(i for i, line in enumerate(lines) if line.startswith("adapter"))
+    assert header > 2  # the details come after the summary
+
+
+def test_columns_measured_reference_error_tolerance():
+    res = _result()
+    lines = scorecard_text(res).splitlines()
+    header = next(line for line in lines if line.startswith("adapter"))
+    assert header.split() == ["adapter", "scene", "metric", "measured", "reference", "error",
+                              "tolerance", "result"]  # fmt: skip
+    row = next(line for line in lines if "restitution_asked" in line and "FAIL" in line[-4:])
+    assert row.split()[3:6] == ["0.7", "0.7292", "0.04"]
+    cols = metric_columns(res, res.metrics[0])
+    assert (cols["measured"], cols["reference"], cols["v0"]) == (0.70, 0.7292, 5.0)
+    md = scorecard_markdown(res)
+    assert "| measured | reference | error | tolerance |" in md
+    assert "| 0.7 | 0.7292 | 0.04 | rtol 0.01 | fail |" in md
+
+
+def test_terminal_scorecard_is_a_table_with_the_same_columns():
+    from rich.console import Console
+
+    buf = io.StringIO()
+    render_scorecard(_result(), console=Console(file=buf, force_terminal=True, width=200))
+    out = buf.getvalue()
+    for col in ("measured", "reference", "error", "tolerance"):
+        assert col in out
+    assert out.index("hcv bench lammps") < out.index("measured")
+
+
+# -- staggering (contract item 11) --------------------------------------------------
+def _raw(n: int = 8, lag: int = 1):
+    t = np.arange(n) * 0.1
+    q = np.sin(np.pi * t / t[-2])  # in contact, then out at the last sample
+    f = np.concatenate([np.zeros(lag), 3.0 * q[: n - lag]])  # force stored `lag` steps late
+    return t, q, f
+
+
+def test_declared_force_lag_is_realigned_for_python_and_cmd_forms():
+    t, q, f = _raw()
+    v = np.ones_like(t)
+
+    class Lagged(ContactAdapter):
+        name = "lagged"
+        staggering = {"force": 1}
+
+        def _impact_impl(self, scene):
+            return Trajectory(t, q, v, f)
+
+    tr = Lagged().impact(None)
+    np.testing.assert_array_equal(tr.force[:-1], 3.0 * q[:-1])
+    assert tr.force[-1] == 0.0  # out of contact at the last sample: no force
+    data = {"t": list(t), "q": list(q), "v": list(v), "force": list(f),
+            "staggering": {"force": 1}}  # fmt: skip
+    tr2 = trajectory_from_mapping(data, who="cmd")
+    np.testing.assert_array_equal(tr2.force, tr.force)
+    assert tr2.meta["staggering_aligned"] == {"force": "force[n] <- force[n + 1]"}
+
+
+def test_half_step_velocity_is_averaged():
+    t = np.arange(5) * 0.5
+    q = np.array([0.0, 1.0, 1.0, 0.5, -0.1])
+    v_half = np.array([1.0, 0.5, 0.0, -0.5, -0.5])
+    tr = trajectory_from_mapping(
+        {"t": t, "q": q, "v": v_half, "force": np.zeros(5), "staggering": {"v": 0.5}}
+    )
+    np.testing.assert_allclose(tr.v, [0.75, 0.25, -0.25, -0.5, -0.5])
+
+
+@pytest.mark.parametrize(
+    "bad", [{"force": 1.5}, {"force": -1}, {"force": 9}, {"v": 0.25}, {"x": 1}, [1], "force"]
+)
+def test_bad_staggering_is_one_line_error(bad):
+    t, q, f = _raw()
+    with pytest.raises(AdapterOutputError) as err:
+        trajectory_from_mapping({"t": t, "q": q, "v": q, "force": f, "staggering": bad}, who="c")
+    assert "\n" not in str(err.value) and "staggering" in str(err.value)
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(3, 40), lag=st.integers(1, 4), seed=st.integers(0, 2**16))
+def test_force_realignment_shifts_every_sample(n, lag, seed):
+    """For any length and lag: aligned[i] = stored[i + lag]; the tail is 0 out of contact."""
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(-1, 1, n)
+    f = rng.uniform(0, 1, n)
+    t = np.arange(n, dtype=float)
+    tr = trajectory_from_mapping({"t": t, "q": q, "v": q, "force": f, "staggering": {"force": lag}})
+    k = min(lag, n)
+    np.testing.assert_array_equal(tr.force[: n - k], f[k:])
+    tail = tr.force[n - k :]
+    expect = np.where(q[n - k :] <= 0, 0.0, np.nan)
+    np.testing.assert_array_equal(np.isnan(tail), np.isnan(expect))
+    np.testing.assert_array_equal(tail[~np.isnan(tail)], 0.0)
+
+
+def test_json_metrics_carry_the_separate_columns():
+    from reference_impl.bench.report import result_to_dict
+
+    doc = result_to_dict(_result())
+    m = doc["metrics"][0]
+    assert (m["measured"], m["expected"], m["at_v0"]) == (0.70, 0.7292, 5.0)
+    assert m["error"] == pytest.approx(0.04004) and m["tolerance"] == "rtol 0.01"
+
+
+# -- the second-language example of the protocol (issue 10, point 12) -------------------
+EXAMPLE_C = ROOT / "docs" / "examples" / "power_verlet.c"
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not installed")
+def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
+    """docs/examples/power_verlet.c compiles warning-free and passes ``hcv bench --gate``."""
+    exe = tmp_path / "power_verlet"
+    cc = subprocess.run(
+        ["gcc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-o", str(exe),
+         str(EXAMPLE_C), "-lm"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert cc.returncode == 0, cc.stderr
+    js = tmp_path / "c.json"
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "bench", f"cmd:{exe}", "--gate",
+         "--scenes", "hooke-damped", "--json", str(js)],
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-2000:]
+    doc = json.loads(js.read_text())
+    asked = next(m for m in doc["metrics"] if m["metric"] == "restitution_asked")
+    assert asked["status"] == "pass" and asked["expected"] == pytest.approx(0.5, rel=1e-12)
+    assert "restitution_asked" in r.stdout and "measured" in r.stdout.splitlines()[3]
+    # A request it cannot serve is answered with the protocol's one-line error.
+    bad = subprocess.run(
+        [str(exe)], input='{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
+        capture_output=True, text=True, timeout=30,
+    )  # fmt: skip
+    assert json.loads(bad.stdout) == {"error": "only power-law potentials"}
+
+
+def test_side_by_side_puts_codes_in_columns():
+    """Two codes' JSON scorecards become one table, a column per variant (for the report)."""
+    from reference_impl.bench.report import result_to_dict, side_by_side, side_by_side_markdown
+
+    a = result_to_dict(_result())
+    b = result_to_dict(_result())
+    for m in b["metrics"]:
+        m["variant"] = "kratos[hertz,euler]"
+    header, rows = side_by_side([a, b])
+    assert header == ["scene", "metric", "reference", LONG, "kratos[hertz,euler]"]
+    assert rows[0] == ["hertz-damped", "restitution_asked", "0.7292", "0.7 FAIL", "0.7 FAIL"]
+    assert rows[1][1] == "restitution_v0_spread" and rows[1][3] == "0.0142 pass"
+    assert len(rows) == 2  # the skipped metric has no row
+    assert side_by_side_markdown([a, b]).splitlines()[0].startswith("| scene | metric |")

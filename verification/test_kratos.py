@@ -1,0 +1,193 @@
+"""The Kratos DEM adapter against real Kratos (``pip install -e '.[kratos]'``).
+
+Marked ``kratos``; skipped when Kratos DEM is not installed (``pytest -m "not
+kratos"`` deselects them). CI installs the extra and runs them.
+
+What is checked: importing Kratos leaves stdout clean and runs one OpenMP
+thread; the elastic force Kratos applies is exactly the declared power law, for
+both laws, both schemes and both geometries, once the declared staggering is
+undone (Symplectic Euler stores the force one step late); Kratos converges to
+the declared damped law (so the declared damping mapping is the one Kratos
+integrates) and never lets the force pull (tension clipped, as declared); and
+``hcv bench kratos --gate`` with its JSON and JUnit files.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reference_impl.adapters.kratos import kratos_available
+
+pytestmark = [
+    pytest.mark.kratos,
+    pytest.mark.skipif(
+        kratos_available() is not None,
+        reason="Kratos DEM not installed (pip install -e '.[kratos]')",
+    ),
+]
+
+from reference_impl import solve_impact  # noqa: E402
+from reference_impl.adapters import AdapterScene, get_adapter  # noqa: E402
+from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
+from reference_impl.bench.runner import resolve_scenes  # noqa: E402
+
+from .assertions import assert_close, assert_true  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+CLAIM = "bench-kratos"  # the benchmark machinery, not a paper claim
+# Elastic force against k q^p: Kratos evaluates (2/3) K_n q and K_n q in double
+# precision from E*, R that the adapter derived from k: a few ulps of round-off.
+_FORCE_RTOL = 1e-9
+
+
+def scene_at(name: str, v0: float, steps_per_contact: int = 200, zeta=None) -> AdapterScene:
+    sc = resolve_scenes([name])[0]
+    t_c = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time
+    asc = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, 4 * steps_per_contact)
+    if zeta is not None:
+        asc = asc.replace(zeta=zeta, damping="universal" if zeta else "none")
+    return asc
+
+
+def test_kratos_import_keeps_stdout_clean_and_runs_one_thread():
+    """The banner goes to stderr, and OpenMP is limited to one thread (33 s vs 1 s)."""
+    code = (
+        "from reference_impl.adapters.kratos import load_kratos\n"
+        "km, dem, _ = load_kratos()\n"
+        "print('threads', km.ParallelUtilities.GetNumThreads())\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "OMP_NUM_THREADS"}
+    env["PYTHONPATH"] = str(ROOT)
+    r = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120
+    )
+    assert r.returncode == 0, r.stderr
+    assert_true(
+        r.stdout.strip() == "threads 1",
+        got=repr(r.stdout[:200]),
+        should="only 'threads 1' on stdout (Kratos' banner on stderr)",
+        claim=CLAIM,
+        call="load_kratos()",
+    )
+    assert "KRATOS" in r.stderr.upper()
+
+
+@pytest.mark.parametrize("geometry", ["wall", "pair"])
+@pytest.mark.parametrize("scheme", ["euler", "verlet"])
+@pytest.mark.parametrize("law,scene_name", [("hertz", "hertz"), ("linear", "hooke-damped")])
+def test_kratos_elastic_force_is_the_declared_law(law, scene_name, scheme, geometry):
+    """force[n] = k q[n]^p at every sample in contact, after the declared staggering."""
+    adapter = get_adapter(f"kratos[law={law},scheme={scheme},geometry={geometry}]")
+    scene = scene_at(scene_name, 1.0, zeta=0.0)
+    tr = adapter.impact(scene)
+    pot = scene.potential
+    inside = np.nonzero(tr.q > 0)[0][:-1]  # the last sample's force may be unknown (NaN)
+    want = pot.k * tr.q[inside] ** pot.p
+    worst = int(np.argmax(np.abs(tr.force[inside] - want) / want))
+    assert_close(
+        float(tr.force[inside][worst]),
+        float(want[worst]),
+        rtol=_FORCE_RTOL,
+        claim=CLAIM,
+        call=f"{adapter.label} force at q = {tr.q[inside][worst]:.4g} m",
+    )
+    assert tr.meta.get("staggering_aligned", {}) == (
+        {"force": "force[n] <- force[n + 1]"} if scheme == "euler" else {}
+    )
+
+
+@pytest.mark.parametrize(
+    "spec,scene_name",
+    [
+        ("kratos[law=hertz,scheme=verlet]", "hertz-damped"),
+        ("kratos[law=hertz,scheme=euler,geometry=pair]", "hertz-damped"),
+        ("kratos[law=linear,scheme=euler]", "hooke-damped"),
+    ],
+)
+def test_kratos_converges_to_the_declared_damped_law(spec, scene_name):
+    """The restitution error against the declared law falls with dt (>= first order).
+
+    A wrong damping mapping (gamma -> zeta) would leave the error at the mapping's
+    offset instead of dividing it by about 4 (first order) when dt is divided by 4.
+    """
+    adapter = get_adapter(spec)
+    errs = []
+    for spc in (200, 800):
+        scene = scene_at(scene_name, 1.0, steps_per_contact=spc)
+        tr = adapter.impact(scene)
+        law = adapter.implemented_law(scene)
+        assert law.clips_tension
+        got = measure(tr, 1.0)["restitution"]
+        exact = exact_reference(law, 1.0)["restitution"]
+        errs.append(abs(got - exact) / exact)
+        # Tension clipped: the total force never pulls.
+        assert_true(
+            float(np.nanmin(tr.force)) >= 0.0,
+            got=f"min force {np.nanmin(tr.force):.3g} N",
+            should=">= 0 (Kratos clips tension)",
+            claim=CLAIM,
+            call=f"{adapter.label}.impact(dt = t_c / {spc})",
+        )
+    # First order divides the error by 4 for a step 4 times smaller; 3 leaves room for
+    # the higher-order terms at 200 steps per contact.
+    assert_true(
+        errs[1] <= errs[0] / 3.0,
+        got=f"errors {errs[0]:.3g} (t_c/200), {errs[1]:.3g} (t_c/800)",
+        should="falling at least like dt",
+        claim=CLAIM,
+        call=f"{adapter.label} restitution against the declared law",
+    )
+
+
+def test_kratos_linear_restitution_is_the_asked_one():
+    """Kratos' bisection for the linear law hits the asked e (its zero-force restitution)."""
+    adapter = get_adapter("kratos[law=linear,scheme=euler]")
+    scene = scene_at("hooke-damped", 1.0)
+    law = adapter.implemented_law(scene)
+    # Bisection on gamma to 1e-4 (sphere_strategy.RootByBisection): |de/dgamma| < 3 for
+    # e in (0.3, 0.9), so e within 3e-4.
+    assert_close(
+        exact_reference(law, 1.0)["restitution"],
+        scene.restitution,
+        rtol=3e-4,
+        claim=CLAIM,
+        call="kratos linear: exact restitution of the declared law",
+    )
+
+
+def test_hcv_bench_kratos_gate(tmp_path):
+    """``hcv bench kratos --gate --json --junit`` runs every default variant and passes.
+
+    Two damped scenes keep it short: each variant runs on one of them."""
+    js, xml = tmp_path / "k.json", tmp_path / "k.xml"
+    # A coarser critical-step bisection and a shorter speed table: the test checks the
+    # pipeline and the gate, not the resolution of Delta t_crit (as test_lammps does).
+    fast = tmp_path / "fast.toml"
+    fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "bench", "kratos", "--gate",
+         "--scenes", "hertz-damped,hooke-damped", "--tolerances", str(fast),
+         "--json", str(js), "--junit", str(xml)],
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True,
+        timeout=600, cwd=tmp_path,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "Multi-Physics" not in r.stdout  # Kratos' banner stays off stdout
+    data = json.loads(js.read_text())
+    labels = [v["label"] for v in data["variants"]]
+    assert labels == [
+        "kratos[hertz,euler]", "kratos[hertz,verlet]", "kratos[linear,euler]",
+        "kratos[linear,verlet]", "kratos[hertz,euler,pair]",
+    ]  # fmt: skip
+    assert data["summary"]["fail"] == 0 and data["summary"]["pass"] > 0
+    tree = ET.parse(xml)
+    assert tree.getroot().get("failures") == "0"
+    assert sorted(os.listdir(tmp_path)) == ["fast.toml", "k.json", "k.xml"]  # nothing left
