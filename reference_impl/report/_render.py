@@ -73,11 +73,20 @@ def _header(r) -> list:
     return blocks
 
 
+def _tests_cell(tests: list[str]) -> str:
+    """``file::test`` names grouped by file: "test_sec4_action.py (5)"."""
+    per_file: dict[str, int] = {}
+    for t in tests:
+        f = t.split("::")[0]
+        per_file[f] = per_file.get(f, 0) + 1
+    return ", ".join(f"{f} ({n})" for f, n in per_file.items()) or "–"
+
+
 def _ledger(r) -> list:
     rows, flags = [], []
     for c in r["claims"]:
         rows.append([c["id"], c["section"], VERDICT_MARK[c["verdict"]],
-                     c["evidence"], ", ".join(c["tests"]) or "–"])
+                     c["evidence"], _tests_cell(c["tests"])])
         flags.append([None, None, "good" if c["verdict"] == "verified" else
                       "bad" if c["verdict"] == "refuted" else "warn", None, None])
     statements = UL([f"{c['id']} ({c['section']}): {c['statement']} Rule: {c['rule']}."
