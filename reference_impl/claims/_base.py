@@ -29,6 +29,8 @@ class Measurement:
         JSON-able measured figures and cases (written to results.json as ``measured``).
     counterexample : dict or None
         For a refuted claim: the case that breaks the statement as printed.
+    headline : str
+        A short line from the measured numbers (the README's verdict table).
     """
 
     claim: str
@@ -37,6 +39,7 @@ class Measurement:
     rule: str
     figures: dict = field(default_factory=dict)
     counterexample: dict | None = None
+    headline: str = ""
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
@@ -51,7 +54,8 @@ class Measurement:
 
         return {"claim": self.claim, "verdict": self.verdict, "evidence": self.evidence,
                 "rule": self.rule, "measured": jsonable(self.figures),
-                "counterexample": jsonable(self.counterexample)}
+                "counterexample": jsonable(self.counterexample),
+                "headline": self.headline or self.evidence.split(";")[0]}
 
 
 def g(x, digits: int = 3) -> str:

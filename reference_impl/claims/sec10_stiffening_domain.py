@@ -61,4 +61,6 @@ def measure(quick: bool = False) -> Measurement:
                        "limit and the indicator has the claimed sign",
                        {"root_over_a": mpmath.nstr(u, 20), "printed": printed,
                         "min_indicator_inside": float(inside.min()),
-                        "indicator_beyond": beyond.tolist()}, counter)
+                        "indicator_beyond": beyond.tolist()}, counter,
+                       headline=(f"2UU'' − U'² changes sign at δ = {mpmath.nstr(u, 8)} a "
+                                 f"(printed {printed} a)"))

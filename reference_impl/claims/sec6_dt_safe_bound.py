@@ -149,7 +149,10 @@ def verdict_from_map(df) -> Measurement:
                        "refuted iff at least one runaway (energy growth that does not saturate) "
                        "has a failing Verlet step ≤ Δt_safe; bounded orbits and accuracy "
                        "thresholds are counted apart, unclassified failures leave it inconclusive",
-                       measured, counter)
+                       measured, counter,
+                       headline=(f"failing steps at or below Δt_safe by kind: {kind_text}"
+                                 + (f"; worst runaway at {counter['ratio']:.2f} Δt_safe "
+                                    f"({counter['case']}, {counter['scene']})" if counter else "")))
 
 
 @functools.cache

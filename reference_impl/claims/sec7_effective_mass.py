@@ -70,4 +70,6 @@ def measure(quick: bool = False) -> Measurement:
     return Measurement(ID, "verified" if ok else "refuted", evidence,
                        f"verified if the identity holds to {g(IDENTITY_TOL)}, M_eff is constant "
                        f"({g(CONSTANT_TOL)}) for p = 1 only (others vary > {g(VARIES_MIN)}) and "
-                       f"the slopes match to {g(SLOPE_TOL)}", {"rows": rows}, counter)
+                       f"the slopes match to {g(SLOPE_TOL)}", {"rows": rows}, counter,
+                       headline=(f"M_eff = 2mKU/U'² to {g(id_err, 2)}, constant only for p = 1 "
+                                 f"(variation {g(lin['relative_variation'], 2)})"))

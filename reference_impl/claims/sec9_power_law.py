@@ -48,4 +48,6 @@ def measure(quick: bool = False) -> Measurement:
     counter = None if ok else {"rows": rows}
     return Measurement(ID, "verified" if ok else "refuted", evidence,
                        f"verified if |slope − (p−1)/2| < {g(SLOPE_TOL)} and C matches Tsuji to "
-                       f"{g(ROUNDOFF_TOL)}", {"rows": rows}, counter)
+                       f"{g(ROUNDOFF_TOL)}", {"rows": rows}, counter,
+                       headline=(f"C ∝ q^((p−1)/2) to {g(c_err, 2)}; Hertz exponent "
+                                 f"{hertz['slope']:.12f}"))

@@ -60,4 +60,7 @@ def measure(quick: bool = False) -> Measurement:
     return Measurement(ID, "refuted" if bad else "verified", evidence,
                        "refuted if any computed cell, rounded to the printed digits, differs "
                        "from the printed value",
-                       {"mismatches": len(bad), "cells": n, "rows": list(by_v.values())}, counter)
+                       {"mismatches": len(bad), "cells": n, "rows": list(by_v.values())}, counter,
+                       headline=(f"{len(bad)} of {n} cells differ at the printed digits"
+                                 + (" (" + ", ".join(f"v0 = {c.v0} {NAMES[c.column]}" for c in bad)
+                                    + ")" if bad else "")))

@@ -79,4 +79,8 @@ def measure(quick: bool = False) -> Measurement:
                 "abs_ratio_minus_1": worst} if refuted else None)
     return Measurement(ID, "refuted" if refuted else "verified", evidence,
                        f"refuted if |T/(2π dJ/dE) − 1| > {g(RELATION_TOL)} at {DPS} digits",
-                       rows, counter)
+                       rows, counter,
+                       headline=(f"with the paper's J and T = 4 × quarter period, T/(2π dJ/dE) = "
+                                 f"{rows[worst_name]['T_over_2pi_dJdE'][:5]} at {DPS} digits "
+                                 f"(|ratio − 2| ≤ {g(max(r['abs_ratio_minus_2'] for r in rows.values()), 2)}); "
+                                 f"2π dJ/dE is the contact time (to {g(tc_dev, 2)})"))

@@ -79,4 +79,6 @@ def measure(quick: bool = False) -> Measurement:
     return Measurement(ID, "verified" if ok else "refuted", evidence,
                        f"verified if the universal spread < {g(E_TOL)} and every other law's "
                        f"spread is > {g(ORDERS)} times larger", {"zeta": ZETA, "rows": rows},
-                       counter)
+                       counter,
+                       headline=(f"universal law: restitution independent of v0 to {g(s_uni, 2)}; "
+                                 f"perturbed or constant laws: spreads ≥ {g(s_min_other, 2)}"))

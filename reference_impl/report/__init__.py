@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -115,7 +116,8 @@ def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
 
 
 def build_report(out_dir: str | Path = "reports", quick: bool = False,
-                 progress: Callable[[str], None] | None = None, adapters=()) -> dict:
+                 progress: Callable[[str], None] | None = None, adapters=(),
+                 readme: str | Path | None = "auto") -> dict:
     """Run every verification and write the report; returns the results dict.
 
     Parameters
@@ -131,6 +133,10 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         Contact codes to benchmark (as for ``hcv bench``: a registered name,
         ``package.module:Class`` or ``cmd:COMMAND``); each scorecard becomes a
         section of the report, its JSON goes to ``bench/`` and its plot to ``figures/``.
+    readme : str, Path or None
+        README whose ``<!-- verdicts:start/end -->`` block is regenerated from this
+        run's results (`readme_table`). "auto": the checkout's README.md when
+        ``out_dir`` is the checkout's ``reports/``; None: leave any README alone.
 
     Returns
     -------
@@ -144,6 +150,7 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         before anything is run or written.
     """
     out, adapters = validate_report_args(out_dir, adapters)
+    readme_path = _readme_for(out, readme)
     from ..claims import sec6_dt_safe_bound, thm2_harmonic
     from ._environment import environment
 
@@ -151,7 +158,37 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
     env = environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
     with swap_in(out) as tmp:
         results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound)
+    if readme_path is not None:
+        from .readme_table import rewrite_readme
+
+        readme_path.write_text(rewrite_readme(results, readme_path.read_text()))
     return results
+
+
+def _readme_for(out: Path, readme) -> Path | None:
+    """The README to update (checked before anything runs), or None."""
+    from ..errors import HCVInputError
+    from .readme_table import ROOT, readme_block
+
+    if readme is None:
+        return None
+    if readme == "auto":
+        path = ROOT / "README.md"
+        if out != (ROOT / "reports").absolute() or not path.is_file():
+            return None
+        try:
+            readme_block(path.read_text())
+        except HCVInputError:  # a README without the verdict block is left alone
+            return None
+    else:
+        path = Path(readme)
+    try:
+        readme_block(path.read_text())
+    except OSError as exc:
+        raise HCVInputError(f"README {str(path)!r} cannot be read ({exc})") from None
+    if not os.access(path, os.W_OK):
+        raise HCVInputError(f"README {str(path)!r} is not writable")
+    return path
 
 
 def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
@@ -226,7 +263,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
         claims.append({"id": c.id, "section": c.section, "statement": c.statement,
                        "verdict": d["verdict"], "evidence": d["evidence"], "rule": d["rule"],
                        "tests": tests.get(c.id, []), "measured": d["measured"],
-                       "counterexample": d["counterexample"]})
+                       "counterexample": d["counterexample"], "headline": d["headline"]})
 
     bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir)
              for spec in adapters]
