@@ -20,7 +20,9 @@ STATEMENT = (
     "(Tsuji damping, q^(1/4) for Hertz)."
 )
 
+# Softening, linear, Hertz and stiffer laws: every regime of section 9.
 EXPONENTS = (0.5, 1.0, 1.5, 2.0, 3.0, 5.0)
+# Damping ratio of the Tsuji comparison (the identity holds for any 0 < zeta < 1).
 ZETA = 0.3
 
 

@@ -23,6 +23,7 @@ STATEMENT = (
     "C(q) = C0 sqrt(m/M) U'/sqrt(2 K U); restitution is then independent of impact speed."
 )
 
+# Damping ratio: moderate (e = 0.37) so restitution differences are well resolved.
 ZETA = 0.3
 # A non-universal law must spread the restitution by this factor more than the universal
 # one: three orders separate a real dependence on v0 from the ODE error (E_TOL).
