@@ -25,7 +25,8 @@ from scipy.integrate import solve_ivp
 from reference_impl import action as act
 from reference_impl.claims import thm1_period
 from reference_impl.integrators.taylor import taylor_impact, taylor_zero_crossings
-from reference_impl.potentials import Ellipsoid, PowerLaw
+from reference_impl.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.potentials import PowerLaw
 from verification.assertions import assert_true, check_measurement
 from verification.strategies import (
     masses,
@@ -74,8 +75,8 @@ _GRID_FRACTIONS = np.linspace(0.05, 1.0, 12)
 _CAP_DEPTH_FRACTION = 0.7
 
 # The paper's ellipsoid (section 10) at its middle impact speed.
-_PAPER_ELLIPSOID = Ellipsoid(0.015, 0.008, 0.008, 1e8, 0.5)
-_PAPER_MASS = 0.05
+_PAPER_ELLIPSOID = paper_ellipsoid()
+_PAPER_MASS = PAPER_MASS
 _PAPER_V0 = 0.99
 
 # Cases of the 40-digit T versus dJ/dE measurement: Hertz (closed form known),

@@ -36,7 +36,7 @@ from hypothesis import strategies as st
 from reference_impl import HarmonicMap, PowerLaw, UniversalDamping, dt_safe, restitution_from_zeta
 from reference_impl.claims import km_cancellation, thm2_harmonic
 from reference_impl.claims._cases import KM_PAIRS
-from reference_impl.claims._tolerances import ODE_RTOL, ROUNDOFF_TOL, SINUSOID_TOL
+from reference_impl.claims._tolerances import ODE_RTOL, ROUNDOFF_TOL, SINUSOID_TOL, TAU_EVENT_RTOL
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.paper import FIG1, PAPER_ELLIPSOID, PAPER_MASS
 from reference_impl.potentials import Ellipsoid
@@ -52,9 +52,7 @@ from verification.strategies import impacts, power_laws, reference_constants
 # _ODE_RTOL, _SINUSOID_TOL: shared with the claim modules (reasons in claims/_tolerances.py).
 _ODE_RTOL = ODE_RTOL
 _SINUSOID_TOL = SINUSOID_TOL
-# Relative error of event times in tau (pi/Omega0, pi/(2 Omega0)): global error of
-# tau ~1e-10 plus event location on the 7th-order dense output (brentq at 4 eps).
-_TAU_EVENT_RTOL = 1e-9
+_TAU_EVENT_RTOL = TAU_EVENT_RTOL  # shared: reference_impl/claims/_tolerances.py
 # Elastic restitution 1: exit speed carries the global ODE error ~1e-10 v0.
 _RESTITUTION_RTOL = 1e-9
 # Relative drift of the (identically physical) energy along the ODE solution:

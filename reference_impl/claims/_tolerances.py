@@ -23,3 +23,17 @@ EXACT_RTOL = 1e-13
 # Log-log slopes of exact power functions fitted by least squares over several decades:
 # round-off in log() of ~1e-16 per point gives slope errors ~1e-13; 1e-10 bounds that.
 SLOPE_TOL = 1e-10
+# Restitution against theory: v_out carries the global ODE error ~1e-10 v0 (absolute in
+# units of v0), so |e - e_th| <= E_ATOL + E_RTOL e is ~100x the worst measured 1.0e-11.
+E_ATOL = 1e-9
+E_RTOL = 1e-8  # relative part of the same bound (see E_ATOL)
+# Event times in tau: global error of tau ~1e-10 plus brentq at 4 eps on the dense output.
+TAU_EVENT_RTOL = 1e-9
+# An identity evaluated two ways at one state: a dozen roundings plus the numeric inverse
+# q(x) (4 eps in q, amplified by a log-derivative < 10).
+IDENTITY_RTOL = 1e-12
+# "Measurably": a difference this many times above the error bound of its method.
+MEASURABLE_FACTOR = 1e3
+# mpmath precision of central-difference derivatives (step 1e-15 relative): truncation
+# ~1e-30 and cancellation ~1e-35 are far below float64 round-off.
+MP_DERIV_DPS = 50
