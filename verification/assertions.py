@@ -55,7 +55,7 @@ def assert_true(cond: bool, *, got: str, should: str, claim: str, call: str) -> 
         raise AssertionError(f"got {got}, should be {should} [{claim}, {call}]")
 
 
-def check_measurement(m, *, expect: str, real=None, call: str) -> None:
+def check_measurement(m, *, expect: str, real=None, call: str, reason: str | None = None) -> None:
     """Assert a claim's measurement (`reference_impl.claims`) gives the recorded verdict.
 
     ``expect="verified"``: the measurement must verify the claim (a refutation
@@ -64,6 +64,8 @@ def check_measurement(m, *, expect: str, real=None, call: str) -> None:
     counterexample that ``real(m)`` (the test's own re-derivation) confirms; the
     test then xfails with the measured evidence as its reason (never a typed
     number). A refuted claim that measures as verified fails: update the record.
+    ``reason`` (also produced from measured numbers) replaces the evidence as
+    the xfail reason, e.g. to describe one case of a parametrized test.
     """
     import pytest
 
@@ -73,6 +75,6 @@ def check_measurement(m, *, expect: str, real=None, call: str) -> None:
         ok = bool(m.counterexample) and (real is None or bool(real(m)))
         assert_true(ok, got=f"counterexample {m.counterexample!r} not confirmed by the test",
                     should="a real counterexample", claim=m.claim, call=call)
-        pytest.xfail(f"{m.claim} refuted as printed: {m.evidence}")
+        pytest.xfail(f"{m.claim} refuted as printed: {reason or m.evidence}")
     raise AssertionError(f"got {m.verdict}: {m.evidence}, should be {expect} "
                          f"(rule: {m.rule}) [{m.claim}, {call}]")
