@@ -42,6 +42,8 @@ def _old_report(d: Path) -> dict[str, bytes]:
     for name in ("results.json", "index.md", "index.html"):
         (d / name).write_text("old " + name)
     (d / "NOTES.txt").write_text("not the report's")
+    (d / "bench").mkdir()
+    (d / "bench" / "exact.json").write_text("{}")  # written by nox -s bench, not the report
     return _snapshot(d)
 
 
@@ -96,11 +98,11 @@ def test_complete_run_swaps_in_and_keeps_foreign_files(tmp_path, fake):
     _old_report(out)
     build_report(out, quick=True)
     snap = _snapshot(out)
-    assert_true(set(snap) == {"NOTES.txt", "figures/fig1.png", "index.html", "index.md",
-                              "results.json"} and snap["figures/fig1.png"] == b"new"
+    assert_true(set(snap) == {"NOTES.txt", "bench/exact.json", "figures/fig1.png", "index.html",
+                              "index.md", "results.json"} and snap["figures/fig1.png"] == b"new"
                 and _siblings(out) == [],
                 got=f"{sorted(snap)}, siblings {_siblings(out)}",
-                should="the new report, NOTES.txt kept, old figures gone, no temp dirs",
+                should="the new report, NOTES.txt and bench/ kept, old figures gone, no temp dirs",
                 claim="report", call=CALL)
 
 

@@ -17,8 +17,10 @@ from ..errors import HCVInputError
 
 __all__ = ["REPORT_ENTRIES", "swap_in", "validate_report_args"]
 
-# What a report run writes into its directory; anything else there is kept across runs.
-REPORT_ENTRIES = ("index.html", "index.md", "results.json", "figures", "bench")
+# What a report run replaces as a whole; anything else in the directory (e.g. the
+# benchmark JSON that ``nox -s bench`` writes into reports/bench/) is kept, file by
+# file, unless the new run wrote a file of the same name.
+REPORT_ENTRIES = ("index.html", "index.md", "results.json", "figures")
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -69,8 +71,8 @@ def validate_report_args(out_dir, adapters=()) -> tuple[Path, list[str]]:
 def swap_in(out: Path):
     """Yield a fresh directory beside ``out``; on success it replaces ``out``.
 
-    Entries of the old directory that the report does not write (`REPORT_ENTRIES`)
-    are carried into the new one. On any exception (KeyboardInterrupt included)
+    Entries of the old directory outside `REPORT_ENTRIES` that the new run did not
+    write are carried into the new one. On any exception (KeyboardInterrupt included)
     the temporary directory is removed and ``out`` is left untouched.
     """
     out = Path(out)
@@ -96,7 +98,17 @@ def swap_in(out: Path):
         old.rename(out)  # put the previous report back
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    for entry in old.iterdir():  # keep what the report does not own
-        if entry.name not in REPORT_ENTRIES:
-            entry.rename(out / entry.name)
+    _carry_over(old, out)
     shutil.rmtree(old, ignore_errors=True)
+
+
+def _carry_over(old: Path, new: Path, top: bool = True) -> None:
+    """Move what the new report did not write from the old directory into the new one."""
+    for entry in old.iterdir():
+        if top and entry.name in REPORT_ENTRIES:
+            continue
+        target = new / entry.name
+        if not target.exists():
+            entry.rename(target)
+        elif entry.is_dir() and target.is_dir():
+            _carry_over(entry, target, top=False)
