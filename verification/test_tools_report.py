@@ -167,3 +167,25 @@ def test_readme_index_and_results_agree():
     got = _ledger_verdicts((ROOT / "reports" / "index.md").read_text())
     assert_true(got == want, got=f"index.md ledger {got}", should=f"results.json {want}",
                 claim="report", call="reports/index.md")
+
+
+def test_report_run_rewrites_the_readme_block_from_its_results(tmp_path, fake):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"intro\n{START}\nhand-written\n{END}\noutro\n")
+    results = build_report(tmp_path / "rep", quick=True, readme=readme)
+    text = readme.read_text()
+    assert_true(readme_block(text) == readme_block(rewrite_readme(results, text))
+                and "hand-written" not in text and text.startswith("intro\n")
+                and text.endswith(f"{END}\noutro\n"),
+                got=text, should="the block regenerated from this run, the rest untouched",
+                claim="report", call=f"{CALL}(readme=...)")
+
+
+def test_readme_without_markers_is_refused_before_running(tmp_path, monkeypatch):
+    called = []
+    monkeypatch.setattr(report, "_build", lambda *a: called.append(a))
+    readme = tmp_path / "README.md"
+    readme.write_text("no block\n")
+    with pytest.raises(HCVInputError, match="verdicts:start"):
+        build_report(tmp_path / "rep", quick=True, readme=readme)
+    assert not called and not (tmp_path / "rep").exists()
