@@ -73,8 +73,14 @@ def check_measurement(m, *, expect: str, real=None, call: str, reason: str | Non
         return
     if m.verdict == "refuted" and expect == "refuted":
         ok = bool(m.counterexample) and (real is None or bool(real(m)))
-        assert_true(ok, got=f"counterexample {m.counterexample!r} not confirmed by the test",
-                    should="a real counterexample", claim=m.claim, call=call)
+        assert_true(
+            ok,
+            got=f"counterexample {m.counterexample!r} not confirmed by the test",
+            should="a real counterexample",
+            claim=m.claim,
+            call=call,
+        )
         pytest.xfail(f"{m.claim} refuted as printed: {reason or m.evidence}")
-    raise AssertionError(f"got {m.verdict}: {m.evidence}, should be {expect} "
-                         f"(rule: {m.rule}) [{m.claim}, {call}]")
+    raise AssertionError(
+        f"got {m.verdict}: {m.evidence}, should be {expect} (rule: {m.rule}) [{m.claim}, {call}]"
+    )

@@ -25,38 +25,68 @@ REQUIRED = ("ID", "SECTION", "STATEMENT", "measure")
 def test_every_claim_has_a_test():
     tests = _scan.claim_tests(HERE)
     missing = [c.id for c in CLAIMS if not tests.get(c.id)]
-    assert_true(not missing, got=f"claims without tests {missing}", should="none",
-                claim="meta", call="claim_tests()")
+    assert_true(
+        not missing,
+        got=f"claims without tests {missing}",
+        should="none",
+        claim="meta",
+        call="claim_tests()",
+    )
 
 
 def test_every_mark_names_a_claim():
     known = set(claim_ids())
-    unknown = [f"{m.file}:{m.line} {m.claim!r}" for m in _scan.scan_claim_marks(HERE)
-               if m.claim not in known]
-    assert_true(not unknown, got=f"marks naming no registered claim {unknown}", should="none",
-                claim="meta", call="scan_claim_marks()")
+    unknown = [
+        f"{m.file}:{m.line} {m.claim!r}"
+        for m in _scan.scan_claim_marks(HERE)
+        if m.claim not in known
+    ]
+    assert_true(
+        not unknown,
+        got=f"marks naming no registered claim {unknown}",
+        should="none",
+        claim="meta",
+        call="scan_claim_marks()",
+    )
 
 
 def test_claim_ids_unique():
     ids = claim_ids()
-    assert_true(len(ids) == len(set(ids)), got=f"{len(ids)} ids, {len(set(ids))} distinct",
-                should="all distinct", claim="meta", call="claim_ids()")
+    assert_true(
+        len(ids) == len(set(ids)),
+        got=f"{len(ids)} ids, {len(set(ids))} distinct",
+        should="all distinct",
+        claim="meta",
+        call="claim_ids()",
+    )
 
 
 def test_every_claim_module_defines_its_home():
     for c in CLAIMS:
         mod = c.home
         missing = [n for n in REQUIRED if not hasattr(mod, n)]
-        assert_true(not missing and mod.ID == c.id, got=f"{mod.__name__}: missing {missing}, "
-                    f"ID {getattr(mod, 'ID', None)!r}", should=f"{REQUIRED} with ID {c.id!r}",
-                    claim="meta", call=mod.__name__)
+        assert_true(
+            not missing and mod.ID == c.id,
+            got=f"{mod.__name__}: missing {missing}, ID {getattr(mod, 'ID', None)!r}",
+            should=f"{REQUIRED} with ID {c.id!r}",
+            claim="meta",
+            call=mod.__name__,
+        )
         sig = inspect.signature(mod.measure)
-        assert_true(list(sig.parameters) == ["quick"] and sig.parameters["quick"].default is False,
-                    got=f"measure{sig}", should="measure(quick: bool = False)", claim="meta",
-                    call=f"{mod.__name__}.measure")
-        assert_true(hasattr(mod.measure, "cache_info"), got="measure is not cached",
-                    should="functools.cache'd (measured once per process)", claim="meta",
-                    call=f"{mod.__name__}.measure")
+        assert_true(
+            list(sig.parameters) == ["quick"] and sig.parameters["quick"].default is False,
+            got=f"measure{sig}",
+            should="measure(quick: bool = False)",
+            claim="meta",
+            call=f"{mod.__name__}.measure",
+        )
+        assert_true(
+            hasattr(mod.measure, "cache_info"),
+            got="measure is not cached",
+            should="functools.cache'd (measured once per process)",
+            claim="meta",
+            call=f"{mod.__name__}.measure",
+        )
 
 
 def _numeric(node) -> bool:
@@ -70,7 +100,8 @@ def _numeric(node) -> bool:
     if isinstance(node, ast.Call):
         return bool(node.args) and all(
             _numeric(a) or (isinstance(a, ast.Constant) and isinstance(a.value, str))
-            for a in node.args)
+            for a in node.args
+        )
     return False
 
 
@@ -82,8 +113,13 @@ def _uncommented_constants(path: Path) -> list[str]:
         if not isinstance(node, ast.Assign) or not _numeric(node.value):
             continue
         names = [t.id for t in node.targets if isinstance(t, ast.Name)]
-        names += [e.id for t in node.targets if isinstance(t, ast.Tuple) for e in t.elts
-                  if isinstance(e, ast.Name)]
+        names += [
+            e.id
+            for t in node.targets
+            if isinstance(t, ast.Tuple)
+            for e in t.elts
+            if isinstance(e, ast.Name)
+        ]
         if not names or not all(n.isupper() or n.strip("_").isupper() for n in names):
             continue
         line = src[node.lineno - 1]
@@ -98,13 +134,19 @@ def test_every_tolerance_states_its_reason():
     setting) carries a comment giving the reason for its size."""
     paths = [Path(c.home.__file__) for c in CLAIMS] + [Path(_tolerances.__file__)]
     bad = [b for p in paths for b in _uncommented_constants(p)]
-    assert_true(not bad, got=f"constants without a reason {bad}", should="none", claim="meta",
-                call="_uncommented_constants")
+    assert_true(
+        not bad,
+        got=f"constants without a reason {bad}",
+        should="none",
+        claim="meta",
+        call="_uncommented_constants",
+    )
 
 
 def test_scanner_sees_every_way_of_writing_a_mark(tmp_path):
     """Literal, module constant, claim-module ID, mark variable, pytestmark, param marks."""
-    (tmp_path / "test_styles.py").write_text(textwrap.dedent('''
+    (tmp_path / "test_styles.py").write_text(
+        textwrap.dedent("""
         import pytest
         from reference_impl.claims import table1
 
@@ -130,17 +172,28 @@ def test_scanner_sees_every_way_of_writing_a_mark(tmp_path):
 
         @pytest.mark.claim(UNDEFINED)
         def test_unresolved(): pass
-    '''))
+    """)
+    )
     (tmp_path / "test_module_mark.py").write_text(
-        'import pytest\npytestmark = pytest.mark.claim("sec7-effective-mass")\n'
-        "def test_a(): pass\n")
+        'import pytest\npytestmark = pytest.mark.claim("sec7-effective-mass")\ndef test_a(): pass\n'
+    )
     got = {(m.claim, m.test) for m in _scan.scan_claim_marks(tmp_path)}
-    want = {("thm1-period", "test_literal"), ("table1", "test_module_id"),
-            ("fig1", "test_variable"), ("sec9-power-law", "test_param"),
-            ("thm2-harmonic", "test_in_class"), (_scan.UNRESOLVED, "test_unresolved"),
-            ("sec7-effective-mass", "test_a")}
-    assert_true(want <= got, got=f"{sorted(got, key=str)}", should=f"{sorted(want, key=str)}",
-                claim="meta", call="scan_claim_marks(tmp)")
+    want = {
+        ("thm1-period", "test_literal"),
+        ("table1", "test_module_id"),
+        ("fig1", "test_variable"),
+        ("sec9-power-law", "test_param"),
+        ("thm2-harmonic", "test_in_class"),
+        (_scan.UNRESOLVED, "test_unresolved"),
+        ("sec7-effective-mass", "test_a"),
+    }
+    assert_true(
+        want <= got,
+        got=f"{sorted(got, key=str)}",
+        should=f"{sorted(want, key=str)}",
+        claim="meta",
+        call="scan_claim_marks(tmp)",
+    )
 
 
 def test_refuted_measurement_needs_a_counterexample():
@@ -150,10 +203,17 @@ def test_refuted_measurement_needs_a_counterexample():
             Measurement(claim="x", evidence="e", rule="r", **kwargs)
         except ValueError:
             continue
-        raise AssertionError(f"got Measurement({kwargs}) accepted, should be a ValueError "
-                             "[meta, Measurement]")
+        raise AssertionError(
+            f"got Measurement({kwargs}) accepted, should be a ValueError [meta, Measurement]"
+        )
     m = Measurement("x", "refuted", "ev; more", "r", {"a": float("nan")}, {"case": 1})
     d = m.to_dict()
-    assert_true(d["measured"] == {"a": None} and d["headline"] == "ev" and d["counterexample"]
-                == {"case": 1}, got=f"{d}", should="JSON-ready dict", claim="meta",
-                call="Measurement.to_dict")
+    assert_true(
+        d["measured"] == {"a": None}
+        and d["headline"] == "ev"
+        and d["counterexample"] == {"case": 1},
+        got=f"{d}",
+        should="JSON-ready dict",
+        claim="meta",
+        call="Measurement.to_dict",
+    )

@@ -95,16 +95,22 @@ def test_table1_cell_matches_printed_digits(v0, column):
     def listed(m):
         return any(c["v0"] == v0 and c["column"] == column for c in m.counterexample["cells"])
 
-    check_measurement(table1.measure(), expect="refuted", real=listed,
-                      call=f"table1.cells()[{v0}, {column}]", reason=table1.describe(cell))
+    check_measurement(
+        table1.measure(),
+        expect="refuted",
+        real=listed,
+        call=f"table1.cells()[{v0}, {column}]",
+        reason=table1.describe(cell),
+    )
 
 
 @pytest.mark.claim("table1")
 def test_table1_measurement():
     """The verdict the report prints: the recomputed table against the printed one."""
     m = table1.measure()
-    check_measurement(m, expect="refuted", real=lambda m: m.figures["mismatches"] > 0,
-                      call="table1.measure()")
+    check_measurement(
+        m, expect="refuted", real=lambda m: m.figures["mismatches"] > 0, call="table1.measure()"
+    )
 
 
 @pytest.mark.claim("table1")
@@ -203,10 +209,13 @@ def _printed_drift_test(v0, C0):
     r = _fig1_claim_run(v0, C0)
     if r["drift"] < FIG1["claimed_energy_error"]:
         return
-    check_measurement(fig1.measure(), expect="refuted",
-                      real=lambda m: r["drift"] >= m.figures["claimed"],
-                      call=f"RK45 rtol=atol={fig1.RTOL:g} ellipsoid v0={v0} C0={C0}",
-                      reason=fig1.describe_drift(r))
+    check_measurement(
+        fig1.measure(),
+        expect="refuted",
+        real=lambda m: r["drift"] >= m.figures["claimed"],
+        call=f"RK45 rtol=atol={fig1.RTOL:g} ellipsoid v0={v0} C0={C0}",
+        reason=fig1.describe_drift(r),
+    )
 
 
 @pytest.mark.claim("fig1")
@@ -249,17 +258,22 @@ def test_fig1_dissipative_transformed_energy_conserved_as_printed(v0):
 def test_fig1_measurement():
     """The verdict the report prints, from reference_impl.claims.fig1."""
     m = fig1.measure()
-    check_measurement(m, expect="refuted",
-                      real=lambda m: all(r["drift"] >= m.figures["claimed"]
-                                         for r in m.counterexample["runs"]),
-                      call="fig1.measure()")
+    check_measurement(
+        m,
+        expect="refuted",
+        real=lambda m: all(r["drift"] >= m.figures["claimed"] for r in m.counterexample["runs"]),
+        call="fig1.measure()",
+    )
 
 
 @pytest.mark.claim("sec10-stiffening-domain")
 def test_sec10_measurement():
     """The verdict the report prints, from reference_impl.claims.sec10_stiffening_domain."""
-    check_measurement(sec10_stiffening_domain.measure(), expect="verified",
-                      call="sec10_stiffening_domain.measure()")
+    check_measurement(
+        sec10_stiffening_domain.measure(),
+        expect="verified",
+        call="sec10_stiffening_domain.measure()",
+    )
 
 
 @pytest.mark.claim("fig1")

@@ -220,8 +220,12 @@ def test_printed_period_equals_2pi_dJdE(case):
 
     if abs(r["T_ratio"] - 1) <= thm1_period.RELATION_TOL:
         return
-    check_measurement(thm1_period.measure(), expect="refuted", real=factor_two,
-                      call=f"thm1_period.relation({case!r})")
+    check_measurement(
+        thm1_period.measure(),
+        expect="refuted",
+        real=factor_two,
+        call=f"thm1_period.relation({case!r})",
+    )
 
 
 @pytest.mark.claim(CLAIM)
@@ -229,12 +233,19 @@ def test_theorem1_measurement():
     """The verdict the report prints: refuted, with the contact time as the corrected form."""
     m = thm1_period.measure()
     tc_dev = max(r["abs_tc_over_2pi_dJdE_minus_1"] for r in m.figures.values())
-    assert_true(tc_dev < thm1_period.RELATION_TOL, got=f"|t_c/(2pi dJ/dE) - 1| = {tc_dev:.3g}",
-                should=f"< {thm1_period.RELATION_TOL:g} (corrected statement)", claim=CLAIM,
-                call="thm1_period.measure()")
-    check_measurement(m, expect="refuted",
-                      real=lambda m: float(m.counterexample["abs_ratio_minus_1"]) > 0.5,
-                      call="thm1_period.measure()")
+    assert_true(
+        tc_dev < thm1_period.RELATION_TOL,
+        got=f"|t_c/(2pi dJ/dE) - 1| = {tc_dev:.3g}",
+        should=f"< {thm1_period.RELATION_TOL:g} (corrected statement)",
+        claim=CLAIM,
+        call="thm1_period.measure()",
+    )
+    check_measurement(
+        m,
+        expect="refuted",
+        real=lambda m: float(m.counterexample["abs_ratio_minus_1"]) > 0.5,
+        call="thm1_period.measure()",
+    )
 
 
 @pytest.mark.claim(CLAIM)

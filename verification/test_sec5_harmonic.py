@@ -72,9 +72,12 @@ _FIG1_K, _FIG1_M, _FIG1_C0 = FIG1["K"], FIG1["M"], FIG1["C0"][1]
 _PAPER_ELLIPSOID = PAPER_ELLIPSOID
 _PAPER_MASS = PAPER_MASS
 
+
 def _amplitude(m: float, v0: float, hmap: HarmonicMap) -> float:
     """Amplitude x'0 / Omega0 of the virtual sinusoid, x'0 = v0 sqrt(m/M)."""
     return v0 * math.sqrt(m / hmap.M) / hmap.omega0
+
+
 # Damping ratios 0 or in [1e-6, 0.9]: a tiny zeta (hypothesis drew 1e-322) has no
 # physical meaning and its products underflow to subnormals, where relative
 # round-off tolerances cannot apply (verification.strategies.zetas draws them).
@@ -305,9 +308,12 @@ def test_damping_law_at_fixed_C0_independent_of_KM_as_printed():
         return
     # Strict expected failure, its reason the claim's measurement; confirmed here by
     # the test's own runs (law and restitution both change measurably).
-    check_measurement(km_cancellation.measure(), expect="refuted",
-                      real=lambda m: C_differs and e_differs,
-                      call=f"UniversalDamping(C0={_FIG1_C0}) for (K, M) = (1, 0.75) vs (1, 1)")
+    check_measurement(
+        km_cancellation.measure(),
+        expect="refuted",
+        real=lambda m: C_differs and e_differs,
+        call=f"UniversalDamping(C0={_FIG1_C0}) for (K, M) = (1, 0.75) vs (1, 1)",
+    )
 
 
 @pytest.mark.claim("km-cancellation")
@@ -315,11 +321,19 @@ def test_km_cancellation_measurement():
     """The verdict the report prints: K, M cancel at fixed zeta (round-off), not at fixed C0."""
     m = km_cancellation.measure()
     f = m.figures
-    assert_less(max(f["dt_safe_spread"] + f["C_fixed_zeta_spread"]), _ROUNDOFF_RTOL,
-                claim="km-cancellation", call="km_cancellation.measure()", what="fixed-zeta spread")
-    check_measurement(m, expect="refuted",
-                      real=lambda m: abs(m.counterexample["C_ratio"] - 1) > _MEASURABLE,
-                      call="km_cancellation.measure()")
+    assert_less(
+        max(f["dt_safe_spread"] + f["C_fixed_zeta_spread"]),
+        _ROUNDOFF_RTOL,
+        claim="km-cancellation",
+        call="km_cancellation.measure()",
+        what="fixed-zeta spread",
+    )
+    check_measurement(
+        m,
+        expect="refuted",
+        real=lambda m: abs(m.counterexample["C_ratio"] - 1) > _MEASURABLE,
+        call="km_cancellation.measure()",
+    )
 
 
 @pytest.mark.claim("thm2-harmonic")

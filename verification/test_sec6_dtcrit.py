@@ -90,8 +90,13 @@ def test_dt_safe_is_a_lower_bound(quick_map, case, v0, kind):
     def below(m):
         return float(row["ratio"]) <= 1.0 and float(row["dt_crit"]) <= float(row["dt_safe"])
 
-    check_measurement(sec6.measure(True), expect="refuted", real=below,
-                      call=f"search_scene {case} {kind}", reason=sec6.describe(row))
+    check_measurement(
+        sec6.measure(True),
+        expect="refuted",
+        real=below,
+        call=f"search_scene {case} {kind}",
+        reason=sec6.describe(row),
+    )
 
 
 @claim
@@ -103,12 +108,20 @@ def test_sec6_measurement():
     """
     m = sec6.measure(True)
     if not m.figures["classified"]:
-        assert_true(m.verdict == "inconclusive" and m.figures["per_kind"][sec6.UNCLASSIFIED] > 0,
-                    got=f"{m.verdict}: {m.evidence}", should="inconclusive, failures counted "
-                    "as unclassified", claim=CLAIM, call="sec6.measure(True)")
+        assert_true(
+            m.verdict == "inconclusive" and m.figures["per_kind"][sec6.UNCLASSIFIED] > 0,
+            got=f"{m.verdict}: {m.evidence}",
+            should="inconclusive, failures counted as unclassified",
+            claim=CLAIM,
+            call="sec6.measure(True)",
+        )
         return
-    check_measurement(m, expect="refuted", real=lambda m: m.counterexample["ratio"] <= 1.0,
-                      call="sec6.measure(True)")
+    check_measurement(
+        m,
+        expect="refuted",
+        real=lambda m: m.counterexample["ratio"] <= 1.0,
+        call="sec6.measure(True)",
+    )
 
 
 @claim
@@ -117,9 +130,13 @@ def test_degenerate_bound_is_reported_not_crashed(quick_map):
     rows = quick_map[quick_map.family == "power"]
     sub = rows[rows.p < 1]
     ok = sub.degenerate.all() and (sub.dt_safe == 0).all() and np.isfinite(sub.dt_crit).all()
-    assert_true(bool(ok),
-                got=sub[["dt_safe", "dt_crit"]].to_string(), should="dt_safe 0, dt_crit finite",
-                claim=CLAIM, call="dt_crit_map")
+    assert_true(
+        bool(ok),
+        got=sub[["dt_safe", "dt_crit"]].to_string(),
+        should="dt_safe 0, dt_crit finite",
+        claim=CLAIM,
+        call="dt_crit_map",
+    )
 
 
 @claim
@@ -128,12 +145,21 @@ def test_shortcut_equals_supremum_only_for_stiffening(quick_map):
     for the interior-supremum contact the shortcut is larger, i.e. not a bound."""
     stiff = quick_map[quick_map.geometry.isin(["stiffening", "linear"])]
     # 1e-9: U(q_max) = E to the few-ulp accuracy of the inverse of U.
-    assert_close(stiff.dt_shortcut.to_numpy(), stiff.dt_safe.to_numpy(), rtol=1e-9, claim=CLAIM,
-                 call="dt_safe vs dt_safe_shortcut")
+    assert_close(
+        stiff.dt_shortcut.to_numpy(),
+        stiff.dt_safe.to_numpy(),
+        rtol=1e-9,
+        claim=CLAIM,
+        call="dt_safe vs dt_safe_shortcut",
+    )
     mixed = quick_map[quick_map.geometry == "mixed"]
-    assert_true(bool(len(mixed) and (mixed.dt_shortcut > mixed.dt_safe).all()),
-                got=mixed[["dt_safe", "dt_shortcut"]].to_string(), should="shortcut > dt_safe",
-                claim=CLAIM, call="dt_safe")
+    assert_true(
+        bool(len(mixed) and (mixed.dt_shortcut > mixed.dt_safe).all()),
+        got=mixed[["dt_safe", "dt_shortcut"]].to_string(),
+        should="shortcut > dt_safe",
+        claim=CLAIM,
+        call="dt_safe",
+    )
 
 
 # ----------------------------------------------------------------------------
@@ -142,9 +168,13 @@ def test_shortcut_equals_supremum_only_for_stiffening(quick_map):
 def test_recommendation_is_safe_on_the_map(quick_map):
     """dt_rec = c 2 sqrt(m / max U'') never reaches a failing step on the measured map."""
     worst = quick_map.recommended_ratio.idxmin()
-    assert_true(bool((quick_map.recommended_ratio > 1).all()),
-                got=f"dt_crit / dt_rec = {quick_map.recommended_ratio.min():.3f} at {worst}",
-                should="> 1 everywhere", claim=CLAIM, call="dt_crit_map")
+    assert_true(
+        bool((quick_map.recommended_ratio > 1).all()),
+        got=f"dt_crit / dt_rec = {quick_map.recommended_ratio.min():.3f} at {worst}",
+        should="> 1 everywhere",
+        claim=CLAIM,
+        call="dt_crit_map",
+    )
 
 
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -154,7 +184,10 @@ def test_recommendation_is_safe_on_holdout_draws(case):
     pot, m, v0 = case
     for kind in KINDS:
         r = search_scene(pot, m, [v0], kind)[0]
-        assert_true(r.dt_crit > r.recommended_dt,
-                    got=f"dt_crit / dt_rec = {r.dt_crit / r.recommended_dt:.3f}",
-                    should="> 1", claim=CLAIM,
-                    call=f"search_scene({pot!r}, m={m:.3g}, v0={v0:.3g}, {kind})")
+        assert_true(
+            r.dt_crit > r.recommended_dt,
+            got=f"dt_crit / dt_rec = {r.dt_crit / r.recommended_dt:.3f}",
+            should="> 1",
+            claim=CLAIM,
+            call=f"search_scene({pot!r}, m={m:.3g}, v0={v0:.3g}, {kind})",
+        )

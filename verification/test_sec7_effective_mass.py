@@ -276,4 +276,6 @@ def test_effective_mass_not_constant_otherwise(pot, q_hi):
 @pytest.mark.claim(sec7_effective_mass.ID)
 def test_sec7_effective_mass_measurement():
     """The verdict the report prints for section 7, from reference_impl.claims.sec7_effective_mass."""
-    check_measurement(sec7_effective_mass.measure(), expect="verified", call="sec7_effective_mass.measure()")
+    check_measurement(
+        sec7_effective_mass.measure(), expect="verified", call="sec7_effective_mass.measure()"
+    )

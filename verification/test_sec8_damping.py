@@ -390,4 +390,6 @@ def test_random_linear_perturbation_makes_restitution_speed_dependent(case, zeta
 @pytest.mark.claim(thm3_damping_iff.ID)
 def test_thm3_damping_iff_measurement():
     """The verdict the report prints for Theorem 3, from reference_impl.claims.thm3_damping_iff."""
-    check_measurement(thm3_damping_iff.measure(), expect="verified", call="thm3_damping_iff.measure()")
+    check_measurement(
+        thm3_damping_iff.measure(), expect="verified", call="thm3_damping_iff.measure()"
+    )

@@ -43,8 +43,9 @@ class Measurement:
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
-            raise ValueError(f"claim {self.claim}: verdict {self.verdict!r} is not one of "
-                             f"{VERDICTS}")
+            raise ValueError(
+                f"claim {self.claim}: verdict {self.verdict!r} is not one of {VERDICTS}"
+            )
         if self.verdict == "refuted" and not self.counterexample:
             raise ValueError(f"claim {self.claim}: a refuted verdict needs a counterexample")
 
@@ -52,10 +53,15 @@ class Measurement:
         """JSON-ready dict: claim, verdict, evidence, rule, measured, counterexample."""
         from ..report._common import jsonable
 
-        return {"claim": self.claim, "verdict": self.verdict, "evidence": self.evidence,
-                "rule": self.rule, "measured": jsonable(self.figures),
-                "counterexample": jsonable(self.counterexample),
-                "headline": self.headline or self.evidence.split(";")[0]}
+        return {
+            "claim": self.claim,
+            "verdict": self.verdict,
+            "evidence": self.evidence,
+            "rule": self.rule,
+            "measured": jsonable(self.figures),
+            "counterexample": jsonable(self.counterexample),
+            "headline": self.headline or self.evidence.split(";")[0],
+        }
 
 
 def g(x, digits: int = 3) -> str:

@@ -36,9 +36,13 @@ class ClaimMark:
 
 
 def _is_claim_call(node) -> bool:
-    return (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-            and node.func.attr == "claim" and isinstance(node.func.value, ast.Attribute)
-            and node.func.value.attr == "mark")
+    return (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr == "claim"
+        and isinstance(node.func.value, ast.Attribute)
+        and node.func.value.attr == "mark"
+    )
 
 
 class _Resolver:
@@ -46,7 +50,9 @@ class _Resolver:
 
     def __init__(self, tree: ast.Module):
         self.strings: dict[str, str] = {}
-        self.claim_modules: dict[str, str] = {}  # local name -> module name in reference_impl.claims
+        self.claim_modules: dict[
+            str, str
+        ] = {}  # local name -> module name in reference_impl.claims
         self.mark_vars: dict[str, str] = {}
         for node in tree.body:
             if isinstance(node, ast.ImportFrom) and node.module == "reference_impl.claims":
@@ -72,8 +78,12 @@ class _Resolver:
             return node.value
         if isinstance(node, ast.Name):
             return self.strings.get(node.id)
-        if (isinstance(node, ast.Attribute) and node.attr == "ID"
-                and isinstance(node.value, ast.Name) and node.value.id in self.claim_modules):
+        if (
+            isinstance(node, ast.Attribute)
+            and node.attr == "ID"
+            and isinstance(node.value, ast.Name)
+            and node.value.id in self.claim_modules
+        ):
             import importlib
 
             name = self.claim_modules[node.value.id]
@@ -104,7 +114,8 @@ def _pytestmark(body, res: _Resolver) -> list[tuple[str, int]]:
     out = []
     for node in body:
         if isinstance(node, ast.Assign) and any(
-                isinstance(t, ast.Name) and t.id == "pytestmark" for t in node.targets):
+            isinstance(t, ast.Name) and t.id == "pytestmark" for t in node.targets
+        ):
             out += res.marks_in(node.value)
     return out
 
@@ -123,8 +134,9 @@ def _scan_file(path: Path) -> list[ClaimMark]:
                 for dec in node.decorator_list:
                     cls += res.marks_in(dec)
                 visit(node.body, cls)
-            elif (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
-                  and node.name.startswith("test")):
+            elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith(
+                "test"
+            ):
                 own = []
                 for dec in node.decorator_list:
                     own += res.marks_in(dec)

@@ -31,8 +31,18 @@ STATEMENT = (
 RTOL = ATOL = 1e-13
 # Samples per curve of the figure (dense output of the same runs).
 CURVE_POINTS = 400
-TABLE_KEYS = ("v0", "C0", "zeta", "steps", "drift", "H_end_over_H0", "restitution",
-              "restitution_theory", "identity_err", "exact_dev")
+TABLE_KEYS = (
+    "v0",
+    "C0",
+    "zeta",
+    "steps",
+    "drift",
+    "H_end_over_H0",
+    "restitution",
+    "restitution_theory",
+    "identity_err",
+    "exact_dev",
+)
 
 
 def run(v0: float, C0: float, method: str = "RK45") -> dict:
@@ -40,8 +50,17 @@ def run(v0: float, C0: float, method: str = "RK45") -> dict:
     pot = paper_ellipsoid()
     hmap = HarmonicMap(pot, PAPER_MASS, K=FIG1["K"], M=FIG1["M"])
     damp = UniversalDamping(hmap, C0=C0) if C0 > 0 else None
-    res = integrate_impact(pot, PAPER_MASS, v0, C=None if damp is None else damp.C,
-                           method=method, rtol=RTOL, atol=ATOL, hmap=hmap, dense_output=True)
+    res = integrate_impact(
+        pot,
+        PAPER_MASS,
+        v0,
+        C=None if damp is None else damp.C,
+        method=method,
+        rtol=RTOL,
+        atol=ATOL,
+        hmap=hmap,
+        dense_output=True,
+    )
     q = np.maximum(res.q, 0.0)
     x = hmap.x(q)
     xp = res.v * math.sqrt(PAPER_MASS / hmap.M)  # dx/dtau = q' sqrt(m/M) (Theorem 2 proof)
@@ -56,7 +75,10 @@ def run(v0: float, C0: float, method: str = "RK45") -> dict:
     qc, vc, _ = res.sol(t)
     qc = np.maximum(qc, 0.0)
     return {
-        "v0": v0, "C0": C0, "zeta": zeta, "method": method,
+        "v0": v0,
+        "C0": C0,
+        "zeta": zeta,
+        "method": method,
         "steps": int(res.t.size - 1),
         "drift": float(np.max(np.abs(H / H[0] - 1))),
         "H_end_over_H0": float(H[-1] / H[0]),
@@ -64,9 +86,15 @@ def run(v0: float, C0: float, method: str = "RK45") -> dict:
         "restitution_theory": restitution_from_zeta(zeta),
         "identity_err": float(np.max(np.abs(H / E_phys - 1))),
         "exact_dev": float(np.max(np.abs(x - x_exact)) / (a0 / wd)),
-        "t_drift": res.t, "rel_H": H / H[0] - 1,
-        "curve": {"t": t, "q": qc, "v": vc, "x": hmap.x(qc),
-                  "xp": vc * math.sqrt(PAPER_MASS / hmap.M)},
+        "t_drift": res.t,
+        "rel_H": H / H[0] - 1,
+        "curve": {
+            "t": t,
+            "q": qc,
+            "v": vc,
+            "x": hmap.x(qc),
+            "xp": vc * math.sqrt(PAPER_MASS / hmap.M),
+        },
     }
 
 
@@ -83,9 +111,11 @@ def table(rs=None) -> list[dict]:
 
 def describe_drift(r: dict) -> str:
     """One line on a run's drift, from its measured numbers."""
-    return (f"C0 = {r['C0']:g}, v0 = {r['v0']:.2f} m/s: transformed-energy drift "
-            f"{g(r['drift'], 2)} with RK45 at RelTol = AbsTol = {g(RTOL)} (printed bound "
-            f"{g(FIG1['claimed_energy_error'])}; H_end/H_0 = {r['H_end_over_H0']:.4f})")
+    return (
+        f"C0 = {r['C0']:g}, v0 = {r['v0']:.2f} m/s: transformed-energy drift "
+        f"{g(r['drift'], 2)} with RK45 at RelTol = AbsTol = {g(RTOL)} (printed bound "
+        f"{g(FIG1['claimed_energy_error'])}; H_end/H_0 = {r['H_end_over_H0']:.4f})"
+    )
 
 
 @functools.cache
@@ -111,13 +141,20 @@ def measure(quick: bool = False) -> Measurement:
         f"Theorem 2; x(τ) matches the exact semi-ellipse/spiral to "
         f"{g(max(r['exact_dev'] for r in rs), 2)} of the amplitude"
     )
-    counter = ({"runs": table(above + diss_above)} if refuted else None)
-    return Measurement(ID, "refuted" if refuted else "verified", evidence,
-                       f"refuted if any C0 = 0 drift ≥ {g(claimed)}, or (as literally claimed) "
-                       f"any C0 > 0 drift ≥ {g(claimed)}",
-                       {"claimed": claimed, "runs": table(rs)}, counter,
-                       headline=(f"RK45 at the paper's tolerances drifts "
-                                 f"{', '.join(g(r['drift'], 2) for r in cons)} ({len(above)} of "
-                                 f"{len(cons)} ≥ {g(claimed)}); with C0 = {diss[0]['C0']:g} H "
-                                 f"decays to e² = {e * e:.4f}; H is identically the physical "
-                                 f"energy (to {g(max(r['identity_err'] for r in rs), 2)})"))
+    counter = {"runs": table(above + diss_above)} if refuted else None
+    return Measurement(
+        ID,
+        "refuted" if refuted else "verified",
+        evidence,
+        f"refuted if any C0 = 0 drift ≥ {g(claimed)}, or (as literally claimed) "
+        f"any C0 > 0 drift ≥ {g(claimed)}",
+        {"claimed": claimed, "runs": table(rs)},
+        counter,
+        headline=(
+            f"RK45 at the paper's tolerances drifts "
+            f"{', '.join(g(r['drift'], 2) for r in cons)} ({len(above)} of "
+            f"{len(cons)} ≥ {g(claimed)}); with C0 = {diss[0]['C0']:g} H "
+            f"decays to e² = {e * e:.4f}; H is identically the physical "
+            f"energy (to {g(max(r['identity_err'] for r in rs), 2)})"
+        ),
+    )

@@ -32,7 +32,9 @@ def root_over_a() -> mpmath.mpf:
     with mpmath.workdps(ROOT_DPS):
         root = mpmath.findroot(
             lambda d: (2 * pot.U(d) * pot.d2U(d) - pot.dU(d) ** 2) / pot.dU(d) ** 2,
-            (mpmath.mpf(BRACKET[0]) * pot.a, mpmath.mpf(BRACKET[1]) * pot.a), solver="anderson")
+            (mpmath.mpf(BRACKET[0]) * pot.a, mpmath.mpf(BRACKET[1]) * pot.a),
+            solver="anderson",
+        )
         return root / pot.a
 
 
@@ -48,19 +50,38 @@ def measure(quick: bool = False) -> Measurement:
     truncated = f"{math.floor(float(u) * 10**nd) / 10**nd:.{nd}f}"
     inside = stiffening_indicator(pot, np.linspace(1e-6, float(printed), 2001) * a)
     beyond = stiffening_indicator(pot, np.array([float(u) + 1e-3, 1.0, 1.5, 1.9]) * a)
-    ok = (truncated == printed and float(inside.min()) > -INDICATOR_ROUNDOFF
-          and bool(np.all(beyond < 0)))
-    evidence = (f"2UU'' − U'² changes sign at δ = {mpmath.nstr(u, 10)} a ({ROOT_DPS}-digit root; "
-                f"independent of b, c, Kn for α = 0.5), printed {printed} a; the indicator "
-                f"(2UU''−U'²)/U'² is ≥ {g(float(inside.min()), 2)} on (0, {printed} a] and "
-                f"negative beyond ({g(float(beyond.max()), 3)} at {float(u) + 1e-3:.4f} a)")
-    counter = None if ok else {"root_over_a": mpmath.nstr(u, 20), "printed": printed,
-                               "min_indicator_inside": float(inside.min())}
-    return Measurement(ID, "verified" if ok else "refuted", evidence,
-                       "verified if the root, truncated to the printed digits, equals the printed "
-                       "limit and the indicator has the claimed sign",
-                       {"root_over_a": mpmath.nstr(u, 20), "printed": printed,
-                        "min_indicator_inside": float(inside.min()),
-                        "indicator_beyond": beyond.tolist()}, counter,
-                       headline=(f"2UU'' − U'² changes sign at δ = {mpmath.nstr(u, 8)} a "
-                                 f"(printed {printed} a)"))
+    ok = (
+        truncated == printed
+        and float(inside.min()) > -INDICATOR_ROUNDOFF
+        and bool(np.all(beyond < 0))
+    )
+    evidence = (
+        f"2UU'' − U'² changes sign at δ = {mpmath.nstr(u, 10)} a ({ROOT_DPS}-digit root; "
+        f"independent of b, c, Kn for α = 0.5), printed {printed} a; the indicator "
+        f"(2UU''−U'²)/U'² is ≥ {g(float(inside.min()), 2)} on (0, {printed} a] and "
+        f"negative beyond ({g(float(beyond.max()), 3)} at {float(u) + 1e-3:.4f} a)"
+    )
+    counter = (
+        None
+        if ok
+        else {
+            "root_over_a": mpmath.nstr(u, 20),
+            "printed": printed,
+            "min_indicator_inside": float(inside.min()),
+        }
+    )
+    return Measurement(
+        ID,
+        "verified" if ok else "refuted",
+        evidence,
+        "verified if the root, truncated to the printed digits, equals the printed "
+        "limit and the indicator has the claimed sign",
+        {
+            "root_over_a": mpmath.nstr(u, 20),
+            "printed": printed,
+            "min_indicator_inside": float(inside.min()),
+            "indicator_beyond": beyond.tolist(),
+        },
+        counter,
+        headline=(f"2UU'' − U'² changes sign at δ = {mpmath.nstr(u, 8)} a (printed {printed} a)"),
+    )

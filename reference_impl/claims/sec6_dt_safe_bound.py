@@ -61,8 +61,9 @@ def failure_kind(row) -> str | None:
     """Kind of the failing step of one map row below the bound; None if it holds there."""
     kind = row.get("failure_kind") if hasattr(row, "get") else None
     has_key = "failure_kind" in row
-    below = (not bool(row["holds"])) or (kind is not None and _is_set(kind)
-                                         and float(row["ratio"]) <= 1.0)
+    below = (not bool(row["holds"])) or (
+        kind is not None and _is_set(kind) and float(row["ratio"]) <= 1.0
+    )
     if bool(row["degenerate"]) or not below:
         return None
     if not has_key or not _is_set(kind):
@@ -84,9 +85,11 @@ def describe(row) -> str:
     E = row.get("counterexample_E_ratio", math.nan)
     steps = row.get("counterexample_steps", math.nan)
     status = row.get("counterexample_status", "")
-    return (f"{kind or 'no failure'} at Δt = {float(row['ratio']):.4f} Δt_safe ({_label(row)}; "
-            f"{row['criterion']}; E/E0 = {g(E, 4)} after {g(steps, 6)} steps"
-            f"{', ' + str(status) if status else ''})")
+    return (
+        f"{kind or 'no failure'} at Δt = {float(row['ratio']):.4f} Δt_safe ({_label(row)}; "
+        f"{row['criterion']}; E/E0 = {g(E, 4)} after {g(steps, 6)} steps"
+        f"{', ' + str(status) if status else ''})"
+    )
 
 
 def verdict_from_map(df) -> Measurement:
@@ -104,23 +107,37 @@ def verdict_from_map(df) -> Measurement:
             counts[kind] = counts.get(kind, 0) + 1
             sc[kind] = sc.get(kind, 0) + 1
     runaways = [row for (_, row), k in zip(df.iterrows(), kinds, strict=True) if k == RUNAWAY]
-    measured = {"per_kind": counts, "per_scene": per_scene, "cases": int(len(df)),
-                "usable_cases": int(len(usable)), "degenerate_cases": int(df.degenerate.sum()),
-                "classified": "failure_kind" in df.columns}
+    measured = {
+        "per_kind": counts,
+        "per_scene": per_scene,
+        "cases": int(len(df)),
+        "usable_cases": int(len(usable)),
+        "degenerate_cases": int(df.degenerate.sum()),
+        "classified": "failure_kind" in df.columns,
+    }
     kind_text = ", ".join(f"{n} {k}" for k, n in counts.items() if n) or "none"
-    text = (f"failing steps at or below Δt_safe in {sum(counts.values())} of {len(usable)} "
-            f"cases with Δt_safe > 0, by kind: {kind_text}")
+    text = (
+        f"failing steps at or below Δt_safe in {sum(counts.values())} of {len(usable)} "
+        f"cases with Δt_safe > 0, by kind: {kind_text}"
+    )
     counter = None
     if runaways:
         worst = min(runaways, key=lambda r: float(r["ratio"]))
-        counter = {"case": worst["case"], "v0": float(worst["v0"]), "scene": worst["scene"],
-                   "ratio": float(worst["ratio"]), "criterion": worst["criterion"],
-                   "failure_kind": RUNAWAY}
+        counter = {
+            "case": worst["case"],
+            "v0": float(worst["v0"]),
+            "scene": worst["scene"],
+            "ratio": float(worst["ratio"]),
+            "criterion": worst["criterion"],
+            "failure_kind": RUNAWAY,
+        }
         measured["worst_runaway"] = counter
         text += f"; worst runaway: {describe(worst)}"
     if counts[UNCLASSIFIED]:
-        text += ("; the map gives no failure_kind, so these failures are not told apart "
-                 "(runaway, bounded orbit or accuracy)")
+        text += (
+            "; the map gives no failure_kind, so these failures are not told apart "
+            "(runaway, bounded orbit or accuracy)"
+        )
     lin = df[(df.family == "power") & (df.p == 1.0) & (df.scene == "two-sided")]
     if len(lin):
         r = float(lin.ratio.iloc[0])
@@ -129,30 +146,45 @@ def verdict_from_map(df) -> Measurement:
     degenerate = df[df.degenerate]
     if len(degenerate):
         ps = sorted({float(p) for p in degenerate.p if np.isfinite(p)})
-        text += (f"; p < 1 ({', '.join(f'{p:g}' for p in ps)}): Δt_safe = 0 (sup U'/√(2U) "
-                 f"infinite at onset), the bound is degenerate while Δt_crit is finite")
+        text += (
+            f"; p < 1 ({', '.join(f'{p:g}' for p in ps)}): Δt_safe = 0 (sup U'/√(2U) "
+            f"infinite at onset), the bound is degenerate while Δt_crit is finite"
+        )
     rec = df.recommended_ratio
     if rec.notna().any():
         i = rec.idxmin()
         measured["recommended_min_margin"] = float(rec.min())
-        text += (f"; the recommended step stays below Δt_crit everywhere "
-                 f"(smallest Δt_crit/Δt_rec = {rec.min():.2f}, {_label(df.loc[i])})"
-                 if rec.min() > 1 else
-                 f"; the recommended step fails in {int((rec <= 1).sum())} cases")
+        text += (
+            f"; the recommended step stays below Δt_crit everywhere "
+            f"(smallest Δt_crit/Δt_rec = {rec.min():.2f}, {_label(df.loc[i])})"
+            if rec.min() > 1
+            else f"; the recommended step fails in {int((rec <= 1).sum())} cases"
+        )
     if runaways:
         verdict = "refuted"
     elif counts[UNCLASSIFIED] or not len(usable):
         verdict = "inconclusive"
     else:
         verdict = "verified"
-    return Measurement(ID, verdict, text,
-                       "refuted iff at least one runaway (energy growth that does not saturate) "
-                       "has a failing Verlet step ≤ Δt_safe; bounded orbits and accuracy "
-                       "thresholds are counted apart, unclassified failures leave it inconclusive",
-                       measured, counter,
-                       headline=(f"failing steps at or below Δt_safe by kind: {kind_text}"
-                                 + (f"; worst runaway at {counter['ratio']:.2f} Δt_safe "
-                                    f"({counter['case']}, {counter['scene']})" if counter else "")))
+    return Measurement(
+        ID,
+        verdict,
+        text,
+        "refuted iff at least one runaway (energy growth that does not saturate) "
+        "has a failing Verlet step ≤ Δt_safe; bounded orbits and accuracy "
+        "thresholds are counted apart, unclassified failures leave it inconclusive",
+        measured,
+        counter,
+        headline=(
+            f"failing steps at or below Δt_safe by kind: {kind_text}"
+            + (
+                f"; worst runaway at {counter['ratio']:.2f} Δt_safe "
+                f"({counter['case']}, {counter['scene']})"
+                if counter
+                else ""
+            )
+        ),
+    )
 
 
 @functools.cache

@@ -53,23 +53,46 @@ def measure(quick: bool = False) -> Measurement:
         id_err = max(id_err, err)
         variation = float((meff.max() - meff.min()) / meff.max())
         slope = float(np.polyfit(np.log(x), np.log(meff), 1)[0]) if p is not None else math.nan
-        rows.append({"potential": label, "identity_rel_err": err, "relative_variation": variation,
-                     "loglog_slope": slope,
-                     "expected_slope": 2 * (1 - p) / (p + 1) if p is not None else math.nan})
+        rows.append(
+            {
+                "potential": label,
+                "identity_rel_err": err,
+                "relative_variation": variation,
+                "loglog_slope": slope,
+                "expected_slope": 2 * (1 - p) / (p + 1) if p is not None else math.nan,
+            }
+        )
     lin = [r for r in rows if r["potential"] == "p=1"][0]
     others = [r for r in rows if r["potential"] != "p=1"]
-    slope_err = max(abs(r["loglog_slope"] - r["expected_slope"]) for r in rows
-                    if math.isfinite(r["expected_slope"]))
-    ok = (id_err < IDENTITY_TOL and lin["relative_variation"] < CONSTANT_TOL
-          and min(r["relative_variation"] for r in others) > VARIES_MIN and slope_err < SLOPE_TOL)
-    evidence = (f"2mKU/U'² vs m/(dx/dq)²: ≤ {g(id_err, 2)}; relative variation of M_eff over "
-                f"three decades of q: {g(lin['relative_variation'], 2)} for p = 1, "
-                + ", ".join(f"{r['potential']} {g(r['relative_variation'], 3)}" for r in others)
-                + f"; power-law slopes d ln M_eff/d ln x = 2(1−p)/(p+1) to {g(slope_err, 2)}")
+    slope_err = max(
+        abs(r["loglog_slope"] - r["expected_slope"])
+        for r in rows
+        if math.isfinite(r["expected_slope"])
+    )
+    ok = (
+        id_err < IDENTITY_TOL
+        and lin["relative_variation"] < CONSTANT_TOL
+        and min(r["relative_variation"] for r in others) > VARIES_MIN
+        and slope_err < SLOPE_TOL
+    )
+    evidence = (
+        f"2mKU/U'² vs m/(dx/dq)²: ≤ {g(id_err, 2)}; relative variation of M_eff over "
+        f"three decades of q: {g(lin['relative_variation'], 2)} for p = 1, "
+        + ", ".join(f"{r['potential']} {g(r['relative_variation'], 3)}" for r in others)
+        + f"; power-law slopes d ln M_eff/d ln x = 2(1−p)/(p+1) to {g(slope_err, 2)}"
+    )
     counter = None if ok else {"rows": rows}
-    return Measurement(ID, "verified" if ok else "refuted", evidence,
-                       f"verified if the identity holds to {g(IDENTITY_TOL)}, M_eff is constant "
-                       f"({g(CONSTANT_TOL)}) for p = 1 only (others vary > {g(VARIES_MIN)}) and "
-                       f"the slopes match to {g(SLOPE_TOL)}", {"rows": rows}, counter,
-                       headline=(f"M_eff = 2mKU/U'² to {g(id_err, 2)}, constant only for p = 1 "
-                                 f"(variation {g(lin['relative_variation'], 2)})"))
+    return Measurement(
+        ID,
+        "verified" if ok else "refuted",
+        evidence,
+        f"verified if the identity holds to {g(IDENTITY_TOL)}, M_eff is constant "
+        f"({g(CONSTANT_TOL)}) for p = 1 only (others vary > {g(VARIES_MIN)}) and "
+        f"the slopes match to {g(SLOPE_TOL)}",
+        {"rows": rows},
+        counter,
+        headline=(
+            f"M_eff = 2mKU/U'² to {g(id_err, 2)}, constant only for p = 1 "
+            f"(variation {g(lin['relative_variation'], 2)})"
+        ),
+    )

@@ -43,13 +43,19 @@ def measure(quick: bool = False) -> Measurement:
         rows.append({"p": p, "slope": slope, "expected": (p - 1) / 2, "tsuji_rel_err": err_c})
     ok = slope_err < SLOPE_TOL and c_err < ROUNDOFF_TOL
     hertz = [r for r in rows if r["p"] == 1.5][0]
-    evidence = (f"slope of U'/√U over six decades of q equals (p−1)/2 to {g(slope_err, 2)} for "
-                f"p ∈ {{{', '.join(f'{p:g}' for p in EXPONENTS)}}} (Hertz: "
-                f"{hertz['slope']:.12f}); C(q) of Theorem 3 equals Tsuji's c q^((p−1)/2) to "
-                f"{g(c_err, 2)}")
+    evidence = (
+        f"slope of U'/√U over six decades of q equals (p−1)/2 to {g(slope_err, 2)} for "
+        f"p ∈ {{{', '.join(f'{p:g}' for p in EXPONENTS)}}} (Hertz: "
+        f"{hertz['slope']:.12f}); C(q) of Theorem 3 equals Tsuji's c q^((p−1)/2) to "
+        f"{g(c_err, 2)}"
+    )
     counter = None if ok else {"rows": rows}
-    return Measurement(ID, "verified" if ok else "refuted", evidence,
-                       f"verified if |slope − (p−1)/2| < {g(SLOPE_TOL)} and C matches Tsuji to "
-                       f"{g(ROUNDOFF_TOL)}", {"rows": rows}, counter,
-                       headline=(f"C ∝ q^((p−1)/2) to {g(c_err, 2)}; Hertz exponent "
-                                 f"{hertz['slope']:.12f}"))
+    return Measurement(
+        ID,
+        "verified" if ok else "refuted",
+        evidence,
+        f"verified if |slope − (p−1)/2| < {g(SLOPE_TOL)} and C matches Tsuji to {g(ROUNDOFF_TOL)}",
+        {"rows": rows},
+        counter,
+        headline=(f"C ∝ q^((p−1)/2) to {g(c_err, 2)}; Hertz exponent {hertz['slope']:.12f}"),
+    )

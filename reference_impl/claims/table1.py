@@ -28,9 +28,11 @@ def cells() -> dict:
 
 def describe(cell) -> str:
     """One line on a cell, from its computed and printed values."""
-    return (f"v0 = {cell.v0} {NAMES[cell.column]} computed {cell.computed_rounded} vs printed "
-            f"{cell.printed} {cell.unit} ({cell.difference_in_last_digit:+.2f} units of the last "
-            f"digit)")
+    return (
+        f"v0 = {cell.v0} {NAMES[cell.column]} computed {cell.computed_rounded} vs printed "
+        f"{cell.printed} {cell.unit} ({cell.difference_in_last_digit:+.2f} units of the last "
+        f"digit)"
+    )
 
 
 @functools.cache
@@ -44,23 +46,51 @@ def measure(quick: bool = False) -> Measurement:
     bad = []
     for c in cells().values():
         d = c.to_dict()
-        by_v[c.v0][c.column] = {k: d[k] for k in ("unit", "printed", "computed", "computed_rounded",
-                                                  "match", "difference_in_last_digit")}
+        by_v[c.v0][c.column] = {
+            k: d[k]
+            for k in (
+                "unit",
+                "printed",
+                "computed",
+                "computed_rounded",
+                "match",
+                "difference_in_last_digit",
+            )
+        }
         if not c.match:
             bad.append(c)
     n = len(cells())
     if bad:
-        evidence = (f"{len(bad)} of {n} cells differ at the printed digits: "
-                    + "; ".join(describe(c) for c in bad))
+        evidence = f"{len(bad)} of {n} cells differ at the printed digits: " + "; ".join(
+            describe(c) for c in bad
+        )
     else:
         evidence = f"all {n} cells match at the printed digits (50-digit recomputation)"
-    counter = ({"cells": [{"v0": c.v0, "column": c.column, "printed": c.printed,
-                           "computed_rounded": c.computed_rounded} for c in bad]}
-               if bad else None)
-    return Measurement(ID, "refuted" if bad else "verified", evidence,
-                       "refuted if any computed cell, rounded to the printed digits, differs "
-                       "from the printed value",
-                       {"mismatches": len(bad), "cells": n, "rows": list(by_v.values())}, counter,
-                       headline=(f"{len(bad)} of {n} cells differ at the printed digits"
-                                 + (" (" + ", ".join(f"v0 = {c.v0} {NAMES[c.column]}" for c in bad)
-                                    + ")" if bad else "")))
+    counter = (
+        {
+            "cells": [
+                {
+                    "v0": c.v0,
+                    "column": c.column,
+                    "printed": c.printed,
+                    "computed_rounded": c.computed_rounded,
+                }
+                for c in bad
+            ]
+        }
+        if bad
+        else None
+    )
+    return Measurement(
+        ID,
+        "refuted" if bad else "verified",
+        evidence,
+        "refuted if any computed cell, rounded to the printed digits, differs "
+        "from the printed value",
+        {"mismatches": len(bad), "cells": n, "rows": list(by_v.values())},
+        counter,
+        headline=(
+            f"{len(bad)} of {n} cells differ at the printed digits"
+            + (" (" + ", ".join(f"v0 = {c.v0} {NAMES[c.column]}" for c in bad) + ")" if bad else "")
+        ),
+    )

@@ -47,8 +47,14 @@ def relation(name: str) -> dict:
         T = act.period_mp(pot, m, E, dps=DPS)
         tc = act.contact_duration_mp(pot, m, E, dps=DPS)
         dJ = act.dJ_dE_mp(pot, m, E, dps=DPS)
-        return {"E": E, "T": T, "t_c": tc, "dJ_dE": dJ, "T_ratio": T / (2 * mpmath.pi * dJ),
-                "tc_ratio": tc / (2 * mpmath.pi * dJ)}
+        return {
+            "E": E,
+            "T": T,
+            "t_c": tc,
+            "dJ_dE": dJ,
+            "T_ratio": T / (2 * mpmath.pi * dJ),
+            "tc_ratio": tc / (2 * mpmath.pi * dJ),
+        }
 
 
 @functools.cache
@@ -69,18 +75,36 @@ def measure(quick: bool = False) -> Measurement:
     worst_name = max(rows, key=lambda n: rows[n]["abs_ratio_minus_1"])
     worst = rows[worst_name]["abs_ratio_minus_1"]
     refuted = worst > RELATION_TOL
-    parts = "; ".join(f"{r['T_over_2pi_dJdE'][:22]}… for {n} "
-                      f"(|ratio − 2| = {g(r['abs_ratio_minus_2'], 2)})" for n, r in rows.items())
+    parts = "; ".join(
+        f"{r['T_over_2pi_dJdE'][:22]}… for {n} (|ratio − 2| = {g(r['abs_ratio_minus_2'], 2)})"
+        for n, r in rows.items()
+    )
     tc_dev = max(r["abs_tc_over_2pi_dJdE_minus_1"] for r in rows.values())
-    evidence = (f"T/(2π dJ/dE) = {parts} at {DPS} digits, dJ/dE by mpmath.diff of J; "
-                f"the printed relation holds for the contact time, t_c = 2π dJ/dE "
-                f"(|t_c/(2π dJ/dE) − 1| ≤ {g(tc_dev, 2)}), so the paper's T = 4π dJ/dE")
-    counter = ({"case": worst_name, "T_over_2pi_dJdE": rows[worst_name]["T_over_2pi_dJdE"],
-                "abs_ratio_minus_1": worst} if refuted else None)
-    return Measurement(ID, "refuted" if refuted else "verified", evidence,
-                       f"refuted if |T/(2π dJ/dE) − 1| > {g(RELATION_TOL)} at {DPS} digits",
-                       rows, counter,
-                       headline=(f"with the paper's J and T = 4 × quarter period, T/(2π dJ/dE) = "
-                                 f"{rows[worst_name]['T_over_2pi_dJdE'][:5]} at {DPS} digits "
-                                 f"(|ratio − 2| ≤ {g(max(r['abs_ratio_minus_2'] for r in rows.values()), 2)}); "
-                                 f"2π dJ/dE is the contact time (to {g(tc_dev, 2)})"))
+    evidence = (
+        f"T/(2π dJ/dE) = {parts} at {DPS} digits, dJ/dE by mpmath.diff of J; "
+        f"the printed relation holds for the contact time, t_c = 2π dJ/dE "
+        f"(|t_c/(2π dJ/dE) − 1| ≤ {g(tc_dev, 2)}), so the paper's T = 4π dJ/dE"
+    )
+    counter = (
+        {
+            "case": worst_name,
+            "T_over_2pi_dJdE": rows[worst_name]["T_over_2pi_dJdE"],
+            "abs_ratio_minus_1": worst,
+        }
+        if refuted
+        else None
+    )
+    return Measurement(
+        ID,
+        "refuted" if refuted else "verified",
+        evidence,
+        f"refuted if |T/(2π dJ/dE) − 1| > {g(RELATION_TOL)} at {DPS} digits",
+        rows,
+        counter,
+        headline=(
+            f"with the paper's J and T = 4 × quarter period, T/(2π dJ/dE) = "
+            f"{rows[worst_name]['T_over_2pi_dJdE'][:5]} at {DPS} digits "
+            f"(|ratio − 2| ≤ {g(max(r['abs_ratio_minus_2'] for r in rows.values()), 2)}); "
+            f"2π dJ/dE is the contact time (to {g(tc_dev, 2)})"
+        ),
+    )

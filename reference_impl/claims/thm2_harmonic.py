@@ -53,7 +53,9 @@ def sinusoid_deviation(pot, m, v0, K, M) -> dict:
         "tau_contact_rel_err": abs(res.tau_contact * hmap.omega0 / math.pi - 1.0),
         # Negative control: the same x against a half-sine in physical time.
         "physical_time_dev_over_A": float(
-            np.max(np.abs(x - A * np.sin(math.pi * res.t / res.contact_time)))) / A,
+            np.max(np.abs(x - A * np.sin(math.pi * res.t / res.contact_time)))
+        )
+        / A,
     }
 
 
@@ -68,8 +70,15 @@ def measure(quick: bool = False) -> Measurement:
         for K, M in kms:
             d = sinusoid_deviation(pot, m, v0, K, M)
             worst = max(worst, d["max_dev_over_A"])
-            rows.append({"case": label, "K": K, "M": M, "max_dev_over_A": d["max_dev_over_A"],
-                         "tau_contact_rel_err": d["tau_contact_rel_err"]})
+            rows.append(
+                {
+                    "case": label,
+                    "K": K,
+                    "M": M,
+                    "max_dev_over_A": d["max_dev_over_A"],
+                    "tau_contact_rel_err": d["tau_contact_rel_err"],
+                }
+            )
             if (K, M) == kms[0]:
                 teeth.append(d["physical_time_dev_over_A"])
         E = 0.5 * m * v0 * v0
@@ -77,23 +86,45 @@ def measure(quick: bool = False) -> Measurement:
         ref = act.contact_duration_mp(pot, m, E, dps=EXACT_DPS)
         err = float(abs((mpmath.mpf(sol.contact_time) - ref) / ref))
         worst_exact = max(worst_exact, err)
-        exact_rows.append({"case": label, "contact_time_exact": sol.contact_time,
-                           "contact_time_mp": mpmath.nstr(ref, 20), "rel_err": err})
+        exact_rows.append(
+            {
+                "case": label,
+                "contact_time_exact": sol.contact_time,
+                "contact_time_mp": mpmath.nstr(ref, 20),
+                "rel_err": err,
+            }
+        )
     ok = worst < SINUSOID_TOL and worst_exact < EXACT_RTOL
-    evidence = (f"max |x − A sin(Ω0 τ)|/A = {g(worst, 2)} over Hertz, the paper ellipsoid and a "
-                f"sum, each with {len(kms)} (K, M) pairs (DOP853 rtol {g(ODE_RTOL)}; "
-                f"integrator-limited); against physical time the same x deviates by "
-                f"{g(min(teeth), 2)}; exact solver vs {EXACT_DPS}-digit physical quadrature of "
-                f"t_c: ≤ {g(worst_exact, 2)}")
+    evidence = (
+        f"max |x − A sin(Ω0 τ)|/A = {g(worst, 2)} over Hertz, the paper ellipsoid and a "
+        f"sum, each with {len(kms)} (K, M) pairs (DOP853 rtol {g(ODE_RTOL)}; "
+        f"integrator-limited); against physical time the same x deviates by "
+        f"{g(min(teeth), 2)}; exact solver vs {EXACT_DPS}-digit physical quadrature of "
+        f"t_c: ≤ {g(worst_exact, 2)}"
+    )
     counter = None
     if not ok:
         bad = max(rows, key=lambda r: r["max_dev_over_A"])
-        counter = bad if bad["max_dev_over_A"] >= SINUSOID_TOL else max(
-            exact_rows, key=lambda r: r["rel_err"])
-    return Measurement(ID, "verified" if ok else "refuted", evidence,
-                       f"verified if max deviation/amplitude < {g(SINUSOID_TOL)} and exact t_c "
-                       f"within {g(EXACT_RTOL)} of the mpmath physical integral",
-                       {"sinusoid": rows, "physical_time_control": teeth,
-                        "exact_vs_mp": exact_rows, "random_KM_seed": SEED_KM}, counter,
-                       headline=(f"x(τ) of integrated trajectories is the sinusoid to "
-                                 f"{g(worst, 2)} of its amplitude; exact t_c to {g(worst_exact, 2)}"))
+        counter = (
+            bad
+            if bad["max_dev_over_A"] >= SINUSOID_TOL
+            else max(exact_rows, key=lambda r: r["rel_err"])
+        )
+    return Measurement(
+        ID,
+        "verified" if ok else "refuted",
+        evidence,
+        f"verified if max deviation/amplitude < {g(SINUSOID_TOL)} and exact t_c "
+        f"within {g(EXACT_RTOL)} of the mpmath physical integral",
+        {
+            "sinusoid": rows,
+            "physical_time_control": teeth,
+            "exact_vs_mp": exact_rows,
+            "random_KM_seed": SEED_KM,
+        },
+        counter,
+        headline=(
+            f"x(τ) of integrated trajectories is the sinusoid to "
+            f"{g(worst, 2)} of its amplitude; exact t_c to {g(worst_exact, 2)}"
+        ),
+    )

@@ -32,8 +32,10 @@ ORDERS = 1e3
 
 def setups():
     """(label, potential, mass kg, impact speeds m/s)."""
-    return [("Hertz", HERTZ, MASS, (0.1, 1.0, 10.0)),
-            ("paper ellipsoid", paper_ellipsoid(), PAPER_MASS, (0.15, 1.5))]
+    return [
+        ("Hertz", HERTZ, MASS, (0.1, 1.0, 10.0)),
+        ("paper ellipsoid", paper_ellipsoid(), PAPER_MASS, (0.15, 1.5)),
+    ]
 
 
 def restitution(pot, m, v0, C) -> float:
@@ -59,9 +61,16 @@ def measure(quick: bool = False) -> Measurement:
         }
         for name, C in variants.items():
             es = [restitution(pot, m, v, C) for v in speeds]
-            rows.append({"case": label, "law": name, "speeds": speeds, "restitution": es,
-                         "spread": float(max(es) - min(es)),
-                         "max_dev_from_theory": float(max(abs(e - e_th) for e in es))})
+            rows.append(
+                {
+                    "case": label,
+                    "law": name,
+                    "speeds": speeds,
+                    "restitution": es,
+                    "spread": float(max(es) - min(es)),
+                    "max_dev_from_theory": float(max(abs(e - e_th) for e in es)),
+                }
+            )
     uni = [r for r in rows if r["law"] == "universal"]
     other = [r for r in rows if r["law"] != "universal"]
     s_uni = max(r["spread"] for r in uni)
@@ -70,16 +79,25 @@ def measure(quick: bool = False) -> Measurement:
     ok = s_uni < E_TOL and d_uni < E_TOL and s_min_other > ORDERS * max(s_uni, E_TOL * 1e-3)
     pert = {r["law"]: r["spread"] for r in other if r["case"] == "Hertz"}
     sp = setups()
-    evidence = (f"restitution spread over v0 (Hertz {', '.join(map(str, sp[0][3]))} m/s, "
-                f"ellipsoid {', '.join(map(str, sp[1][3]))} m/s; ζ = {ZETA}): universal "
-                f"law {g(s_uni, 2)} (|e − e(ζ)| ≤ {g(d_uni, 2)}, e(ζ) = {e_th:.6f}, ODE rtol "
-                f"{g(ODE_RTOL)}); perturbed law {g(pert['perturbed C(q)(1+q/q_ref)'], 3)}, "
-                f"constant C {g(pert['constant C'], 3)} (Hertz); smallest non-universal spread "
-                f"{g(s_min_other, 3)}")
+    evidence = (
+        f"restitution spread over v0 (Hertz {', '.join(map(str, sp[0][3]))} m/s, "
+        f"ellipsoid {', '.join(map(str, sp[1][3]))} m/s; ζ = {ZETA}): universal "
+        f"law {g(s_uni, 2)} (|e − e(ζ)| ≤ {g(d_uni, 2)}, e(ζ) = {e_th:.6f}, ODE rtol "
+        f"{g(ODE_RTOL)}); perturbed law {g(pert['perturbed C(q)(1+q/q_ref)'], 3)}, "
+        f"constant C {g(pert['constant C'], 3)} (Hertz); smallest non-universal spread "
+        f"{g(s_min_other, 3)}"
+    )
     counter = None if ok else max(uni, key=lambda r: r["spread"])
-    return Measurement(ID, "verified" if ok else "refuted", evidence,
-                       f"verified if the universal spread < {g(E_TOL)} and every other law's "
-                       f"spread is > {g(ORDERS)} times larger", {"zeta": ZETA, "rows": rows},
-                       counter,
-                       headline=(f"universal law: restitution independent of v0 to {g(s_uni, 2)}; "
-                                 f"perturbed or constant laws: spreads ≥ {g(s_min_other, 2)}"))
+    return Measurement(
+        ID,
+        "verified" if ok else "refuted",
+        evidence,
+        f"verified if the universal spread < {g(E_TOL)} and every other law's "
+        f"spread is > {g(ORDERS)} times larger",
+        {"zeta": ZETA, "rows": rows},
+        counter,
+        headline=(
+            f"universal law: restitution independent of v0 to {g(s_uni, 2)}; "
+            f"perturbed or constant laws: spreads ≥ {g(s_min_other, 2)}"
+        ),
+    )

@@ -38,6 +38,7 @@ from ._files import swap_in, validate_report_args
 
 __all__ = ["build_report", "quick_drops", "validate_report_args"]
 
+
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
     from ..workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
@@ -49,8 +50,11 @@ def quick_drops() -> list[str]:
 
     full, quick = cov(False), cov(True)
     gone_cases = [k for k in full if k not in quick]
-    fewer_speeds = [f"{k} ({len(quick[k])} of {len(full[k])} speeds)" for k in quick
-                    if k in full and len(quick[k]) < len(full[k])]
+    fewer_speeds = [
+        f"{k} ({len(quick[k])} of {len(full[k])} speeds)"
+        for k in quick
+        if k in full and len(quick[k]) < len(full[k])
+    ]
     kept_rtols = set(IVP_RTOLS[::2])
     kept_steps = set(VERLET_STEPS[::2])
     from ._wp import QUICK_SKIP
@@ -115,9 +119,13 @@ def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
     return {"result": result_to_dict(result), "figure": name}
 
 
-def build_report(out_dir: str | Path = "reports", quick: bool = False,
-                 progress: Callable[[str], None] | None = None, adapters=(),
-                 readme: str | Path | None = "auto") -> dict:
+def build_report(
+    out_dir: str | Path = "reports",
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+    adapters=(),
+    readme: str | Path | None = "auto",
+) -> dict:
     """Run every verification and write the report; returns the results dict.
 
     Parameters
@@ -229,8 +237,13 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
         hard = timed("hard cases", _hardcases.run_hard_cases, quick, say)
         sweeps = timed("hard cases: sweeps", _hardcases.run_sweeps, quick, say)
         u_star = float(sec10_stiffening_domain.root_over_a())
-        timed("hard cases: figure", _hardcases.sweeps_figure, sweeps, fig_dir / "hard_cases.png",
-              u_star)
+        timed(
+            "hard cases: figure",
+            _hardcases.sweeps_figure,
+            sweeps,
+            fig_dir / "hard_cases.png",
+            u_star,
+        )
     except BaseException:
         if background is not None:
             background[0].shutdown(wait=False, cancel_futures=True)
@@ -239,8 +252,9 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
     dmap = None
     if background is not None:
         try:
-            dmap = timed("critical-step map (waiting for the second process)", _finish_map,
-                         background)
+            dmap = timed(
+                "critical-step map (waiting for the second process)", _finish_map, background
+            )
         except Exception:  # a broken worker: measure here instead
             dmap = None
     if dmap is None:
@@ -260,37 +274,54 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
         if m.verdict not in VERDICTS:
             raise ValueError(f"claim {c.id}: verdict {m.verdict!r} is not one of {VERDICTS}")
         d = m.to_dict()
-        claims.append({"id": c.id, "section": c.section, "statement": c.statement,
-                       "verdict": d["verdict"], "evidence": d["evidence"], "rule": d["rule"],
-                       "tests": tests.get(c.id, []), "measured": d["measured"],
-                       "counterexample": d["counterexample"], "headline": d["headline"]})
+        claims.append(
+            {
+                "id": c.id,
+                "section": c.section,
+                "statement": c.statement,
+                "verdict": d["verdict"],
+                "evidence": d["evidence"],
+                "rule": d["rule"],
+                "tests": tests.get(c.id, []),
+                "measured": d["measured"],
+                "counterexample": d["counterexample"],
+                "headline": d["headline"],
+            }
+        )
 
-    bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir)
-             for spec in adapters]
+    bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir) for spec in adapters]
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures += [b["figure"] for b in bench if b.get("figure")]
     results = {
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
-                 "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
+        "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
         "generated_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "mode": "quick" if quick else "full",
         "quick_drops": quick_drops() if quick else [],
         "claims": claims,
         "table1": measured[table1.ID].figures["rows"],
-        "fig1": {"runs": fig1_claim.table(), "rtol": fig1_claim.RTOL, "atol": fig1_claim.ATOL,
-                 "figure": "figures/fig1.png"},
+        "fig1": {
+            "runs": fig1_claim.table(),
+            "rtol": fig1_claim.RTOL,
+            "atol": fig1_claim.ATOL,
+            "figure": "figures/fig1.png",
+        },
         "dt_crit_map": records(dmap),
         "dt_crit_sensitivity": records(sens),
-        "dt_crit_map_coverage": [{"family": c.family, "case": c.label, "m": c.m,
-                                  "velocities": list(c.velocities)} for c in coverage(quick)],
+        "dt_crit_map_coverage": [
+            {"family": c.family, "case": c.label, "m": c.m, "velocities": list(c.velocities)}
+            for c in coverage(quick)
+        ],
         "work_precision": records(wp),
         "work_precision_summary": [jsonable(r) for r in _wp.wp_summary(wp)],
         "work_precision_settings": _wp.settings_text(quick),
         "work_precision_scenes": _scene_info(),
-        "hard_cases": {"cases": [jsonable(r) for r in hard],
-                       "sweeps": jsonable(sweeps),
-                       "accuracy": _hardcases.lost_accuracy(hard, sweeps["speed"] + sweeps["depth"])},
+        "hard_cases": {
+            "cases": [jsonable(r) for r in hard],
+            "sweeps": jsonable(sweeps),
+            "accuracy": _hardcases.lost_accuracy(hard, sweeps["speed"] + sweeps["depth"]),
+        },
         "figures": [f"figures/{n}" for n in figures],
         "figure_captions": {n: cap for n, cap in wp_figs},
         "environment": env,
@@ -300,8 +331,9 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
     results["timings_seconds"] = timings
     say("writing index.html, index.md, results.json")
     results = jsonable(results)
-    (out / "results.json").write_text(json.dumps(results, indent=1, allow_nan=False,
-                                                  ensure_ascii=False) + "\n")
+    (out / "results.json").write_text(
+        json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
+    )
     (out / "index.md").write_text(_render.markdown(results))
     (out / "index.html").write_text(_render.html_page(results, fig_dir))
     return results

@@ -31,31 +31,55 @@ def fig1_figure(runs: list[dict], path) -> None:
         pb.plot(cu["x"], cu["xp"], ls, color=c, lw=1.6)
         pc.plot(cu["t"] * 1e3, cu["q"] * 1e3, ls, color=c, lw=1.6)
         if r["C0"] == 0:
-            pd.semilogy(r["t_drift"] * 1e3, np.maximum(np.abs(r["rel_H"]), 1e-17), ".-", color=c,
-                        lw=0.8, ms=2.5, label=f"v0 = {r['v0']:.2f} m/s: max {g(r['drift'], 2)}")
-    pa.set(xlabel="penetration δ [mm]", ylabel="velocity dδ/dt [m/s]",
-           title="(a) physical phase space")
-    pb.set(xlabel=f"x = √(2U/K) [m]   (K = {FIG1['K']:g} N/m)",
-           ylabel=f"x' = dx/dτ [m/s]   (M = {FIG1['M']:g} kg)",
-           title="(b) transformed phase space (x, x')")
+            pd.semilogy(
+                r["t_drift"] * 1e3,
+                np.maximum(np.abs(r["rel_H"]), 1e-17),
+                ".-",
+                color=c,
+                lw=0.8,
+                ms=2.5,
+                label=f"v0 = {r['v0']:.2f} m/s: max {g(r['drift'], 2)}",
+            )
+    pa.set(
+        xlabel="penetration δ [mm]", ylabel="velocity dδ/dt [m/s]", title="(a) physical phase space"
+    )
+    pb.set(
+        xlabel=f"x = √(2U/K) [m]   (K = {FIG1['K']:g} N/m)",
+        ylabel=f"x' = dx/dτ [m/s]   (M = {FIG1['M']:g} kg)",
+        title="(b) transformed phase space (x, x')",
+    )
     pb.set_xlim(left=-0.02 * max(r["curve"]["x"].max() for r in runs))
     pc.set(xlabel="time t [ms]", ylabel="penetration δ [mm]", title="(c) time series")
     claimed = FIG1["claimed_energy_error"]
     pd.axhline(claimed, color="k", lw=1.2, ls=":")
-    pd.text(0.02, claimed * 1.25, f"paper: relative error < {g(claimed)}",
-            transform=pd.get_yaxis_transform(), fontsize=9)
-    pd.set(xlabel="time t [ms]", ylabel="|H(t)/H(0) − 1|",
-           title=f"(d) transformed energy drift, C0 = 0, RK45 rtol = atol = {g(RTOL)}",
-           ylim=(1e-17, 1e-11))
+    pd.text(
+        0.02,
+        claimed * 1.25,
+        f"paper: relative error < {g(claimed)}",
+        transform=pd.get_yaxis_transform(),
+        fontsize=9,
+    )
+    pd.set(
+        xlabel="time t [ms]",
+        ylabel="|H(t)/H(0) − 1|",
+        title=f"(d) transformed energy drift, C0 = 0, RK45 rtol = atol = {g(RTOL)}",
+        ylim=(1e-17, 1e-11),
+    )
     pd.legend(fontsize=8.5, loc="lower right")
     for a in ax.flat:
         a.grid(True, alpha=0.3)
         a.tick_params(labelsize=9)
-    handles = [Line2D([], [], color=c, lw=2, label=f"v0 = {v:.2f} m/s")
-               for c, v in zip(COLOURS, speeds, strict=True)]
-    handles += [Line2D([], [], color="k", ls="--", label="C0 = 0 (conservative)"),
-                Line2D([], [], color="k", ls="-", label=f"C0 = {FIG1['C0'][1]:g} (universal law)")]
+    handles = [
+        Line2D([], [], color=c, lw=2, label=f"v0 = {v:.2f} m/s")
+        for c, v in zip(COLOURS, speeds, strict=True)
+    ]
+    handles += [
+        Line2D([], [], color="k", ls="--", label="C0 = 0 (conservative)"),
+        Line2D([], [], color="k", ls="-", label=f"C0 = {FIG1['C0'][1]:g} (universal law)"),
+    ]
     pa.legend(handles=handles, fontsize=8.5, loc="upper right")
-    fig.suptitle("Fig. 1 regenerated: ellipsoid a = 15 mm, b = c = 8 mm, m = 0.05 kg, "
-                 "Kn = 1e8, α = 0.5", fontsize=12)
+    fig.suptitle(
+        "Fig. 1 regenerated: ellipsoid a = 15 mm, b = c = 8 mm, m = 0.05 kg, Kn = 1e8, α = 0.5",
+        fontsize=12,
+    )
     fig.savefig(path)

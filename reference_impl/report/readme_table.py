@@ -37,9 +37,12 @@ def verdict_table(results: dict) -> str:
     env = results.get("environment", {})
     commit = (env.get("git_commit") or "unknown")[:12]
     dirty = " (uncommitted changes)" if env.get("git_dirty") else ""
-    lines += ["", f"Generated from `reports/results.json` ({results.get('mode', '?')} run of "
-              f"{results.get('generated_utc', '?')}, commit {commit}{dirty}) by "
-              f"`python -m reference_impl.report.readme_table`."]
+    lines += [
+        "",
+        f"Generated from `reports/results.json` ({results.get('mode', '?')} run of "
+        f"{results.get('generated_utc', '?')}, commit {commit}{dirty}) by "
+        f"`python -m reference_impl.report.readme_table`.",
+    ]
     return "\n".join(lines)
 
 
@@ -48,20 +51,20 @@ def readme_block(readme_text: str) -> str:
     i, j = readme_text.find(START), readme_text.find(END)
     if i < 0 or j < 0 or j < i:
         raise HCVInputError(f"README has no {START} ... {END} block")
-    return readme_text[i + len(START):j].strip("\n")
+    return readme_text[i + len(START) : j].strip("\n")
 
 
 def rewrite_readme(results: dict, readme_text: str) -> str:
     """The README with only its verdict block replaced."""
     readme_block(readme_text)  # markers present
     i, j = readme_text.find(START), readme_text.find(END)
-    return (readme_text[:i + len(START)] + "\n" + verdict_table(results) + "\n"
-            + readme_text[j:])
+    return readme_text[: i + len(START)] + "\n" + verdict_table(results) + "\n" + readme_text[j:]
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m reference_impl.report.readme_table",
-                                 description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="python -m reference_impl.report.readme_table", description=__doc__.splitlines()[0]
+    )
     ap.add_argument("--results", default=str(ROOT / "reports" / "results.json"))
     ap.add_argument("--readme", default=str(ROOT / "README.md"))
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
@@ -75,8 +78,10 @@ def main(argv=None) -> int:
         return 2
     if args.check:
         if new != readme:
-            print(f"readme_table: {args.readme} verdict block differs from {args.results}",
-                  file=sys.stderr)
+            print(
+                f"readme_table: {args.readme} verdict block differs from {args.results}",
+                file=sys.stderr,
+            )
             return 1
         return 0
     if new != readme:
