@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..paper import PAPER_MASS, paper_ellipsoid
+from ..paper import PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
 from ..potentials import PowerLaw
 
 # Hertz contact of the theory checks: k = 1e6, p = 1.5, on a 50 g body.
@@ -16,6 +16,6 @@ def theory_cases():
     """(label, potential, mass kg, impact speed m/s): Hertz, the paper ellipsoid, a sum."""
     return [
         ("Hertz k=1e6 p=1.5", HERTZ, MASS, 1.0),
-        ("paper ellipsoid", paper_ellipsoid(), PAPER_MASS, 0.99),
+        ("paper ellipsoid", paper_ellipsoid(), PAPER_MASS, PAPER_V0_MIDDLE),
         ("sum q^2/2 + q^3/3 (k=1e4, 1e6)", PowerLaw(1e4, 1.0) + PowerLaw(1e6, 2.0), MASS, 1.0),
     ]

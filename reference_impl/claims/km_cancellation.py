@@ -15,7 +15,7 @@ import numpy as np
 from ..damping import UniversalDamping
 from ..harmonic_map import HarmonicMap
 from ..integrators.ivp import integrate_impact
-from ..paper import FIG1, PAPER_MASS, paper_ellipsoid
+from ..paper import FIG1, PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
 from ._base import Measurement, g
 from ._cases import KM_PAIRS, theory_cases
 from ._tolerances import MEASURABLE, ODE_RTOL, ROUNDOFF_TOL
@@ -30,7 +30,7 @@ STATEMENT = (
 # Damping ratio of the fixed-zeta checks (any 0 < zeta < 1 would do).
 ZETA = 0.3
 # Speed of the fixed-C0 check: the paper's middle Table 1 speed, m/s.
-V0_FIXED_C0 = 0.99
+V0_FIXED_C0 = PAPER_V0_MIDDLE
 
 
 def _spread(a) -> float:
