@@ -20,6 +20,7 @@ __all__ = [
     "Table1Cell",
     "table1_cells",
     "STIFFENING_LIMIT_PRINTED",
+    "PAPER_V0_MIDDLE",
 ]
 
 # Section 10: semi-axes a = 0.015 m, b = c = 0.008 m, Kn = 1e8, alpha = 0.5, m = 0.05 kg.
@@ -39,6 +40,8 @@ STIFFENING_LIMIT_PRINTED = "0.735"
 # Fig. 1 caption: K = 1, M = 0.75, C0 = 0 (dashed) and 0.5 (solid), three speeds;
 # ode45 with RelTol = AbsTol = 1e-13; claimed transformed-energy error < 3e-13.
 FIG1 = dict(K=1.0, M=0.75, C0=(0.0, 0.5), velocities=(0.50, 0.99, 1.50), claimed_energy_error=3e-13)
+# The middle speed of Table 1 and Fig. 1 (m/s), used by several claims' cases.
+PAPER_V0_MIDDLE = FIG1["velocities"][1]
 
 
 def paper_ellipsoid() -> Ellipsoid:

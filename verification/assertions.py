@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["assert_close", "assert_less", "assert_true", "rel_err"]
+__all__ = ["assert_close", "assert_less", "assert_true", "check_measurement", "rel_err"]
 
 
 def rel_err(got, expected) -> float:
@@ -53,3 +53,34 @@ def assert_true(cond: bool, *, got: str, should: str, claim: str, call: str) -> 
     """Assert a condition with a message in the house format."""
     if not cond:
         raise AssertionError(f"got {got}, should be {should} [{claim}, {call}]")
+
+
+def check_measurement(m, *, expect: str, real=None, call: str, reason: str | None = None) -> None:
+    """Assert a claim's measurement (`reference_impl.claims`) gives the recorded verdict.
+
+    ``expect="verified"``: the measurement must verify the claim (a refutation
+    fails the test, printing the evidence). ``expect="refuted"``: a strict
+    expected failure -- the measurement must refute the claim, with a
+    counterexample that ``real(m)`` (the test's own re-derivation) confirms; the
+    test then xfails with the measured evidence as its reason (never a typed
+    number). A refuted claim that measures as verified fails: update the record.
+    ``reason`` (also produced from measured numbers) replaces the evidence as
+    the xfail reason, e.g. to describe one case of a parametrized test.
+    """
+    import pytest
+
+    if m.verdict == expect == "verified":
+        return
+    if m.verdict == "refuted" and expect == "refuted":
+        ok = bool(m.counterexample) and (real is None or bool(real(m)))
+        assert_true(
+            ok,
+            got=f"counterexample {m.counterexample!r} not confirmed by the test",
+            should="a real counterexample",
+            claim=m.claim,
+            call=call,
+        )
+        pytest.xfail(f"{m.claim} refuted as printed: {reason or m.evidence}")
+    raise AssertionError(
+        f"got {m.verdict}: {m.evidence}, should be {expect} (rule: {m.rule}) [{m.claim}, {call}]"
+    )

@@ -35,7 +35,6 @@ def _hcv(*args, cwd=None):
     )
 
 
-@pytest.mark.claim("table1")
 def test_solve_json_embedded_paper_scene():
     r = _hcv("solve", "paper-ellipsoid", "--json")
     assert r.returncode == 0, r.stderr
@@ -133,7 +132,6 @@ def test_usage_error_exit_2():
     assert r.returncode == 2
 
 
-@pytest.mark.claim("sec6-dt-safe-bound")
 def test_dt_crit_json_reports_each_velocity():
     r = _hcv("dt-crit", "hertz", "--json")
     assert r.returncode == 0, r.stderr

@@ -35,7 +35,6 @@ def _powerlaw_contact_time(k, p, m, v0):
     return 2.0 * math.sqrt(m / 2.0) * q_max / math.sqrt(E) * beta_fn(1.0 / n, 0.5) / n, q_max
 
 
-@pytest.mark.claim("thm2-harmonic")
 @pytest.mark.parametrize("p", [0.3, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0])
 def test_conservative_power_law_closed_form(p):
     k, m, v0 = 2.5e7, 0.05, 0.8
@@ -117,7 +116,6 @@ def test_power_law_scaling_law(p, zeta, v1, v2):
     )
 
 
-@pytest.mark.claim("thm3-damping-iff")
 @given(pot=hs.monotone_potentials(), zeta=hs.zetas(), v0=hs.speeds())
 def test_restitution_closed_forms(pot, zeta, v0):
     m = 0.01

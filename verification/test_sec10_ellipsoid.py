@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import math
 
-import mpmath
 import numpy as np
 import pytest
 from hypothesis import given
 
+from reference_impl.claims import fig1, sec10_stiffening_domain, table1
 from reference_impl.damping import UniversalDamping, restitution_from_zeta
 from reference_impl.harmonic_map import HarmonicMap
 from reference_impl.paper import (
@@ -17,12 +17,11 @@ from reference_impl.paper import (
     STIFFENING_LIMIT_PRINTED,
     TABLE1_PRINTED,
     paper_ellipsoid,
-    table1_cells,
 )
 from reference_impl.potentials import Ellipsoid
 from reference_impl.stability import dt_safe, geometry_class, stiffening_indicator
 from verification import strategies as hs
-from verification.assertions import assert_close, assert_less, assert_true
+from verification.assertions import assert_close, assert_less, assert_true, check_measurement
 
 # -- stiffening domain ---------------------------------------------------------
 
@@ -59,13 +58,7 @@ def test_stiffening_limit_is_the_root():
     """The sign change lies at u* = 0.7350889..., which the paper prints as 0.735."""
     pot = paper_ellipsoid()
     a = pot.a
-    with mpmath.workdps(30):
-        root = mpmath.findroot(
-            lambda d: (2 * pot.U(d) * pot.d2U(d) - pot.dU(d) ** 2) / pot.dU(d) ** 2,
-            (mpmath.mpf(0.7) * a, mpmath.mpf(0.77) * a),
-            solver="anderson",
-        )
-    u = float(root / a)
+    u = float(sec10_stiffening_domain.root_over_a())
     # The root of a smooth function found by a bracketing solver at 30 digits.
     assert_close(u, U_STAR, rtol=1e-14, claim="sec10-stiffening-domain", call="findroot(indicator)")
     assert_true(
@@ -83,37 +76,40 @@ def test_stiffening_limit_is_the_root():
 
 # -- Table 1 -------------------------------------------------------------------
 
-_CELLS = {(c.v0, c.column): c for c in table1_cells()}
-
-# Measured (50 digits, see reference_impl.paper.table1_cells): these printed
-# cells do not match the computed value at the printed number of digits.
-_MISMATCH = {
-    ("0.99", "delta_max"): "computed 6.7069918 mm, printed 6.706989 (2.8 units of the last digit)",
-    ("0.99", "max_force"): "computed 10.0000284 N, printed 10.000023 (5.4 units of the last digit)",
-    ("0.99", "dt_safe"): "computed 9.8999719 ms, printed 9.899977 (5.1 units of the last digit)",
-    ("1.50", "dt_safe"): "computed 9.3151223 ms, printed 9.315123 (0.65 units of the last digit)",
-}
-
-
-def _cell_params():
-    for v in TABLE1_PRINTED:
-        for col in ("delta_max", "max_force", "dt_safe"):
-            marks = []
-            if (v, col) in _MISMATCH:
-                marks.append(pytest.mark.xfail(strict=True, reason=_MISMATCH[(v, col)]))
-            yield pytest.param(v, col, marks=marks, id=f"v0={v}-{col}")
+_COLUMNS = ("delta_max", "max_force", "dt_safe")
 
 
 @pytest.mark.claim("table1")
-@pytest.mark.parametrize("v0, column", list(_cell_params()))
+@pytest.mark.parametrize("v0", list(TABLE1_PRINTED))
+@pytest.mark.parametrize("column", _COLUMNS)
 def test_table1_cell_matches_printed_digits(v0, column):
-    cell = _CELLS[(v0, column)]
-    assert_true(
-        cell.match,
-        got=f"{cell.computed_rounded} {cell.unit} (computed {mpmath.nstr(cell.computed, 12)})",
-        should=f"{cell.printed} {cell.unit} as printed",
-        claim="table1",
-        call=f"table1_cells()[{v0}, {column}]",
+    """Each printed cell against the 50-digit recomputation of the claim module.
+
+    A mismatching cell is an expected failure whose reason is the measured cell
+    (computed, printed, difference in units of the last digit).
+    """
+    cell = table1.cells()[(v0, column)]
+    if cell.match:
+        return
+
+    def listed(m):
+        return any(c["v0"] == v0 and c["column"] == column for c in m.counterexample["cells"])
+
+    check_measurement(
+        table1.measure(),
+        expect="refuted",
+        real=listed,
+        call=f"table1.cells()[{v0}, {column}]",
+        reason=table1.describe(cell),
+    )
+
+
+@pytest.mark.claim("table1")
+def test_table1_measurement():
+    """The verdict the report prints: the recomputed table against the printed one."""
+    m = table1.measure()
+    check_measurement(
+        m, expect="refuted", real=lambda m: m.figures["mismatches"] > 0, call="table1.measure()"
     )
 
 
@@ -203,40 +199,34 @@ def test_fig1_transformed_energy_is_the_physical_energy():
     assert_close(H, E_phys, rtol=1e-14, claim="fig1", call="H_transformed vs physical energy")
 
 
-# Measured with scipy RK45 at the paper's tolerances (this environment): drift
-# 5.2e-13 (v0 = 0.50), 3.8e-13 (0.99), 2.4e-13 (1.50). The values depend on the
-# step sequence (they moved by ~50 % when the integrator's scaling changed), which
-# is the point: the printed bound is a property of one integrator run.
-_FIG1_DRIFT_ABOVE_CLAIM = {
-    0.50: "measured relative drift 5.2e-13 > 3e-13 with RK45 (ode45) at RelTol = AbsTol = 1e-13",
-    0.99: "measured relative drift 3.8e-13 > 3e-13 with RK45 (ode45) at RelTol = AbsTol = 1e-13",
-}
+def _fig1_claim_run(v0, C0):
+    """The claim module's run (cached with the measurement) for this speed and C0."""
+    return next(r for r in fig1.runs() if r["v0"] == v0 and r["C0"] == C0)
+
+
+def _printed_drift_test(v0, C0):
+    """Drift < 3e-13 as printed; above it: an expected failure described by the run."""
+    r = _fig1_claim_run(v0, C0)
+    if r["drift"] < FIG1["claimed_energy_error"]:
+        return
+    check_measurement(
+        fig1.measure(),
+        expect="refuted",
+        real=lambda m: r["drift"] >= m.figures["claimed"],
+        call=f"RK45 rtol=atol={fig1.RTOL:g} ellipsoid v0={v0} C0={C0}",
+        reason=fig1.describe_drift(r),
+    )
 
 
 @pytest.mark.claim("fig1")
-@pytest.mark.parametrize(
-    "v0",
-    [
-        pytest.param(
-            v,
-            marks=[pytest.mark.xfail(strict=True, reason=_FIG1_DRIFT_ABOVE_CLAIM[v])]
-            if v in _FIG1_DRIFT_ABOVE_CLAIM
-            else [],
-        )
-        for v in FIG1["velocities"]
-    ],
-)
+@pytest.mark.parametrize("v0", FIG1["velocities"])
 def test_fig1_conservative_drift_below_printed_bound(v0):
-    """The printed figure, literally: drift < 3e-13 with the paper's integrator settings."""
-    *_, H = _fig1_run(v0, 0.0)
-    drift = float(np.max(np.abs(H / H[0] - 1)))
-    assert_less(
-        drift,
-        FIG1["claimed_energy_error"],
-        claim="fig1",
-        call=f"RK45 rtol=atol=1e-13 ellipsoid v0={v0} C0=0",
-        what="relative energy drift",
-    )
+    """The printed figure, literally: drift < 3e-13 with the paper's integrator settings.
+
+    The drift depends on the step sequence (it moved by ~50 % when the
+    integrator's scaling changed): the printed bound is a property of one run.
+    """
+    _printed_drift_test(v0, 0.0)
 
 
 @pytest.mark.claim("fig1")
@@ -259,22 +249,30 @@ def test_fig1_conservative_drift_at_integrator_level(v0, method):
 
 @pytest.mark.claim("fig1")
 @pytest.mark.parametrize("v0", FIG1["velocities"])
-@pytest.mark.xfail(
-    strict=True,
-    reason="measured: with C0 = 0.5 the transformed energy is not "
-    "conserved, it decays to 0.1504 = e^2 of its initial value over the contact "
-    "(relative change 0.85 at every speed); 'conserved to < 3e-13' can only refer to "
-    "the C0 = 0 runs",
-)
 def test_fig1_dissipative_transformed_energy_conserved_as_printed(v0):
-    *_, H = _fig1_run(v0, FIG1["C0"][1])
-    drift = float(np.max(np.abs(H / H[0] - 1)))
-    assert_less(
-        drift,
-        FIG1["claimed_energy_error"],
-        claim="fig1",
-        call=f"v0={v0} C0=0.5",
-        what="relative energy drift",
+    """'Conserved to < 3e-13' read literally for the C0 = 0.5 runs too."""
+    _printed_drift_test(v0, FIG1["C0"][1])
+
+
+@pytest.mark.claim("fig1")
+def test_fig1_measurement():
+    """The verdict the report prints, from reference_impl.claims.fig1."""
+    m = fig1.measure()
+    check_measurement(
+        m,
+        expect="refuted",
+        real=lambda m: all(r["drift"] >= m.figures["claimed"] for r in m.counterexample["runs"]),
+        call="fig1.measure()",
+    )
+
+
+@pytest.mark.claim("sec10-stiffening-domain")
+def test_sec10_measurement():
+    """The verdict the report prints, from reference_impl.claims.sec10_stiffening_domain."""
+    check_measurement(
+        sec10_stiffening_domain.measure(),
+        expect="verified",
+        call="sec10_stiffening_domain.measure()",
     )
 
 

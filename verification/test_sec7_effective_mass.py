@@ -28,29 +28,23 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from reference_impl import Ellipsoid, HarmonicMap, PowerLaw, Sphere
+from reference_impl.claims import sec7_effective_mass
+from reference_impl.claims._tolerances import IDENTITY_RTOL, MP_DERIV_DPS, ODE_RTOL, SLOPE_TOL
 from reference_impl.integrators.ivp import integrate_impact
-from verification.assertions import assert_close, assert_true
+from verification.assertions import assert_close, assert_true, check_measurement
 from verification.strategies import impacts, log_uniform, masses, power_laws, reference_constants
 
-# Tight DOP853 runs: global error below ~1e2 * rtol = 1e-10 over one contact.
-_ODE_RTOL = 1e-12
+_ODE_RTOL = ODE_RTOL  # shared: reference_impl/claims/_tolerances.py
 # Two independent ODE solutions (physical and (x, P)) compared at the same times:
 # each carries ~1e-10 global error, x amplifies q errors by n/2 <= 3: 1e-8 of x_max.
 _TWO_ODES_TOL = 1e-8
-# Identity evaluated two ways at one state: a dozen roundings plus the numeric
-# inverse q(x) (4 eps in q, amplified by |d ln M_eff / d ln q| <= |1 - p| + 2 < 10).
-_IDENTITY_RTOL = 1e-12
+_IDENTITY_RTOL = IDENTITY_RTOL  # shared: reference_impl/claims/_tolerances.py
 # Energy along the ODE path (integrator only): global error ~1e-10 in q and v.
 _ENERGY_RTOL = 1e-9
-# mpmath working precision and relative central-difference step for dx/dq: the
-# truncation error ~ step^2 = 1e-30 and the cancellation ~ 10^-50 / step = 1e-35
-# are both far below float64 round-off.
-_MP_DPS = 50
+_MP_DPS = MP_DERIV_DPS  # shared: reference_impl/claims/_tolerances.py
+# Relative central-difference step for dx/dq at _MP_DPS digits (see MP_DERIV_DPS).
 _MP_REL_STEP = mpmath.mpf("1e-15")
-# Log-log slope from exact power functions: polyfit of ~60 points, round-off of
-# log values ~1e-16 times a conditioning of ~1e2: 1e-10 is generous but still
-# 8 decades below the smallest slope tested as "non-constant".
-_SLOPE_ATOL = 1e-10
+_SLOPE_ATOL = SLOPE_TOL  # shared: reference_impl/claims/_tolerances.py
 # A relative variation of M_eff is "measurable" above 1e3 times the identity
 # tolerance.
 _MEASURABLE = 1e3 * _IDENTITY_RTOL
@@ -276,4 +270,12 @@ def test_effective_mass_not_constant_otherwise(pot, q_hi):
         should=f"> {_MEASURABLE:.0e} (non-constant)",
         claim="sec7-effective-mass",
         call=f"effective_mass over x in [1e-3, 1] x({q_hi}) for {pot!r}",
+    )
+
+
+@pytest.mark.claim(sec7_effective_mass.ID)
+def test_sec7_effective_mass_measurement():
+    """The verdict the report prints for section 7, from reference_impl.claims.sec7_effective_mass."""
+    check_measurement(
+        sec7_effective_mass.measure(), expect="verified", call="sec7_effective_mass.measure()"
     )

@@ -22,25 +22,25 @@ from reference_impl import (
     restitution_from_zeta,
     tsuji_coefficient,
 )
+from reference_impl.claims import sec9_power_law
+from reference_impl.claims._tolerances import (
+    E_ATOL,
+    E_RTOL,
+    MEASURABLE_FACTOR,
+    ODE_RTOL,
+    ROUNDOFF_TOL,
+    SLOPE_TOL,
+)
 from reference_impl.integrators.ivp import integrate_impact
-from verification.assertions import assert_close, assert_less, assert_true
+from verification.assertions import assert_close, assert_less, assert_true, check_measurement
 from verification.strategies import log_uniform, masses, power_laws, reference_constants
 
-# Log-log slope of an exact power function by least squares over 60 points: the
-# logs carry ~1e-16 relative round-off, the fit a conditioning of ~1e2 over six
-# decades of q: 1e-10 is far above that and far below any physical difference.
-_SLOPE_ATOL = 1e-10
-# Same function evaluated by two formulas (UniversalDamping.C through HarmonicMap,
-# and c q^e): a dozen roundings, K- and M-factors that cancel analytically.
-_ROUNDOFF_RTOL = 1e-13
-# Tight DOP853 runs: global error below ~1e2 * rtol = 1e-10.
-_ODE_RTOL = 1e-12
-# Restitution error bound |e - e_th| <= _E_ATOL + _E_RTOL e (v_out carries ~1e-10 v0
-# of global error; two decades of margin), as in test_sec8_damping.
-_E_ATOL = 1e-9
-_E_RTOL = 1e-8
-# "Measurably speed-dependent": a spread 1e3 times above that bound.
-_MEASURABLE_FACTOR = 1e3
+_SLOPE_ATOL = SLOPE_TOL  # shared: reference_impl/claims/_tolerances.py
+_ROUNDOFF_RTOL = ROUNDOFF_TOL  # shared: reference_impl/claims/_tolerances.py
+_ODE_RTOL = ODE_RTOL  # shared: reference_impl/claims/_tolerances.py
+_E_ATOL = E_ATOL  # shared: reference_impl/claims/_tolerances.py
+_E_RTOL = E_RTOL  # shared: reference_impl/claims/_tolerances.py
+_MEASURABLE_FACTOR = MEASURABLE_FACTOR  # shared: reference_impl/claims/_tolerances.py
 # Hertz case: force exponent, stiffness, mass, damping ratio, speeds over 3 decades.
 _HERTZ_P = 1.5
 _HERTZ = PowerLaw(k=1e6, p=_HERTZ_P)
@@ -197,3 +197,9 @@ def test_hertz_other_exponents_are_speed_dependent(exponent):
         claim="sec9-power-law",
         call=f"Hertz with C ~ q^{exponent} at v0 = {_SPEEDS}",
     )
+
+
+@pytest.mark.claim(sec9_power_law.ID)
+def test_sec9_power_law_measurement():
+    """The verdict the report prints for section 9, from reference_impl.claims.sec9_power_law."""
+    check_measurement(sec9_power_law.measure(), expect="verified", call="sec9_power_law.measure()")

@@ -12,13 +12,21 @@ scenes, and writes into ``out_dir``:
 
 Every number in the output is computed by the run that writes it; the only
 numbers typed in are the paper's own (`reference_impl.paper`) and the
-tolerances of the verdict rules (stated next to each verdict).
+tolerances of the verdict rules (stated next to each verdict). Each claim's
+verdict is its module's ``measure()`` (`reference_impl.claims`): the report
+loops over the registry and the tests assert on the same measurements.
+
+Nothing is written before the arguments are checked (`validate_report_args`)
+and the provenance is taken; the report is written into a temporary directory
+beside ``out_dir`` and swapped in only when complete, so an error or Ctrl-C
+leaves the previous report intact.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import json
+import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -26,8 +34,10 @@ from pathlib import Path
 from ..claims import CLAIMS, VERDICTS
 from ..dtcrit_map import coverage
 from ._common import claim_tests, jsonable, records
+from ._files import swap_in, validate_report_args
 
-__all__ = ["build_report", "quick_drops"]
+__all__ = ["build_report", "quick_drops", "validate_report_args"]
+
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
@@ -40,8 +50,11 @@ def quick_drops() -> list[str]:
 
     full, quick = cov(False), cov(True)
     gone_cases = [k for k in full if k not in quick]
-    fewer_speeds = [f"{k} ({len(quick[k])} of {len(full[k])} speeds)" for k in quick
-                    if k in full and len(quick[k]) < len(full[k])]
+    fewer_speeds = [
+        f"{k} ({len(quick[k])} of {len(full[k])} speeds)"
+        for k in quick
+        if k in full and len(quick[k]) < len(full[k])
+    ]
     kept_rtols = set(IVP_RTOLS[::2])
     kept_steps = set(VERLET_STEPS[::2])
     from ._wp import QUICK_SKIP
@@ -106,14 +119,20 @@ def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
     return {"result": result_to_dict(result), "figure": name}
 
 
-def build_report(out_dir: str | Path = "reports", quick: bool = False,
-                 progress: Callable[[str], None] | None = None, adapters=()) -> dict:
+def build_report(
+    out_dir: str | Path = "reports",
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+    adapters=(),
+    readme: str | Path | None = "auto",
+) -> dict:
     """Run every verification and write the report; returns the results dict.
 
     Parameters
     ----------
     out_dir : str or Path
-        Output directory (created; existing report files are overwritten).
+        Output directory. It is replaced as a whole when the run completes
+        (entries of it that the report does not write are kept).
     quick : bool
         Smaller study (see `quick_drops`), for CI and ``hcv report --quick``.
     progress : callable, optional
@@ -122,24 +141,76 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
         Contact codes to benchmark (as for ``hcv bench``: a registered name,
         ``package.module:Class`` or ``cmd:COMMAND``); each scorecard becomes a
         section of the report, its JSON goes to ``bench/`` and its plot to ``figures/``.
+    readme : str, Path or None
+        README whose ``<!-- verdicts:start/end -->`` block is regenerated from this
+        run's results (`readme_table`). "auto": the checkout's README.md when
+        ``out_dir`` is the checkout's ``reports/``; None: leave any README alone.
 
     Returns
     -------
     dict
         The content of ``results.json`` (JSON-ready).
+
+    Raises
+    ------
+    HCVInputError
+        A bad argument (unknown adapter, unwritable or non-directory ``out_dir``),
+        before anything is run or written.
     """
-    from . import _dtmap, _fig1, _hardcases, _render, _verdicts, _wp
+    out, adapters = validate_report_args(out_dir, adapters)
+    readme_path = _readme_for(out, readme)
+    from ..claims import sec6_dt_safe_bound, thm2_harmonic
     from ._environment import environment
+
+    # Provenance first: the temporary directory must not make the checkout look dirty.
+    env = environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
+    with swap_in(out) as tmp:
+        results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound)
+    if readme_path is not None:
+        from .readme_table import rewrite_readme
+
+        readme_path.write_text(rewrite_readme(results, readme_path.read_text()))
+    return results
+
+
+def _readme_for(out: Path, readme) -> Path | None:
+    """The README to update (checked before anything runs), or None."""
+    from ..errors import HCVInputError
+    from .readme_table import ROOT, readme_block
+
+    if readme is None:
+        return None
+    if readme == "auto":
+        path = ROOT / "README.md"
+        if out != (ROOT / "reports").absolute() or not path.is_file():
+            return None
+        try:
+            readme_block(path.read_text())
+        except HCVInputError:  # a README without the verdict block is left alone
+            return None
+    else:
+        path = Path(readme)
+    try:
+        readme_block(path.read_text())
+    except OSError as exc:
+        raise HCVInputError(f"README {str(path)!r} cannot be read ({exc})") from None
+    if not os.access(path, os.W_OK):
+        raise HCVInputError(f"README {str(path)!r} is not writable")
+    return path
+
+
+def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
+    """Run everything and write the report into ``out`` (a fresh, empty directory)."""
+    from ..claims import fig1 as fig1_claim
+    from ..claims import sec10_stiffening_domain, table1
+    from . import _dtmap, _fig1, _hardcases, _render, _wp
 
     def say(text: str) -> None:
         if progress is not None:
             progress(text)
 
-    out = Path(out_dir)
     fig_dir = out / "figures"
     fig_dir.mkdir(parents=True, exist_ok=True)
-    for old in fig_dir.glob("*.png"):  # figures of an earlier run must not linger
-        old.unlink()
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
 
@@ -157,30 +228,22 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
     if background is not None:
         say("critical-step map: started in a second process")
 
+    measured: dict = {}
     try:
-        verdicts: dict[str, dict] = {}
-        verdicts["thm1-period"] = timed("Theorem 1 at 40 digits", _verdicts.thm1_period)
-        verdicts["thm2-harmonic"] = timed("Theorem 2: x(τ) of integrated trajectories",
-                                          _verdicts.thm2_harmonic)
-        verdicts["km-cancellation"] = timed("K, M cancellation", _verdicts.km_cancellation)
-        verdicts["thm3-damping-iff"] = timed("Theorem 3: restitution against impact speed",
-                                             _verdicts.thm3_damping)
-        verdicts["sec7-effective-mass"] = timed("section 7: effective mass",
-                                                _verdicts.sec7_effective_mass)
-        verdicts["sec9-power-law"] = timed("section 9: power laws", _verdicts.sec9_power_law)
-        verdicts["sec10-stiffening-domain"] = timed("section 10: stiffening domain",
-                                                    _verdicts.sec10_stiffening)
-        verdicts["table1"], table1_rows = timed("Table 1 at 50 digits", _verdicts.table1)
-
-        fig1_runs = timed("Fig. 1: RK45 runs at RelTol = AbsTol = 1e-13", _fig1.run_fig1)
-        verdicts["fig1"] = _fig1.fig1_verdict(fig1_runs)
-        timed("Fig. 1: figure", _fig1.fig1_figure, fig1_runs, fig_dir / "fig1.png")
-
+        for c in CLAIMS:
+            if c.id != sec6.ID:  # section 6 is measured on the map below
+                measured[c.id] = timed(f"claim {c.id}", c.measure, quick)
+        timed("Fig. 1: figure", _fig1.fig1_figure, fig1_claim.runs(), fig_dir / "fig1.png")
         hard = timed("hard cases", _hardcases.run_hard_cases, quick, say)
         sweeps = timed("hard cases: sweeps", _hardcases.run_sweeps, quick, say)
-        u_star = float(verdicts["sec10-stiffening-domain"]["measured"]["root_over_a"])
-        timed("hard cases: figure", _hardcases.sweeps_figure, sweeps, fig_dir / "hard_cases.png",
-              u_star)
+        u_star = float(sec10_stiffening_domain.root_over_a())
+        timed(
+            "hard cases: figure",
+            _hardcases.sweeps_figure,
+            sweeps,
+            fig_dir / "hard_cases.png",
+            u_star,
+        )
     except BaseException:
         if background is not None:
             background[0].shutdown(wait=False, cancel_futures=True)
@@ -189,13 +252,15 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
     dmap = None
     if background is not None:
         try:
-            dmap = timed("critical-step map (waiting for the second process)", _finish_map,
-                         background)
+            dmap = timed(
+                "critical-step map (waiting for the second process)", _finish_map, background
+            )
         except Exception:  # a broken worker: measure here instead
             dmap = None
     if dmap is None:
         dmap = timed("critical-step map", _dtmap.run_map, quick, say)
-    verdicts["sec6-dt-safe-bound"] = _dtmap.sec6_verdict(dmap)
+    sec6.use_map(quick, dmap)
+    measured[sec6.ID] = sec6.measure(quick)
     timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")
     sens = timed("critical step against the criterion", _dtmap.run_sensitivity, quick)
 
@@ -205,50 +270,70 @@ def build_report(out_dir: str | Path = "reports", quick: bool = False,
     tests = claim_tests()
     claims = []
     for c in CLAIMS:
-        v = verdicts[c.id]
-        if v["verdict"] not in VERDICTS:
-            raise ValueError(f"claim {c.id}: verdict {v['verdict']!r} is not one of {VERDICTS}")
-        claims.append({"id": c.id, "section": c.section, "statement": c.statement,
-                       "verdict": v["verdict"], "evidence": v["evidence"], "rule": v["rule"],
-                       "tests": tests.get(c.id, []), "measured": v["measured"]})
+        m = measured[c.id]
+        if m.verdict not in VERDICTS:
+            raise ValueError(f"claim {c.id}: verdict {m.verdict!r} is not one of {VERDICTS}")
+        d = m.to_dict()
+        claims.append(
+            {
+                "id": c.id,
+                "section": c.section,
+                "statement": c.statement,
+                "verdict": d["verdict"],
+                "evidence": d["evidence"],
+                "rule": d["rule"],
+                "tests": tests.get(c.id, []),
+                "measured": d["measured"],
+                "counterexample": d["counterexample"],
+                "headline": d["headline"],
+            }
+        )
 
-    bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir)
-             for spec in adapters]
+    bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir) for spec in adapters]
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures += [b["figure"] for b in bench if b.get("figure")]
     results = {
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
-                 "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
+        "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
         "generated_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "mode": "quick" if quick else "full",
         "quick_drops": quick_drops() if quick else [],
         "claims": claims,
-        "table1": table1_rows,
-        "fig1": {"runs": _fig1.fig1_table(fig1_runs), "rtol": _fig1.RTOL, "atol": _fig1.ATOL,
-                 "figure": "figures/fig1.png"},
+        "table1": measured[table1.ID].figures["rows"],
+        "fig1": {
+            "runs": fig1_claim.table(),
+            "rtol": fig1_claim.RTOL,
+            "atol": fig1_claim.ATOL,
+            "figure": "figures/fig1.png",
+        },
         "dt_crit_map": records(dmap),
         "dt_crit_sensitivity": records(sens),
-        "dt_crit_map_coverage": [{"family": c.family, "case": c.label, "m": c.m,
-                                  "velocities": list(c.velocities)} for c in coverage(quick)],
+        "dt_crit_map_coverage": [
+            {"family": c.family, "case": c.label, "m": c.m, "velocities": list(c.velocities)}
+            for c in coverage(quick)
+        ],
         "work_precision": records(wp),
         "work_precision_summary": [jsonable(r) for r in _wp.wp_summary(wp)],
         "work_precision_settings": _wp.settings_text(quick),
         "work_precision_scenes": _scene_info(),
-        "hard_cases": {"cases": [jsonable(r) for r in hard],
-                       "sweeps": jsonable(sweeps),
-                       "accuracy": _hardcases.lost_accuracy(hard, sweeps["speed"] + sweeps["depth"])},
+        "hard_cases": {
+            "cases": [jsonable(r) for r in hard],
+            "sweeps": jsonable(sweeps),
+            "accuracy": _hardcases.lost_accuracy(hard, sweeps["speed"] + sweeps["depth"]),
+        },
         "figures": [f"figures/{n}" for n in figures],
         "figure_captions": {n: cap for n, cap in wp_figs},
-        "environment": environment({"thm2_random_KM": _verdicts.SEED_KM}),
+        "environment": env,
         "adapters": [b["result"] for b in bench],
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings
     say("writing index.html, index.md, results.json")
     results = jsonable(results)
-    (out / "results.json").write_text(json.dumps(results, indent=1, allow_nan=False,
-                                                  ensure_ascii=False) + "\n")
+    (out / "results.json").write_text(
+        json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
+    )
     (out / "index.md").write_text(_render.markdown(results))
     (out / "index.html").write_text(_render.html_page(results, fig_dir))
     return results

@@ -6,8 +6,16 @@ import os
 
 from ..provenance import machine_info
 
-PACKAGES = ("numpy", "scipy", "mpmath", "numba", "pandas", "matplotlib", "sympy",
-            "hidden-harmonic-verification")
+PACKAGES = (
+    "numpy",
+    "scipy",
+    "mpmath",
+    "numba",
+    "pandas",
+    "matplotlib",
+    "sympy",
+    "hidden-harmonic-verification",
+)
 
 
 def environment(seeds: dict) -> dict:

@@ -51,8 +51,13 @@ def _cases(quick: bool):
         ("Hertz, very soft k = 1", PowerLaw(1.0, 1.5), _HERTZ_M, 1.0, 0.0),
         ("Hertz k = 1e9, v0 = 1e-6 m/s", PowerLaw(1e9, 1.5), _HERTZ_M, 1e-6, 0.0),
         ("Hertz k = 1e9, v0 = 1e3 m/s", PowerLaw(1e9, 1.5), _HERTZ_M, 1e3, 0.0),
-        ("ellipsoid, very stiff Kn = 1e12", Ellipsoid(0.015, 0.008, 0.008, 1e12, 0.5), m, 0.99,
-         0.0),
+        (
+            "ellipsoid, very stiff Kn = 1e12",
+            Ellipsoid(0.015, 0.008, 0.008, 1e12, 0.5),
+            m,
+            0.99,
+            0.0,
+        ),
         ("ellipsoid, very soft Kn = 1e6", Ellipsoid(0.015, 0.008, 0.008, 1e6, 0.5), m, 0.99, 0.0),
         ("softening p = 0.5 (k = 1e3)", PowerLaw(1e3, 0.5), m, 1.0, 0.0),
         ("softening p = 0.5, ζ = 0.3", PowerLaw(1e3, 0.5), m, 1.0, 0.3),
@@ -108,8 +113,11 @@ def measure_case(label, pot, m, v0, zeta, *, search: bool = True) -> dict:
         return row
     try:
         s = dt_safe(pot, m, v0)
-        row.update(dt_safe=s.dt_safe, geometry=s.geometry,
-                   shortcut_over_safe=s.dt_shortcut / s.dt_safe if s.dt_safe > 0 else math.inf)
+        row.update(
+            dt_safe=s.dt_safe,
+            geometry=s.geometry,
+            shortcut_over_safe=s.dt_shortcut / s.dt_safe if s.dt_safe > 0 else math.inf,
+        )
     except HCVInputError as e:
         row["notes"].append(f"dt_safe: {_err(e)}")
     if search:
@@ -163,13 +171,20 @@ def run_sweeps(quick: bool, progress=None) -> dict:
         progress("hard cases: sweeps")
     n = 5 if quick else 10
     hertz = PowerLaw(1e9, 1.5)
-    speed = [measure_case(f"v0={v:.3g}", hertz, _HERTZ_M, float(v), 0.0, search=False)
-             for v in np.logspace(-6, 3, n)]
+    speed = [
+        measure_case(f"v0={v:.3g}", hertz, _HERTZ_M, float(v), 0.0, search=False)
+        for v in np.logspace(-6, 3, n)
+    ]
     ell = paper_ellipsoid()
-    fracs = ([0.05, 0.447, 0.9, 1.5, 1.999] if quick else
-             [0.01, 0.05, 0.2, 0.447, 0.7, 0.8, 1.0, 1.3, 1.6, 1.9, 1.99, 1.999, 1.9999])
-    depth = [measure_case(f"q_max={f:g}a", ell, PAPER_MASS, _v_for_depth(ell, PAPER_MASS, f), 0.0)
-             for f in fracs]
+    fracs = (
+        [0.05, 0.447, 0.9, 1.5, 1.999]
+        if quick
+        else [0.01, 0.05, 0.2, 0.447, 0.7, 0.8, 1.0, 1.3, 1.6, 1.9, 1.99, 1.999, 1.9999]
+    )
+    depth = [
+        measure_case(f"q_max={f:g}a", ell, PAPER_MASS, _v_for_depth(ell, PAPER_MASS, f), 0.0)
+        for f in fracs
+    ]
     return {"speed": speed, "depth": depth}
 
 
@@ -183,12 +198,12 @@ def sweeps_figure(sweeps: dict, path, u_star: float) -> None:
     floor = 1e-17
 
     def err_lines(ax, rows, x):
-        for key, lab, st in (("exact_err_t_c", "exact solver: t_c", "k*-"),
-                             ("exact_quadrature_estimate", "exact solver: own error estimate",
-                              "k:"),
-                             ("ode_err_t_c", f"DOP853 rtol {g(_ODE_RTOL)}: t_c", "o-"),
-                             ("verlet_err_t_c", f"Verlet {_VERLET_STEPS} steps/contact: t_c",
-                              "^-")):
+        for key, lab, st in (
+            ("exact_err_t_c", "exact solver: t_c", "k*-"),
+            ("exact_quadrature_estimate", "exact solver: own error estimate", "k:"),
+            ("ode_err_t_c", f"DOP853 rtol {g(_ODE_RTOL)}: t_c", "o-"),
+            ("verlet_err_t_c", f"Verlet {_VERLET_STEPS} steps/contact: t_c", "^-"),
+        ):
             y = np.array([r.get(key, math.nan) for r in rows], dtype=float)
             ax.loglog(x, np.maximum(y, floor), st, label=lab, ms=5)
         ax.set_ylabel("relative error (vs 25-digit mpmath)")
@@ -203,28 +218,44 @@ def sweeps_figure(sweeps: dict, path, u_star: float) -> None:
     err_lines(pb, dp, x)
     pb.set_xscale("linear")
     pb.axvline(u_star, color="0.4", ls="--", lw=1)
-    pb.text(u_star + 0.02, 0.02, f"{u_star:.4f} a", transform=pb.get_xaxis_transform(), fontsize=8.5)
-    pb.set(xlabel="maximum penetration q_max / a", xlim=(0, 2.05),
-           title="(b) paper ellipsoid: depth up to 2a")
+    pb.text(
+        u_star + 0.02, 0.02, f"{u_star:.4f} a", transform=pb.get_xaxis_transform(), fontsize=8.5
+    )
+    pb.set(
+        xlabel="maximum penetration q_max / a",
+        xlim=(0, 2.05),
+        title="(b) paper ellipsoid: depth up to 2a",
+    )
     for r in dp:
         if "dtcrit_over_rec" in r:
             r["_rec_over_safe"] = r["dtcrit_over_safe"] / r["dtcrit_over_rec"]
-    for key, lab, st in (("dtcrit_over_safe", "measured Δt_crit/Δt_safe (impact)", "o-"),
-                         ("shortcut_over_safe", "shortcut 2mv0/U'(q_max) / Δt_safe", "s--"),
-                         ("_rec_over_safe", "recommended Δt_rec/Δt_safe (impact)", "d:")):
+    for key, lab, st in (
+        ("dtcrit_over_safe", "measured Δt_crit/Δt_safe (impact)", "o-"),
+        ("shortcut_over_safe", "shortcut 2mv0/U'(q_max) / Δt_safe", "s--"),
+        ("_rec_over_safe", "recommended Δt_rec/Δt_safe (impact)", "d:"),
+    ):
         y = np.array([r.get(key, math.nan) for r in dp], dtype=float)
         pc.semilogy(x, y, st, label=lab, ms=5)
     for r in dp:
         r.pop("_rec_over_safe", None)
     pc.axhline(1.0, color="k", lw=1.4)
     pc.axvline(u_star, color="0.4", ls="--", lw=1)
-    pc.text(u_star + 0.02, 0.02, f"{u_star:.4f} a", transform=pc.get_xaxis_transform(), fontsize=8.5)
-    pc.set(xlabel="maximum penetration q_max / a", ylabel="ratio", xlim=(0, 2.05),
-           title="(c) ellipsoid: bound, shortcut, Δt_rec")
+    pc.text(
+        u_star + 0.02, 0.02, f"{u_star:.4f} a", transform=pc.get_xaxis_transform(), fontsize=8.5
+    )
+    pc.set(
+        xlabel="maximum penetration q_max / a",
+        ylabel="ratio",
+        xlim=(0, 2.05),
+        title="(c) ellipsoid: bound, shortcut, Δt_rec",
+    )
     pc.legend(fontsize=8.5)
     pc.grid(True, alpha=0.3, which="both")
-    fig.suptitle("Hard cases: accuracy and the section 6 bound across scales "
-                 f"(errors below {g(floor)} drawn at {g(floor)})", fontsize=11.5)
+    fig.suptitle(
+        "Hard cases: accuracy and the section 6 bound across scales "
+        f"(errors below {g(floor)} drawn at {g(floor)})",
+        fontsize=11.5,
+    )
     fig.savefig(path)
 
 
@@ -245,32 +276,47 @@ def lost_accuracy(rows: list[dict], sweep_rows: list[dict] = ()) -> list[str]:
     ok_exact = [r for r in every if r.get("exact_err_t_c", math.inf) <= _EXACT_LOST]
     if ok_exact:
         worst = max(r["exact_err_t_c"] for r in ok_exact)
-        out.append(f"exact solver within {g(_EXACT_LOST)} of the 25-digit contact time on "
-                   f"{len(ok_exact)} of {len(every)} cases and sweep points (worst {g(worst, 2)})")
+        out.append(
+            f"exact solver within {g(_EXACT_LOST)} of the 25-digit contact time on "
+            f"{len(ok_exact)} of {len(every)} cases and sweep points (worst {g(worst, 2)})"
+        )
     for r in every:
         if r.get("exact_err_t_c", 0) > _EXACT_LOST:
-            out.append(f"exact solver loses accuracy: {r['case']}: t_c error "
-                       f"{g(r['exact_err_t_c'], 2)} (its own estimate "
-                       f"{g(r.get('exact_quadrature_estimate'), 2)})")
+            out.append(
+                f"exact solver loses accuracy: {r['case']}: t_c error "
+                f"{g(r['exact_err_t_c'], 2)} (its own estimate "
+                f"{g(r.get('exact_quadrature_estimate'), 2)})"
+            )
     for r in every:
         if r.get("ode_err_t_c", 0) > _ODE_LOST:
-            out.append(f"DOP853 rtol {g(_ODE_RTOL)} loses accuracy: {r['case']}: t_c error "
-                       f"{g(r['ode_err_t_c'], 2)} ({r.get('ode_nfev')} evaluations)")
+            out.append(
+                f"DOP853 rtol {g(_ODE_RTOL)} loses accuracy: {r['case']}: t_c error "
+                f"{g(r['ode_err_t_c'], 2)} ({r.get('ode_nfev')} evaluations)"
+            )
     for r in rows:
         if r.get("dt_safe") == 0:
-            out.append(f"Δt_safe = 0 (degenerate bound): {r['case']}"
-                       + (f"; measured Δt_crit is finite, recommended step margin "
-                          f"Δt_crit/Δt_rec = {r['dtcrit_over_rec']:.2f}"
-                          if "dtcrit_over_rec" in r else ""))
+            out.append(
+                f"Δt_safe = 0 (degenerate bound): {r['case']}"
+                + (
+                    f"; measured Δt_crit is finite, recommended step margin "
+                    f"Δt_crit/Δt_rec = {r['dtcrit_over_rec']:.2f}"
+                    if "dtcrit_over_rec" in r
+                    else ""
+                )
+            )
     for r in rows:
         if r.get("geometry") == "mixed" and r.get("shortcut_over_safe", 1) > 1 + 1e-9:
-            out.append(f"beyond the stiffening domain: {r['case']}: the shortcut 2 m v0/U'(q_max) "
-                       f"is {r['shortcut_over_safe']:.4g} × Δt_safe (not a bound); measured "
-                       f"Δt_crit/Δt_safe = {g(r.get('dtcrit_over_safe'))}")
+            out.append(
+                f"beyond the stiffening domain: {r['case']}: the shortcut 2 m v0/U'(q_max) "
+                f"is {r['shortcut_over_safe']:.4g} × Δt_safe (not a bound); measured "
+                f"Δt_crit/Δt_safe = {g(r.get('dtcrit_over_safe'))}"
+            )
     for r in every:
         if r.get("dtcrit_over_rec", math.inf) <= 1:
-            out.append(f"the recommended step fails: {r['case']}: Δt_crit/Δt_rec = "
-                       f"{r['dtcrit_over_rec']:.3g}")
+            out.append(
+                f"the recommended step fails: {r['case']}: Δt_crit/Δt_rec = "
+                f"{r['dtcrit_over_rec']:.3g}"
+            )
     for r in rows:
         if math.isnan(r.get("q_max", math.nan)):
             out.append(f"{r['case']}: {'; '.join(r['notes'])}")

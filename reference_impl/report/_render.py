@@ -46,8 +46,11 @@ def DETAILS(summary, blocks):
 
 
 def _num(x, d=4):
-    return g(x, d) if not isinstance(x, (bool, str)) else ("yes" if x is True else
-                                                            "no" if x is False else x)
+    return (
+        g(x, d)
+        if not isinstance(x, (bool, str))
+        else ("yes" if x is True else "no" if x is False else x)
+    )
 
 
 # ----------------------------------------------------------------------------------
@@ -58,12 +61,14 @@ def _header(r) -> list:
     commit = env.get("git_commit") or "unknown"
     dirty = " (with uncommitted changes)" if env.get("git_dirty") else ""
     blocks = [
-        P(f"Generated {r['generated_utc']} by `hcv report`{' --quick' if r['mode'] == 'quick' else ''}"
-          f" in {r['timings_seconds']['total']:.1f} s on {env['cpu_count']} CPU(s); commit "
-          f"{commit[:12]}{dirty}. Every result below was computed by this run. Numbers typed in "
-          f"are inputs only: the paper's data (Table 1 as printed, the Fig. 1 settings, "
-          f"0.735 a, 3e-13), the parameters of the scenes and cases, and the tolerances of the "
-          f"verdict rules, which are stated with each verdict."),
+        P(
+            f"Generated {r['generated_utc']} by `hcv report`{' --quick' if r['mode'] == 'quick' else ''}"
+            f" in {r['timings_seconds']['total']:.1f} s on {env['cpu_count']} CPU(s); commit "
+            f"{commit[:12]}{dirty}. Every result below was computed by this run. Numbers typed in "
+            f"are inputs only: the paper's data (Table 1 as printed, the Fig. 1 settings, "
+            f"0.735 a, 3e-13), the parameters of the scenes and cases, and the tolerances of the "
+            f"verdict rules, which are stated with each verdict."
+        ),
     ]
     if r["mode"] == "quick":
         blocks.append(P("Quick mode: this report leaves out part of the study:", "warn"))
@@ -73,28 +78,67 @@ def _header(r) -> list:
     return blocks
 
 
+def _tests_cell(tests: list[str]) -> str:
+    """``file::test`` names grouped by file: "test_sec4_action.py (5)"."""
+    per_file: dict[str, int] = {}
+    for t in tests:
+        f = t.split("::")[0]
+        per_file[f] = per_file.get(f, 0) + 1
+    return ", ".join(f"{f} ({n})" for f, n in per_file.items()) or "–"
+
+
 def _ledger(r) -> list:
     rows, flags = [], []
     for c in r["claims"]:
-        rows.append([c["id"], c["section"], VERDICT_MARK[c["verdict"]],
-                     c["evidence"], ", ".join(c["tests"]) or "–"])
-        flags.append([None, None, "good" if c["verdict"] == "verified" else
-                      "bad" if c["verdict"] == "refuted" else "warn", None, None])
-    statements = UL([f"{c['id']} ({c['section']}): {c['statement']} Rule: {c['rule']}."
-                     for c in r["claims"]])
-    return [H(2, "1. Claims ledger", "claims"),
-            T(["claim", "paper section", "verdict", "evidence (measured in this run)", "tests"],
-              rows, flags, cls="ledger"),
-            DETAILS("The claims as the paper states them, and the rule that decided each verdict",
-                    [statements])]
+        rows.append(
+            [
+                c["id"],
+                c["section"],
+                VERDICT_MARK[c["verdict"]],
+                c["evidence"],
+                _tests_cell(c["tests"]),
+            ]
+        )
+        flags.append(
+            [
+                None,
+                None,
+                "good"
+                if c["verdict"] == "verified"
+                else "bad"
+                if c["verdict"] == "refuted"
+                else "warn",
+                None,
+                None,
+            ]
+        )
+    statements = UL(
+        [f"{c['id']} ({c['section']}): {c['statement']} Rule: {c['rule']}." for c in r["claims"]]
+    )
+    return [
+        H(2, "1. Claims ledger", "claims"),
+        T(
+            ["claim", "paper section", "verdict", "evidence (measured in this run)", "tests"],
+            rows,
+            flags,
+            cls="ledger",
+        ),
+        DETAILS(
+            "The claims as the paper states them, and the rule that decided each verdict",
+            [statements],
+        ),
+    ]
 
 
 def _table1(r) -> list:
     headers = ["v0 [m/s]"]
     for col in ("delta_max", "max_force", "dt_safe"):
         unit = r["table1"][0][col]["unit"]
-        headers += [f"{TABLE1_NAMES[col]} printed [{unit}]", f"{TABLE1_NAMES[col]} computed",
-                    "Δ [last digit]"]
+        headers += [
+            f"{TABLE1_NAMES[col]} printed [{unit}]",
+            f"{TABLE1_NAMES[col]} computed",
+            "Δ [last digit]",
+        ]
     rows, flags, bad = [], [], 0
     for row in r["table1"]:
         cells, fl = [row["v0"]], [None]
@@ -103,43 +147,84 @@ def _table1(r) -> list:
             ok = c["match"]
             bad += not ok
             mark = "" if ok else "✘ "
-            cells += [c["printed"], f"{mark}{c['computed_rounded']} ({c['computed']})",
-                      f"{c['difference_in_last_digit']:+.2f}"]
+            cells += [
+                c["printed"],
+                f"{mark}{c['computed_rounded']} ({c['computed']})",
+                f"{c['difference_in_last_digit']:+.2f}",
+            ]
             fl += [None if ok else "bad", "good" if ok else "bad", None if ok else "bad"]
         rows.append(cells)
         flags.append(fl)
-    return [H(2, "2. Table 1 reproduced", "table1"),
-            P("The paper's ellipsoid (a = 0.015 m, b = c = 0.008 m, m = 0.05 kg, Kn = 1e8, "
-              "α = 0.5) recomputed at 50 digits: δmax solves U(δ) = m v0²/2, the force is "
-              "U'(δmax), Δt_safe = 2 m v0 / U'(δmax). Computed values are rounded to the printed "
-              "number of digits (15 significant digits in parentheses); Δ is computed − printed "
-              "in units of the printed last digit. Cells marked ✘ do not match."),
-            T(headers, rows, flags),
-            P(next(c["evidence"] for c in r["claims"] if c["id"] == "table1")
-              + f" ({bad} cells flagged above).")]
+    return [
+        H(2, "2. Table 1 reproduced", "table1"),
+        P(
+            "The paper's ellipsoid (a = 0.015 m, b = c = 0.008 m, m = 0.05 kg, Kn = 1e8, "
+            "α = 0.5) recomputed at 50 digits: δmax solves U(δ) = m v0²/2, the force is "
+            "U'(δmax), Δt_safe = 2 m v0 / U'(δmax). Computed values are rounded to the printed "
+            "number of digits (15 significant digits in parentheses); Δ is computed − printed "
+            "in units of the printed last digit. Cells marked ✘ do not match."
+        ),
+        T(headers, rows, flags),
+        P(
+            next(c["evidence"] for c in r["claims"] if c["id"] == "table1")
+            + f" ({bad} cells flagged above)."
+        ),
+    ]
 
 
 def _fig1(r) -> list:
     f = r["fig1"]
-    rows = [[_num(x["v0"], 3), _num(x["C0"]), _num(x["zeta"]), str(x["steps"]),
-             _num(x["drift"], 3), _num(x["H_end_over_H0"], 5), _num(x["restitution"], 6),
-             _num(x["restitution_theory"], 6), _num(x["identity_err"], 2),
-             _num(x["exact_dev"], 2)] for x in f["runs"]]
+    rows = [
+        [
+            _num(x["v0"], 3),
+            _num(x["C0"]),
+            _num(x["zeta"]),
+            str(x["steps"]),
+            _num(x["drift"], 3),
+            _num(x["H_end_over_H0"], 5),
+            _num(x["restitution"], 6),
+            _num(x["restitution_theory"], 6),
+            _num(x["identity_err"], 2),
+            _num(x["exact_dev"], 2),
+        ]
+        for x in f["runs"]
+    ]
     claimed = next(c for c in r["claims"] if c["id"] == "fig1")["measured"]["claimed"]
-    flags = [[None] * 4 + ["bad" if x["drift"] >= claimed else "good"] + [None] * 5
-             for x in f["runs"]]
-    return [H(2, "3. Fig. 1 regenerated", "fig1"),
-            P(f"Ellipsoid, α = 0.5, Kn = 1e8, K = 1, M = 0.75; C0 = 0 dashed and 0.5 solid; "
-              f"v0 = 0.50, 0.99, 1.50 m/s; physical ODE integrated with RK45 (Dormand–Prince "
-              f"5(4), as ode45) at RelTol = {g(f['rtol'])}, AbsTol = {g(f['atol'])}, with τ as "
-              f"an extra state. Panel (d) is not in the paper: the measured drift of "
-              f"H = M x'²/2 + K x²/2 at the solver's steps."),
-            IMG("fig1.png", "Fig. 1: (a) physical phase space, (b) transformed phase space, "
-                            "(c) time series, (d) transformed-energy drift (C0 = 0)."),
-            T(["v0 [m/s]", "C0", "ζ = C0/(2√(KM))", "RK45 steps", "max |H/H0 − 1|",
-               "H_end/H0", "e measured", "e = exp(−πζ/√(1−ζ²))", "|H/E_phys − 1|",
-               "max |x − x_exact(τ)| / amplitude"], rows, flags),
-            P(next(c["evidence"] for c in r["claims"] if c["id"] == "fig1"))]
+    flags = [
+        [None] * 4 + ["bad" if x["drift"] >= claimed else "good"] + [None] * 5 for x in f["runs"]
+    ]
+    return [
+        H(2, "3. Fig. 1 regenerated", "fig1"),
+        P(
+            f"Ellipsoid, α = 0.5, Kn = 1e8, K = 1, M = 0.75; C0 = 0 dashed and 0.5 solid; "
+            f"v0 = 0.50, 0.99, 1.50 m/s; physical ODE integrated with RK45 (Dormand–Prince "
+            f"5(4), as ode45) at RelTol = {g(f['rtol'])}, AbsTol = {g(f['atol'])}, with τ as "
+            f"an extra state. Panel (d) is not in the paper: the measured drift of "
+            f"H = M x'²/2 + K x²/2 at the solver's steps."
+        ),
+        IMG(
+            "fig1.png",
+            "Fig. 1: (a) physical phase space, (b) transformed phase space, "
+            "(c) time series, (d) transformed-energy drift (C0 = 0).",
+        ),
+        T(
+            [
+                "v0 [m/s]",
+                "C0",
+                "ζ = C0/(2√(KM))",
+                "RK45 steps",
+                "max |H/H0 − 1|",
+                "H_end/H0",
+                "e measured",
+                "e = exp(−πζ/√(1−ζ²))",
+                "|H/E_phys − 1|",
+                "max |x − x_exact(τ)| / amplitude",
+            ],
+            rows,
+            flags,
+        ),
+        P(next(c["evidence"] for c in r["claims"] if c["id"] == "fig1")),
+    ]
 
 
 def _dtmap(r) -> list:
@@ -155,51 +240,121 @@ def _dtmap(r) -> list:
         fails = [x for x in usable if not x["holds"]]
         ratios = [x["ratio"] for x in usable if isinstance(x["ratio"], float)]
         rec = [x["recommended_ratio"] for x in xs if isinstance(x["recommended_ratio"], float)]
-        summ.append([scene, str(len(xs)), str(len(xs) - len(usable)),
-                     f"{len(fails)}/{len(usable)}", _num(min(ratios), 4) if ratios else "–",
-                     _num(max(ratios), 4) if ratios else "–", _num(min(rec), 3) if rec else "–"])
-    full = [[x["case"], _num(x["v0"], 3), x["scene"], x["geometry"], _num(x["dt_safe"]),
-             _num(x["dt_crit"]), _num(x["ratio"], 4), "yes" if x["holds"] else "NO",
-             _num(x["recommended_dt"]), _num(x["recommended_ratio"], 3),
-             x["counterexample_status"] or ""] for x in rows]
-    fflags = [[None] * 6 + ["bad" if not x["holds"] and not x["degenerate"] else None,
-                            "bad" if not x["holds"] else "good", None,
-                            "bad" if isinstance(x["recommended_ratio"], float)
-                            and x["recommended_ratio"] <= 1 else None, None] for x in rows]
+        summ.append(
+            [
+                scene,
+                str(len(xs)),
+                str(len(xs) - len(usable)),
+                f"{len(fails)}/{len(usable)}",
+                _num(min(ratios), 4) if ratios else "–",
+                _num(max(ratios), 4) if ratios else "–",
+                _num(min(rec), 3) if rec else "–",
+            ]
+        )
+    full = [
+        [
+            x["case"],
+            _num(x["v0"], 3),
+            x["scene"],
+            x["geometry"],
+            _num(x["dt_safe"]),
+            _num(x["dt_crit"]),
+            _num(x["ratio"], 4),
+            "yes" if x["holds"] else "NO",
+            _num(x["recommended_dt"]),
+            _num(x["recommended_ratio"], 3),
+            x["counterexample_status"] or "",
+        ]
+        for x in rows
+    ]
+    fflags = [
+        [None] * 6
+        + [
+            "bad" if not x["holds"] and not x["degenerate"] else None,
+            "bad" if not x["holds"] else "good",
+            None,
+            "bad"
+            if isinstance(x["recommended_ratio"], float) and x["recommended_ratio"] <= 1
+            else None,
+            None,
+        ]
+        for x in rows
+    ]
     crit = sorted({x["criterion"] for x in rows})
-    return [H(2, "4. Critical-step map", "dtcrit"),
-            P("Δt_crit is the smallest step at which velocity Verlet fails (searched on a grid and "
-              "refined to 0.1 % of Δt_safe), for one impact (`impact`), a particle oscillating "
-              "through a two-sided contact U(|q|) (`two-sided`) and repeated impacts between two "
-              "walls (`two-walls`). Criteria: " + "; ".join(crit) + "."),
-            IMG("dt_crit_map.png", "Δt_crit/Δt_safe against p for each scene, with the bound's "
-                                   "line (1) and the recommended corrected step (dashed/hollow)."),
-            P(describe_recommendation()),
-            T(["scene", "cases", "Δt_safe = 0 (degenerate)", "bound fails", "min Δt_crit/Δt_safe",
-               "max Δt_crit/Δt_safe", "min Δt_crit/Δt_rec"], summ),
-            P(next(c["evidence"] for c in r["claims"] if c["id"] == "sec6-dt-safe-bound")),
-            *_sensitivity(r),
-            DETAILS(f"All {len(rows)} rows of the map (times in s)",
-                    [T(["case", "v0", "scene", "geometry", "Δt_safe", "Δt_crit",
-                        "Δt_crit/Δt_safe", "bound holds", "Δt_rec", "Δt_crit/Δt_rec",
-                        "failure"], full, fflags)])]
+    return [
+        H(2, "4. Critical-step map", "dtcrit"),
+        P(
+            "Δt_crit is the smallest step at which velocity Verlet fails (searched on a grid and "
+            "refined to 0.1 % of Δt_safe), for one impact (`impact`), a particle oscillating "
+            "through a two-sided contact U(|q|) (`two-sided`) and repeated impacts between two "
+            "walls (`two-walls`). Criteria: " + "; ".join(crit) + "."
+        ),
+        IMG(
+            "dt_crit_map.png",
+            "Δt_crit/Δt_safe against p for each scene, with the bound's "
+            "line (1) and the recommended corrected step (dashed/hollow).",
+        ),
+        P(describe_recommendation()),
+        T(
+            [
+                "scene",
+                "cases",
+                "Δt_safe = 0 (degenerate)",
+                "bound fails",
+                "min Δt_crit/Δt_safe",
+                "max Δt_crit/Δt_safe",
+                "min Δt_crit/Δt_rec",
+            ],
+            summ,
+        ),
+        P(next(c["evidence"] for c in r["claims"] if c["id"] == "sec6-dt-safe-bound")),
+        *_sensitivity(r),
+        DETAILS(
+            f"All {len(rows)} rows of the map (times in s)",
+            [
+                T(
+                    [
+                        "case",
+                        "v0",
+                        "scene",
+                        "geometry",
+                        "Δt_safe",
+                        "Δt_crit",
+                        "Δt_crit/Δt_safe",
+                        "bound holds",
+                        "Δt_rec",
+                        "Δt_crit/Δt_rec",
+                        "failure",
+                    ],
+                    full,
+                    fflags,
+                )
+            ],
+        ),
+    ]
 
 
 def _sensitivity(r) -> list:
     rows = r.get("dt_crit_sensitivity") or []
     if not rows:
         return []
+
     def crit(x):
         if x["scene"] == "impact":
             return f"rebound gain > {x['tol']:g}"
         return f"E > {x['factor']:g} E0 within {int(x['n_steps']):,} steps"
+
     table = [[x["case"], x["scene"], crit(x), _num(x["ratio"], 4)] for x in rows]
-    return [P("How the measured Δt_crit/Δt_safe moves with the definition of \"unstable\" "
-              "(m = k = v0 = 1; ratios are scale-free for power laws). A runaway gives the same "
-              "ratio for every factor and N; the linear spring's bounded orbit peaks at "
-              "E0/(1 − (ωΔt/2)²), so its ratio follows √(1 − 1/F); a single impact's ratio is "
-              "an accuracy threshold and moves with the tolerance."),
-            T(["case", "scene", "criterion", "Δt_crit/Δt_safe"], table)]
+    return [
+        P(
+            'How the measured Δt_crit/Δt_safe moves with the definition of "unstable" '
+            "(m = k = v0 = 1; ratios are scale-free for power laws). A runaway gives the same "
+            "ratio for every factor and N; the linear spring's bounded orbit peaks at "
+            "E0/(1 − (ωΔt/2)²), so its ratio follows √(1 − 1/F); a single impact's ratio is "
+            "an accuracy threshold and moves with the tolerance."
+        ),
+        T(["case", "scene", "criterion", "Δt_crit/Δt_safe"], table),
+    ]
 
 
 def _wp(r) -> list:
@@ -209,12 +364,20 @@ def _wp(r) -> list:
     tkeys = [k for k in summ[0] if k.startswith("fastest to")]
     summ_rows = []
     for x in summ:
-        row = [x["scene"], x["method"], _num(x["best max error"], 2), x["at setting"],
-               _num(x["time at best [s]"], 3)]
+        row = [
+            x["scene"],
+            x["method"],
+            _num(x["best max error"], 2),
+            x["at setting"],
+            _num(x["time at best [s]"], 3),
+        ]
         for k in tkeys:
             t = x[k]
-            row += [t["setting"], _num(t["seconds"], 3),
-                    _num(t["exact_faster_by"], 3) if x["method"] != "exact" else "–"]
+            row += [
+                t["setting"],
+                _num(t["seconds"], 3),
+                _num(t["exact_faster_by"], 3) if x["method"] != "exact" else "–",
+            ]
         summ_rows.append(row)
     headers = ["scene", "method", "best max error", "at setting", "time [s]"]
     for k in tkeys:
@@ -222,31 +385,65 @@ def _wp(r) -> list:
         headers += [f"fastest setting to {tgt}", "time [s]", "time / exact solver time"]
     full = []
     for x in r["work_precision"]:
-        full.append([x["scene"], x["method"], x["setting"], _num(x.get("seconds"), 3)]
-                    + [_num(x.get(k), 2) for k in ("err_contact_time", "err_restitution",
-                                                    "err_max_penetration", "err_trajectory")]
-                    + [x.get("failure") or ""])
-    blocks = [H(2, "5. Speed against error", "wp"),
-              P("Work-precision diagrams as SciMLBenchmarks draws them: relative error against "
-                "wall time per impact (median of repeats in one process), against a 30-digit "
-                "mpmath ground truth (`workprecision.ground_truth`). Runs: "
-                + r["work_precision_settings"] + ". Velocity Verlet is the lane engine's "
-                "algorithm and force kernel (compiled), with the contact starting at a step "
-                "boundary and the dashpot on the half-step velocity; its trajectory is "
-                "interpolated by cubic Hermite from (q_n, v_n). Scenes:"),
-              UL([f"{k}: {v}" for k, v in scenes.items()])]
+        full.append(
+            [x["scene"], x["method"], x["setting"], _num(x.get("seconds"), 3)]
+            + [
+                _num(x.get(k), 2)
+                for k in (
+                    "err_contact_time",
+                    "err_restitution",
+                    "err_max_penetration",
+                    "err_trajectory",
+                )
+            ]
+            + [x.get("failure") or ""]
+        )
+    blocks = [
+        H(2, "5. Speed against error", "wp"),
+        P(
+            "Work-precision diagrams as SciMLBenchmarks draws them: relative error against "
+            "wall time per impact (median of repeats in one process), against a 30-digit "
+            "mpmath ground truth (`workprecision.ground_truth`). Runs: "
+            + r["work_precision_settings"]
+            + ". Velocity Verlet is the lane engine's "
+            "algorithm and force kernel (compiled), with the contact starting at a step "
+            "boundary and the dashpot on the half-step velocity; its trajectory is "
+            "interpolated by cubic Hermite from (q_n, v_n). Scenes:"
+        ),
+        UL([f"{k}: {v}" for k, v in scenes.items()]),
+    ]
     caps = r.get("figure_captions", {})
     for name in r["figures"]:
         n = name.split("/")[-1]
         if n.startswith("work_precision_"):
             blocks.append(IMG(n, caps.get(n, n)))
-    blocks += [P("Summary: per scene and method, the smallest maximum error over the four "
-                 "metrics, and the fastest setting whose four errors are all at or below each "
-                 "target (its wall time, and that time divided by the exact solver's)."),
-               T(headers, summ_rows),
-               DETAILS(f"All {len(full)} rows (relative errors)",
-                       [T(["scene", "method", "setting", "seconds", "t_c", "e", "q_max",
-                           "q(t)", "failure"], full)])]
+    blocks += [
+        P(
+            "Summary: per scene and method, the smallest maximum error over the four "
+            "metrics, and the fastest setting whose four errors are all at or below each "
+            "target (its wall time, and that time divided by the exact solver's)."
+        ),
+        T(headers, summ_rows),
+        DETAILS(
+            f"All {len(full)} rows (relative errors)",
+            [
+                T(
+                    [
+                        "scene",
+                        "method",
+                        "setting",
+                        "seconds",
+                        "t_c",
+                        "e",
+                        "q_max",
+                        "q(t)",
+                        "failure",
+                    ],
+                    full,
+                )
+            ],
+        ),
+    ]
     return blocks
 
 
@@ -255,28 +452,58 @@ def _hard(r) -> list:
     rows = []
     for x in hc["cases"]:
         qa = x.get("q_max_over_a")
-        rows.append([x["case"], _num(x.get("v0"), 3), _num(x.get("q_max"), 3)
-                     + (f" ({qa:.5g} a)" if isinstance(qa, float) else ""),
-                     x.get("geometry", "–"), _num(x.get("dt_safe"), 3),
-                     _num(x.get("shortcut_over_safe"), 4), _num(x.get("dtcrit_over_safe"), 3),
-                     _num(x.get("dtcrit_over_rec"), 3), _num(x.get("exact_err_t_c"), 2),
-                     _num(x.get("ode_err_t_c"), 2), _num(x.get("verlet_err_t_c"), 2),
-                     "; ".join(x.get("notes", []))])
-    return [H(2, "6. Hard cases", "hard"),
-            P("Each case runs every part of the suite: the section 6 bound (`dt_safe`, its "
-              "geometry class and the endpoint shortcut 2 m v0/U'(q_max)), the measured critical "
-              "step of one impact, the exact solver and scipy DOP853 (rtol 1e-12) against a "
-              "25-digit mpmath contact time (the physical integral for conservative contacts, "
-              "`solve_impact_mp` for damped ones), and velocity Verlet at 1000 steps per "
-              "contact. For a fixed shape the dimensionless problem depends on Kn and v0 only "
-              "through q_max/a, so the depth sweep covers the stiffness range as well."),
-            T(["case", "v0 [m/s]", "q_max [m]", "geometry", "Δt_safe [s]", "shortcut/Δt_safe",
-               "Δt_crit/Δt_safe", "Δt_crit/Δt_rec", "exact t_c err", "DOP853 t_c err",
-               "Verlet t_c err", "notes"], rows),
-            P("Where accuracy is lost (measured):"),
-            UL(hc["accuracy"]),
-            IMG("hard_cases.png", "Errors against impact speed (Hertz) and penetration depth "
-                                  "(ellipsoid), and the bound near 2a.")]
+        rows.append(
+            [
+                x["case"],
+                _num(x.get("v0"), 3),
+                _num(x.get("q_max"), 3) + (f" ({qa:.5g} a)" if isinstance(qa, float) else ""),
+                x.get("geometry", "–"),
+                _num(x.get("dt_safe"), 3),
+                _num(x.get("shortcut_over_safe"), 4),
+                _num(x.get("dtcrit_over_safe"), 3),
+                _num(x.get("dtcrit_over_rec"), 3),
+                _num(x.get("exact_err_t_c"), 2),
+                _num(x.get("ode_err_t_c"), 2),
+                _num(x.get("verlet_err_t_c"), 2),
+                "; ".join(x.get("notes", [])),
+            ]
+        )
+    return [
+        H(2, "6. Hard cases", "hard"),
+        P(
+            "Each case runs every part of the suite: the section 6 bound (`dt_safe`, its "
+            "geometry class and the endpoint shortcut 2 m v0/U'(q_max)), the measured critical "
+            "step of one impact, the exact solver and scipy DOP853 (rtol 1e-12) against a "
+            "25-digit mpmath contact time (the physical integral for conservative contacts, "
+            "`solve_impact_mp` for damped ones), and velocity Verlet at 1000 steps per "
+            "contact. For a fixed shape the dimensionless problem depends on Kn and v0 only "
+            "through q_max/a, so the depth sweep covers the stiffness range as well."
+        ),
+        T(
+            [
+                "case",
+                "v0 [m/s]",
+                "q_max [m]",
+                "geometry",
+                "Δt_safe [s]",
+                "shortcut/Δt_safe",
+                "Δt_crit/Δt_safe",
+                "Δt_crit/Δt_rec",
+                "exact t_c err",
+                "DOP853 t_c err",
+                "Verlet t_c err",
+                "notes",
+            ],
+            rows,
+        ),
+        P("Where accuracy is lost (measured):"),
+        UL(hc["accuracy"]),
+        IMG(
+            "hard_cases.png",
+            "Errors against impact speed (Hertz) and penetration depth "
+            "(ellipsoid), and the bound near 2a.",
+        ),
+    ]
 
 
 def _adapters(r) -> list:
@@ -284,30 +511,51 @@ def _adapters(r) -> list:
     docs = r.get("adapters") or []
     if not docs:
         return []
-    blocks = [H(2, "Contact codes benchmarked (hcv report --adapter)", "adapters"),
-              P("Each code ran the bench scenes through its adapter; every metric is compared "
-                "with the exact solution under the tolerance shown (`hcv bench`, "
-                "reference_impl/bench/tolerances.toml).")]
+    blocks = [
+        H(2, "Contact codes benchmarked (hcv report --adapter)", "adapters"),
+        P(
+            "Each code ran the bench scenes through its adapter; every metric is compared "
+            "with the exact solution under the tolerance shown (`hcv bench`, "
+            "reference_impl/bench/tolerances.toml)."
+        ),
+    ]
     for d in docs:
         s = d["summary"]
         rows, flags = [], []
         for m in d["metrics"]:
             if m.get("status") == "skip":
                 continue
-            rows.append([m.get("variant", ""), m.get("scene", ""), m.get("metric", ""),
-                         _num(m.get("value")), _num(m.get("reference")), str(m.get("tolerance")),
-                         m.get("status", ""),
-                         m.get("explanation", "") if m.get("status") == "fail" else ""])
+            rows.append(
+                [
+                    m.get("variant", ""),
+                    m.get("scene", ""),
+                    m.get("metric", ""),
+                    _num(m.get("value")),
+                    _num(m.get("reference")),
+                    str(m.get("tolerance")),
+                    m.get("status", ""),
+                    m.get("explanation", "") if m.get("status") == "fail" else "",
+                ]
+            )
             flags.append([None] * 6 + ["bad" if m.get("status") == "fail" else "good", None])
-        blocks += [H(3, f"{d['adapter']}: {s.get('pass', 0)} pass, {s.get('fail', 0)} fail, "
-                        f"{s.get('skip', 0)} skipped"),
-                   T(["variant", "scene", "metric", "value", "reference", "tolerance", "result",
-                      "why"], rows, flags)]
+        blocks += [
+            H(
+                3,
+                f"{d['adapter']}: {s.get('pass', 0)} pass, {s.get('fail', 0)} fail, "
+                f"{s.get('skip', 0)} skipped",
+            ),
+            T(
+                ["variant", "scene", "metric", "value", "reference", "tolerance", "result", "why"],
+                rows,
+                flags,
+            ),
+        ]
         safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(d["adapter"]))[:60]
         fig = f"bench_{safe}.png"
         if any(f.endswith(fig) for f in r.get("figures", [])):
-            blocks.append(IMG(fig, f"Speed against error of {d['adapter']} against the exact "
-                                   "solution."))
+            blocks.append(
+                IMG(fig, f"Speed against error of {d['adapter']} against the exact solution.")
+            )
     return blocks
 
 
@@ -317,19 +565,32 @@ def _env(r) -> list:
     rows += [[f"package {k}", str(v)] for k, v in env["packages"].items()]
     rows += [[f"seed {k}", str(v)] for k, v in env["seeds"].items()]
     trows = [[k, f"{v:.2f}"] for k, v in r["timings_seconds"].items()]
-    return [H(2, "7. Environment and provenance", "env"),
-            T(["item", "value"], rows),
-            P("Wall time of each step of this run (s):"),
-            T(["step", "seconds"], trows),
-            P("Reproduce: `hcv report` (full) or `hcv report --quick`; the machine-readable "
-              "results are in results.json next to this page. HYPOTHESIS_PROFILE and the "
-              "hypothesis seeds apply to the pytest suite; the report's only random draw is "
-              "the (K, M) pairs of the Theorem 2 check, with the seed above.")]
+    return [
+        H(2, "7. Environment and provenance", "env"),
+        T(["item", "value"], rows),
+        P("Wall time of each step of this run (s):"),
+        T(["step", "seconds"], trows),
+        P(
+            "Reproduce: `hcv report` (full) or `hcv report --quick`; the machine-readable "
+            "results are in results.json next to this page. HYPOTHESIS_PROFILE and the "
+            "hypothesis seeds apply to the pytest suite; the report's only random draw is "
+            "the (K, M) pairs of the Theorem 2 check, with the seed above."
+        ),
+    ]
 
 
 def _sections(r) -> list:
-    return (_header(r) + _ledger(r) + _table1(r) + _fig1(r) + _dtmap(r) + _wp(r) + _hard(r)
-            + _adapters(r) + _env(r))
+    return (
+        _header(r)
+        + _ledger(r)
+        + _table1(r)
+        + _fig1(r)
+        + _dtmap(r)
+        + _wp(r)
+        + _hard(r)
+        + _adapters(r)
+        + _env(r)
+    )
 
 
 # ----------------------------------------------------------------------------------
@@ -411,8 +672,11 @@ def _html(blocks, fig_dir: Path, out: list[str]) -> None:
         elif kind == "table":
             _, headers, rows, flags, cls = b
             c = f' class="{cls}"' if cls else ""
-            out.append(f"<table{c}><thead><tr>"
-                       + "".join(f"<th>{_inline(h)}</th>" for h in headers) + "</tr></thead><tbody>")
+            out.append(
+                f"<table{c}><thead><tr>"
+                + "".join(f"<th>{_inline(h)}</th>" for h in headers)
+                + "</tr></thead><tbody>"
+            )
             for i, row in enumerate(rows):
                 tds = []
                 for j, cell in enumerate(row):
@@ -423,9 +687,11 @@ def _html(blocks, fig_dir: Path, out: list[str]) -> None:
             out.append("</tbody></table>")
         elif kind == "img":
             data = base64.b64encode((fig_dir / b[1]).read_bytes()).decode("ascii")
-            out.append(f'<figure><img src="data:image/png;base64,{data}" '
-                       f'alt="{html.escape(b[2])}"><figcaption>{_inline(b[2])}</figcaption>'
-                       f"</figure>")
+            out.append(
+                f'<figure><img src="data:image/png;base64,{data}" '
+                f'alt="{html.escape(b[2])}"><figcaption>{_inline(b[2])}</figcaption>'
+                f"</figure>"
+            )
         elif kind == "ul":
             out.append("<ul>" + "".join(f"<li>{_inline(it)}</li>" for it in b[1]) + "</ul>")
         elif kind == "details":
@@ -435,15 +701,35 @@ def _html(blocks, fig_dir: Path, out: list[str]) -> None:
 
 
 def html_page(r: dict, fig_dir: Path) -> str:
-    nav = ("<nav>" + "".join(f'<a href="#{a}">{t}</a>' for a, t in (
-        ("claims", "Claims"), ("table1", "Table 1"), ("fig1", "Fig. 1"),
-        ("dtcrit", "Critical step"), ("wp", "Speed vs error"), ("hard", "Hard cases"),
-        ("env", "Environment"))) + "</nav>")
-    out = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
-           '<meta name="viewport" content="width=device-width, initial-scale=1">',
-           f"<title>{html.escape(r['title'])}</title>", f"<style>{_CSS}</style>", "</head>",
-           "<body>", f"<h1>{html.escape(r['title'])}</h1>", nav]
+    nav = (
+        "<nav>"
+        + "".join(
+            f'<a href="#{a}">{t}</a>'
+            for a, t in (
+                ("claims", "Claims"),
+                ("table1", "Table 1"),
+                ("fig1", "Fig. 1"),
+                ("dtcrit", "Critical step"),
+                ("wp", "Speed vs error"),
+                ("hard", "Hard cases"),
+                ("env", "Environment"),
+            )
+        )
+        + "</nav>"
+    )
+    out = [
+        "<!DOCTYPE html>",
+        '<html lang="en">',
+        "<head>",
+        '<meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{html.escape(r['title'])}</title>",
+        f"<style>{_CSS}</style>",
+        "</head>",
+        "<body>",
+        f"<h1>{html.escape(r['title'])}</h1>",
+        nav,
+    ]
     _html(_sections(r), fig_dir, out)
     out += ["</body>", "</html>"]
     return "\n".join(out) + "\n"
-

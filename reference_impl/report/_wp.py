@@ -36,9 +36,11 @@ def settings_text(quick: bool) -> str:
     methods = ("DOP853", "RK45") if quick else IVP_METHODS
     rtols = IVP_RTOLS[::2] if quick else IVP_RTOLS
     steps = VERLET_STEPS[::2] if quick else VERLET_STEPS
-    return (f"solve_ivp methods {', '.join(methods)} at rtol ∈ {{{', '.join(g(r) for r in rtols)}}}"
-            f" (atol = rtol × state scale); velocity Verlet at {', '.join(map(str, steps))} steps "
-            f"per contact; the exact harmonic-map solver at its default level")
+    return (
+        f"solve_ivp methods {', '.join(methods)} at rtol ∈ {{{', '.join(g(r) for r in rtols)}}}"
+        f" (atol = rtol × state scale); velocity Verlet at {', '.join(map(str, steps))} steps "
+        f"per contact; the exact harmonic-map solver at its default level"
+    )
 
 
 # Scene left out by --quick (its damped twin and the ellipsoid remain).
@@ -65,8 +67,7 @@ def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, 
         d = df[(df.scene == scene) & df.seconds.notna()]
         fig = Figure(figsize=(11.5, 8.4), dpi=110)
         axes = fig.subplots(2, 2)
-        fig.subplots_adjust(left=0.075, right=0.985, bottom=0.07, top=0.895, wspace=0.2,
-                            hspace=0.3)
+        fig.subplots_adjust(left=0.075, right=0.985, bottom=0.07, top=0.895, wspace=0.2, hspace=0.3)
         for ax, (col, title) in zip(axes.flat, METRICS, strict=True):
             for method, style in METHOD_STYLE.items():
                 s = d[d.method == method]
@@ -77,29 +78,58 @@ def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, 
                 ok = np.isfinite(x) & np.isfinite(y)
                 if not ok.any():
                     continue
-                ax.loglog(x[ok], y[ok], ls="-" if method != "exact" else "none", lw=1.3,
-                          label=method, **style)
+                ax.loglog(
+                    x[ok],
+                    y[ok],
+                    ls="-" if method != "exact" else "none",
+                    lw=1.3,
+                    label=method,
+                    **style,
+                )
                 if method != "exact" and ok.sum() > 1:
                     sets = s.setting.to_numpy()[ok]
                     for i in (0, ok.sum() - 1):
                         txt = sets[i].replace("rtol=", "").replace(" steps/contact", "")
-                        ax.annotate(txt, (x[ok][i], y[ok][i]), fontsize=7, color=style["color"],
-                                    xytext=(4, 3), textcoords="offset points")
-            ax.set(xlabel="wall time per impact [s] (median of repeats)",
-                   ylabel="relative error", title=title)
+                        ax.annotate(
+                            txt,
+                            (x[ok][i], y[ok][i]),
+                            fontsize=7,
+                            color=style["color"],
+                            xytext=(4, 3),
+                            textcoords="offset points",
+                        )
+            ax.set(
+                xlabel="wall time per impact [s] (median of repeats)",
+                ylabel="relative error",
+                title=title,
+            )
             ax.axhline(FLOOR, color="0.6", lw=0.6, ls=":")
             ax.grid(True, which="major", alpha=0.3)
         handles, labels = axes[0, 0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=9.5,
-                   bbox_to_anchor=(0.5, 0.955), frameon=False)
+        fig.legend(
+            handles,
+            labels,
+            loc="upper center",
+            ncol=len(labels),
+            fontsize=9.5,
+            bbox_to_anchor=(0.5, 0.955),
+            frameon=False,
+        )
         info = scenes_info.get(scene, "")
-        fig.suptitle(f"Work-precision, scene {scene}: {_short(info)}; truth: mpmath, 30 digits",
-                     fontsize=11.5)
+        fig.suptitle(
+            f"Work-precision, scene {scene}: {_short(info)}; truth: mpmath, 30 digits",
+            fontsize=11.5,
+        )
         name = f"work_precision_{scene}.png"
         fig.savefig(fig_dir / name)
-        out.append((name, f"Error against wall time, {scene} ({info}). Numbers at the ends of "
-                          f"each line: rtol (solve_ivp) or steps per contact (Verlet). Errors "
-                          f"below {g(FLOOR)} are drawn at {g(FLOOR)}."))
+        out.append(
+            (
+                name,
+                f"Error against wall time, {scene} ({info}). Numbers at the ends of "
+                f"each line: rtol (solve_ivp) or steps per contact (Verlet). Errors "
+                f"below {g(FLOOR)} are drawn at {g(FLOOR)}.",
+            )
+        )
     return out
 
 
@@ -122,19 +152,27 @@ def wp_summary(df: pd.DataFrame) -> list[dict]:
                 continue
             errs = s.apply(lambda r: _max_err(r.to_dict()), axis=1)
             best = errs.idxmin()
-            row = {"scene": scene, "method": method,
-                   "best max error": float(errs[best]), "at setting": s.setting[best],
-                   "time at best [s]": float(s.seconds[best])}
+            row = {
+                "scene": scene,
+                "method": method,
+                "best max error": float(errs[best]),
+                "at setting": s.setting[best],
+                "time at best [s]": float(s.seconds[best]),
+            }
             for target in TARGETS:
                 reach = s[errs <= target]
                 if len(reach):
                     f = reach.seconds.idxmin()
                     row[f"fastest to ≤ {g(target)}"] = {
-                        "setting": s.setting[f], "seconds": float(s.seconds[f]),
-                        "exact_faster_by": float(s.seconds[f]) / t_exact}
+                        "setting": s.setting[f],
+                        "seconds": float(s.seconds[f]),
+                        "exact_faster_by": float(s.seconds[f]) / t_exact,
+                    }
                 else:
                     row[f"fastest to ≤ {g(target)}"] = {
-                        "setting": "not reached", "seconds": math.nan,
-                        "exact_faster_by": math.nan}
+                        "setting": "not reached",
+                        "seconds": math.nan,
+                        "exact_faster_by": math.nan,
+                    }
             rows.append(row)
     return rows

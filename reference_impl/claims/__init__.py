@@ -1,0 +1,98 @@
+"""Registry of the paper's claims: one module per claim, the single source of every verdict.
+
+Each claim module (``reference_impl/claims/<name>.py``) holds the claim's ``ID``,
+``SECTION``, ``STATEMENT``, its cases, its tolerances (named constants, each
+with the reason for its size) and ``measure(quick=False) -> Measurement``, cached
+per process. ``hcv report`` loops over `CLAIMS` and writes each measurement;
+the tests in ``verification/test_sec*.py`` carry ``pytest.mark.claim(ID)`` and
+assert on the same measurement (or its case functions).
+
+Adding a claim: write ``reference_impl/claims/<name>.py`` with the names above,
+add ``<name>`` to `_MODULES` below, and write a test marked
+``@pytest.mark.claim("<id>")`` that calls ``<name>.measure()``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from types import ModuleType
+
+from ._base import VERDICTS, Measurement
+
+__all__ = ["Claim", "CLAIMS", "VERDICTS", "Measurement", "claim_ids", "get_claim", "measure"]
+
+PAPER = "../shared/paper/hidden-harmonic-contact.tex"
+
+# Claim modules in paper order.
+_MODULES = (
+    "thm1_period",
+    "thm2_harmonic",
+    "km_cancellation",
+    "thm3_damping_iff",
+    "sec6_dt_safe_bound",
+    "sec7_effective_mass",
+    "sec9_power_law",
+    "sec10_stiffening_domain",
+    "table1",
+    "fig1",
+)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One checkable statement of the paper.
+
+    Attributes
+    ----------
+    id : str
+        Stable identifier, used by marks, the report and results.json.
+    section : str
+        Where the paper states it.
+    statement : str
+        The claim as the paper makes it (paraphrased only where LaTeX would not read).
+    module : str
+        Name of the claim module in `reference_impl.claims` that measures it.
+    """
+
+    id: str
+    section: str
+    statement: str
+    module: str = ""
+
+    @property
+    def home(self) -> ModuleType:
+        """The claim module (ID, SECTION, STATEMENT, tolerances, measure)."""
+        return importlib.import_module(f"{__name__}.{self.module}")
+
+    def measure(self, quick: bool = False) -> Measurement:
+        """The claim's measurement (cached per process by the module)."""
+        return self.home.measure(quick)
+
+
+def _load(name: str) -> Claim:
+    mod = importlib.import_module(f"{__name__}.{name}")
+    return Claim(mod.ID, mod.SECTION, mod.STATEMENT, name)
+
+
+CLAIMS: tuple[Claim, ...] = tuple(_load(n) for n in _MODULES)
+
+_BY_ID = {c.id: c for c in CLAIMS}
+
+
+def claim_ids() -> tuple[str, ...]:
+    """All registered claim ids, in paper order."""
+    return tuple(c.id for c in CLAIMS)
+
+
+def get_claim(claim_id: str) -> Claim:
+    """The claim with this id; KeyError naming the id otherwise."""
+    try:
+        return _BY_ID[claim_id]
+    except KeyError:
+        raise KeyError(f"unknown claim id {claim_id!r}; registered: {', '.join(_BY_ID)}") from None
+
+
+def measure(claim_id: str, quick: bool = False) -> Measurement:
+    """The measurement of one claim by id."""
+    return get_claim(claim_id).measure(quick)
