@@ -28,8 +28,8 @@ import numpy as np
 from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
 from ..potentials.power import PowerLaw
 
-__all__ = ["METRICS", "MetricResult", "SceneContext", "SpeedRecord", "exact_reference",
-           "measure", "metric_names"]
+__all__ = ["METRICS", "MetricResult", "SceneContext", "SpeedRecord", "check_conventions",
+           "exact_reference", "measure", "metric_names"]
 
 # Samples of the damped ODE on which the exact tensile peak is located.
 _TENSILE_SAMPLES = 4001
@@ -44,7 +44,7 @@ class MetricResult:
     variant: str
     scene: str
     metric: str
-    status: str  # "pass" | "fail" | "skip"
+    status: str  # "pass" | "fail" | "skip" | "error" (our reference failed, not the code)
     value: float | None = None
     reference: float | None = None
     tolerance: str = ""
@@ -74,11 +74,13 @@ class SpeedRecord:
     stderr: str = ""
     seconds: float = 0.0
     dt_crit: dict | None = None
+    internal: str = ""  # the suite's own reference failed at this speed
 
     def to_dict(self) -> dict:
         return {"v0": self.v0, "dt": self.dt, "asked_restitution": self.asked_e,
                 "implemented_law": self.law.to_json() if self.law is not None else None,
                 "exact": self.exact, "measured": self.measured, "error": self.error,
+                "internal_error": self.internal,
                 "stderr": self.stderr, "seconds": self.seconds, "dt_crit": self.dt_crit}
 
 
@@ -96,11 +98,39 @@ class SceneContext:
     order: float | None = None
     order_error: str = ""
     sustained: dict | None = None
+    internal: str = ""  # the suite's own reference failed on this scene
+    order_internal: str = ""  # ... on the speed table only
 
 
 # ----------------------------------------------------------------------------
 # measurement on a trajectory
 # ----------------------------------------------------------------------------
+def check_conventions(tr: Trajectory, v0: float) -> str | None:
+    """A plain sentence when a trajectory breaks the sign conventions, else None.
+
+    Checked before anything is measured, so that a sign error is named as such
+    instead of surfacing as "did not separate" or an instability: the overlap q
+    is > 0 in contact, dq/dt is > 0 while approaching (v[0] = v0 > 0), and the
+    contact force is > 0 when repulsive.
+    """
+    q, v, f = tr.q, tr.v, tr.force
+    with np.errstate(invalid="ignore"):
+        if np.isfinite(v[0]) and v[0] < 0:
+            return (f"v = dq/dt must be positive while approaching (got v[0] = {v[0]:.6g} m/s "
+                    f"for v0 = {v0:g} m/s)")
+        moved = np.nonzero(np.isfinite(q) & (q != 0))[0]
+        if moved.size and q[moved[0]] < 0:  # the body approaches: the overlap grows first
+            i = int(moved[0])
+            return (f"q must be positive in contact (got q[{i}] = {q[i]:.6g} m after the "
+                    f"first step at v0 = {v0:g} m/s: q is the overlap, not the gap)")
+        if np.any(np.isfinite(q)) and np.nanmax(q) > 0:
+            i = int(np.nanargmax(q))  # deepest overlap: q' ~ 0, the force is U'(q_max) > 0
+            if np.isfinite(f[i]) and f[i] < 0:
+                return (f"force must be positive (repulsive) in contact (got {f[i]:.6g} N at "
+                        f"the deepest overlap q = {q[i]:.6g} m)")
+    return None
+
+
 def measure(tr: Trajectory, v0: float) -> dict:
     """Restitution, contact time, max penetration and tensile peak of one impact.
 
@@ -246,6 +276,7 @@ class Metric:
     field = ""
     description = ""
     impact_only = True
+    magnitude = True  # the value is a size (>= 0) compared with the limit from below
 
     def applies(self, ctx: SceneContext) -> str | None:
         if self.impact_only and ctx.kind != "impact":
@@ -258,14 +289,27 @@ class Metric:
                             self.description)
 
     def evaluate(self, ctx: SceneContext, tol: dict) -> MetricResult:
+        if ctx.skipped:
+            return self._result(ctx, "skip", explanation=ctx.skipped)
         reason = self.applies(ctx)
         if reason:
             return self._result(ctx, "skip", explanation=reason)
         limit = float(tol[self.key][self.field])
+        if ctx.internal:
+            return self._result(ctx, "error", tol=limit, explanation=_ours(ctx.internal))
         try:
-            return self._evaluate(ctx, limit)
+            res = self._evaluate(ctx, limit)
         except _Missing as miss:
             return self._result(ctx, "fail", tol=limit, explanation=str(miss))
+        except _Internal as exc:
+            return self._result(ctx, "error", tol=limit, explanation=_ours(str(exc)))
+        if res.status == "pass" and self.magnitude and not (
+                isinstance(res.value, float) and res.value >= 0):
+            # every magnitude metric compares a value >= 0 with its limit; anything else
+            # (negative, NaN) is a sign or measurement error and never passes
+            return self._result(ctx, "fail", res.value, res.reference, limit,
+                                f"{self.name} = {res.value!r} is not a magnitude >= 0")
+        return res
 
     def _evaluate(self, ctx: SceneContext, limit: float) -> MetricResult:  # pragma: no cover
         raise NotImplementedError
@@ -275,9 +319,19 @@ class _Missing(Exception):
     """A run this metric needs failed or did not produce the quantity."""
 
 
+class _Internal(Exception):
+    """The suite's own reference failed for this metric (not the code under test)."""
+
+
+def _ours(text: str) -> str:
+    return f"internal error of the reference (ours, not the code's): {text}"
+
+
 def _need(rec: SpeedRecord, *keys: str, exact: bool = True) -> tuple[dict, dict]:
     if rec.error:
         raise _Missing(f"run failed at v0 = {rec.v0:g} m/s: {rec.error}")
+    if exact and rec.internal:
+        raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal}")
     meas = rec.measured or {}
     for k in keys:
         if not isinstance(meas.get(k), float) or not math.isfinite(meas[k]):
@@ -376,10 +430,14 @@ class RestitutionSpread(Metric):
             meas, ex = _need(rec, "restitution", exact=False)
             es.append((meas["restitution"], rec.v0, ex.get("restitution", math.nan)))
         vals = np.array([e for e, _, _ in es])
-        spread = float((vals.max() - vals.min()) / vals.mean())
+        if np.any(vals < 0):  # a restitution is a magnitude: a negative one is a sign error
+            bad = es[int(np.argmin(vals))]
+            raise _Missing(f"restitution {bad[0]:.5g} < 0 at v0 = {bad[1]:g} m/s (wrong sign "
+                           "of the velocity?)")
+        spread = float((vals.max() - vals.min()) / abs(vals.mean())) if vals.mean() else math.inf
         exact_vals = np.array([x for _, _, x in es])
-        ref = (float((exact_vals.max() - exact_vals.min()) / exact_vals.mean())
-               if np.all(np.isfinite(exact_vals)) else math.nan)
+        ref = (float((exact_vals.max() - exact_vals.min()) / abs(exact_vals.mean()))
+               if np.all(np.isfinite(exact_vals)) and exact_vals.mean() else math.nan)
         if spread <= limit:
             return self._result(ctx, "pass", spread, ref, limit)
         lo, hi = es[int(np.argmin(vals))], es[int(np.argmax(vals))]
@@ -441,6 +499,7 @@ class AttractiveForce(Metric):
 class DtCrit(Metric):
     name = key = "dt_crit"
     field = "min_ratio"
+    magnitude = False  # a ratio compared from above (inf when stable throughout)
     description = ("critical step measured on the code, in units of Delta t_safe (section 6), "
                    "against textbook Verlet with the same law")
 
@@ -448,6 +507,8 @@ class DtCrit(Metric):
         worst = None
         for rec in ctx.speeds:
             d = rec.dt_crit
+            if rec.internal or (d is not None and d.get("internal")):
+                raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal or d['internal']}")
             if d is None:
                 raise _Missing(f"no critical-step search at v0 = {rec.v0:g} m/s"
                                + (f": {rec.error}" if rec.error else ""))
@@ -471,10 +532,13 @@ class DtCrit(Metric):
 class SpeedError(Metric):
     name = key = "speed_error"
     field = "min_order"
+    magnitude = False  # an order, compared from above
     description = ("convergence order of the error against dt (speed-against-error table, "
                    "middle speed)")
 
     def _evaluate(self, ctx, limit):
+        if ctx.order_internal:
+            raise _Internal(ctx.order_internal)
         if ctx.order_error:
             raise _Missing(ctx.order_error)
         if ctx.order is None or not math.isfinite(ctx.order):

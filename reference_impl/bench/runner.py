@@ -21,35 +21,43 @@ rewritten after every scene (and on interruption), so nothing computed is lost.
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
 from ..adapters.base import AdapterScene, ImplementedLaw, Trajectory
 from ..errors import HCVInputError
 from ..impact import solve_impact
-from ..scenes import Scene, load_scene, parse_scene
+from ..scenes import Scene, load_scene
 from ..stability import dt_safe as _dt_safe
 from .metrics import (
     METRICS,
     MetricResult,
     SceneContext,
     SpeedRecord,
+    check_conventions,
     exact_reference,
     measure,
 )
 from .tolerances import load_tolerances
-from .worker import Outcome, make_executor
+from .worker import Outcome, _one_line, make_executor
 
 __all__ = ["DEFAULT_SCENES", "BenchResult", "bench_scene_names", "resolve_scenes", "run_bench"]
 
-# Scenes run when none are given: embedded scenes and the bench's own (bench/scenes/).
+# Scenes run when none are given (all in the one catalogue, `hcv scenes`).
 DEFAULT_SCENES = ("hertz", "hertz-damped", "hooke-damped", "hertz-walls")
+# Upper bounds checked before any work: each speed costs a main run, a critical-step
+# search (~20 runs) and each scene a speed table (~6 runs); 32 speeds x 64 scenes is
+# already ~40,000 adapter runs.
+MAX_SCENES = 64
+# Gate exit status when no metric failed but the suite's own reference could not decide one.
+EXIT_INTERNAL = 3
+MAX_SPEEDS = 32
 # Critical-step scan, in units of dt_safe, before bisection.
 _DT_SCAN = (0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0)
 _DT_LOW = (0.25, 0.125, 0.0625)
@@ -61,29 +69,37 @@ _ORDER_FLOOR = 1e-13
 
 
 def bench_scene_names() -> list[str]:
-    """Names of the scenes shipped with the benchmark (reference_impl/bench/scenes)."""
-    root = resources.files(__package__) / "scenes"
-    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
-
-
-def _load(name: str) -> Scene:
-    if name in bench_scene_names() and not Path(name).exists():
-        res = resources.files(__package__) / "scenes" / f"{name}.toml"
-        return parse_scene(res.read_text(encoding="utf-8"), f"<bench>/{name}.toml")
-    return load_scene(name)
+    """Names of the benchmark's default scenes (embedded scenes, listed by ``hcv scenes``)."""
+    return list(DEFAULT_SCENES)
 
 
 def resolve_scenes(scenes: Sequence[str | Scene] | None) -> list[Scene]:
-    """Scenes from names (embedded or bench scenes), TOML paths or Scene objects."""
+    """Scenes from names (embedded scenes), TOML paths or Scene objects.
+
+    Raises
+    ------
+    HCVInputError
+        No scene, more than `MAX_SCENES` scenes or `MAX_SPEEDS` speeds in one,
+        a kind the bench does not run, zeta >= 1, or repeated names.
+    """
     items = list(DEFAULT_SCENES if scenes is None else scenes)
     if not items:
         raise HCVInputError("no scenes given")
+    if len(items) > MAX_SCENES:
+        raise HCVInputError(f"{len(items)} scenes given; hcv bench runs at most {MAX_SCENES}")
     out = []
     for s in items:
-        sc = s if isinstance(s, Scene) else _load(s)
+        sc = s if isinstance(s, Scene) else load_scene(s)
         if sc.kind not in ("impact", "two-walls"):
             raise HCVInputError(f"scene {sc.name!r}: hcv bench runs impact and two-walls scenes, "
                                 f"not {sc.kind!r}")
+        if len(sc.velocities) > MAX_SPEEDS:
+            raise HCVInputError(f"scene {sc.name!r} has {len(sc.velocities)} speeds; hcv bench "
+                                f"runs at most {MAX_SPEEDS} per scene")
+        if sc.damping_law == "universal" and (sc.zeta or 0.0) >= 1.0:
+            raise HCVInputError(f"scene {sc.name!r}: hcv bench needs damping zeta < 1, got "
+                                f"{sc.zeta!r} (the restitution asked, exp(-pi zeta / sqrt(1 - "
+                                "zeta^2)), is defined for zeta < 1 only)")
         out.append(sc)
     names = [s.name for s in out]
     dup = {n for n in names if names.count(n) > 1}
@@ -131,7 +147,8 @@ class BenchResult:
     interrupted: bool = False
 
     def counts(self) -> dict[str, int]:
-        c = {"pass": 0, "fail": 0, "skip": 0}
+        """Metrics per status: pass, fail, skip, and error (our reference failed)."""
+        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0}
         for m in self.metrics:
             c[m.status] += 1
         return c
@@ -140,11 +157,19 @@ class BenchResult:
     def failures(self) -> list[MetricResult]:
         return [m for m in self.metrics if m.status == "fail"]
 
+    @property
+    def internal_errors(self) -> list[MetricResult]:
+        """Metrics not decided because the suite's own reference failed (never the code's fault)."""
+        return [m for m in self.metrics if m.status == "error"]
+
     def exit_status(self, gate: bool) -> int:
-        """0, or with ``gate`` 1 when any metric failed (or the run was interrupted)."""
+        """0; with ``gate`` 1 when a metric failed (or the run was interrupted), else
+        `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
         if not gate:
             return 0
-        return 1 if (self.failures or self.interrupted) else 0
+        if self.failures or self.interrupted:
+            return 1
+        return EXIT_INTERNAL if self.internal_errors else 0
 
     def to_dict(self) -> dict:
         from .report import result_to_dict
@@ -155,18 +180,46 @@ class BenchResult:
 # ----------------------------------------------------------------------------
 # one variant on one scene
 # ----------------------------------------------------------------------------
+class _Declined(Exception):
+    """The code declined the scene at run time ({"unsupported": reason}): a skip."""
+
+
+class _Ours(Exception):
+    """The suite's own reference failed: an internal error, never the code's failure."""
+
+
 class _SceneRun:
     def __init__(self, executor, index: int, label: str, scene: Scene, tol: dict):
         self.ex, self.index, self.scene, self.tol = executor, index, scene, tol
         self.timeout = float(tol["run"]["timeout"])
         damped = scene.damping_law == "universal" and bool(scene.zeta)
         self.ctx = SceneContext(label, scene.name, scene.kind, damped)
+        self.timed_out = ""
 
     def call(self, method: str, ascene: AdapterScene) -> Outcome:
-        return self.ex.call(self.index, method, ascene, timeout=self.timeout)
+        """One adapter call; after a first timeout on this scene the rest are not run."""
+        if self.timed_out:
+            return Outcome(False, error=f"not run: an earlier run on this scene {self.timed_out}",
+                           timed_out=True)
+        out = self.ex.call(self.index, method, ascene, timeout=self.timeout)
+        if out.declined:
+            raise _Declined(out.declined)
+        if out.timed_out:
+            self.timed_out = f"timed out after {self.timeout:g} s"
+        return out
 
     def asked(self, v0: float):
-        return solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
+        """Exact solution of the scene's own law (ours): `_Ours` when it fails."""
+        try:
+            sol = solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
+            t_c = float(sol.contact_time)
+        except Exception as exc:
+            raise _Ours(f"exact solution of the scene at v0 = {v0:g} m/s failed: "
+                        f"{_one_line(exc)}") from None
+        if not (math.isfinite(t_c) and t_c > 0):
+            raise _Ours(f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time "
+                        f"{t_c!r}")
+        return sol
 
     def budget(self, dt: float, t_c: float) -> int:
         return int(math.ceil(self.tol["run"]["budget"] * t_c / dt)) + _EXTRA_STEPS
@@ -182,6 +235,10 @@ class _SceneRun:
         if not out.ok:
             rec.error, rec.stderr = out.error, out.stderr
             return rec
+        wrong = check_conventions(out.value, v0)
+        if wrong:
+            rec.error = f"sign convention: {wrong}"
+            return rec
         rec.measured = measure(out.value, v0)
         law = self.call("implemented_law", ascene)
         if not law.ok:
@@ -195,10 +252,10 @@ class _SceneRun:
         rec.law = law.value
         try:
             rec.exact = exact_reference(rec.law, v0)
-        except Exception as exc:  # the declared law cannot be solved
-            rec.error = rec.error or f"exact solution of the implemented law failed: {exc}"
-        if not rec.error:
-            rec.dt_crit = self.dt_crit(ascene, rec.law)
+        except Exception as exc:  # our solver on the declared law: never the code's failure
+            rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
+            return rec
+        rec.dt_crit = self.dt_crit(ascene, rec.law)
         return rec
 
     def _stable(self, ascene: AdapterScene, dt: float, q_max: float) -> tuple[bool, str]:
@@ -233,8 +290,8 @@ class _SceneRun:
         try:
             safe = _dt_safe(pot, m, v0)
             q_max = pot.turning_point(0.5 * m * v0 * v0)
-        except Exception as exc:
-            return {"error": f"dt_safe of the implemented law: {exc}"}
+        except Exception as exc:  # ours, not the code's
+            return {"internal": f"dt_safe of the implemented law failed: {_one_line(exc)}"}
         ref = safe.dt_safe if safe.dt_safe > 0 else safe.dt_shortcut
         res = self.tol["dt_crit"]["resolution"]
         out = {"dt_safe": ref}
@@ -246,6 +303,8 @@ class _SceneRun:
             out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
         except TypeError as exc:  # a damping the reference Verlet cannot run
             out["verlet_error"] = str(exc)
+        except Exception as exc:  # ours, not the code's
+            out["internal"] = f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
         return out
 
     def speed_table(self, rows: list[dict]) -> None:
@@ -254,10 +313,18 @@ class _SceneRun:
         recs = [r for r in ctx.speeds if r.law is not None and r.exact is not None
                 and not r.error]
         if not recs:
-            ctx.order_error = "no speed with a successful run and exact reference"
+            ours = next((r.internal for r in ctx.speeds if r.internal and not r.error), "")
+            if ours:
+                ctx.order_internal = ours
+            else:
+                ctx.order_error = "no speed with a successful run and exact reference"
             return
         rec = recs[len(recs) // 2]
-        ex = exact_reference(rec.law, rec.v0, timing=True)
+        try:
+            ex = exact_reference(rec.law, rec.v0, timing=True)
+        except Exception as exc:  # ours
+            ctx.order_internal = f"exact reference of the speed table failed: {_one_line(exc)}"
+            return
         rows.append({"adapter": ctx.variant, "scene": sc.name, "v0": rec.v0, "method": ex["method"],
                      "setting": "reference", "steps_per_contact": None, "dt": None,
                      "seconds": ex["seconds"], "err_restitution": 0.0, "err_contact_time": 0.0,
@@ -310,7 +377,12 @@ class _SceneRun:
             return
         tr: Trajectory = out.value
         qp = np.clip(tr.q, 0.0, None)
-        E = 0.5 * sc.mass * tr.v**2 + sc.potential._U(qp)
+        try:
+            with np.errstate(all="ignore"):
+                U = sc.potential._U(qp)
+        except Exception as exc:  # ours: U outside the domain the potential covers
+            raise _Ours(f"energy of the sustained run: {_one_line(exc)}") from None
+        E = 0.5 * sc.mass * tr.v**2 + U
         E0 = 0.5 * sc.mass * v0 * v0
         drift = float(np.max(np.abs(E / E0 - 1.0))) if np.all(np.isfinite(E)) else math.inf
         impacts = int(np.sum((tr.q[1:] > 0) & (tr.q[:-1] <= 0)))
@@ -319,12 +391,17 @@ class _SceneRun:
 
     def run(self, rows: list[dict]) -> SceneContext:
         ctx = self.ctx
-        if ctx.kind == "two-walls":
-            self.sustained()
-            return ctx
-        for v0 in self.scene.velocities:
-            ctx.speeds.append(self.impact_speed(v0))
-        self.speed_table(rows)
+        try:
+            if ctx.kind == "two-walls":
+                self.sustained()
+                return ctx
+            for v0 in self.scene.velocities:
+                ctx.speeds.append(self.impact_speed(v0))
+            self.speed_table(rows)
+        except _Declined as exc:
+            ctx.skipped, ctx.speeds, ctx.sustained = f"declined by the code: {exc}", [], None
+        except _Ours as exc:
+            ctx.internal = str(exc)
         return ctx
 
 
@@ -398,7 +475,7 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from .report import machine_info, write_json, write_junit
+    from .report import machine_info
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)
@@ -447,7 +524,7 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
             result.contexts.append(ctx)
             result.seconds = time.perf_counter() - t0
             if json_path is not None:
-                write_json(result, json_path)
+                _write_json(result, json_path)
             if progress is not None:
                 progress(float(done), total)
     except KeyboardInterrupt:
@@ -456,7 +533,51 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
         executor.close()
         result.seconds = time.perf_counter() - t0
         if json_path is not None:
-            write_json(result, json_path)
+            _write_json(result, json_path)
         if junit_path is not None:
-            write_junit(result, junit_path)
+            _write_junit(result, junit_path)
     return result
+
+
+def _public_mode(path) -> None:
+    """Give a written report the mode of a new file (0666 less the umask), not mkstemp's 0600."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
+def _write_json(result: BenchResult, path) -> None:
+    """The JSON report; status "error" when only our reference failed (no metric failed)."""
+    from .report import _atomic_write, result_to_dict
+
+    doc = result_to_dict(result)
+    if doc.get("status") == "pass" and result.internal_errors:
+        doc["status"] = "error"
+    _atomic_write(path, json.dumps(doc, indent=2) + "\n")
+    _public_mode(path)
+
+
+def _write_junit(result: BenchResult, path) -> None:
+    """JUnit XML; a metric our reference could not decide is an <error>, not a pass."""
+    import xml.etree.ElementTree as ET
+
+    from .report import _atomic_write, junit_tree
+
+    tree = junit_tree(result)
+    errors = {(f"hcv.bench.{m.variant}.{m.scene}", m.metric): m for m in result.internal_errors}
+    root = tree.getroot()
+    for suite in root.iter("testsuite"):
+        n = 0
+        for case in suite.iter("testcase"):
+            m = errors.get((case.get("classname"), case.get("name")))
+            if m is None:
+                continue
+            for child in list(case):
+                case.remove(child)
+            ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
+            n += 1
+        suite.set("errors", str(n))
+    root.set("errors", str(len(errors)))
+    ET.indent(tree)
+    _atomic_write(path, ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n")
+    _public_mode(path)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
 import tempfile
 import time
 import traceback
@@ -52,6 +53,10 @@ class Outcome:
         The adapter's diagnostics for a failed call (tail).
     seconds : float
         Wall time of the call inside the adapter process (s).
+    timed_out : bool
+        The call failed by exceeding its timeout.
+    declined : str
+        The code declined the scene at run time (the reason): a skip, not a failure.
     """
 
     ok: bool
@@ -59,6 +64,8 @@ class Outcome:
     error: str = ""
     stderr: str = ""
     seconds: float = 0.0
+    timed_out: bool = False
+    declined: str = ""
 
 
 def _one_line(exc: BaseException) -> str:
@@ -86,7 +93,9 @@ class InProcessExecutor:
         except Exception as exc:  # an adapter failure is a result, never fatal
             return Outcome(False, error=_one_line(exc),
                            stderr=getattr(exc, "stderr", "") or "",
-                           seconds=time.perf_counter() - t0)
+                           seconds=time.perf_counter() - t0,
+                           timed_out=bool(getattr(exc, "timed_out", False)),
+                           declined=str(getattr(exc, "declined", "") or ""))
         return Outcome(True, value, seconds=time.perf_counter() - t0)
 
     def close(self) -> None:
@@ -97,10 +106,16 @@ class InProcessExecutor:
                 pass
 
 
-def _worker_main(conn, spec: str, log_path: str) -> None:  # pragma: no cover - runs in a child
-    """Entry point of the worker process: build the adapter, then serve calls."""
+def _worker_main(conn, spec: str, log_path: str,
+                 out_path: str | None = None) -> None:  # pragma: no cover - runs in a child
+    """Entry point of the worker process: build the adapter, then serve calls.
+
+    File descriptor 2 goes to ``log_path``, 1 to ``out_path`` (so that the parent
+    can tell an adapter that prints on stdout, against the contract).
+    """
     fd = os.open(log_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
-    os.dup2(fd, 1)
+    out = os.open(out_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT) if out_path else fd
+    os.dup2(out, 1)
     os.dup2(fd, 2)
     try:
         adapter = get_adapter(spec)
@@ -124,7 +139,7 @@ def _worker_main(conn, spec: str, log_path: str) -> None:  # pragma: no cover - 
         except BaseException as exc:
             stderr = getattr(exc, "stderr", "") or ""
             conn.send(("error", _one_line(exc), stderr + "\n" + traceback.format_exc(),
-                       time.perf_counter() - t0))
+                       time.perf_counter() - t0, str(getattr(exc, "declined", "") or "")))
     for v in variants:
         try:
             v.close()
@@ -153,12 +168,32 @@ class WorkerExecutor:
         self._conn = None
         fd, self._log = tempfile.mkstemp(prefix="hcv-worker-", suffix=".log")
         os.close(fd)
+        fd, self._out = tempfile.mkstemp(prefix="hcv-worker-", suffix=".stdout")
+        os.close(fd)
+        self.stdout_warned = False
 
     def _log_size(self) -> int:
         try:
             return os.path.getsize(self._log)
         except OSError:
             return 0
+
+    def _check_stdout(self) -> None:
+        """Warn once (stderr) when the adapter wrote to its stdout, naming the adapter."""
+        if self.stdout_warned:
+            return
+        try:
+            size = os.path.getsize(self._out)
+            with open(self._out, "rb") as fh:
+                head = fh.read(80).decode(errors="replace").strip().splitlines()
+        except OSError:
+            return
+        if size:
+            self.stdout_warned = True
+            first = head[0] if head else ""
+            print(f"hcv: warning: adapter {self.spec!r} printed {size} bytes on stdout (starting "
+                  f"{first!r}); the contract asks for stderr: stdout is discarded",
+                  file=sys.stderr)
 
     def _log_since(self, offset: int) -> str:
         try:
@@ -172,7 +207,8 @@ class WorkerExecutor:
         """Start the worker; an Outcome describing the failure, or None when ready."""
         offset = self._log_size()
         parent, child = self._ctx.Pipe()
-        proc = self._ctx.Process(target=_worker_main, args=(child, self.spec, self._log),
+        proc = self._ctx.Process(target=_worker_main,
+                                 args=(child, self.spec, self._log, self._out),
                                  daemon=True, name=f"hcv-adapter-{self.adapter.name}")
         proc.start()
         child.close()
@@ -219,6 +255,12 @@ class WorkerExecutor:
         self._proc = self._conn = None
 
     def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+        try:
+            return self._call(index, method, *args, timeout=timeout)
+        finally:
+            self._check_stdout()
+
+    def _call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
         if self._proc is None or not self._proc.is_alive():
             failed = self._start()
             if failed is not None:
@@ -234,7 +276,7 @@ class WorkerExecutor:
         if not self._conn.poll(timeout):
             self._kill()
             return Outcome(False, error=f"timeout after {timeout:g} s", seconds=timeout or 0.0,
-                           stderr=self._log_since(offset))
+                           stderr=self._log_since(offset), timed_out=True)
         try:
             msg = self._conn.recv()
         except (EOFError, OSError):
@@ -246,7 +288,8 @@ class WorkerExecutor:
             return Outcome(True, msg[1], seconds=msg[2])
         stderr = (msg[2] or "") + "\n" + self._log_since(offset)
         return Outcome(False, error=msg[1], stderr=_tail(stderr),
-                       seconds=msg[3] if len(msg) > 3 else time.perf_counter() - t0)
+                       seconds=msg[3] if len(msg) > 3 else time.perf_counter() - t0,
+                       declined=msg[4] if len(msg) > 4 else "")
 
     def close(self) -> None:
         if self._conn is not None:
@@ -256,10 +299,11 @@ class WorkerExecutor:
             except (OSError, ValueError):
                 pass
         self._kill()
-        try:
-            os.unlink(self._log)
-        except OSError:
-            pass
+        for path in (self._log, self._out):
+            try:
+                os.unlink(path)
+            except OSError:
+                pass
 
 
 def make_executor(spec, startup_timeout: float = 300.0, isolate: bool | None = None):
