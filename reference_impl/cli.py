@@ -169,7 +169,8 @@ def _require_finite(rows: list[dict], scene) -> None:
                 raise UnsupportedError(
                     f"scene {scene.name!r}, v0 = {row['v0']:g} m/s: the solver gives {key} = "
                     f"{value!r}; this scene (zeta = {row.get('zeta', 0.0):g}) is outside what it "
-                    "computes reliably")
+                    "computes reliably"
+                )
 
 
 def _check_out_dir(path: str) -> None:
@@ -357,8 +358,10 @@ def run_command(args) -> int:
     except (RecursionError, OverflowError, MemoryError) as exc:
         # Sizes are bounded before work starts; this is the backstop for an input that
         # still exhausts a limit (nesting, float range, memory).
-        print(f"hcv: error: the input is too large or too deeply nested "
-              f"({type(exc).__name__})", file=sys.stderr)
+        print(
+            f"hcv: error: the input is too large or too deeply nested ({type(exc).__name__})",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     except BrokenPipeError:
         # Output piped into e.g. `head`: stop quietly, as Unix tools do.

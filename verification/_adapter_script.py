@@ -104,10 +104,12 @@ def main(argv: list[str]) -> int:
                 sys.stdout.write("[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]\n" * 1000)
     if mode == "tsuji" and active:
         out = integrate(scene, zeta_scale=0.5)
-        out["implemented_law"] = {"potential": scene["potential"], "mass": scene["mass"],
-                                  "damping": {"law": "universal",
-                                              "zeta": 0.5 * scene["damping"]["zeta"]},
-                                  "description": "half the damping ratio"}
+        out["implemented_law"] = {
+            "potential": scene["potential"],
+            "mass": scene["mass"],
+            "damping": {"law": "universal", "zeta": 0.5 * scene["damping"]["zeta"]},
+            "description": "half the damping ratio",
+        }
     else:
         out = integrate(scene)
     if mode == "malformed" and active:
@@ -132,7 +134,6 @@ else:  # imported: the Python adapters (the program itself needs only the standa
         def _impact_impl(self, scene):
             return integrate(scene.to_json())
 
-
     class CrashAdapter(ScriptAdapter):
         """Dies (os._exit) for v0 > 1 m/s, after a line on stderr."""
 
@@ -144,7 +145,6 @@ else:  # imported: the Python adapters (the program itself needs only the standa
                 os._exit(139)
             return super()._impact_impl(scene)
 
-
     class HangAdapter(ScriptAdapter):
         """Never returns for v0 > 1 m/s."""
 
@@ -155,7 +155,6 @@ else:  # imported: the Python adapters (the program itself needs only the standa
                 print("hang-adapter: waiting forever", file=sys.stderr, flush=True)
                 time.sleep(3600)
             return super()._impact_impl(scene)
-
 
     class ChattyAdapter(ScriptAdapter):
         """Prints a progress line on stdout for every run (the contract asks for stderr)."""

@@ -36,14 +36,22 @@ from reference_impl.scenes import parse_scene
 from .test_adapters import FAST, SCRIPT, _by, ascene, cmd, scene
 
 ROOT = Path(__file__).resolve().parent.parent
-_WALLS = ('name = "walls"\nmass = 4.1103e-3\nvelocities = [1.0]\nkind = "two-walls"\n'
-          'gap = 1e-4\n[potential]\nfamily = "power"\nk = 1.0879e10\np = 1.5\n')
+_WALLS = (
+    'name = "walls"\nmass = 4.1103e-3\nvelocities = [1.0]\nkind = "two-walls"\n'
+    'gap = 1e-4\n[potential]\nfamily = "power"\nk = 1.0879e10\np = 1.5\n'
+)
 
 
 def _hcv(args, cwd, timeout=120):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run([sys.executable, "-m", "reference_impl.cli", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def _processes_with(needle: str) -> list[int]:
@@ -95,14 +103,29 @@ def test_after_a_timeout_the_scene_s_other_runs_are_not_run():
 def test_ctrl_c_on_a_gate_kills_the_adapter_and_says_interrupted(tmp_path):
     (tmp_path / "s.toml").write_text(
         'name = "s"\nmass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = "power"\n'
-        'k = 1.0\np = 1.5\n')
+        "k = 1.0\np = 1.5\n"
+    )
     marker = "97.5312"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-m", "reference_impl.cli", "bench",
-                             f"cmd:sleep {marker}", "--scenes", "s.toml", "--gate",
-                             "--json", "out.json"],
-                            cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "reference_impl.cli",
+            "bench",
+            f"cmd:sleep {marker}",
+            "--scenes",
+            "s.toml",
+            "--gate",
+            "--json",
+            "out.json",
+        ],
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.time() + 60
     while not _processes_with(f"sleep {marker}") and time.time() < deadline:
         time.sleep(0.2)
@@ -119,25 +142,39 @@ def test_ctrl_c_on_a_gate_kills_the_adapter_and_says_interrupted(tmp_path):
 def test_progress_lines_when_not_on_a_terminal(tmp_path):
     (tmp_path / "s.toml").write_text(
         'name = "s"\nmass = 4.1103e-3\nvelocities = [1.0]\n[potential]\nfamily = "power"\n'
-        'k = 1.0879e10\np = 1.5\n')
+        "k = 1.0879e10\np = 1.5\n"
+    )
     (tmp_path / "fast.toml").write_text(
-        "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
+        "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
+    )
     r = _hcv(["bench", "reference", "--scenes", "s.toml", "--tolerances", "fast.toml"], tmp_path)
     assert r.returncode == 0, r.stderr
     assert "0 of 1 scene runs done" in r.stderr and "1 of 1 scene runs done" in r.stderr
 
 
-@pytest.mark.parametrize("field, text, message", [
-    ("velocities", "velocities = [" + ", ".join(["1.0"] * 40) + "]", "at most 32 per scene"),
-    ("zeta", "velocities = [1.0]\n[damping]\nlaw = 'universal'\nzeta = 1.5",
-     "needs damping zeta < 1"),
-])
+@pytest.mark.parametrize(
+    "field, text, message",
+    [
+        ("velocities", "velocities = [" + ", ".join(["1.0"] * 40) + "]", "at most 32 per scene"),
+        (
+            "zeta",
+            "velocities = [1.0]\n[damping]\nlaw = 'universal'\nzeta = 1.5",
+            "needs damping zeta < 1",
+        ),
+    ],
+)
 def test_bench_bounds_are_checked_before_work(tmp_path, field, text, message):
     path = tmp_path / "s.toml"
-    path.write_text(f"name = 's'\nmass = 1.0\n{text}\n".replace(
-        "[damping]", "[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n[damping]")
-        + ("" if "[potential]" in text or "damping" in text
-           else "[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n"))
+    path.write_text(
+        f"name = 's'\nmass = 1.0\n{text}\n".replace(
+            "[damping]", "[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n[damping]"
+        )
+        + (
+            ""
+            if "[potential]" in text or "damping" in text
+            else "[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n"
+        )
+    )
     with pytest.raises(HCVInputError, match=message):
         run_bench("reference", scenes=[str(path)])
 
@@ -168,16 +205,20 @@ def test_reference_failure_is_an_internal_error_not_a_metric_failure():
     assert statuses["restitution_exact"] == "error" and statuses["dt_crit"] == "error"
     assert statuses["restitution_asked"] == "pass"  # needs no exact reference of ours
     assert "fail" not in statuses.values()
-    assert "internal error of the reference (ours" in _by(res, "small",
-                                                          "restitution_exact").explanation
+    assert (
+        "internal error of the reference (ours"
+        in _by(res, "small", "restitution_exact").explanation
+    )
     assert res.exit_status(gate=True) == 3 and res.exit_status(gate=False) == 0
 
 
 def test_abs_expression_scene_never_fails_the_reference_adapter(tmp_path):
     """Our own Verlet on abs(q)**2.5: whatever our dt_safe cannot do is "error", never "fail"."""
     path = tmp_path / "abs.toml"
-    path.write_text('name = "abs"\nmass = 1.0\nvelocities = [1.0]\n[potential]\n'
-                    'family = "expression"\nU = "abs(q)**2.5"\n')
+    path.write_text(
+        'name = "abs"\nmass = 1.0\nvelocities = [1.0]\n[potential]\n'
+        'family = "expression"\nU = "abs(q)**2.5"\n'
+    )
     res = run_bench("reference", scenes=[str(path)], tolerances=FAST)
     assert not res.failures, [m.explanation for m in res.failures]
     for m in res.internal_errors:
@@ -192,22 +233,31 @@ def test_cmd_can_decline_a_scene():
     """{"unsupported": reason} is a skip with the reason, not a failure (contract point 1)."""
     with pytest.raises(AdapterDeclined, match="no model for this scene"):
         get_adapter(cmd("--mode", "decline")).impact(ascene())
-    res = run_bench(cmd("--mode", "decline", "--above", "1"),
-                    scenes=[scene("ok", vels=(0.5,)), scene("no", vels=(2.0,))],
-                    tolerances=FAST)
+    res = run_bench(
+        cmd("--mode", "decline", "--above", "1"),
+        scenes=[scene("ok", vels=(0.5,)), scene("no", vels=(2.0,))],
+        tolerances=FAST,
+    )
     assert {m.status for m in res.metrics if m.scene == "no"} == {"skip"}
-    assert "declined by the code: no model for this scene" in _by(res, "no",
-                                                                   "restitution_exact").explanation
+    assert (
+        "declined by the code: no model for this scene"
+        in _by(res, "no", "restitution_exact").explanation
+    )
     assert _by(res, "ok", "restitution_exact").status == "pass"
     assert res.exit_status(gate=True) == 0
 
 
 def test_cmd_declares_sustained_scenes_in_its_spec():
     assert parse_spec("cmd[sustained=true,timeout=5]:./code --x") == (
-        "subprocess", {"command": "./code --x", "sustained": True, "timeout": 5})
+        "subprocess",
+        {"command": "./code --x", "sustained": True, "timeout": 5},
+    )
     walls = parse_scene(_WALLS, "<test>/walls.toml")
-    res = run_bench(cmd().replace("cmd:", "cmd[sustained=true]:", 1),
-                    scenes=[walls, scene("ok", vels=(0.5,))], tolerances=FAST)
+    res = run_bench(
+        cmd().replace("cmd:", "cmd[sustained=true]:", 1),
+        scenes=[walls, scene("ok", vels=(0.5,))],
+        tolerances=FAST,
+    )
     drift = _by(res, "walls", "energy_drift")
     assert drift.status == "skip" and "no two-walls model" in drift.explanation
     assert _by(res, "ok", "restitution_exact").status == "pass"
@@ -227,11 +277,14 @@ def test_one_scene_catalogue():
     assert "hertz-walls" in _hcv(["scenes"], ROOT).stdout
 
 
-@pytest.mark.parametrize("mode, message", [
-    ("flipq", "q must be positive in contact (got q[1] = -"),
-    ("flipv", "v = dq/dt must be positive while approaching (got v[0] = -"),
-    ("flipf", "force must be positive (repulsive) in contact (got -"),
-])
+@pytest.mark.parametrize(
+    "mode, message",
+    [
+        ("flipq", "q must be positive in contact (got q[1] = -"),
+        ("flipv", "v = dq/dt must be positive while approaching (got v[0] = -"),
+        ("flipf", "force must be positive (repulsive) in contact (got -"),
+    ],
+)
 def test_sign_conventions_are_checked_first(mode, message):
     res = run_bench(cmd("--mode", mode), scenes=[scene(vels=(1.0,))], tolerances=FAST)
     m = _by(res, "small", "restitution_exact")
@@ -241,28 +294,51 @@ def test_sign_conventions_are_checked_first(mode, message):
 
 def _ctx(quantity: str, value: float, exact: float) -> SceneContext:
     law = ImplementedLaw(PowerLaw(1.0, 1.5), 1.0, zeta=0.1)
-    meas = {"separated": True, "finite": True, "restitution": 0.7, "energy_ratio": 0.49,
-            "contact_time": 1.0, "max_penetration": 1.0, "tensile": 0.0, quantity: value}
-    ex = {"restitution": 0.7, "energy_ratio": 0.49, "contact_time": 1.0,
-          "max_penetration": 1.0, "tensile": 0.0, quantity: exact}
+    meas = {
+        "separated": True,
+        "finite": True,
+        "restitution": 0.7,
+        "energy_ratio": 0.49,
+        "contact_time": 1.0,
+        "max_penetration": 1.0,
+        "tensile": 0.0,
+        quantity: value,
+    }
+    ex = {
+        "restitution": 0.7,
+        "energy_ratio": 0.49,
+        "contact_time": 1.0,
+        "max_penetration": 1.0,
+        "tensile": 0.0,
+        quantity: exact,
+    }
     ctx = SceneContext("code", "s", "impact", damped=False)
     for v0 in (1.0, 2.0):
-        ctx.speeds.append(SpeedRecord(v0=v0, asked_e=1.0, law=law, exact=dict(ex),
-                                      measured=dict(meas),
-                                      dt_crit={"ratio": 1.0, "verlet_ratio": 1.0,
-                                               "dt_crit": 1.0}))
+        ctx.speeds.append(
+            SpeedRecord(
+                v0=v0,
+                asked_e=1.0,
+                law=law,
+                exact=dict(ex),
+                measured=dict(meas),
+                dt_crit={"ratio": 1.0, "verlet_ratio": 1.0, "dt_crit": 1.0},
+            )
+        )
     ctx.order = 2.0
     return ctx
 
 
-@pytest.mark.parametrize("metric, quantity, value, exact", [
-    ("restitution_v0_spread", "restitution", -0.343, 0.343),  # the reported case
-    ("restitution_exact", "restitution", -0.7, 0.7),
-    ("contact_time", "contact_time", -1.0, 1.0),
-    ("max_penetration", "max_penetration", -1.0, 1.0),
-    ("attractive_force", "tensile", -0.005, 0.0),
-    ("restitution_v0_spread", "restitution", math.nan, 0.7),
-])
+@pytest.mark.parametrize(
+    "metric, quantity, value, exact",
+    [
+        ("restitution_v0_spread", "restitution", -0.343, 0.343),  # the reported case
+        ("restitution_exact", "restitution", -0.7, 0.7),
+        ("contact_time", "contact_time", -1.0, 1.0),
+        ("max_penetration", "max_penetration", -1.0, 1.0),
+        ("attractive_force", "tensile", -0.005, 0.0),
+        ("restitution_v0_spread", "restitution", math.nan, 0.7),
+    ],
+)
 def test_a_signed_or_nan_value_never_passes(metric, quantity, value, exact):
     """Every magnitude metric: a negative (wrong sign) or NaN measurement fails (point 5)."""
     m = next(x for x in METRICS if x.name == metric)
@@ -273,8 +349,11 @@ def test_a_signed_or_nan_value_never_passes(metric, quantity, value, exact):
 
 
 def test_python_adapter_printing_to_stdout_is_warned_once(capsys):
-    res = run_bench("verification._adapter_script:ChattyAdapter",
-                    scenes=[scene(vels=(0.5, 1.0))], tolerances=FAST)
+    res = run_bench(
+        "verification._adapter_script:ChattyAdapter",
+        scenes=[scene(vels=(0.5, 1.0))],
+        tolerances=FAST,
+    )
     err = capsys.readouterr().err
     assert err.count("printed") == 1, err
     assert "verification._adapter_script:ChattyAdapter" in err and "chatty-adapter" in err
@@ -284,7 +363,8 @@ def test_python_adapter_printing_to_stdout_is_warned_once(capsys):
 def test_module_class_from_the_current_directory(tmp_path, monkeypatch):
     (tmp_path / "my_code_adapter.py").write_text(
         "from verification._adapter_script import ScriptAdapter\n\n"
-        "class MyCode(ScriptAdapter):\n    name = 'my-code'\n")
+        "class MyCode(ScriptAdapter):\n    name = 'my-code'\n"
+    )
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", str(tmp_path))])
     assert type(get_adapter("my_code_adapter:MyCode")).__name__ == "MyCode"
@@ -297,8 +377,13 @@ def test_module_class_from_the_current_directory(tmp_path, monkeypatch):
 def test_reports_are_written_0644_under_umask_022(tmp_path):
     old = os.umask(0o022)
     try:
-        run_bench(cmd(), scenes=[scene(vels=(1.0,))], tolerances=FAST,
-                  json_path=tmp_path / "b.json", junit_path=tmp_path / "b.xml")
+        run_bench(
+            cmd(),
+            scenes=[scene(vels=(1.0,))],
+            tolerances=FAST,
+            json_path=tmp_path / "b.json",
+            junit_path=tmp_path / "b.xml",
+        )
     finally:
         os.umask(old)
     for name in ("b.json", "b.xml"):
@@ -317,8 +402,9 @@ def _one_line_exit_2(capsys, argv, needle):
 
 @pytest.mark.parametrize("option", ["--json", "--junit", "--markdown", "--plot"])
 def test_output_paths_are_checked_before_work(tmp_path, capsys, option):
-    _one_line_exit_2(capsys, ["bench", "reference", option, str(tmp_path / "no" / "f")],
-                     "does not exist")
+    _one_line_exit_2(
+        capsys, ["bench", "reference", option, str(tmp_path / "no" / "f")], "does not exist"
+    )
     _one_line_exit_2(capsys, ["bench", "reference", option, str(tmp_path)], "is a directory")
 
 
@@ -326,8 +412,7 @@ def test_output_paths_are_checked_before_work(tmp_path, capsys, option):
 def test_unwritable_output_directory(tmp_path, capsys):
     ro = tmp_path / "ro"
     ro.mkdir(mode=0o500)
-    _one_line_exit_2(capsys, ["bench", "reference", "--json", str(ro / "b.json")],
-                     "not writable")
+    _one_line_exit_2(capsys, ["bench", "reference", "--json", str(ro / "b.json")], "not writable")
 
 
 def test_report_out_checked_before_work(tmp_path, capsys):
@@ -336,13 +421,16 @@ def test_report_out_checked_before_work(tmp_path, capsys):
     _one_line_exit_2(capsys, ["report", "--out", str(tmp_path / "a" / "b")], "does not exist")
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["bench", 'cmd:python "unbalanced'], "check its quotes"),
-    (["bench", "subprocess"], "needs the argument(s) command; use cmd:COMMAND"),
-    (["bench", "reference", "--scenes", ""], "names no scene"),
-    (["bench", "reference", "--scenes", " , "], "names no scene"),
-    (["bench", "cmd[timeout=1,timeout=2]:x"], "repeats"),
-])
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["bench", 'cmd:python "unbalanced'], "check its quotes"),
+        (["bench", "subprocess"], "needs the argument(s) command; use cmd:COMMAND"),
+        (["bench", "reference", "--scenes", ""], "names no scene"),
+        (["bench", "reference", "--scenes", " , "], "names no scene"),
+        (["bench", "cmd[timeout=1,timeout=2]:x"], "repeats"),
+    ],
+)
 def test_bench_usage_errors_are_one_line(capsys, argv, needle):
     _one_line_exit_2(capsys, argv, needle)
 

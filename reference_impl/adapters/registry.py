@@ -84,7 +84,7 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
     spec = spec.strip()
     cmd = _CMD_RE.match(spec)
     if cmd:
-        command = spec[cmd.end():].strip()
+        command = spec[cmd.end() :].strip()
         if not command:
             raise HCVInputError("adapter spec 'cmd:' needs a command, e.g. 'cmd:python my_code.py'")
         kwargs = _kwargs(cmd.group("args") or "", spec)
@@ -93,8 +93,10 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
         return "subprocess", {"command": command, **kwargs}
     m = _SPEC_RE.match(spec)
     if not m:
-        raise HCVInputError(f"adapter spec {spec!r} is malformed; use NAME, NAME[key=value,...], "
-                            "package.module:Class or cmd:COMMAND")
+        raise HCVInputError(
+            f"adapter spec {spec!r} is malformed; use NAME, NAME[key=value,...], "
+            "package.module:Class or cmd:COMMAND"
+        )
     return m.group("target").strip(), _kwargs(m.group("args") or "", spec)
 
 
@@ -120,15 +122,19 @@ def _import(path: str) -> type:
     try:
         module = importlib.import_module(mod_name)
     except ImportError as exc:
-        raise HCVInputError(f"adapter {path!r}: cannot import module {mod_name!r} ({exc}); the "
-                            f"current directory {cwd} is on the import path, else set "
-                            "PYTHONPATH") from None
+        raise HCVInputError(
+            f"adapter {path!r}: cannot import module {mod_name!r} ({exc}); the "
+            f"current directory {cwd} is on the import path, else set "
+            "PYTHONPATH"
+        ) from None
     cls = getattr(module, cls_name, None)
     if cls is None:
         raise HCVInputError(f"adapter {path!r}: module {mod_name!r} has no attribute {cls_name!r}")
     if not (isinstance(cls, type) and issubclass(cls, ContactAdapter)):
-        raise HCVInputError(f"adapter {path!r} is not a ContactAdapter subclass "
-                            "(see reference_impl.adapters.base for the contract)")
+        raise HCVInputError(
+            f"adapter {path!r} is not a ContactAdapter subclass "
+            "(see reference_impl.adapters.base for the contract)"
+        )
     return cls
 
 
@@ -139,8 +145,10 @@ def resolve_class(target: str) -> type:
         return _import(entry) if isinstance(entry, str) else entry
     if _IMPORT_RE.match(target):
         return _import(target)
-    raise HCVInputError(f"unknown adapter {target!r}; registered: {', '.join(registered())}; "
-                        "or give package.module:Class or cmd:COMMAND")
+    raise HCVInputError(
+        f"unknown adapter {target!r}; registered: {', '.join(registered())}; "
+        "or give package.module:Class or cmd:COMMAND"
+    )
 
 
 def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
@@ -151,10 +159,12 @@ def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
     cls = resolve_class(target)
     missing = _missing_arguments(cls, kwargs)
     if missing:
-        hint = ("; use cmd:COMMAND, e.g. cmd:./my_code" if "command" in missing else
-                f"; give {target}[{'=...,'.join(missing)}=...]")
-        raise HCVInputError(f"adapter {target!r} needs the argument(s) {', '.join(missing)}"
-                            f"{hint}")
+        hint = (
+            "; use cmd:COMMAND, e.g. cmd:./my_code"
+            if "command" in missing
+            else f"; give {target}[{'=...,'.join(missing)}=...]"
+        )
+        raise HCVInputError(f"adapter {target!r} needs the argument(s) {', '.join(missing)}{hint}")
     try:
         return cls(**kwargs)
     except HCVInputError:
@@ -169,5 +179,10 @@ def _missing_arguments(cls: type, kwargs: dict) -> list[str]:
         params = inspect.signature(cls).parameters.values()
     except (TypeError, ValueError):
         return []
-    return [p.name for p in params if p.default is inspect.Parameter.empty
-            and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and p.name not in kwargs]
+    return [
+        p.name
+        for p in params
+        if p.default is inspect.Parameter.empty
+        and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        and p.name not in kwargs
+    ]

@@ -92,8 +92,14 @@ from .base import (
     trajectory_from_mapping,
 )
 
-__all__ = ["PROTOCOL", "AdapterDeclined", "AdapterTimeout", "SubprocessAdapter",
-           "law_from_json", "response_limit"]
+__all__ = [
+    "PROTOCOL",
+    "AdapterDeclined",
+    "AdapterTimeout",
+    "SubprocessAdapter",
+    "law_from_json",
+    "response_limit",
+]
 
 PROTOCOL = "hcv-adapter/1"
 # Characters of the command's stderr kept for a failure report (the tail).
@@ -139,8 +145,11 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(data, Mapping):
         raise AdapterOutputError(f"{who}: 'implemented_law' must be an object")
     try:
-        pot = (_potential(_Where(who), dict(data["potential"]), "implemented_law.potential")
-               if "potential" in data else scene.potential)
+        pot = (
+            _potential(_Where(who), dict(data["potential"]), "implemented_law.potential")
+            if "potential" in data
+            else scene.potential
+        )
     except HCVInputError as exc:
         raise AdapterOutputError(f"{who}: {exc}") from None
     mass = data.get("mass", scene.mass)
@@ -148,8 +157,10 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(mass, (int, float)) or not mass > 0 or not isinstance(damping, Mapping):
         raise AdapterOutputError(f"{who}: 'implemented_law' needs mass > 0 and a damping object")
     law = damping.get("law")
-    kw = dict(clips_tension=bool(data.get("clips_tension", False)),
-              description=str(data.get("description", "")))
+    kw = dict(
+        clips_tension=bool(data.get("clips_tension", False)),
+        description=str(data.get("description", "")),
+    )
     try:
         if law == "none":
             return ImplementedLaw(pot, float(mass), zeta=0.0, **kw)
@@ -162,8 +173,9 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
             return ImplementedLaw(pot, float(mass), C=PowerDamping(c, a), **kw)
     except (KeyError, TypeError, ValueError, HCVInputError) as exc:
         raise AdapterOutputError(f"{who}: bad 'implemented_law.damping' ({exc})") from None
-    raise AdapterOutputError(f"{who}: implemented_law.damping.law must be none, universal or "
-                             f"power, got {law!r}")
+    raise AdapterOutputError(
+        f"{who}: implemented_law.damping.law must be none, universal or power, got {law!r}"
+    )
 
 
 class SubprocessAdapter(ContactAdapter):
@@ -187,19 +199,29 @@ class SubprocessAdapter(ContactAdapter):
     name = "subprocess"
     isolate = False  # every run is already a separate process with a timeout
 
-    def __init__(self, command: str | Sequence[str], timeout: float | None = None,
-                 cwd: str | None = None, label: str | None = None, sustained: bool = False):
+    def __init__(
+        self,
+        command: str | Sequence[str],
+        timeout: float | None = None,
+        cwd: str | None = None,
+        label: str | None = None,
+        sustained: bool = False,
+    ):
         if isinstance(command, str):
             try:
                 argv = shlex.split(command)
             except ValueError as exc:  # e.g. an unbalanced quote
-                raise HCVInputError(f"subprocess adapter: cannot split the command {command!r} "
-                                    f"({exc}); check its quotes") from None
+                raise HCVInputError(
+                    f"subprocess adapter: cannot split the command {command!r} "
+                    f"({exc}); check its quotes"
+                ) from None
         elif isinstance(command, Sequence) and all(isinstance(a, str) for a in command):
             argv = list(command)
         else:
-            raise HCVInputError(f"subprocess adapter: command must be a string or a list of "
-                                f"strings, got {command!r}")
+            raise HCVInputError(
+                f"subprocess adapter: command must be a string or a list of "
+                f"strings, got {command!r}"
+            )
         if not argv:
             raise HCVInputError("subprocess adapter: empty command")
         self.timeout_given = timeout is not None
@@ -222,18 +244,29 @@ class SubprocessAdapter(ContactAdapter):
         return self._label
 
     def describe(self) -> dict:
-        return {"name": self.name, "label": self.label, "command": self.argv,
-                "timeout": self.timeout, "protocol": PROTOCOL}
+        return {
+            "name": self.name,
+            "label": self.label,
+            "command": self.argv,
+            "timeout": self.timeout,
+            "protocol": PROTOCOL,
+        }
 
     def _exchange(self, payload: bytes, limit: int) -> tuple[int, bytes, str]:
         """Run the command once: (exit status, stdout, stderr tail); kill it on any way out."""
         try:
-            proc = subprocess.Popen(self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                    stderr=subprocess.PIPE, cwd=self.cwd,
-                                    start_new_session=True)
+            proc = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                cwd=self.cwd,
+                start_new_session=True,
+            )
         except OSError as exc:
-            raise AdapterRunError(f"{self.label}: cannot start {self.argv[0]!r} "
-                                  f"({exc.strerror})") from None
+            raise AdapterRunError(
+                f"{self.label}: cannot start {self.argv[0]!r} ({exc.strerror})"
+            ) from None
         out, err = bytearray(), bytearray()
         deadline = time.monotonic() + self.timeout
         sel = selectors.DefaultSelector()
@@ -247,13 +280,15 @@ class SubprocessAdapter(ContactAdapter):
             while sel.get_map():
                 left = deadline - time.monotonic()
                 if left <= 0:
-                    raise AdapterTimeout(f"{self.label}: timeout after {self.timeout:g} s",
-                                         _tail(err.decode(errors="replace")))
+                    raise AdapterTimeout(
+                        f"{self.label}: timeout after {self.timeout:g} s",
+                        _tail(err.decode(errors="replace")),
+                    )
                 for key, _ in sel.select(min(left, _POLL)):
                     f = key.fileobj
                     if f is proc.stdin:
                         try:
-                            sent += os.write(f.fileno(), payload[sent:sent + _CHUNK])
+                            sent += os.write(f.fileno(), payload[sent : sent + _CHUNK])
                         except BlockingIOError:
                             continue
                         except BrokenPipeError:
@@ -271,16 +306,19 @@ class SubprocessAdapter(ContactAdapter):
                         if len(out) > limit:
                             raise AdapterOutputError(
                                 f"{self.label}: more than {limit} bytes on stdout for a run of "
-                                f"{self._n_steps} steps; the command was stopped")
+                                f"{self._n_steps} steps; the command was stopped"
+                            )
                     else:
                         err += data
-                        del err[:-2 * _STDERR_TAIL]
+                        del err[: -2 * _STDERR_TAIL]
             left = deadline - time.monotonic()
             try:
                 rc = proc.wait(timeout=max(left, 0.0))
             except subprocess.TimeoutExpired:
-                raise AdapterTimeout(f"{self.label}: timeout after {self.timeout:g} s",
-                                     _tail(err.decode(errors="replace"))) from None
+                raise AdapterTimeout(
+                    f"{self.label}: timeout after {self.timeout:g} s",
+                    _tail(err.decode(errors="replace")),
+                ) from None
             done = True
         finally:
             sel.close()
@@ -298,32 +336,37 @@ class SubprocessAdapter(ContactAdapter):
         self._n_steps = int(scene.n_steps)
         rc, raw_bytes, stderr = self._exchange(payload.encode(), response_limit(scene.n_steps))
         if rc != 0:
-            how = (f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}")
+            how = f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}"
             raise AdapterRunError(f"{self.label}: command failed, {how}", stderr)
         raw = raw_bytes.decode(errors="replace")
         try:
             data = json.loads(raw)
         except json.JSONDecodeError as exc:
             first = raw.strip().splitlines()[0][:80] if raw.strip() else "(empty)"
-            raise AdapterOutputError(f"{self.label}: stdout is not one JSON object ({exc.msg} at "
-                                     f"line {exc.lineno}; starts with {first!r})") from None
+            raise AdapterOutputError(
+                f"{self.label}: stdout is not one JSON object ({exc.msg} at "
+                f"line {exc.lineno}; starts with {first!r})"
+            ) from None
         except RecursionError:
             raise AdapterOutputError(f"{self.label}: stdout is JSON nested too deeply") from None
         if not isinstance(data, dict):
-            raise AdapterOutputError(f"{self.label}: stdout must be a JSON object, got "
-                                     f"{type(data).__name__}")
+            raise AdapterOutputError(
+                f"{self.label}: stdout must be a JSON object, got {type(data).__name__}"
+            )
         if "unsupported" in data:
             raise AdapterDeclined(str(data["unsupported"])[:300])
         if "error" in data:
-            raise AdapterRunError(f"{self.label}: reported error: {str(data['error'])[:300]}",
-                                  stderr)
+            raise AdapterRunError(
+                f"{self.label}: reported error: {str(data['error'])[:300]}", stderr
+            )
         return data
 
     def _run(self, request: str, scene: AdapterScene):
         data = self._call(request, scene)
         if "implemented_law" in data:
-            self._laws[(scene.name, scene.v0)] = law_from_json(data["implemented_law"], scene,
-                                                               self.label)
+            self._laws[(scene.name, scene.v0)] = law_from_json(
+                data["implemented_law"], scene, self.label
+            )
         return trajectory_from_mapping(data, who=self.label)
 
     def _impact_impl(self, scene: AdapterScene):

@@ -44,8 +44,10 @@ def _scene_args(values: Sequence[str] | None) -> list[str] | None:
         raise HCVInputError(f"--scenes is longer than {_MAX_SCENE_ARGS} characters")
     out = [s.strip() for v in values for s in v.split(",") if s.strip()]
     if not out:
-        raise HCVInputError(f"--scenes {' '.join(repr(v) for v in values)} names no scene; give "
-                            "scene names or TOML files, or leave --scenes out for the defaults")
+        raise HCVInputError(
+            f"--scenes {' '.join(repr(v) for v in values)} names no scene; give "
+            "scene names or TOML files, or leave --scenes out for the defaults"
+        )
     return out
 
 
@@ -74,26 +76,41 @@ class _Lines:
         self.adapter, self.t0 = adapter, time.perf_counter()
 
     def __call__(self, done: float, total: float) -> None:
-        print(f"hcv bench {self.adapter}: {done:.0f} of {total:.0f} scene runs done "
-              f"({time.perf_counter() - self.t0:.0f} s)", file=sys.stderr, flush=True)
+        print(
+            f"hcv bench {self.adapter}: {done:.0f} of {total:.0f} scene runs done "
+            f"({time.perf_counter() - self.t0:.0f} s)",
+            file=sys.stderr,
+            flush=True,
+        )
 
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object."""
     b = subparsers.add_parser(
-        "bench", help="benchmark a contact code against the exact solution (CI gate)",
+        "bench",
+        help="benchmark a contact code against the exact solution (CI gate)",
         description="Run scenes through a contact code's adapter and through the exact "
-                    "solution; print the scorecard; with --gate exit 1 when a metric fails.")
-    b.add_argument("adapter", help="registered name (reference, lammps, subprocess), "
-                                   "package.module:Class or cmd:COMMAND; NAME[key=value,...] "
-                                   "passes arguments")
-    b.add_argument("--scenes", nargs="+", metavar="SCENE",
-                   help="scene names or TOML files (space or comma separated); default: "
-                        "hertz, hertz-damped, hooke-damped, hertz-walls")
-    b.add_argument("--tolerances", metavar="FILE",
-                   help="TOML file overriding the default tolerances")
-    b.add_argument("--gate", action="store_true",
-                   help="exit 1 when any metric fails (0 when all pass)")
+        "solution; print the scorecard; with --gate exit 1 when a metric fails.",
+    )
+    b.add_argument(
+        "adapter",
+        help="registered name (reference, lammps, subprocess), "
+        "package.module:Class or cmd:COMMAND; NAME[key=value,...] "
+        "passes arguments",
+    )
+    b.add_argument(
+        "--scenes",
+        nargs="+",
+        metavar="SCENE",
+        help="scene names or TOML files (space or comma separated); default: "
+        "hertz, hertz-damped, hooke-damped, hertz-walls",
+    )
+    b.add_argument(
+        "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
+    )
+    b.add_argument(
+        "--gate", action="store_true", help="exit 1 when any metric fails (0 when all pass)"
+    )
     b.add_argument("--json", metavar="FILE", help="write the JSON report here")
     b.add_argument("--junit", metavar="FILE", help="write JUnit XML here")
     b.add_argument("--plot", metavar="FILE", help="write the speed-against-error plot (PNG)")
@@ -122,14 +139,23 @@ def cmd_bench(args) -> int:
 
         with Progress(transient=True, console=Console(stderr=True)) as bar:
             task = bar.add_task(f"bench {args.adapter}", total=None)
-            result = run_bench(args.adapter, scenes=scenes,
-                               tolerances=args.tolerances, json_path=args.json,
-                               junit_path=args.junit,
-                               progress=lambda d, t: bar.update(task, completed=d, total=t))
+            result = run_bench(
+                args.adapter,
+                scenes=scenes,
+                tolerances=args.tolerances,
+                json_path=args.json,
+                junit_path=args.junit,
+                progress=lambda d, t: bar.update(task, completed=d, total=t),
+            )
     else:
-        result = run_bench(args.adapter, scenes=scenes, tolerances=args.tolerances,
-                           json_path=args.json, junit_path=args.junit,
-                           progress=_Lines(args.adapter))
+        result = run_bench(
+            args.adapter,
+            scenes=scenes,
+            tolerances=args.tolerances,
+            json_path=args.json,
+            junit_path=args.junit,
+            progress=_Lines(args.adapter),
+        )
     console = Console()
     render_scorecard(result, console=console, show_skipped=args.show_skipped)
     if result.speed_error:
@@ -152,8 +178,10 @@ def cmd_bench(args) -> int:
     if args.gate:
         c = result.counts()
         verdict = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
-        print(f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} metrics "
-              f"failed, {c['error']} undecided by our reference)")
+        print(
+            f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} metrics "
+            f"failed, {c['error']} undecided by our reference)"
+        )
     return status
 
 

@@ -28,8 +28,16 @@ import numpy as np
 from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
 from ..potentials.power import PowerLaw
 
-__all__ = ["METRICS", "MetricResult", "SceneContext", "SpeedRecord", "check_conventions",
-           "exact_reference", "measure", "metric_names"]
+__all__ = [
+    "METRICS",
+    "MetricResult",
+    "SceneContext",
+    "SpeedRecord",
+    "check_conventions",
+    "exact_reference",
+    "measure",
+    "metric_names",
+]
 
 # Samples of the damped ODE on which the exact tensile peak is located.
 _TENSILE_SAMPLES = 4001
@@ -77,11 +85,19 @@ class SpeedRecord:
     internal: str = ""  # the suite's own reference failed at this speed
 
     def to_dict(self) -> dict:
-        return {"v0": self.v0, "dt": self.dt, "asked_restitution": self.asked_e,
-                "implemented_law": self.law.to_json() if self.law is not None else None,
-                "exact": self.exact, "measured": self.measured, "error": self.error,
-                "internal_error": self.internal,
-                "stderr": self.stderr, "seconds": self.seconds, "dt_crit": self.dt_crit}
+        return {
+            "v0": self.v0,
+            "dt": self.dt,
+            "asked_restitution": self.asked_e,
+            "implemented_law": self.law.to_json() if self.law is not None else None,
+            "exact": self.exact,
+            "measured": self.measured,
+            "error": self.error,
+            "internal_error": self.internal,
+            "stderr": self.stderr,
+            "seconds": self.seconds,
+            "dt_crit": self.dt_crit,
+        }
 
 
 @dataclass
@@ -116,18 +132,24 @@ def check_conventions(tr: Trajectory, v0: float) -> str | None:
     q, v, f = tr.q, tr.v, tr.force
     with np.errstate(invalid="ignore"):
         if np.isfinite(v[0]) and v[0] < 0:
-            return (f"v = dq/dt must be positive while approaching (got v[0] = {v[0]:.6g} m/s "
-                    f"for v0 = {v0:g} m/s)")
+            return (
+                f"v = dq/dt must be positive while approaching (got v[0] = {v[0]:.6g} m/s "
+                f"for v0 = {v0:g} m/s)"
+            )
         moved = np.nonzero(np.isfinite(q) & (q != 0))[0]
         if moved.size and q[moved[0]] < 0:  # the body approaches: the overlap grows first
             i = int(moved[0])
-            return (f"q must be positive in contact (got q[{i}] = {q[i]:.6g} m after the "
-                    f"first step at v0 = {v0:g} m/s: q is the overlap, not the gap)")
+            return (
+                f"q must be positive in contact (got q[{i}] = {q[i]:.6g} m after the "
+                f"first step at v0 = {v0:g} m/s: q is the overlap, not the gap)"
+            )
         if np.any(np.isfinite(q)) and np.nanmax(q) > 0:
             i = int(np.nanargmax(q))  # deepest overlap: q' ~ 0, the force is U'(q_max) > 0
             if np.isfinite(f[i]) and f[i] < 0:
-                return (f"force must be positive (repulsive) in contact (got {f[i]:.6g} N at "
-                        f"the deepest overlap q = {q[i]:.6g} m)")
+                return (
+                    f"force must be positive (repulsive) in contact (got {f[i]:.6g} N at "
+                    f"the deepest overlap q = {q[i]:.6g} m)"
+                )
     return None
 
 
@@ -145,8 +167,10 @@ def measure(tr: Trajectory, v0: float) -> dict:
     seen = np.cumsum(in_contact) > 0
     after = np.nonzero((~in_contact) & np.concatenate([[False], seen[:-1]]))[0]
     end = int(after[0]) if after.size else q.size
-    finite = bool(np.all(np.isfinite(q[:end + 1 if after.size else end]))
-                  and np.all(np.isfinite(v[:end + 1 if after.size else end])))
+    finite = bool(
+        np.all(np.isfinite(q[: end + 1 if after.size else end]))
+        and np.all(np.isfinite(v[: end + 1 if after.size else end]))
+    )
     out["finite"] = finite
     if not finite:
         out["reason"] = "non-finite state (blown up)"
@@ -158,7 +182,7 @@ def measure(tr: Trajectory, v0: float) -> dict:
     fc = f[1:end][in_contact[1:end]]
     fmax = float(np.max(fc)) if fc.size else math.nan
     out["max_force"] = fmax
-    out["tensile"] = (float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan)
+    out["tensile"] = float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan
     if not after.size:
         out["reason"] = f"did not separate within {q.size - 1} steps"
         return out
@@ -197,8 +221,14 @@ def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
     C = law.damping_coefficient
     if not math.isfinite(t_end):
         return math.nan
-    res = integrate_impact(law.potential, law.mass, v0, C=C, rtol=1e-10,
-                           t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES))
+    res = integrate_impact(
+        law.potential,
+        law.mass,
+        v0,
+        C=C,
+        rtol=1e-10,
+        t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES),
+    )
     q, v = res.q, res.v
     inside = q > 0
     if not np.any(inside):
@@ -248,8 +278,9 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
             out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
     out["energy_ratio"] = out["restitution"] ** 2
     out["tensile"] = _tensile_exact(law, v0, out["contact_time"])
-    return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v)
-            for k, v in out.items()}
+    return {
+        k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in out.items()
+    }
 
 
 def _time(fn, budget: float = 0.05, repeats: int = 3) -> float:
@@ -284,9 +315,17 @@ class Metric:
         return None
 
     def _result(self, ctx, status, value=None, reference=None, tol=None, explanation=""):
-        return MetricResult(ctx.variant, ctx.scene, self.name, status, value, reference,
-                            f"{self.field} {tol:g}" if tol is not None else "", explanation,
-                            self.description)
+        return MetricResult(
+            ctx.variant,
+            ctx.scene,
+            self.name,
+            status,
+            value,
+            reference,
+            f"{self.field} {tol:g}" if tol is not None else "",
+            explanation,
+            self.description,
+        )
 
     def evaluate(self, ctx: SceneContext, tol: dict) -> MetricResult:
         if ctx.skipped:
@@ -303,12 +342,21 @@ class Metric:
             return self._result(ctx, "fail", tol=limit, explanation=str(miss))
         except _Internal as exc:
             return self._result(ctx, "error", tol=limit, explanation=_ours(str(exc)))
-        if res.status == "pass" and self.magnitude and not (
-                isinstance(res.value, float) and res.value >= 0):
+        if (
+            res.status == "pass"
+            and self.magnitude
+            and not (isinstance(res.value, float) and res.value >= 0)
+        ):
             # every magnitude metric compares a value >= 0 with its limit; anything else
             # (negative, NaN) is a sign or measurement error and never passes
-            return self._result(ctx, "fail", res.value, res.reference, limit,
-                                f"{self.name} = {res.value!r} is not a magnitude >= 0")
+            return self._result(
+                ctx,
+                "fail",
+                res.value,
+                res.reference,
+                limit,
+                f"{self.name} = {res.value!r} is not a magnitude >= 0",
+            )
         return res
 
     def _evaluate(self, ctx: SceneContext, limit: float) -> MetricResult:  # pragma: no cover
@@ -363,10 +411,16 @@ class _RelativeToExact(Metric):
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
         law = rec.law.description if rec.law is not None else ""
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"{self.quantity.replace('_', ' ')} {got:.7g}{self.unit} at v0 = "
-                            f"{rec.v0:g} m/s, exact {ref:.7g}{self.unit} for the implemented law "
-                            f"({law}): rel. error {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"{self.quantity.replace('_', ' ')} {got:.7g}{self.unit} at v0 = "
+            f"{rec.v0:g} m/s, exact {ref:.7g}{self.unit} for the implemented law "
+            f"({law}): rel. error {err:.2g} > {limit:g}",
+        )
 
 
 class RestitutionExact(_RelativeToExact):
@@ -405,10 +459,16 @@ class RestitutionAsked(Metric):
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
         implemented = ex.get("restitution", math.nan)
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"e = {got:.6g} at v0 = {rec.v0:g} m/s but {rec.asked_e:.6g} was asked "
-                            f"(rel. {err:.2g} > {limit:g}); the law the code implements gives "
-                            f"{implemented:.6g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"e = {got:.6g} at v0 = {rec.v0:g} m/s but {rec.asked_e:.6g} was asked "
+            f"(rel. {err:.2g} > {limit:g}); the law the code implements gives "
+            f"{implemented:.6g}",
+        )
 
 
 class RestitutionSpread(Metric):
@@ -432,19 +492,29 @@ class RestitutionSpread(Metric):
         vals = np.array([e for e, _, _ in es])
         if np.any(vals < 0):  # a restitution is a magnitude: a negative one is a sign error
             bad = es[int(np.argmin(vals))]
-            raise _Missing(f"restitution {bad[0]:.5g} < 0 at v0 = {bad[1]:g} m/s (wrong sign "
-                           "of the velocity?)")
+            raise _Missing(
+                f"restitution {bad[0]:.5g} < 0 at v0 = {bad[1]:g} m/s (wrong sign of the velocity?)"
+            )
         spread = float((vals.max() - vals.min()) / abs(vals.mean())) if vals.mean() else math.inf
         exact_vals = np.array([x for _, _, x in es])
-        ref = (float((exact_vals.max() - exact_vals.min()) / abs(exact_vals.mean()))
-               if np.all(np.isfinite(exact_vals)) and exact_vals.mean() else math.nan)
+        ref = (
+            float((exact_vals.max() - exact_vals.min()) / abs(exact_vals.mean()))
+            if np.all(np.isfinite(exact_vals)) and exact_vals.mean()
+            else math.nan
+        )
         if spread <= limit:
             return self._result(ctx, "pass", spread, ref, limit)
         lo, hi = es[int(np.argmin(vals))], es[int(np.argmax(vals))]
-        return self._result(ctx, "fail", spread, ref, limit,
-                            f"e = {lo[0]:.5g} at v0 = {lo[1]:g} m/s but {hi[0]:.5g} at {hi[1]:g} "
-                            f"m/s: spread {spread:.2g} > {limit:g} (the implemented law's exact "
-                            f"spread is {ref:.2g})")
+        return self._result(
+            ctx,
+            "fail",
+            spread,
+            ref,
+            limit,
+            f"e = {lo[0]:.5g} at v0 = {lo[1]:g} m/s but {hi[0]:.5g} at {hi[1]:g} "
+            f"m/s: spread {spread:.2g} > {limit:g} (the implemented law's exact "
+            f"spread is {ref:.2g})",
+        )
 
 
 class EnergyBalance(Metric):
@@ -466,16 +536,24 @@ class EnergyBalance(Metric):
         err, rec, ratio = worst
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"E_out / E_in = {ratio:.8g} at v0 = {rec.v0:g} m/s for an elastic "
-                            f"impact: |1 - ratio| = {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"E_out / E_in = {ratio:.8g} at v0 = {rec.v0:g} m/s for an elastic "
+            f"impact: |1 - ratio| = {err:.2g} > {limit:g}",
+        )
 
 
 class AttractiveForce(Metric):
     name = key = "attractive_force"
     field = "atol"
-    description = ("peak attractive (tensile) total force near the end of contact, / peak "
-                   "force, against the implemented law")
+    description = (
+        "peak attractive (tensile) total force near the end of contact, / peak "
+        "force, against the implemented law"
+    )
 
     def _evaluate(self, ctx, limit):
         worst = None
@@ -489,19 +567,27 @@ class AttractiveForce(Metric):
         if err <= limit:
             return self._result(ctx, "pass", got, ref, limit)
         clip = rec.law is not None and rec.law.clips_tension
-        return self._result(ctx, "fail", got, ref, limit,
-                            f"tensile force peaks at {got:.3g} of the peak force at v0 = "
-                            f"{rec.v0:g} m/s, the implemented law "
-                            f"{'(tension clipped) ' if clip else ''}gives {ref:.3g}: "
-                            f"|diff| {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            got,
+            ref,
+            limit,
+            f"tensile force peaks at {got:.3g} of the peak force at v0 = "
+            f"{rec.v0:g} m/s, the implemented law "
+            f"{'(tension clipped) ' if clip else ''}gives {ref:.3g}: "
+            f"|diff| {err:.2g} > {limit:g}",
+        )
 
 
 class DtCrit(Metric):
     name = key = "dt_crit"
     field = "min_ratio"
     magnitude = False  # a ratio compared from above (inf when stable throughout)
-    description = ("critical step measured on the code, in units of Delta t_safe (section 6), "
-                   "against textbook Verlet with the same law")
+    description = (
+        "critical step measured on the code, in units of Delta t_safe (section 6), "
+        "against textbook Verlet with the same law"
+    )
 
     def _evaluate(self, ctx, limit):
         worst = None
@@ -510,31 +596,41 @@ class DtCrit(Metric):
             if rec.internal or (d is not None and d.get("internal")):
                 raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal or d['internal']}")
             if d is None:
-                raise _Missing(f"no critical-step search at v0 = {rec.v0:g} m/s"
-                               + (f": {rec.error}" if rec.error else ""))
+                raise _Missing(
+                    f"no critical-step search at v0 = {rec.v0:g} m/s"
+                    + (f": {rec.error}" if rec.error else "")
+                )
             if d.get("error"):
                 raise _Missing(f"critical-step search at v0 = {rec.v0:g} m/s: {d['error']}")
             ref = d.get("verlet_ratio", 1.0)
-            rel = d["ratio"] / ref if math.isfinite(ref) else (1.0 if math.isinf(d["ratio"])
-                                                                else 0.0)
+            rel = (
+                d["ratio"] / ref if math.isfinite(ref) else (1.0 if math.isinf(d["ratio"]) else 0.0)
+            )
             if worst is None or rel < worst[0]:
                 worst = (rel, rec, d, ref)
         rel, rec, d, ref = worst
         if rel >= limit:
             return self._result(ctx, "pass", d["ratio"], ref, limit)
-        return self._result(ctx, "fail", d["ratio"], ref, limit,
-                            f"unstable at dt = {d['dt_crit']:.4g} s = {d['ratio']:.3g} dt_safe "
-                            f"(v0 = {rec.v0:g} m/s: {d.get('reason', 'energy gain')}), textbook "
-                            f"Verlet with the same law holds to {ref:.3g} dt_safe: "
-                            f"{rel:.3g} < {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            d["ratio"],
+            ref,
+            limit,
+            f"unstable at dt = {d['dt_crit']:.4g} s = {d['ratio']:.3g} dt_safe "
+            f"(v0 = {rec.v0:g} m/s: {d.get('reason', 'energy gain')}), textbook "
+            f"Verlet with the same law holds to {ref:.3g} dt_safe: "
+            f"{rel:.3g} < {limit:g}",
+        )
 
 
 class SpeedError(Metric):
     name = key = "speed_error"
     field = "min_order"
     magnitude = False  # an order, compared from above
-    description = ("convergence order of the error against dt (speed-against-error table, "
-                   "middle speed)")
+    description = (
+        "convergence order of the error against dt (speed-against-error table, middle speed)"
+    )
 
     def _evaluate(self, ctx, limit):
         if ctx.order_internal:
@@ -545,10 +641,16 @@ class SpeedError(Metric):
             raise _Missing("too few converging points in the speed-against-error table")
         if ctx.order >= limit:
             return self._result(ctx, "pass", ctx.order, 2.0, limit)
-        return self._result(ctx, "fail", ctx.order, 2.0, limit,
-                            f"the largest relative error falls like dt^{ctx.order:.2f} "
-                            f"(order below {limit:g}): the code does not converge to the law it "
-                            "implements")
+        return self._result(
+            ctx,
+            "fail",
+            ctx.order,
+            2.0,
+            limit,
+            f"the largest relative error falls like dt^{ctx.order:.2f} "
+            f"(order below {limit:g}): the code does not converge to the law it "
+            "implements",
+        )
 
 
 class EnergyDrift(Metric):
@@ -573,14 +675,28 @@ class EnergyDrift(Metric):
         drift = s["drift"]
         if drift <= limit:
             return self._result(ctx, "pass", drift, 0.0, limit)
-        return self._result(ctx, "fail", drift, 0.0, limit,
-                            f"energy drifts by {drift:.3g} of E_0 over {s['steps']} steps "
-                            f"({s.get('impacts', '?')} impacts) > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            drift,
+            0.0,
+            limit,
+            f"energy drifts by {drift:.3g} of E_0 over {s['steps']} steps "
+            f"({s.get('impacts', '?')} impacts) > {limit:g}",
+        )
 
 
 METRICS: tuple[Metric, ...] = (
-    RestitutionAsked(), RestitutionExact(), RestitutionSpread(), MaxPenetration(),
-    ContactTime(), EnergyBalance(), AttractiveForce(), DtCrit(), SpeedError(), EnergyDrift(),
+    RestitutionAsked(),
+    RestitutionExact(),
+    RestitutionSpread(),
+    MaxPenetration(),
+    ContactTime(),
+    EnergyBalance(),
+    AttractiveForce(),
+    DtCrit(),
+    SpeedError(),
+    EnergyDrift(),
 )
 
 

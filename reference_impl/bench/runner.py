@@ -91,15 +91,20 @@ def resolve_scenes(scenes: Sequence[str | Scene] | None) -> list[Scene]:
     for s in items:
         sc = s if isinstance(s, Scene) else load_scene(s)
         if sc.kind not in ("impact", "two-walls"):
-            raise HCVInputError(f"scene {sc.name!r}: hcv bench runs impact and two-walls scenes, "
-                                f"not {sc.kind!r}")
+            raise HCVInputError(
+                f"scene {sc.name!r}: hcv bench runs impact and two-walls scenes, not {sc.kind!r}"
+            )
         if len(sc.velocities) > MAX_SPEEDS:
-            raise HCVInputError(f"scene {sc.name!r} has {len(sc.velocities)} speeds; hcv bench "
-                                f"runs at most {MAX_SPEEDS} per scene")
+            raise HCVInputError(
+                f"scene {sc.name!r} has {len(sc.velocities)} speeds; hcv bench "
+                f"runs at most {MAX_SPEEDS} per scene"
+            )
         if sc.damping_law == "universal" and (sc.zeta or 0.0) >= 1.0:
-            raise HCVInputError(f"scene {sc.name!r}: hcv bench needs damping zeta < 1, got "
-                                f"{sc.zeta!r} (the restitution asked, exp(-pi zeta / sqrt(1 - "
-                                "zeta^2)), is defined for zeta < 1 only)")
+            raise HCVInputError(
+                f"scene {sc.name!r}: hcv bench needs damping zeta < 1, got "
+                f"{sc.zeta!r} (the restitution asked, exp(-pi zeta / sqrt(1 - "
+                "zeta^2)), is defined for zeta < 1 only)"
+            )
         out.append(sc)
     names = [s.name for s in out]
     dup = {n for n in names if names.count(n) > 1}
@@ -199,8 +204,11 @@ class _SceneRun:
     def call(self, method: str, ascene: AdapterScene) -> Outcome:
         """One adapter call; after a first timeout on this scene the rest are not run."""
         if self.timed_out:
-            return Outcome(False, error=f"not run: an earlier run on this scene {self.timed_out}",
-                           timed_out=True)
+            return Outcome(
+                False,
+                error=f"not run: an earlier run on this scene {self.timed_out}",
+                timed_out=True,
+            )
         out = self.ex.call(self.index, method, ascene, timeout=self.timeout)
         if out.declined:
             raise _Declined(out.declined)
@@ -214,11 +222,13 @@ class _SceneRun:
             sol = solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
             t_c = float(sol.contact_time)
         except Exception as exc:
-            raise _Ours(f"exact solution of the scene at v0 = {v0:g} m/s failed: "
-                        f"{_one_line(exc)}") from None
+            raise _Ours(
+                f"exact solution of the scene at v0 = {v0:g} m/s failed: {_one_line(exc)}"
+            ) from None
         if not (math.isfinite(t_c) and t_c > 0):
-            raise _Ours(f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time "
-                        f"{t_c!r}")
+            raise _Ours(
+                f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time {t_c!r}"
+            )
         return sol
 
     def budget(self, dt: float, t_c: float) -> int:
@@ -246,8 +256,9 @@ class _SceneRun:
             rec.stderr = rec.stderr or law.stderr
             return rec
         if not isinstance(law.value, ImplementedLaw):
-            rec.error = rec.error or (f"malformed output: implemented_law returned "
-                                      f"{type(law.value).__name__}")
+            rec.error = rec.error or (
+                f"malformed output: implemented_law returned {type(law.value).__name__}"
+            )
             return rec
         rec.law = law.value
         try:
@@ -276,8 +287,9 @@ class _SceneRun:
             return False, f"rebound energy {gain:.4g} E_0"
         return True, ""
 
-    def _verlet_stable(self, law: ImplementedLaw, v0: float, dt: float,
-                       q_max: float) -> tuple[bool, str]:
+    def _verlet_stable(
+        self, law: ImplementedLaw, v0: float, dt: float, q_max: float
+    ) -> tuple[bool, str]:
         from ..adapters.reference import law_trajectory
 
         n = int(math.ceil(_DTCRIT_BUDGET * q_max / (v0 * dt))) + _EXTRA_STEPS
@@ -296,8 +308,12 @@ class _SceneRun:
         res = self.tol["dt_crit"]["resolution"]
         out = {"dt_safe": ref}
         code = _search(lambda f: self._stable(ascene, f * ref, q_max), res)
-        out.update(dt_crit=code["ratio"] * ref, ratio=code["ratio"], reason=code["reason"],
-                   runs=code["runs"])
+        out.update(
+            dt_crit=code["ratio"] * ref,
+            ratio=code["ratio"],
+            reason=code["reason"],
+            runs=code["runs"],
+        )
         try:
             verlet = _search(lambda f: self._verlet_stable(law, v0, f * ref, q_max), res)
             out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
@@ -310,8 +326,7 @@ class _SceneRun:
     def speed_table(self, rows: list[dict]) -> None:
         """Speed against error at the middle speed; fit the convergence order."""
         ctx, sc = self.ctx, self.scene
-        recs = [r for r in ctx.speeds if r.law is not None and r.exact is not None
-                and not r.error]
+        recs = [r for r in ctx.speeds if r.law is not None and r.exact is not None and not r.error]
         if not recs:
             ours = next((r.internal for r in ctx.speeds if r.internal and not r.error), "")
             if ours:
@@ -325,19 +340,37 @@ class _SceneRun:
         except Exception as exc:  # ours
             ctx.order_internal = f"exact reference of the speed table failed: {_one_line(exc)}"
             return
-        rows.append({"adapter": ctx.variant, "scene": sc.name, "v0": rec.v0, "method": ex["method"],
-                     "setting": "reference", "steps_per_contact": None, "dt": None,
-                     "seconds": ex["seconds"], "err_restitution": 0.0, "err_contact_time": 0.0,
-                     "err_max_penetration": 0.0})
+        rows.append(
+            {
+                "adapter": ctx.variant,
+                "scene": sc.name,
+                "v0": rec.v0,
+                "method": ex["method"],
+                "setting": "reference",
+                "steps_per_contact": None,
+                "dt": None,
+                "seconds": ex["seconds"],
+                "err_restitution": 0.0,
+                "err_contact_time": 0.0,
+                "err_max_penetration": 0.0,
+            }
+        )
         t_c = ex["contact_time"]
         pts = []
         for n in self.tol["run"]["speed_error_steps"]:
             dt = t_c / n
             ascene = AdapterScene.from_scene(sc, rec.v0, dt, self.budget(dt, t_c))
             out = self.call("impact", ascene)
-            row = {"adapter": ctx.variant, "scene": sc.name, "v0": rec.v0, "method": ctx.variant,
-                   "setting": f"dt = t_c/{n}", "steps_per_contact": n, "dt": dt,
-                   "seconds": out.seconds}
+            row = {
+                "adapter": ctx.variant,
+                "scene": sc.name,
+                "v0": rec.v0,
+                "method": ctx.variant,
+                "setting": f"dt = t_c/{n}",
+                "steps_per_contact": n,
+                "dt": dt,
+                "seconds": out.seconds,
+            }
             if not out.ok:
                 row["failure"] = out.error
                 rows.append(row)
@@ -352,8 +385,13 @@ class _SceneRun:
             worst = max(errs.values())
             if math.isfinite(worst) and worst > _ORDER_FLOOR:
                 pts.append((dt, worst))
-        mine = [r for r in rows if r["adapter"] == ctx.variant and r["scene"] == sc.name
-                and r["steps_per_contact"] is not None]
+        mine = [
+            r
+            for r in rows
+            if r["adapter"] == ctx.variant
+            and r["scene"] == sc.name
+            and r["steps_per_contact"] is not None
+        ]
         failed = [r for r in mine if "failure" in r]
         if len(pts) >= 3:
             x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
@@ -361,8 +399,10 @@ class _SceneRun:
         elif not failed:
             ctx.order = math.inf  # errors at round-off: nothing left to converge
         else:
-            ctx.order_error = (f"{len(failed)} of {len(mine)} runs of the speed-against-error "
-                               f"table failed: {failed[0]['failure']}")
+            ctx.order_error = (
+                f"{len(failed)} of {len(mine)} runs of the speed-against-error "
+                f"table failed: {failed[0]['failure']}"
+            )
 
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
@@ -386,8 +426,13 @@ class _SceneRun:
         E0 = 0.5 * sc.mass * v0 * v0
         drift = float(np.max(np.abs(E / E0 - 1.0))) if np.all(np.isfinite(E)) else math.inf
         impacts = int(np.sum((tr.q[1:] > 0) & (tr.q[:-1] <= 0)))
-        ctx.sustained = {"drift": drift, "steps": int(tr.t.size - 1), "impacts": impacts,
-                         "dt": dt, "seconds": out.seconds}
+        ctx.sustained = {
+            "drift": drift,
+            "steps": int(tr.t.size - 1),
+            "impacts": impacts,
+            "dt": dt,
+            "seconds": out.seconds,
+        }
 
     def run(self, rows: list[dict]) -> SceneContext:
         ctx = self.ctx
@@ -405,7 +450,6 @@ class _SceneRun:
         return ctx
 
 
-
 def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> dict:
     """Smallest unstable step, in units of dt_safe: scan `_DT_SCAN`, then bisect.
 
@@ -421,8 +465,11 @@ def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> d
 
     first_bad = next((f for f in _DT_SCAN if not ok(f)), None)
     if first_bad is None:
-        return {"ratio": math.inf, "reason": f"stable up to {_DT_SCAN[-1]:g} dt_safe",
-                "runs": len(tried)}
+        return {
+            "ratio": math.inf,
+            "reason": f"stable up to {_DT_SCAN[-1]:g} dt_safe",
+            "runs": len(tried),
+        }
     below = [f for f in _DT_SCAN if f < first_bad]
     lo = below[-1] if below else 0.0
     if lo == 0.0:
@@ -444,8 +491,14 @@ def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> d
 # ----------------------------------------------------------------------------
 # the entry point
 # ----------------------------------------------------------------------------
-def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_path=None,
-              progress: Callable[[float, float], None] | None = None) -> BenchResult:
+def run_bench(
+    adapter_spec,
+    scenes=None,
+    tolerances=None,
+    json_path=None,
+    junit_path=None,
+    progress: Callable[[float, float], None] | None = None,
+) -> BenchResult:
     """Benchmark one adapter on scenes; the function ``hcv bench`` calls.
 
     Parameters
@@ -485,8 +538,9 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
     labels = [v.label for v in variants]
     if len(set(labels)) != len(labels):
         executor.close()
-        raise HCVInputError(f"adapter {adapter_spec!r}: variants must have distinct labels, got "
-                            f"{labels}")
+        raise HCVInputError(
+            f"adapter {adapter_spec!r}: variants must have distinct labels, got {labels}"
+        )
     for var in variants:  # in-process adapters with their own timeout take the run's
         if getattr(var, "timeout_given", True) is False:
             var.timeout = float(tol["run"]["timeout"])
@@ -498,16 +552,26 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
     if all(reason for *_, reason in plan):
         executor.close()
         reasons = sorted({reason for *_, reason in plan})
-        raise HCVInputError(f"adapter {spec!r} supports none of the scenes "
-                            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}")
-    result = BenchResult(adapter=spec, scenes=[s.name for s in scene_list], tolerances=tol,
-                         machine=machine_info(), started=time.time())
+        raise HCVInputError(
+            f"adapter {spec!r} supports none of the scenes "
+            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}"
+        )
+    result = BenchResult(
+        adapter=spec,
+        scenes=[s.name for s in scene_list],
+        tolerances=tol,
+        machine=machine_info(),
+        started=time.time(),
+    )
     t0 = time.perf_counter()
     try:
         for i, var in enumerate(variants):
             desc = executor.call(i, "describe", timeout=tol["run"]["timeout"])
-            result.variants.append(desc.value if desc.ok and isinstance(desc.value, dict)
-                                   else {"label": var.label, "describe_error": desc.error})
+            result.variants.append(
+                desc.value
+                if desc.ok and isinstance(desc.value, dict)
+                else {"label": var.label, "describe_error": desc.error}
+            )
         total = float(len(plan))
         if progress is not None:
             progress(0.0, total)
@@ -515,9 +579,16 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
             if reason:
                 ctx = SceneContext(var.label, sc.name, sc.kind, bool(sc.zeta), skipped=reason)
                 result.metrics.extend(
-                    MetricResult(var.label, sc.name, m.name, "skip",
-                                 explanation=f"scene not supported: {reason}",
-                                 description=m.description) for m in METRICS)
+                    MetricResult(
+                        var.label,
+                        sc.name,
+                        m.name,
+                        "skip",
+                        explanation=f"scene not supported: {reason}",
+                        description=m.description,
+                    )
+                    for m in METRICS
+                )
             else:
                 ctx = _SceneRun(executor, i, var.label, sc, tol).run(result.speed_error)
                 result.metrics.extend(m.evaluate(ctx, tol) for m in METRICS)

@@ -91,11 +91,14 @@ class InProcessExecutor:
         try:
             value = getattr(self.variants[index], method)(*args)
         except Exception as exc:  # an adapter failure is a result, never fatal
-            return Outcome(False, error=_one_line(exc),
-                           stderr=getattr(exc, "stderr", "") or "",
-                           seconds=time.perf_counter() - t0,
-                           timed_out=bool(getattr(exc, "timed_out", False)),
-                           declined=str(getattr(exc, "declined", "") or ""))
+            return Outcome(
+                False,
+                error=_one_line(exc),
+                stderr=getattr(exc, "stderr", "") or "",
+                seconds=time.perf_counter() - t0,
+                timed_out=bool(getattr(exc, "timed_out", False)),
+                declined=str(getattr(exc, "declined", "") or ""),
+            )
         return Outcome(True, value, seconds=time.perf_counter() - t0)
 
     def close(self) -> None:
@@ -106,8 +109,9 @@ class InProcessExecutor:
                 pass
 
 
-def _worker_main(conn, spec: str, log_path: str,
-                 out_path: str | None = None) -> None:  # pragma: no cover - runs in a child
+def _worker_main(
+    conn, spec: str, log_path: str, out_path: str | None = None
+) -> None:  # pragma: no cover - runs in a child
     """Entry point of the worker process: build the adapter, then serve calls.
 
     File descriptor 2 goes to ``log_path``, 1 to ``out_path`` (so that the parent
@@ -138,8 +142,15 @@ def _worker_main(conn, spec: str, log_path: str,
             conn.send(("ok", value, time.perf_counter() - t0))
         except BaseException as exc:
             stderr = getattr(exc, "stderr", "") or ""
-            conn.send(("error", _one_line(exc), stderr + "\n" + traceback.format_exc(),
-                       time.perf_counter() - t0, str(getattr(exc, "declined", "") or "")))
+            conn.send(
+                (
+                    "error",
+                    _one_line(exc),
+                    stderr + "\n" + traceback.format_exc(),
+                    time.perf_counter() - t0,
+                    str(getattr(exc, "declined", "") or ""),
+                )
+            )
     for v in variants:
         try:
             v.close()
@@ -191,9 +202,11 @@ class WorkerExecutor:
         if size:
             self.stdout_warned = True
             first = head[0] if head else ""
-            print(f"hcv: warning: adapter {self.spec!r} printed {size} bytes on stdout (starting "
-                  f"{first!r}); the contract asks for stderr: stdout is discarded",
-                  file=sys.stderr)
+            print(
+                f"hcv: warning: adapter {self.spec!r} printed {size} bytes on stdout (starting "
+                f"{first!r}); the contract asks for stderr: stdout is discarded",
+                file=sys.stderr,
+            )
 
     def _log_since(self, offset: int) -> str:
         try:
@@ -207,25 +220,33 @@ class WorkerExecutor:
         """Start the worker; an Outcome describing the failure, or None when ready."""
         offset = self._log_size()
         parent, child = self._ctx.Pipe()
-        proc = self._ctx.Process(target=_worker_main,
-                                 args=(child, self.spec, self._log, self._out),
-                                 daemon=True, name=f"hcv-adapter-{self.adapter.name}")
+        proc = self._ctx.Process(
+            target=_worker_main,
+            args=(child, self.spec, self._log, self._out),
+            daemon=True,
+            name=f"hcv-adapter-{self.adapter.name}",
+        )
         proc.start()
         child.close()
         self._proc, self._conn = proc, parent
         if not parent.poll(self.startup_timeout):
             self._kill()
-            return Outcome(False, error=f"adapter worker did not start within "
-                                        f"{self.startup_timeout:g} s",
-                           stderr=self._log_since(offset))
+            return Outcome(
+                False,
+                error=f"adapter worker did not start within {self.startup_timeout:g} s",
+                stderr=self._log_since(offset),
+            )
         try:
             msg = parent.recv()
         except (EOFError, OSError):
             return self._died(offset)
         if msg[0] != "ready":
             self._kill()
-            return Outcome(False, error=f"adapter worker could not build {self.spec!r}: {msg[1]}",
-                           stderr=_tail(msg[2]))
+            return Outcome(
+                False,
+                error=f"adapter worker could not build {self.spec!r}: {msg[1]}",
+                stderr=_tail(msg[2]),
+            )
         if msg[1] != [v.label for v in self.variants]:
             self._kill()
             return Outcome(False, error="adapter worker built different variants than the parent")
@@ -275,21 +296,31 @@ class WorkerExecutor:
             return Outcome(False, error=f"cannot send the call to the worker: {_one_line(exc)}")
         if not self._conn.poll(timeout):
             self._kill()
-            return Outcome(False, error=f"timeout after {timeout:g} s", seconds=timeout or 0.0,
-                           stderr=self._log_since(offset), timed_out=True)
+            return Outcome(
+                False,
+                error=f"timeout after {timeout:g} s",
+                seconds=timeout or 0.0,
+                stderr=self._log_since(offset),
+                timed_out=True,
+            )
         try:
             msg = self._conn.recv()
         except (EOFError, OSError):
             return self._died(offset)
         except Exception as exc:  # the result cannot be unpickled
-            return Outcome(False, error=f"malformed output: {_one_line(exc)}",
-                           stderr=self._log_since(offset))
+            return Outcome(
+                False, error=f"malformed output: {_one_line(exc)}", stderr=self._log_since(offset)
+            )
         if msg[0] == "ok":
             return Outcome(True, msg[1], seconds=msg[2])
         stderr = (msg[2] or "") + "\n" + self._log_since(offset)
-        return Outcome(False, error=msg[1], stderr=_tail(stderr),
-                       seconds=msg[3] if len(msg) > 3 else time.perf_counter() - t0,
-                       declined=msg[4] if len(msg) > 4 else "")
+        return Outcome(
+            False,
+            error=msg[1],
+            stderr=_tail(stderr),
+            seconds=msg[3] if len(msg) > 3 else time.perf_counter() - t0,
+            declined=msg[4] if len(msg) > 4 else "",
+        )
 
     def close(self) -> None:
         if self._conn is not None:
@@ -321,4 +352,3 @@ def make_executor(spec, startup_timeout: float = 300.0, isolate: bool | None = N
         return InProcessExecutor(adapter)
     adapter.close()
     return WorkerExecutor(spec, startup_timeout)
-

@@ -28,6 +28,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import sys
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -157,8 +158,15 @@ def _keys(err: _Where, table: dict, path: str, allowed, required=()) -> None:
             raise err(f"missing key {path + key!r}")
 
 
-def _number(err: _Where, value, name: str, *, low: float = -math.inf, strict: bool = True,
-            high: float = math.inf) -> float:
+def _number(
+    err: _Where,
+    value,
+    name: str,
+    *,
+    low: float = -math.inf,
+    strict: bool = True,
+    high: float = math.inf,
+) -> float:
     """``value`` as a float, or SceneError unless it is finite and in (low, high]."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise err(f"{name} must be a number, got {_short(value)}")
@@ -168,6 +176,8 @@ def _number(err: _Where, value, name: str, *, low: float = -math.inf, strict: bo
         raise err(f"{name} must be a finite number, got {_short(value)}") from None
     if not math.isfinite(v):
         raise err(f"{name} must be a finite number, got {_short(value)}")
+    if 0.0 < abs(v) < sys.float_info.min:  # subnormal: 1 / v overflows to inf
+        raise err(f"{name} = {v!r} is below the smallest normal float ({sys.float_info.min:g})")
     if (v <= low if strict else v < low) or v > high:
         rel = ">" if strict else ">="
         bound = f"{rel} {low:g}" + (f" and <= {high:g}" if math.isfinite(high) else "")
@@ -219,13 +229,17 @@ def _potential(err: _Where, table, path: str, depth: int = 0) -> Potential:
     if family == "sum":
         terms = table["terms"]
         if not isinstance(terms, list) or not 2 <= len(terms) <= _MAX_TERMS:
-            raise err(f"{path}.terms must be an array of at least two (at most {_MAX_TERMS}) "
-                      "potential tables")
-        parts = [_potential(err, t, f"{path}.terms[{i}]", depth + 1)
-                 for i, t in enumerate(terms)]
+            raise err(
+                f"{path}.terms must be an array of at least two (at most {_MAX_TERMS}) "
+                "potential tables"
+            )
+        parts = [_potential(err, t, f"{path}.terms[{i}]", depth + 1) for i, t in enumerate(terms)]
         return _construct(err, path, SumPotential, *parts)
-    args = {k: _number(err, table[k], f"{path}.{k}", low=0.0) for k in (*required, *optional)
-            if k in table}
+    args = {
+        k: _number(err, table[k], f"{path}.{k}", low=0.0)
+        for k in (*required, *optional)
+        if k in table
+    }
     cls = {"power": PowerLaw, "ellipsoid": Ellipsoid, "sphere": Sphere}[family]
     return _construct(err, path, cls, **args)
 
@@ -248,14 +262,18 @@ def _damping(err: _Where, table) -> tuple[str, float | None]:
     given = [k for k in ("zeta", "restitution", "C0", "K", "M") if k in table]
     if law == "none":
         if given:
-            raise err(f"damping.{given[0]} is set but damping.law is 'none'; set law = "
-                      "\"universal\" or remove it")
+            raise err(
+                f"damping.{given[0]} is set but damping.law is 'none'; set law = "
+                '"universal" or remove it'
+            )
         return law, None
     forms = [k for k in ("zeta", "restitution", "C0") if k in table]
     if len(forms) != 1:
         what = "none" if not forms else " and ".join(forms)
-        raise err(f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
-                  f"(with K and M), got {what}")
+        raise err(
+            f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
+            f"(with K and M), got {what}"
+        )
     if forms[0] != "C0" and ("K" in table or "M" in table):
         raise err("damping.K and damping.M go with damping.C0 only; remove them")
     if forms[0] == "zeta":
@@ -340,8 +358,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         kind = type(text).__name__
         raise SceneError(f"scene {source}: the scene text must be a string, got {kind}")
     if len(text) > _MAX_SCENE_BYTES:
-        raise SceneError(f"scene {source}: {len(text)} characters is too large for a scene "
-                         f"(limit {_MAX_SCENE_BYTES})")
+        raise SceneError(
+            f"scene {source}: {len(text)} characters is too large for a scene "
+            f"(limit {_MAX_SCENE_BYTES})"
+        )
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -388,19 +408,24 @@ def load_scene(path_or_name: str | os.PathLike) -> Scene:
         return parse_scene(res.read_text(encoding="utf-8"), f"<embedded>/{text_arg}.toml")
     path = Path(text_arg)
     if not path.exists():
-        raise SceneError(f"scene file {text_arg}: not found; give an existing .toml file or an "
-                         "embedded scene name")
+        raise SceneError(
+            f"scene file {text_arg}: not found; give an existing .toml file or an "
+            "embedded scene name"
+        )
     if not path.is_file():
         raise SceneError(f"scene file {text_arg}: is not a regular file")
     try:
         size = path.stat().st_size
         if size > _MAX_SCENE_BYTES:
-            raise SceneError(f"scene file {text_arg}: {size} bytes is too large for a scene "
-                             f"(limit {_MAX_SCENE_BYTES}); is this the right file?")
+            raise SceneError(
+                f"scene file {text_arg}: {size} bytes is too large for a scene "
+                f"(limit {_MAX_SCENE_BYTES}); is this the right file?"
+            )
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise SceneError(f"scene file {text_arg}: not UTF-8 text ({exc.reason} at byte "
-                         f"{exc.start})") from None
+        raise SceneError(
+            f"scene file {text_arg}: not UTF-8 text ({exc.reason} at byte {exc.start})"
+        ) from None
     except OSError as exc:
         raise SceneError(f"scene file {text_arg}: cannot be read ({exc.strerror})") from None
     return parse_scene(text, text_arg)
