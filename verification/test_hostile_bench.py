@@ -179,6 +179,24 @@ def test_bench_bounds_are_checked_before_work(tmp_path, field, text, message):
         run_bench("reference", scenes=[str(path)])
 
 
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ({"run": {"sustained_steps": 10**12}}, "must be <= 1e+07"),
+        ({"run": {"steps_per_contact": 10**9}}, "must be <= 100000"),
+        ({"run": {"speed_error_steps": [2, 10**9]}}, "each <= 100000"),
+        ({"run": {"speed_error_steps": list(range(2, 40))}}, "at most 12 values"),
+        ({"run": {"timeout": 1e300}}, "must be <= 86400"),
+        ({"dt_crit": {"resolution": 1e-12}}, "must be >= 0.0001"),
+    ],
+)
+def test_tolerance_sizes_are_bounded(override, message):
+    from reference_impl.bench import load_tolerances
+
+    with pytest.raises(HCVInputError, match=message):
+        load_tolerances(override)
+
+
 def test_too_many_scenes_is_refused():
     with pytest.raises(HCVInputError, match="at most 64"):
         run_bench("reference", scenes=["hertz"] * 65)
