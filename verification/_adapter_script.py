@@ -165,6 +165,18 @@ else:  # imported: the Python adapters (the program itself needs only the standa
             print(f"chatty-adapter: running v0 = {scene.v0}", flush=True)
             return super()._impact_impl(scene)
 
+    class FloodAdapter(ScriptAdapter):
+        """Writes to stderr without end for v0 > 1 m/s."""
+
+        name = "flood"
+
+        def _impact_impl(self, scene):
+            if scene.v0 > 1.0:
+                line = "flood-adapter: " + "x" * 1000 + "\n"
+                while True:
+                    sys.stderr.write(line * 100)
+            return super()._impact_impl(scene)
+
     class MalformedAdapter(ScriptAdapter):
         """Returns arrays of different lengths for v0 > 1 m/s."""
 

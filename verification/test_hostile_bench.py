@@ -89,6 +89,20 @@ def test_python_flood_is_capped_too():
         get_adapter(cmd("--mode", "flood")).impact(ascene())
 
 
+def test_python_adapter_flooding_its_output_is_stopped():
+    """A worker writing without end is killed at the output bound, long before its timeout."""
+    t0 = time.perf_counter()
+    res = run_bench(
+        "verification._adapter_script:FloodAdapter",
+        scenes=[scene("ok", vels=(0.5,)), scene("bad", vels=(2.0,))],
+        tolerances=FAST,
+    )
+    assert time.perf_counter() - t0 < 50
+    bad = _by(res, "bad", "restitution_exact")
+    assert bad.status == "fail" and "bytes of output; stopped" in bad.explanation
+    assert _by(res, "ok", "restitution_exact").status == "pass"
+
+
 def test_after_a_timeout_the_scene_s_other_runs_are_not_run():
     """Two hanging speeds with a 1 s timeout: one timeout, then a clear reason, quickly."""
     tol = {**FAST, "run": {**FAST["run"], "timeout": 1.0}}

@@ -35,6 +35,10 @@ __all__ = ["InProcessExecutor", "Outcome", "WorkerExecutor", "make_executor"]
 
 # Characters of a worker's output kept with a failure (the tail).
 _STDERR_TAIL = 4000
+# Bytes the worker may write to its stdout and stderr files during one call (temporary
+# files on disk, emptied before each call); checked while waiting, every _POLL s.
+_MAX_OUTPUT = 64 << 20
+_POLL = 0.25
 
 
 @dataclass
@@ -252,6 +256,27 @@ class WorkerExecutor:
             return Outcome(False, error="adapter worker built different variants than the parent")
         return None
 
+    def _output_size(self) -> int:
+        total = 0
+        for path in (self._log, self._out):
+            try:
+                total += os.path.getsize(path)
+            except OSError:
+                pass
+        return total
+
+    def _wait(self, timeout: float | None) -> str:
+        """Wait for the answer: "ready", "timeout", or "output" (the worker's output overflowed)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            step = _POLL if deadline is None else min(_POLL, deadline - time.monotonic())
+            if step > 0 and self._conn.poll(step):
+                return "ready"
+            if self._output_size() > _MAX_OUTPUT:
+                return "output"
+            if deadline is not None and time.monotonic() >= deadline:
+                return "timeout"
+
     def _died(self, offset: int) -> Outcome:
         proc = self._proc
         proc.join(timeout=5)
@@ -276,6 +301,11 @@ class WorkerExecutor:
         self._proc = self._conn = None
 
     def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+        for path in (self._log, self._out):  # output is bounded per call (the worker appends)
+            try:
+                os.truncate(path, 0)
+            except OSError:
+                pass
         try:
             return self._call(index, method, *args, timeout=timeout)
         finally:
@@ -294,7 +324,16 @@ class WorkerExecutor:
             return self._died(offset)
         except Exception as exc:  # the arguments cannot be pickled
             return Outcome(False, error=f"cannot send the call to the worker: {_one_line(exc)}")
-        if not self._conn.poll(timeout):
+        waited = self._wait(timeout)
+        if waited == "output":
+            self._kill()
+            return Outcome(
+                False,
+                error=f"the adapter wrote more than {_MAX_OUTPUT} bytes of output; stopped",
+                seconds=time.perf_counter() - t0,
+                stderr=self._log_since(max(offset, self._log_size() - _STDERR_TAIL)),
+            )
+        if waited == "timeout":
             self._kill()
             return Outcome(
                 False,
