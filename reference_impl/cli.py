@@ -161,11 +161,31 @@ def _cmd_solve(args) -> int:
     return EXIT_OK
 
 
+# Results that are durations, lengths, forces or actions (>= 0 by definition), and
+# restitutions (in [0, 1] by definition).
+_NON_NEGATIVE = (
+    "max_penetration",
+    "max_force",
+    "dt_safe",
+    "dt_safe_shortcut",
+    "contact_time",
+    "contact_time_zero_force",
+    "action",
+    "period",
+)
+_UNIT_INTERVAL = ("restitution", "restitution_zero_force")
+
+
 def _require_finite(rows: list[dict], scene) -> None:
-    """Refuse (one line) rather than print a non-finite number as a result."""
+    """Refuse (one line) rather than print a result that is non-finite or out of its range."""
     for row in rows:
         for key, value in row.items():
-            if isinstance(value, float) and not math.isfinite(value):
+            if not isinstance(value, float):
+                continue
+            wrong = not math.isfinite(value)
+            wrong |= key in _NON_NEGATIVE and value < 0
+            wrong |= key in _UNIT_INTERVAL and not 0.0 <= value <= 1.0
+            if wrong:
                 raise UnsupportedError(
                     f"scene {scene.name!r}, v0 = {row['v0']:g} m/s: the solver gives {key} = "
                     f"{value!r}; this scene (zeta = {row.get('zeta', 0.0):g}) is outside what it "

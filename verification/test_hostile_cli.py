@@ -197,6 +197,11 @@ def _check(capsys, argv: list[str], text: str) -> None:
                 row = {k: v for k, v in row.items() if k != "ratio"}
             bad = _finite_numbers(row)
             assert not bad, f"non-finite {bad} for\n{text}"
+            # By definition: durations and lengths >= 0, restitutions in [0, 1].
+            for key in ("contact_time", "max_penetration", "dt_safe", "period"):
+                assert not isinstance(row.get(key), float) or row[key] >= 0, (key, text)
+            for key in ("restitution", "restitution_zero_force"):
+                assert not isinstance(row.get(key), float) or 0 <= row[key] <= 1, (key, text)
 
 
 _SETTINGS = dict(
@@ -259,3 +264,14 @@ def test_ctrl_c_in_any_command_is_one_line_130(capsys, monkeypatch):
         args.func = interrupted
         assert cli.run_command(args) == 130
         assert capsys.readouterr().err == "hcv: interrupted\n"
+
+
+@pytest.mark.parametrize("zeta", ["0.9999", "0.99999", "2.0"])
+def test_near_critical_damping_is_right_or_refused(tmp_path, capsys, zeta):
+    """Issue 12, section 2: never a negative or non-finite time printed with exit 0."""
+    path = tmp_path / "z.toml"
+    path.write_text(
+        "mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.0\n"
+        f"[damping]\nlaw = 'universal'\nzeta = {zeta}\n"
+    )
+    _check(capsys, ["solve", str(path), "--json"], path.read_text())
