@@ -91,11 +91,15 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         help="benchmark a contact code against the exact solution (CI gate)",
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
+        epilog="exit status: 0 pass (or no --gate); 1 a metric failed; 2 usage or "
+        "configuration error; 3 no metric failed but our reference could not decide one; "
+        "130 interrupted.",
     )
     b.add_argument(
         "adapter",
         help="registered name (reference, lammps, subprocess), "
-        "package.module:Class or cmd:COMMAND; NAME[key=value,...] "
+        "package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND for two-walls); "
+        "NAME[key=value,...] "
         "passes arguments",
     )
     b.add_argument(
