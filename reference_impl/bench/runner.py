@@ -21,9 +21,7 @@ rewritten after every scene (and on interruption), so nothing computed is lost.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -528,6 +526,7 @@ def run_bench(
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
+    from ._output import write_json, write_junit
     from .report import machine_info
 
     tol = load_tolerances(tolerances)
@@ -595,7 +594,7 @@ def run_bench(
             result.contexts.append(ctx)
             result.seconds = time.perf_counter() - t0
             if json_path is not None:
-                _write_json(result, json_path)
+                write_json(result, json_path)
             if progress is not None:
                 progress(float(done), total)
     except KeyboardInterrupt:
@@ -604,51 +603,7 @@ def run_bench(
         executor.close()
         result.seconds = time.perf_counter() - t0
         if json_path is not None:
-            _write_json(result, json_path)
+            write_json(result, json_path)
         if junit_path is not None:
-            _write_junit(result, junit_path)
+            write_junit(result, junit_path)
     return result
-
-
-def _public_mode(path) -> None:
-    """Give a written report the mode of a new file (0666 less the umask), not mkstemp's 0600."""
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)
-
-
-def _write_json(result: BenchResult, path) -> None:
-    """The JSON report; status "error" when only our reference failed (no metric failed)."""
-    from .report import _atomic_write, result_to_dict
-
-    doc = result_to_dict(result)
-    if doc.get("status") == "pass" and result.internal_errors:
-        doc["status"] = "error"
-    _atomic_write(path, json.dumps(doc, indent=2) + "\n")
-    _public_mode(path)
-
-
-def _write_junit(result: BenchResult, path) -> None:
-    """JUnit XML; a metric our reference could not decide is an <error>, not a pass."""
-    import xml.etree.ElementTree as ET
-
-    from .report import _atomic_write, junit_tree
-
-    tree = junit_tree(result)
-    errors = {(f"hcv.bench.{m.variant}.{m.scene}", m.metric): m for m in result.internal_errors}
-    root = tree.getroot()
-    for suite in root.iter("testsuite"):
-        n = 0
-        for case in suite.iter("testcase"):
-            m = errors.get((case.get("classname"), case.get("name")))
-            if m is None:
-                continue
-            for child in list(case):
-                case.remove(child)
-            ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
-            n += 1
-        suite.set("errors", str(n))
-    root.set("errors", str(len(errors)))
-    ET.indent(tree)
-    _atomic_write(path, ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n")
-    _public_mode(path)
