@@ -13,6 +13,7 @@ from .errors import (
     NonMonotoneError,
     NoTurningPointError,
     SceneError,
+    UnsupportedError,
 )
 from .harmonic_map import HarmonicMap
 from .impact import ImpactSolution, solve_impact, solve_impact_mp
@@ -35,6 +36,7 @@ __all__ = [
     "SafeStep",
     "Scene",
     "SceneError",
+    "UnsupportedError",
     "Sphere",
     "SumPotential",
     "UniversalDamping",

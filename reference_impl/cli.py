@@ -1,8 +1,10 @@
 """Command-line interface ``hcv``.
 
 Every input problem (missing or malformed scene, a potential that violates the
-paper's assumptions, NaN) is reported as one line on stderr with exit status 2;
-nothing is computed for a scene that fails validation.
+paper's assumptions, NaN, an output path that cannot be written) is reported as
+one line on stderr with exit status 2; nothing is computed for a scene that
+fails validation. Ctrl-C ends any command with the line "hcv: interrupted" and
+exit status 130 (128 + SIGINT, as shells report it).
 """
 
 from __future__ import annotations
@@ -10,17 +12,19 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Sequence
 
-from .errors import HCVInputError
+from .errors import HCVInputError, UnsupportedError
 
-__all__ = ["main", "solve_scene"]
+__all__ = ["main", "run_command", "solve_scene"]
 
-# Exit statuses (shared with `hcv bench --gate`).
+# Exit statuses (shared with `hcv bench --gate`, which adds 3: our reference failed).
 EXIT_OK = 0
 EXIT_FAIL = 1
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
@@ -130,6 +134,7 @@ def _cmd_solve(args) -> int:
             "(kind = \"impact\"); use 'hcv dt-crit' for sustained scenes"
         )
     rows = solve_scene(scene)
+    _require_finite(rows, scene)
     if args.json:
         out = {
             "scene": scene.to_dict(),
@@ -156,10 +161,62 @@ def _cmd_solve(args) -> int:
     return EXIT_OK
 
 
+# Results that are durations, lengths, forces or actions (>= 0 by definition), and
+# restitutions (in [0, 1] by definition).
+_NON_NEGATIVE = (
+    "max_penetration",
+    "max_force",
+    "dt_safe",
+    "dt_safe_shortcut",
+    "contact_time",
+    "contact_time_zero_force",
+    "action",
+    "period",
+)
+_UNIT_INTERVAL = ("restitution", "restitution_zero_force")
+
+
+def _require_finite(rows: list[dict], scene) -> None:
+    """Refuse (one line) rather than print a result that is non-finite or out of its range."""
+    for row in rows:
+        for key, value in row.items():
+            if not isinstance(value, float):
+                continue
+            wrong = not math.isfinite(value)
+            wrong |= key in _NON_NEGATIVE and value < 0
+            wrong |= key in _UNIT_INTERVAL and not 0.0 <= value <= 1.0
+            if wrong:
+                raise UnsupportedError(
+                    f"scene {scene.name!r}, v0 = {row['v0']:g} m/s: the solver gives {key} = "
+                    f"{value!r}; this scene (zeta = {row.get('zeta', 0.0):g}) is outside what it "
+                    "computes reliably"
+                )
+
+
+def _check_out_dir(path: str) -> None:
+    """An output directory must be a writable directory, or creatable in one."""
+    from pathlib import Path
+
+    p = Path(path)
+    if p.exists():
+        if not p.is_dir():
+            raise HCVInputError(f"--out {path}: exists and is not a directory")
+        if not os.access(p, os.W_OK | os.X_OK):
+            raise HCVInputError(f"--out {path}: directory is not writable")
+        return
+    parent = p.parent
+    if not parent.is_dir():
+        raise HCVInputError(f"--out {path}: parent directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise HCVInputError(f"--out {path}: parent directory {str(parent)!r} is not writable")
+
+
 def _cmd_report(args) -> int:
     from rich.console import Console
 
     from .report import build_report
+
+    _check_out_dir(args.out)
 
     with Console(stderr=True).status("hcv report: starting") as status:
         results = build_report(
@@ -304,19 +361,43 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``hcv`` console script; returns the exit status."""
-    parser = _parser()
-    args = parser.parse_args(argv)
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def run_command(args) -> int:
+    """Run a parsed command; every way out is one line on stderr and an exit status."""
     try:
         return args.func(args)
     except HCVInputError as exc:
-        print(f"hcv: error: {exc}", file=sys.stderr)
+        print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("hcv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (RecursionError, OverflowError, MemoryError) as exc:
+        # Sizes are bounded before work starts; this is the backstop for an input that
+        # still exhausts a limit (nesting, float range, memory).
+        print(
+            f"hcv: error: the input is too large or too deeply nested ({type(exc).__name__})",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     except BrokenPipeError:
         # Output piped into e.g. `head`: stop quietly, as Unix tools do.
         sys.stderr.close()
         return EXIT_OK
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``hcv`` console script; returns the exit status."""
+    try:
+        parser = _parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:
+        print("hcv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return run_command(args)
 
 
 if __name__ == "__main__":  # pragma: no cover

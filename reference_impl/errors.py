@@ -13,6 +13,7 @@ __all__ = [
     "NoTurningPointError",
     "ExpressionError",
     "SceneError",
+    "UnsupportedError",
 ]
 
 
@@ -38,3 +39,7 @@ class ExpressionError(HCVInputError):
 
 class SceneError(HCVInputError):
     """A scene file is missing, malformed, or has an invalid value."""
+
+
+class UnsupportedError(HCVInputError):
+    """A valid input outside what the solver computes reliably: refused, never guessed."""

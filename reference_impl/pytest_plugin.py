@@ -7,8 +7,10 @@ Installed as the ``pytest11`` entry point ``hcv-contact``, so a code's CI runs::
 
 and gets one test per adapter variant, scene and scorecard metric, named
 ``contact-adapter/<variant>/<scene>::<metric>``: a failed metric fails its test
-with the scorecard's one-line explanation, a metric that does not apply is
-skipped. The benchmark (`reference_impl.bench.run_bench`) runs once, when the
+with the scorecard's one-line explanation, a metric that does not apply (or a
+scene the code declines) is skipped, and a metric the suite's own reference
+could not decide fails with "internal error of the reference (ours ...)" (a
+`ContactReferenceError`, never reported as the code's failure). The benchmark (`reference_impl.bench.run_bench`) runs once, when the
 first of these tests runs. Without ``--contact-adapter`` the plugin does nothing.
 Any adapter spec of ``hcv bench`` works (a registered name, ``cmd:COMMAND``, ...).
 """
@@ -21,26 +23,53 @@ _RESULT_KEY = pytest.StashKey[object]()
 
 
 def pytest_addoption(parser):
-    group = parser.getgroup("contact-adapter", "benchmark a contact code against the exact "
-                                               "solution (hidden-harmonic-verification)")
-    group.addoption("--contact-adapter", default=None, metavar="SPEC",
-                    help="adapter to benchmark: package.module:Class, a registered name "
-                         "(reference, lammps) or cmd:COMMAND")
-    group.addoption("--contact-scenes", default=None, metavar="S1,S2",
-                    help="comma-separated scene names or TOML files (default: the bench's)")
-    group.addoption("--contact-tolerances", default=None, metavar="FILE",
-                    help="TOML file overriding the default tolerances")
-    group.addoption("--contact-json", default=None, metavar="FILE",
-                    help="also write the JSON report of the benchmark here")
+    group = parser.getgroup(
+        "contact-adapter",
+        "benchmark a contact code against the exact solution (hidden-harmonic-verification)",
+    )
+    group.addoption(
+        "--contact-adapter",
+        default=None,
+        metavar="SPEC",
+        help="adapter to benchmark: package.module:Class, a registered name "
+        "(reference, lammps) or cmd:COMMAND",
+    )
+    group.addoption(
+        "--contact-scenes",
+        default=None,
+        metavar="S1,S2",
+        help="comma-separated scene names or TOML files (default: the bench's)",
+    )
+    group.addoption(
+        "--contact-tolerances",
+        default=None,
+        metavar="FILE",
+        help="TOML file overriding the default tolerances",
+    )
+    group.addoption(
+        "--contact-json",
+        default=None,
+        metavar="FILE",
+        help="also write the JSON report of the benchmark here",
+    )
 
 
 def _scenes(config):
     text = config.getoption("contact_scenes")
-    return [s.strip() for s in text.split(",") if s.strip()] if text else None
+    if text is None:
+        return None
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names:
+        raise pytest.UsageError(f"--contact-scenes={text!r} names no scene")
+    return names
 
 
 class ContactMetricFailure(AssertionError):
     """A scorecard metric failed (the message is its one-line explanation)."""
+
+
+class ContactReferenceError(RuntimeError):
+    """The suite's own reference could not decide this metric (not the code's failure)."""
 
 
 class ContactMetricItem(pytest.Item):
@@ -60,11 +89,13 @@ class ContactMetricItem(pytest.Item):
                     pytest.skip(m.explanation)
                 if m.status == "fail":
                     raise ContactMetricFailure(m.explanation)
+                if m.status == "error":
+                    raise ContactReferenceError(m.explanation)
                 return
         raise ContactMetricFailure("no result for this metric (benchmark interrupted?)")
 
     def repr_failure(self, excinfo):
-        if isinstance(excinfo.value, ContactMetricFailure):
+        if isinstance(excinfo.value, (ContactMetricFailure, ContactReferenceError)):
             return f"{self.metric} [{self.variant} / {self.scene}]: {excinfo.value}"
         return super().repr_failure(excinfo)
 
@@ -96,8 +127,12 @@ class ContactAdapterCollector(pytest.Collector):
                     continue
                 for metric in metric_names():
                     yield ContactMetricItem.from_parent(
-                        self, name=f"{var.label}/{sc.name}::{metric}", variant=var.label,
-                        scene=sc.name, metric=metric)
+                        self,
+                        name=f"{var.label}/{sc.name}::{metric}",
+                        variant=var.label,
+                        scene=sc.name,
+                        metric=metric,
+                    )
         adapter.close()
 
 
@@ -108,9 +143,12 @@ def _bench(config):
         from .errors import HCVInputError
 
         try:
-            result = run_bench(config.getoption("contact_adapter"), scenes=_scenes(config),
-                               tolerances=config.getoption("contact_tolerances"),
-                               json_path=config.getoption("contact_json"))
+            result = run_bench(
+                config.getoption("contact_adapter"),
+                scenes=_scenes(config),
+                tolerances=config.getoption("contact_tolerances"),
+                json_path=config.getoption("contact_json"),
+            )
         except HCVInputError as exc:
             result = exc
         config.stash[_RESULT_KEY] = result

@@ -11,10 +11,14 @@ misbehave for speeds above ``--above`` (default: always): ``hang`` (sleeps),
 ``crash`` (prints to stderr, exits 3), ``abort`` (SIGABRT), ``garbage`` (not
 JSON), ``malformed`` (arrays of different lengths), ``error`` (reports an
 error), ``tsuji`` (declares an implemented law with half the damping ratio,
-and integrates it).
+and integrates it), ``decline`` (answers ``{"unsupported": ...}``), ``flood``
+(writes to stdout without end), ``flipq``, ``flipv``, ``flipf`` (report the
+overlap, its rate or the force with the wrong sign). It declines "sustained"
+requests (it has no two-walls model), as the protocol lets a code do.
 
 As Python adapters (run isolated in a worker by the benchmark): `ScriptAdapter`
-(the same integrator), `CrashAdapter`, `HangAdapter`, `MalformedAdapter`. They
+(the same integrator), `CrashAdapter`, `HangAdapter`, `MalformedAdapter`,
+`ChattyAdapter` (prints to stdout, against the contract). They
 are defined only when the file is imported, so that the program starts without
 importing the package (numpy, scipy).
 """
@@ -80,6 +84,9 @@ def main(argv: list[str]) -> int:
             above = float(args.pop(0))
     request = json.load(sys.stdin)
     scene = request["scene"]
+    if request["request"] != "impact":
+        json.dump({"unsupported": "adapter-script has no two-walls model"}, sys.stdout)
+        return 0
     active = scene["v0"] > above
     if active:
         _misbehave(mode)
@@ -89,16 +96,27 @@ def main(argv: list[str]) -> int:
         if mode == "error":
             json.dump({"error": "mesh generation failed"}, sys.stdout)
             return 0
+        if mode == "decline":
+            json.dump({"unsupported": "no model for this scene"}, sys.stdout)
+            return 0
+        if mode == "flood":
+            while True:
+                sys.stdout.write("[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]\n" * 1000)
     if mode == "tsuji" and active:
         out = integrate(scene, zeta_scale=0.5)
-        out["implemented_law"] = {"potential": scene["potential"], "mass": scene["mass"],
-                                  "damping": {"law": "universal",
-                                              "zeta": 0.5 * scene["damping"]["zeta"]},
-                                  "description": "half the damping ratio"}
+        out["implemented_law"] = {
+            "potential": scene["potential"],
+            "mass": scene["mass"],
+            "damping": {"law": "universal", "zeta": 0.5 * scene["damping"]["zeta"]},
+            "description": "half the damping ratio",
+        }
     else:
         out = integrate(scene)
     if mode == "malformed" and active:
         out["force"] = out["force"][:-1]
+    flip = {"flipq": "q", "flipv": "v", "flipf": "force"}.get(mode)
+    if flip and active:
+        out[flip] = [-x for x in out[flip]]
     json.dump(out, sys.stdout)
     return 0
 
@@ -116,7 +134,6 @@ else:  # imported: the Python adapters (the program itself needs only the standa
         def _impact_impl(self, scene):
             return integrate(scene.to_json())
 
-
     class CrashAdapter(ScriptAdapter):
         """Dies (os._exit) for v0 > 1 m/s, after a line on stderr."""
 
@@ -127,7 +144,6 @@ else:  # imported: the Python adapters (the program itself needs only the standa
                 print("crash-adapter: segfault in the contact kernel", file=sys.stderr, flush=True)
                 os._exit(139)
             return super()._impact_impl(scene)
-
 
     class HangAdapter(ScriptAdapter):
         """Never returns for v0 > 1 m/s."""
@@ -140,6 +156,26 @@ else:  # imported: the Python adapters (the program itself needs only the standa
                 time.sleep(3600)
             return super()._impact_impl(scene)
 
+    class ChattyAdapter(ScriptAdapter):
+        """Prints a progress line on stdout for every run (the contract asks for stderr)."""
+
+        name = "chatty"
+
+        def _impact_impl(self, scene):
+            print(f"chatty-adapter: running v0 = {scene.v0}", flush=True)
+            return super()._impact_impl(scene)
+
+    class FloodAdapter(ScriptAdapter):
+        """Writes to stderr without end for v0 > 1 m/s."""
+
+        name = "flood"
+
+        def _impact_impl(self, scene):
+            if scene.v0 > 1.0:
+                line = "flood-adapter: " + "x" * 1000 + "\n"
+                while True:
+                    sys.stderr.write(line * 100)
+            return super()._impact_impl(scene)
 
     class MalformedAdapter(ScriptAdapter):
         """Returns arrays of different lengths for v0 > 1 m/s."""

@@ -5,7 +5,11 @@ An adapter spec is one of
 * a registered name: ``reference``, ``lammps``, ``subprocess`` (see `registered`);
 * an import path ``package.module:Class`` of a `ContactAdapter` subclass;
 * ``cmd:COMMAND``: the subprocess adapter running COMMAND (split like a shell
-  does, see `reference_impl.adapters.subprocess`).
+  does, see `reference_impl.adapters.subprocess`); ``cmd[key=value,...]:COMMAND``
+  passes its other arguments (``sustained=true``, ``timeout=5``, ``label=...``).
+
+Import paths are resolved with the current directory on the import path (as
+pytest does with its rootdir), so ``my_adapter:MyCode`` finds ``./my_adapter.py``.
 
 A name or an import path may end with constructor arguments in brackets,
 ``lammps[damping=tsuji,geometry=pair]``; values are read as int, float, true/
@@ -16,7 +20,10 @@ false, none, else as strings. Every problem raises `HCVInputError` with one line
 from __future__ import annotations
 
 import importlib
+import inspect
+import os
 import re
+import sys
 from typing import Any
 
 from ..errors import HCVInputError
@@ -33,6 +40,9 @@ _REGISTRY: dict[str, str | type] = {
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
 _IMPORT_RE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 _NAME_RE = re.compile(r"^[A-Za-z][\w-]*$")
+_CMD_RE = re.compile(r"^cmd(?:\[(?P<args>[^\]]*)\])?:")
+# Longest adapter spec accepted (characters): a command line, not a file.
+_MAX_SPEC = 4096
 
 
 def register(name: str, target: str | type) -> None:
@@ -70,38 +80,62 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
     """Split ``target[key=value,...]`` into the target and keyword arguments."""
     if not isinstance(spec, str) or not spec.strip():
         raise HCVInputError(f"adapter spec must be a non-empty string, got {spec!r}")
+    if len(spec) > _MAX_SPEC:
+        raise HCVInputError(f"adapter spec of {len(spec)} characters; at most {_MAX_SPEC}")
     spec = spec.strip()
-    if spec.startswith("cmd:"):
-        command = spec[4:].strip()
+    cmd = _CMD_RE.match(spec)
+    if cmd:
+        command = spec[cmd.end() :].strip()
         if not command:
             raise HCVInputError("adapter spec 'cmd:' needs a command, e.g. 'cmd:python my_code.py'")
-        return "subprocess", {"command": command}
+        kwargs = _kwargs(cmd.group("args") or "", spec)
+        if "command" in kwargs:
+            raise HCVInputError(f"adapter spec {spec!r}: the command goes after 'cmd[...]:'")
+        return "subprocess", {"command": command, **kwargs}
     m = _SPEC_RE.match(spec)
     if not m:
-        raise HCVInputError(f"adapter spec {spec!r} is malformed; use NAME, NAME[key=value,...], "
-                            "package.module:Class or cmd:COMMAND")
+        raise HCVInputError(
+            f"adapter spec {spec!r} is malformed; use NAME, NAME[key=value,...], "
+            "package.module:Class or cmd:COMMAND"
+        )
+    return m.group("target").strip(), _kwargs(m.group("args") or "", spec)
+
+
+def _kwargs(text: str, spec: str) -> dict[str, Any]:
+    """``key=value,...`` as keyword arguments (a repeated key is refused)."""
     kwargs: dict[str, Any] = {}
-    for part in filter(None, (p.strip() for p in (m.group("args") or "").split(","))):
+    for part in filter(None, (p.strip() for p in text.split(","))):
         key, sep, val = part.partition("=")
         key = key.strip()
         if not sep or not key.isidentifier():
             raise HCVInputError(f"adapter argument {part!r} in {spec!r} must be key=value")
+        if key in kwargs:
+            raise HCVInputError(f"adapter argument {key!r} repeats in {spec!r}")
         kwargs[key] = _value(val)
-    return m.group("target").strip(), kwargs
+    return kwargs
 
 
 def _import(path: str) -> type:
     mod_name, _, cls_name = path.partition(":")
+    cwd = os.getcwd()
+    if cwd not in sys.path and "" not in sys.path:  # as pytest's rootdir: ./my_adapter.py
+        sys.path.insert(0, cwd)
     try:
         module = importlib.import_module(mod_name)
     except ImportError as exc:
-        raise HCVInputError(f"adapter {path!r}: cannot import module {mod_name!r} ({exc})") from None
+        raise HCVInputError(
+            f"adapter {path!r}: cannot import module {mod_name!r} ({exc}); the "
+            f"current directory {cwd} is on the import path, else set "
+            "PYTHONPATH"
+        ) from None
     cls = getattr(module, cls_name, None)
     if cls is None:
         raise HCVInputError(f"adapter {path!r}: module {mod_name!r} has no attribute {cls_name!r}")
     if not (isinstance(cls, type) and issubclass(cls, ContactAdapter)):
-        raise HCVInputError(f"adapter {path!r} is not a ContactAdapter subclass "
-                            "(see reference_impl.adapters.base for the contract)")
+        raise HCVInputError(
+            f"adapter {path!r} is not a ContactAdapter subclass "
+            "(see reference_impl.adapters.base for the contract)"
+        )
     return cls
 
 
@@ -112,8 +146,10 @@ def resolve_class(target: str) -> type:
         return _import(entry) if isinstance(entry, str) else entry
     if _IMPORT_RE.match(target):
         return _import(target)
-    raise HCVInputError(f"unknown adapter {target!r}; registered: {', '.join(registered())}; "
-                        "or give package.module:Class or cmd:COMMAND")
+    raise HCVInputError(
+        f"unknown adapter {target!r}; registered: {', '.join(registered())}; "
+        "or give package.module:Class or cmd:COMMAND"
+    )
 
 
 def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
@@ -122,9 +158,32 @@ def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
         return spec
     target, kwargs = parse_spec(spec)
     cls = resolve_class(target)
+    missing = _missing_arguments(cls, kwargs)
+    if missing:
+        hint = (
+            "; use cmd:COMMAND, e.g. cmd:./my_code"
+            if "command" in missing
+            else f"; give {target}[{'=...,'.join(missing)}=...]"
+        )
+        raise HCVInputError(f"adapter {target!r} needs the argument(s) {', '.join(missing)}{hint}")
     try:
         return cls(**kwargs)
     except HCVInputError:
         raise
     except TypeError as exc:
         raise HCVInputError(f"adapter {spec!r}: bad arguments ({exc})") from None
+
+
+def _missing_arguments(cls: type, kwargs: dict) -> list[str]:
+    """Required constructor parameters of ``cls`` not in ``kwargs``."""
+    try:
+        params = inspect.signature(cls).parameters.values()
+    except (TypeError, ValueError):
+        return []
+    return [
+        p.name
+        for p in params
+        if p.default is inspect.Parameter.empty
+        and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+        and p.name not in kwargs
+    ]

@@ -52,10 +52,20 @@ record every step; stop at the first step after q has returned to <= 0, or after
 ``n_steps`` steps; all four arrays have the same length (>= 2). Non-finite
 numbers may be written as null (a blown-up run is a result, not an error). To
 report a failure, write ``{"error": "one line"}`` or exit with a non-zero status.
+To decline a scene the code cannot run (no sphere model, no sustained scenes),
+write ``{"unsupported": "one line"}``: the scene is skipped, not failed.
 Nothing else may be written to stdout; diagnostics go to stderr.
 
+Sustained (two-walls) scenes are sent only to commands declared with
+``cmd[sustained=true]:COMMAND`` (other ``cmd[...]`` arguments: ``timeout``,
+``label``, ``cwd``).
+
 Failures of one run (non-zero exit, timeout, output that is not JSON or breaks
-the rules) fail that run only; the benchmark goes on with the next one.
+the rules) fail that run only; the benchmark goes on with the next one. Output is
+read while the command runs and capped (`response_limit`): a command that writes
+more is killed (its whole process group) and the run fails; so is one that
+outlives its timeout, and on Ctrl-C the command is killed before the interrupt
+propagates.
 """
 
 from __future__ import annotations
@@ -63,10 +73,11 @@ from __future__ import annotations
 import json
 import math
 import os
+import selectors
 import shlex
 import signal
 import subprocess
-import tempfile
+import time
 from collections.abc import Mapping, Sequence
 
 from ..errors import HCVInputError
@@ -81,13 +92,47 @@ from .base import (
     trajectory_from_mapping,
 )
 
-__all__ = ["PROTOCOL", "SubprocessAdapter", "law_from_json"]
+__all__ = [
+    "PROTOCOL",
+    "AdapterDeclined",
+    "AdapterTimeout",
+    "SubprocessAdapter",
+    "law_from_json",
+    "response_limit",
+]
 
 PROTOCOL = "hcv-adapter/1"
 # Characters of the command's stderr kept for a failure report (the tail).
 _STDERR_TAIL = 4000
-# Largest response accepted (bytes): a trajectory of 1e6 samples is ~80 MB of JSON.
-_MAX_STDOUT = 256 * 1024 * 1024
+# Response size bound: a sample is 4 numbers of at most ~25 characters in JSON plus
+# separators (~110 bytes); 160 leaves room for spaces. Plus 1 MiB for meta and the
+# implemented law. Never more than 32 MiB: json.loads peaks at ~15x the text size.
+_BYTES_PER_SAMPLE = 160
+_RESPONSE_SLACK = 1 << 20
+_MAX_STDOUT = 32 << 20
+# Bytes read from a pipe at a time.
+_CHUNK = 1 << 16
+# Seconds the selector waits before it rechecks the deadline.
+_POLL = 0.5
+
+
+def response_limit(n_steps: int) -> int:
+    """Largest response (bytes) accepted for a run of ``n_steps`` steps."""
+    return min(_MAX_STDOUT, _RESPONSE_SLACK + _BYTES_PER_SAMPLE * (int(n_steps) + 2))
+
+
+class AdapterDeclined(AdapterRunError):
+    """The code declined the scene (``{"unsupported": reason}``): the scene is skipped."""
+
+    def __init__(self, reason: str):
+        super().__init__(f"declined: {reason}")
+        self.declined = reason
+
+
+class AdapterTimeout(AdapterRunError):
+    """The command outlived its timeout and was killed."""
+
+    timed_out = True
 
 
 def _tail(text: str) -> str:
@@ -100,8 +145,11 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(data, Mapping):
         raise AdapterOutputError(f"{who}: 'implemented_law' must be an object")
     try:
-        pot = (_potential(_Where(who), dict(data["potential"]), "implemented_law.potential")
-               if "potential" in data else scene.potential)
+        pot = (
+            _potential(_Where(who), dict(data["potential"]), "implemented_law.potential")
+            if "potential" in data
+            else scene.potential
+        )
     except HCVInputError as exc:
         raise AdapterOutputError(f"{who}: {exc}") from None
     mass = data.get("mass", scene.mass)
@@ -109,8 +157,10 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(mass, (int, float)) or not mass > 0 or not isinstance(damping, Mapping):
         raise AdapterOutputError(f"{who}: 'implemented_law' needs mass > 0 and a damping object")
     law = damping.get("law")
-    kw = dict(clips_tension=bool(data.get("clips_tension", False)),
-              description=str(data.get("description", "")))
+    kw = dict(
+        clips_tension=bool(data.get("clips_tension", False)),
+        description=str(data.get("description", "")),
+    )
     try:
         if law == "none":
             return ImplementedLaw(pot, float(mass), zeta=0.0, **kw)
@@ -123,8 +173,9 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
             return ImplementedLaw(pot, float(mass), C=PowerDamping(c, a), **kw)
     except (KeyError, TypeError, ValueError, HCVInputError) as exc:
         raise AdapterOutputError(f"{who}: bad 'implemented_law.damping' ({exc})") from None
-    raise AdapterOutputError(f"{who}: implemented_law.damping.law must be none, universal or "
-                             f"power, got {law!r}")
+    raise AdapterOutputError(
+        f"{who}: implemented_law.damping.law must be none, universal or power, got {law!r}"
+    )
 
 
 class SubprocessAdapter(ContactAdapter):
@@ -148,15 +199,29 @@ class SubprocessAdapter(ContactAdapter):
     name = "subprocess"
     isolate = False  # every run is already a separate process with a timeout
 
-    def __init__(self, command: str | Sequence[str], timeout: float | None = None,
-                 cwd: str | None = None, label: str | None = None, sustained: bool = False):
+    def __init__(
+        self,
+        command: str | Sequence[str],
+        timeout: float | None = None,
+        cwd: str | None = None,
+        label: str | None = None,
+        sustained: bool = False,
+    ):
         if isinstance(command, str):
-            argv = shlex.split(command)
+            try:
+                argv = shlex.split(command)
+            except ValueError as exc:  # e.g. an unbalanced quote
+                raise HCVInputError(
+                    f"subprocess adapter: cannot split the command {command!r} "
+                    f"({exc}); check its quotes"
+                ) from None
         elif isinstance(command, Sequence) and all(isinstance(a, str) for a in command):
             argv = list(command)
         else:
-            raise HCVInputError(f"subprocess adapter: command must be a string or a list of "
-                                f"strings, got {command!r}")
+            raise HCVInputError(
+                f"subprocess adapter: command must be a string or a list of "
+                f"strings, got {command!r}"
+            )
         if not argv:
             raise HCVInputError("subprocess adapter: empty command")
         self.timeout_given = timeout is not None
@@ -171,6 +236,7 @@ class SubprocessAdapter(ContactAdapter):
             prog = next((a for a in argv[1:] if not a.startswith("-")), prog)
         self._label = label or os.path.basename(prog)
         self.supports_sustained = bool(sustained)
+        self._n_steps = 0
         self._laws: dict[tuple, ImplementedLaw] = {}
 
     @property
@@ -178,59 +244,129 @@ class SubprocessAdapter(ContactAdapter):
         return self._label
 
     def describe(self) -> dict:
-        return {"name": self.name, "label": self.label, "command": self.argv,
-                "timeout": self.timeout, "protocol": PROTOCOL}
+        return {
+            "name": self.name,
+            "label": self.label,
+            "command": self.argv,
+            "timeout": self.timeout,
+            "protocol": PROTOCOL,
+        }
+
+    def _exchange(self, payload: bytes, limit: int) -> tuple[int, bytes, str]:
+        """Run the command once: (exit status, stdout, stderr tail); kill it on any way out."""
+        try:
+            proc = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                cwd=self.cwd,
+                start_new_session=True,
+            )
+        except OSError as exc:
+            raise AdapterRunError(
+                f"{self.label}: cannot start {self.argv[0]!r} ({exc.strerror})"
+            ) from None
+        out, err = bytearray(), bytearray()
+        deadline = time.monotonic() + self.timeout
+        sel = selectors.DefaultSelector()
+        done = False
+        try:
+            os.set_blocking(proc.stdin.fileno(), False)
+            sel.register(proc.stdin, selectors.EVENT_WRITE)
+            sel.register(proc.stdout, selectors.EVENT_READ)
+            sel.register(proc.stderr, selectors.EVENT_READ)
+            sent = 0
+            while sel.get_map():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise AdapterTimeout(
+                        f"{self.label}: timeout after {self.timeout:g} s",
+                        _tail(err.decode(errors="replace")),
+                    )
+                for key, _ in sel.select(min(left, _POLL)):
+                    f = key.fileobj
+                    if f is proc.stdin:
+                        try:
+                            sent += os.write(f.fileno(), payload[sent : sent + _CHUNK])
+                        except BlockingIOError:
+                            continue
+                        except BrokenPipeError:
+                            sent = len(payload)  # the command does not read its input
+                        if sent >= len(payload):
+                            sel.unregister(f)
+                            f.close()
+                        continue
+                    data = os.read(f.fileno(), _CHUNK)
+                    if not data:
+                        sel.unregister(f)
+                        continue
+                    if f is proc.stdout:
+                        out += data
+                        if len(out) > limit:
+                            raise AdapterOutputError(
+                                f"{self.label}: more than {limit} bytes on stdout for a run of "
+                                f"{self._n_steps} steps; the command was stopped"
+                            )
+                    else:
+                        err += data
+                        del err[: -2 * _STDERR_TAIL]
+            left = deadline - time.monotonic()
+            try:
+                rc = proc.wait(timeout=max(left, 0.0))
+            except subprocess.TimeoutExpired:
+                raise AdapterTimeout(
+                    f"{self.label}: timeout after {self.timeout:g} s",
+                    _tail(err.decode(errors="replace")),
+                ) from None
+            done = True
+        finally:
+            sel.close()
+            if not done:  # timeout, overflow, Ctrl-C, any error: no process left behind
+                _kill_group(proc)
+            for f in (proc.stdin, proc.stdout, proc.stderr):
+                try:
+                    f.close()
+                except OSError:
+                    pass
+        return rc, bytes(out), _tail(err.decode(errors="replace"))
 
     def _call(self, request: str, scene: AdapterScene) -> dict:
         payload = json.dumps({"protocol": PROTOCOL, "request": request, "scene": scene.to_json()})
-        with tempfile.TemporaryFile() as err, tempfile.TemporaryFile() as out:
-            try:
-                proc = subprocess.Popen(self.argv, stdin=subprocess.PIPE, stdout=out, stderr=err,
-                                        cwd=self.cwd, start_new_session=True)
-            except OSError as exc:
-                raise AdapterRunError(f"{self.label}: cannot start {self.argv[0]!r} "
-                                      f"({exc.strerror})") from None
-            try:
-                proc.communicate(payload.encode(), timeout=self.timeout)
-            except subprocess.TimeoutExpired:
-                _kill_group(proc)
-                err.seek(0)
-                raise AdapterRunError(f"{self.label}: timeout after {self.timeout:g} s",
-                                      _tail(err.read().decode(errors="replace"))) from None
-            except BrokenPipeError:
-                proc.wait(timeout=self.timeout)
-            err.seek(0)
-            stderr = _tail(err.read().decode(errors="replace"))
-            if proc.returncode != 0:
-                rc = proc.returncode
-                how = (f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0
-                       else f"exit status {rc}")
-                raise AdapterRunError(f"{self.label}: command failed, {how}", stderr)
-            size = out.tell()
-            if size > _MAX_STDOUT:
-                raise AdapterOutputError(f"{self.label}: {size} bytes on stdout, more than "
-                                         f"{_MAX_STDOUT}")
-            out.seek(0)
-            raw = out.read().decode(errors="replace")
+        self._n_steps = int(scene.n_steps)
+        rc, raw_bytes, stderr = self._exchange(payload.encode(), response_limit(scene.n_steps))
+        if rc != 0:
+            how = f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}"
+            raise AdapterRunError(f"{self.label}: command failed, {how}", stderr)
+        raw = raw_bytes.decode(errors="replace")
         try:
             data = json.loads(raw)
         except json.JSONDecodeError as exc:
             first = raw.strip().splitlines()[0][:80] if raw.strip() else "(empty)"
-            raise AdapterOutputError(f"{self.label}: stdout is not one JSON object ({exc.msg} at "
-                                     f"line {exc.lineno}; starts with {first!r})") from None
+            raise AdapterOutputError(
+                f"{self.label}: stdout is not one JSON object ({exc.msg} at "
+                f"line {exc.lineno}; starts with {first!r})"
+            ) from None
+        except RecursionError:
+            raise AdapterOutputError(f"{self.label}: stdout is JSON nested too deeply") from None
         if not isinstance(data, dict):
-            raise AdapterOutputError(f"{self.label}: stdout must be a JSON object, got "
-                                     f"{type(data).__name__}")
+            raise AdapterOutputError(
+                f"{self.label}: stdout must be a JSON object, got {type(data).__name__}"
+            )
+        if "unsupported" in data:
+            raise AdapterDeclined(str(data["unsupported"])[:300])
         if "error" in data:
-            raise AdapterRunError(f"{self.label}: reported error: {str(data['error'])[:300]}",
-                                  stderr)
+            raise AdapterRunError(
+                f"{self.label}: reported error: {str(data['error'])[:300]}", stderr
+            )
         return data
 
     def _run(self, request: str, scene: AdapterScene):
         data = self._call(request, scene)
         if "implemented_law" in data:
-            self._laws[(scene.name, scene.v0)] = law_from_json(data["implemented_law"], scene,
-                                                               self.label)
+            self._laws[(scene.name, scene.v0)] = law_from_json(
+                data["implemented_law"], scene, self.label
+            )
         return trajectory_from_mapping(data, who=self.label)
 
     def _impact_impl(self, scene: AdapterScene):

@@ -8,18 +8,23 @@ import path ``package.module:Class``, or ``cmd:COMMAND`` (a program speaking the
 JSON protocol of docs/adapter-protocol.md); names and import paths take
 constructor arguments as ``NAME[key=value,...]``.
 
-Exit status: 0; with ``--gate`` 0 when every metric passes and 1 when any fails
-(or the run was interrupted); 2 for usage or configuration errors (unknown
-adapter, bad scene or tolerances file, an adapter that supports none of the
-scenes). `add_bench_parser` adds the subcommand to the ``hcv`` parser;
+Exit status: 0; with ``--gate`` 0 when every metric passes, 1 when any fails,
+3 when none fails but the suite's own reference could not decide one (an
+internal error, never counted against the code); 2 for usage or configuration
+errors (unknown adapter, bad scene or tolerances file, an output path that
+cannot be written, an adapter that supports none of the scenes); 130 on Ctrl-C
+(the scorecard so far is printed and the files written, then "interrupted"). `add_bench_parser` adds the subcommand to the ``hcv`` parser;
 ``python -m reference_impl.bench`` runs it stand-alone.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import time
 from collections.abc import Sequence
+from pathlib import Path
 
 from ..errors import HCVInputError
 
@@ -28,29 +33,88 @@ __all__ = ["add_bench_parser", "cmd_bench", "main"]
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
 
+# Longest --scenes argument list accepted (characters), checked before any work.
+_MAX_SCENE_ARGS = 100_000
+
+
 def _scene_args(values: Sequence[str] | None) -> list[str] | None:
-    if not values:
+    if values is None:
         return None
+    if sum(len(v) for v in values) > _MAX_SCENE_ARGS:
+        raise HCVInputError(f"--scenes is longer than {_MAX_SCENE_ARGS} characters")
     out = [s.strip() for v in values for s in v.split(",") if s.strip()]
-    return out or None
+    if not out:
+        raise HCVInputError(
+            f"--scenes {' '.join(repr(v) for v in values)} names no scene; give "
+            "scene names or TOML files, or leave --scenes out for the defaults"
+        )
+    return out
+
+
+def check_output_file(path: str, option: str) -> None:
+    """Refuse (HCVInputError) an output path that cannot be written, before any work.
+
+    An existing regular file is overwritten; a directory, a missing or
+    unwritable parent directory are refused.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise HCVInputError(f"{option} {path}: is a directory; give a file name")
+    parent = p.parent
+    if not parent.is_dir():
+        raise HCVInputError(f"{option} {path}: directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise HCVInputError(f"{option} {path}: directory {str(parent)!r} is not writable")
+    if p.exists() and not (p.is_file() and os.access(p, os.W_OK)):
+        raise HCVInputError(f"{option} {path}: exists and is not a writable regular file")
+
+
+class _Lines:
+    """Progress as plain lines on stderr (no terminal: CI logs), at most one per step."""
+
+    def __init__(self, adapter: str):
+        self.adapter, self.t0 = adapter, time.perf_counter()
+
+    def __call__(self, done: float, total: float) -> None:
+        print(
+            f"hcv bench {self.adapter}: {done:.0f} of {total:.0f} scene runs done "
+            f"({time.perf_counter() - self.t0:.0f} s)",
+            file=sys.stderr,
+            flush=True,
+        )
 
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object."""
     b = subparsers.add_parser(
-        "bench", help="benchmark a contact code against the exact solution (CI gate)",
+        "bench",
+        help="benchmark a contact code against the exact solution (CI gate)",
         description="Run scenes through a contact code's adapter and through the exact "
-                    "solution; print the scorecard; with --gate exit 1 when a metric fails.")
-    b.add_argument("adapter", help="registered name (reference, lammps, subprocess), "
-                                   "package.module:Class or cmd:COMMAND; NAME[key=value,...] "
-                                   "passes arguments")
-    b.add_argument("--scenes", nargs="+", metavar="SCENE",
-                   help="scene names or TOML files (space or comma separated); default: "
-                        "hertz, hertz-damped, hooke-damped, hertz-walls")
-    b.add_argument("--tolerances", metavar="FILE",
-                   help="TOML file overriding the default tolerances")
-    b.add_argument("--gate", action="store_true",
-                   help="exit 1 when any metric fails (0 when all pass)")
+        "solution; print the scorecard; with --gate exit 1 when a metric fails.",
+        epilog="exit status: 0 pass (or no --gate); 1 a metric failed; 2 usage or "
+        "configuration error; 3 no metric failed but our reference could not decide one; "
+        "130 interrupted.",
+    )
+    b.add_argument(
+        "adapter",
+        help="registered name (reference, lammps, subprocess), "
+        "package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND for two-walls); "
+        "NAME[key=value,...] "
+        "passes arguments",
+    )
+    b.add_argument(
+        "--scenes",
+        nargs="+",
+        metavar="SCENE",
+        help="scene names or TOML files (space or comma separated); default: "
+        "hertz, hertz-damped, hooke-damped, hertz-walls",
+    )
+    b.add_argument(
+        "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
+    )
+    b.add_argument(
+        "--gate", action="store_true", help="exit 1 when any metric fails (0 when all pass)"
+    )
     b.add_argument("--json", metavar="FILE", help="write the JSON report here")
     b.add_argument("--junit", metavar="FILE", help="write JUnit XML here")
     b.add_argument("--plot", metavar="FILE", help="write the speed-against-error plot (PNG)")
@@ -62,26 +126,40 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
 
 def cmd_bench(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
-    from pathlib import Path
-
     from rich.console import Console
 
+    from . import report
     from .report import plot_speed_error, render_scorecard, render_speed_error, scorecard_markdown
     from .runner import run_bench
 
+    scenes = _scene_args(args.scenes)
+    for option in ("json", "junit", "plot", "markdown"):
+        if getattr(args, option):
+            check_output_file(getattr(args, option), f"--{option}")
+    # Until the scorecard table knows the status "error" (our reference failed).
+    report._STATUS.setdefault("error", "[bold magenta]ERROR (ours)[/]")
     if sys.stderr.isatty():
         from rich.progress import Progress
 
         with Progress(transient=True, console=Console(stderr=True)) as bar:
             task = bar.add_task(f"bench {args.adapter}", total=None)
-            result = run_bench(args.adapter, scenes=_scene_args(args.scenes),
-                               tolerances=args.tolerances, json_path=args.json,
-                               junit_path=args.junit,
-                               progress=lambda d, t: bar.update(task, completed=d, total=t))
+            result = run_bench(
+                args.adapter,
+                scenes=scenes,
+                tolerances=args.tolerances,
+                json_path=args.json,
+                junit_path=args.junit,
+                progress=lambda d, t: bar.update(task, completed=d, total=t),
+            )
     else:
-        result = run_bench(args.adapter, scenes=_scene_args(args.scenes),
-                           tolerances=args.tolerances, json_path=args.json,
-                           junit_path=args.junit)
+        result = run_bench(
+            args.adapter,
+            scenes=scenes,
+            tolerances=args.tolerances,
+            json_path=args.json,
+            junit_path=args.junit,
+            progress=_Lines(args.adapter),
+        )
     console = Console()
     render_scorecard(result, console=console, show_skipped=args.show_skipped)
     if result.speed_error:
@@ -96,11 +174,18 @@ def cmd_bench(args) -> int:
     written = [p for p in (args.json, args.junit, args.plot, args.markdown) if p]
     if written:
         print("written: " + ", ".join(written))
+    for m in result.internal_errors:
+        print(f"ERROR (ours) {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    if result.interrupted:  # the results so far are out; the CLI says "interrupted", 130
+        raise KeyboardInterrupt
     status = result.exit_status(args.gate)
     if args.gate:
         c = result.counts()
-        print(f"gate: {'FAIL' if status else 'pass'} ({c['fail']} of {c['pass'] + c['fail']} "
-              f"metrics failed)")
+        verdict = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
+        print(
+            f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} metrics "
+            f"failed, {c['error']} undecided by our reference)"
+        )
     return status
 
 
@@ -110,11 +195,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     add_bench_parser(sub)
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
-    try:
-        return args.func(args)
-    except HCVInputError as exc:
-        print(f"hcv: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except BrokenPipeError:
-        sys.stderr.close()
-        return EXIT_OK
+    from ..cli import run_command
+
+    return run_command(args)

@@ -19,22 +19,23 @@ q = 0.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import asdict, dataclass, field
-from typing import Any
 
 import numpy as np
 
-from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
-from ..potentials.power import PowerLaw
+from ..adapters.base import ImplementedLaw
+from .measure import check_conventions, exact_reference, measure
 
-__all__ = ["METRICS", "MetricResult", "SceneContext", "SpeedRecord", "exact_reference",
-           "measure", "metric_names"]
-
-# Samples of the damped ODE on which the exact tensile peak is located.
-_TENSILE_SAMPLES = 4001
-# Exact references of non-universal laws: DOP853 tolerance.
-_IVP_RTOL = 1e-12
+__all__ = [
+    "METRICS",
+    "MetricResult",
+    "SceneContext",
+    "SpeedRecord",
+    "check_conventions",
+    "exact_reference",
+    "measure",
+    "metric_names",
+]
 
 
 @dataclass
@@ -44,7 +45,7 @@ class MetricResult:
     variant: str
     scene: str
     metric: str
-    status: str  # "pass" | "fail" | "skip"
+    status: str  # "pass" | "fail" | "skip" | "error" (our reference failed, not the code)
     value: float | None = None
     reference: float | None = None
     tolerance: str = ""
@@ -74,12 +75,22 @@ class SpeedRecord:
     stderr: str = ""
     seconds: float = 0.0
     dt_crit: dict | None = None
+    internal: str = ""  # the suite's own reference failed at this speed
 
     def to_dict(self) -> dict:
-        return {"v0": self.v0, "dt": self.dt, "asked_restitution": self.asked_e,
-                "implemented_law": self.law.to_json() if self.law is not None else None,
-                "exact": self.exact, "measured": self.measured, "error": self.error,
-                "stderr": self.stderr, "seconds": self.seconds, "dt_crit": self.dt_crit}
+        return {
+            "v0": self.v0,
+            "dt": self.dt,
+            "asked_restitution": self.asked_e,
+            "implemented_law": self.law.to_json() if self.law is not None else None,
+            "exact": self.exact,
+            "measured": self.measured,
+            "error": self.error,
+            "internal_error": self.internal,
+            "stderr": self.stderr,
+            "seconds": self.seconds,
+            "dt_crit": self.dt_crit,
+        }
 
 
 @dataclass
@@ -96,143 +107,8 @@ class SceneContext:
     order: float | None = None
     order_error: str = ""
     sustained: dict | None = None
-
-
-# ----------------------------------------------------------------------------
-# measurement on a trajectory
-# ----------------------------------------------------------------------------
-def measure(tr: Trajectory, v0: float) -> dict:
-    """Restitution, contact time, max penetration and tensile peak of one impact.
-
-    The contact ends at the first sample with q <= 0 after some q > 0; the
-    restitution is -v there / v0 (free flight), the contact time the linear
-    interpolation of q = 0 between that sample and the previous one. ``tensile``
-    is max(0, -min F) / max F over the samples in contact.
-    """
-    q, v, f, t = tr.q, tr.v, tr.force, tr.t
-    out: dict[str, Any] = {"samples": int(q.size), "separated": False, "finite": True}
-    in_contact = q > 0
-    seen = np.cumsum(in_contact) > 0
-    after = np.nonzero((~in_contact) & np.concatenate([[False], seen[:-1]]))[0]
-    end = int(after[0]) if after.size else q.size
-    finite = bool(np.all(np.isfinite(q[:end + 1 if after.size else end]))
-                  and np.all(np.isfinite(v[:end + 1 if after.size else end])))
-    out["finite"] = finite
-    if not finite:
-        out["reason"] = "non-finite state (blown up)"
-        return out
-    if not np.any(in_contact):
-        out["reason"] = "never in contact (q stayed <= 0)"
-        return out
-    out["max_penetration"] = float(np.max(q[:end]))
-    fc = f[1:end][in_contact[1:end]]
-    fmax = float(np.max(fc)) if fc.size else math.nan
-    out["max_force"] = fmax
-    out["tensile"] = (float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan)
-    if not after.size:
-        out["reason"] = f"did not separate within {q.size - 1} steps"
-        return out
-    j = end
-    out["separated"] = True
-    out["restitution"] = float(-v[j] / v0)
-    out["energy_ratio"] = float((v[j] / v0) ** 2)
-    qa, qb = float(q[j - 1]), float(q[j])
-    out["contact_time"] = float(t[j - 1] + qa / (qa - qb) * (t[j] - t[j - 1]))
-    out["steps"] = int(j)
-    return out
-
-
-# ----------------------------------------------------------------------------
-# exact references
-# ----------------------------------------------------------------------------
-def universal_zeta(law: ImplementedLaw) -> float | None:
-    """zeta when the law is the universal one (incl. c q^((p-1)/2) of a power law), else None."""
-    if law.C is None:
-        return float(law.zeta or 0.0)
-    pot = law.potential
-    if isinstance(law.C, PowerDamping) and type(pot) is PowerLaw:
-        if law.C.c == 0.0:
-            return 0.0
-        if abs(law.C.exponent - 0.5 * (pot.p - 1.0)) < 1e-15:
-            return law.C.c / (2.0 * math.sqrt(law.mass * pot.k * (pot.p + 1.0) / 2.0))
-    return None
-
-
-def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
-    """Exact peak tensile total force / peak compressive force along the damped ODE."""
-    from ..integrators.ivp import integrate_impact
-
-    if law.clips_tension:
-        return 0.0
-    C = law.damping_coefficient
-    if not math.isfinite(t_end):
-        return math.nan
-    res = integrate_impact(law.potential, law.mass, v0, C=C, rtol=1e-10,
-                           t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES))
-    q, v = res.q, res.v
-    inside = q > 0
-    if not np.any(inside):
-        return math.nan
-    F = law.potential._dU(q[inside]) + C(q[inside]) * v[inside]
-    return float(max(0.0, -np.min(F)) / np.max(F))
-
-
-def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> dict:
-    """Exact restitution, contact time, max penetration and tensile peak of ``law`` at v0.
-
-    With ``timing`` the wall time of the exact solver is measured too ("seconds").
-    """
-    from ..impact import solve_impact
-    from ..integrators.ivp import integrate_impact
-
-    pot, m = law.potential, law.mass
-    zeta = universal_zeta(law)
-    out: dict[str, Any] = {}
-    if zeta is not None and zeta < 1.0:
-        sol = solve_impact(pot, m, v0, zeta)
-        out["method"] = "exact (harmonic map)"
-        out["max_penetration"] = sol.max_penetration
-        if law.clips_tension and zeta > 0:
-            e = sol.restitution_zero_force
-            q_zf = float(sol.state(np.array([sol.contact_time_zero_force]))[0][0])
-            out["restitution"] = e
-            out["contact_time"] = sol.contact_time_zero_force + q_zf / (e * v0)
-        else:
-            out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
-        out["zeta"] = zeta
-        if timing:
-            out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
-    else:
-        C = law.damping_coefficient
-        res = integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=law.clips_tension)
-        out["method"] = f"DOP853 rtol={_IVP_RTOL:g}"
-        out["max_penetration"] = res.q_max
-        if law.clips_tension and res.t_zero_force < res.contact_time:
-            e = res.restitution_zero_force
-            q_zf = float(res.sol(res.t_zero_force)[0])
-            out["restitution"] = e
-            out["contact_time"] = res.t_zero_force + q_zf / (e * v0)
-        else:
-            out["restitution"], out["contact_time"] = res.restitution, res.contact_time
-        if timing:
-            out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
-    out["energy_ratio"] = out["restitution"] ** 2
-    out["tensile"] = _tensile_exact(law, v0, out["contact_time"])
-    return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v)
-            for k, v in out.items()}
-
-
-def _time(fn, budget: float = 0.05, repeats: int = 3) -> float:
-    times, spent = [], 0.0
-    while len(times) < repeats or spent < budget:
-        t0 = time.perf_counter()
-        fn()
-        d = time.perf_counter() - t0
-        times.append(d)
-        spent += d
-        if len(times) >= 50:
-            break
-    return float(np.median(times))
+    internal: str = ""  # the suite's own reference failed on this scene
+    order_internal: str = ""  # ... on the speed table only
 
 
 # ----------------------------------------------------------------------------
@@ -246,6 +122,7 @@ class Metric:
     field = ""
     description = ""
     impact_only = True
+    magnitude = True  # the value is a size (>= 0) compared with the limit from below
 
     def applies(self, ctx: SceneContext) -> str | None:
         if self.impact_only and ctx.kind != "impact":
@@ -253,19 +130,49 @@ class Metric:
         return None
 
     def _result(self, ctx, status, value=None, reference=None, tol=None, explanation=""):
-        return MetricResult(ctx.variant, ctx.scene, self.name, status, value, reference,
-                            f"{self.field} {tol:g}" if tol is not None else "", explanation,
-                            self.description)
+        return MetricResult(
+            ctx.variant,
+            ctx.scene,
+            self.name,
+            status,
+            value,
+            reference,
+            f"{self.field} {tol:g}" if tol is not None else "",
+            explanation,
+            self.description,
+        )
 
     def evaluate(self, ctx: SceneContext, tol: dict) -> MetricResult:
+        if ctx.skipped:
+            return self._result(ctx, "skip", explanation=ctx.skipped)
         reason = self.applies(ctx)
         if reason:
             return self._result(ctx, "skip", explanation=reason)
         limit = float(tol[self.key][self.field])
+        if ctx.internal:
+            return self._result(ctx, "error", tol=limit, explanation=_ours(ctx.internal))
         try:
-            return self._evaluate(ctx, limit)
+            res = self._evaluate(ctx, limit)
         except _Missing as miss:
             return self._result(ctx, "fail", tol=limit, explanation=str(miss))
+        except _Internal as exc:
+            return self._result(ctx, "error", tol=limit, explanation=_ours(str(exc)))
+        if (
+            res.status == "pass"
+            and self.magnitude
+            and not (isinstance(res.value, float) and res.value >= 0)
+        ):
+            # every magnitude metric compares a value >= 0 with its limit; anything else
+            # (negative, NaN) is a sign or measurement error and never passes
+            return self._result(
+                ctx,
+                "fail",
+                res.value,
+                res.reference,
+                limit,
+                f"{self.name} = {res.value!r} is not a magnitude >= 0",
+            )
+        return res
 
     def _evaluate(self, ctx: SceneContext, limit: float) -> MetricResult:  # pragma: no cover
         raise NotImplementedError
@@ -275,9 +182,19 @@ class _Missing(Exception):
     """A run this metric needs failed or did not produce the quantity."""
 
 
+class _Internal(Exception):
+    """The suite's own reference failed for this metric (not the code under test)."""
+
+
+def _ours(text: str) -> str:
+    return f"internal error of the reference (ours, not the code's): {text}"
+
+
 def _need(rec: SpeedRecord, *keys: str, exact: bool = True) -> tuple[dict, dict]:
     if rec.error:
         raise _Missing(f"run failed at v0 = {rec.v0:g} m/s: {rec.error}")
+    if exact and rec.internal:
+        raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal}")
     meas = rec.measured or {}
     for k in keys:
         if not isinstance(meas.get(k), float) or not math.isfinite(meas[k]):
@@ -309,10 +226,16 @@ class _RelativeToExact(Metric):
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
         law = rec.law.description if rec.law is not None else ""
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"{self.quantity.replace('_', ' ')} {got:.7g}{self.unit} at v0 = "
-                            f"{rec.v0:g} m/s, exact {ref:.7g}{self.unit} for the implemented law "
-                            f"({law}): rel. error {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"{self.quantity.replace('_', ' ')} {got:.7g}{self.unit} at v0 = "
+            f"{rec.v0:g} m/s, exact {ref:.7g}{self.unit} for the implemented law "
+            f"({law}): rel. error {err:.2g} > {limit:g}",
+        )
 
 
 class RestitutionExact(_RelativeToExact):
@@ -351,10 +274,16 @@ class RestitutionAsked(Metric):
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
         implemented = ex.get("restitution", math.nan)
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"e = {got:.6g} at v0 = {rec.v0:g} m/s but {rec.asked_e:.6g} was asked "
-                            f"(rel. {err:.2g} > {limit:g}); the law the code implements gives "
-                            f"{implemented:.6g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"e = {got:.6g} at v0 = {rec.v0:g} m/s but {rec.asked_e:.6g} was asked "
+            f"(rel. {err:.2g} > {limit:g}); the law the code implements gives "
+            f"{implemented:.6g}",
+        )
 
 
 class RestitutionSpread(Metric):
@@ -376,17 +305,31 @@ class RestitutionSpread(Metric):
             meas, ex = _need(rec, "restitution", exact=False)
             es.append((meas["restitution"], rec.v0, ex.get("restitution", math.nan)))
         vals = np.array([e for e, _, _ in es])
-        spread = float((vals.max() - vals.min()) / vals.mean())
+        if np.any(vals < 0):  # a restitution is a magnitude: a negative one is a sign error
+            bad = es[int(np.argmin(vals))]
+            raise _Missing(
+                f"restitution {bad[0]:.5g} < 0 at v0 = {bad[1]:g} m/s (wrong sign of the velocity?)"
+            )
+        spread = float((vals.max() - vals.min()) / abs(vals.mean())) if vals.mean() else math.inf
         exact_vals = np.array([x for _, _, x in es])
-        ref = (float((exact_vals.max() - exact_vals.min()) / exact_vals.mean())
-               if np.all(np.isfinite(exact_vals)) else math.nan)
+        ref = (
+            float((exact_vals.max() - exact_vals.min()) / abs(exact_vals.mean()))
+            if np.all(np.isfinite(exact_vals)) and exact_vals.mean()
+            else math.nan
+        )
         if spread <= limit:
             return self._result(ctx, "pass", spread, ref, limit)
         lo, hi = es[int(np.argmin(vals))], es[int(np.argmax(vals))]
-        return self._result(ctx, "fail", spread, ref, limit,
-                            f"e = {lo[0]:.5g} at v0 = {lo[1]:g} m/s but {hi[0]:.5g} at {hi[1]:g} "
-                            f"m/s: spread {spread:.2g} > {limit:g} (the implemented law's exact "
-                            f"spread is {ref:.2g})")
+        return self._result(
+            ctx,
+            "fail",
+            spread,
+            ref,
+            limit,
+            f"e = {lo[0]:.5g} at v0 = {lo[1]:g} m/s but {hi[0]:.5g} at {hi[1]:g} "
+            f"m/s: spread {spread:.2g} > {limit:g} (the implemented law's exact "
+            f"spread is {ref:.2g})",
+        )
 
 
 class EnergyBalance(Metric):
@@ -408,16 +351,24 @@ class EnergyBalance(Metric):
         err, rec, ratio = worst
         if err <= limit:
             return self._result(ctx, "pass", err, 0.0, limit)
-        return self._result(ctx, "fail", err, 0.0, limit,
-                            f"E_out / E_in = {ratio:.8g} at v0 = {rec.v0:g} m/s for an elastic "
-                            f"impact: |1 - ratio| = {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            err,
+            0.0,
+            limit,
+            f"E_out / E_in = {ratio:.8g} at v0 = {rec.v0:g} m/s for an elastic "
+            f"impact: |1 - ratio| = {err:.2g} > {limit:g}",
+        )
 
 
 class AttractiveForce(Metric):
     name = key = "attractive_force"
     field = "atol"
-    description = ("peak attractive (tensile) total force near the end of contact, / peak "
-                   "force, against the implemented law")
+    description = (
+        "peak attractive (tensile) total force near the end of contact, / peak "
+        "force, against the implemented law"
+    )
 
     def _evaluate(self, ctx, limit):
         worst = None
@@ -431,60 +382,90 @@ class AttractiveForce(Metric):
         if err <= limit:
             return self._result(ctx, "pass", got, ref, limit)
         clip = rec.law is not None and rec.law.clips_tension
-        return self._result(ctx, "fail", got, ref, limit,
-                            f"tensile force peaks at {got:.3g} of the peak force at v0 = "
-                            f"{rec.v0:g} m/s, the implemented law "
-                            f"{'(tension clipped) ' if clip else ''}gives {ref:.3g}: "
-                            f"|diff| {err:.2g} > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            got,
+            ref,
+            limit,
+            f"tensile force peaks at {got:.3g} of the peak force at v0 = "
+            f"{rec.v0:g} m/s, the implemented law "
+            f"{'(tension clipped) ' if clip else ''}gives {ref:.3g}: "
+            f"|diff| {err:.2g} > {limit:g}",
+        )
 
 
 class DtCrit(Metric):
     name = key = "dt_crit"
     field = "min_ratio"
-    description = ("critical step measured on the code, in units of Delta t_safe (section 6), "
-                   "against textbook Verlet with the same law")
+    magnitude = False  # a ratio compared from above (inf when stable throughout)
+    description = (
+        "critical step measured on the code, in units of Delta t_safe (section 6), "
+        "against textbook Verlet with the same law"
+    )
 
     def _evaluate(self, ctx, limit):
         worst = None
         for rec in ctx.speeds:
             d = rec.dt_crit
+            if rec.internal or (d is not None and d.get("internal")):
+                raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal or d['internal']}")
             if d is None:
-                raise _Missing(f"no critical-step search at v0 = {rec.v0:g} m/s"
-                               + (f": {rec.error}" if rec.error else ""))
+                raise _Missing(
+                    f"no critical-step search at v0 = {rec.v0:g} m/s"
+                    + (f": {rec.error}" if rec.error else "")
+                )
             if d.get("error"):
                 raise _Missing(f"critical-step search at v0 = {rec.v0:g} m/s: {d['error']}")
             ref = d.get("verlet_ratio", 1.0)
-            rel = d["ratio"] / ref if math.isfinite(ref) else (1.0 if math.isinf(d["ratio"])
-                                                                else 0.0)
+            rel = (
+                d["ratio"] / ref if math.isfinite(ref) else (1.0 if math.isinf(d["ratio"]) else 0.0)
+            )
             if worst is None or rel < worst[0]:
                 worst = (rel, rec, d, ref)
         rel, rec, d, ref = worst
         if rel >= limit:
             return self._result(ctx, "pass", d["ratio"], ref, limit)
-        return self._result(ctx, "fail", d["ratio"], ref, limit,
-                            f"unstable at dt = {d['dt_crit']:.4g} s = {d['ratio']:.3g} dt_safe "
-                            f"(v0 = {rec.v0:g} m/s: {d.get('reason', 'energy gain')}), textbook "
-                            f"Verlet with the same law holds to {ref:.3g} dt_safe: "
-                            f"{rel:.3g} < {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            d["ratio"],
+            ref,
+            limit,
+            f"unstable at dt = {d['dt_crit']:.4g} s = {d['ratio']:.3g} dt_safe "
+            f"(v0 = {rec.v0:g} m/s: {d.get('reason', 'energy gain')}), textbook "
+            f"Verlet with the same law holds to {ref:.3g} dt_safe: "
+            f"{rel:.3g} < {limit:g}",
+        )
 
 
 class SpeedError(Metric):
     name = key = "speed_error"
     field = "min_order"
-    description = ("convergence order of the error against dt (speed-against-error table, "
-                   "middle speed)")
+    magnitude = False  # an order, compared from above
+    description = (
+        "convergence order of the error against dt (speed-against-error table, middle speed)"
+    )
 
     def _evaluate(self, ctx, limit):
+        if ctx.order_internal:
+            raise _Internal(ctx.order_internal)
         if ctx.order_error:
             raise _Missing(ctx.order_error)
         if ctx.order is None or not math.isfinite(ctx.order):
             raise _Missing("too few converging points in the speed-against-error table")
         if ctx.order >= limit:
             return self._result(ctx, "pass", ctx.order, 2.0, limit)
-        return self._result(ctx, "fail", ctx.order, 2.0, limit,
-                            f"the largest relative error falls like dt^{ctx.order:.2f} "
-                            f"(order below {limit:g}): the code does not converge to the law it "
-                            "implements")
+        return self._result(
+            ctx,
+            "fail",
+            ctx.order,
+            2.0,
+            limit,
+            f"the largest relative error falls like dt^{ctx.order:.2f} "
+            f"(order below {limit:g}): the code does not converge to the law it "
+            "implements",
+        )
 
 
 class EnergyDrift(Metric):
@@ -509,14 +490,28 @@ class EnergyDrift(Metric):
         drift = s["drift"]
         if drift <= limit:
             return self._result(ctx, "pass", drift, 0.0, limit)
-        return self._result(ctx, "fail", drift, 0.0, limit,
-                            f"energy drifts by {drift:.3g} of E_0 over {s['steps']} steps "
-                            f"({s.get('impacts', '?')} impacts) > {limit:g}")
+        return self._result(
+            ctx,
+            "fail",
+            drift,
+            0.0,
+            limit,
+            f"energy drifts by {drift:.3g} of E_0 over {s['steps']} steps "
+            f"({s.get('impacts', '?')} impacts) > {limit:g}",
+        )
 
 
 METRICS: tuple[Metric, ...] = (
-    RestitutionAsked(), RestitutionExact(), RestitutionSpread(), MaxPenetration(),
-    ContactTime(), EnergyBalance(), AttractiveForce(), DtCrit(), SpeedError(), EnergyDrift(),
+    RestitutionAsked(),
+    RestitutionExact(),
+    RestitutionSpread(),
+    MaxPenetration(),
+    ContactTime(),
+    EnergyBalance(),
+    AttractiveForce(),
+    DtCrit(),
+    SpeedError(),
+    EnergyDrift(),
 )
 
 

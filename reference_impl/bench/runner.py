@@ -25,31 +25,37 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
 from ..adapters.base import AdapterScene, ImplementedLaw, Trajectory
 from ..errors import HCVInputError
 from ..impact import solve_impact
-from ..scenes import Scene, load_scene, parse_scene
+from ..scenes import Scene, load_scene
 from ..stability import dt_safe as _dt_safe
 from .metrics import (
     METRICS,
     MetricResult,
     SceneContext,
     SpeedRecord,
+    check_conventions,
     exact_reference,
     measure,
 )
 from .tolerances import load_tolerances
-from .worker import Outcome, make_executor
+from .worker import Outcome, _one_line, make_executor
 
 __all__ = ["DEFAULT_SCENES", "BenchResult", "bench_scene_names", "resolve_scenes", "run_bench"]
 
-# Scenes run when none are given: embedded scenes and the bench's own (bench/scenes/).
+# Scenes run when none are given (all in the one catalogue, `hcv scenes`).
 DEFAULT_SCENES = ("hertz", "hertz-damped", "hooke-damped", "hertz-walls")
+# Upper bounds checked before any work: each speed costs a main run, a critical-step
+# search (~20 runs) and each scene a speed table (~6 runs); 32 speeds x 64 scenes is
+# already ~40,000 adapter runs.
+MAX_SCENES = 64
+# Gate exit status when no metric failed but the suite's own reference could not decide one.
+EXIT_INTERNAL = 3
+MAX_SPEEDS = 32
 # Critical-step scan, in units of dt_safe, before bisection.
 _DT_SCAN = (0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0, 8.0)
 _DT_LOW = (0.25, 0.125, 0.0625)
@@ -61,29 +67,42 @@ _ORDER_FLOOR = 1e-13
 
 
 def bench_scene_names() -> list[str]:
-    """Names of the scenes shipped with the benchmark (reference_impl/bench/scenes)."""
-    root = resources.files(__package__) / "scenes"
-    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
-
-
-def _load(name: str) -> Scene:
-    if name in bench_scene_names() and not Path(name).exists():
-        res = resources.files(__package__) / "scenes" / f"{name}.toml"
-        return parse_scene(res.read_text(encoding="utf-8"), f"<bench>/{name}.toml")
-    return load_scene(name)
+    """Names of the benchmark's default scenes (embedded scenes, listed by ``hcv scenes``)."""
+    return list(DEFAULT_SCENES)
 
 
 def resolve_scenes(scenes: Sequence[str | Scene] | None) -> list[Scene]:
-    """Scenes from names (embedded or bench scenes), TOML paths or Scene objects."""
+    """Scenes from names (embedded scenes), TOML paths or Scene objects.
+
+    Raises
+    ------
+    HCVInputError
+        No scene, more than `MAX_SCENES` scenes or `MAX_SPEEDS` speeds in one,
+        a kind the bench does not run, zeta >= 1, or repeated names.
+    """
     items = list(DEFAULT_SCENES if scenes is None else scenes)
     if not items:
         raise HCVInputError("no scenes given")
+    if len(items) > MAX_SCENES:
+        raise HCVInputError(f"{len(items)} scenes given; hcv bench runs at most {MAX_SCENES}")
     out = []
     for s in items:
-        sc = s if isinstance(s, Scene) else _load(s)
+        sc = s if isinstance(s, Scene) else load_scene(s)
         if sc.kind not in ("impact", "two-walls"):
-            raise HCVInputError(f"scene {sc.name!r}: hcv bench runs impact and two-walls scenes, "
-                                f"not {sc.kind!r}")
+            raise HCVInputError(
+                f"scene {sc.name!r}: hcv bench runs impact and two-walls scenes, not {sc.kind!r}"
+            )
+        if len(sc.velocities) > MAX_SPEEDS:
+            raise HCVInputError(
+                f"scene {sc.name!r} has {len(sc.velocities)} speeds; hcv bench "
+                f"runs at most {MAX_SPEEDS} per scene"
+            )
+        if sc.damping_law == "universal" and (sc.zeta or 0.0) >= 1.0:
+            raise HCVInputError(
+                f"scene {sc.name!r}: hcv bench needs damping zeta < 1, got "
+                f"{sc.zeta!r} (the restitution asked, exp(-pi zeta / sqrt(1 - "
+                "zeta^2)), is defined for zeta < 1 only)"
+            )
         out.append(sc)
     names = [s.name for s in out]
     dup = {n for n in names if names.count(n) > 1}
@@ -131,7 +150,8 @@ class BenchResult:
     interrupted: bool = False
 
     def counts(self) -> dict[str, int]:
-        c = {"pass": 0, "fail": 0, "skip": 0}
+        """Metrics per status: pass, fail, skip, and error (our reference failed)."""
+        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0}
         for m in self.metrics:
             c[m.status] += 1
         return c
@@ -140,11 +160,19 @@ class BenchResult:
     def failures(self) -> list[MetricResult]:
         return [m for m in self.metrics if m.status == "fail"]
 
+    @property
+    def internal_errors(self) -> list[MetricResult]:
+        """Metrics not decided because the suite's own reference failed (never the code's fault)."""
+        return [m for m in self.metrics if m.status == "error"]
+
     def exit_status(self, gate: bool) -> int:
-        """0, or with ``gate`` 1 when any metric failed (or the run was interrupted)."""
+        """0; with ``gate`` 1 when a metric failed (or the run was interrupted), else
+        `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
         if not gate:
             return 0
-        return 1 if (self.failures or self.interrupted) else 0
+        if self.failures or self.interrupted:
+            return 1
+        return EXIT_INTERNAL if self.internal_errors else 0
 
     def to_dict(self) -> dict:
         from .report import result_to_dict
@@ -155,18 +183,51 @@ class BenchResult:
 # ----------------------------------------------------------------------------
 # one variant on one scene
 # ----------------------------------------------------------------------------
+class _Declined(Exception):
+    """The code declined the scene at run time ({"unsupported": reason}): a skip."""
+
+
+class _Ours(Exception):
+    """The suite's own reference failed: an internal error, never the code's failure."""
+
+
 class _SceneRun:
     def __init__(self, executor, index: int, label: str, scene: Scene, tol: dict):
         self.ex, self.index, self.scene, self.tol = executor, index, scene, tol
         self.timeout = float(tol["run"]["timeout"])
         damped = scene.damping_law == "universal" and bool(scene.zeta)
         self.ctx = SceneContext(label, scene.name, scene.kind, damped)
+        self.timed_out = ""
 
     def call(self, method: str, ascene: AdapterScene) -> Outcome:
-        return self.ex.call(self.index, method, ascene, timeout=self.timeout)
+        """One adapter call; after a first timeout on this scene the rest are not run."""
+        if self.timed_out:
+            return Outcome(
+                False,
+                error=f"not run: an earlier run on this scene {self.timed_out}",
+                timed_out=True,
+            )
+        out = self.ex.call(self.index, method, ascene, timeout=self.timeout)
+        if out.declined:
+            raise _Declined(out.declined)
+        if out.timed_out:
+            self.timed_out = f"timed out after {self.timeout:g} s"
+        return out
 
     def asked(self, v0: float):
-        return solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
+        """Exact solution of the scene's own law (ours): `_Ours` when it fails."""
+        try:
+            sol = solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
+            t_c = float(sol.contact_time)
+        except Exception as exc:
+            raise _Ours(
+                f"exact solution of the scene at v0 = {v0:g} m/s failed: {_one_line(exc)}"
+            ) from None
+        if not (math.isfinite(t_c) and t_c > 0):
+            raise _Ours(
+                f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time {t_c!r}"
+            )
+        return sol
 
     def budget(self, dt: float, t_c: float) -> int:
         return int(math.ceil(self.tol["run"]["budget"] * t_c / dt)) + _EXTRA_STEPS
@@ -182,6 +243,10 @@ class _SceneRun:
         if not out.ok:
             rec.error, rec.stderr = out.error, out.stderr
             return rec
+        wrong = check_conventions(out.value, v0)
+        if wrong:
+            rec.error = f"sign convention: {wrong}"
+            return rec
         rec.measured = measure(out.value, v0)
         law = self.call("implemented_law", ascene)
         if not law.ok:
@@ -189,16 +254,17 @@ class _SceneRun:
             rec.stderr = rec.stderr or law.stderr
             return rec
         if not isinstance(law.value, ImplementedLaw):
-            rec.error = rec.error or (f"malformed output: implemented_law returned "
-                                      f"{type(law.value).__name__}")
+            rec.error = rec.error or (
+                f"malformed output: implemented_law returned {type(law.value).__name__}"
+            )
             return rec
         rec.law = law.value
         try:
             rec.exact = exact_reference(rec.law, v0)
-        except Exception as exc:  # the declared law cannot be solved
-            rec.error = rec.error or f"exact solution of the implemented law failed: {exc}"
-        if not rec.error:
-            rec.dt_crit = self.dt_crit(ascene, rec.law)
+        except Exception as exc:  # our solver on the declared law: never the code's failure
+            rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
+            return rec
+        rec.dt_crit = self.dt_crit(ascene, rec.law)
         return rec
 
     def _stable(self, ascene: AdapterScene, dt: float, q_max: float) -> tuple[bool, str]:
@@ -219,8 +285,9 @@ class _SceneRun:
             return False, f"rebound energy {gain:.4g} E_0"
         return True, ""
 
-    def _verlet_stable(self, law: ImplementedLaw, v0: float, dt: float,
-                       q_max: float) -> tuple[bool, str]:
+    def _verlet_stable(
+        self, law: ImplementedLaw, v0: float, dt: float, q_max: float
+    ) -> tuple[bool, str]:
         from ..adapters.reference import law_trajectory
 
         n = int(math.ceil(_DTCRIT_BUDGET * q_max / (v0 * dt))) + _EXTRA_STEPS
@@ -233,44 +300,75 @@ class _SceneRun:
         try:
             safe = _dt_safe(pot, m, v0)
             q_max = pot.turning_point(0.5 * m * v0 * v0)
-        except Exception as exc:
-            return {"error": f"dt_safe of the implemented law: {exc}"}
+        except Exception as exc:  # ours, not the code's
+            return {"internal": f"dt_safe of the implemented law failed: {_one_line(exc)}"}
         ref = safe.dt_safe if safe.dt_safe > 0 else safe.dt_shortcut
         res = self.tol["dt_crit"]["resolution"]
         out = {"dt_safe": ref}
         code = _search(lambda f: self._stable(ascene, f * ref, q_max), res)
-        out.update(dt_crit=code["ratio"] * ref, ratio=code["ratio"], reason=code["reason"],
-                   runs=code["runs"])
+        out.update(
+            dt_crit=code["ratio"] * ref,
+            ratio=code["ratio"],
+            reason=code["reason"],
+            runs=code["runs"],
+        )
         try:
             verlet = _search(lambda f: self._verlet_stable(law, v0, f * ref, q_max), res)
             out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
         except TypeError as exc:  # a damping the reference Verlet cannot run
             out["verlet_error"] = str(exc)
+        except Exception as exc:  # ours, not the code's
+            out["internal"] = f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
         return out
 
     def speed_table(self, rows: list[dict]) -> None:
         """Speed against error at the middle speed; fit the convergence order."""
         ctx, sc = self.ctx, self.scene
-        recs = [r for r in ctx.speeds if r.law is not None and r.exact is not None
-                and not r.error]
+        recs = [r for r in ctx.speeds if r.law is not None and r.exact is not None and not r.error]
         if not recs:
-            ctx.order_error = "no speed with a successful run and exact reference"
+            ours = next((r.internal for r in ctx.speeds if r.internal and not r.error), "")
+            if ours:
+                ctx.order_internal = ours
+            else:
+                ctx.order_error = "no speed with a successful run and exact reference"
             return
         rec = recs[len(recs) // 2]
-        ex = exact_reference(rec.law, rec.v0, timing=True)
-        rows.append({"adapter": ctx.variant, "scene": sc.name, "v0": rec.v0, "method": ex["method"],
-                     "setting": "reference", "steps_per_contact": None, "dt": None,
-                     "seconds": ex["seconds"], "err_restitution": 0.0, "err_contact_time": 0.0,
-                     "err_max_penetration": 0.0})
+        try:
+            ex = exact_reference(rec.law, rec.v0, timing=True)
+        except Exception as exc:  # ours
+            ctx.order_internal = f"exact reference of the speed table failed: {_one_line(exc)}"
+            return
+        rows.append(
+            {
+                "adapter": ctx.variant,
+                "scene": sc.name,
+                "v0": rec.v0,
+                "method": ex["method"],
+                "setting": "reference",
+                "steps_per_contact": None,
+                "dt": None,
+                "seconds": ex["seconds"],
+                "err_restitution": 0.0,
+                "err_contact_time": 0.0,
+                "err_max_penetration": 0.0,
+            }
+        )
         t_c = ex["contact_time"]
         pts = []
         for n in self.tol["run"]["speed_error_steps"]:
             dt = t_c / n
             ascene = AdapterScene.from_scene(sc, rec.v0, dt, self.budget(dt, t_c))
             out = self.call("impact", ascene)
-            row = {"adapter": ctx.variant, "scene": sc.name, "v0": rec.v0, "method": ctx.variant,
-                   "setting": f"dt = t_c/{n}", "steps_per_contact": n, "dt": dt,
-                   "seconds": out.seconds}
+            row = {
+                "adapter": ctx.variant,
+                "scene": sc.name,
+                "v0": rec.v0,
+                "method": ctx.variant,
+                "setting": f"dt = t_c/{n}",
+                "steps_per_contact": n,
+                "dt": dt,
+                "seconds": out.seconds,
+            }
             if not out.ok:
                 row["failure"] = out.error
                 rows.append(row)
@@ -285,8 +383,13 @@ class _SceneRun:
             worst = max(errs.values())
             if math.isfinite(worst) and worst > _ORDER_FLOOR:
                 pts.append((dt, worst))
-        mine = [r for r in rows if r["adapter"] == ctx.variant and r["scene"] == sc.name
-                and r["steps_per_contact"] is not None]
+        mine = [
+            r
+            for r in rows
+            if r["adapter"] == ctx.variant
+            and r["scene"] == sc.name
+            and r["steps_per_contact"] is not None
+        ]
         failed = [r for r in mine if "failure" in r]
         if len(pts) >= 3:
             x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
@@ -294,8 +397,10 @@ class _SceneRun:
         elif not failed:
             ctx.order = math.inf  # errors at round-off: nothing left to converge
         else:
-            ctx.order_error = (f"{len(failed)} of {len(mine)} runs of the speed-against-error "
-                               f"table failed: {failed[0]['failure']}")
+            ctx.order_error = (
+                f"{len(failed)} of {len(mine)} runs of the speed-against-error "
+                f"table failed: {failed[0]['failure']}"
+            )
 
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
@@ -310,23 +415,37 @@ class _SceneRun:
             return
         tr: Trajectory = out.value
         qp = np.clip(tr.q, 0.0, None)
-        E = 0.5 * sc.mass * tr.v**2 + sc.potential._U(qp)
+        try:
+            with np.errstate(all="ignore"):
+                U = sc.potential._U(qp)
+        except Exception as exc:  # ours: U outside the domain the potential covers
+            raise _Ours(f"energy of the sustained run: {_one_line(exc)}") from None
+        E = 0.5 * sc.mass * tr.v**2 + U
         E0 = 0.5 * sc.mass * v0 * v0
         drift = float(np.max(np.abs(E / E0 - 1.0))) if np.all(np.isfinite(E)) else math.inf
         impacts = int(np.sum((tr.q[1:] > 0) & (tr.q[:-1] <= 0)))
-        ctx.sustained = {"drift": drift, "steps": int(tr.t.size - 1), "impacts": impacts,
-                         "dt": dt, "seconds": out.seconds}
+        ctx.sustained = {
+            "drift": drift,
+            "steps": int(tr.t.size - 1),
+            "impacts": impacts,
+            "dt": dt,
+            "seconds": out.seconds,
+        }
 
     def run(self, rows: list[dict]) -> SceneContext:
         ctx = self.ctx
-        if ctx.kind == "two-walls":
-            self.sustained()
-            return ctx
-        for v0 in self.scene.velocities:
-            ctx.speeds.append(self.impact_speed(v0))
-        self.speed_table(rows)
+        try:
+            if ctx.kind == "two-walls":
+                self.sustained()
+                return ctx
+            for v0 in self.scene.velocities:
+                ctx.speeds.append(self.impact_speed(v0))
+            self.speed_table(rows)
+        except _Declined as exc:
+            ctx.skipped, ctx.speeds, ctx.sustained = f"declined by the code: {exc}", [], None
+        except _Ours as exc:
+            ctx.internal = str(exc)
         return ctx
-
 
 
 def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> dict:
@@ -344,8 +463,11 @@ def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> d
 
     first_bad = next((f for f in _DT_SCAN if not ok(f)), None)
     if first_bad is None:
-        return {"ratio": math.inf, "reason": f"stable up to {_DT_SCAN[-1]:g} dt_safe",
-                "runs": len(tried)}
+        return {
+            "ratio": math.inf,
+            "reason": f"stable up to {_DT_SCAN[-1]:g} dt_safe",
+            "runs": len(tried),
+        }
     below = [f for f in _DT_SCAN if f < first_bad]
     lo = below[-1] if below else 0.0
     if lo == 0.0:
@@ -367,8 +489,14 @@ def _search(stable: Callable[[float], tuple[bool, str]], resolution: float) -> d
 # ----------------------------------------------------------------------------
 # the entry point
 # ----------------------------------------------------------------------------
-def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_path=None,
-              progress: Callable[[float, float], None] | None = None) -> BenchResult:
+def run_bench(
+    adapter_spec,
+    scenes=None,
+    tolerances=None,
+    json_path=None,
+    junit_path=None,
+    progress: Callable[[float, float], None] | None = None,
+) -> BenchResult:
     """Benchmark one adapter on scenes; the function ``hcv bench`` calls.
 
     Parameters
@@ -398,7 +526,8 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from .report import machine_info, write_json, write_junit
+    from ._output import write_json, write_junit
+    from .report import machine_info
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)
@@ -408,8 +537,9 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
     labels = [v.label for v in variants]
     if len(set(labels)) != len(labels):
         executor.close()
-        raise HCVInputError(f"adapter {adapter_spec!r}: variants must have distinct labels, got "
-                            f"{labels}")
+        raise HCVInputError(
+            f"adapter {adapter_spec!r}: variants must have distinct labels, got {labels}"
+        )
     for var in variants:  # in-process adapters with their own timeout take the run's
         if getattr(var, "timeout_given", True) is False:
             var.timeout = float(tol["run"]["timeout"])
@@ -421,16 +551,26 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
     if all(reason for *_, reason in plan):
         executor.close()
         reasons = sorted({reason for *_, reason in plan})
-        raise HCVInputError(f"adapter {spec!r} supports none of the scenes "
-                            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}")
-    result = BenchResult(adapter=spec, scenes=[s.name for s in scene_list], tolerances=tol,
-                         machine=machine_info(), started=time.time())
+        raise HCVInputError(
+            f"adapter {spec!r} supports none of the scenes "
+            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}"
+        )
+    result = BenchResult(
+        adapter=spec,
+        scenes=[s.name for s in scene_list],
+        tolerances=tol,
+        machine=machine_info(),
+        started=time.time(),
+    )
     t0 = time.perf_counter()
     try:
         for i, var in enumerate(variants):
             desc = executor.call(i, "describe", timeout=tol["run"]["timeout"])
-            result.variants.append(desc.value if desc.ok and isinstance(desc.value, dict)
-                                   else {"label": var.label, "describe_error": desc.error})
+            result.variants.append(
+                desc.value
+                if desc.ok and isinstance(desc.value, dict)
+                else {"label": var.label, "describe_error": desc.error}
+            )
         total = float(len(plan))
         if progress is not None:
             progress(0.0, total)
@@ -438,9 +578,16 @@ def run_bench(adapter_spec, scenes=None, tolerances=None, json_path=None, junit_
             if reason:
                 ctx = SceneContext(var.label, sc.name, sc.kind, bool(sc.zeta), skipped=reason)
                 result.metrics.extend(
-                    MetricResult(var.label, sc.name, m.name, "skip",
-                                 explanation=f"scene not supported: {reason}",
-                                 description=m.description) for m in METRICS)
+                    MetricResult(
+                        var.label,
+                        sc.name,
+                        m.name,
+                        "skip",
+                        explanation=f"scene not supported: {reason}",
+                        description=m.description,
+                    )
+                    for m in METRICS
+                )
             else:
                 ctx = _SceneRun(executor, i, var.label, sc, tol).run(result.speed_error)
                 result.metrics.extend(m.evaluate(ctx, tol) for m in METRICS)

@@ -23,6 +23,20 @@ __all__ = ["default_tolerances", "load_tolerances"]
 _INT_LISTS = {("run", "speed_error_steps")}
 _INTS = {("run", "steps_per_contact"), ("run", "sustained_steps")}
 _MAX_BYTES = 1_000_000
+# Upper bounds of the sizes a tolerances file controls (run length, counts, waits),
+# checked before any work: a run is at most ~1e7 steps (~1 GB of trajectory at 4 x 8
+# bytes per sample in the parent), a wait at most a day.
+_MAX = {
+    ("run", "timeout"): 86400.0,
+    ("run", "startup_timeout"): 86400.0,
+    ("run", "steps_per_contact"): 100_000,
+    ("run", "budget"): 100.0,
+    ("run", "speed_error_steps"): 100_000,
+    ("run", "sustained_steps"): 10_000_000,
+}
+_MAX_SPEED_ERROR_ROWS = 12
+# The critical-step bisection stops at this fraction of dt_safe at the finest.
+_MIN_RESOLUTION = 1e-4
 
 
 def default_tolerances() -> dict[str, dict[str, Any]]:
@@ -33,16 +47,34 @@ def default_tolerances() -> dict[str, dict[str, Any]]:
 
 def _check(table: str, key: str, value, where: str):
     if (table, key) in _INT_LISTS:
-        ok = (isinstance(value, list) and len(value) >= 2
-              and all(isinstance(v, int) and not isinstance(v, bool) and v >= 2 for v in value))
+        ok = (
+            isinstance(value, list)
+            and len(value) >= 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 2 for v in value)
+        )
         if not ok:
-            raise HCVInputError(f"{where}: {table}.{key} must be a list of at least two integers "
-                                f">= 2, got {value!r}")
+            raise HCVInputError(
+                f"{where}: {table}.{key} must be a list of at least two integers "
+                f">= 2, got {value!r}"
+            )
+        top = _MAX[(table, key)]
+        if len(value) > _MAX_SPEED_ERROR_ROWS or max(value) > top:
+            raise HCVInputError(
+                f"{where}: {table}.{key} takes at most {_MAX_SPEED_ERROR_ROWS} "
+                f"values, each <= {top}"
+            )
         return sorted(set(value))
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise HCVInputError(f"{where}: {table}.{key} must be a number, got {value!r}")
     if not (math.isfinite(value) and value > 0):
         raise HCVInputError(f"{where}: {table}.{key} must be a finite number > 0, got {value!r}")
+    top = _MAX.get((table, key))
+    if top is not None and value > top:
+        raise HCVInputError(f"{where}: {table}.{key} must be <= {top:g}, got {value!r}")
+    if (table, key) == ("dt_crit", "resolution") and value < _MIN_RESOLUTION:
+        raise HCVInputError(
+            f"{where}: dt_crit.resolution must be >= {_MIN_RESOLUTION:g}, got {value!r}"
+        )
     if (table, key) in _INTS:
         if int(value) != value or value < 2:
             raise HCVInputError(f"{where}: {table}.{key} must be an integer >= 2, got {value!r}")

@@ -28,6 +28,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
+import sys
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -43,6 +44,16 @@ __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_sc
 # A scene is a few lines; refusing anything larger keeps a wrong path (a log,
 # a binary) from being read whole into memory.
 _MAX_SCENE_BYTES = 1_000_000
+# Upper bounds of the sizes a scene controls, checked before any work: every
+# speed is a full solve (and a critical-step search under dt-crit and bench);
+# an expression is parsed symbolically and differentiated twice; a sum is built
+# term by term (and nested sums recursively).
+_MAX_SPEEDS = 256
+_MAX_EXPRESSION_CHARS = 2000
+_MAX_PARAMS = 64
+_MAX_TERMS = 64
+_MAX_DEPTH = 8
+_MAX_NAME_CHARS = 200
 _KINDS = ("impact", "two-sided", "two-walls")
 _LAWS = ("none", "universal")
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
@@ -141,43 +152,67 @@ def _keys(err: _Where, table: dict, path: str, allowed, required=()) -> None:
         if key not in allowed:
             near = difflib.get_close_matches(key, allowed, n=1)
             hint = f"did you mean {near[0]!r}?" if near else f"allowed: {', '.join(allowed)}"
-            raise err(f"unknown key {path + str(key)!r} ({hint})")
+            raise err(f"unknown key {_short(path + str(key))} ({hint})")
     for key in required:
         if key not in table:
             raise err(f"missing key {path + key!r}")
 
 
-def _number(err: _Where, value, name: str, *, low: float = -math.inf, strict: bool = True,
-            high: float = math.inf) -> float:
+def _number(
+    err: _Where,
+    value,
+    name: str,
+    *,
+    low: float = -math.inf,
+    strict: bool = True,
+    high: float = math.inf,
+) -> float:
     """``value`` as a float, or SceneError unless it is finite and in (low, high]."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise err(f"{name} must be a number, got {value!r}")
-    v = float(value)
+        raise err(f"{name} must be a number, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:  # an integer beyond the float range (e.g. 400 digits)
+        raise err(f"{name} must be a finite number, got {_short(value)}") from None
     if not math.isfinite(v):
-        raise err(f"{name} must be a finite number, got {value!r}")
+        raise err(f"{name} must be a finite number, got {_short(value)}")
+    if 0.0 < abs(v) < sys.float_info.min:  # subnormal: 1 / v overflows to inf
+        raise err(f"{name} = {v!r} is below the smallest normal float ({sys.float_info.min:g})")
     if (v <= low if strict else v < low) or v > high:
         rel = ">" if strict else ">="
         bound = f"{rel} {low:g}" + (f" and <= {high:g}" if math.isfinite(high) else "")
-        raise err(f"{name} must be {bound}, got {value!r}")
+        raise err(f"{name} must be {bound}, got {_short(value)}")
     return v
 
 
-def _string(err: _Where, value, name: str, choices=None) -> str:
+def _short(value, limit: int = 60) -> str:
+    """repr(value), cut to ``limit`` characters (a message stays one short line)."""
+    if isinstance(value, int) and value.bit_length() > 200:  # no str(): ints of > 4300 digits
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _string(err: _Where, value, name: str, choices=None, max_chars: int = _MAX_NAME_CHARS) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise err(f"{name} must be a non-empty string, got {value!r}")
+        raise err(f"{name} must be a non-empty string, got {_short(value)}")
+    if len(value) > max_chars:
+        raise err(f"{name} has {len(value)} characters; at most {max_chars}")
     if choices is not None and value not in choices:
-        raise err(f"{name} = {value!r} is not one of {', '.join(repr(c) for c in choices)}")
+        raise err(f"{name} = {_short(value)} is not one of {', '.join(repr(c) for c in choices)}")
     return value
 
 
 def _table(err: _Where, value, name: str) -> dict:
     if not isinstance(value, dict):
-        raise err(f"{name} must be a table, got {value!r}")
+        raise err(f"{name} must be a table, got {_short(value)}")
     return value
 
 
-def _potential(err: _Where, table, path: str) -> Potential:
+def _potential(err: _Where, table, path: str, depth: int = 0) -> Potential:
     """Build the potential of one ``[potential]`` (or ``[[potential.terms]]``) table."""
+    if depth > _MAX_DEPTH:
+        raise err(f"{path}: sums nested more than {_MAX_DEPTH} deep")
     table = _table(err, table, path)
     if "family" not in table:
         raise err(f"missing key '{path}.family' (one of {', '.join(_FAMILIES)})")
@@ -185,18 +220,26 @@ def _potential(err: _Where, table, path: str) -> Potential:
     required, optional = _FAMILIES[family]
     _keys(err, table, f"{path}.", ("family", *required, *optional), required)
     if family == "expression":
-        source = _string(err, table["U"], f"{path}.U")
+        source = _string(err, table["U"], f"{path}.U", max_chars=_MAX_EXPRESSION_CHARS)
         params = _table(err, table.get("params", {}), f"{path}.params")
+        if len(params) > _MAX_PARAMS:
+            raise err(f"{path}.params has {len(params)} entries; at most {_MAX_PARAMS}")
         values = {k: _number(err, v, f"{path}.params.{k}") for k, v in params.items()}
         return _construct(err, path, Expression, source, **values)
     if family == "sum":
         terms = table["terms"]
-        if not isinstance(terms, list) or len(terms) < 2:
-            raise err(f"{path}.terms must be an array of at least two potential tables")
-        parts = [_potential(err, t, f"{path}.terms[{i}]") for i, t in enumerate(terms)]
+        if not isinstance(terms, list) or not 2 <= len(terms) <= _MAX_TERMS:
+            raise err(
+                f"{path}.terms must be an array of at least two (at most {_MAX_TERMS}) "
+                "potential tables"
+            )
+        parts = [_potential(err, t, f"{path}.terms[{i}]", depth + 1) for i, t in enumerate(terms)]
         return _construct(err, path, SumPotential, *parts)
-    args = {k: _number(err, table[k], f"{path}.{k}", low=0.0) for k in (*required, *optional)
-            if k in table}
+    args = {
+        k: _number(err, table[k], f"{path}.{k}", low=0.0)
+        for k in (*required, *optional)
+        if k in table
+    }
     cls = {"power": PowerLaw, "ellipsoid": Ellipsoid, "sphere": Sphere}[family]
     return _construct(err, path, cls, **args)
 
@@ -219,14 +262,18 @@ def _damping(err: _Where, table) -> tuple[str, float | None]:
     given = [k for k in ("zeta", "restitution", "C0", "K", "M") if k in table]
     if law == "none":
         if given:
-            raise err(f"damping.{given[0]} is set but damping.law is 'none'; set law = "
-                      "\"universal\" or remove it")
+            raise err(
+                f"damping.{given[0]} is set but damping.law is 'none'; set law = "
+                '"universal" or remove it'
+            )
         return law, None
     forms = [k for k in ("zeta", "restitution", "C0") if k in table]
     if len(forms) != 1:
         what = "none" if not forms else " and ".join(forms)
-        raise err(f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
-                  f"(with K and M), got {what}")
+        raise err(
+            f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
+            f"(with K and M), got {what}"
+        )
     if forms[0] != "C0" and ("K" in table or "M" in table):
         raise err("damping.K and damping.M go with damping.C0 only; remove them")
     if forms[0] == "zeta":
@@ -273,7 +320,9 @@ def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
     mass = _number(err, data["mass"], "mass", low=0.0)
     vels = data["velocities"]
     if not isinstance(vels, list) or not vels:
-        raise err(f"velocities must be a non-empty array of speeds in m/s, got {vels!r}")
+        raise err(f"velocities must be a non-empty array of speeds in m/s, got {_short(vels)}")
+    if len(vels) > _MAX_SPEEDS:
+        raise err(f"velocities has {len(vels)} speeds; at most {_MAX_SPEEDS}")
     velocities = tuple(_number(err, v, f"velocities[{i}]", low=0.0) for i, v in enumerate(vels))
     kind = _string(err, data.get("kind", "impact"), "kind", _KINDS)
     gap = None
@@ -308,10 +357,17 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if not isinstance(text, str):
         kind = type(text).__name__
         raise SceneError(f"scene {source}: the scene text must be a string, got {kind}")
+    if len(text) > _MAX_SCENE_BYTES:
+        raise SceneError(
+            f"scene {source}: {len(text)} characters is too large for a scene "
+            f"(limit {_MAX_SCENE_BYTES})"
+        )
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"scene {source}: TOML syntax error: {exc}") from None
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise SceneError(f"scene {source}: nested too deeply to be a scene") from None
     return scene_from_dict(data, source)
 
 
@@ -352,19 +408,24 @@ def load_scene(path_or_name: str | os.PathLike) -> Scene:
         return parse_scene(res.read_text(encoding="utf-8"), f"<embedded>/{text_arg}.toml")
     path = Path(text_arg)
     if not path.exists():
-        raise SceneError(f"scene file {text_arg}: not found; give an existing .toml file or an "
-                         "embedded scene name")
+        raise SceneError(
+            f"scene file {text_arg}: not found; give an existing .toml file or an "
+            "embedded scene name"
+        )
     if not path.is_file():
         raise SceneError(f"scene file {text_arg}: is not a regular file")
     try:
         size = path.stat().st_size
         if size > _MAX_SCENE_BYTES:
-            raise SceneError(f"scene file {text_arg}: {size} bytes is too large for a scene "
-                             f"(limit {_MAX_SCENE_BYTES}); is this the right file?")
+            raise SceneError(
+                f"scene file {text_arg}: {size} bytes is too large for a scene "
+                f"(limit {_MAX_SCENE_BYTES}); is this the right file?"
+            )
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise SceneError(f"scene file {text_arg}: not UTF-8 text ({exc.reason} at byte "
-                         f"{exc.start})") from None
+        raise SceneError(
+            f"scene file {text_arg}: not UTF-8 text ({exc.reason} at byte {exc.start})"
+        ) from None
     except OSError as exc:
         raise SceneError(f"scene file {text_arg}: cannot be read ({exc.strerror})") from None
     return parse_scene(text, text_arg)

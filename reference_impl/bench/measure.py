@@ -1,0 +1,204 @@
+"""Measurement on an adapter's trajectory and the exact references it is compared with.
+
+`check_conventions` names a sign error before anything is measured; `measure`
+reads restitution, contact time, max penetration and tensile peak off a
+trajectory; `exact_reference` solves the law the code implements exactly (the
+harmonic-map solver for the universal law, else DOP853 at rtol 1e-12). The
+scorecard rules are in `reference_impl.bench.metrics`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
+from ..potentials.power import PowerLaw
+
+__all__ = ["check_conventions", "exact_reference", "measure", "universal_zeta"]
+
+# Samples of the damped ODE on which the exact tensile peak is located.
+_TENSILE_SAMPLES = 4001
+# Exact references of non-universal laws: DOP853 tolerance.
+_IVP_RTOL = 1e-12
+
+
+# ----------------------------------------------------------------------------
+# measurement on a trajectory
+# ----------------------------------------------------------------------------
+def check_conventions(tr: Trajectory, v0: float) -> str | None:
+    """A plain sentence when a trajectory breaks the sign conventions, else None.
+
+    Checked before anything is measured, so that a sign error is named as such
+    instead of surfacing as "did not separate" or an instability: the overlap q
+    is > 0 in contact, dq/dt is > 0 while approaching (v[0] = v0 > 0), and the
+    contact force is > 0 when repulsive.
+    """
+    q, v, f = tr.q, tr.v, tr.force
+    with np.errstate(invalid="ignore"):
+        if np.isfinite(v[0]) and v[0] < 0:
+            return (
+                f"v = dq/dt must be positive while approaching (got v[0] = {v[0]:.6g} m/s "
+                f"for v0 = {v0:g} m/s)"
+            )
+        moved = np.nonzero(np.isfinite(q) & (q != 0))[0]
+        if moved.size and q[moved[0]] < 0:  # the body approaches: the overlap grows first
+            i = int(moved[0])
+            return (
+                f"q must be positive in contact (got q[{i}] = {q[i]:.6g} m after the "
+                f"first step at v0 = {v0:g} m/s: q is the overlap, not the gap)"
+            )
+        if np.any(np.isfinite(q)) and np.nanmax(q) > 0:
+            i = int(np.nanargmax(q))  # deepest overlap: q' ~ 0, the force is U'(q_max) > 0
+            if np.isfinite(f[i]) and f[i] < 0:
+                return (
+                    f"force must be positive (repulsive) in contact (got {f[i]:.6g} N at "
+                    f"the deepest overlap q = {q[i]:.6g} m)"
+                )
+    return None
+
+
+def measure(tr: Trajectory, v0: float) -> dict:
+    """Restitution, contact time, max penetration and tensile peak of one impact.
+
+    The contact ends at the first sample with q <= 0 after some q > 0; the
+    restitution is -v there / v0 (free flight), the contact time the linear
+    interpolation of q = 0 between that sample and the previous one. ``tensile``
+    is max(0, -min F) / max F over the samples in contact.
+    """
+    q, v, f, t = tr.q, tr.v, tr.force, tr.t
+    out: dict[str, Any] = {"samples": int(q.size), "separated": False, "finite": True}
+    in_contact = q > 0
+    seen = np.cumsum(in_contact) > 0
+    after = np.nonzero((~in_contact) & np.concatenate([[False], seen[:-1]]))[0]
+    end = int(after[0]) if after.size else q.size
+    finite = bool(
+        np.all(np.isfinite(q[: end + 1 if after.size else end]))
+        and np.all(np.isfinite(v[: end + 1 if after.size else end]))
+    )
+    out["finite"] = finite
+    if not finite:
+        out["reason"] = "non-finite state (blown up)"
+        return out
+    if not np.any(in_contact):
+        out["reason"] = "never in contact (q stayed <= 0)"
+        return out
+    out["max_penetration"] = float(np.max(q[:end]))
+    fc = f[1:end][in_contact[1:end]]
+    fmax = float(np.max(fc)) if fc.size else math.nan
+    out["max_force"] = fmax
+    out["tensile"] = float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan
+    if not after.size:
+        out["reason"] = f"did not separate within {q.size - 1} steps"
+        return out
+    j = end
+    out["separated"] = True
+    out["restitution"] = float(-v[j] / v0)
+    out["energy_ratio"] = float((v[j] / v0) ** 2)
+    qa, qb = float(q[j - 1]), float(q[j])
+    out["contact_time"] = float(t[j - 1] + qa / (qa - qb) * (t[j] - t[j - 1]))
+    out["steps"] = int(j)
+    return out
+
+
+# ----------------------------------------------------------------------------
+# exact references
+# ----------------------------------------------------------------------------
+def universal_zeta(law: ImplementedLaw) -> float | None:
+    """zeta when the law is the universal one (incl. c q^((p-1)/2) of a power law), else None."""
+    if law.C is None:
+        return float(law.zeta or 0.0)
+    pot = law.potential
+    if isinstance(law.C, PowerDamping) and type(pot) is PowerLaw:
+        if law.C.c == 0.0:
+            return 0.0
+        if abs(law.C.exponent - 0.5 * (pot.p - 1.0)) < 1e-15:
+            return law.C.c / (2.0 * math.sqrt(law.mass * pot.k * (pot.p + 1.0) / 2.0))
+    return None
+
+
+def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
+    """Exact peak tensile total force / peak compressive force along the damped ODE."""
+    from ..integrators.ivp import integrate_impact
+
+    if law.clips_tension:
+        return 0.0
+    C = law.damping_coefficient
+    if not math.isfinite(t_end):
+        return math.nan
+    res = integrate_impact(
+        law.potential,
+        law.mass,
+        v0,
+        C=C,
+        rtol=1e-10,
+        t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES),
+    )
+    q, v = res.q, res.v
+    inside = q > 0
+    if not np.any(inside):
+        return math.nan
+    F = law.potential._dU(q[inside]) + C(q[inside]) * v[inside]
+    return float(max(0.0, -np.min(F)) / np.max(F))
+
+
+def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> dict:
+    """Exact restitution, contact time, max penetration and tensile peak of ``law`` at v0.
+
+    With ``timing`` the wall time of the exact solver is measured too ("seconds").
+    """
+    from ..impact import solve_impact
+    from ..integrators.ivp import integrate_impact
+
+    pot, m = law.potential, law.mass
+    zeta = universal_zeta(law)
+    out: dict[str, Any] = {}
+    if zeta is not None and zeta < 1.0:
+        sol = solve_impact(pot, m, v0, zeta)
+        out["method"] = "exact (harmonic map)"
+        out["max_penetration"] = sol.max_penetration
+        if law.clips_tension and zeta > 0:
+            e = sol.restitution_zero_force
+            q_zf = float(sol.state(np.array([sol.contact_time_zero_force]))[0][0])
+            out["restitution"] = e
+            out["contact_time"] = sol.contact_time_zero_force + q_zf / (e * v0)
+        else:
+            out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
+        out["zeta"] = zeta
+        if timing:
+            out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
+    else:
+        C = law.damping_coefficient
+        res = integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=law.clips_tension)
+        out["method"] = f"DOP853 rtol={_IVP_RTOL:g}"
+        out["max_penetration"] = res.q_max
+        if law.clips_tension and res.t_zero_force < res.contact_time:
+            e = res.restitution_zero_force
+            q_zf = float(res.sol(res.t_zero_force)[0])
+            out["restitution"] = e
+            out["contact_time"] = res.t_zero_force + q_zf / (e * v0)
+        else:
+            out["restitution"], out["contact_time"] = res.restitution, res.contact_time
+        if timing:
+            out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
+    out["energy_ratio"] = out["restitution"] ** 2
+    out["tensile"] = _tensile_exact(law, v0, out["contact_time"])
+    return {
+        k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in out.items()
+    }
+
+
+def _time(fn, budget: float = 0.05, repeats: int = 3) -> float:
+    times, spent = [], 0.0
+    while len(times) < repeats or spent < budget:
+        t0 = time.perf_counter()
+        fn()
+        d = time.perf_counter() - t0
+        times.append(d)
+        spent += d
+        if len(times) >= 50:
+            break
+    return float(np.median(times))
