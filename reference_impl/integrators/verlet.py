@@ -37,18 +37,22 @@ Conventions (decided here, used everywhere in the package)
 
 Potentials of the known families (PowerLaw, Ellipsoid, Sphere,
 `SaturatingForce`, and sums of them) run in one numba kernel that receives the
-family parameters as arrays; any other `Potential` (e.g. a user expression)
-runs in a numpy fallback that advances all lanes together, one step per
-vectorised call of ``Potential._dU``/``_U``.
+family parameters as arrays. A user `Expression` runs in the same kernel with
+its sympy U', U compiled in (`_expression_kernel`, once per distinct expression
+and process) when the batch is long enough to repay the compile; any other
+`Potential`, or a short batch, runs in a numpy fallback that advances all lanes
+together, one step per vectorised call of ``Potential._dU``/``_U``.
 """
 
 from __future__ import annotations
 
 import math
+import types
 from dataclasses import dataclass
 
 import numba
 import numpy as np
+import sympy as sp
 
 from ..errors import HCVInputError
 from ..potentials.base import Potential, SumPotential
@@ -615,7 +619,9 @@ def run_lanes(
         Process lanes by increasing dt within each group and skip those at or
         above a dt that already failed (searches need only the first failure).
     engine : {"auto", "numba", "numpy"}
-        "auto" uses numba for known families and numpy otherwise.
+        "auto" uses numba for known families, and for an `Expression` when the
+        batch is long enough to repay compiling its kernel; numpy otherwise.
+        "numba" compiles an Expression's kernel whatever the batch.
     block : int
         Lanes the numba kernel advances in lockstep (results do not depend on it).
 
@@ -630,13 +636,17 @@ def run_lanes(
     cps = np.ascontiguousarray(
         np.unique(np.asarray([] if checkpoints is None else checkpoints, dtype=np.int64))
     )
-    terms = kernel_terms(pot)
+    if engine not in ("auto", "numba", "numpy"):
+        raise HCVInputError(f"engine must be 'auto', 'numba' or 'numpy', got {engine!r}")
+    terms, kern = kernel_terms(pot), _kernel
+    if terms is None and (engine == "numba" or (engine == "auto" and _worth_compiling(batch))):
+        kern = _expression_kernel(pot)
+        if kern is not None:
+            terms = (np.zeros(1, dtype=np.int64), np.zeros((1, _N_PAR)))
     if engine == "auto":
         engine = "numpy" if terms is None else "numba"
     if engine == "numba" and terms is None:
         raise HCVInputError(f"no numba kernel for {pot!r}; use engine='numpy'")
-    if engine not in ("numba", "numpy"):
-        raise HCVInputError(f"engine must be 'auto', 'numba' or 'numpy', got {engine!r}")
     n = len(batch)
     order = np.lexsort((batch.dt, batch.group)).astype(np.int64)
     c_damp = 2.0 * zeta * math.sqrt(m)
@@ -653,7 +663,7 @@ def run_lanes(
         istate = np.zeros((n, 4), dtype=np.int64)
         b = 0
         while b < n:  # each call returns within _CHUNK_LANE_STEPS, so Ctrl-C gets through
-            b = _kernel(
+            b = kern(
                 terms[0],
                 terms[1],
                 q_sup,
@@ -687,6 +697,107 @@ def run_lanes(
             )
         return LaneResult(st, steps, emax, eend, hist, "numba")
     return _run_numpy(pot, float(m), scene, batch, c_damp, q_sup, cps, skip_after_fail)
+
+
+# Compiled kernels of user expressions, keyed by the sympy form of (U', U):
+# compiling costs a few seconds, so each distinct expression is compiled once per
+# process; None records a form numba cannot compile (the numpy engine runs it).
+_EXPR_KERNELS: dict = {}
+# Distinct expressions kept compiled at once (each kernel holds ~1 MB of code).
+_EXPR_KERNELS_MAX = 16
+
+
+# Compile an expression's kernel under engine="auto" only when the numpy engine
+# would take longer than the compile (~5 s, more on a loaded machine): the numpy
+# engine pays ~1e-4 s per step whatever the lane count, and ~1e-6 s per lane-step.
+_COMPILE_MIN_STEPS = 50_000
+_COMPILE_MIN_LANE_STEPS = 10_000_000
+
+
+def _worth_compiling(batch: LaneBatch) -> bool:
+    """True when the batch's step budget makes the numpy engine slower than a compile."""
+    if len(batch) == 0:
+        return False
+    budget = np.maximum(batch.max_steps, batch.confirm_steps)
+    return int(budget.max()) >= _COMPILE_MIN_STEPS or float(budget.sum()) >= _COMPILE_MIN_LANE_STEPS
+
+
+def _expression_kernel(pot: Potential):
+    """The lane kernel with U'(q), U(q) of an `Expression` compiled in; None if not possible.
+
+    U' and U come from the expression's sympy tree (parameters substituted),
+    printed by ``sympy.lambdify`` as math-module code and compiled with
+    ``numba.njit`` (numpy error model: inf/nan instead of exceptions); the
+    kernel is the same function as `_kernel` with this force in place of
+    `_force_energy`. No user text is evaluated: only what sympy prints from the
+    parsed, whitelisted tree, as for the numpy engine.
+    """
+    from ..potentials.expression import Expression
+
+    if type(pot) is not Expression:  # exact type: a subclass may change the law
+        return None
+    key = sp.srepr((pot.dexpr, pot.expr))
+    if key in _EXPR_KERNELS:
+        return _EXPR_KERNELS[key]
+    try:
+        qs = [x for x in (pot.expr.free_symbols | pot.dexpr.free_symbols) if x.name == "q"]
+        q = qs[0] if qs else sp.Symbol("q", real=True)
+        fn = numba.njit(error_model="numpy")(sp.lambdify(q, (pot.dexpr, pot.expr), modules="math"))
+
+        @numba.njit(inline="always", error_model="numpy")
+        def force_energy(x, fam, par):
+            a, b = fn(x)
+            return float(a), float(b)
+
+        src = _kernel.py_func
+        env = dict(src.__globals__, _force_energy=force_energy)
+        kern = numba.njit(types.FunctionType(src.__code__, env, "_kernel_expression"))
+        _probe(kern, pot)
+    except Exception:  # noqa: BLE001 -- any compile failure: the numpy engine runs it
+        kern = None
+    while len(_EXPR_KERNELS) >= _EXPR_KERNELS_MAX:
+        _EXPR_KERNELS.pop(next(iter(_EXPR_KERNELS)))
+    _EXPR_KERNELS[key] = kern
+    return kern
+
+
+def _probe(kern, pot: Potential) -> None:
+    """Compile ``kern`` now (one lane, one step), so that a failure shows here."""
+    one = np.ones(1)
+    i1 = np.ones(1, dtype=np.int64)
+    st = np.full(1, _PENDING, dtype=np.int64)
+    kern(
+        np.zeros(1, dtype=np.int64),
+        np.zeros((1, _N_PAR)),
+        float(pot.q_sup),
+        1.0,
+        SCENE_WALLS,
+        0.0,
+        one * 1e-3,
+        one * 0.0,
+        one,
+        one * 0.0,
+        one * np.inf,
+        one * np.inf,
+        i1,
+        one * np.inf,
+        i1,
+        i1 * 0,
+        i1 * 0,
+        False,
+        np.zeros(0, dtype=np.int64),
+        1,
+        0,
+        10,
+        np.full(1, np.inf),
+        np.zeros((1, 6)),
+        np.zeros((1, 4), dtype=np.int64),
+        st,
+        np.zeros(1, dtype=np.int64),
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros((1, 0)),
+    )
 
 
 # How often (in steps) the numpy engine compacts its active lanes and applies
