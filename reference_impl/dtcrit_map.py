@@ -57,6 +57,8 @@ _TABLE1_SPEEDS = (0.50, 0.99, 1.50)
 _SAT_FULL = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
 _SAT_QUICK = (1.0, 8.0)
 _DEFAULT_GRID = SearchGrid()
+# Values per list of `criterion_sensitivity` (one search each; a full search is ~1 s).
+_MAX_SENS_VALUES = 100
 
 
 @dataclass(frozen=True)
@@ -321,6 +323,11 @@ def criterion_sensitivity(
         Columns scene, factor, n_steps, tol, dt_safe, dt_crit, dt_crit_onset, ratio,
         failure_kind, dt_bounded.
     """
+    for name, vals in (("factors", factors), ("n_steps", n_steps), ("tols", tols)):
+        if len(vals) > _MAX_SENS_VALUES:
+            raise HCVInputError(
+                f"criterion_sensitivity takes at most {_MAX_SENS_VALUES} {name}, got {len(vals)}"
+            )
     rows = []
     if kind == "impact":
         crits = [replace(ImpactGain(), tol=float(t)) for t in tols]
