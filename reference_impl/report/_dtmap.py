@@ -11,11 +11,7 @@ from ..dtcrit_map import dt_crit_map
 SCENE_COLOURS = {"impact": "#1f77b4", "two-sided": "#d62728", "two-walls": "#2ca02c"}
 SCENE_MARKERS = {"impact": "o", "two-sided": "s", "two-walls": "^"}
 # What Delta t_crit measures per scene kind (legend text).
-_WHAT = {
-    "impact": "accuracy threshold (rebound gain)",
-    "two-sided": "runaway Δt_crit",
-    "two-walls": "runaway Δt_crit",
-}
+_WHAT = {"impact": "accuracy limit", "two-sided": "runaway Δt_crit", "two-walls": "runaway Δt_crit"}
 
 
 def run_map(quick: bool, progress=None) -> pd.DataFrame:
@@ -168,7 +164,7 @@ def map_figure(df: pd.DataFrame, path) -> None:
 
     fig = Figure(figsize=(12.5, 5.8), dpi=110)
     pa, pb = fig.subplots(1, 2, width_ratios=[1.0, 1.25])
-    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.25, top=0.88, wspace=0.15)
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.27, top=0.86, wspace=0.15)
     pw = df[df.family == "power"].sort_values("p")
     deg = pw[pw.degenerate]
     ok = pw[~pw.degenerate]
@@ -192,7 +188,7 @@ def map_figure(df: pd.DataFrame, path) -> None:
                 marker="x",
                 color=c,
                 s=28,
-                label=f"{k}: bounded excursion (not an instability)",
+                label=f"{k}: bounded excursion",
             )
     pa.axhline(1.0, color="k", lw=1.6)
     pa.text(1.6, 1.02, "paper: Δt_crit ≥ Δt_safe (bound)", ha="left", va="bottom", fontsize=9)
@@ -211,7 +207,7 @@ def map_figure(df: pd.DataFrame, path) -> None:
         title="(a) power laws, m = 1 kg, k = 1, v0 = 1 m/s (ratio is scale-free)",
         ylim=(0, 1.6),
     )
-    pa.legend(fontsize=7.5, loc="upper right", ncol=2)
+    pa.legend(fontsize=6.5, loc="upper right", ncol=2)
     other = df[df.family != "power"].copy()
     if len(other):
         labels = list(dict.fromkeys(_label(r) for _, r in other.iterrows()))
@@ -246,7 +242,7 @@ def map_figure(df: pd.DataFrame, path) -> None:
             ylim=(0, 1.6),
             title="(b) ellipsoid and sphere (Kn = 1e8, α = 0.5), q²/(1+q²) saturating force",
         )
-        pb.legend(fontsize=7.5, ncol=3, loc="upper left")
+        pb.legend(fontsize=6.5, ncol=3, loc="upper left")
     for a in (pa, pb):
         a.grid(True, alpha=0.3)
     c = kind_counts(df)
@@ -254,17 +250,16 @@ def map_figure(df: pd.DataFrame, path) -> None:
         0.5,
         0.015,
         f"Below Δt_safe (cases with Δt_safe > 0): runaways (instabilities) {c['runaway']} "
-        f"of {c['sustained_cases']} sustained cases; bounded excursions (not instabilities) "
-        f"{c['bounded']}; impact accuracy threshold (not an instability) {c['accuracy']} "
-        f"of {c['impact_cases']}",
+        f"of {c['sustained_cases']} sustained cases;\nbounded excursions (not instabilities) "
+        f"{c['bounded']} of {c['sustained_cases']}; impact accuracy limit (not an instability) "
+        f"{c['accuracy']} of {c['impact_cases']} impacts",
         ha="center",
         va="bottom",
-        fontsize=9.5,
+        fontsize=9,
     )
     fig.suptitle(
-        "Critical Verlet step against the section 6 bound Δt_safe: a runaway below "
-        "the black line refutes the bound; bounded excursions and impact accuracy "
-        "do not",
+        "Critical Verlet step against the section 6 bound Δt_safe: a runaway below the black "
+        "line refutes the bound;\nbounded excursions (×) and the impact accuracy limit do not",
         fontsize=11,
     )
     fig.savefig(path)
