@@ -13,12 +13,35 @@ Scenes (names exactly as the scene files spell them)
              the onset of one contact with speed v0 (repeated impacts);
 "impact"     one collision against one wall, from contact onset to separation.
 
-What "unstable" means is a named criterion: `EnergyGrowth` for the sustained
-scenes (E_n > factor * E_0 for some n <= n_steps), `ImpactGain` for the single
-impact (rebound energy > (1 + tol) E_0, i.e. a passive collision gains energy,
-checked with the onset exactly at a step boundary and at stratified onset
-phases inside a step). A lane that leaves the potential's domain or becomes
-non-finite is unstable under both.
+What fails is a named criterion, and each failure has a kind (``failure_kind``):
+
+"runaway"   sustained scenes, `EnergyGrowth`: E_n > factor E_0 for some
+            n <= n_steps, *confirmed* by the same lane going on to exceed
+            factor * confirm_factor E_0 within confirm_horizon * n_steps steps
+            (defaults 100 E_0 in 1e5 steps, confirmed at 1e6 E_0 within 1e6
+            steps), or leaving the potential's domain (q > q_sup: the body
+            passed through the wall) or becoming non-finite. Only this is an
+            instability: ``holds`` is False only for a runaway strictly below
+            Delta t_safe.
+"bounded"   sustained scenes: the lane crossed factor E_0 but stayed below the
+            confirmation level to the end of the longer horizon: a large but
+            saturating excursion (e.g. the linear spring just below 2/omega,
+            whose orbit peaks at E_0 / (1 - (omega dt / 2)^2)). Not an
+            instability; reported as ``dt_bounded`` and its peak, and the search
+            for a runaway goes on above it.
+"accuracy"  single impact, `ImpactGain`: rebound energy > (1 + tol) E_0 (a
+            passive collision gains energy), checked with the onset exactly at a
+            step boundary and at stratified onset phases inside a step. It moves
+            with tol, so it is an accuracy threshold: reported as
+            ``dt_accuracy`` (the largest step below the first failure whose
+            rebound gain stays within tol) beside Delta t_safe, never counted as
+            an instability.
+None        no failure in the search range.
+
+Every user-controlled size has a stated upper bound checked before any work
+(`MAX_N_STEPS`, `MAX_CONFIRM_STEPS`, `MAX_FACTOR`, `MAX_N_PHASES`, `MAX_SPEEDS`,
+`MAX_SCAN_POINTS`, `MAX_REFINE_POINTS`), and the lanes of one round are run in
+chunks of at most `MAX_LANES_PER_CALL`, so memory does not grow with n_phases.
 
 Search: stability need not be monotone in Delta t, so a grid is scanned first
 and the smallest failing step is then bracketed by repeated k-section (k
@@ -35,6 +58,7 @@ that the same searches found safe on every case measured.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -56,6 +80,16 @@ from .stability import dt_safe as _dt_safe
 
 __all__ = [
     "KINDS",
+    "FAILURE_KINDS",
+    "MAX_N_STEPS",
+    "MAX_CONFIRM_STEPS",
+    "MAX_FACTOR",
+    "MAX_TOL",
+    "MAX_N_PHASES",
+    "MAX_SPEEDS",
+    "MAX_SCAN_POINTS",
+    "MAX_REFINE_POINTS",
+    "MAX_LANES_PER_CALL",
     "EnergyGrowth",
     "ImpactGain",
     "Criterion",
@@ -68,6 +102,31 @@ __all__ = [
 ]
 
 KINDS = ("impact", "two-sided", "two-walls")
+# Values of DtCritResult.failure_kind (None: no failure in the search range).
+FAILURE_KINDS = ("runaway", "bounded", "accuracy", None)
+
+# Upper bounds of the user-controlled sizes, checked before any work starts.
+# Step budget of a sustained lane: 1e7 steps is ~0.3 s of one lane at the
+# measured 3.5e7 lane-steps/s, 100x the default.
+MAX_N_STEPS = 10_000_000
+# Steps of a lane followed on to its confirmation (n_steps * confirm_horizon):
+# ~3 s per lane; a search confirms a few tens of lanes.
+MAX_CONFIRM_STEPS = 100_000_000
+# Energy factors (factor, and factor * confirm_factor): beyond 1e12 E_0 the
+# energies of a finite-precision runaway turn non-finite anyway (caught as blown).
+MAX_FACTOR = 1e12
+# Impact energy tolerance: a rebound with 1000x the impact energy tests nothing.
+MAX_TOL = 1e3
+# Onset phases per step of the single impact: 1e4 is 600x the default; the
+# search time grows linearly with it (its memory does not: lanes are chunked).
+MAX_N_PHASES = 10_000
+# Impact speeds of one search.
+MAX_SPEEDS = 1_000
+# Grid points of one scan, and refinement points per round.
+MAX_SCAN_POINTS = 10_000
+MAX_REFINE_POINTS = 1_024
+# Lanes per engine call: bounds the memory of one round (~200 B per lane).
+MAX_LANES_PER_CALL = 1 << 16
 
 # Without a gap in the scene, two-walls uses gap = this many q_max: a flight of
 # a few contact durations, so that N steps contain thousands of impacts.
@@ -84,31 +143,90 @@ _IMPACT_MIN_STEPS = 64
 _IMPACT_GUARD = 1e12
 
 
+def _check_int(name: str, value, lo: int, hi: int) -> None:
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if not ok or not lo <= value <= hi:
+        raise HCVInputError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+
+
+def _check_real(name: str, value, lo: float, hi: float, lo_open: bool = False) -> None:
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if (
+        not ok
+        or not math.isfinite(value)
+        or not (value > lo if lo_open else value >= lo)
+        or value > hi
+    ):
+        raise HCVInputError(
+            f"{name} must be a finite number in {'(' if lo_open else '['}{lo:g}, "
+            f"{hi:g}], got {value!r}"
+        )
+
+
 @dataclass(frozen=True)
 class EnergyGrowth:
-    """Sustained-scene criterion: unstable when E_n > factor * E_0 for some n <= n_steps.
+    """Sustained-scene criterion: a runaway is E_n > factor E_0 for some n <= n_steps, confirmed.
+
+    A lane that crosses factor E_0 is followed on: it is a runaway only if it
+    also exceeds factor * confirm_factor E_0 within confirm_horizon * n_steps
+    steps (or blows up); otherwise the excursion is bounded (not an instability).
 
     Attributes
     ----------
     factor : float
-        Energy growth factor (> 1), default 100.
+        Energy growth factor (> 1, <= `MAX_FACTOR`), default 100.
     n_steps : int
-        Step budget N (>= 1), default 1e5.
+        Step budget N (1 .. `MAX_N_STEPS`), default 1e5.
+    confirm_factor : float
+        Further growth that confirms a runaway (> 1; factor * confirm_factor <=
+        `MAX_FACTOR`), default 1e4: the linear spring's bounded orbit, peak
+        E_0 / (1 - (omega dt/2)^2), then counts as a runaway only within
+        5e-7 of 2/omega.
+    confirm_horizon : int
+        Steps of the confirmation in units of n_steps (>= 1; n_steps *
+        confirm_horizon <= `MAX_CONFIRM_STEPS`), default 10.
     """
 
     factor: float = 100.0
     n_steps: int = 100_000
+    confirm_factor: float = 1e4
+    confirm_horizon: int = 10
 
     def __post_init__(self):
-        if not (math.isfinite(self.factor) and self.factor > 1):
-            raise HCVInputError(f"EnergyGrowth factor must be finite and > 1, got {self.factor!r}")
-        if int(self.n_steps) != self.n_steps or self.n_steps < 1:
-            raise HCVInputError(
-                f"EnergyGrowth n_steps must be an integer >= 1, got {self.n_steps!r}")
+        _check_real("EnergyGrowth factor", self.factor, 1.0, MAX_FACTOR, lo_open=True)
+        _check_int("EnergyGrowth n_steps", self.n_steps, 1, MAX_N_STEPS)
+        _check_real(
+            "EnergyGrowth confirm_factor",
+            self.confirm_factor,
+            1.0,
+            MAX_FACTOR / self.factor,
+            lo_open=True,
+        )
+        _check_int(
+            "EnergyGrowth confirm_horizon",
+            self.confirm_horizon,
+            1,
+            max(1, MAX_CONFIRM_STEPS // int(self.n_steps)),
+        )
+
+    @property
+    def confirm_level(self) -> float:
+        """Energy (in E_0) that confirms a runaway."""
+        return self.factor * self.confirm_factor
+
+    @property
+    def confirm_steps(self) -> int:
+        """Step budget of a lane followed on to its confirmation."""
+        return int(self.n_steps) * int(self.confirm_horizon)
 
     def describe(self) -> str:
-        """One line saying what counts as unstable."""
-        return f"energy-growth: E_n > {self.factor:g} E_0 for some n <= {int(self.n_steps)}"
+        """One line saying what counts as unstable (the rule used)."""
+        return (
+            f"runaway: E_n > {self.factor:g} E_0 for some n <= {int(self.n_steps)}, "
+            f"confirmed by E_n > {self.confirm_level:g} E_0 within {self.confirm_steps} steps "
+            f"(or q > q_sup / non-finite); a crossing that stays below is bounded, "
+            f"not an instability"
+        )
 
 
 @dataclass(frozen=True)
@@ -118,9 +236,9 @@ class ImpactGain:
     Attributes
     ----------
     tol : float
-        Allowed relative energy gain of a passive collision (>= 0), default 0.01.
+        Allowed relative energy gain of a passive collision (0 .. `MAX_TOL`), default 0.01.
     n_phases : int
-        Number of onset phases phi = (j + 1/2) / n_phases inside a step (the
+        Number (0 .. `MAX_N_PHASES`) of onset phases phi = (j + 1/2) / n_phases inside a step (the
         contact starts a fraction phi of a step after a step boundary), tried
         in addition to phi = 0; default 16. 0 tries the step boundary only.
     """
@@ -129,16 +247,15 @@ class ImpactGain:
     n_phases: int = 16
 
     def __post_init__(self):
-        if not (math.isfinite(self.tol) and self.tol >= 0):
-            raise HCVInputError(f"ImpactGain tol must be finite and >= 0, got {self.tol!r}")
-        if int(self.n_phases) != self.n_phases or self.n_phases < 0:
-            raise HCVInputError(
-                f"ImpactGain n_phases must be an integer >= 0, got {self.n_phases!r}")
+        _check_real("ImpactGain tol", self.tol, 0.0, MAX_TOL)
+        _check_int("ImpactGain n_phases", self.n_phases, 0, MAX_N_PHASES)
 
     def describe(self) -> str:
-        """One line saying what counts as unstable."""
-        return (f"impact-gain: rebound energy > (1 + {self.tol:g}) E_0 at onset phase 0 or any of "
-                f"{int(self.n_phases)} phases in a step")
+        """One line saying what counts as a failure (an accuracy threshold, not an instability)."""
+        return (
+            f"accuracy: rebound energy > (1 + {self.tol:g}) E_0 at onset phase 0 or any of "
+            f"{int(self.n_phases)} phases in a step (not an instability)"
+        )
 
     def phases(self) -> np.ndarray:
         """Onset phases (fractions of a step): 0, then the stratified ones."""
@@ -158,26 +275,43 @@ def default_criterion(kind: str) -> Criterion:
 def parse_criterion(text: str, kind: str) -> Criterion:
     """Criterion from ``"key=value,key=value"`` text (for the CLI ``--criterion``).
 
-    Keys: ``factor``, ``n_steps`` (sustained scenes); ``tol``, ``n_phases`` (impact).
-    Unknown keys or values raise `HCVInputError` with one line.
+    Keys: ``factor``, ``n_steps``, ``confirm_factor``, ``confirm_horizon``
+    (sustained scenes); ``tol``, ``n_phases`` (impact). Values are decimal
+    numbers (``1e5`` allowed); integer keys refuse non-integral values (1.5 is
+    not truncated). Empty text or items, unknown or repeated keys, non-finite
+    values and values beyond the stated bounds raise `HCVInputError` with one
+    line naming the value.
     """
+    _check_kind(kind)
     base = default_criterion(kind)
     if kind == "impact":
         fields = {"tol": float, "n_phases": int}
     else:
-        fields = {"factor": float, "n_steps": int}
+        fields = {"factor": float, "n_steps": int, "confirm_factor": float, "confirm_horizon": int}
+    if not isinstance(text, str) or not text.strip():
+        raise HCVInputError(f"criterion is empty; give key=value items ({', '.join(fields)})")
     kw: dict[str, Any] = {}
-    for part in filter(None, (s.strip() for s in text.split(","))):
+    for part in (s.strip() for s in text.split(",")):
         key, sep, val = part.partition("=")
-        key = key.strip()
+        key, val = key.strip(), val.strip()
         if not sep or key not in fields:
             raise HCVInputError(
-                f"criterion for {kind!r} takes {', '.join(fields)} as key=value, got {part!r}")
+                f"criterion for {kind!r} takes {', '.join(fields)} as key=value, got {part!r}"
+            )
+        if key in kw:
+            raise HCVInputError(f"criterion key {key!r} given twice (second value {val!r})")
         try:
             num = float(val)
-            kw[key] = int(num) if fields[key] is int and num == int(num) else fields[key](num)
-        except (ValueError, OverflowError):
+        except ValueError:
             raise HCVInputError(f"criterion value {key}={val!r} is not a number") from None
+        if not math.isfinite(num):
+            raise HCVInputError(f"criterion value {key}={val!r} is not finite")
+        if fields[key] is int:
+            if num != math.floor(num):
+                raise HCVInputError(f"criterion value {key}={val!r} is not an integer")
+            kw[key] = int(num)
+        else:
+            kw[key] = num
     return type(base)(**{**asdict(base), **kw})
 
 
@@ -209,7 +343,24 @@ class SearchGrid:
     hi_max: float = 100.0
     lo_min: float = 1e-4
 
+    def __post_init__(self):
+        _check_real("SearchGrid lo", self.lo, 0.0, 1e6, lo_open=True)
+        _check_real("SearchGrid hi", self.hi, self.lo, 1e6)
+        _check_real("SearchGrid step", self.step, 0.0, 1e6, lo_open=True)
+        n = (self.hi - self.lo) / self.step + 1
+        if n > MAX_SCAN_POINTS:
+            raise HCVInputError(
+                f"SearchGrid scan has {n:.6g} points, more than "
+                f"{MAX_SCAN_POINTS}; widen step={self.step!r}"
+            )
+        # Below 1e-12 relative the bracket is below the round-off of the steps themselves.
+        _check_real("SearchGrid resolution", self.resolution, 1e-12, 1.0)
+        _check_int("SearchGrid refine_points", self.refine_points, 1, MAX_REFINE_POINTS)
+        _check_real("SearchGrid hi_max", self.hi_max, self.hi, 1e6)
+        _check_real("SearchGrid lo_min", self.lo_min, 1e-12, self.lo)
+
     def scan(self) -> np.ndarray:
+        """The scanned steps in units of the reference step."""
         n = int(round((self.hi - self.lo) / self.step)) + 1
         return np.unique(np.concatenate([self.lo + self.step * np.arange(n), [1.0]]))
 
@@ -229,16 +380,20 @@ class DtCritResult:
     dt_safe_shortcut : float
         Endpoint shortcut 2 m v0 / U'(q_max) (s).
     dt_crit : float
-        Smallest failing step found (s); inf when none failed up to the search limit.
+        Smallest failing step found (s): a runaway for the sustained scenes, the
+        accuracy threshold for the single impact; inf when none failed up to the
+        search limit.
     ratio : float
         dt_crit / dt_safe (inf when dt_safe = 0 or dt_crit = inf).
     criterion : str
-        What counted as unstable.
+        What counted as a failure (the rule used, see the module docstring).
     holds : bool
-        True when every step <= dt_safe that was tried was stable, i.e.
-        dt_crit > dt_safe; vacuously True when dt_safe = 0 (see `degenerate`).
+        False only for a runaway strictly below dt_safe (dt_crit < dt_safe with
+        failure_kind "runaway"); bounded excursions and impact accuracy failures
+        never make it False; vacuously True when dt_safe = 0 (see `degenerate`).
     counterexample : dict or None
-        When ``holds`` is False: the failing step and its energy history.
+        When dt_crit < dt_safe (a runaway, or an impact accuracy failure): the
+        failing step and its energy history.
     dt_stable : float
         Largest stable step tried below dt_crit (s); the bracket is [dt_stable, dt_crit].
     dt_crit_onset : float or None
@@ -257,6 +412,24 @@ class DtCritResult:
         Verlet steps integrated by the whole `search_scene` call (all lanes).
     engine : str
         "numba" or "numpy".
+    failure_kind : {"runaway", "bounded", "accuracy", None}
+        Kind of the failure found (module docstring): "runaway" when dt_crit is
+        a confirmed runaway, "bounded" when only bounded excursions were found,
+        "accuracy" for an impact's rebound-energy threshold, None when nothing
+        failed in the search range.
+    dt_bounded : float
+        Sustained scenes: smallest step with a bounded excursion below dt_crit
+        (s); inf when none.
+    bounded_E_max_over_E0 : float
+        Peak E_n / E_0 of the bounded excursion at dt_bounded (NaN when none).
+    dt_accuracy : float or None
+        Impact only: largest step below the first failure whose rebound energy
+        gain stays within tol (s), i.e. the lower end of the bracket.
+    accuracy_ratio : float or None
+        Impact only: dt_accuracy / dt_safe (inf when dt_safe = 0).
+    runaway_evidence : str or None
+        For a runaway: "confirmed" (E_n exceeded the confirmation level),
+        "domain" (q > q_sup or non-finite: the lane blew up).
     """
 
     v0: float
@@ -277,6 +450,12 @@ class DtCritResult:
     recommended_dt: float = math.nan
     lane_steps: int = 0
     engine: str = ""
+    failure_kind: str | None = None
+    dt_bounded: float = math.inf
+    bounded_E_max_over_E0: float = math.nan
+    dt_accuracy: float | None = None
+    accuracy_ratio: float | None = None
+    runaway_evidence: str | None = None
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -324,8 +503,11 @@ def tangent_step(pot: Potential, m: float, q_max: float) -> float:
     if not math.isfinite(kmax) or kmax <= 0:
         return 0.0
     if 0 < i < q.size - 1:  # interior maximum: refine between the grid neighbours
-        res = minimize_scalar(lambda x: -float(pot._d2U(np.array([x]))[0]),
-                              bounds=(q[i - 1], q[i + 1]), method="bounded")
+        res = minimize_scalar(
+            lambda x: -float(pot._d2U(np.array([x]))[0]),
+            bounds=(q[i - 1], q[i + 1]),
+            method="bounded",
+        )
         kmax = max(kmax, -float(res.fun))
     return 2.0 * math.sqrt(m / kmax)
 
@@ -341,9 +523,17 @@ class _Search:
     dt_ref: float
     phases: np.ndarray  # impact onset phases (fractions of a step); [0] for sustained scenes
     tried: dict = field(default_factory=dict)  # dt -> failed (bool)
+    bounded: dict = field(default_factory=dict)  # dt -> peak E / E_0 of a bounded excursion
+    evidence: dict = field(default_factory=dict)  # failing dt -> "confirmed" or "domain"
     upward: float = 0.0  # largest ratio tried by the upward extension
     downward: float = math.inf  # smallest ratio tried by the downward extension
     done: bool = False
+
+    def smallest_bounded(self) -> tuple[float, float]:
+        """(smallest dt with a bounded excursion below the first failure, its peak E / E_0)."""
+        f = self.bracket()[1]
+        b = [d for d in self.bounded if d < f]
+        return (min(b), self.bounded[min(b)]) if b else (math.inf, math.nan)
 
     def bracket(self) -> tuple[float, float]:
         """(largest stable dt below the smallest failure, smallest failing dt)."""
@@ -380,24 +570,45 @@ def _impact_batch(pot, m, v0, dts, phases, q_max, tol, group):
     phi = np.tile(phases, dts.size)
     E0 = 0.5 * m * v0 * v0
     steps = np.ceil(_IMPACT_TIME_BUDGET * q_max / (v0 * dt)).astype(np.int64) + _IMPACT_MIN_STEPS
-    return dict(dt=dt, y0=-phi * v0 * dt, v0=v0, gap=0.0, e_limit=_IMPACT_GUARD * E0,
-                e_final=(1.0 + tol) * E0, max_steps=steps, group=group), phi
+    return dict(
+        dt=dt,
+        y0=-phi * v0 * dt,
+        v0=v0,
+        gap=0.0,
+        e_limit=_IMPACT_GUARD * E0,
+        e_final=(1.0 + tol) * E0,
+        max_steps=steps,
+        group=group,
+    ), phi
 
 
 def _sustained_batch(m, v0, dts, gap, crit, group):
-    """Two-sided / two-walls lanes: start at the onset of the contact at y = gap."""
+    """Two-sided / two-walls lanes: start at the onset of the contact at y = gap.
+
+    A lane crossing factor E_0 is followed on to the confirmation level.
+    """
     E0 = 0.5 * m * v0 * v0
-    return dict(dt=dts, y0=gap, v0=v0, gap=gap, e_limit=crit.factor * E0, e_final=np.inf,
-                max_steps=int(crit.n_steps), group=group)
+    return dict(
+        dt=dts,
+        y0=gap,
+        v0=v0,
+        gap=gap,
+        e_limit=crit.factor * E0,
+        e_final=np.inf,
+        max_steps=int(crit.n_steps),
+        group=group,
+        e_confirm=crit.confirm_level * E0,
+        confirm_steps=crit.confirm_steps,
+    )
 
 
 def _build(searches, need, kind, pot, m, q_maxes, gap_of, crit):
-    """One LaneBatch for every search that still needs steps; lane -> search map."""
+    """One LaneBatch for ``need`` = {search: (dts, phases)}; lane -> search map."""
     parts, owners, phis = [], [], []
-    for i, dts in need.items():
+    for i, (dts, phases) in need.items():
         s = searches[i]
         if kind == "impact":
-            b, phi = _impact_batch(pot, m, s.v0, dts, s.phases, q_maxes[i], crit.tol, i)
+            b, phi = _impact_batch(pot, m, s.v0, dts, phases, q_maxes[i], crit.tol, i)
         else:
             b = _sustained_batch(m, s.v0, dts, gap_of[i], crit, i)
             phi = np.zeros(dts.size)
@@ -409,17 +620,25 @@ def _build(searches, need, kind, pot, m, q_maxes, gap_of, crit):
     return batch, np.concatenate(owners), np.concatenate(phis)
 
 
-def _record(searches, owners, batch, res):
-    """Fold one engine call into the searches' tried steps."""
+def _record(searches, owners, batch, res, m):
+    """Fold one engine call into the searches' tried steps (and bounded excursions)."""
     for i in np.unique(owners):
         sel = owners == i
         dts, failed, ran = batch.dt[sel], res.failed[sel], res.ran[sel]
+        bounded, st = res.bounded[sel], res.status[sel]
+        peak = res.e_max[sel] / (0.5 * m * batch.v0[sel] ** 2)  # lanes start out of contact
+        s = searches[i]
         for d in np.unique(dts):
             at = dts == d
+            key = float(d)
             if np.any(failed[at]):
-                searches[i].tried[float(d)] = True
+                s.tried[key] = True
+                blown = np.any(st[at] == STATUS_NAMES.index("blown"))
+                s.evidence[key] = "domain" if blown else "confirmed"
             elif np.all(ran[at]):
-                searches[i].tried.setdefault(float(d), False)
+                s.tried.setdefault(key, False)
+                if np.any(bounded[at]):
+                    s.bounded[key] = float(np.max(peak[at & bounded]))
 
 
 def _progress_fraction(s: _Search, grid: SearchGrid) -> float:
@@ -448,12 +667,19 @@ def _counterexample(pot, m, kind, s, dt, gap, crit, q_max, dt_safe, zeta, engine
         n_cp = int(np.max(b["max_steps"]))
     else:
         b, phi = _sustained_batch(m, s.v0, np.array([dt]), gap, crit, 0), np.zeros(1)
-        n_cp = int(crit.n_steps)
+        n_cp = crit.confirm_steps
     n = np.asarray(b["dt"]).size
     batch = LaneBatch(**{k: np.broadcast_to(v, (n,)) for k, v in b.items()})
     cps = _checkpoints(n_cp)
-    res = run_lanes(pot, m, SCENE_IMPACT if kind == "impact" else SCENE_WALLS, batch,
-                    zeta=zeta, checkpoints=cps, engine=engine)
+    res = run_lanes(
+        pot,
+        m,
+        SCENE_IMPACT if kind == "impact" else SCENE_WALLS,
+        batch,
+        zeta=zeta,
+        checkpoints=cps,
+        engine=engine,
+    )
     E0 = 0.5 * m * s.v0 * s.v0
     key = np.where(res.failed, np.nan_to_num(res.e_end, nan=np.inf), -np.inf)
     j = int(np.argmax(key)) if np.any(res.failed) else int(np.argmax(res.e_max))
@@ -470,7 +696,105 @@ def _counterexample(pot, m, kind, s, dt, gap, crit, q_max, dt_safe, zeta, engine
     }
     if kind == "impact":
         out["onset_phase"] = float(phi[j])
+    else:
+        out["evidence"] = "domain" if out["status"] == "blown" else "confirmed"
     return out
+
+
+def _chunks(searches, need, max_lanes):
+    """Split one round's {search: dts} into parts {search: (dts, phases)} of <= max_lanes lanes.
+
+    Phases of an impact search are split when dts x phases exceeds max_lanes,
+    and a later part drops the steps at or above a failure found by an earlier
+    one, so memory is bounded whatever n_phases is.
+    """
+    part, count = {}, 0
+    for i, dts in need.items():
+        phases = searches[i].phases
+        per = max(1, max_lanes // max(dts.size, 1))  # phases per part
+        for p0 in range(0, phases.size, per):
+            f = searches[i].bracket()[1]
+            keep = dts[(dts < f) & ~np.isin(dts, [d for d, x in searches[i].tried.items() if x])]
+            if keep.size == 0:
+                break
+            ph = phases[p0 : p0 + per]
+            if count and count + keep.size * ph.size > max_lanes:
+                yield part
+                part, count = {}, 0
+            if i in part:  # the same search in one part twice: flush first
+                yield part
+                part, count = {}, 0
+            part[i] = (keep, ph)
+            count += keep.size * ph.size
+            if p0 + per < phases.size:  # later phases need this part's outcome
+                yield part
+                part, count = {}, 0
+    if part:
+        yield part
+
+
+def _result(
+    pot,
+    m,
+    v0,
+    kind,
+    crit,
+    ss,
+    q_max,
+    dt_tan,
+    g,
+    z,
+    engine,
+    s,
+    onset_search,
+    lo,
+    f,
+    recommend,
+    lane_steps,
+    used,
+) -> DtCritResult:
+    """The DtCritResult of one speed from its finished search(es)."""
+    ratio = f / ss.dt_safe if ss.dt_safe > 0 else math.inf
+    extra = {"gap": g} if kind == "two-walls" else {}
+    if z > 0:
+        extra["zeta"] = z
+    dt_b, peak_b = (math.inf, math.nan) if kind == "impact" else s.smallest_bounded()
+    if kind == "impact":
+        fk = "accuracy" if math.isfinite(f) else None
+    else:
+        fk = "runaway" if math.isfinite(f) else ("bounded" if math.isfinite(dt_b) else None)
+    holds = not (fk == "runaway" and f < ss.dt_safe)
+    ce = None
+    if math.isfinite(f) and f < ss.dt_safe:
+        ce = _counterexample(pot, m, kind, s, f, g, crit, q_max, ss.dt_safe, z, engine)
+    acc = lo if kind == "impact" else None
+    return DtCritResult(
+        v0=v0,
+        kind=kind,
+        dt_safe=ss.dt_safe,
+        dt_safe_shortcut=ss.dt_shortcut,
+        dt_crit=f,
+        ratio=ratio,
+        criterion=crit.describe(),
+        holds=holds,
+        counterexample=ce,
+        dt_stable=lo,
+        dt_crit_onset=onset_search.bracket()[1] if onset_search is not None else None,
+        q_max=q_max,
+        geometry=ss.geometry,
+        degenerate=ss.dt_safe == 0,
+        dt_tangent=dt_tan,
+        recommended_dt=math.nan if recommend is None else recommend(pot, m, v0, kind),
+        lane_steps=lane_steps,
+        engine=used,
+        failure_kind=fk,
+        dt_bounded=dt_b,
+        bounded_E_max_over_E0=peak_b,
+        dt_accuracy=acc,
+        accuracy_ratio=None if acc is None else (acc / ss.dt_safe if ss.dt_safe > 0 else math.inf),
+        runaway_evidence=s.evidence.get(f) if fk == "runaway" else None,
+        extra=extra,
+    )
 
 
 def _validated(potential, m, velocities, kind, gap, zeta, criterion):
@@ -479,7 +803,10 @@ def _validated(potential, m, velocities, kind, gap, zeta, criterion):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
         raise HCVInputError(f"mass m must be a finite number > 0 (kg), got {m!r}")
-    vs = [float(v) for v in (velocities if isinstance(velocities, Iterable) else [velocities])]
+    it = velocities if isinstance(velocities, Iterable) else [velocities]
+    vs = [float(v) for v in itertools.islice(it, MAX_SPEEDS + 1)]
+    if len(vs) > MAX_SPEEDS:
+        raise HCVInputError(f"at most {MAX_SPEEDS} impact speeds per search, got more")
     if not vs or not all(math.isfinite(v) and v > 0 for v in vs):
         raise HCVInputError(f"velocities must be finite numbers > 0 (m/s), got {velocities!r}")
     if gap is not None and not (math.isfinite(gap) and gap >= 0):
@@ -494,12 +821,20 @@ def _validated(potential, m, velocities, kind, gap, zeta, criterion):
     return vs, z, crit
 
 
-def search_scene(potential: Potential, m: float, velocities: Sequence[float] | float, kind: str, *,
-                 gap: float | None = None, zeta: float | None = None,
-                 criterion: Criterion | None = None, grid: SearchGrid = SearchGrid(),
-                 progress: Callable[[float, float], None] | None = None,
-                 engine: str = "auto",
-                 recommend: Callable | None | str = "default") -> list[DtCritResult]:
+def search_scene(
+    potential: Potential,
+    m: float,
+    velocities: Sequence[float] | float,
+    kind: str,
+    *,
+    gap: float | None = None,
+    zeta: float | None = None,
+    criterion: Criterion | None = None,
+    grid: SearchGrid = SearchGrid(),
+    progress: Callable[[float, float], None] | None = None,
+    engine: str = "auto",
+    recommend: Callable | None | str = "default",
+) -> list[DtCritResult]:
     """Measure Delta t_crit of velocity Verlet for each impact speed of one scene.
 
     Parameters
@@ -567,12 +902,21 @@ def search_scene(potential: Potential, m: float, velocities: Sequence[float] | f
                     s.done = True
         if not need:
             break
-        batch, owners, _ = _build(searches, need, kind, potential, m,
-                                  [o[1] for o in owner_info], [o[3] for o in owner_info], crit)
-        res = run_lanes(potential, m, scene, batch, zeta=z, skip_after_fail=True, engine=engine)
-        lane_steps += int(res.steps.sum())
-        used = res.engine
-        _record(searches, owners, batch, res)
+        for part in _chunks(searches, need, MAX_LANES_PER_CALL):
+            batch, owners, _ = _build(
+                searches,
+                part,
+                kind,
+                potential,
+                m,
+                [o[1] for o in owner_info],
+                [o[3] for o in owner_info],
+                crit,
+            )
+            res = run_lanes(potential, m, scene, batch, zeta=z, skip_after_fail=True, engine=engine)
+            lane_steps += int(res.steps.sum())
+            used = res.engine
+            _record(searches, owners, batch, res, m)
         if progress is not None:
             progress(sum(_progress_fraction(s, grid) for s in searches), float(len(searches)))
     out = []
@@ -580,22 +924,28 @@ def search_scene(potential: Potential, m: float, velocities: Sequence[float] | f
         ss, q_max, dt_tan, g = info[j]
         s = searches[main_of[j]]
         lo, f = s.bracket()
-        holds = bool(f > ss.dt_safe)
-        ce = None
-        if not holds:
-            ce = _counterexample(potential, m, kind, s, f, g, crit, q_max, ss.dt_safe, z, engine)
-        onset = searches[main_of[j] + 1].bracket()[1] if kind == "impact" else None
-        ratio = f / ss.dt_safe if ss.dt_safe > 0 else math.inf
-        extra = {"gap": g} if kind == "two-walls" else {}
-        if z > 0:
-            extra["zeta"] = z
-        out.append(DtCritResult(
-            v0=v0, kind=kind, dt_safe=ss.dt_safe, dt_safe_shortcut=ss.dt_shortcut, dt_crit=f,
-            ratio=ratio, criterion=crit.describe(), holds=holds, counterexample=ce, dt_stable=lo,
-            dt_crit_onset=onset, q_max=q_max, geometry=ss.geometry, degenerate=ss.dt_safe == 0,
-            dt_tangent=dt_tan,
-            recommended_dt=math.nan if recommend is None else recommend(potential, m, v0, kind),
-            lane_steps=lane_steps, engine=used, extra=extra))
+        out.append(
+            _result(
+                potential,
+                m,
+                v0,
+                kind,
+                crit,
+                ss,
+                q_max,
+                dt_tan,
+                g,
+                z,
+                engine,
+                s,
+                searches[main_of[j] + 1] if kind == "impact" else None,
+                lo,
+                f,
+                recommend,
+                lane_steps,
+                used,
+            )
+        )
     if progress is not None:
         progress(float(len(searches)), float(len(searches)))
     return out

@@ -57,6 +57,8 @@ _TABLE1_SPEEDS = (0.50, 0.99, 1.50)
 _SAT_FULL = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
 _SAT_QUICK = (1.0, 8.0)
 _DEFAULT_GRID = SearchGrid()
+# Values per list of `criterion_sensitivity` (one search each; a full search is ~1 s).
+_MAX_SENS_VALUES = 100
 
 
 @dataclass(frozen=True)
@@ -97,14 +99,28 @@ def coverage(quick: bool = False) -> list[MapCase]:
     Kn = 1e8, alpha = 0.5); the sphere has R = 0.01 m and the same m, Kn, alpha.
     """
     ps = _P_QUICK if quick else _P_FULL
-    cases = [MapCase("power", f"p={p:g}", PowerLaw(1.0, float(p)), 1.0, (1.0,), float(p))
-             for p in ps]
-    cases.append(MapCase("ellipsoid", "ellipsoid", Ellipsoid(0.015, 0.008, 0.008, 1e8, 0.5), 0.05,
-                         _TABLE1_SPEEDS))
-    cases.append(MapCase("sphere", "sphere", Sphere(0.01, 1e8, 0.5), 0.05,
-                         (0.99,) if quick else _TABLE1_SPEEDS))
-    cases.append(MapCase("saturating", "q^2/(1+q^2)", SaturatingForce(1.0, 1.0), 1.0,
-                         _SAT_QUICK if quick else _SAT_FULL))
+    cases = [
+        MapCase("power", f"p={p:g}", PowerLaw(1.0, float(p)), 1.0, (1.0,), float(p)) for p in ps
+    ]
+    cases.append(
+        MapCase(
+            "ellipsoid", "ellipsoid", Ellipsoid(0.015, 0.008, 0.008, 1e8, 0.5), 0.05, _TABLE1_SPEEDS
+        )
+    )
+    cases.append(
+        MapCase(
+            "sphere", "sphere", Sphere(0.01, 1e8, 0.5), 0.05, (0.99,) if quick else _TABLE1_SPEEDS
+        )
+    )
+    cases.append(
+        MapCase(
+            "saturating",
+            "q^2/(1+q^2)",
+            SaturatingForce(1.0, 1.0),
+            1.0,
+            _SAT_QUICK if quick else _SAT_FULL,
+        )
+    )
     return cases
 
 
@@ -126,7 +142,9 @@ def recommended_step(potential: Potential, m: float, v0: float, kind: str) -> fl
 
     k_t is the largest tangent stiffness U'' met on the path [0, q_max] (the
     linear Verlet limit 2 sqrt(m / k_t) at the stiffest point); when U'' is
-    unbounded at onset (leading exponent < 2) it is U''(q_max). The factors
+    unbounded at onset (leading exponent < 2) it is U''(q_max); where that is
+    <= 0 (a concave, softening contact such as tanh(q), log(1 + q), sqrt(q))
+    there is no recommendation (NaN), never an error. The factors
     c_kind (`RECOMMEND_FACTOR`, `RECOMMEND_FACTOR_SINGULAR`) are the smallest
     measured dt_crit / (2 sqrt(m / k_t)) divided by 1.3 to 1.7;
     `reference_impl.dtcrit_map.dt_crit_map` reports the margin dt_crit / dt_rec
@@ -135,7 +153,8 @@ def recommended_step(potential: Potential, m: float, v0: float, kind: str) -> fl
     Returns
     -------
     float
-        Recommended time step (s).
+        Recommended time step (s); NaN for concave contacts (U''(q_max) <= 0 with
+        U'' unbounded or non-positive on the path): outside the measured classes.
     """
     if kind not in KINDS:
         raise HCVInputError(f"scene kind must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -144,6 +163,12 @@ def recommended_step(potential: Potential, m: float, v0: float, kind: str) -> fl
     if dt_t > 0:
         return RECOMMEND_FACTOR[kind] * dt_t
     k = float(potential._d2U(np.array([q_max]))[0])
+    if not (math.isfinite(k) and k > 0):
+        # Concave (softening) contacts such as tanh(q), log(1 + q), sqrt(q): no
+        # tangent stiffness to scale by, and none of the measured classes the
+        # factors come from (the chord stiffness U'(q_max)/q_max was measured
+        # unsafe: impact dt_crit / dt_rec = 0.013 to 0.5). No recommendation.
+        return math.nan
     return RECOMMEND_FACTOR_SINGULAR[kind] * 2.0 * math.sqrt(m / k)
 
 
@@ -192,6 +217,13 @@ def _row(case: MapCase, r, period: float) -> dict:
         "dt_crit_onset": np.nan if r.dt_crit_onset is None else r.dt_crit_onset,
         "ratio": r.ratio,
         "holds": r.holds,
+        "failure_kind": r.failure_kind,
+        "runaway_evidence": r.runaway_evidence,
+        "dt_bounded": r.dt_bounded,
+        "bounded_ratio": r.dt_bounded / r.dt_safe if r.dt_safe > 0 else math.inf,
+        "bounded_E_max_over_E0": r.bounded_E_max_over_E0,
+        "dt_accuracy": np.nan if r.dt_accuracy is None else r.dt_accuracy,
+        "accuracy_ratio": np.nan if r.accuracy_ratio is None else r.accuracy_ratio,
         "degenerate": r.degenerate,
         "recommended_dt": r.recommended_dt,
         "recommended_ratio": r.dt_crit / r.recommended_dt,
@@ -199,17 +231,23 @@ def _row(case: MapCase, r, period: float) -> dict:
         "dt_crit_over_period": r.dt_crit / period,
         "counterexample_dt": ce.get("dt", np.nan),
         # the rebound energy for an impact, the largest energy for sustained scenes
-        "counterexample_E_ratio": ce.get("E_end_over_E0" if r.kind == "impact" else "E_max_over_E0",
-                                         np.nan),
+        "counterexample_E_ratio": ce.get(
+            "E_end_over_E0" if r.kind == "impact" else "E_max_over_E0", np.nan
+        ),
         "counterexample_steps": ce.get("steps", np.nan),
         "counterexample_status": ce.get("status", ""),
     }
 
 
-def dt_crit_map(cases: Sequence[MapCase] | None = None, kinds: Sequence[str] = KINDS, *,
-                quick: bool = False, criteria: dict[str, Criterion] | None = None,
-                grid: SearchGrid = _DEFAULT_GRID,
-                progress: Callable[[int, int], None] | None = None) -> pd.DataFrame:
+def dt_crit_map(
+    cases: Sequence[MapCase] | None = None,
+    kinds: Sequence[str] = KINDS,
+    *,
+    quick: bool = False,
+    criteria: dict[str, Criterion] | None = None,
+    grid: SearchGrid = _DEFAULT_GRID,
+    progress: Callable[[int, int], None] | None = None,
+) -> pd.DataFrame:
     """Measured Delta t_crit, Delta t_safe and the recommendation for every case and scene.
 
     Parameters
@@ -233,7 +271,12 @@ def dt_crit_map(cases: Sequence[MapCase] | None = None, kinds: Sequence[str] = K
         One row per (case, v0, scene) with columns family, case, p, m, v0, scene,
         criterion, q_max (m), geometry, dt_safe, dt_shortcut, dt_tangent,
         dt_crit, dt_stable, dt_crit_onset (s), ratio = dt_crit / dt_safe,
-        holds, degenerate, recommended_dt (s), recommended_ratio =
+        holds (False only for a runaway below dt_safe), failure_kind
+        ("runaway", "bounded", "accuracy" or None, see `reference_impl.dtcrit`),
+        runaway_evidence ("confirmed" or "domain"), dt_bounded (s) and
+        bounded_ratio = dt_bounded / dt_safe with bounded_E_max_over_E0 (the
+        smallest bounded excursion below dt_crit), dt_accuracy (s) and
+        accuracy_ratio (impact: largest step within the rebound tolerance), degenerate, recommended_dt (s), recommended_ratio =
         dt_crit / recommended_dt (> 1 means the recommendation is safe),
         period T(E) (s), dt_crit_over_period, and the counterexample's step
         (s), E/E_0 (rebound energy for impacts, largest E_n otherwise), steps
@@ -246,8 +289,9 @@ def dt_crit_map(cases: Sequence[MapCase] | None = None, kinds: Sequence[str] = K
         periods = {v: oscillation_period(case.potential, case.m, v) for v in case.velocities}
         for kind in kinds:
             crit = criteria.get(kind, default_criterion(kind))
-            for r in search_scene(case.potential, case.m, case.velocities, kind, criterion=crit,
-                                  grid=grid):
+            for r in search_scene(
+                case.potential, case.m, case.velocities, kind, criterion=crit, grid=grid
+            ):
                 rows.append(_row(case, r, periods[r.v0]))
             done += 1
             if progress is not None:
@@ -255,12 +299,18 @@ def dt_crit_map(cases: Sequence[MapCase] | None = None, kinds: Sequence[str] = K
     return pd.DataFrame(rows)
 
 
-def criterion_sensitivity(potential: Potential, m: float, v0: float, kind: str, *,
-                          factors: Sequence[float] = (10.0, 100.0, 1e4),
-                          n_steps: Sequence[int] = (1_000, 10_000, 100_000, 1_000_000),
-                          tols: Sequence[float] = (1e-3, 1e-2, 1e-1, 1.0),
-                          gap: float | None = None,
-                          grid: SearchGrid = _DEFAULT_GRID) -> pd.DataFrame:
+def criterion_sensitivity(
+    potential: Potential,
+    m: float,
+    v0: float,
+    kind: str,
+    *,
+    factors: Sequence[float] = (10.0, 100.0, 1e4),
+    n_steps: Sequence[int] = (1_000, 10_000, 100_000, 1_000_000),
+    tols: Sequence[float] = (1e-3, 1e-2, 1e-1, 1.0),
+    gap: float | None = None,
+    grid: SearchGrid = _DEFAULT_GRID,
+) -> pd.DataFrame:
     """How the measured Delta t_crit moves with the definition of "unstable".
 
     Sustained scenes: every (factor, n_steps) pair of `EnergyGrowth`.
@@ -270,8 +320,14 @@ def criterion_sensitivity(potential: Potential, m: float, v0: float, kind: str, 
     Returns
     -------
     pandas.DataFrame
-        Columns scene, factor, n_steps, tol, dt_safe, dt_crit, dt_crit_onset, ratio.
+        Columns scene, factor, n_steps, tol, dt_safe, dt_crit, dt_crit_onset, ratio,
+        failure_kind, dt_bounded.
     """
+    for name, vals in (("factors", factors), ("n_steps", n_steps), ("tols", tols)):
+        if len(vals) > _MAX_SENS_VALUES:
+            raise HCVInputError(
+                f"criterion_sensitivity takes at most {_MAX_SENS_VALUES} {name}, got {len(vals)}"
+            )
     rows = []
     if kind == "impact":
         crits = [replace(ImpactGain(), tol=float(t)) for t in tols]
@@ -279,14 +335,18 @@ def criterion_sensitivity(potential: Potential, m: float, v0: float, kind: str, 
         crits = [EnergyGrowth(float(f), int(n)) for f in factors for n in n_steps]
     for c in crits:
         r = search_scene(potential, m, [v0], kind, gap=gap, criterion=c, grid=grid)[0]
-        rows.append({
-            "scene": kind,
-            "factor": getattr(c, "factor", np.nan),
-            "n_steps": getattr(c, "n_steps", np.nan),
-            "tol": getattr(c, "tol", np.nan),
-            "dt_safe": r.dt_safe,
-            "dt_crit": r.dt_crit,
-            "dt_crit_onset": np.nan if r.dt_crit_onset is None else r.dt_crit_onset,
-            "ratio": r.ratio,
-        })
+        rows.append(
+            {
+                "scene": kind,
+                "factor": getattr(c, "factor", np.nan),
+                "n_steps": getattr(c, "n_steps", np.nan),
+                "tol": getattr(c, "tol", np.nan),
+                "dt_safe": r.dt_safe,
+                "dt_crit": r.dt_crit,
+                "dt_crit_onset": np.nan if r.dt_crit_onset is None else r.dt_crit_onset,
+                "ratio": r.ratio,
+                "failure_kind": r.failure_kind,
+                "dt_bounded": r.dt_bounded,
+            }
+        )
     return pd.DataFrame(rows)
