@@ -276,7 +276,9 @@ def _metric(variant, scene, metric, status, measured, expected, error, tolerance
         "error": error,
         "at_v0": at_v0,
         "tolerance": tolerance,
-        "explanation": f"{metric} off by {error}" if status == "fail" else "",
+        "explanation": {"fail": f"{metric} off by {error}", "skip": "scene not supported"}.get(
+            status, ""
+        ),
     }
 
 
@@ -286,7 +288,7 @@ E_ASKED = 0.7292476142876709  # the asked restitution of scene hertz-damped
 DOCS = [
     {
         "adapter": "lammps",
-        "summary": {"pass": 1, "fail": 1, "skip": 1},
+        "summary": {"pass": 1, "fail": 1, "skip": 2},
         "metrics": [
             _metric(
                 LMP,
@@ -309,6 +311,7 @@ DOCS = [
                 "rtol 0.01",
             ),
             _metric(LMP, "hertz-walls", "energy_drift", "skip", None, None, None, ""),
+            _metric(LMP, "two-spheres", "restitution_asked", "skip", None, None, None, ""),
         ],
     },
     {
@@ -386,6 +389,14 @@ def test_adapter_section_shows_codes_side_by_side():
         drift[3] == "-" and drift[4].endswith("pass"),
         got=str(drift),
         should="'-' for lammps (skipped), a pass for kratos",
+        claim="report",
+        call=call,
+    )
+    assert_true(
+        "no variant ran (every metric skipped): two-spheres (scene not supported)" in md
+        and "hertz-walls (" not in md,
+        got=md,
+        should="two-spheres (skipped by every variant) named, hertz-walls (run by kratos) not",
         claim="report",
         call=call,
     )

@@ -556,6 +556,20 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     return rows, flags
 
 
+def _scenes_no_code_ran(docs) -> dict[str, str]:
+    """Scenes whose every metric, in every document, was skipped -> the first skip reason."""
+    seen: dict[str, str] = {}
+    ran: set[str] = set()
+    for d in docs:
+        for m in d.get("metrics", []):
+            scene = m.get("scene", "")
+            if m.get("status") == "skip":
+                seen.setdefault(scene, m.get("explanation", ""))
+            else:
+                ran.add(scene)
+    return {k: v for k, v in seen.items() if k not in ran}
+
+
 def _adapters(r) -> list:
     """Scorecards of the contact codes given with ``hcv report --adapter``: first all codes
     side by side (`reference_impl.bench.report.side_by_side`), then each code's own table."""
@@ -593,6 +607,16 @@ def _adapters(r) -> list:
         ),
         T(header, sbs, sbs_flags),
     ]
+    unrun = _scenes_no_code_ran(docs)
+    if unrun:
+        blocks.append(
+            P(
+                "Scenes no variant ran (every metric skipped): "
+                + "; ".join(f"{scene} ({why})" for scene, why in unrun.items())
+                + ".",
+                "warn",
+            )
+        )
     for d in docs:
         s = d.get("summary", {})
         rows, flags = _adapter_rows(d)
