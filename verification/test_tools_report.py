@@ -393,7 +393,8 @@ def test_adapter_section_shows_codes_side_by_side():
         call=call,
     )
     assert_true(
-        "no variant ran (every metric skipped): two-spheres (scene not supported)" in md
+        "no variant ran (every metric skipped): two-spheres (first reason given: scene not supported)"
+        in md
         and "hertz-walls (" not in md,
         got=md,
         should="two-spheres (skipped by every variant) named, hertz-walls (run by kratos) not",

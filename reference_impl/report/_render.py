@@ -612,7 +612,7 @@ def _adapters(r) -> list:
         blocks.append(
             P(
                 "Scenes no variant ran (every metric skipped): "
-                + "; ".join(f"{scene} ({why})" for scene, why in unrun.items())
+                + "; ".join(f"{scene} (first reason given: {why})" for scene, why in unrun.items())
                 + ".",
                 "warn",
             )
