@@ -405,4 +405,5 @@ def test_report_with_adapter_has_scorecard(tmp_path):
     assert docs[0]["summary"]["pass"] > 0
     md = (tmp_path / "index.md").read_text()
     assert "Contact codes benchmarked" in md and "| reference" in md
+    assert "### Side by side" in md and "| measured | expected | error | tolerance |" in md
     assert (tmp_path / "bench").is_dir() and any((tmp_path / "bench").glob("*.json"))

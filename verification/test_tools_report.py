@@ -1,8 +1,9 @@
 """Tool tests of ``hcv report``: arguments checked before writing, the swap, the README block.
 
 Fast: the heavy sections are replaced by a stub that writes a tiny report
-(`_fake_build`), so only the file handling is exercised. No claim marks: these
-are not evidence for any claim.
+(`_fake_build`), so only the file handling is exercised; the adapter section is
+rendered from two hand-made bench documents shaped like LAMMPS' and Kratos'. No
+claim marks: these are not evidence for any claim.
 """
 
 from __future__ import annotations
@@ -256,3 +257,188 @@ def test_readme_without_markers_is_refused_before_running(tmp_path, monkeypatch)
     with pytest.raises(HCVInputError, match="verdicts:start"):
         build_report(tmp_path / "rep", quick=True, readme=readme)
     assert not called and not (tmp_path / "rep").exists()
+
+
+# ----------------------------------------------------------------------------------
+# The adapter section (hcv report --adapter lammps --adapter kratos), rendered from
+# two hcv-bench/1 documents shaped like the real ones (no code is run).
+# ----------------------------------------------------------------------------------
+def _metric(variant, scene, metric, status, measured, expected, error, tolerance, at_v0=0.1):
+    return {
+        "variant": variant,
+        "scene": scene,
+        "metric": metric,
+        "status": status,
+        "value": error,
+        "reference": expected,
+        "measured": measured,
+        "expected": expected,
+        "error": error,
+        "at_v0": at_v0,
+        "tolerance": tolerance,
+        "explanation": {"fail": f"{metric} off by {error}", "skip": "scene not supported"}.get(
+            status, ""
+        ),
+    }
+
+
+LMP = "lammps[velocity,wall]"
+KRA = "kratos[hertz,Symplectic_Euler]"
+E_ASKED = 0.7292476142876709  # the asked restitution of scene hertz-damped
+DOCS = [
+    {
+        "adapter": "lammps",
+        "summary": {"pass": 1, "fail": 1, "skip": 2},
+        "metrics": [
+            _metric(
+                LMP,
+                "hertz-damped",
+                "restitution_asked",
+                "fail",
+                0.5992461627,
+                E_ASKED,
+                0.178,
+                "rtol 0.02",
+            ),
+            _metric(
+                LMP,
+                "hertz-damped",
+                "restitution_exact",
+                "pass",
+                0.5992461627,
+                0.59833,
+                0.00153,
+                "rtol 0.01",
+            ),
+            _metric(LMP, "hertz-walls", "energy_drift", "skip", None, None, None, ""),
+            _metric(LMP, "two-spheres", "restitution_asked", "skip", None, None, None, ""),
+        ],
+    },
+    {
+        "adapter": "kratos",
+        "summary": {"pass": 2, "fail": 0, "skip": 0},
+        "metrics": [
+            _metric(
+                KRA,
+                "hertz-damped",
+                "restitution_asked",
+                "pass",
+                0.7290012345,
+                E_ASKED,
+                0.000338,
+                "rtol 0.02",
+            ),
+            _metric(
+                KRA, "hertz-walls", "energy_drift", "pass", 1e-9, 0.0, 1e-9, "atol 1e-06", None
+            ),
+        ],
+    },
+]
+
+
+def _adapter_section(fmt: str) -> str:
+    from reference_impl.report import _render
+
+    blocks = _render._adapters({"adapters": DOCS, "figures": []})
+    out: list[str] = []
+    if fmt == "md":
+        _render._md(blocks, out)
+    else:
+        _render._html(blocks, Path("/nonexistent"), out)
+    return "\n".join(out)
+
+
+def _md_table_after(md: str, heading: str) -> list[list[str]]:
+    """Cells of the first markdown table after ``heading`` (bold marks removed)."""
+    lines = md[md.index(heading) :].splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.startswith("| "))
+    rows = []
+    for ln in lines[start:]:
+        if not ln.startswith("|"):
+            break
+        if not ln.startswith("|---"):
+            rows.append([c.strip().strip("*") for c in ln.strip("|").split(" | ")])
+    return rows
+
+
+def test_adapter_section_shows_codes_side_by_side():
+    """The side-by-side table comes first, a column per code's variant, the measured
+    restitution (6 digits) and its verdict in each cell; then each code's own table."""
+    md = _adapter_section("md")
+    call = "_render._adapters(two bench documents)"
+    sbs = _md_table_after(md, "Side by side")
+    header = sbs[0]
+    assert_true(
+        header == ["scene", "metric", "reference", LMP, KRA],
+        got=str(header),
+        should="scene, metric, reference and one column per variant",
+        claim="report",
+        call=call,
+    )
+    by_key = {(r[0], r[1]): r for r in sbs[1:]}
+    row = by_key[("hertz-damped", "restitution_asked")]
+    assert_true(
+        row[2:] == ["0.729248", "0.599246 FAIL", "0.729001 pass"],
+        got=str(row),
+        should="asked 0.729248, lammps measured 0.599246 FAIL, kratos measured 0.729001 pass",
+        claim="report",
+        call=call,
+    )
+    drift = by_key[("hertz-walls", "energy_drift")]
+    assert_true(
+        drift[3] == "-" and drift[4].endswith("pass"),
+        got=str(drift),
+        should="'-' for lammps (skipped), a pass for kratos",
+        claim="report",
+        call=call,
+    )
+    assert_true(
+        "no variant ran (every metric skipped): two-spheres (first reason given: scene not supported)"
+        in md
+        and "hertz-walls (" not in md,
+        got=md,
+        should="two-spheres (skipped by every variant) named, hertz-walls (run by kratos) not",
+        claim="report",
+        call=call,
+    )
+    assert_true(
+        md.index("Side by side") < md.index("### lammps:") < md.index("### kratos:"),
+        got="section order wrong",
+        should="side by side first, then lammps, then kratos",
+        claim="report",
+        call=call,
+    )
+    own = _md_table_after(md, "### lammps:")
+    cols = own[0]
+    rows = {r[2]: dict(zip(cols, r, strict=True)) for r in own[1:]}
+    got = rows.get("restitution_asked", {})
+    assert_true(
+        cols[3:8] == ["measured", "expected", "error", "tolerance", "at v0 (m/s)"]
+        and got.get("measured") == "0.599246"
+        and got.get("expected") == "0.729248"
+        and got.get("error") == "0.178"
+        and got.get("tolerance") == "rtol 0.02"
+        and got.get("result") == "FAIL"
+        and "energy_drift" not in rows,
+        got=str(own),
+        should="measured / expected / error / tolerance columns, skips left out",
+        claim="report",
+        call=call,
+    )
+
+
+def test_adapter_section_html_has_side_by_side_table():
+    """The HTML page carries the same side-by-side table, failures marked."""
+    page = _adapter_section("html")
+    call = "_render._adapters -> _html"
+    head = f"<th>{LMP}</th><th>{KRA}</th>"
+    assert_true(
+        head in page
+        and '<td class="bad">0.599246 FAIL</td>' in page
+        and '<td class="good">0.729001 pass</td>' in page
+        and page.index("Side by side") < page.index("lammps: 1 pass"),
+        got=page[:2000],
+        should="a side-by-side table with a column per variant, before the per-code tables",
+        claim="report",
+        call=call,
+    )
