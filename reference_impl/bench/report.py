@@ -3,11 +3,16 @@
 * JSON (`write_json`): schema ``hcv-bench/1``, with machine and commit info,
   the tolerances, every metric, the per-speed records (runs, implemented laws,
   exact references, critical steps) and the speed-against-error rows. Written
-  atomically (temporary file, then rename), so a reader never sees half a file.
+  atomically (temporary file, then rename), so a reader never sees half a file,
+  with the mode of a new file (0666 less the umask, not mkstemp's 0600).
 * JUnit XML (`write_junit`): one testsuite per adapter variant, one testcase per
   scene x metric (``classname`` = ``hcv.bench.<variant>.<scene>``), failures
   with the one-line explanation as message and the details as text, skips
-  with their reason.
+  with their reason, and an ``<error>`` for a metric our own reference could not
+  decide (status "error": an internal error, never the code's failure).
+
+Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
+failed). Every output below knows all four (`STATUSES`).
 * `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
   `render_speed_error`: the speed-against-error table.
 * `scorecard_markdown` and `plot_speed_error`: for ``hcv report``.
@@ -37,9 +42,14 @@ __all__ = [
     "side_by_side_markdown",
     "write_json",
     "write_junit",
+    "write_markdown",
 ]
 
 SCHEMA = "hcv-bench/1"
+# Every metric status, in the order the summaries list them.
+STATUSES = ("pass", "fail", "skip", "error")
+# How the status "error" is shown: it is ours (the reference's), not the code's.
+_OURS = "ERROR (ours)"
 
 
 def machine_info() -> dict:
@@ -97,9 +107,7 @@ def result_to_dict(result) -> dict:
         {
             "schema": SCHEMA,
             "adapter": result.adapter,
-            "status": "interrupted"
-            if result.interrupted
-            else ("fail" if counts["fail"] else "pass"),
+            "status": _overall(result.interrupted, counts),
             "summary": counts,
             "seconds": result.seconds,
             "started": result.started,
@@ -114,6 +122,16 @@ def result_to_dict(result) -> dict:
     )
 
 
+def _overall(interrupted: bool, counts: dict) -> str:
+    """Status of the whole run: "interrupted", else "fail" when a metric failed, else
+    "error" when our reference could not decide a metric, else "pass"."""
+    if interrupted:
+        return "interrupted"
+    if counts.get("fail"):
+        return "fail"
+    return "error" if counts.get("error") else "pass"
+
+
 def _metric_dict(result, m) -> dict:
     """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
     reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
@@ -123,11 +141,21 @@ def _metric_dict(result, m) -> dict:
     return d
 
 
+def _new_file_mode() -> int:
+    """Mode of a new file under the current umask (0644 under umask 022)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def _atomic_write(path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (temporary file, then rename), with the
+    mode of a new file (`_new_file_mode`) rather than mkstemp's 0600."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
+        os.fchmod(fd, _new_file_mode())
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
         os.replace(tmp, path)
@@ -145,7 +173,7 @@ def write_json(result, path) -> None:
 
 
 def _details(result, m) -> str:
-    """Per-speed details of one failed metric, for the JUnit failure text."""
+    """Per-speed details of one failed (or undecided) metric, for the JUnit text."""
     lines = [m.explanation, f"tolerance: {m.tolerance}", f"value: {m.value!r}"]
     for c in result.contexts:
         if c.variant == m.variant and c.scene == m.scene:
@@ -167,9 +195,10 @@ def junit_tree(result) -> ET.ElementTree:
     by_variant: dict[str, list] = {}
     for m in result.metrics:
         by_variant.setdefault(m.variant, []).append(m)
-    totals = {"tests": 0, "failures": 0, "skipped": 0}
+    totals = {"tests": 0, "failures": 0, "errors": 0, "skipped": 0}
     for variant, items in by_variant.items():
         fails = sum(m.status == "fail" for m in items)
+        errors = sum(m.status == "error" for m in items)
         skips = sum(m.status == "skip" for m in items)
         suite = ET.SubElement(
             root,
@@ -177,7 +206,7 @@ def junit_tree(result) -> ET.ElementTree:
             name=variant,
             tests=str(len(items)),
             failures=str(fails),
-            errors="0",
+            errors=str(errors),
             skipped=str(skips),
         )
         for m in items:
@@ -191,6 +220,9 @@ def junit_tree(result) -> ET.ElementTree:
             if m.status == "fail":
                 el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
                 el.text = _details(result, m)
+            elif m.status == "error":  # ours: the reference failed, not the code
+                el = ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
+                el.text = _details(result, m)
             elif m.status == "skip":
                 ET.SubElement(case, "skipped", message=m.explanation)
             else:
@@ -198,10 +230,11 @@ def junit_tree(result) -> ET.ElementTree:
                 out.text = f"value {m.value!r}, reference {m.reference!r}, {m.tolerance}"
         totals["tests"] += len(items)
         totals["failures"] += fails
+        totals["errors"] += errors
         totals["skipped"] += skips
     root.set("tests", str(totals["tests"]))
     root.set("failures", str(totals["failures"]))
-    root.set("errors", "0")
+    root.set("errors", str(totals["errors"]))
     root.set("skipped", str(totals["skipped"]))
     root.set("time", f"{result.seconds:.3f}")
     return ET.ElementTree(root)
@@ -225,8 +258,13 @@ def _fmt(v) -> str:
     return str(v)
 
 
-_STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
-_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip"}
+_STATUS = {
+    "pass": "[green]pass[/]",
+    "fail": "[bold red]FAIL[/]",
+    "skip": "[dim]skip[/]",
+    "error": f"[bold magenta]{_OURS}[/]",
+}
+_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS}
 # Metrics whose value is a relative error of one quantity, and that quantity's key.
 _RELATIVE = {
     "restitution_asked": "restitution",
@@ -317,22 +355,30 @@ def _fmt_v(v, unit: str = "") -> str:
     return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
 
 
+def _count_text(counts: dict) -> str:
+    """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)")."""
+    text = f"{counts.get('pass', 0)} pass, {counts.get('fail', 0)} fail, {counts.get('skip', 0)} skipped"
+    if counts.get("error"):
+        text += f", {counts['error']} {_OURS}"
+    return text
+
+
 def _summary_lines(result) -> list[str]:
-    """Per code: pass / fail counts, then each failing metric with measured vs expected."""
-    counts = result.counts()
+    """Per code: pass / fail counts, then each failing metric with measured vs expected,
+    then each metric our reference could not decide (status "error")."""
     lines = [
-        f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
-        f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")
+        f"hcv bench {result.adapter}: {_count_text(result.counts())}"
+        + (" (interrupted)" if result.interrupted else "")
     ]
     by_variant: dict[str, list] = {}
     for m in result.metrics:
         by_variant.setdefault(m.variant, []).append(m)
     for variant, items in by_variant.items():
-        n_pass = sum(m.status == "pass" for m in items)
-        n_fail = sum(m.status == "fail" for m in items)
-        n_skip = sum(m.status == "skip" for m in items)
-        lines.append(f"  {variant}: {n_pass} pass, {n_fail} fail, {n_skip} skipped")
+        counts = {s: sum(m.status == s for m in items) for s in STATUSES}
+        lines.append(f"  {variant}: {_count_text(counts)}")
         for m in items:
+            if m.status == "error":
+                lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")
             if m.status != "fail":
                 continue
             c = metric_columns(result, m)
@@ -386,6 +432,10 @@ def scorecard_text(result, show_skipped: bool = False) -> str:
             lines.append("  ".join("-" * w for w in widths))
     for m in result.failures:
         lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    for m in result.internal_errors:
+        lines.append(f"{_OURS} {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    if result.interrupted:
+        lines.append("interrupted: results so far")
     return "\n".join(lines) + "\n"
 
 
@@ -420,6 +470,13 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
     for m in result.failures:
         console.print(
             f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
+            f"{escape(m.explanation)}",
+            highlight=False,
+            soft_wrap=True,
+        )
+    for m in result.internal_errors:
+        console.print(
+            f"[bold magenta]{_OURS}[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
             f"{escape(m.explanation)}",
             highlight=False,
             soft_wrap=True,
@@ -481,12 +538,17 @@ def render_speed_error(result, console=None) -> None:
 
 def scorecard_markdown(result) -> str:
     """The scorecard and the speed table as markdown (for ``hcv report``)."""
-    counts = result.counts()
     out = [
         f"### Benchmark of `{result.adapter}`",
         "",
-        f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
-        f"(commit {result.machine.get('commit') or 'unknown'}).",
+        f"{_count_text(result.counts())} "
+        f"(commit {result.machine.get('commit') or 'unknown'})."
+        + (
+            f" {_OURS}: the suite's own reference could not decide the metric "
+            "(an internal error, not the code's failure)."
+            if result.internal_errors
+            else ""
+        ),
         "",
         "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -494,12 +556,13 @@ def scorecard_markdown(result) -> str:
     for m in result.metrics:
         if m.status == "skip":
             continue
-        why = m.explanation.replace("|", "/") if m.status == "fail" else ""
+        why = m.explanation.replace("|", "/") if m.status in ("fail", "error") else ""
         c = metric_columns(result, m)
         out.append(
             f"| {m.variant} | {m.scene} | {m.metric} | "
             f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
-            f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |"
+            f"{_fmt(c['error'])} | {m.tolerance} | {_OURS if m.status == 'error' else m.status} | "
+            f"{why} |"
         )
     if result.speed_error:
         out += [
@@ -515,6 +578,11 @@ def scorecard_markdown(result) -> str:
                 f"{_fmt(r.get('err_max_penetration'))} |"
             )
     return "\n".join(out) + "\n"
+
+
+def write_markdown(result, path) -> None:
+    """Write `scorecard_markdown` (atomically, mode of a new file)."""
+    _atomic_write(path, scorecard_markdown(result))
 
 
 def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
@@ -547,7 +615,7 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
             key = (m.get("scene", ""), m.get("metric", ""))
             measured = m.get("measured", m.get("value"))
             unit = _UNITS.get(key[1], "")
-            status = {"pass": "pass", "fail": "FAIL"}.get(m.get("status"), m.get("status"))
+            status = _PLAIN_STATUS.get(m.get("status"), m.get("status"))
             cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
             if key[1] == "restitution_asked" and m.get("expected") is not None:
                 refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
