@@ -310,3 +310,25 @@ def test_report_files_get_the_mode_of_a_new_file(tmp_path, umask):
     for name in ("r.json", "r.xml", "r.md"):
         assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o666 & ~umask, name
     assert json.loads((tmp_path / "r.json").read_text())["status"] == "error"
+
+
+def test_package_data_ships_every_toml_and_every_pattern_matches():
+    """pyproject's package-data: each data file of the package is matched (a wheel ships the
+    scenes and tolerances the code loads) and no pattern is stale (matches nothing)."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    patterns = data["package-data"]
+    shipped = set()
+    for package, globs in patterns.items():
+        pkg_dir = ROOT.joinpath(*package.split("."))
+        for g in globs:
+            hits = {p.relative_to(ROOT) for p in pkg_dir.glob(g) if p.is_file()}
+            assert hits, f"package-data {package!r}: pattern {g!r} matches nothing"
+            shipped |= hits
+    data_files = {
+        p.relative_to(ROOT)
+        for p in (ROOT / "reference_impl").rglob("*")
+        if p.is_file() and p.suffix in (".toml", ".json", ".csv") and "__pycache__" not in p.parts
+    }
+    assert data_files <= shipped, sorted(map(str, data_files - shipped))
