@@ -280,6 +280,44 @@ def test_cmd_can_decline_a_scene():
     assert res.exit_status(gate=True) == 0
 
 
+_DECLINER = """
+from reference_impl.adapters import AdapterDeclined
+from reference_impl.adapters.reference import ReferenceAdapter
+
+
+class Decliner(ReferenceAdapter):
+    name = "decliner"
+    isolate = {isolate}
+
+    def _impact_impl(self, scene):
+        if scene.v0 > 1.0:
+            raise AdapterDeclined("no model above 1 m/s")
+        return super()._impact_impl(scene)
+"""
+
+
+@pytest.mark.parametrize("isolate", [False, True], ids=["in-process", "worker"])
+def test_python_adapter_can_decline_a_scene_at_run_time(tmp_path, monkeypatch, isolate):
+    """AdapterDeclined raised by a Python adapter (in-process or in the worker) is a skip
+    with its reason, like a cmd: program's {"unsupported": reason} (contract item 7)."""
+    from reference_impl.adapters import AdapterDeclined as exported
+
+    assert exported is AdapterDeclined  # one class for both forms
+    (tmp_path / "decliner_mod.py").write_text(_DECLINER.format(isolate=isolate))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(ROOT), str(tmp_path)]))
+    res = run_bench(
+        "decliner_mod:Decliner",
+        scenes=[scene("ok", vels=(0.5,)), scene("no", vels=(2.0,))],
+        tolerances=FAST,
+    )
+    assert {m.status for m in res.metrics if m.scene == "no"} == {"skip"}
+    why = _by(res, "no", "restitution_exact").explanation
+    assert "declined by the code: no model above 1 m/s" in why, why
+    assert _by(res, "ok", "restitution_exact").status == "pass"
+    assert res.exit_status(gate=True) == 0
+
+
 def test_cmd_declares_sustained_scenes_in_its_spec():
     assert parse_spec("cmd[sustained=true,timeout=5]:./code --x") == (
         "subprocess",

@@ -83,6 +83,7 @@ from collections.abc import Mapping, Sequence
 from ..errors import HCVInputError
 from ..scenes._scene import _potential, _Where
 from .base import (
+    AdapterDeclined,
     AdapterOutputError,
     AdapterRunError,
     AdapterScene,
@@ -119,14 +120,6 @@ _POLL = 0.5
 def response_limit(n_steps: int) -> int:
     """Largest response (bytes) accepted for a run of ``n_steps`` steps."""
     return min(_MAX_STDOUT, _RESPONSE_SLACK + _BYTES_PER_SAMPLE * (int(n_steps) + 2))
-
-
-class AdapterDeclined(AdapterRunError):
-    """The code declined the scene (``{"unsupported": reason}``): the scene is skipped."""
-
-    def __init__(self, reason: str):
-        super().__init__(f"declined: {reason}")
-        self.declined = reason
 
 
 class AdapterTimeout(AdapterRunError):
