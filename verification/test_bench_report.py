@@ -224,12 +224,18 @@ def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
     asked = next(m for m in doc["metrics"] if m["metric"] == "restitution_asked")
     assert asked["status"] == "pass" and asked["expected"] == pytest.approx(0.5, rel=1e-12)
     assert "restitution_asked" in r.stdout and "measured" in r.stdout.splitlines()[3]
-    # A request it cannot serve is answered with the protocol's one-line error.
-    bad = subprocess.run(
-        [str(exe)], input='{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
-        capture_output=True, text=True, timeout=30,
-    )  # fmt: skip
-    assert json.loads(bad.stdout) == {"error": "only power-law potentials"}
+    # A scene it has no model for is declined (a skip); a malformed request is an error.
+    for request, answer in (
+        ('{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
+         {"unsupported": "only power-law potentials"}),
+        ('{"request": "sustained", "scene": {"potential": {"family": "power"}}}',
+         {"unsupported": "single impacts only"}),
+        ('{"request": "impact", "scene": {"potential": {"family": "power", "k": 1}}}',
+         {"error": "request lacks k, p, mass, v0, dt or n_steps"}),
+    ):  # fmt: skip
+        bad = subprocess.run([str(exe)], input=request, capture_output=True, text=True,
+                             timeout=30)  # fmt: skip
+        assert json.loads(bad.stdout) == answer, (request, bad.stdout)
 
 
 def test_side_by_side_puts_codes_in_columns():
