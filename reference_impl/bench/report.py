@@ -10,12 +10,13 @@
   with the one-line explanation as message and the details as text, skips
   with their reason, and an ``<error>`` for a metric our own reference could not
   decide (status "error": an internal error, never the code's failure).
-
-Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
-failed). Every output below knows all four (`STATUSES`).
 * `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
   `render_speed_error`: the speed-against-error table.
-* `scorecard_markdown` and `plot_speed_error`: for ``hcv report``.
+* `scorecard_markdown`: for ``hcv report``; `side_by_side` and `plot_speed_error`
+  (home: `reference_impl.bench.compare`, re-exported here) as well.
+
+Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
+failed). Every output above knows all four (`STATUSES`).
 """
 
 from __future__ import annotations
@@ -585,108 +586,5 @@ def write_markdown(result, path) -> None:
     _atomic_write(path, scorecard_markdown(result))
 
 
-def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
-    """Several codes' scorecards as one table: a row per (scene, metric), a column per variant.
-
-    Parameters
-    ----------
-    docs : sequence of dict
-        JSON documents of `result_to_dict` (one per ``hcv bench`` run, e.g. lammps
-        and kratos).
-
-    Returns
-    -------
-    header, rows : list of str, list of list of str
-        ``header`` = ["scene", "metric", "reference", variant...]; a cell is the
-        measured value with "pass" / "FAIL", "-" when the variant did not run that
-        scene (skipped). ``reference`` is the asked value where it is the same for
-        every code (restitution_asked), else empty (each code's own exact law).
-    """
-    variants: list[str] = []
-    cells: dict[tuple[str, str], dict[str, str]] = {}
-    refs: dict[tuple[str, str], set] = {}
-    for doc in docs:
-        for m in doc.get("metrics", []):
-            v = m.get("variant", "")
-            if v not in variants:
-                variants.append(v)
-            if m.get("status") == "skip":
-                continue
-            key = (m.get("scene", ""), m.get("metric", ""))
-            measured = m.get("measured", m.get("value"))
-            unit = _UNITS.get(key[1], "")
-            status = _PLAIN_STATUS.get(m.get("status"), m.get("status"))
-            cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
-            if key[1] == "restitution_asked" and m.get("expected") is not None:
-                refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
-    header = ["scene", "metric", "reference", *variants]
-    rows = []
-    for (scene, metric), by in cells.items():
-        ref = refs.get((scene, metric), set())
-        rows.append(
-            [
-                scene,
-                metric,
-                next(iter(ref)) if len(ref) == 1 else "",
-                *(by.get(v, "-") for v in variants),
-            ]
-        )
-    return header, rows
-
-
-def side_by_side_markdown(docs) -> str:
-    """`side_by_side` as a markdown table."""
-    header, rows = side_by_side(docs)
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(out) + "\n"
-
-
-def _num(x):
-    """A JSON number back as a float ("inf"/"nan" strings included), else unchanged."""
-    if isinstance(x, str) and x in ("inf", "-inf", "nan"):
-        return float(x)
-    return float(x) if isinstance(x, int) and not isinstance(x, bool) else x
-
-
-def plot_speed_error(rows, path) -> Path:
-    """Error against wall time per impact, one panel per scene, one line per adapter (log-log).
-
-    The exact solver's time for each scene is a dotted vertical line. Needs matplotlib.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
-    fig, axes = plt.subplots(
-        1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True, squeeze=False
-    )
-    for ax, scene in zip(axes[0], scenes, strict=True):
-        groups: dict[str, list] = {}
-        for r in rows:
-            if r["scene"] != scene:
-                continue
-            if r.get("steps_per_contact") is None:
-                ax.axvline(r["seconds"], color="grey", lw=0.6, ls=":")
-            elif not r.get("failure"):
-                groups.setdefault(r["adapter"], []).append(r)
-        for adapter, rs in groups.items():
-            rs = sorted(rs, key=lambda r: r["dt"], reverse=True)
-            err = [
-                max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
-                for r in rs
-            ]
-            ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
-        ax.set_title(scene, fontsize=9)
-        ax.set_xlabel("wall time per impact [s]")
-        ax.legend(fontsize=5)
-    axes[0][0].set_ylabel("largest relative error (e, t_c, q_max)")
-    fig.suptitle("speed against error (dotted: exact solver)", fontsize=10)
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+# Kept importable from here (their home is `reference_impl.bench.compare`).
+from .compare import plot_speed_error, side_by_side, side_by_side_markdown  # noqa: E402
