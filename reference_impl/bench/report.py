@@ -433,15 +433,14 @@ def scorecard_text(result, show_skipped: bool = False) -> str:
             lines.append("  ".join("-" * w for w in widths))
     for m in result.failures:
         lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
-    for m in result.internal_errors:
-        lines.append(f"{_OURS} {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
     if result.interrupted:
         lines.append("interrupted: results so far")
     return "\n".join(lines) + "\n"
 
 
 def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
-    """Print the scorecard: a summary per code, then the details, then each failure.
+    """Print the scorecard: a summary per code (with each metric our reference could
+    not decide), then the details, then each failure.
 
     On a terminal it is a rich table; otherwise (CI logs, pipes) full-width plain
     text (`scorecard_text`), never cut to the console width.
@@ -471,13 +470,6 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
     for m in result.failures:
         console.print(
             f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
-            f"{escape(m.explanation)}",
-            highlight=False,
-            soft_wrap=True,
-        )
-    for m in result.internal_errors:
-        console.print(
-            f"[bold magenta]{_OURS}[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
             f"{escape(m.explanation)}",
             highlight=False,
             soft_wrap=True,
