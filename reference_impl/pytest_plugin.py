@@ -9,9 +9,10 @@ and gets one test per adapter variant, scene and scorecard metric, named
 ``contact-adapter/<variant>/<scene>::<metric>``: a failed metric fails its test
 with the scorecard's one-line explanation, a metric that does not apply (or a
 scene the code declines) is skipped, and a metric the suite's own reference
-could not decide fails with "internal error of the reference (ours ...)" (a
-`ContactReferenceError`, never reported as the code's failure). The benchmark (`reference_impl.bench.run_bench`) runs once, when the
-first of these tests runs. Without ``--contact-adapter`` the plugin does nothing.
+could not decide (status "error") fails with "internal error of the reference
+(ours ...)" (a `ContactReferenceError`, never reported as the code's
+`ContactMetricFailure`). The benchmark (`reference_impl.bench.run_bench`) runs
+once, when the first of these tests runs. Without ``--contact-adapter`` the plugin does nothing.
 Any adapter spec of ``hcv bench`` works (a registered name, ``cmd:COMMAND``, ...).
 """
 

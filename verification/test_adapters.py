@@ -88,8 +88,12 @@ def ascene(v0=1.0, damped=True, n_per_contact=200):
 # the contract
 # ----------------------------------------------------------------------------
 def _good():
-    return {"t": [0.0, 1.0, 2.0], "q": [0.0, 0.5, -0.1], "v": [1.0, 0.0, -1.0],
-            "force": [0.0, 2.0, 0.0]}
+    return {
+        "t": [0.0, 1.0, 2.0],
+        "q": [0.0, 0.5, -0.1],
+        "v": [1.0, 0.0, -1.0],
+        "force": [0.0, 2.0, 0.0],
+    }
 
 
 def test_valid_output_becomes_a_trajectory():
@@ -100,15 +104,18 @@ def test_valid_output_becomes_a_trajectory():
     assert math.isnan(tr.q[1]) and math.isinf(tr.q[2])
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda d: d.pop("force"), "no 'force'"),
-    (lambda d: d.update(q=[0.0, 1.0]), "'q' has 2 samples but 't' has 3"),
-    (lambda d: d.update(t=[0.0, 2.0, 1.0]), "must increase strictly"),
-    (lambda d: d.update(t=[1.0, 2.0, 3.0]), "must start at 0"),
-    (lambda d: d.update(v="fast"), "not an array of numbers"),
-    (lambda d: d.update(t=[[0.0, 1.0, 2.0]]), "must be 1-D"),
-    (lambda d: d.update(meta=[1]), "'meta' must be a mapping"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda d: d.pop("force"), "no 'force'"),
+        (lambda d: d.update(q=[0.0, 1.0]), "'q' has 2 samples but 't' has 3"),
+        (lambda d: d.update(t=[0.0, 2.0, 1.0]), "must increase strictly"),
+        (lambda d: d.update(t=[1.0, 2.0, 3.0]), "must start at 0"),
+        (lambda d: d.update(v="fast"), "not an array of numbers"),
+        (lambda d: d.update(t=[[0.0, 1.0, 2.0]]), "must be 1-D"),
+        (lambda d: d.update(meta=[1]), "'meta' must be a mapping"),
+    ],
+)
 def test_malformed_output_is_refused_in_one_line(change, message):
     d = _good()
     change(d)
@@ -134,8 +141,13 @@ def test_implemented_law_takes_zeta_or_c_not_both():
         ImplementedLaw(pot, 1.0, zeta=0.1, C=PowerDamping(1.0))
     law = ImplementedLaw(pot, 1.0, C=PowerDamping(2.0, 0.25))
     assert law.zeta is None
-    assert_close(law.damping_coefficient(np.array([16.0])), [4.0], rtol=1e-15, claim=CLAIM,
-                 call="ImplementedLaw.damping_coefficient")
+    assert_close(
+        law.damping_coefficient(np.array([16.0])),
+        [4.0],
+        rtol=1e-15,
+        claim=CLAIM,
+        call="ImplementedLaw.damping_coefficient",
+    )
 
 
 def test_tsuji_power_damping_is_the_universal_law():
@@ -144,8 +156,13 @@ def test_tsuji_power_damping_is_the_universal_law():
     c = 2 * zeta * math.sqrt(m * pot.k * 2.5 / 2)
     ex = exact_reference(ImplementedLaw(pot, m, C=PowerDamping(c, 0.25)), 1.0)
     assert ex["method"].startswith("exact")
-    assert_close(ex["restitution"], restitution_from_zeta(zeta), rtol=1e-13, claim=CLAIM,
-                 call="exact_reference(PowerDamping(c, 1/4))")
+    assert_close(
+        ex["restitution"],
+        restitution_from_zeta(zeta),
+        rtol=1e-13,
+        claim=CLAIM,
+        call="exact_reference(PowerDamping(c, 1/4))",
+    )
 
 
 # ----------------------------------------------------------------------------
@@ -162,21 +179,25 @@ def test_import_path_and_constructor_arguments():
     a = get_adapter("verification._adapter_script:ScriptAdapter")
     assert type(a).__name__ == "ScriptAdapter"
     assert parse_spec("lammps[damping=tsuji,geometry=pair,radius=0.01,limit_damping=true]") == (
-        "lammps", {"damping": "tsuji", "geometry": "pair", "radius": 0.01,
-                   "limit_damping": True})
+        "lammps",
+        {"damping": "tsuji", "geometry": "pair", "radius": 0.01, "limit_damping": True},
+    )
     assert parse_spec("cmd:./code --x") == ("subprocess", {"command": "./code --x"})
     sub = get_adapter(f"cmd:{sys.executable} {SCRIPT} --mode ok")
     assert isinstance(sub, SubprocessAdapter) and sub.label == "_adapter_script.py"
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("verification._adapter_script:NoSuch", "has no attribute 'NoSuch'"),
-    ("verification.no_such_module:X", "cannot import module"),
-    ("verification._adapter_script:integrate", "is not a ContactAdapter subclass"),
-    ("reference[bogus=1]", "bad arguments"),
-    ("reference[novalue]", "must be key=value"),
-    ("cmd:", "needs a command"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("verification._adapter_script:NoSuch", "has no attribute 'NoSuch'"),
+        ("verification.no_such_module:X", "cannot import module"),
+        ("verification._adapter_script:integrate", "is not a ContactAdapter subclass"),
+        ("reference[bogus=1]", "bad arguments"),
+        ("reference[novalue]", "must be key=value"),
+        ("cmd:", "needs a command"),
+    ],
+)
 def test_bad_specs_are_usage_errors(spec, message):
     with pytest.raises(HCVInputError, match=message):
         get_adapter(spec)
@@ -203,8 +224,13 @@ def test_reference_adapter_is_the_lane_engine():
     res = run_lanes(s.potential, s.mass, SCENE_IMPACT, batch, zeta=s.zeta)
     e_lanes = math.sqrt(res.e_end[0] / (0.5 * s.mass * s.v0**2))
     assert int(res.steps[0]) == tr.t.size - 1
-    assert_close(-tr.v[-1] / s.v0, e_lanes, rtol=1e-13, claim=CLAIM,
-                 call="ReferenceAdapter().impact vs run_lanes")
+    assert_close(
+        -tr.v[-1] / s.v0,
+        e_lanes,
+        rtol=1e-13,
+        claim=CLAIM,
+        call="ReferenceAdapter().impact vs run_lanes",
+    )
 
 
 def test_reference_adapter_converges_to_the_exact_solution():
@@ -220,8 +246,9 @@ def test_power_damping_and_clipping_in_the_reference_verlet():
     pot, m = PowerLaw(1.0879e10, 1.5), 4.1103e-3
     t, q, v, f = verlet_trajectory(pot, m, 1.0, 2e-7, 5000, damping=PowerDamping(60.0, 0.0))
     assert f[1:-1].min() < 0  # a constant dashpot pulls at the end of contact
-    t, q, v, f = verlet_trajectory(pot, m, 1.0, 2e-7, 5000, damping=PowerDamping(60.0, 0.0),
-                                   clip=True)
+    t, q, v, f = verlet_trajectory(
+        pot, m, 1.0, 2e-7, 5000, damping=PowerDamping(60.0, 0.0), clip=True
+    )
     assert f.min() == 0.0
 
 
@@ -233,17 +260,26 @@ def test_subprocess_script_matches_the_reference_verlet():
     tr = get_adapter(cmd()).impact(s)
     ref = ReferenceAdapter().impact(s)
     assert tr.t.size == ref.t.size
-    assert_close(tr.q, ref.q, rtol=0, atol=1e-12 * ref.q.max(), claim=CLAIM,
-                 call="subprocess adapter q(t) vs reference")
+    assert_close(
+        tr.q,
+        ref.q,
+        rtol=0,
+        atol=1e-12 * ref.q.max(),
+        claim=CLAIM,
+        call="subprocess adapter q(t) vs reference",
+    )
 
 
-@pytest.mark.parametrize("mode, error, message", [
-    ("crash", AdapterRunError, "exit status 3"),
-    ("abort", AdapterRunError, "killed by signal 6"),
-    ("garbage", AdapterOutputError, "stdout is not one JSON object"),
-    ("malformed", AdapterOutputError, "'force' has"),
-    ("error", AdapterRunError, "mesh generation failed"),
-])
+@pytest.mark.parametrize(
+    "mode, error, message",
+    [
+        ("crash", AdapterRunError, "exit status 3"),
+        ("abort", AdapterRunError, "killed by signal 6"),
+        ("garbage", AdapterOutputError, "stdout is not one JSON object"),
+        ("malformed", AdapterOutputError, "'force' has"),
+        ("error", AdapterRunError, "mesh generation failed"),
+    ],
+)
 def test_subprocess_failures_are_one_line_with_stderr(mode, error, message):
     with pytest.raises(error, match=message) as exc:
         get_adapter(cmd("--mode", mode)).impact(ascene())
@@ -276,8 +312,13 @@ def _by(result, scene_name, metric):
 
 
 def test_bench_of_the_subprocess_script_passes_and_writes_reports(tmp_path):
-    res = run_bench(cmd(), scenes=[scene()], tolerances=FAST, json_path=tmp_path / "b.json",
-                    junit_path=tmp_path / "b.xml")
+    res = run_bench(
+        cmd(),
+        scenes=[scene()],
+        tolerances=FAST,
+        json_path=tmp_path / "b.json",
+        junit_path=tmp_path / "b.xml",
+    )
     assert res.exit_status(gate=True) == 0, [m.explanation for m in res.failures]
     assert {m.metric for m in res.metrics} == set(metric_names())
     doc = json.loads((tmp_path / "b.json").read_text())
@@ -296,17 +337,26 @@ def test_declared_law_separates_asked_from_implemented():
     """A code that halves the damping fails restitution_asked but not restitution_exact."""
     res = run_bench(cmd("--mode", "tsuji"), scenes=[scene(vels=(1.5,))], tolerances=FAST)
     asked, exact = _by(res, "small", "restitution_asked"), _by(res, "small", "restitution_exact")
-    assert_true(asked.status == "fail" and exact.status == "pass",
-                got=f"{asked.status}/{exact.status}", should="fail/pass", claim=CLAIM,
-                call="run_bench(--mode tsuji)")
+    assert_true(
+        asked.status == "fail" and exact.status == "pass",
+        got=f"{asked.status}/{exact.status}",
+        should="fail/pass",
+        claim=CLAIM,
+        call="run_bench(--mode tsuji)",
+    )
     assert "was asked" in asked.explanation and "\n" not in asked.explanation
     assert res.exit_status(gate=True) == 1 and res.exit_status(gate=False) == 0
 
 
 def test_crashing_command_fails_its_scene_and_the_run_goes_on(tmp_path):
     scenes = [scene("slow", vels=(0.5,)), scene("fast", vels=(2.0,)), scene("slow2", vels=(0.7,))]
-    res = run_bench(cmd("--mode", "crash", "--above", "1"), scenes=scenes, tolerances=FAST,
-                    json_path=tmp_path / "b.json", junit_path=tmp_path / "b.xml")
+    res = run_bench(
+        cmd("--mode", "crash", "--above", "1"),
+        scenes=scenes,
+        tolerances=FAST,
+        json_path=tmp_path / "b.json",
+        junit_path=tmp_path / "b.xml",
+    )
     fast = _by(res, "fast", "restitution_exact")
     assert fast.status == "fail" and "exit status 3" in fast.explanation
     for name in ("slow", "slow2"):  # scenes before and after the crash are unaffected
@@ -314,23 +364,34 @@ def test_crashing_command_fails_its_scene_and_the_run_goes_on(tmp_path):
     doc = json.loads((tmp_path / "b.json").read_text())
     rec = next(r for r in doc["records"] if r["scene"] == "fast")["speeds"][0]
     assert "simulated crash" in rec["stderr"]
-    failure = ET.parse(tmp_path / "b.xml").getroot().find(
-        "./testsuite/testcase[@classname='hcv.bench._adapter_script.py.fast']"
-        "[@name='restitution_exact']/failure")
+    failure = (
+        ET.parse(tmp_path / "b.xml")
+        .getroot()
+        .find(
+            "./testsuite/testcase[@classname='hcv.bench._adapter_script.py.fast']"
+            "[@name='restitution_exact']/failure"
+        )
+    )
     assert failure is not None and "exit status 3" in failure.get("message")
     assert "simulated crash" in failure.text
 
 
-@pytest.mark.parametrize("cls, message", [
-    ("CrashAdapter", "crashed (worker exited with status 139)"),
-    ("HangAdapter", "timeout after 2 s"),
-    ("MalformedAdapter", "'q' has"),
-])
+@pytest.mark.parametrize(
+    "cls, message",
+    [
+        ("CrashAdapter", "crashed (worker exited with status 139)"),
+        ("HangAdapter", "timeout after 2 s"),
+        ("MalformedAdapter", "'q' has"),
+    ],
+)
 def test_python_adapter_isolated_in_a_worker(cls, message):
     """A Python adapter that dies, hangs or returns garbage fails that run only."""
     tol = {**FAST, "run": {**FAST["run"], "timeout": 2.0}}
-    res = run_bench(f"verification._adapter_script:{cls}",
-                    scenes=[scene("ok", vels=(0.5,)), scene("bad", vels=(2.0,))], tolerances=tol)
+    res = run_bench(
+        f"verification._adapter_script:{cls}",
+        scenes=[scene("ok", vels=(0.5,)), scene("bad", vels=(2.0,))],
+        tolerances=tol,
+    )
     bad = _by(res, "bad", "restitution_exact")
     assert bad.status == "fail" and message in bad.explanation, bad.explanation
     assert _by(res, "ok", "restitution_exact").status == "pass"
@@ -343,11 +404,13 @@ def test_tolerances_override_and_validation(tmp_path):
     tol = load_tolerances({"restitution_exact": {"rtol": 1e-9}})
     assert tol["restitution_exact"]["rtol"] == 1e-9 and tol["contact_time"]["rtol"] == 5e-3
     bad = tmp_path / "bad.toml"
-    for text, message in (("[restitution_exakt]\nrtol = 1", "did you mean 'restitution_exact'"),
-                          ("[contact_time]\nrtoll = 1", "unknown key contact_time.rtoll"),
-                          ("[contact_time]\nrtol = -1", "must be a finite number > 0"),
-                          ("[run]\nspeed_error_steps = [10]", "at least two integers"),
-                          ("[run\n", "TOML syntax error")):
+    for text, message in (
+        ("[restitution_exakt]\nrtol = 1", "did you mean 'restitution_exact'"),
+        ("[contact_time]\nrtoll = 1", "unknown key contact_time.rtoll"),
+        ("[contact_time]\nrtol = -1", "must be a finite number > 0"),
+        ("[run]\nspeed_error_steps = [10]", "at least two integers"),
+        ("[run\n", "TOML syntax error"),
+    ):
         bad.write_text(text)
         with pytest.raises(HCVInputError, match=message):
             load_tolerances(bad)
@@ -356,8 +419,10 @@ def test_tolerances_override_and_validation(tmp_path):
 
 
 def test_adapter_supporting_no_scene_is_a_configuration_error():
-    walls = parse_scene('name = "w"\nmass = 1.0\nvelocities = [1.0]\nkind = "two-walls"\n'
-                        'gap = 0.1\n[potential]\nfamily = "power"\nk = 1.0\np = 1.5\n')
+    walls = parse_scene(
+        'name = "w"\nmass = 1.0\nvelocities = [1.0]\nkind = "two-walls"\n'
+        'gap = 0.1\n[potential]\nfamily = "power"\nk = 1.0\np = 1.5\n'
+    )
     with pytest.raises(HCVInputError, match="supports none of the scenes"):
         run_bench(cmd(), scenes=[walls])
 
@@ -378,8 +443,7 @@ def _bench_command() -> list[str]:
 
 def _run(args, cwd, extra_env=None, timeout=120):
     env = {**os.environ, "PYTHONPATH": str(ROOT), **(extra_env or {})}
-    return subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
 def test_gate_exit_statuses(tmp_path):
@@ -392,16 +456,17 @@ def test_gate_exit_statuses(tmp_path):
     ok = _run([*base, "--tolerances", str(fast), "--junit", str(tmp_path / "ok.xml")], tmp_path)
     assert ok.returncode == 0, ok.stdout + ok.stderr
     assert "gate: pass" in ok.stdout and (tmp_path / "ok.xml").exists()
-    bad = _run([*base, "--tolerances", str(strict), "--json", str(tmp_path / "bad.json")],
-               tmp_path)
+    bad = _run([*base, "--tolerances", str(strict), "--json", str(tmp_path / "bad.json")], tmp_path)
     assert bad.returncode == 1, bad.stdout + bad.stderr
     assert "FAIL" in bad.stdout and "restitution_exact" in bad.stdout
     assert json.loads((tmp_path / "bad.json").read_text())["status"] == "fail"
     nogate = _run([c for c in base if c != "--gate"] + ["--tolerances", str(strict)], tmp_path)
     assert nogate.returncode == 0
-    for args, message in (([*_bench_command(), "nosuch", "--gate"], "unknown adapter"),
-                          ([*base, "--tolerances", str(tmp_path / "none.toml")], "not found"),
-                          ([*_bench_command(), "--gate"], "")):
+    for args, message in (
+        ([*_bench_command(), "nosuch", "--gate"], "unknown adapter"),
+        ([*base, "--tolerances", str(tmp_path / "none.toml")], "not found"),
+        ([*_bench_command(), "--gate"], ""),
+    ):
         r = _run(args, tmp_path)
         assert r.returncode == 2, r.stdout + r.stderr
         assert message in r.stderr
@@ -410,17 +475,47 @@ def test_gate_exit_statuses(tmp_path):
 def test_pytest_plugin_makes_one_test_per_scene_and_metric(tmp_path):
     (tmp_path / "s.toml").write_text(_SCENE.format(name="s", vels=[1.0], damping=_DAMPED))
     strict = tmp_path / "strict.toml"
-    strict.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
-                      "[restitution_exact]\nrtol = 1e-9\n")
+    strict.write_text(
+        "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
+        "[restitution_exact]\nrtol = 1e-9\n"
+    )
     # The plugin arrives through its pytest11 entry point (pyproject), as in a user's CI.
-    r = _run([sys.executable, "-m", "pytest",
-              "-p", "no:cacheprovider", "-q", "-rf",
-              "--contact-adapter=verification._adapter_script:ScriptAdapter",
-              f"--contact-scenes={tmp_path / 's.toml'}", f"--contact-tolerances={strict}"],
-             tmp_path)
+    r = _run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-p",
+            "no:cacheprovider",
+            "-q",
+            "-rf",
+            "--contact-adapter=verification._adapter_script:ScriptAdapter",
+            f"--contact-scenes={tmp_path / 's.toml'}",
+            f"--contact-tolerances={strict}",
+        ],
+        tmp_path,
+    )
     n = len(metric_names())
     assert r.returncode == 1, r.stdout + r.stderr
     # one speed: restitution_v0_spread, energy_balance (damped) and energy_drift are skipped
     assert f"1 failed, {n - 4} passed, 3 skipped" in r.stdout, r.stdout
     assert "ScriptAdapter" not in r.stderr
     assert "restitution_exact [script / s]: restitution" in r.stdout
+
+
+def test_builtin_adapter_classes_are_exported_without_loading_the_codes():
+    """``from reference_impl.adapters import KratosAdapter, LammpsAdapter`` loads neither
+    Kratos nor LAMMPS (nor their adapter modules until asked): the codes load at run time."""
+    code = (
+        "import sys\n"
+        "import reference_impl.adapters as a\n"
+        "early = sorted(m for m in sys.modules if m.endswith(('adapters.kratos', 'adapters.lammps')))\n"
+        "from reference_impl.adapters import KratosAdapter, LammpsAdapter\n"
+        "assert 'KratosAdapter' in a.__all__ and 'KratosAdapter' in dir(a)\n"
+        "codes = sorted(m for m in sys.modules if m.split('.')[0] in "
+        "('KratosMultiphysics', 'lammps', 'mpi4py'))\n"
+        "print(early, KratosAdapter.__name__, LammpsAdapter.__name__, codes)\n"
+    )
+    r = _run([sys.executable, "-c", code], ROOT)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["[]", "KratosAdapter", "LammpsAdapter", "[]"], r.stdout

@@ -224,12 +224,18 @@ def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
     asked = next(m for m in doc["metrics"] if m["metric"] == "restitution_asked")
     assert asked["status"] == "pass" and asked["expected"] == pytest.approx(0.5, rel=1e-12)
     assert "restitution_asked" in r.stdout and "measured" in r.stdout.splitlines()[3]
-    # A request it cannot serve is answered with the protocol's one-line error.
-    bad = subprocess.run(
-        [str(exe)], input='{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
-        capture_output=True, text=True, timeout=30,
-    )  # fmt: skip
-    assert json.loads(bad.stdout) == {"error": "only power-law potentials"}
+    # A scene it has no model for is declined (a skip); a malformed request is an error.
+    for request, answer in (
+        ('{"request": "impact", "scene": {"potential": {"family": "sphere"}}}',
+         {"unsupported": "only power-law potentials"}),
+        ('{"request": "sustained", "scene": {"potential": {"family": "power"}}}',
+         {"unsupported": "single impacts only"}),
+        ('{"request": "impact", "scene": {"potential": {"family": "power", "k": 1}}}',
+         {"error": "request lacks k, p, mass, v0, dt or n_steps"}),
+    ):  # fmt: skip
+        bad = subprocess.run([str(exe)], input=request, capture_output=True, text=True,
+                             timeout=30)  # fmt: skip
+        assert json.loads(bad.stdout) == answer, (request, bad.stdout)
 
 
 def test_side_by_side_puts_codes_in_columns():
@@ -246,3 +252,89 @@ def test_side_by_side_puts_codes_in_columns():
     assert rows[1][1] == "restitution_v0_spread" and rows[1][3] == "0.0142 pass"
     assert len(rows) == 2  # the skipped metric has no row
     assert side_by_side_markdown([a, b]).splitlines()[0].startswith("| scene | metric |")
+
+
+# -- the status "error": our reference failed (issue 12 §3), one home in report.py ---------
+OURS = "internal error of the reference (ours, not the code's): exact solver raised"
+
+
+def _result_with_error() -> BenchResult:
+    """`_result` without its failure, plus one metric our reference could not decide."""
+    res = _result()
+    res.metrics = [m for m in res.metrics if m.status != "fail"]
+    res.metrics.append(
+        MetricResult(LONG, "hertz-damped", "restitution_exact", "error", tolerance="rtol 0.01",
+                     explanation=OURS)
+    )  # fmt: skip
+    return res
+
+
+def test_error_status_in_every_scorecard_output():
+    from rich.console import Console
+
+    from reference_impl.bench.report import junit_tree, result_to_dict
+
+    res = _result_with_error()
+    lines = _piped(res).splitlines()
+    assert lines[0] == "hcv bench lammps: 1 pass, 0 fail, 1 skipped, 1 ERROR (ours)"
+    assert lines[1].strip() == f"{LONG}: 1 pass, 0 fail, 1 skipped, 1 ERROR (ours)"
+    assert lines[2].strip() == f"ERROR (ours) hertz-damped / restitution_exact: {OURS}"
+    row = next(line for line in lines if "restitution_exact" in line and "rtol" in line)
+    assert row.endswith("ERROR (ours)")
+    assert "FAIL" not in "\n".join(lines)  # never counted against the code
+    buf = io.StringIO()  # the rich table knows the status (no KeyError, no patch needed)
+    render_scorecard(res, console=Console(file=buf, force_terminal=True, width=250))
+    assert "ERROR (ours)" in buf.getvalue()
+    md = scorecard_markdown(res)
+    assert "1 ERROR (ours)" in md and f"| ERROR (ours) | {OURS} |" in md
+    assert result_to_dict(res)["status"] == "error"
+    res.metrics[0].status = "fail"  # a real failure outranks our error
+    assert result_to_dict(res)["status"] == "fail"
+    res.metrics[0].status = "pass"
+    root = junit_tree(res).getroot()
+    (err,) = root.findall("./testsuite/testcase/error")
+    assert err.get("message") == OURS and err.get("type") == "ReferenceError"
+    assert root.get("errors") == "1" and root.get("failures") == "0"
+    assert root.find("./testsuite").get("errors") == "1"
+    assert not root.findall("./testsuite/testcase/failure")
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_report_files_get_the_mode_of_a_new_file(tmp_path, umask):
+    """--json / --junit / --markdown: 0666 less the umask, not mkstemp's 0600 (issue 10 §8)."""
+    import stat
+
+    from reference_impl.bench.report import write_json, write_junit, write_markdown
+
+    old = os.umask(umask)
+    try:
+        for write, name in ((write_json, "r.json"), (write_junit, "r.xml"),
+                            (write_markdown, "r.md")):  # fmt: skip
+            write(_result_with_error(), tmp_path / name)
+    finally:
+        os.umask(old)
+    for name in ("r.json", "r.xml", "r.md"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o666 & ~umask, name
+    assert json.loads((tmp_path / "r.json").read_text())["status"] == "error"
+
+
+def test_package_data_ships_every_toml_and_every_pattern_matches():
+    """pyproject's package-data: each data file of the package is matched (a wheel ships the
+    scenes and tolerances the code loads) and no pattern is stale (matches nothing)."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    patterns = data["package-data"]
+    shipped = set()
+    for package, globs in patterns.items():
+        pkg_dir = ROOT.joinpath(*package.split("."))
+        for g in globs:
+            hits = {p.relative_to(ROOT) for p in pkg_dir.glob(g) if p.is_file()}
+            assert hits, f"package-data {package!r}: pattern {g!r} matches nothing"
+            shipped |= hits
+    data_files = {
+        p.relative_to(ROOT)
+        for p in (ROOT / "reference_impl").rglob("*")
+        if p.is_file() and p.suffix in (".toml", ".json", ".csv") and "__pycache__" not in p.parts
+    }
+    assert data_files <= shipped, sorted(map(str, data_files - shipped))

@@ -245,6 +245,52 @@ def test_reference_failure_is_an_internal_error_not_a_metric_failure():
     assert res.exit_status(gate=True) == 3 and res.exit_status(gate=False) == 0
 
 
+_BROKEN_REFERENCE_CLI = """
+import sys
+from reference_impl.bench import runner
+
+
+def broken(law, v0, **kw):
+    raise NameError("name 'DiracDelta' is not defined")
+
+
+runner.exact_reference = broken
+from reference_impl.cli import main
+
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_gate_on_an_error_of_ours_exits_3_and_says_so(tmp_path):
+    """``hcv bench --gate`` when only our reference failed: exit 3, the scorecard lists each
+    undecided metric once as ERROR (ours), JUnit has <error> (not <failure>), JSON "error"."""
+    import xml.etree.ElementTree as ET
+
+    (tmp_path / "s.toml").write_text(
+        'name = "s"\nmass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = "power"\n'
+        'k = 1.0\np = 1.5\n[damping]\nlaw = "universal"\nzeta = 0.1\n'
+    )
+    (tmp_path / "fast.toml").write_text(
+        "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
+    )
+    (tmp_path / "cli.py").write_text(_BROKEN_REFERENCE_CLI)
+    r = subprocess.run(
+        [sys.executable, "cli.py", "bench", "reference", "--scenes", "s.toml", "--tolerances",
+         "fast.toml", "--gate", "--junit", "b.xml", "--json", "b.json"],
+        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True,
+        text=True, timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 3, r.stdout[-3000:] + r.stderr[-2000:]
+    out = r.stdout
+    assert "FAIL" not in out and "gate: ERROR (internal error of the reference)" in out
+    listed = [line for line in out.splitlines() if line.strip().startswith("ERROR (ours) s / ")]
+    root = ET.parse(tmp_path / "b.xml").getroot()
+    errors = root.findall("./testsuite/testcase/error")
+    assert errors and len(listed) == len(errors) == int(root.get("errors")), out
+    assert not root.findall("./testsuite/testcase/failure")
+    assert json.loads((tmp_path / "b.json").read_text())["status"] == "error"
+
+
 def test_abs_expression_scene_never_fails_the_reference_adapter(tmp_path):
     """Our own Verlet on abs(q)**2.5: whatever our dt_safe cannot do is "error", never "fail"."""
     path = tmp_path / "abs.toml"
@@ -276,6 +322,44 @@ def test_cmd_can_decline_a_scene():
         "declined by the code: no model for this scene"
         in _by(res, "no", "restitution_exact").explanation
     )
+    assert _by(res, "ok", "restitution_exact").status == "pass"
+    assert res.exit_status(gate=True) == 0
+
+
+_DECLINER = """
+from reference_impl.adapters import AdapterDeclined
+from reference_impl.adapters.reference import ReferenceAdapter
+
+
+class Decliner(ReferenceAdapter):
+    name = "decliner"
+    isolate = {isolate}
+
+    def _impact_impl(self, scene):
+        if scene.v0 > 1.0:
+            raise AdapterDeclined("no model above 1 m/s")
+        return super()._impact_impl(scene)
+"""
+
+
+@pytest.mark.parametrize("isolate", [False, True], ids=["in-process", "worker"])
+def test_python_adapter_can_decline_a_scene_at_run_time(tmp_path, monkeypatch, isolate):
+    """AdapterDeclined raised by a Python adapter (in-process or in the worker) is a skip
+    with its reason, like a cmd: program's {"unsupported": reason} (contract item 7)."""
+    from reference_impl.adapters import AdapterDeclined as exported
+
+    assert exported is AdapterDeclined  # one class for both forms
+    (tmp_path / "decliner_mod.py").write_text(_DECLINER.format(isolate=isolate))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(ROOT), str(tmp_path)]))
+    res = run_bench(
+        "decliner_mod:Decliner",
+        scenes=[scene("ok", vels=(0.5,)), scene("no", vels=(2.0,))],
+        tolerances=FAST,
+    )
+    assert {m.status for m in res.metrics if m.scene == "no"} == {"skip"}
+    why = _by(res, "no", "restitution_exact").explanation
+    assert "declined by the code: no model above 1 m/s" in why, why
     assert _by(res, "ok", "restitution_exact").status == "pass"
     assert res.exit_status(gate=True) == 0
 

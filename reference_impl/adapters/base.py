@@ -8,10 +8,17 @@ then comparing. A code is plugged in through an *adapter*: a subclass of
 
 Implementer contract
 --------------------
+The items hold for both forms; where the JSON form of a ``cmd:`` program
+differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
+
 1. Subclass `ContactAdapter`, give it a short ``name`` and implement
    ``_impact_impl(self, scene: AdapterScene) -> Trajectory`` (a mapping with the
    keys ``t, q, v, force`` and optionally ``meta`` is accepted too). Do not
-   override `ContactAdapter.impact`: it validates what you return.
+   override `ContactAdapter.impact`: it validates what you return. Run it with
+   ``hcv bench package.module:Class`` (constructor arguments
+   ``package.module:Class[key=value,...]``); a program in another language with
+   ``hcv bench "cmd:COMMAND"`` (one JSON request on stdin, one JSON response on
+   stdout per run).
 2. What a scene gives (`AdapterScene`, SI units): the contact potential U(q)
    (``potential``, a `Potential`; ``potential_spec`` is the same as a plain dict,
    e.g. ``{"family": "power", "k": 1e10, "p": 1.5}`` for U' = k q^p), the
@@ -20,6 +27,7 @@ Implementer contract
    C(q) = 2 zeta sqrt(m) U'/sqrt(2U), whose restitution is ``restitution`` at every
    speed), the time step ``dt`` (s) and a step budget ``n_steps``; ``velocities``
    lists every speed of the scene (for codes that calibrate a damping constant).
+   ``cmd:``: the ``"scene"`` object of the request (`AdapterScene.to_json`).
 3. Start at contact onset: t = 0, overlap q = 0, dq/dt = v0 (q > 0 is overlap,
    dq/dt > 0 approaching). For two bodies, q is the total overlap and ``mass``
    the reduced mass m1 m2 / (m1 + m2).
@@ -33,32 +41,45 @@ Implementer contract
    negative = attractive, 0 out of contact), all at the same instants. A blown-up
    run may contain inf/NaN: that is a result (unstable), not malformed output.
    Anything else (missing key, wrong length, t not increasing) is malformed and
-   the run fails with a one-line reason.
+   the run fails with a one-line reason. ``cmd:``: JSON arrays, non-finite
+   numbers as ``null``.
 6. Optional: ``implemented_law(scene) -> ImplementedLaw`` says which force law the
    code *actually* integrates (potential, mass, damping: a universal ratio
    ``zeta`` or a coefficient ``C(q)``, e.g. `PowerDamping`; ``clips_tension`` if
    the code never lets the total force pull). The scorecard compares the code with
    the exact solution of that law as well as with what was asked. The default
    claims the scene's own law. For adapters run in a worker process the law is
-   pickled: use `PowerDamping` or a module-level function for ``C``.
-7. Optional: ``supports(scene) -> str | None`` returns why a scene cannot be run
-   (e.g. "only power laws with p = 1 or 1.5"); such scenes are skipped, not failed.
+   pickled: use `PowerDamping` or a module-level function for ``C``. ``cmd:``:
+   the ``"implemented_law"`` key of the response.
+7. Declining a scene. Optional: ``supports(scene) -> str | None`` returns why a
+   scene cannot be run (e.g. "only power laws with p = 1 or 1.5"); such scenes
+   are skipped, not failed. A code that finds out only while running raises
+   `AdapterDeclined` ("one-line reason") from ``_impact_impl`` /
+   ``_sustained_impl``: the whole scene is skipped with that reason. A ``cmd:``
+   program answers ``{"unsupported": "one-line reason"}`` instead of a
+   trajectory (``{"error": "..."}`` or a non-zero exit is a failed run, not a skip).
 8. Optional: ``variants() -> list[ContactAdapter]`` splits one adapter into
    several configurations benchmarked separately (e.g. one per damping model);
    each variant needs a distinct ``label``.
-9. Optional, sustained scenes (kind "two-walls"): ``_sustained_impl(scene)``
+9. Optional, sustained scenes (kind "two-walls"), sent only to adapters that
+   declare them (undeclared: skipped, "runs single impacts only"). Python: set
+   ``supports_sustained = True`` and implement ``_sustained_impl(scene)``, which
    returns the trajectory of ``scene.n_steps`` steps of a body bouncing between
    two walls ``scene.gap`` apart (q measured at the wall being touched, as in
-   `reference_impl.integrators.verlet`); ``supports_sustained = True``.
+   `reference_impl.integrators.verlet`). ``cmd:`` program: give it as
+   ``cmd[sustained=true]:COMMAND`` and answer requests with ``"request":
+   "sustained"`` the same way (or decline one, item 7).
 10. Be deterministic and self-contained: no files left behind, nothing printed on
-    stdout (use stderr for diagnostics; it is kept and shown when a run fails).
-    A run that raises, crashes or exceeds the per-run timeout is reported as a
-    failure of that run only; the benchmark goes on.
+    stdout (use stderr for diagnostics; it is kept and shown when a run fails; a
+    Python adapter's stdout is discarded with one warning naming it, a ``cmd:``
+    program's stdout is its JSON answer). A run that raises, crashes or exceeds
+    the per-run timeout is reported as a failure of that run only; the benchmark
+    goes on (after a timeout, the code's other runs on that scene are not started).
 11. Staggered quantities. Report q, v and force at the same instants t[n] when
     you can. A code that stores some of them shifted in time may return them as
     stored and declare the shift in ``staggering`` (a mapping, class or instance
     attribute; the ``"staggering"`` key of a ``cmd:`` response does the same):
-    ``{"force": k}`` (integer k >= 1) when force[n] is the force at t[n - k] (a
+    ``{"force": k}`` (integer k, 1 to 4) when force[n] is the force at t[n - k] (a
     force stored one step late, e.g. Kratos' Symplectic_Euler: k = 1);
     ``{"v": 0.5}`` when v[n] is the velocity at t[n] - dt/2 (leapfrog). `impact`
     re-aligns before anything is measured: force[n] <- force[n + k] and
@@ -82,6 +103,7 @@ from ..potentials.base import Potential
 from ..scenes import potential_to_dict
 
 __all__ = [
+    "AdapterDeclined",
     "AdapterError",
     "AdapterOutputError",
     "AdapterRunError",
@@ -116,6 +138,23 @@ class AdapterRunError(AdapterError):
     def __init__(self, message: str, stderr: str = ""):
         super().__init__(message)
         self.stderr = stderr
+
+
+class AdapterDeclined(AdapterRunError):
+    """The code declines the scene at run time (contract item 7): the scene is skipped.
+
+    Raised by a Python adapter's ``_impact_impl`` / ``_sustained_impl``, or by the
+    subprocess adapter for a ``{"unsupported": reason}`` answer of a ``cmd:`` program.
+
+    Parameters
+    ----------
+    reason : str
+        One line saying why (shown as the skip reason of the scene's metrics).
+    """
+
+    def __init__(self, reason: str):
+        super().__init__(f"declined: {reason}")
+        self.declined = reason
 
 
 @dataclass(frozen=True)

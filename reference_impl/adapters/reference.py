@@ -22,8 +22,9 @@ __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
 
 
 @numba.njit(cache=True)
-def _traj_kernel(fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap,
-                 t, q, v, f):
+def _traj_kernel(
+    fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap, t, q, v, f
+):
     """Integrate one body; fill t, q, v, f (repulsive force) and return the sample count.
 
     Damping: the universal law with 2 zeta sqrt(m) = c_damp, plus c_pow q^a_pow; with
@@ -125,9 +126,19 @@ def _traj_python(pot, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap
     return t, q, v, f
 
 
-def verlet_trajectory(pot, m: float, v0: float, dt: float, n_steps: int, *, zeta: float = 0.0,
-                      kind: str = "impact", gap: float = 0.0, damping: PowerDamping | None = None,
-                      clip: bool = False):
+def verlet_trajectory(
+    pot,
+    m: float,
+    v0: float,
+    dt: float,
+    n_steps: int,
+    *,
+    zeta: float = 0.0,
+    kind: str = "impact",
+    gap: float = 0.0,
+    damping: PowerDamping | None = None,
+    clip: bool = False,
+):
     """Velocity-Verlet trajectory (t, q, v, force) of one impact or a two-walls run.
 
     Damping: the universal law of ratio ``zeta`` and/or ``damping`` (C = c q^a);
@@ -143,12 +154,40 @@ def verlet_trajectory(pot, m: float, v0: float, dt: float, n_steps: int, *, zeta
     c_pow, a_pow = (0.0, 0.0) if damping is None else (float(damping.c), float(damping.exponent))
     terms = kernel_terms(pot)
     if terms is None:
-        return _traj_python(pot, float(m), c_damp, c_pow, a_pow, bool(clip), float(dt),
-                            float(v0), int(n_steps), scene, float(gap))
+        return _traj_python(
+            pot,
+            float(m),
+            c_damp,
+            c_pow,
+            a_pow,
+            bool(clip),
+            float(dt),
+            float(v0),
+            int(n_steps),
+            scene,
+            float(gap),
+        )
     n = int(n_steps) + 1
     t, q, v, f = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    k = _traj_kernel(terms[0], terms[1], float(pot.q_sup), float(m), c_damp, c_pow, a_pow,
-                     bool(clip), float(dt), float(v0), int(n_steps), scene, float(gap), t, q, v, f)
+    k = _traj_kernel(
+        terms[0],
+        terms[1],
+        float(pot.q_sup),
+        float(m),
+        c_damp,
+        c_pow,
+        a_pow,
+        bool(clip),
+        float(dt),
+        float(v0),
+        int(n_steps),
+        scene,
+        float(gap),
+        t,
+        q,
+        v,
+        f,
+    )
     return t[:k], q[:k], v[:k], f[:k]
 
 
@@ -163,8 +202,16 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
     """
     if law.C is not None and not isinstance(law.C, PowerDamping):
         raise TypeError(f"the reference Verlet runs PowerDamping or universal laws, not {law.C!r}")
-    return verlet_trajectory(law.potential, law.mass, v0, dt, n_steps, zeta=law.zeta or 0.0,
-                             damping=law.C, clip=law.clips_tension)
+    return verlet_trajectory(
+        law.potential,
+        law.mass,
+        v0,
+        dt,
+        n_steps,
+        zeta=law.zeta or 0.0,
+        damping=law.C,
+        clip=law.clips_tension,
+    )
 
 
 class ReferenceAdapter(ContactAdapter):
@@ -184,16 +231,27 @@ class ReferenceAdapter(ContactAdapter):
         return None
 
     def describe(self) -> dict:
-        return {"name": self.name, "label": self.label,
-                "scheme": "velocity Verlet (kick-drift-kick), dashpot at the half-step velocity"}
+        return {
+            "name": self.name,
+            "label": self.label,
+            "scheme": "velocity Verlet (kick-drift-kick), dashpot at the half-step velocity",
+        }
 
     def _impact_impl(self, scene: AdapterScene) -> Trajectory:
-        t, q, v, f = verlet_trajectory(scene.potential, scene.mass, scene.v0, scene.dt,
-                                       scene.n_steps, zeta=scene.zeta)
+        t, q, v, f = verlet_trajectory(
+            scene.potential, scene.mass, scene.v0, scene.dt, scene.n_steps, zeta=scene.zeta
+        )
         return Trajectory(t, q, v, f, {"steps": int(t.size - 1)})
 
     def _sustained_impl(self, scene: AdapterScene) -> Trajectory:
-        t, q, v, f = verlet_trajectory(scene.potential, scene.mass, scene.v0, scene.dt,
-                                       scene.n_steps, zeta=scene.zeta, kind="two-walls",
-                                       gap=float(scene.gap or 0.0))
+        t, q, v, f = verlet_trajectory(
+            scene.potential,
+            scene.mass,
+            scene.v0,
+            scene.dt,
+            scene.n_steps,
+            zeta=scene.zeta,
+            kind="two-walls",
+            gap=float(scene.gap or 0.0),
+        )
         return Trajectory(t, q, v, f, {"steps": int(t.size - 1)})

@@ -27,7 +27,8 @@ Request (stdin)::
     }
 
 Potential families are those of the scene files: ``power`` (U' = k q^p),
-``ellipsoid``, ``sphere``, ``expression``, ``sum`` (README, "Scenes").
+``ellipsoid``, ``sphere``, ``expression``, ``sum`` (U(q) of each, with units, in
+``docs/adapter-protocol.md``, "Contact laws U(q) of every potential family").
 
 Response (stdout), one JSON object::
 
@@ -54,7 +55,10 @@ numbers may be written as null (a blown-up run is a result, not an error). To
 report a failure, write ``{"error": "one line"}`` or exit with a non-zero status.
 To decline a scene the code cannot run (no sphere model, no sustained scenes),
 write ``{"unsupported": "one line"}``: the scene is skipped, not failed.
-Nothing else may be written to stdout; diagnostics go to stderr.
+Nothing else may be written to stdout; diagnostics go to stderr. An optional
+``"staggering"`` key declares samples stored shifted in time (``{"force": 1}``:
+force one step late; ``{"v": 0.5}``: half-step velocities), contract item 11 of
+`reference_impl.adapters.base`.
 
 Sustained (two-walls) scenes are sent only to commands declared with
 ``cmd[sustained=true]:COMMAND`` (other ``cmd[...]`` arguments: ``timeout``,
@@ -83,6 +87,7 @@ from collections.abc import Mapping, Sequence
 from ..errors import HCVInputError
 from ..scenes._scene import _potential, _Where
 from .base import (
+    AdapterDeclined,
     AdapterOutputError,
     AdapterRunError,
     AdapterScene,
@@ -119,14 +124,6 @@ _POLL = 0.5
 def response_limit(n_steps: int) -> int:
     """Largest response (bytes) accepted for a run of ``n_steps`` steps."""
     return min(_MAX_STDOUT, _RESPONSE_SLACK + _BYTES_PER_SAMPLE * (int(n_steps) + 2))
-
-
-class AdapterDeclined(AdapterRunError):
-    """The code declined the scene (``{"unsupported": reason}``): the scene is skipped."""
-
-    def __init__(self, reason: str):
-        super().__init__(f"declined: {reason}")
-        self.declined = reason
 
 
 class AdapterTimeout(AdapterRunError):

@@ -4,9 +4,11 @@
 through the exact solution, evaluates the scorecard metrics
 (`reference_impl.bench.metrics`) against tolerances (`load_tolerances`, defaults
 in ``tolerances.toml``), and writes JSON and JUnit reports
-(`reference_impl.bench.report`). ``BenchResult.exit_status(gate=True)`` is 0
-when every metric passes and 1 otherwise; usage and configuration errors raise
-`HCVInputError` (exit status 2).
+(`reference_impl.bench.report`). A metric is "pass", "fail", "skip" or "error"
+(the suite's own reference could not decide it: never the code's failure).
+``BenchResult.exit_status(gate=True)`` is 0 when every metric passes, 1 when one
+failed (or the run was interrupted), 3 when none failed but one is "error";
+usage and configuration errors raise `HCVInputError` (exit status 2).
 """
 
 from .metrics import METRICS, MetricResult, metric_names
@@ -17,6 +19,7 @@ from .report import (
     scorecard_markdown,
     write_json,
     write_junit,
+    write_markdown,
 )
 from .runner import DEFAULT_SCENES, BenchResult, bench_scene_names, resolve_scenes, run_bench
 from .tolerances import default_tolerances, load_tolerances
@@ -38,4 +41,5 @@ __all__ = [
     "scorecard_markdown",
     "write_json",
     "write_junit",
+    "write_markdown",
 ]

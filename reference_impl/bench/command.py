@@ -13,7 +13,8 @@ Exit status: 0; with ``--gate`` 0 when every metric passes, 1 when any fails,
 internal error, never counted against the code); 2 for usage or configuration
 errors (unknown adapter, bad scene or tolerances file, an output path that
 cannot be written, an adapter that supports none of the scenes); 130 on Ctrl-C
-(the scorecard so far is printed and the files written, then "interrupted"). `add_bench_parser` adds the subcommand to the ``hcv`` parser;
+(the scorecard so far is printed and the files written, then "interrupted").
+`add_bench_parser` adds the subcommand to the ``hcv`` parser;
 ``python -m reference_impl.bench`` runs it stand-alone.
 """
 
@@ -128,16 +129,13 @@ def cmd_bench(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
-    from . import report
-    from .report import plot_speed_error, render_scorecard, render_speed_error, scorecard_markdown
+    from .report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
     from .runner import run_bench
 
     scenes = _scene_args(args.scenes)
     for option in ("json", "junit", "plot", "markdown"):
         if getattr(args, option):
             check_output_file(getattr(args, option), f"--{option}")
-    # Until the scorecard table knows the status "error" (our reference failed).
-    report._STATUS.setdefault("error", "[bold magenta]ERROR (ours)[/]")
     if sys.stderr.isatty():
         from rich.progress import Progress
 
@@ -170,12 +168,10 @@ def cmd_bench(args) -> int:
         except ImportError:
             raise HCVInputError("--plot needs matplotlib (pip install -e '.[report]')") from None
     if args.markdown:
-        Path(args.markdown).write_text(scorecard_markdown(result), encoding="utf-8")
+        write_markdown(result, args.markdown)
     written = [p for p in (args.json, args.junit, args.plot, args.markdown) if p]
     if written:
         print("written: " + ", ".join(written))
-    for m in result.internal_errors:
-        print(f"ERROR (ours) {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
     if result.interrupted:  # the results so far are out; the CLI says "interrupted", 130
         raise KeyboardInterrupt
     status = result.exit_status(args.gate)

@@ -3,14 +3,20 @@
 * JSON (`write_json`): schema ``hcv-bench/1``, with machine and commit info,
   the tolerances, every metric, the per-speed records (runs, implemented laws,
   exact references, critical steps) and the speed-against-error rows. Written
-  atomically (temporary file, then rename), so a reader never sees half a file.
+  atomically (temporary file, then rename), so a reader never sees half a file,
+  with the mode of a new file (0666 less the umask, not mkstemp's 0600).
 * JUnit XML (`write_junit`): one testsuite per adapter variant, one testcase per
   scene x metric (``classname`` = ``hcv.bench.<variant>.<scene>``), failures
   with the one-line explanation as message and the details as text, skips
-  with their reason.
+  with their reason, and an ``<error>`` for a metric our own reference could not
+  decide (status "error": an internal error, never the code's failure).
 * `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
   `render_speed_error`: the speed-against-error table.
-* `scorecard_markdown` and `plot_speed_error`: for ``hcv report``.
+* `scorecard_markdown`: for ``hcv report``; `side_by_side` and `plot_speed_error`
+  (home: `reference_impl.bench.compare`, re-exported here) as well.
+
+Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
+failed). Every output above knows all four (`STATUSES`).
 """
 
 from __future__ import annotations
@@ -37,9 +43,14 @@ __all__ = [
     "side_by_side_markdown",
     "write_json",
     "write_junit",
+    "write_markdown",
 ]
 
 SCHEMA = "hcv-bench/1"
+# Every metric status, in the order the summaries list them.
+STATUSES = ("pass", "fail", "skip", "error")
+# How the status "error" is shown: it is ours (the reference's), not the code's.
+_OURS = "ERROR (ours)"
 
 
 def machine_info() -> dict:
@@ -97,9 +108,7 @@ def result_to_dict(result) -> dict:
         {
             "schema": SCHEMA,
             "adapter": result.adapter,
-            "status": "interrupted"
-            if result.interrupted
-            else ("fail" if counts["fail"] else "pass"),
+            "status": _overall(result.interrupted, counts),
             "summary": counts,
             "seconds": result.seconds,
             "started": result.started,
@@ -114,6 +123,16 @@ def result_to_dict(result) -> dict:
     )
 
 
+def _overall(interrupted: bool, counts: dict) -> str:
+    """Status of the whole run: "interrupted", else "fail" when a metric failed, else
+    "error" when our reference could not decide a metric, else "pass"."""
+    if interrupted:
+        return "interrupted"
+    if counts.get("fail"):
+        return "fail"
+    return "error" if counts.get("error") else "pass"
+
+
 def _metric_dict(result, m) -> dict:
     """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
     reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
@@ -123,11 +142,21 @@ def _metric_dict(result, m) -> dict:
     return d
 
 
+def _new_file_mode() -> int:
+    """Mode of a new file under the current umask (0644 under umask 022)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def _atomic_write(path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (temporary file, then rename), with the
+    mode of a new file (`_new_file_mode`) rather than mkstemp's 0600."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
+        os.fchmod(fd, _new_file_mode())
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
         os.replace(tmp, path)
@@ -145,7 +174,7 @@ def write_json(result, path) -> None:
 
 
 def _details(result, m) -> str:
-    """Per-speed details of one failed metric, for the JUnit failure text."""
+    """Per-speed details of one failed (or undecided) metric, for the JUnit text."""
     lines = [m.explanation, f"tolerance: {m.tolerance}", f"value: {m.value!r}"]
     for c in result.contexts:
         if c.variant == m.variant and c.scene == m.scene:
@@ -167,9 +196,10 @@ def junit_tree(result) -> ET.ElementTree:
     by_variant: dict[str, list] = {}
     for m in result.metrics:
         by_variant.setdefault(m.variant, []).append(m)
-    totals = {"tests": 0, "failures": 0, "skipped": 0}
+    totals = {"tests": 0, "failures": 0, "errors": 0, "skipped": 0}
     for variant, items in by_variant.items():
         fails = sum(m.status == "fail" for m in items)
+        errors = sum(m.status == "error" for m in items)
         skips = sum(m.status == "skip" for m in items)
         suite = ET.SubElement(
             root,
@@ -177,7 +207,7 @@ def junit_tree(result) -> ET.ElementTree:
             name=variant,
             tests=str(len(items)),
             failures=str(fails),
-            errors="0",
+            errors=str(errors),
             skipped=str(skips),
         )
         for m in items:
@@ -191,6 +221,9 @@ def junit_tree(result) -> ET.ElementTree:
             if m.status == "fail":
                 el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
                 el.text = _details(result, m)
+            elif m.status == "error":  # ours: the reference failed, not the code
+                el = ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
+                el.text = _details(result, m)
             elif m.status == "skip":
                 ET.SubElement(case, "skipped", message=m.explanation)
             else:
@@ -198,10 +231,11 @@ def junit_tree(result) -> ET.ElementTree:
                 out.text = f"value {m.value!r}, reference {m.reference!r}, {m.tolerance}"
         totals["tests"] += len(items)
         totals["failures"] += fails
+        totals["errors"] += errors
         totals["skipped"] += skips
     root.set("tests", str(totals["tests"]))
     root.set("failures", str(totals["failures"]))
-    root.set("errors", "0")
+    root.set("errors", str(totals["errors"]))
     root.set("skipped", str(totals["skipped"]))
     root.set("time", f"{result.seconds:.3f}")
     return ET.ElementTree(root)
@@ -225,8 +259,13 @@ def _fmt(v) -> str:
     return str(v)
 
 
-_STATUS = {"pass": "[green]pass[/]", "fail": "[bold red]FAIL[/]", "skip": "[dim]skip[/]"}
-_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip"}
+_STATUS = {
+    "pass": "[green]pass[/]",
+    "fail": "[bold red]FAIL[/]",
+    "skip": "[dim]skip[/]",
+    "error": f"[bold magenta]{_OURS}[/]",
+}
+_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS}
 # Metrics whose value is a relative error of one quantity, and that quantity's key.
 _RELATIVE = {
     "restitution_asked": "restitution",
@@ -317,22 +356,30 @@ def _fmt_v(v, unit: str = "") -> str:
     return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
 
 
+def _count_text(counts: dict) -> str:
+    """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)")."""
+    text = f"{counts.get('pass', 0)} pass, {counts.get('fail', 0)} fail, {counts.get('skip', 0)} skipped"
+    if counts.get("error"):
+        text += f", {counts['error']} {_OURS}"
+    return text
+
+
 def _summary_lines(result) -> list[str]:
-    """Per code: pass / fail counts, then each failing metric with measured vs expected."""
-    counts = result.counts()
+    """Per code: pass / fail counts, then each failing metric with measured vs expected,
+    then each metric our reference could not decide (status "error")."""
     lines = [
-        f"hcv bench {result.adapter}: {counts['pass']} pass, {counts['fail']} fail, "
-        f"{counts['skip']} skipped" + (" (interrupted)" if result.interrupted else "")
+        f"hcv bench {result.adapter}: {_count_text(result.counts())}"
+        + (" (interrupted)" if result.interrupted else "")
     ]
     by_variant: dict[str, list] = {}
     for m in result.metrics:
         by_variant.setdefault(m.variant, []).append(m)
     for variant, items in by_variant.items():
-        n_pass = sum(m.status == "pass" for m in items)
-        n_fail = sum(m.status == "fail" for m in items)
-        n_skip = sum(m.status == "skip" for m in items)
-        lines.append(f"  {variant}: {n_pass} pass, {n_fail} fail, {n_skip} skipped")
+        counts = {s: sum(m.status == s for m in items) for s in STATUSES}
+        lines.append(f"  {variant}: {_count_text(counts)}")
         for m in items:
+            if m.status == "error":
+                lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")
             if m.status != "fail":
                 continue
             c = metric_columns(result, m)
@@ -386,11 +433,14 @@ def scorecard_text(result, show_skipped: bool = False) -> str:
             lines.append("  ".join("-" * w for w in widths))
     for m in result.failures:
         lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    if result.interrupted:
+        lines.append("interrupted: results so far")
     return "\n".join(lines) + "\n"
 
 
 def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
-    """Print the scorecard: a summary per code, then the details, then each failure.
+    """Print the scorecard: a summary per code (with each metric our reference could
+    not decide), then the details, then each failure.
 
     On a terminal it is a rich table; otherwise (CI logs, pipes) full-width plain
     text (`scorecard_text`), never cut to the console width.
@@ -481,12 +531,17 @@ def render_speed_error(result, console=None) -> None:
 
 def scorecard_markdown(result) -> str:
     """The scorecard and the speed table as markdown (for ``hcv report``)."""
-    counts = result.counts()
     out = [
         f"### Benchmark of `{result.adapter}`",
         "",
-        f"{counts['pass']} pass, {counts['fail']} fail, {counts['skip']} skipped "
-        f"(commit {result.machine.get('commit') or 'unknown'}).",
+        f"{_count_text(result.counts())} "
+        f"(commit {result.machine.get('commit') or 'unknown'})."
+        + (
+            f" {_OURS}: the suite's own reference could not decide the metric "
+            "(an internal error, not the code's failure)."
+            if result.internal_errors
+            else ""
+        ),
         "",
         "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -494,12 +549,13 @@ def scorecard_markdown(result) -> str:
     for m in result.metrics:
         if m.status == "skip":
             continue
-        why = m.explanation.replace("|", "/") if m.status == "fail" else ""
+        why = m.explanation.replace("|", "/") if m.status in ("fail", "error") else ""
         c = metric_columns(result, m)
         out.append(
             f"| {m.variant} | {m.scene} | {m.metric} | "
             f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
-            f"{_fmt(c['error'])} | {m.tolerance} | {m.status} | {why} |"
+            f"{_fmt(c['error'])} | {m.tolerance} | {_OURS if m.status == 'error' else m.status} | "
+            f"{why} |"
         )
     if result.speed_error:
         out += [
@@ -517,108 +573,10 @@ def scorecard_markdown(result) -> str:
     return "\n".join(out) + "\n"
 
 
-def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
-    """Several codes' scorecards as one table: a row per (scene, metric), a column per variant.
-
-    Parameters
-    ----------
-    docs : sequence of dict
-        JSON documents of `result_to_dict` (one per ``hcv bench`` run, e.g. lammps
-        and kratos).
-
-    Returns
-    -------
-    header, rows : list of str, list of list of str
-        ``header`` = ["scene", "metric", "reference", variant...]; a cell is the
-        measured value with "pass" / "FAIL", "-" when the variant did not run that
-        scene (skipped). ``reference`` is the asked value where it is the same for
-        every code (restitution_asked), else empty (each code's own exact law).
-    """
-    variants: list[str] = []
-    cells: dict[tuple[str, str], dict[str, str]] = {}
-    refs: dict[tuple[str, str], set] = {}
-    for doc in docs:
-        for m in doc.get("metrics", []):
-            v = m.get("variant", "")
-            if v not in variants:
-                variants.append(v)
-            if m.get("status") == "skip":
-                continue
-            key = (m.get("scene", ""), m.get("metric", ""))
-            measured = m.get("measured", m.get("value"))
-            unit = _UNITS.get(key[1], "")
-            status = {"pass": "pass", "fail": "FAIL"}.get(m.get("status"), m.get("status"))
-            cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
-            if key[1] == "restitution_asked" and m.get("expected") is not None:
-                refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
-    header = ["scene", "metric", "reference", *variants]
-    rows = []
-    for (scene, metric), by in cells.items():
-        ref = refs.get((scene, metric), set())
-        rows.append(
-            [
-                scene,
-                metric,
-                next(iter(ref)) if len(ref) == 1 else "",
-                *(by.get(v, "-") for v in variants),
-            ]
-        )
-    return header, rows
+def write_markdown(result, path) -> None:
+    """Write `scorecard_markdown` (atomically, mode of a new file)."""
+    _atomic_write(path, scorecard_markdown(result))
 
 
-def side_by_side_markdown(docs) -> str:
-    """`side_by_side` as a markdown table."""
-    header, rows = side_by_side(docs)
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(out) + "\n"
-
-
-def _num(x):
-    """A JSON number back as a float ("inf"/"nan" strings included), else unchanged."""
-    if isinstance(x, str) and x in ("inf", "-inf", "nan"):
-        return float(x)
-    return float(x) if isinstance(x, int) and not isinstance(x, bool) else x
-
-
-def plot_speed_error(rows, path) -> Path:
-    """Error against wall time per impact, one panel per scene, one line per adapter (log-log).
-
-    The exact solver's time for each scene is a dotted vertical line. Needs matplotlib.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
-    fig, axes = plt.subplots(
-        1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True, squeeze=False
-    )
-    for ax, scene in zip(axes[0], scenes, strict=True):
-        groups: dict[str, list] = {}
-        for r in rows:
-            if r["scene"] != scene:
-                continue
-            if r.get("steps_per_contact") is None:
-                ax.axvline(r["seconds"], color="grey", lw=0.6, ls=":")
-            elif not r.get("failure"):
-                groups.setdefault(r["adapter"], []).append(r)
-        for adapter, rs in groups.items():
-            rs = sorted(rs, key=lambda r: r["dt"], reverse=True)
-            err = [
-                max(r["err_restitution"], r["err_contact_time"], r["err_max_penetration"])
-                for r in rs
-            ]
-            ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
-        ax.set_title(scene, fontsize=9)
-        ax.set_xlabel("wall time per impact [s]")
-        ax.legend(fontsize=5)
-    axes[0][0].set_ylabel("largest relative error (e, t_c, q_max)")
-    fig.suptitle("speed against error (dotted: exact solver)", fontsize=10)
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
-    return out
+# Kept importable from here (their home is `reference_impl.bench.compare`).
+from .compare import plot_speed_error, side_by_side, side_by_side_markdown  # noqa: E402

@@ -526,8 +526,7 @@ def run_bench(
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from ._output import write_json, write_junit
-    from .report import machine_info
+    from .report import machine_info, write_json, write_junit
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)
