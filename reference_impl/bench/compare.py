@@ -48,9 +48,9 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
             measured = m.get("measured", m.get("value"))
             unit = _UNITS.get(key[1], "")
             status = _PLAIN_STATUS.get(m.get("status"), m.get("status"))
-            cells.setdefault(key, {})[v] = f"{_fmt_v(_num(measured), unit)} {status}".strip()
+            cells.setdefault(key, {})[v] = f"{_fmt_v(json_number(measured), unit)} {status}".strip()
             if key[1] == "restitution_asked" and m.get("expected") is not None:
-                refs.setdefault(key, set()).add(_fmt_v(_num(m["expected"])))
+                refs.setdefault(key, set()).add(_fmt_v(json_number(m["expected"])))
     header = ["scene", "metric", "reference", *variants]
     rows = []
     for (scene, metric), by in cells.items():
@@ -74,7 +74,7 @@ def side_by_side_markdown(docs) -> str:
     return "\n".join(out) + "\n"
 
 
-def _num(x):
+def json_number(x):
     """A JSON number back as a float ("inf"/"nan" strings included), else unchanged."""
     if isinstance(x, str) and x in ("inf", "-inf", "nan"):
         return float(x)

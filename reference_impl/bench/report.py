@@ -31,6 +31,10 @@ from pathlib import Path
 from ..provenance import machine_info as _machine_info
 
 __all__ = [
+    "UNITS",
+    "format_value",
+    "format_with_unit",
+    "json_number",
     "machine_info",
     "metric_columns",
     "plot_speed_error",
@@ -579,4 +583,14 @@ def write_markdown(result, path) -> None:
 
 
 # Kept importable from here (their home is `reference_impl.bench.compare`).
-from .compare import plot_speed_error, side_by_side, side_by_side_markdown  # noqa: E402
+from .compare import (  # noqa: E402
+    json_number,
+    plot_speed_error,
+    side_by_side,
+    side_by_side_markdown,
+)
+
+# Public names of the cell formatting, so that the report renders values as the scorecard does.
+UNITS = _UNITS
+format_value = _fmt
+format_with_unit = _fmt_v

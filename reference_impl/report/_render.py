@@ -527,8 +527,10 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     ``measured`` / ``expected`` are the compared quantities (with their unit), ``error``
     what the tolerance bounds (`reference_impl.bench.report.metric_columns`).
     """
-    from ..bench.report import _UNITS, _fmt, _fmt_v
-    from ..bench.report import _num as _bench_num
+    from ..bench.report import UNITS as _UNITS
+    from ..bench.report import format_value as _fmt
+    from ..bench.report import format_with_unit as _fmt_v
+    from ..bench.report import json_number as _bench_num
 
     rows, flags = [], []
     for m in d.get("metrics", []):
