@@ -43,6 +43,7 @@ class CaseStore:
     def __init__(self, out_dir):
         self.dir = Path(out_dir)
         self.path = self.dir / "cases.jsonl"
+        self._ended = False
 
     def exists(self) -> bool:
         return self.path.exists() and self.path.stat().st_size > 0
@@ -52,7 +53,7 @@ class CaseStore:
         out: dict[str, dict] = {}
         if not self.path.exists():
             return out
-        with self.path.open(encoding="utf-8") as fh:
+        with self.path.open(encoding="utf-8", errors="replace") as fh:
             for line in fh:
                 try:
                     rec = json.loads(line)
@@ -65,6 +66,14 @@ class CaseStore:
     def append(self, record: dict) -> None:
         """Write one record and flush it to the OS (survives a kill of this process)."""
         self.dir.mkdir(parents=True, exist_ok=True)
+        if not self._ended:
+            # A line cut by a kill has no newline: end it, or the next record joins it.
+            with self.path.open("a+b") as fh:
+                if fh.tell() > 0:
+                    fh.seek(-1, 2)
+                    if fh.read(1) != b"\n":
+                        fh.write(b"\n")
+            self._ended = True
         with self.path.open("a", encoding="utf-8") as fh:
             fh.write(json.dumps(record, default=_json_default, allow_nan=True) + "\n")
             fh.flush()
@@ -209,6 +218,15 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
     return True
 
 
+def _criterion_text(crit: dict) -> str:
+    if not crit:
+        return ""
+    texts = set(crit.values())
+    if len(texts) == 1:
+        return f", criterion `{texts.pop()}`"
+    return ", criterion " + ", ".join(f"`{v}` ({k})" for k, v in crit.items())
+
+
 def write_summary(
     spec, df: pd.DataFrame, out_dir, *, seconds: float, where: str, interrupted: bool = False
 ) -> Path:
@@ -221,7 +239,7 @@ def write_summary(
     lines = [
         f"# hcv sweep: {Path(spec.source).name}",
         "",
-        f"- task: `{spec.task}`" + (f", criterion {spec.criterion}" if spec.criterion else ""),
+        f"- task: `{spec.task}`" + _criterion_text(spec.criterion),
         "- swept: " + ", ".join(f"`{k}` ({len(v)} values)" for k, v in spec.sweep.items()),
         f"- cases: {n_cases}; finished {len(errors)} ({len(errors) - len(failed)} ok, "
         f"{len(failed)} failed); {len(df)} rows in results.parquet",

@@ -29,6 +29,10 @@ __all__ = ["CaseFailed", "Outcome", "dask_available", "iter_outcomes", "open_cli
 # Cases in flight per worker thread: enough to keep every worker busy while the
 # client stores results, small enough that Ctrl-C or a kill loses little.
 _WINDOW_PER_THREAD = 4
+# Local cluster settings: non-daemonic workers (a case may start processes, e.g.
+# an isolated bench adapter); one queued case per worker thread, so a worker
+# that dies takes down only the case it was running, not an innocent neighbour.
+_LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
 # Seconds to wait for an existing scheduler to answer.
 _CONNECT_TIMEOUT = 20
 # Loggers that report normal cluster shutdown as warnings.
@@ -137,7 +141,8 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
         Address of an existing scheduler, e.g. ``tcp://host:8786``.
 
     The local cluster's workers are non-daemonic, so a case may start processes
-    of its own (isolated adapters of ``bench:``). Cluster and client are closed
+    of its own (isolated adapters of ``bench:``), and take one case at a time
+    (`_LOCAL_CONFIG`). Cluster and client are closed
     on exit, also on KeyboardInterrupt.
     """
     import dask
@@ -154,13 +159,13 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                 ) from None
         else:
             n = workers or os.cpu_count() or 1
-            with dask.config.set({"distributed.worker.daemon": False}):
+            with dask.config.set(_LOCAL_CONFIG):
                 cluster = LocalCluster(
                     n_workers=n,
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
-                    silence_logs=logging.ERROR,
+                    silence_logs=logging.CRITICAL,
                 )
             client = Client(cluster)
         yield client

@@ -299,10 +299,12 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
             raise SweepSpecError(
                 f"spec {src}: sweep {path!r} must be a non-empty array of values, got {values!r}"
             )
-        seen = [json.dumps(v, sort_keys=True) for v in values]
-        dup = next((v for v, s in zip(values, seen, strict=True) if seen.count(s) > 1), None)
-        if dup is not None:
-            raise SweepSpecError(f"spec {src}: sweep {path!r} repeats the value {dup!r}")
+        seen: set[str] = set()
+        for v in values:
+            canon = json.dumps(v, sort_keys=True)
+            if canon in seen:
+                raise SweepSpecError(f"spec {src}: sweep {path!r} repeats the value {v!r}")
+            seen.add(canon)
         n *= len(values)
     if n > MAX_CASES:
         raise SweepSpecError(
@@ -320,7 +322,9 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
             if p == "velocities" and not isinstance(v, list):
                 v = [v]  # a scalar speed: one speed per case
             _set_path(case_scene, p, copy.deepcopy(v))
-        error, ctext = "", None
+        raw_kind = case_scene.get("kind", "impact")
+        ctext = crit.get(raw_kind) if isinstance(raw_kind, str) else None
+        error = ""
         try:
             sc = scene_from_dict(case_scene, f"case {index} ({_label(params)})")
             if task == "solve" and sc.kind != "impact":
@@ -336,8 +340,7 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
         except HCVInputError as exc:
             error = str(exc)
         else:
-            if task == "dt-crit" and sc.kind in crit:
-                ctext = crit[sc.kind]
+            if ctext is not None:
                 try:
                     parse_criterion(ctext, sc.kind)
                 except HCVInputError as exc:
