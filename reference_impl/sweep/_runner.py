@@ -210,7 +210,8 @@ def iter_outcomes(
         window = max(2, _WINDOW_PER_THREAD * max(sum(client.nthreads().values()), 1))
     pending = iter(range(len(items)))
     where: dict[str, int] = {}
-    ac = as_completed()
+    # Results are gathered in the background as they finish (no blocking round trip each).
+    ac = as_completed(with_results=True, raise_errors=False)
 
     def submit() -> None:
         i = next(pending, None)
@@ -222,21 +223,20 @@ def iter_outcomes(
     for _ in range(min(window, len(items))):
         submit()
     try:
-        for fut in ac:
+        for fut, res in ac:
             i = where.pop(fut.key)
             if fut.status == "error":
-                exc = fut.exception()
-                name = type(exc).__name__
+                exc = res[1] if isinstance(res, tuple) else res
                 why = (
                     "its worker died while running it"
-                    if name == "KilledWorker"
+                    if type(exc).__name__ == "KilledWorker"
                     else "the cluster could not run it"
                 )
                 out = Outcome(i, keys[i], False, error=f"{why} ({_one_line(exc)})")
-            elif fut.status == "cancelled":
+            elif fut.status == "cancelled" or isinstance(res, BaseException):
                 out = Outcome(i, keys[i], False, error="cancelled by the cluster")
             else:
-                ok, value, error, seconds, worker = fut.result()
+                ok, value, error, seconds, worker = res
                 out = Outcome(i, keys[i], ok, value, error, seconds, worker)
             fut.release()
             submit()
