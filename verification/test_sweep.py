@@ -359,3 +359,23 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
         claim="sweep",
         call="run_sweep(resume=True)",
     )
+
+
+def test_report_map_through_run_cases_equals_dt_crit_map():
+    """The bridge the report's map uses gives dt_crit_map's table, and its cases pickle."""
+    import pickle
+
+    from reference_impl.dtcrit_map import coverage, dt_crit_map
+    from reference_impl.sweep import dt_crit_map_on_cluster
+
+    cases = [c for c in coverage(quick=True) if c.family != "power"]
+    pickle.loads(pickle.dumps(cases))  # what a worker receives
+    want = dt_crit_map(cases, kinds=("impact",))
+    got = dt_crit_map_on_cluster(cases, kinds=("impact",), workers=0)
+    assert_true(
+        got.equals(want),
+        got=f"{len(got)} rows, columns {list(got.columns)[:4]}",
+        should=f"the {len(want)} rows of dt_crit_map",
+        claim="sweep",
+        call="dt_crit_map_on_cluster(workers=0)",
+    )

@@ -7,6 +7,7 @@ processes or an existing Dask scheduler (`run_sweep`, `run_cases`). Dask is the
 ``sweep`` extra; `run_cases` falls back to serial in-process runs without it.
 """
 
+from ._map import dt_crit_map_on_cluster
 from ._runner import CaseFailed, Outcome, dask_available, iter_outcomes, open_client, run_cases
 from ._spec import (
     DEFAULT_TIMEOUT,
@@ -33,6 +34,7 @@ __all__ = [
     "add_parser",
     "check_deadline",
     "dask_available",
+    "dt_crit_map_on_cluster",
     "iter_outcomes",
     "load_spec",
     "open_client",
