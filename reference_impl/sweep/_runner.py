@@ -34,7 +34,7 @@ _WINDOW_PER_THREAD = 4
 # that dies takes down only the case it was running, not an innocent neighbour.
 _LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
 # Seconds to wait for an existing scheduler to answer.
-_CONNECT_TIMEOUT = 20
+_CONNECT_TIMEOUT = 10
 # Loggers that report normal cluster shutdown as warnings.
 _QUIET_LOGGERS = (
     "distributed",

@@ -164,29 +164,38 @@ def run_sweep(
             f"--out {out}: already holds a sweep (cases.jsonl); add --resume "
             "to continue it or choose another directory"
         )
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "spec.toml").write_text(spec.text, encoding="utf-8")
     records = store.load()
-    for case in spec.invalid:  # invalid scenes: a row with the reason, never sent to a worker
-        if case.key not in records:
-            rec = _record(case, False, [], case.error, 0.0, "")
-            store.append(rec)
-            records[case.key] = rec
-    todo = [c for c in spec.cases if c.key not in records]
-    done0 = len(spec.cases) - len(todo)
-    failed0 = sum(1 for c in spec.cases if c.key in records and not records[c.key]["ok"])
+    todo = [c for c in spec.cases if not c.error and c.key not in records]
+
+    def prepare() -> None:
+        """Create DIR, copy the spec, store the invalid cases (after the cluster is reachable)."""
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "spec.toml").write_text(spec.text, encoding="utf-8")
+        for case in spec.invalid:  # a row with the reason; never sent to a worker
+            if case.key not in records:
+                rec = _record(case, False, [], case.error, 0.0, "")
+                store.append(rec)
+                records[case.key] = rec
+
     tty = sys.stderr.isatty() if progress is None else progress
     t0 = time.perf_counter()
     where = f"scheduler {scheduler}" if scheduler else "local cluster"
     interrupted = False
     try:
-        if todo:
+        if not todo:
+            prepare()
+        else:
             with open_client(workers, scheduler) as client:
+                prepare()
+                done0 = len(spec.cases) - len(todo)
+                failed0 = sum(
+                    1 for c in spec.cases if c.key in records and not records[c.key]["ok"]
+                )
                 n = sum(client.nthreads().values())
                 where = (
                     f"scheduler {scheduler} ({n} worker threads)"
                     if scheduler
-                    else f"local cluster of {n} worker processes"
+                    else f"local cluster of {n} worker process{'es' if n != 1 else ''}"
                 )
                 with _Display(len(spec.cases), done0, failed0, tty) as disp:
                     for o in iter_outcomes(
@@ -202,6 +211,8 @@ def run_sweep(
                         disp.update(o.ok)
     except KeyboardInterrupt:
         interrupted = True
+        if not out.is_dir():  # interrupted before anything was written
+            return {"interrupted": True}
     seconds = time.perf_counter() - t0
     df = consolidate(spec, records)
     if len(df):
