@@ -12,6 +12,8 @@ import os
 import textwrap
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from reference_impl.cli import main as hcv_main
 from reference_impl.sweep import (
@@ -22,6 +24,7 @@ from reference_impl.sweep import (
     run_case,
     run_cases,
     run_sweep,
+    spec_from_dict,
 )
 from reference_impl.sweep._runner import dask_available
 from verification.assertions import assert_true
@@ -378,4 +381,44 @@ def test_report_map_through_run_cases_equals_dt_crit_map():
         should=f"the {len(want)} rows of dt_crit_map",
         claim="sweep",
         call="dt_crit_map_on_cluster(workers=0)",
+    )
+
+
+@given(
+    st.lists(st.integers(1, 4), min_size=1, max_size=3),
+    st.sampled_from(["impact", "two-sided"]),
+)
+def test_any_sweep_expands_to_its_product_with_unique_keys(sizes, kind):
+    """For any list lengths: len = product, params as given, keys unique, TOML text round-trips."""
+    import tomllib
+
+    paths = ["potential.p", "mass", "velocities"][: len(sizes)]
+    sweep = {p: [1.0 + 0.5 * i for i in range(n)] for p, n in zip(paths, sizes, strict=True)}
+    data = {
+        "task": "dt-crit",
+        "scene": {
+            "mass": 1.0,
+            "velocities": [1.0],
+            "kind": kind,
+            "potential": {"family": "power", "k": 1.0, "p": 1.5},
+        },
+        "sweep": sweep,
+    }
+    spec = spec_from_dict(data, "prop")
+    n = 1
+    for s in sizes:
+        n *= s
+    keys = {c.key for c in spec.cases}
+    scene_ok = all(
+        c.scene["potential"]["p"] == c.params.get("potential.p", 1.5)
+        and c.scene["velocities"] == [c.params.get("velocities", 1.0)]
+        for c in spec.cases
+    )
+    ok = len(spec.cases) == n and len(keys) == n and scene_ok and not spec.invalid
+    assert_true(
+        ok and tomllib.loads(spec.text) == data,
+        got=f"{len(spec.cases)} cases, {len(keys)} keys, scenes ok {scene_ok}",
+        should=f"{n} valid cases, unique keys",
+        claim="sweep",
+        call=f"spec_from_dict(sweep={sweep})",
     )
