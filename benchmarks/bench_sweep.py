@@ -17,7 +17,10 @@ time minus the time spent inside the cases (measured by the worker), per case;
 (b) a no-op case on 1 worker, wall time per case. Goal: <= 5 % of a 0.3 s case
 (15 ms). From these, the cluster needed for a 1e5-case map is printed.
 Timings are wall times: on a machine shared with other work they are upper
-bounds, and the speed-up a lower bound; the load average is printed beside them.
+bounds, and the speed-up a lower bound; the load average is printed beside them,
+with the fraction of the workers' wall time spent inside cases (the engine's
+share of any shortfall) and how much slower each case ran on 2 workers than on 1
+(the machine's share).
 """
 
 from __future__ import annotations
@@ -158,7 +161,14 @@ def main(argv=None) -> None:
     over_b = runs[1]["null_case_s"]
     over_serial = (runs[1]["wall_s"] - serial) / n
     case = runs[1]["in_case_s"] / n
+    busy = {w: r["in_case_s"] / (w * r["wall_s"]) for w, r in runs.items()}
+    slow = runs[2]["in_case_s"] / runs[1]["in_case_s"]
     print(f"speed-up 2 workers / 1 worker: {speedup:.2f}x (goal >= {_GOAL_SPEEDUP})")
+    print(
+        f"workers busy inside cases: {busy[1]:.1%} (1 worker), {busy[2]:.1%} (2 workers); "
+        f"the same cases took {slow:.2f}x as long each on 2 workers as on 1 (a value > 1 "
+        f"is the cores being shared, not the scheduling)"
+    )
     print(
         f"scheduling overhead per case: {over_a * 1e3:.1f} ms (1-worker wall - in-case time), "
         f"{over_b * 1e3:.1f} ms (no-op case round trip), {over_serial * 1e3:.1f} ms "
