@@ -237,7 +237,7 @@ def run(args) -> int:
 
     try:
         spec = load_spec(args.spec)
-        out = args.out or f"sweep-{Path(args.spec).stem}"
+        out = Path(args.out or f"sweep-{Path(args.spec).stem}")
         if spec.invalid:
             first = spec.invalid[0]
             print(
@@ -254,7 +254,7 @@ def run(args) -> int:
         print("interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     print(
-        f"wrote {out}/results.parquet ({res['rows']} rows; {res['ok']} cases ok, "
-        f"{res['failed']} failed), {out}/summary.md in {res['seconds']:.1f} s on {res['where']}"
+        f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ok, "
+        f"{res['failed']} failed), {out / 'summary.md'} in {res['seconds']:.1f} s on {res['where']}"
     )
     return EXIT_FAIL if res["failed"] else EXIT_OK
