@@ -23,6 +23,8 @@ __all__ = ["CaseStore", "consolidate", "write_summary"]
 _SUMMARY_ROWS = 200
 # Failed cases listed by name in summary.md.
 _SUMMARY_ERRORS = 20
+# Longest category label on the figure's x axis (whole tables swept as values are long).
+_TICK_CHARS = 28
 # Figure quantity per task: column and axis label.
 _Y = {
     "dt-crit": ("ratio", "Δt_crit / Δt_safe (measured / section 6 bound)"),
@@ -161,6 +163,15 @@ def _markdown_table(df: pd.DataFrame) -> str:
     return "\n".join([head, sep, *body])
 
 
+def _key_of(v) -> str:
+    return json.dumps(v, sort_keys=True, default=str)
+
+
+def _short(v, width: int = _TICK_CHARS) -> str:
+    text = str(v)
+    return text if len(text) <= width else text[: width - 1] + "…"
+
+
 def _task_family(task: str) -> str:
     return "bench" if task.startswith("bench:") else task
 
@@ -180,7 +191,7 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
     x = varying[0]
     xs = list(spec.sweep[x])
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in xs)
-    pos = {json.dumps(v): i for i, v in enumerate(xs)}
+    pos = {_key_of(_cell(v)): i for i, v in enumerate(xs)}  # table cells -> positions
     fig = Figure(figsize=(7.5, 4.8), dpi=110)
     ax = fig.subplots()
     groups = [varying[1]] if len(varying) == 2 else []
@@ -189,7 +200,7 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
     series = ok.groupby(groups, sort=False, dropna=False) if groups else [((), ok)]
     for name, g in series:
         xv = g[x].tolist()
-        xp = xv if numeric else [pos.get(json.dumps(v), math.nan) for v in xv]
+        xp = xv if numeric else [pos.get(_key_of(v), math.nan) for v in xv]
         yv = pd.to_numeric(g[ycol], errors="coerce").tolist()
         pts = sorted(zip(xp, yv, strict=True))
         name = name if isinstance(name, tuple) else (name,)
@@ -206,7 +217,7 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
             fontsize=8,
         )
     if not numeric:
-        ax.set_xticks(range(len(xs)), [str(v) for v in xs])
+        ax.set_xticks(range(len(xs)), [_short(_cell(v)) for v in xs], fontsize=8)
     ax.set_xlabel(x + ("" if numeric else " (category)"))
     ax.set_ylabel(ylabel)
     ax.set_title(f"hcv sweep: {spec.task}, {len(spec.cases)} cases", fontsize=10)
