@@ -20,7 +20,9 @@ Timings are wall times: on a machine shared with other work they are upper
 bounds, and the speed-up a lower bound; the load average is printed beside them,
 with the fraction of the workers' wall time spent inside cases (the engine's
 share of any shortfall) and how much slower each case ran on 2 workers than on 1
-(the machine's share).
+(the machine's share). CPU seconds inside the cases are printed beside the wall
+times: equal CPU per case in this process and in a worker shows that the engine
+does not slow the cases down; wall above CPU is the cores being shared.
 """
 
 from __future__ import annotations
@@ -111,11 +113,13 @@ def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
     failed = [o.error for o in outs if not o.ok]
     assert not failed, f"benchmark cases failed: {failed[:2]}"
     inside = sum(o.seconds for o in outs)
+    cpu = sum(o.cpu_seconds for o in outs)
     return {
         "ratios": [o.value[0]["ratio"] for o in outs],
         "workers": n,
         "wall_s": wall,
         "in_case_s": inside,
+        "in_case_cpu_s": cpu,
         "startup_s": startup,
         "warm_s": max(warm.values()),
         "null_case_s": null,
@@ -136,12 +140,13 @@ def main(argv=None) -> None:
     spec = parse_spec(_SPEC, "bench-sweep")
     payloads = [c.payload() for c in spec.cases]
     _warm()
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     serial_rows = [run_case(p) for p in payloads]
-    serial = time.perf_counter() - t
+    serial, serial_cpu = time.perf_counter() - t, time.process_time() - c
     n = len(payloads)
     print(
-        f"serial, this process: {n} cases in {serial:.2f} s ({serial / n:.3f} s a case); "
+        f"serial, this process: {n} cases in {serial:.2f} s ({serial / n:.3f} s a case; "
+        f"CPU {serial_cpu:.2f} s); "
         f"load {_load()}"
     )
     runs = {}
@@ -152,7 +157,7 @@ def main(argv=None) -> None:
         runs[w] = r
         print(
             f"LocalCluster {w} worker(s): {n} cases in {r['wall_s']:.2f} s "
-            f"(in cases {r['in_case_s']:.2f} s; cluster start {r['startup_s']:.1f} s, "
+            f"(in cases {r['in_case_s']:.2f} s, CPU {r['in_case_cpu_s']:.2f} s; cluster start {r['startup_s']:.1f} s, "
             f"worker warm-up {r['warm_s']:.1f} s; {r['workers_used']} workers used); "
             f"load {r['load']}"
         )
@@ -194,6 +199,7 @@ def main(argv=None) -> None:
             "machine": info,
             "cases": n,
             "serial_s": serial,
+            "serial_cpu_s": serial_cpu,
             "runs": runs,
             "speedup_2_over_1": speedup,
             "overhead_per_case_s": {

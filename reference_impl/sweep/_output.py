@@ -6,7 +6,7 @@ only the cases in flight; ``--resume`` reads the keys back (a truncated last
 line is ignored). `consolidate` turns the records of the current spec into the
 table written to ``DIR/results.parquet``: one row per case and speed, the swept
 parameters first (named by their dotted paths), then the task's fields, then
-``case_key``, ``error`` and ``case_seconds``.
+``case_key``, ``error``, ``case_seconds`` (wall) and ``case_cpu_seconds``.
 """
 
 from __future__ import annotations
@@ -108,6 +108,7 @@ def consolidate(spec, records: dict[str, dict]) -> pd.DataFrame:
             "case_key": case.key,
             "error": rec.get("error") or None,
             "case_seconds": rec.get("seconds", math.nan),
+            "case_cpu_seconds": rec.get("cpu_seconds", math.nan),
         }
         for r in rec.get("rows") or [{}]:
             row = dict(params)
@@ -118,7 +119,7 @@ def consolidate(spec, records: dict[str, dict]) -> pd.DataFrame:
             row.update(tail)
             rows.append(row)
     df = pd.DataFrame(rows)
-    tail_cols = ["case_key", "error", "case_seconds"]
+    tail_cols = ["case_key", "error", "case_seconds", "case_cpu_seconds"]
     if len(df):
         df = df[[c for c in df.columns if c not in tail_cols] + tail_cols]
     return _arrow_safe(df)

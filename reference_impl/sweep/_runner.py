@@ -73,6 +73,8 @@ class Outcome:
         Wall time of the case inside its worker (s); 0 when unknown.
     worker : str
         Address of the worker that ran it ("" when unknown).
+    cpu_seconds : float
+        CPU time of the case's thread (s); below ``seconds`` when the core was shared.
     """
 
     index: int
@@ -82,6 +84,7 @@ class Outcome:
     error: str = ""
     seconds: float = 0.0
     worker: str = ""
+    cpu_seconds: float = 0.0
 
 
 def dask_available() -> bool:
@@ -98,19 +101,20 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
-def _call(fn: Callable, item: Any) -> tuple[bool, Any, str, float, str]:
-    """Run one case in a worker: (ok, value, error, seconds, worker address)."""
-    t = time.perf_counter()
+def _call(fn: Callable, item: Any) -> tuple[bool, Any, str, float, str, float]:
+    """Run one case in a worker: (ok, value, error, seconds, worker address, CPU seconds)."""
     try:
         from distributed import get_worker
 
         where = get_worker().address
     except (ImportError, ValueError):
         where = ""
+    t, c = time.perf_counter(), time.thread_time()
     try:
-        return True, fn(item), "", time.perf_counter() - t, where
+        ok, value, error = True, fn(item), ""
     except Exception as exc:  # a failing case is a result, not a lost sweep
-        return False, None, _one_line(exc), time.perf_counter() - t, where
+        ok, value, error = False, None, _one_line(exc)
+    return ok, value, error, time.perf_counter() - t, where, time.thread_time() - c
 
 
 @contextlib.contextmanager
@@ -236,8 +240,7 @@ def iter_outcomes(
             elif fut.status == "cancelled" or isinstance(res, BaseException):
                 out = Outcome(i, keys[i], False, error="cancelled by the cluster")
             else:
-                ok, value, error, seconds, worker = res
-                out = Outcome(i, keys[i], ok, value, error, seconds, worker)
+                out = Outcome(i, keys[i], *res)
             fut.release()
             submit()
             yield out
@@ -300,8 +303,7 @@ def run_cases(
         return results
     if scheduler is None and (workers == 0 or not dask_available()):
         for i, item in enumerate(items):
-            ok, value, error, seconds, _ = _call(fn, item)
-            take(Outcome(i, "", ok, value, error, seconds), i + 1)
+            take(Outcome(i, "", *_call(fn, item)), i + 1)
         return results
     with open_client(workers, scheduler) as client:
         for done, out in enumerate(iter_outcomes(client, fn, items), start=1):

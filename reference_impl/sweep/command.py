@@ -114,7 +114,9 @@ class _Display:
         return False
 
 
-def _record(case, ok: bool, rows, error: str, seconds: float, worker: str) -> dict:
+def _record(
+    case, ok: bool, rows, error: str, seconds: float, worker: str, cpu: float = 0.0
+) -> dict:
     return {
         "key": case.key,
         "index": case.index,
@@ -122,6 +124,7 @@ def _record(case, ok: bool, rows, error: str, seconds: float, worker: str) -> di
         "ok": ok,
         "error": error,
         "seconds": seconds,
+        "cpu_seconds": cpu,
         "worker": worker,
         "rows": rows or [],
     }
@@ -205,7 +208,9 @@ def run_sweep(
                         keys=[f"hcv-case-{c.key}" for c in todo],
                     ):
                         case = todo[o.index]
-                        rec = _record(case, o.ok, o.value, o.error, o.seconds, o.worker)
+                        rec = _record(
+                            case, o.ok, o.value, o.error, o.seconds, o.worker, o.cpu_seconds
+                        )
                         store.append(rec)
                         records[case.key] = rec
                         disp.update(o.ok)
