@@ -354,7 +354,7 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
         call="run_sweep(resume=True)",
     )
     df2 = pd.read_parquet(out / "results.parquet")
-    cols = [c for c in df.columns if c not in ("case_seconds", "lane_steps")]
+    cols = [c for c in df.columns if c not in ("case_seconds", "case_cpu_seconds", "lane_steps")]
     assert_true(
         df2[cols].equals(df[cols]),
         got="a different table after resume",
