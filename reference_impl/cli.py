@@ -358,6 +358,9 @@ def _parser() -> argparse.ArgumentParser:
     from .bench.command import add_bench_parser
 
     add_bench_parser(sub)
+    from .sweep.command import add_parser as add_sweep_parser
+
+    add_sweep_parser(sub)
     return p
 
 

@@ -1,0 +1,47 @@
+"""Parameter sweeps on Dask: ``hcv sweep`` and the `run_cases` engine other modules reuse.
+
+A sweep spec (TOML: ``task``, a ``[scene]``, a ``[sweep]`` table of dotted paths
+to lists) expands into the Cartesian product of cases (`load_spec`); each case
+is a pure task keyed by a hash of its parameters, run on a local cluster of
+processes or an existing Dask scheduler (`run_sweep`, `run_cases`). Dask is the
+``sweep`` extra; `run_cases` falls back to serial in-process runs without it.
+"""
+
+from ._map import dt_crit_map_on_cluster
+from ._runner import CaseFailed, Outcome, dask_available, iter_outcomes, open_client, run_cases
+from ._spec import (
+    DEFAULT_TIMEOUT,
+    MAX_CASES,
+    Case,
+    SweepSpec,
+    SweepSpecError,
+    load_spec,
+    parse_spec,
+    spec_from_dict,
+)
+from ._tasks import CaseTimeout, check_deadline, run_case
+from .command import add_parser, run, run_sweep
+
+__all__ = [
+    "DEFAULT_TIMEOUT",
+    "MAX_CASES",
+    "Case",
+    "CaseFailed",
+    "CaseTimeout",
+    "Outcome",
+    "SweepSpec",
+    "SweepSpecError",
+    "add_parser",
+    "check_deadline",
+    "dask_available",
+    "dt_crit_map_on_cluster",
+    "iter_outcomes",
+    "load_spec",
+    "open_client",
+    "parse_spec",
+    "run",
+    "run_case",
+    "run_cases",
+    "run_sweep",
+    "spec_from_dict",
+]

@@ -1,0 +1,427 @@
+"""Sweep specifications: a scene, a table of swept dotted paths, a task; expanded into cases.
+
+A spec is a TOML document::
+
+    task = "dt-crit"                 # "dt-crit" | "solve" | "bench:ADAPTER"
+    criterion = "tol=0.5"            # dt-crit only; or a table {impact = "...", two-sided = "..."}
+    timeout = 600                    # s per case (optional)
+    [scene]                          # the usual scene table (see reference_impl.scenes)
+    name = "hertz-map"
+    mass = 1.0
+    velocities = [1.0]
+    kind = "two-sided"
+    [scene.potential]
+    family = "power"
+    k = 1.0
+    p = 1.5
+    [sweep]                          # dotted path into [scene] -> list of values
+    "potential.p" = [1.0, 1.5, 2.0, 3.0]
+    "kind" = ["two-sided", "impact"]
+
+The sweep is the Cartesian product of the ``[sweep]`` lists, in the order the
+keys are written (the last key varies fastest). Spec-level problems (syntax,
+unknown keys, a sweep value that is not a non-empty list, a task or criterion
+that does not parse, too many cases, every case invalid) raise `SweepSpecError`
+with one line. A case whose scene does not validate is kept as an *invalid
+case* (its error becomes its row), so one bad combination does not lose the
+sweep.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import HCVInputError
+
+__all__ = [
+    "MAX_CASES",
+    "TASKS",
+    "DEFAULT_TIMEOUT",
+    "Case",
+    "SweepSpec",
+    "SweepSpecError",
+    "load_spec",
+    "parse_spec",
+    "spec_from_dict",
+]
+
+# Refuse sweeps above this many cases: a 1e5-case map is the largest the README
+# sizes (about 8 core-hours at 0.3 s a case); more should be split into several
+# sweeps (each validated up front, each with its own resumable output directory).
+MAX_CASES = 100_000
+# Per-case time limit (s) when the spec gives none: 2000 times the 0.3 s of a
+# typical sustained search, so it stops a runaway case and never a normal one.
+DEFAULT_TIMEOUT = 600.0
+# A spec is a few lines; refusing large files keeps a wrong path from being read whole.
+_MAX_SPEC_BYTES = 1_000_000
+TASKS = ("dt-crit", "solve", "bench:ADAPTER")
+_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep")
+
+
+class SweepSpecError(HCVInputError):
+    """A sweep specification that cannot run (one line naming the offending value)."""
+
+
+@dataclass(frozen=True)
+class Case:
+    """One point of the sweep.
+
+    Attributes
+    ----------
+    index : int
+        Position in the Cartesian product (0-based).
+    key : str
+        Hash of what determines the result (task, criterion, scene): the
+        case's identity for `--resume`.
+    params : dict
+        Swept dotted path -> value for this case.
+    scene : dict
+        The full scene table of the case (TOML schema).
+    task : str
+        "dt-crit", "solve" or "bench:ADAPTER".
+    criterion : str or None
+        The dt-crit criterion text for this case's kind (None: the default).
+    timeout : float
+        Time limit of the case (s).
+    error : str
+        Empty for a valid case; else the one-line reason its scene is invalid.
+    """
+
+    index: int
+    key: str
+    params: dict
+    scene: dict
+    task: str
+    criterion: str | None
+    timeout: float
+    error: str = ""
+
+    def payload(self) -> dict:
+        """What a worker needs to run the case (plain data, picklable)."""
+        return {
+            "key": self.key,
+            "task": self.task,
+            "criterion": self.criterion,
+            "scene": self.scene,
+            "timeout": self.timeout,
+        }
+
+
+@dataclass
+class SweepSpec:
+    """A parsed and validated sweep.
+
+    Attributes
+    ----------
+    task : str
+        "dt-crit", "solve" or "bench:ADAPTER".
+    criterion : dict
+        Scene kind -> criterion text (dt-crit); empty for the defaults.
+    timeout : float
+        Per-case time limit (s).
+    scene : dict
+        The base scene table.
+    sweep : dict
+        Dotted path -> list of values, in the order given.
+    source : str
+        Where the spec came from.
+    text : str
+        The spec as TOML text (copied to DIR/spec.toml).
+    cases : list of Case
+        The Cartesian product, every case's scene validated.
+    """
+
+    task: str
+    criterion: dict
+    timeout: float
+    scene: dict
+    sweep: dict
+    source: str
+    text: str
+    cases: list[Case] = field(default_factory=list)
+
+    @property
+    def varying(self) -> list[str]:
+        """Swept paths with more than one value."""
+        return [k for k, v in self.sweep.items() if len(v) > 1]
+
+    @property
+    def invalid(self) -> list[Case]:
+        return [c for c in self.cases if c.error]
+
+
+def _set_path(table: dict, path: str, value: Any) -> None:
+    """table[path] = value for a dotted path; integer parts index arrays (terms.1.p)."""
+    parts = path.split(".")
+    node: Any = table
+    for i, part in enumerate(parts[:-1]):
+        if isinstance(node, list):
+            node = node[int(part)]
+            continue
+        nxt = node.get(part)
+        if nxt is None:
+            nxt = node[part] = [] if parts[i + 1].isdigit() else {}
+        node = nxt
+    last = parts[-1]
+    if isinstance(node, list):
+        node[int(last)] = value
+    else:
+        node[last] = value
+
+
+def _check_path(err_src: str, path: str, scene: dict) -> None:
+    """A sweep key must be a dotted path; array indices must exist in the base scene."""
+    parts = path.split(".")
+    if not path or any(not p.strip() for p in parts):
+        raise SweepSpecError(
+            f"spec {err_src}: sweep key {path!r} is not a dotted path such as 'potential.p'"
+        )
+    node: Any = scene
+    for part in parts:
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise SweepSpecError(
+                    f"spec {err_src}: sweep key {path!r}: index {part!r} "
+                    f"is not an index of the {len(node)} entries there"
+                )
+            node = node[int(part)]
+        elif isinstance(node, dict):
+            node = node.get(part)
+        else:
+            return
+
+
+def _key(task: str, criterion: str | None, scene: dict) -> str:
+    text = json.dumps(
+        {"task": task, "criterion": criterion, "scene": scene}, sort_keys=True, default=str
+    )
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def _criterion_table(src: str, task: str, value) -> dict:
+    from ..dtcrit import KINDS
+
+    if value is None:
+        return {}
+    if task != "dt-crit":
+        raise SweepSpecError(
+            f"spec {src}: criterion applies to task = 'dt-crit' only, "
+            f"but task = {task!r}; remove it"
+        )
+    if isinstance(value, str):
+        return {k: value for k in KINDS}
+    if isinstance(value, dict):
+        for k, v in value.items():
+            if k not in KINDS:
+                raise SweepSpecError(
+                    f"spec {src}: criterion.{k}: not a scene kind ({', '.join(KINDS)})"
+                )
+            if not isinstance(v, str):
+                raise SweepSpecError(
+                    f"spec {src}: criterion.{k} must be a string such as 'tol=0.5', got {v!r}"
+                )
+        return dict(value)
+    raise SweepSpecError(
+        f"spec {src}: criterion must be a string or a table of strings by kind, got {value!r}"
+    )
+
+
+def _check_task(src: str, task) -> str:
+    if not isinstance(task, str) or not (
+        task in ("dt-crit", "solve") or (task.startswith("bench:") and task[6:].strip())
+    ):
+        raise SweepSpecError(
+            f"spec {src}: task = {task!r} is not one of 'dt-crit', 'solve', 'bench:ADAPTER'"
+        )
+    return task
+
+
+def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) -> SweepSpec:
+    """Validate a parsed spec and expand it into validated cases.
+
+    Parameters
+    ----------
+    data : dict
+        The TOML document as a dict (see the module docstring).
+    source : str
+        Label for messages.
+    text : str, optional
+        The TOML text (kept for DIR/spec.toml); rebuilt from ``data`` if None.
+
+    Raises
+    ------
+    SweepSpecError
+        Any spec-level problem, or when every case's scene is invalid.
+    """
+    from ..dtcrit import parse_criterion
+    from ..scenes import scene_from_dict
+
+    src = source
+    if not isinstance(data, dict):
+        raise SweepSpecError(f"spec {src}: must be a TOML table")
+    for k in data:
+        if k not in _TOP_KEYS:
+            near = difflib.get_close_matches(k, _TOP_KEYS, n=1)
+            hint = f"did you mean {near[0]!r}?" if near else f"allowed: {', '.join(_TOP_KEYS)}"
+            raise SweepSpecError(f"spec {src}: unknown key {k!r} ({hint})")
+    for k in ("task", "scene", "sweep"):
+        if k not in data:
+            raise SweepSpecError(f"spec {src}: missing key {k!r}")
+    task = _check_task(src, data["task"])
+    crit = _criterion_table(src, task, data.get("criterion"))
+    timeout = data.get("timeout", DEFAULT_TIMEOUT)
+    if (
+        isinstance(timeout, bool)
+        or not isinstance(timeout, (int, float))
+        or not (math.isfinite(timeout) and timeout > 0)
+    ):
+        raise SweepSpecError(
+            f"spec {src}: timeout must be a number of seconds > 0, got {timeout!r}"
+        )
+    scene, sweep = data["scene"], data["sweep"]
+    if not isinstance(scene, dict):
+        raise SweepSpecError(f"spec {src}: [scene] must be a table, got {scene!r}")
+    if not isinstance(sweep, dict) or not sweep:
+        raise SweepSpecError(f"spec {src}: [sweep] must be a table of dotted path = [values]")
+    n = 1
+    for path, values in sweep.items():
+        _check_path(src, path, scene)
+        if not isinstance(values, list) or not values:
+            raise SweepSpecError(
+                f"spec {src}: sweep {path!r} must be a non-empty array of values, got {values!r}"
+            )
+        seen: set[str] = set()
+        for v in values:
+            canon = json.dumps(v, sort_keys=True)
+            if canon in seen:
+                raise SweepSpecError(f"spec {src}: sweep {path!r} repeats the value {v!r}")
+            seen.add(canon)
+        n *= len(values)
+    if n > MAX_CASES:
+        raise SweepSpecError(
+            f"spec {src}: {n} cases is more than the maximum {MAX_CASES}; "
+            "split the sweep into several specs"
+        )
+    spec = SweepSpec(
+        task, crit, float(timeout), scene, sweep, src, text if text is not None else _to_toml(data)
+    )
+    paths = list(sweep)
+    for index, combo in enumerate(itertools.product(*(sweep[p] for p in paths))):
+        case_scene = copy.deepcopy(scene)
+        params = dict(zip(paths, combo, strict=True))
+        for p, v in params.items():
+            if p == "velocities" and not isinstance(v, list):
+                v = [v]  # a scalar speed: one speed per case
+            _set_path(case_scene, p, copy.deepcopy(v))
+        raw_kind = case_scene.get("kind", "impact")
+        ctext = crit.get(raw_kind) if isinstance(raw_kind, str) else None
+        error = ""
+        try:
+            sc = scene_from_dict(case_scene, f"case {index} ({_label(params)})")
+            if task == "solve" and sc.kind != "impact":
+                raise HCVInputError(
+                    f"case {index} ({_label(params)}): task 'solve' solves "
+                    f"single impacts, but kind = {sc.kind!r}"
+                )
+            if task.startswith("bench:") and sc.kind not in ("impact", "two-walls"):
+                raise HCVInputError(
+                    f"case {index} ({_label(params)}): bench runs impact and "
+                    f"two-walls scenes, not {sc.kind!r}"
+                )
+        except HCVInputError as exc:
+            error = str(exc)
+        else:
+            if ctext is not None:
+                try:
+                    parse_criterion(ctext, sc.kind)
+                except HCVInputError as exc:
+                    raise SweepSpecError(
+                        f"spec {src}: criterion {ctext!r} for kind {sc.kind!r}: {exc}"
+                    ) from None
+        spec.cases.append(
+            Case(
+                index,
+                _key(task, ctext, case_scene),
+                params,
+                case_scene,
+                task,
+                ctext,
+                float(timeout),
+                error,
+            )
+        )
+    if all(c.error for c in spec.cases):
+        raise SweepSpecError(f"spec {src}: every case is invalid; first: {spec.cases[0].error}")
+    return spec
+
+
+def _label(params: dict) -> str:
+    return ", ".join(f"{k} = {v!r}" for k, v in params.items())
+
+
+def _to_toml(data: dict) -> str:
+    """Minimal TOML writer for specs given as dicts (strings, numbers, lists, tables)."""
+
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, (int, float)):
+            return (
+                repr(v) if math.isfinite(v) else ("nan" if v != v else ("inf" if v > 0 else "-inf"))
+            )
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{json.dumps(k)} = {val(x)}" for k, x in v.items()) + "}"
+        raise SweepSpecError(f"cannot write {v!r} as TOML")
+
+    lines: list[str] = []
+
+    def table(prefix: str, d: dict) -> None:
+        subs = {k: v for k, v in d.items() if isinstance(v, dict)}
+        for k, v in d.items():
+            if k not in subs:
+                lines.append(f"{json.dumps(k)} = {val(v)}")
+        for k, v in subs.items():
+            name = f"{prefix}.{json.dumps(k)}" if prefix else json.dumps(k)
+            lines.append(f"\n[{name}]")
+            table(name, v)
+
+    table("", data)
+    return "\n".join(lines) + "\n"
+
+
+def parse_spec(text: str, source: str = "<string>") -> SweepSpec:
+    """Parse and validate the TOML text of a sweep spec (see `spec_from_dict`)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SweepSpecError(f"spec {source}: TOML syntax error: {exc}") from None
+    return spec_from_dict(data, source, text)
+
+
+def load_spec(path) -> SweepSpec:
+    """Load and validate a sweep spec file (one-line `SweepSpecError` on any problem)."""
+    p = Path(path)
+    if not p.is_file():
+        raise SweepSpecError(f"spec file {path}: not found (give a .toml sweep spec)")
+    if p.stat().st_size > _MAX_SPEC_BYTES:
+        raise SweepSpecError(
+            f"spec file {path}: larger than {_MAX_SPEC_BYTES} bytes; is this the right file?"
+        )
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (UnicodeDecodeError, OSError) as exc:
+        raise SweepSpecError(f"spec file {path}: cannot be read ({exc})") from None
+    return parse_spec(text, str(path))

@@ -1,0 +1,160 @@
+"""What one case runs, inside a worker: the task's rows, as plain JSON-ready dicts.
+
+Every task returns one dict per impact speed (per adapter variant and speed for
+``bench:ADAPTER``) with the same fields as the task's ``--json`` result:
+``hcv dt-crit --json`` (whatever `DtCritResult.to_dict` returns), ``hcv solve
+--json``, or the per-speed records of ``hcv bench --json`` flattened with dotted
+names. Nested values (a counterexample) become JSON text so the table stays flat;
+"inf"/"nan" written as strings by the JSON encoders become floats again.
+
+The per-case time limit is cooperative: `check_deadline` is called between
+engine calls (dt-crit), between speeds (solve) and between adapter runs
+(bench), and raises `CaseTimeout` past the deadline.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+import time
+from dataclasses import replace
+
+from ..errors import HCVInputError
+
+__all__ = ["CaseTimeout", "check_deadline", "deadline", "run_case"]
+
+_local = threading.local()
+_NONFINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+
+
+class CaseTimeout(Exception):
+    """A case ran past its time limit."""
+
+
+class deadline:
+    """Context manager: `check_deadline` raises `CaseTimeout` after ``seconds`` (this thread)."""
+
+    def __init__(self, seconds: float | None):
+        self.seconds = seconds
+
+    def __enter__(self):
+        self._prev = getattr(_local, "deadline", None)
+        _local.deadline = (
+            None if self.seconds is None else (time.monotonic() + self.seconds, self.seconds)
+        )
+        return self
+
+    def __exit__(self, *exc):
+        _local.deadline = self._prev
+        return False
+
+
+def check_deadline(*_args) -> None:
+    """Raise `CaseTimeout` when this thread's case is past its time limit (a progress hook)."""
+    d = getattr(_local, "deadline", None)
+    if d is not None and time.monotonic() > d[0]:
+        raise CaseTimeout(f"timeout after {d[1]:g} s")
+
+
+def _flat(d: dict, prefix: str = "") -> dict:
+    """Nested dicts -> dotted keys; lists and deeper values -> JSON text; 'inf' -> inf."""
+    out: dict = {}
+    for k, v in d.items():
+        name = f"{prefix}{k}"
+        if (
+            isinstance(v, dict)
+            and prefix == ""
+            and k in ("measured", "exact", "dt_crit", "sustained")
+        ):
+            out.update(_flat(v, name + "."))
+        elif isinstance(v, (dict, list, tuple)):
+            out[name] = json.dumps(v, default=str) if v else None
+        elif isinstance(v, str) and v in _NONFINITE:
+            out[name] = _NONFINITE[v]
+        else:
+            out[name] = v
+    return out
+
+
+def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
+    """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
+    from ..dtcrit import default_criterion, parse_criterion, search_scene
+
+    crit = parse_criterion(criterion, scene.kind) if criterion else default_criterion(scene.kind)
+    results = search_scene(
+        scene.potential,
+        scene.mass,
+        scene.velocities,
+        scene.kind,
+        gap=scene.gap,
+        zeta=scene.zeta if scene.damping_law == "universal" else None,
+        criterion=crit,
+        progress=check_deadline,
+    )
+    return [_flat(r.to_dict()) for r in results]
+
+
+def _solve_rows(scene) -> list[dict]:
+    """As ``hcv solve --json``: one row per speed of `reference_impl.cli.solve_scene`."""
+    from ..cli import solve_scene
+
+    rows = []
+    for v0 in scene.velocities:
+        check_deadline()
+        rows.extend(_flat(r) for r in solve_scene(replace(scene, velocities=(v0,))))
+    return rows
+
+
+def _bench_rows(scene, adapter: str) -> list[dict]:
+    """``hcv bench ADAPTER`` on the case's scene: one row per variant and speed.
+
+    Each row carries the case's scorecard (metric counts, failed metric names,
+    status) and the per-speed record of the JSON report, flattened.
+    """
+    from ..bench.runner import run_bench
+
+    result = run_bench(adapter, scenes=[scene], progress=check_deadline)
+    d = result.to_dict()
+    rows = []
+    for ctx in d["records"]:
+        mine = [m for m in d["metrics"] if m["variant"] == ctx["variant"]]
+        head = {
+            "variant": ctx["variant"],
+            # this variant's verdict (the JSON's top-level status covers all variants)
+            "status": "fail" if any(m["status"] == "fail" for m in mine) else "pass",
+            "metrics_pass": sum(m["status"] == "pass" for m in mine),
+            "metrics_fail": sum(m["status"] == "fail" for m in mine),
+            "metrics_skip": sum(m["status"] == "skip" for m in mine),
+            "failed_metrics": ",".join(m["metric"] for m in mine if m["status"] == "fail"),
+            "convergence_order": ctx["convergence_order"],
+            "skipped": ctx["skipped"],
+        }
+        if ctx["speeds"]:
+            rows.extend(_flat({**head, **s}) for s in ctx["speeds"])
+        else:
+            rows.append(
+                _flat({**head, "v0": scene.velocities[0], "sustained": ctx["sustained"] or {}})
+            )
+    if result.interrupted:
+        raise KeyboardInterrupt
+    return rows
+
+
+def run_case(payload: dict) -> list[dict]:
+    """Run one case (a `Case.payload`) and return its rows; exceptions propagate.
+
+    Pure: the result depends on the payload only (its ``key`` hashes it).
+    """
+    from ..scenes import scene_from_dict
+
+    scene = scene_from_dict(payload["scene"], f"case {payload['key']}")
+    task = payload["task"]
+    with deadline(payload.get("timeout")):
+        if task == "dt-crit":
+            return _dt_crit_rows(scene, payload.get("criterion"))
+        if task == "solve":
+            return _solve_rows(scene)
+        if task.startswith("bench:"):
+            return _bench_rows(scene, task[len("bench:") :])
+    raise HCVInputError(f"unknown task {task!r}")

@@ -1,0 +1,265 @@
+"""``hcv sweep SPEC.toml [--workers N] [--scheduler ADDRESS] [--out DIR] [--resume]``.
+
+Validates the whole spec (every case's scene) before any cluster starts; runs
+the valid cases on a local cluster of ``--workers`` processes (default: the CPU
+count) or on the Dask scheduler named by ``--scheduler``; stores each finished
+case at once (DIR/cases.jsonl) and writes DIR/results.parquet, DIR/spec.toml and
+DIR/summary.md (+ summary.png) at the end. Exit status: 0 when every case
+succeeded, 1 when some failed (their rows hold the errors), 2 for a bad spec
+or bad options (nothing run), 130 on Ctrl-C (cluster closed, results so far
+written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..errors import HCVInputError
+
+__all__ = ["add_parser", "run", "run_sweep"]
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+# Plain progress lines (not a terminal): at most one per this many seconds.
+_PLAIN_EVERY = 5.0
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``sweep`` subcommand to an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "sweep",
+        help="run a parameter sweep (dt-crit, solve or bench) on a Dask cluster",
+        description="Run the Cartesian product of a spec's [sweep] lists over its [scene], "
+        "one case per task, on local worker processes or an existing Dask cluster.",
+    )
+    p.add_argument("spec", help="sweep spec TOML file (task, [scene], [sweep])")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="local worker processes (default: the CPU count)"
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="use the existing Dask scheduler at ADDRESS (tcp://host:8786)",
+    )
+    p.add_argument("--out", metavar="DIR", help="output directory (default: sweep-<spec name>)")
+    p.add_argument("--resume", action="store_true", help="skip the cases already stored in DIR")
+    p.set_defaults(func=run)
+    return p
+
+
+class _Display:
+    """Progress: a rich bar on a terminal, else a plain line every few seconds."""
+
+    def __init__(self, total: int, done: int, failed: int, tty: bool):
+        self.total, self.done, self.failed, self.tty = total, done, failed, tty
+        self.t0, self.last, self.base = time.monotonic(), 0.0, done
+        self.bar = None
+
+    def __enter__(self):
+        if self.tty:
+            from rich.console import Console
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeRemainingColumn,
+            )
+
+            self.bar = Progress(
+                TextColumn("sweep"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("[red]{task.fields[failed]} failed"),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+                transient=True,
+            )
+            self.bar.__enter__()
+            self.task = self.bar.add_task(
+                "sweep", total=self.total, completed=self.done, failed=self.failed
+            )
+        else:
+            self._line(force=True)
+        return self
+
+    def update(self, ok: bool) -> None:
+        self.done += 1
+        self.failed += 0 if ok else 1
+        if self.bar is not None:
+            self.bar.update(self.task, completed=self.done, failed=self.failed)
+        else:
+            self._line(force=self.done == self.total)
+
+    def _line(self, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now - self.last < _PLAIN_EVERY:
+            return
+        self.last = now
+        ran = self.done - self.base
+        left = self.total - self.done
+        eta = f"{(now - self.t0) / ran * left:.0f} s" if ran else "unknown"
+        print(
+            f"sweep: {self.done}/{self.total} done, {self.failed} failed, ETA {eta}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.__exit__(*exc)
+        return False
+
+
+def _record(
+    case, ok: bool, rows, error: str, seconds: float, worker: str, cpu: float = 0.0
+) -> dict:
+    return {
+        "key": case.key,
+        "index": case.index,
+        "params": case.params,
+        "ok": ok,
+        "error": error,
+        "seconds": seconds,
+        "cpu_seconds": cpu,
+        "worker": worker,
+        "rows": rows or [],
+    }
+
+
+def run_sweep(
+    spec,
+    out_dir,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool | None = None,
+) -> dict:
+    """Run a validated `SweepSpec` into ``out_dir``; the function ``hcv sweep`` calls.
+
+    Returns a dict with ``cases``, ``ok``, ``failed``, ``rows``, ``seconds`` and
+    ``interrupted`` (True after Ctrl-C; the results so far are written, the
+    cluster closed). Raises `HCVInputError` for bad options (nothing run).
+    """
+    from ._output import CaseStore, consolidate, write_parquet, write_summary
+    from ._runner import dask_available, iter_outcomes, open_client
+    from ._tasks import run_case
+
+    if workers is not None and workers < 1:
+        raise HCVInputError(f"--workers must be >= 1, got {workers}")
+    if workers is not None and scheduler:
+        raise HCVInputError(
+            "--workers sizes a local cluster; with --scheduler the cluster's "
+            "own workers run the sweep (give one or the other)"
+        )
+    if not dask_available():
+        raise HCVInputError("hcv sweep needs dask.distributed: pip install -e '.[sweep]'")
+    out = Path(out_dir)
+    store = CaseStore(out)
+    if out.exists() and not out.is_dir():
+        raise HCVInputError(f"--out {out}: exists and is not a directory")
+    if store.exists() and not resume:
+        raise HCVInputError(
+            f"--out {out}: already holds a sweep (cases.jsonl); add --resume "
+            "to continue it or choose another directory"
+        )
+    records = store.load()
+    todo = [c for c in spec.cases if not c.error and c.key not in records]
+
+    def prepare() -> None:
+        """Create DIR, copy the spec, store the invalid cases (after the cluster is reachable)."""
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "spec.toml").write_text(spec.text, encoding="utf-8")
+        for case in spec.invalid:  # a row with the reason; never sent to a worker
+            if case.key not in records:
+                rec = _record(case, False, [], case.error, 0.0, "")
+                store.append(rec)
+                records[case.key] = rec
+
+    tty = sys.stderr.isatty() if progress is None else progress
+    t0 = time.perf_counter()
+    where = f"scheduler {scheduler}" if scheduler else "local cluster"
+    interrupted = False
+    try:
+        if not todo:
+            prepare()
+        else:
+            with open_client(workers, scheduler) as client:
+                prepare()
+                done0 = len(spec.cases) - len(todo)
+                failed0 = sum(
+                    1 for c in spec.cases if c.key in records and not records[c.key]["ok"]
+                )
+                n = sum(client.nthreads().values())
+                where = (
+                    f"scheduler {scheduler} ({n} worker threads)"
+                    if scheduler
+                    else f"local cluster of {n} worker process{'es' if n != 1 else ''}"
+                )
+                with _Display(len(spec.cases), done0, failed0, tty) as disp:
+                    for o in iter_outcomes(
+                        client,
+                        run_case,
+                        [c.payload() for c in todo],
+                        keys=[f"hcv-case-{c.key}" for c in todo],
+                    ):
+                        case = todo[o.index]
+                        rec = _record(
+                            case, o.ok, o.value, o.error, o.seconds, o.worker, o.cpu_seconds
+                        )
+                        store.append(rec)
+                        records[case.key] = rec
+                        disp.update(o.ok)
+    except KeyboardInterrupt:
+        interrupted = True
+        if not out.is_dir():  # interrupted before anything was written
+            return {"interrupted": True}
+    seconds = time.perf_counter() - t0
+    df = consolidate(spec, records)
+    if len(df):
+        write_parquet(df, out / "results.parquet")
+    write_summary(spec, df, out, seconds=seconds, where=where, interrupted=interrupted)
+    finished = [records[c.key] for c in spec.cases if c.key in records]
+    failed = sum(1 for r in finished if not r["ok"])
+    return {
+        "cases": len(spec.cases),
+        "ok": len(finished) - failed,
+        "failed": failed,
+        "rows": len(df),
+        "seconds": seconds,
+        "interrupted": interrupted,
+        "where": where,
+    }
+
+
+def run(args) -> int:
+    """``hcv sweep`` for parsed arguments; returns the exit status."""
+    from ._spec import load_spec
+
+    try:
+        spec = load_spec(args.spec)
+        out = Path(args.out or f"sweep-{Path(args.spec).stem}")
+        if spec.invalid:
+            first = spec.invalid[0]
+            print(
+                f"sweep: {len(spec.invalid)} of {len(spec.cases)} cases have invalid "
+                f"parameters and are recorded as failed (first: {first.error})",
+                file=sys.stderr,
+            )
+        res = run_sweep(
+            spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume
+        )
+    except KeyboardInterrupt:  # during validation or cluster start-up
+        res = {"interrupted": True}
+    if res["interrupted"]:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    print(
+        f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ok, "
+        f"{res['failed']} failed), {out / 'summary.md'} in {res['seconds']:.1f} s on {res['where']}"
+    )
+    return EXIT_FAIL if res["failed"] else EXIT_OK
