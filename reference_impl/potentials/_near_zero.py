@@ -45,12 +45,15 @@ _MAX_DPS = 20000
 # far below the 1e-13 the solvers promise, above the few-ulp spread of a
 # well-conditioned formula.
 FLOAT_RTOL = 1e-14
-# Decades scanned for the float floor: every decade down to 1e-20 m, then every
-# tenth decade to 1e-300 m (cancellation only grows as q -> 0, so the floor is
-# the lowest passing point of an unbroken run from the top).
+# Overlaps scanned for the float floor: _SCAN_PER_DECADE points per decade down
+# to 1e-20 m, then every tenth decade to 1e-300 m (cancellation only grows as
+# q -> 0, so the floor is the lowest passing point of an unbroken run from the
+# top). The fine steps keep the floor low enough for a series of finite radius
+# (q - atan(q): floor 0.25 m, series radius 1 m).
 _SCAN_TOP = 2
 _SCAN_FINE_LOW = -20
 _SCAN_LOW = -300
+_SCAN_PER_DECADE = 8
 # Values beyond this magnitude range are not float64 numbers (overflow or
 # subnormal); the float formula cannot be judged there, only skipped.
 _FLOAT_MIN = 1e-300
@@ -136,7 +139,8 @@ def mp_accurate(func, q, n_lead: float, dps: int | None = None):
 
 
 def _scan_points() -> list[float]:
-    fine = range(_SCAN_TOP, _SCAN_FINE_LOW - 1, -1)
+    steps = (_SCAN_TOP - _SCAN_FINE_LOW) * _SCAN_PER_DECADE
+    fine = [_SCAN_TOP - k / _SCAN_PER_DECADE for k in range(steps + 1)]
     coarse = range(_SCAN_FINE_LOW - 10, _SCAN_LOW - 1, -10)
     return [10.0**k for k in (*fine, *coarse)]
 
