@@ -76,7 +76,9 @@ def speeds() -> st.SearchStrategy[float]:
 
 
 def zetas() -> st.SearchStrategy[float]:
-    return st.floats(0.0, 0.9)
+    # No subnormal ratios (5e-324): they test float64 underflow of the tests' own
+    # reference formulas (2 zeta sqrt(m) U'/sqrt(2U) -> 0), not the damping law.
+    return st.floats(0.0, 0.9, allow_subnormal=False)
 
 
 # -- impacts (appended for the section 5/8 ODE tests) -----------------------------
