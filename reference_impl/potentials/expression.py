@@ -114,8 +114,15 @@ class Expression(Potential):
         The formula as given.
     expr, dexpr, d2expr : sympy.Expr
         U, U' and U'' in the real symbol ``q``, parameters substituted.
+    sympy_U : sympy.Expr
+        Same as ``expr``: the validated U (stable name for exact solvers).
+    sympy_symbol : sympy.Symbol
+        The real symbol ``q`` of ``sympy_U``.
     leading_exponent : float
-        n of U ~ c q^n as q -> 0+ (lim q U'/U, by sympy or numerically).
+        n of U ~ c q^n as q -> 0+ (lim q U'/U by sympy; a raised-precision
+        estimate only when sympy finds no limit).
+    leading_coefficient : float
+        c of U ~ c q^n (J/m^n), by sympy's lim U/q^n; c > 0 is required.
 
     Raises
     ------
@@ -131,6 +138,20 @@ class Expression(Potential):
 
     Notes
     -----
+    Round-off is not physics: U(0) = 0, n and the sign of c are decided by
+    sympy, never from a float evaluation near 0. Formulas that cancel near 0
+    (``q - atan(q)``, ``1 - cos(q)``, ``exp(q) - 1 - q``) are evaluated there
+    by their Puiseux series (float64, below the overlap where the formula
+    itself stops being accurate to 1e-14, both checked against mpmath at
+    raised precision) or at raised precision; ``abs(a)`` is replaced by ``a``
+    or ``-a`` where the sign of a is fixed for q > 0, and refused otherwise.
+
+    A non-zero force at contact (n = 1, e.g. ``exp(q) - 1`` or
+    ``1 - exp(-q)``, U'(0+) = c) and an infinite one (n < 1, ``sqrt(q)``) are
+    accepted: the assumptions of section 3 concern q >= 0 only, and the
+    quadratures handle any n > 0. For n < 2 the supremum of U'/sqrt(2U) is
+    infinite, so Delta t_safe of section 6 is 0.
+
     Monotonicity (U' > 0) and the existence of a turning point for a given
     energy are checked by `turning_point` / `check_monotone`, as for every
     potential; ``q_sup`` is infinite and ``q_scale`` 1 m. The inverse of U
