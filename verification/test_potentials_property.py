@@ -1,0 +1,91 @@
+"""Property tests: random valid formulas from a small grammar are accepted and solve exactly.
+
+The grammar (`verification.strategies.monotone_expressions`) sums positive
+multiples of monomials q**r and of terms that cancel in float64 near 0
+(q - atan q, 1 - cos q, exp q - 1 - q ...). The expectations come from the
+grammar (leading exponent = the smallest term exponent), from sympy's leading
+term, and from an mpmath quadrature, never from the code under test.
+"""
+
+from __future__ import annotations
+
+import mpmath
+import sympy as sp
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from reference_impl.impact import solve_impact
+from reference_impl.potentials import Expression
+from verification.assertions import assert_close, assert_true
+from verification.strategies import expression_impacts, log_uniform, monotone_expressions
+from verification.test_potentials_near_zero import (
+    _F64_RTOL,
+    _SOLVE_RTOL,
+    _contact_time_truth,
+    _reference,
+)
+
+# Each example builds an Expression (sympy limits and series, ~0.1-0.5 s):
+# few examples keep the file within a few seconds per test.
+_EXAMPLES = 12
+_SETTINGS = settings(
+    max_examples=_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+)
+Q = sp.Symbol("q", positive=True)
+
+
+@_SETTINGS
+@given(case=monotone_expressions())
+def test_leading_exponent_is_the_grammars_and_sympys(case):
+    source, n = case
+    pot = Expression(source)
+    lead = sp.sympify(source, locals={"q": Q}, rational=True).as_leading_term(Q)
+    n_sympy = lead.as_coeff_exponent(Q)[1]
+    for got, label in ((pot.leading_exponent, "Expression"), (float(n_sympy), "sympy")):
+        assert_true(
+            got == n,
+            got=repr(got),
+            should=repr(n),
+            claim="expression",
+            call=f"{label} leading exponent of {source!r}",
+        )
+
+
+@_SETTINGS
+@given(case=monotone_expressions(), q=log_uniform(1e-300, 3.0))
+def test_float_values_match_mpmath(case, q):
+    source, _ = case
+    pot = Expression(source)
+    dexpr = sp.diff(pot.sympy_U, pot.sympy_symbol)
+    for name, fn, expr in (("U", pot.U, pot.sympy_U), ("dU", pot.dU, dexpr)):
+        ref = _reference(expr, pot.sympy_symbol, q, 20)
+        if 1e-300 < abs(ref) < 1e300:
+            assert_close(
+                fn(q),
+                float(ref),
+                rtol=_F64_RTOL,
+                claim="expression",
+                call=f"Expression({source!r}).{name}({q!r})",
+            )
+
+
+@_SETTINGS
+@given(case=expression_impacts(), zeta=st.just(0.0))
+def test_random_formula_solves_like_mpmath(case, zeta):
+    pot, source, _, m, v0 = case
+    sol = solve_impact(pot, m, v0, zeta)
+    truth = _contact_time_truth(pot, m, v0)
+    assert_close(
+        sol.contact_time,
+        float(truth),
+        rtol=_SOLVE_RTOL,
+        claim="expression",
+        call=f"solve_impact(Expression({source!r}), m={m!r}, v0={v0!r}).contact_time",
+    )
+    assert_true(
+        mpmath.isfinite(sol.max_force) and sol.max_force > 0,
+        got=repr(sol.max_force),
+        should="finite > 0",
+        claim="expression",
+        call="max_force",
+    )
