@@ -36,6 +36,8 @@ QPOS = sp.Symbol("q", positive=True)
 
 # Digits the reference evaluation must reach (relative): well below float64's 16.
 _REF_DPS = 24
+# Extra digits of the first evaluation (then doubled until two evaluations agree).
+_FIRST_EXTRA = 10
 # Extra digits of the check evaluation that confirms a raised-precision value.
 _CHECK_EXTRA = 20
 # Largest working precision tried before giving up (digits): q ~ 1e-300 with a
@@ -45,15 +47,17 @@ _MAX_DPS = 20000
 # far below the 1e-13 the solvers promise, above the few-ulp spread of a
 # well-conditioned formula.
 FLOAT_RTOL = 1e-14
-# Overlaps scanned for the float floor: _SCAN_PER_DECADE points per decade down
-# to 1e-20 m, then every tenth decade to 1e-300 m (cancellation only grows as
-# q -> 0, so the floor is the lowest passing point of an unbroken run from the
-# top). The fine steps keep the floor low enough for a series of finite radius
-# (q - atan(q): floor 0.25 m, series radius 1 m).
+# Overlaps scanned for the float floor: every decade down to 1e-20 m, then
+# every tenth decade to 1e-300 m (cancellation only grows as q -> 0, so the
+# floor is the lowest passing point of an unbroken run from the top); the decade
+# above the first failure is refined in _SCAN_PER_DECADE steps.
 _SCAN_TOP = 2
 _SCAN_FINE_LOW = -20
 _SCAN_LOW = -300
 _SCAN_PER_DECADE = 8
+# The refinement runs only where the decade grid is fine (below 1e2 m and above
+# the tenth-decade steps).
+_FINE_SCAN_ABOVE = 10.0**_SCAN_TOP
 # Values beyond this magnitude range are not float64 numbers (overflow or
 # subnormal); the float formula cannot be judged there, only skipped.
 _FLOAT_MIN = 1e-300
@@ -98,10 +102,12 @@ def _lead_digits(q, n_lead: float) -> int:
 def mp_accurate(func, q, n_lead: float, dps: int | None = None):
     """``func(q)`` (an mpmath lambdified formula) to ``dps`` correct digits.
 
-    The precision is raised by the cancellation a leading exponent n_lead
-    predicts, then doubled until an evaluation 20 digits more precise agrees
-    to 10^-dps relative. Returns an mpf at the caller's precision (nan when the
-    formula is not computable or does not settle below `_MAX_DPS` digits).
+    The formula is evaluated at dps + e and dps + e + 20 digits, e = 10, 20,
+    40, ..., until the two agree to 10^-dps relative. Two zeros are trusted
+    only once e exceeds the digits a leading exponent n_lead can cancel at q
+    (n_lead |log10 q|): 1 - cos(q) is exactly 0 at any precision below that.
+    Returns an mpf at the caller's precision (nan when the formula is not
+    computable or does not settle below `_MAX_DPS` digits).
 
     Parameters
     ----------
@@ -110,13 +116,14 @@ def mp_accurate(func, q, n_lead: float, dps: int | None = None):
     q : mpf, float or str
         Overlap (m), taken as exact.
     n_lead : float
-        Leading exponent of the formula's cancelling terms (a guess; only cost).
+        Leading exponent of the formula's cancelling terms (bounds the digits lost).
     dps : int, optional
         Correct digits wanted; default `_REF_DPS`.
     """
     target = _REF_DPS if dps is None else dps
     qv = mpmath.mpf(q)
-    extra = _lead_digits(qv, n_lead) + 10
+    cancel = _lead_digits(qv, n_lead)
+    extra = _FIRST_EXTRA
     while target + extra <= _MAX_DPS:
         with mpmath.workdps(target + extra):
             try:
@@ -132,15 +139,18 @@ def mp_accurate(func, q, n_lead: float, dps: int | None = None):
             val, chk = mpmath.mpf(val), mpmath.mpf(chk)
             if not mpmath.isfinite(chk):
                 return +chk
-            if abs(val - chk) <= abs(chk) * mpmath.mpf(10) ** (-target - 1):
+            if chk == 0:
+                if val == 0 and extra > cancel:
+                    return mpmath.mpf(0)
+            elif abs(val - chk) <= abs(chk) * mpmath.mpf(10) ** (-target - 1):
                 return +chk
         extra *= 2
     return mpmath.nan
 
 
 def _scan_points() -> list[float]:
-    steps = (_SCAN_TOP - _SCAN_FINE_LOW) * _SCAN_PER_DECADE
-    fine = [_SCAN_TOP - k / _SCAN_PER_DECADE for k in range(steps + 1)]
+    """Decades 1e2 .. 1e-20 m, then every tenth decade to 1e-300 m."""
+    fine = range(_SCAN_TOP, _SCAN_FINE_LOW - 1, -1)
     coarse = range(_SCAN_FINE_LOW - 10, _SCAN_LOW - 1, -10)
     return [10.0**k for k in (*fine, *coarse)]
 
@@ -166,17 +176,31 @@ def float_floor(np_func, mp_func, n_lead: float, q_sup: float = math.inf) -> flo
     (under- or overflow) are skipped. Returns 0.0 when every point passes, and
     inf when the top point already fails.
     """
+
+    def passes(qp: float) -> bool:
+        with np.errstate(all="ignore"):
+            val = float(np.asarray(np_func(np.array([qp])), dtype=float).ravel()[0])
+        return _float_ok(val, mp_accurate(mp_func, qp, n_lead)) is not False
+
     floor = math.inf
     for qp in _scan_points():
         if qp > q_sup:
             continue
-        with np.errstate(all="ignore"):
-            val = float(np.asarray(np_func(np.array([qp])), dtype=float).ravel()[0])
-        ok = _float_ok(val, mp_accurate(mp_func, qp, n_lead))
-        if ok is False:
-            return floor
+        if not passes(qp):
+            break
         floor = qp
-    return 0.0
+    else:
+        return 0.0
+    if not math.isfinite(floor) or floor > _FINE_SCAN_ABOVE:
+        return floor
+    # Refine within the decade above the first failure: a lower floor lets a
+    # series of finite radius reach it (q - atan(q): 0.13 m, radius 1 m).
+    for k in range(1, _SCAN_PER_DECADE):
+        qp = floor * 10.0 ** (-k / _SCAN_PER_DECADE)
+        if not passes(qp):
+            break
+        floor = qp
+    return floor
 
 
 class PowerSeries:

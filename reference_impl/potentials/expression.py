@@ -52,6 +52,9 @@ _SCAN_LIN_POINTS = 2000
 # Series orders (beyond the leading exponent) tried for the branch near 0; each
 # try is checked against the raised-precision reference before it is used.
 _SERIES_EXTRA_ORDERS = (24, 48, 96)
+# Overlap (m) at which an exact series replacing a formula that is inaccurate
+# everywhere is checked (the top of the float-floor scan).
+_SCAN_TOP_Q = 100.0
 # Where the series branch is checked, as fractions of the branch point.
 _SERIES_CHECK_FRACTIONS = (1.0, 0.5, 0.1, 1e-2, 1e-4)
 # Extra digits of the mpmath path above the float floor: there the formula loses
@@ -309,7 +312,11 @@ class Expression(Potential):
         """The series branch matches the raised-precision reference below the branch point."""
         qb = self._q_branch
         if not math.isfinite(qb):
-            return False
+            # The formula is inaccurate even at the top of the scan: only an
+            # exact (terminating) series, e.g. of (q + 1e20)**2 - 1e40, can stand in.
+            if any(math.isfinite(ser.gap) for ser in series):
+                return False
+            qb = _SCAN_TOP_Q
         for frac in _SERIES_CHECK_FRACTIONS:
             q = np.array([qb * frac])
             for ser, mp_f in zip(series, self._mp_funcs, strict=True):
