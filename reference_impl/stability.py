@@ -20,7 +20,6 @@ __all__ = [
     "dt_safe",
     "dt_safe_shortcut",
     "geometry_class",
-    "ratio_at_zero",
     "stiffening_indicator",
 ]
 
@@ -36,7 +35,7 @@ _SUP_XATOL = 1e-10
 _INDICATOR_RTOL = 1e-10
 
 
-def ratio_at_zero(pot: Potential) -> float:
+def _ratio_at_zero(pot: Potential) -> float:
     """lim_{q -> 0+} U'(q) / sqrt(2 U(q)) from the leading term U ~ c q^n (N / sqrt(J)).
 
     U'/sqrt(2U) ~ n sqrt(c / 2) q^(n/2 - 1): infinite for n < 2, 0 for n > 2
@@ -66,7 +65,7 @@ def _ratio(pot: Potential, q: np.ndarray) -> np.ndarray:
     dU = pot._dU(q)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = dU / np.sqrt(2 * U)
-    return np.where(U > 0, r, ratio_at_zero(pot))
+    return np.where(U > 0, r, _ratio_at_zero(pot))
 
 
 def stiffening_indicator(pot: Potential, q) -> np.ndarray:

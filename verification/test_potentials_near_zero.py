@@ -352,3 +352,34 @@ def test_underflowing_force_is_not_a_violation():
         claim="expression",
         call="U on 1e-300..1",
     )
+
+
+def test_raised_precision_fallback_without_series(monkeypatch):
+    """With no usable series, the float64 path below the floor evaluates in mpmath."""
+    import reference_impl.potentials.expression as expression_module
+
+    def no_series(*args, **kwargs):
+        raise ValueError("series disabled for this test")
+
+    monkeypatch.setattr(expression_module, "PowerSeries", no_series)
+    pot = Expression("q - atan(q)")
+    assert_true(
+        pot._series is None and pot._q_branch > 0,
+        got=f"series={pot._series}, branch={pot._q_branch}",
+        should="no series, a positive float floor",
+        claim="expression",
+        call="Expression('q - atan(q)') without series",
+    )
+    for q in (1e-200, 1e-8, 0.01):
+        ref = _reference(pot.sympy_U, pot.sympy_symbol, q, _MP_DPS)
+        assert_close(
+            pot.U(q), float(ref), rtol=_F64_RTOL, claim="expression", call=f"fallback U({q:g})"
+        )
+    truth = _contact_time_truth(pot, 1.0, 1.0)
+    assert_close(
+        solve_impact(pot, 1.0, 1.0).contact_time,
+        float(truth),
+        rtol=_SOLVE_RTOL,
+        claim="expression",
+        call="solve_impact on the fallback path",
+    )
