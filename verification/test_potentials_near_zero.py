@@ -12,6 +12,7 @@ q - atan(q) is its interior maximum, 2.5636547...
 
 from __future__ import annotations
 
+import functools
 import math
 
 import mpmath
@@ -113,12 +114,19 @@ def test_accepted_with_exact_leading_term(source, n):
     )
 
 
-def _reference(expr: sp.Expr, sym: sp.Symbol, q: float, dps: int) -> mpmath.mpf:
-    """expr at the exact binary q, in mpmath at _REF_DPS digits, confirmed at +100 digits."""
-    f = sp.lambdify(sym, expr, modules="mpmath")
-    with mpmath.workdps(_REF_DPS):
+@functools.lru_cache(maxsize=64)
+def _mp_function(expr: sp.Expr, sym: sp.Symbol):
+    return sp.lambdify(sym, expr, modules="mpmath")
+
+
+def _reference(
+    expr: sp.Expr, sym: sp.Symbol, q: float, dps: int, work_dps: int = _REF_DPS
+) -> mpmath.mpf:
+    """expr at the exact binary q, in mpmath at work_dps digits, confirmed at +100 digits."""
+    f = _mp_function(expr, sym)
+    with mpmath.workdps(work_dps):
         val = f(mpmath.mpf(q))
-    with mpmath.workdps(_REF_DPS + 100):
+    with mpmath.workdps(work_dps + 100):
         chk = f(mpmath.mpf(q))
     with mpmath.workdps(dps + 10):
         assert abs(val - chk) <= abs(chk) * mpmath.mpf(10) ** -(dps + 5), "reference unsettled"

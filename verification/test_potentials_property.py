@@ -97,3 +97,56 @@ def test_random_formula_solves_like_mpmath(case, zeta):
         claim="expression",
         call="max_force",
     )
+
+
+# Delta t_safe against the mpmath ratio: the float64 ratio at the reported
+# maximiser carries a few roundings of U, U' (1e-14 each by construction), and
+# the grid below is exact to 1e-20, so 1e-13 bounds the comparison.
+_DT_PROPERTY_RTOL = 1e-13
+# Points of the mpmath grid on [1e-6 q_max, q_max] (log-spaced then linear).
+_DT_GRID = 60
+
+
+@_SETTINGS
+@given(case=expression_impacts())
+def test_dt_safe_is_the_supremum_of_the_mpmath_ratio(case):
+    """2 sqrt(m) / dt_safe bounds U'/sqrt(2U) on a grid of [0, q_max] and is attained."""
+    from reference_impl.stability import dt_safe
+
+    pot, source, n, m, v0 = case
+    step = dt_safe(pot, m, v0)
+    q_max = pot.turning_point(0.5 * m * v0 * v0)
+    dexpr = sp.diff(pot.sympy_U, pot.sympy_symbol)
+
+    def ratio(q: float) -> mpmath.mpf:
+        # q >= 1e-9 m here: the formulas cancel at most ~30 digits, 80 leave 50.
+        u = _reference(pot.sympy_U, pot.sympy_symbol, q, 20, work_dps=80)
+        return _reference(dexpr, pot.sympy_symbol, q, 20, work_dps=80) / mpmath.sqrt(2 * u)
+
+    if n < 2:  # U'/sqrt(2U) ~ q^(n/2 - 1) -> inf: the bound degenerates to 0
+        assert_true(
+            step.dt_safe == 0.0,
+            got=repr(step.dt_safe),
+            should="0.0",
+            claim="dt-safe",
+            call=f"dt_safe({source!r})",
+        )
+        return
+    sup = 2 * math.sqrt(m) / step.dt_safe
+    grid = [q_max * 10.0 ** (-6 + 6 * k / _DT_GRID) for k in range(_DT_GRID + 1)]
+    worst = max(grid, key=ratio)
+    assert_true(
+        float(ratio(worst)) <= sup * (1 + _DT_PROPERTY_RTOL),
+        got=f"{float(ratio(worst))!r} at q = {worst!r}",
+        should=f"<= {sup!r}",
+        claim="dt-safe",
+        call=f"dt_safe({source!r}) bound",
+    )
+    if step.q_star > 0:
+        assert_close(
+            float(ratio(step.q_star)),
+            sup,
+            rtol=_DT_PROPERTY_RTOL,
+            claim="dt-safe",
+            call=f"dt_safe({source!r}) attained at q_star = {step.q_star!r}",
+        )
