@@ -391,3 +391,18 @@ def test_raised_precision_fallback_without_series(monkeypatch):
         claim="expression",
         call="solve_impact on the fallback path",
     )
+
+
+def test_cancellation_far_from_contact_is_evaluated_at_raised_precision():
+    """U'' = 2 tanh(q) (1 - tanh(q)^2) of q - tanh(q) cancels for q > 10 m; the value stays right."""
+    pot = Expression("q - tanh(q)")
+    d2 = sp.diff(pot.sympy_U, pot.sympy_symbol, 2)
+    for q in (12.0, 30.0, 60.0):
+        ref = _reference(d2, pot.sympy_symbol, q, _MP_DPS)
+        assert_close(
+            pot.d2U(q),
+            float(ref),
+            rtol=_F64_RTOL,
+            claim="expression",
+            call=f"Expression('q - tanh(q)').d2U({q})",
+        )

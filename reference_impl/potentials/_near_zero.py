@@ -7,8 +7,8 @@ with a leading exponent above 1. This module gives `Expression` three tools:
 
 * `mp_accurate`: a formula evaluated in mpmath at a precision raised until two
   evaluations agree (the reference for every decision near 0);
-* `float_floor`: the smallest overlap above which the float64 formula agrees
-  with that reference (a scan of decades, decided at raised precision);
+* `float_range`: the overlaps between which the float64 formula agrees with
+  that reference (a scan of decades, decided at raised precision);
 * `PowerSeries`: the exact (sympy) Puiseux series of U at 0, evaluated in float64
   or mpmath below the floor, with the leading term factored out so that neither
   cancellation nor a spurious underflow of an intermediate power occurs.
@@ -28,7 +28,7 @@ import sympy as sp
 from ..errors import ExpressionError
 from ._expr_parse import _Q, _short
 
-__all__ = ["QPOS", "strip_abs", "mp_accurate", "float_floor", "PowerSeries"]
+__all__ = ["QPOS", "strip_abs", "mp_accurate", "float_range", "PowerSeries"]
 
 # A positive twin of the parser's real symbol q: series and sign decisions for
 # q > 0 need positive=True, which the parser avoids for speed (see _expr_parse).
@@ -61,7 +61,7 @@ _FINE_SCAN_ABOVE = 10.0**_SCAN_TOP
 # Values beyond this magnitude range are not float64 numbers (overflow or
 # subnormal); the float formula cannot be judged there, only skipped.
 _FLOAT_MIN = 1e-300
-_FLOAT_MAX = 1e300
+_FLOAT_MAX = 1e307
 
 
 def strip_abs(expr: sp.Expr, source: str) -> sp.Expr:
@@ -167,40 +167,55 @@ def _float_ok(value: float, ref) -> bool | None:
     return abs(mpmath.mpf(value) - ref) <= FLOAT_RTOL * mag if mag else value == 0.0
 
 
-def float_floor(np_func, mp_func, n_lead: float, q_sup: float = math.inf) -> float:
-    """Smallest scanned overlap from which up the float64 formula is accurate (m).
+def float_range(np_func, mp_func, n_lead: float, q_sup: float = math.inf) -> tuple[float, float]:
+    """(floor, ceiling) (m): where the float64 formula is accurate, judged at raised precision.
 
-    Walks the decades 1e2 .. 1e-300 m downward and stops at the first point
-    where the float64 value differs from `mp_accurate` by more than
-    `FLOAT_RTOL` (relative). Points where the true value is no float64 number
-    (under- or overflow) are skipped. Returns 0.0 when every point passes, and
-    inf when the top point already fails.
+    Walks the scan points upward from 1e-300 m, comparing the float64 value
+    with `mp_accurate` (relative tolerance `FLOAT_RTOL`; points where the true
+    value is no float64 number are skipped). The floor is the first passing
+    point after the run of failures that starts at the bottom (cancellation at
+    contact), refined within the decade below it; 0.0 when the lowest judged
+    point passes, inf when none does. The ceiling is the first failing point
+    above the floor (1 - tanh(q)**2 in U'' of q - tanh(q) cancels beyond
+    q ~ 10 m), inf when none fails up to the top of the scan.
     """
 
-    def passes(qp: float) -> bool:
+    def passes(qp: float) -> bool | None:
         with np.errstate(all="ignore"):
             val = float(np.asarray(np_func(np.array([qp])), dtype=float).ravel()[0])
-        return _float_ok(val, mp_accurate(mp_func, qp, n_lead)) is not False
+        return _float_ok(val, mp_accurate(mp_func, qp, n_lead))
 
+    points = [qp for qp in reversed(_scan_points()) if qp <= q_sup]
+    failed = False
     floor = math.inf
-    for qp in _scan_points():
-        if qp > q_sup:
+    start = len(points)
+    for k, qp in enumerate(points):
+        ok = passes(qp)
+        if ok is None:
             continue
-        if not passes(qp):
+        if ok:
+            floor, start = qp, k + 1
             break
-        floor = qp
-    else:
-        return 0.0
-    if not math.isfinite(floor) or floor > _FINE_SCAN_ABOVE:
-        return floor
-    # Refine within the decade above the first failure: a lower floor lets a
-    # series of finite radius reach it (q - atan(q): 0.13 m, radius 1 m).
+        failed = True
+    if not failed:
+        floor = 0.0
+    ceiling = math.inf
+    for qp in points[start:]:
+        if passes(qp) is False:
+            ceiling = qp
+            break
+    if not (failed and math.isfinite(floor)):
+        return floor, ceiling
+    if floor > _FINE_SCAN_ABOVE or floor < 10.0**_SCAN_FINE_LOW:
+        return floor, ceiling
+    # Refine within the decade below: a lower floor lets a series of finite
+    # radius reach it (q - atan(q): 0.18 m, radius 1 m).
     for k in range(1, _SCAN_PER_DECADE):
         qp = floor * 10.0 ** (-k / _SCAN_PER_DECADE)
-        if not passes(qp):
+        if passes(qp) is False:
             break
         floor = qp
-    return floor
+    return floor, ceiling
 
 
 class PowerSeries:

@@ -28,7 +28,7 @@ from scipy.optimize import elementwise
 
 from ..errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
 from ._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
-from ._near_zero import FLOAT_RTOL, PowerSeries, float_floor, mp_accurate, strip_abs
+from ._near_zero import FLOAT_RTOL, PowerSeries, float_range, mp_accurate, strip_abs
 from .base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -285,17 +285,21 @@ class Expression(Potential):
     def _setup_near_zero(self) -> None:
         """Choose where the float64 path switches from the formula to the series of U at 0.
 
-        The formula is trusted down to its float floor (the lowest overlap from
-        which it matches the raised-precision value to 1e-14); below, the
+        Each formula is trusted between its float floor and ceiling (where it
+        matches the raised-precision value to 1e-14); below the floor, the
         Puiseux series of U (and its term-wise derivatives) is used once it has
         been checked against the same reference. If no series passes, the
         float64 path falls back to mpmath at raised precision below the floor.
         """
         n = self.leading_exponent
         self._series: tuple[PowerSeries, ...] | None = None
-        self._mp_series_radius: dict[int, float] = {}
-        floors = [float_floor(f, g, n) for f, g in zip(self._np_funcs, self._mp_funcs, strict=True)]
-        self._q_branch = max(floors)
+        self._mp_series_radius: dict[int, tuple[float, ...]] = {}
+        # Per formula (U, U', U''): below its float floor the formula cancels;
+        # from its ceiling on (cancellation far from contact) mpmath takes over.
+        ranges = [float_range(f, g, n) for f, g in zip(self._np_funcs, self._mp_funcs, strict=True)]
+        self._branches = tuple(r[0] for r in ranges)
+        self._ceilings = tuple(r[1] for r in ranges)
+        self._q_branch = max(self._branches)
         if self._q_branch == 0.0:
             return
         for extra in _SERIES_EXTRA_ORDERS:
@@ -309,17 +313,18 @@ class Expression(Potential):
                 return
 
     def _series_ok(self, series) -> bool:
-        """The series branch matches the raised-precision reference below the branch point."""
-        qb = self._q_branch
-        if not math.isfinite(qb):
-            # The formula is inaccurate even at the top of the scan: only an
-            # exact (terminating) series, e.g. of (q + 1e20)**2 - 1e40, can stand in.
-            if any(math.isfinite(ser.gap) for ser in series):
-                return False
-            qb = _SCAN_TOP_Q
-        for frac in _SERIES_CHECK_FRACTIONS:
-            q = np.array([qb * frac])
-            for ser, mp_f in zip(series, self._mp_funcs, strict=True):
+        """Each series matches the raised-precision reference below its formula's floor."""
+        for ser, mp_f, qb in zip(series, self._mp_funcs, self._branches, strict=True):
+            if qb == 0.0:
+                continue
+            if not math.isfinite(qb):
+                # The formula is inaccurate even at the top of the scan: only an
+                # exact (terminating) series, e.g. of (q + 1e20)**2 - 1e40, can stand in.
+                if math.isfinite(ser.gap):
+                    return False
+                qb = _SCAN_TOP_Q
+            for frac in _SERIES_CHECK_FRACTIONS:
+                q = np.array([qb * frac])
                 ref = mp_accurate(mp_f, q[0], self.leading_exponent)
                 if not mpmath.isfinite(ref):
                     return False
@@ -352,16 +357,17 @@ class Expression(Potential):
             out = np.asarray(self._np_funcs[i](q), dtype=float)
         # A formula constant in q (U'' of a quadratic) comes back as a scalar.
         out = np.array(np.broadcast_to(out, q.shape), dtype=float)
-        near = q < self._q_branch
-        if np.any(near):
-            if self._series is not None:
-                out[near] = self._series[i].eval_float(q[near])
-            else:
-                with mpmath.workdps(20):
-                    out[near] = [
-                        float(mp_accurate(self._mp_funcs[i], float(x), self.leading_exponent))
-                        for x in q[near]
-                    ]
+        near = q < self._branches[i]
+        if np.any(near) and self._series is not None:
+            out[near] = self._series[i].eval_float(q[near])
+            near[:] = False
+        slow = near | (q >= self._ceilings[i])
+        if np.any(slow):
+            with mpmath.workdps(20):
+                out[slow] = [
+                    float(mp_accurate(self._mp_funcs[i], float(x), self.leading_exponent))
+                    for x in q[slow]
+                ]
         # U(0) = 0 was proved exactly at construction; round-off of a formula such
         # as (q + 0.1)**2 - 0.01 must not turn it into 1.7e-18.
         fix = (q == 0) & ((i == 0) | ~np.isfinite(out))
@@ -375,12 +381,13 @@ class Expression(Potential):
             return _to_mpf(self._limit_at_zero(i))
         if self._series is not None:
             if dps not in self._mp_series_radius:
-                self._mp_series_radius[dps] = min(
-                    s.mp_radius(self._q_branch, FLOAT_RTOL, dps + 3) for s in self._series
+                self._mp_series_radius[dps] = tuple(
+                    s.mp_radius(b, FLOAT_RTOL, dps + 3)
+                    for s, b in zip(self._series, self._branches, strict=True)
                 )
-            if q < self._mp_series_radius[dps]:
+            if q < self._mp_series_radius[dps][i]:
                 return self._series[i].eval_mp(q)
-        if q < self._q_branch or q < _MP_TINY_Q:
+        if q < self._branches[i] or q < _MP_TINY_Q or q >= self._ceilings[i]:
             out = mp_accurate(self._mp_funcs[i], q, self.leading_exponent, dps=dps)
         else:
             with mpmath.workdps(dps + _MP_GUARD_DPS):
