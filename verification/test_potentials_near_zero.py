@@ -70,6 +70,8 @@ ACCEPTED = [
     ("sqrt(1 + q**2) - 1", 2),
     ("q**1.5 + q - atan(q)", 1.5),
     ("abs(q)**2 + abs(-q - 1) - 1", 1),
+    ("q**0.5*(1 - cos(q))", 2.5),  # U'' cancels inside a subterm (1 - cos q)/q**1.5
+    ("exp(exp(q)) - E", 1),  # sympy's series exceeds its time budget: raised precision
 ]
 
 

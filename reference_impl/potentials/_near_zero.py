@@ -19,7 +19,10 @@ on exact sympy objects; numbers are compared only at raised precision.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import signal
+import threading
 
 import mpmath
 import numpy as np
@@ -28,7 +31,15 @@ import sympy as sp
 from ..errors import ExpressionError
 from ._expr_parse import _Q, _short
 
-__all__ = ["QPOS", "strip_abs", "mp_accurate", "float_range", "PowerSeries"]
+__all__ = [
+    "QPOS",
+    "SeriesTimeout",
+    "strip_abs",
+    "mp_accurate",
+    "float_range",
+    "PowerSeries",
+    "time_limit",
+]
 
 # A positive twin of the parser's real symbol q: series and sign decisions for
 # q > 0 need positive=True, which the parser avoids for speed (see _expr_parse).
@@ -38,6 +49,9 @@ QPOS = sp.Symbol("q", positive=True)
 _REF_DPS = 24
 # Extra digits of the first evaluation (then doubled until two evaluations agree).
 _FIRST_EXTRA = 10
+# Orders of q beyond the leading exponent that a subterm may vanish to (or be
+# divided by in U''), for the a-priori precision bound of `_lead_digits`.
+_CANCEL_MARGIN = 2
 # Extra digits of the check evaluation that confirms a raised-precision value.
 _CHECK_EXTRA = 20
 # Largest working precision tried before giving up (digits): q ~ 1e-300 with a
@@ -62,6 +76,40 @@ _FINE_SCAN_ABOVE = 10.0**_SCAN_TOP
 # subnormal); the float formula cannot be judged there, only skipped.
 _FLOAT_MIN = 1e-300
 _FLOAT_MAX = 1e307
+
+
+class SeriesTimeout(Exception):
+    """sympy's series did not finish within its budget (or could not be bounded)."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float):
+    """Raise `SeriesTimeout` inside the block after ``seconds`` of wall time.
+
+    sympy's series of a nested formula can take exponential time (exp(exp(q))
+    to order 10 takes 5 s, to order 14 minutes). The bound uses SIGALRM, which
+    only the main thread can receive; elsewhere, or when another alarm is
+    pending, the block is not entered (SeriesTimeout at once) and the caller
+    falls back to raised-precision evaluation.
+    """
+    usable = (
+        hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+        and signal.getitimer(signal.ITIMER_REAL)[0] == 0
+    )
+    if not usable:
+        raise SeriesTimeout("no way to bound sympy's series here")
+
+    def _expire(signum, frame):
+        raise SeriesTimeout(f"sympy's series took more than {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, _expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def strip_abs(expr: sp.Expr, source: str) -> sp.Expr:
@@ -93,19 +141,26 @@ def strip_abs(expr: sp.Expr, source: str) -> sp.Expr:
 
 
 def _lead_digits(q, n_lead: float) -> int:
-    """A-priori guess of the digits a formula with U ~ q^n loses to cancellation at q."""
+    """A-priori bound on the digits a formula with U ~ q^n loses to cancellation at q.
+
+    A subterm that vanishes like q^k, divided by q^j in a derivative, loses
+    (k + j) |log10 q| digits; k + j <= n + 2 covers U, U' and U'' of the
+    formulas met (sqrt(q) (1 - cos q): n = 2.5, U'' loses 2 |log10 q|). Two
+    evaluations below this precision may agree on the same wrong value (a
+    1 - cos(q) that is exactly 0 at both), so agreement is trusted only above it.
+    """
     if not q or q >= 1:
         return 0
-    return int(math.ceil(max(n_lead, 1.0) * -float(mpmath.log10(q)))) + 5
+    return int(math.ceil((max(n_lead, 1.0) + _CANCEL_MARGIN) * -float(mpmath.log10(q)))) + 5
 
 
 def mp_accurate(func, q, n_lead: float, dps: int | None = None):
     """``func(q)`` (an mpmath lambdified formula) to ``dps`` correct digits.
 
-    The formula is evaluated at dps + e and dps + e + 20 digits, e = 10, 20,
-    40, ..., until the two agree to 10^-dps relative. Two zeros are trusted
-    only once e exceeds the digits a leading exponent n_lead can cancel at q
-    (n_lead |log10 q|): 1 - cos(q) is exactly 0 at any precision below that.
+    The formula is evaluated at dps + e and dps + e + 20 digits, starting
+    from e = the a-priori cancellation bound of `_lead_digits` and doubling e
+    until the two agree to 10^-dps relative (agreement below that bound can be
+    spurious: 1 - cos(q) is exactly 0 at any precision below 2 |log10 q|).
     Returns an mpf at the caller's precision (nan when the formula is not
     computable or does not settle below `_MAX_DPS` digits).
 
@@ -123,7 +178,7 @@ def mp_accurate(func, q, n_lead: float, dps: int | None = None):
     target = _REF_DPS if dps is None else dps
     qv = mpmath.mpf(q)
     cancel = _lead_digits(qv, n_lead)
-    extra = _FIRST_EXTRA
+    extra = max(_FIRST_EXTRA, cancel)
     while target + extra <= _MAX_DPS:
         with mpmath.workdps(target + extra):
             try:
@@ -140,7 +195,7 @@ def mp_accurate(func, q, n_lead: float, dps: int | None = None):
             if not mpmath.isfinite(chk):
                 return +chk
             if chk == 0:
-                if val == 0 and extra > cancel:
+                if val == 0:
                     return mpmath.mpf(0)
             elif abs(val - chk) <= abs(chk) * mpmath.mpf(10) ** (-target - 1):
                 return +chk

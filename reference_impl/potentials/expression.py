@@ -28,7 +28,15 @@ from scipy.optimize import elementwise
 
 from ..errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
 from ._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
-from ._near_zero import FLOAT_RTOL, PowerSeries, float_range, mp_accurate, strip_abs
+from ._near_zero import (
+    FLOAT_RTOL,
+    PowerSeries,
+    SeriesTimeout,
+    float_range,
+    mp_accurate,
+    strip_abs,
+    time_limit,
+)
 from .base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -55,6 +63,9 @@ _SERIES_EXTRA_ORDERS = (24, 48, 96)
 # Overlap (m) at which an exact series replacing a formula that is inaccurate
 # everywhere is checked (the top of the float-floor scan).
 _SCAN_TOP_Q = 100.0
+# Wall-time budget (s) of one sympy series: q - atan(q) to order 99 takes 0.3 s;
+# past the budget the float64 path evaluates at raised precision instead.
+_SERIES_SECONDS = 2.0
 # Where the series branch is checked, as fractions of the branch point.
 _SERIES_CHECK_FRACTIONS = (1.0, 0.5, 0.1, 1e-2, 1e-4)
 # Extra digits of the mpmath path above the float floor: there the formula loses
@@ -304,9 +315,10 @@ class Expression(Potential):
             return
         for extra in _SERIES_EXTRA_ORDERS:
             try:
-                s0 = PowerSeries(self.expr, int(math.ceil(n)) + extra)
-                series = (s0, s0.derivative(), s0.derivative().derivative())
-            except (ValueError, TypeError, NotImplementedError, ZeroDivisionError):
+                with time_limit(_SERIES_SECONDS):
+                    s0 = PowerSeries(self.expr, int(math.ceil(n)) + extra)
+                    series = (s0, s0.derivative(), s0.derivative().derivative())
+            except (ValueError, TypeError, NotImplementedError, ZeroDivisionError, SeriesTimeout):
                 return
             if self._series_ok(series):
                 self._series = series
