@@ -75,7 +75,10 @@ class HarmonicMap:
             return 0.0
         if n < 2:
             return math.inf
-        return math.sqrt(float(self.potential.d2U(0.0)) / self.K)
+        # n = 2: U ~ c q^2 exactly, so U''(0) = 2c (no float limit needed).
+        c = self.potential.leading_coefficient
+        d2U0 = 2.0 * c if c is not None else float(self.potential.d2U(0.0))
+        return math.sqrt(d2U0 / self.K)
 
     def q_of_x(self, x):
         """Inverse map q(x): the overlap with U(q) = K x^2 / 2 (x >= 0)."""

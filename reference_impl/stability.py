@@ -15,27 +15,57 @@ from scipy.optimize import minimize_scalar
 
 from .potentials.base import Potential
 
-__all__ = ["SafeStep", "dt_safe", "dt_safe_shortcut", "geometry_class", "stiffening_indicator"]
+__all__ = [
+    "SafeStep",
+    "dt_safe",
+    "dt_safe_shortcut",
+    "geometry_class",
+    "stiffening_indicator",
+]
 
 # Grid on which the supremum is located before a bounded scalar refinement; the
 # log part resolves q -> 0, where softening contacts take their supremum.
 _SUP_GRID_LIN = 801
 _SUP_GRID_LOG = 200
+# Location tolerance of the bounded refinement, relative to q_max: the ratio is
+# flat at its maximum, so a q error of 1e-10 q_max changes it by ~1e-20.
+_SUP_XATOL = 1e-10
 # Relative band within which 2UU'' - U'^2 counts as zero (round-off of the
 # products, a few ulps times the size of U'^2).
 _INDICATOR_RTOL = 1e-10
 
 
+def _ratio_at_zero(pot: Potential) -> float:
+    """lim_{q -> 0+} U'(q) / sqrt(2 U(q)) from the leading term U ~ c q^n (N / sqrt(J)).
+
+    U'/sqrt(2U) ~ n sqrt(c / 2) q^(n/2 - 1): infinite for n < 2, 0 for n > 2
+    and sqrt(2 c) = sqrt(U''(0)) for n = 2. The case is decided by the exact
+    leading exponent, never by a float evaluation near 0.
+    """
+    n = pot.leading_exponent
+    if n < 2:
+        return math.inf
+    if n > 2:
+        return 0.0
+    c = pot.leading_coefficient
+    if c is not None:
+        return math.sqrt(2.0 * c)
+    return math.sqrt(float(pot._d2U(np.array([0.0]))[0]))
+
+
 def _ratio(pot: Potential, q: np.ndarray) -> np.ndarray:
-    """U'(q) / sqrt(2 U(q)) (N / sqrt(J)); the limit value is used at q = 0."""
+    """U'(q) / sqrt(2 U(q)) (N / sqrt(J)); the limit value is used at q = 0.
+
+    Where U underflows to 0 at q > 0 the leading-term limit stands in (the
+    ratio there is within round-off of its limit for n = 2 and negligible
+    against the supremum for n > 2; for n < 2 the supremum is infinite anyway).
+    """
     q = np.asarray(q, dtype=float)
     U = pot._U(q)
     dU = pot._dU(q)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = dU / np.sqrt(2 * U)
-    n = pot.leading_exponent
-    at0 = math.inf if n < 2 else (0.0 if n > 2 else math.sqrt(float(pot._d2U(np.array([0.0]))[0])))
-    return np.where(U > 0, r, at0)
+    return np.where(U > 0, r, _ratio_at_zero(pot))
 
 
 def stiffening_indicator(pot: Potential, q) -> np.ndarray:
@@ -118,13 +148,15 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
     r = _ratio(pot, grid)
     i = int(np.argmax(r))
     q_star, r_star = float(grid[i]), float(r[i])
-    if math.isfinite(r_star) and 0 < i < len(grid) - 1:
-        # Refine an interior maximum between its grid neighbours.
+    if math.isfinite(r_star) and 0 < i:
+        # Refine the maximum between its grid neighbours (at the last point the
+        # bracket is [previous point, q_max], so an interior maximum just below
+        # q_max is not mistaken for the endpoint).
         res = minimize_scalar(
             lambda q: -float(_ratio(pot, np.array([q]))[0]),
-            bounds=(grid[i - 1], grid[i + 1]),
+            bounds=(grid[i - 1], grid[min(i + 1, len(grid) - 1)]),
             method="bounded",
-            options={"xatol": 1e-14 * q_max},
+            options={"xatol": _SUP_XATOL * q_max},
         )
         if -res.fun > r_star:
             q_star, r_star = float(res.x), float(-res.fun)

@@ -75,8 +75,15 @@ def speeds() -> st.SearchStrategy[float]:
     return log_uniform(1e-2, 1e1)
 
 
+# Smallest non-zero damping ratio drawn: ratios near 1e-305 only test float64
+# underflow of the tests' own reference formulas (2 zeta sqrt(m) U'/sqrt(2U)
+# lands in the subnormal range), not the damping law; 1e-12 is far below any
+# physical damping and far above underflow.
+_ZETA_MIN = 1e-12
+
+
 def zetas() -> st.SearchStrategy[float]:
-    return st.floats(0.0, 0.9)
+    return st.one_of(st.just(0.0), st.floats(_ZETA_MIN, 0.9))
 
 
 # -- impacts (appended for the section 5/8 ODE tests) -----------------------------
@@ -115,3 +122,70 @@ def impacts(draw, potentials=None):
 
 
 __all__ += ["impacts"]
+
+
+# -- random monotone formulas (appended for the Expression property tests) ---------
+
+# Softening and saturating terms of the grammar, each with U(0) = 0, increasing on
+# (0, pi) and cancelling in float64 near 0; with its leading exponent n (U ~ c q^n).
+_EXPRESSION_TERMS = (
+    ("(q - atan(q))", 3),  # force q^2 / (1 + q^2): saturating
+    ("(q - log(1 + q))", 2),  # force q / (1 + q): integral of a log-type softening
+    ("log(1 + q**2)", 2),  # force 2q / (1 + q^2): softening beyond q = 1
+    ("(1 - cos(q))", 2),  # force sin q: increasing only for q < pi
+    ("(exp(q) - 1 - q)", 2),
+    ("(cosh(q) - 1)", 2),
+    ("(sqrt(1 + q**2) - 1)", 2),
+    ("(q - sin(q))", 3),
+    ("(q - tanh(q))", 3),
+)
+# Largest turning point drawn for a formula (m): below pi, where 1 - cos(q) and
+# every other term of the grammar is still increasing.
+EXPRESSION_Q_MAX = 3.0
+# Range of the exponents r of the monomials q**r (the brief's grammar).
+_MONOMIAL_R = (1.2, 6.0)
+
+
+@st.composite
+def monotone_expressions(draw, max_terms: int = 3) -> tuple[str, float]:
+    """Random valid contact law as ``(source, n)``: a sum of positive-coefficient terms.
+
+    Terms are monomials ``c*q**r`` (r in [1.2, 6], two decimals) and the
+    softening/saturating terms of `_EXPRESSION_TERMS`; every term is increasing
+    on (0, `EXPRESSION_Q_MAX`], so the sum is. ``n`` is the leading exponent
+    known from the grammar (the smallest term exponent), not from the code.
+    """
+    parts, exps = [], []
+    for _ in range(draw(st.integers(1, max_terms))):
+        coef = f"{draw(log_uniform(1e-2, 1e2)):.3g}"
+        if draw(st.booleans()):
+            r = round(draw(st.floats(*_MONOMIAL_R)), 2)
+            parts.append(f"{coef}*q**{r}")
+            exps.append(float(r))
+        else:
+            term, n = draw(st.sampled_from(_EXPRESSION_TERMS))
+            parts.append(f"{coef}*{term}")
+            exps.append(float(n))
+    return " + ".join(parts), min(exps)
+
+
+@st.composite
+def expression_impacts(draw) -> tuple:
+    """``(Expression, source, n, m, v0)`` with the turning point in [1e-3, 3] m.
+
+    v0 = sqrt(2 U(q_max) / m) from a drawn q_max, so that the impact stays where
+    every term of the grammar is increasing.
+    """
+    import math
+
+    from reference_impl.potentials import Expression
+
+    source, n = draw(monotone_expressions())
+    pot = Expression(source)
+    m = draw(log_uniform(1e-1, 1e1))
+    q_max = draw(log_uniform(1e-3, EXPRESSION_Q_MAX))
+    v0 = math.sqrt(2.0 * float(pot.U(q_max)) / m)
+    return pot, source, n, m, v0
+
+
+__all__ += ["monotone_expressions", "expression_impacts", "EXPRESSION_Q_MAX"]

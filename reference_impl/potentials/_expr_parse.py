@@ -287,5 +287,3 @@ def _check_expr(expr: sp.Expr, source: str) -> None:
                 f"Expression: the constant {_short(str(sub))} in U = {src} overflows float64; "
                 "rescale the formula"
             )
-
-

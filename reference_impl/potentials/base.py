@@ -46,9 +46,14 @@ class Potential(ABC):
        ``mpmath.mpf``, and return the same kind. Use only arithmetic, ``**`` and
        the namespace returned by ``self._ns(q)`` (``numpy`` or ``mpmath``), so
        that one formula serves both the float64 and the 50-digit path.
-    2. Set ``leading_exponent``: the n > 0 with U(q) ~ c q**n as q -> 0+.
-       The quadratures of `reference_impl.impact` substitute with it to remove
-       the endpoint singularity of dq/dx.
+    2. Set ``leading_exponent``: the n > 0 with U(q) ~ c q**n as q -> 0+,
+       decided exactly (from the family's formula, or by sympy for an
+       `Expression`; never from a float evaluation near 0), and
+       ``leading_coefficient``: that c (J/m**n) as a float, or None when the
+       family does not know it. The quadratures of `reference_impl.impact`
+       substitute with n to remove the endpoint singularity of dq/dx;
+       `reference_impl.stability` takes the limit of U'/sqrt(2U) at 0 from
+       (n, c). These two names are a stable interface.
     3. Set ``q_sup`` (metres) when U is defined only on ``[0, q_sup]``; the
        public methods raise `DomainError` outside it.
     4. Optionally override ``_inverse(u)`` with an exact inverse of U on
@@ -58,10 +63,19 @@ class Potential(ABC):
     6. Implement ``params()`` returning the defining parameters as a dict.
 
     The public methods ``U``, ``dU``, ``d2U`` validate the input (NaN, q < 0,
-    q > q_sup) and then call the hooks.
+    q > q_sup) and then call the hooks. The float64 hooks must be accurate to
+    a few ulps (relative) at every q, including q -> 0 where a formula such as
+    q - atan(q) cancels: evaluate there by a series or at raised precision.
+
+    Stable interface for exact (symbolic) solvers: a potential given as a
+    formula, `reference_impl.potentials.Expression`, also exposes
+    ``sympy_U`` (the validated U as a sympy expression, parameters substituted
+    by exact numbers, every ``abs`` resolved for q > 0) and ``sympy_symbol``
+    (the real sympy symbol of q in it).
     """
 
     leading_exponent: float = 2.0
+    leading_coefficient: float | None = None
     q_sup: float = math.inf
     q_scale: float = 1.0
 
@@ -324,6 +338,8 @@ class SumPotential(Potential):
             raise HCVInputError("a sum of potentials needs at least two Potential terms")
         self.terms = tuple(terms)
         self.leading_exponent = min(t.leading_exponent for t in terms)
+        lead = [t.leading_coefficient for t in terms if t.leading_exponent == self.leading_exponent]
+        self.leading_coefficient = None if None in lead else float(sum(lead))
         self.q_sup = min(t.q_sup for t in terms)
         self.q_scale = min(t.q_scale for t in terms)
 

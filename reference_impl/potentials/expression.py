@@ -28,6 +28,15 @@ from scipy.optimize import elementwise
 
 from ..errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
 from ._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
+from ._near_zero import (
+    FLOAT_RTOL,
+    PowerSeries,
+    SeriesTimeout,
+    float_range,
+    mp_accurate,
+    strip_abs,
+    time_limit,
+)
 from .base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -39,15 +48,33 @@ _N_PROBES = ("1e-30", "1e-45")
 _N_RTOL = 1e-9
 # Bracket steps of the inverse: 1100 doublings span float64.
 _MAX_BRACKET_STEPS = 1100
-# Smallest overlap (m) the downward bracket search tries: U <= 0 even there
-# means U does not rise from U(0) = 0.
-_TINY_Q = 1e-300
+# Smallest overlap (m) the downward bracket search tries (the smallest positive
+# float64): U above the energy even there means U does not rise from U(0) = 0.
+_TINY_Q = 5e-324
 # Root tolerance of the inverse of U: a few ulps of q, as in the base class.
 _INVERSE_XRTOL = 4.0 * np.finfo(float).eps
 # Grid that locates where U' <= 0 once U was seen to decrease: log points
 # resolve q -> 0, linear ones the rest (the sizes of Potential.check_monotone).
 _SCAN_LOG_POINTS = 600
 _SCAN_LIN_POINTS = 2000
+# Series orders (beyond the leading exponent) tried for the branch near 0; each
+# try is checked against the raised-precision reference before it is used.
+_SERIES_EXTRA_ORDERS = (24, 48, 96)
+# Overlap (m) at which an exact series replacing a formula that is inaccurate
+# everywhere is checked (the top of the float-floor scan).
+_SCAN_TOP_Q = 100.0
+# Wall-time budget (s) of one sympy series: q - atan(q) to order 99 takes 0.3 s;
+# past the budget the float64 path evaluates at raised precision instead.
+_SERIES_SECONDS = 2.0
+# Where the series branch is checked, as fractions of the branch point.
+_SERIES_CHECK_FRACTIONS = (1.0, 0.5, 0.1, 1e-2, 1e-4)
+# Extra digits of the mpmath path above the float floor: there the formula loses
+# at most ~2 digits (it is float64-accurate to 1e-14), 5 covers that.
+_MP_GUARD_DPS = 5
+# Below this overlap (m) the float floor scan has no points: the mpmath path
+# always raises its precision there.
+_MP_TINY_Q = 1e-300
+
 
 def _limit0(expr: sp.Expr) -> sp.Expr | None:
     """lim_{q -> 0+} expr, or None when sympy cannot find it."""
@@ -101,8 +128,15 @@ class Expression(Potential):
         The formula as given.
     expr, dexpr, d2expr : sympy.Expr
         U, U' and U'' in the real symbol ``q``, parameters substituted.
+    sympy_U : sympy.Expr
+        Same as ``expr``: the validated U (stable name for exact solvers).
+    sympy_symbol : sympy.Symbol
+        The real symbol ``q`` of ``sympy_U``.
     leading_exponent : float
-        n of U ~ c q^n as q -> 0+ (lim q U'/U, by sympy or numerically).
+        n of U ~ c q^n as q -> 0+ (lim q U'/U by sympy; a raised-precision
+        estimate only when sympy finds no limit).
+    leading_coefficient : float
+        c of U ~ c q^n (J/m^n), by sympy's lim U/q^n; c > 0 is required.
 
     Raises
     ------
@@ -118,6 +152,20 @@ class Expression(Potential):
 
     Notes
     -----
+    Round-off is not physics: U(0) = 0, n and the sign of c are decided by
+    sympy, never from a float evaluation near 0. Formulas that cancel near 0
+    (``q - atan(q)``, ``1 - cos(q)``, ``exp(q) - 1 - q``) are evaluated there
+    by their Puiseux series (float64, below the overlap where the formula
+    itself stops being accurate to 1e-14, both checked against mpmath at
+    raised precision) or at raised precision; ``abs(a)`` is replaced by ``a``
+    or ``-a`` where the sign of a is fixed for q > 0, and refused otherwise.
+
+    A non-zero force at contact (n = 1, e.g. ``exp(q) - 1`` or
+    ``1 - exp(-q)``, U'(0+) = c) and an infinite one (n < 1, ``sqrt(q)``) are
+    accepted: the assumptions of section 3 concern q >= 0 only, and the
+    quadratures handle any n > 0. For n < 2 the supremum of U'/sqrt(2U) is
+    infinite, so Delta t_safe of section 6 is 0.
+
     Monotonicity (U' > 0) and the existence of a turning point for a given
     energy are checked by `turning_point` / `check_monotone`, as for every
     potential; ``q_sup`` is infinite and ``q_scale`` 1 m. The inverse of U
@@ -135,7 +183,7 @@ class Expression(Potential):
         _check_inputs(source, params)
         self.source = source
         self._params = dict(params)
-        self.expr = _parse(source, self._params)
+        self.expr = strip_abs(_parse(source, self._params), source)
         _check_expr(self.expr, source)
         self.dexpr = sp.diff(self.expr, _Q)
         self.d2expr = sp.diff(self.dexpr, _Q)
@@ -146,8 +194,22 @@ class Expression(Potential):
         self._mp_funcs = tuple(sp.lambdify(_Q, e, modules="mpmath") for e in exprs)
         self._zero_limits: dict[int, sp.Expr | None] = {}
         self._check_zero()
+        self._n_exact: sp.Expr | None = None
         self.leading_exponent = self._find_leading_exponent()
-        self._check_onset()
+        self._check_real()
+        self.leading_coefficient = self._find_leading_coefficient()
+        self._setup_near_zero()
+
+    # -- public interface used by the exact solvers ---------------------------------
+    @property
+    def sympy_U(self) -> sp.Expr:
+        """The validated U(q) as a sympy expression in `sympy_symbol` (parameters substituted)."""
+        return self.expr
+
+    @property
+    def sympy_symbol(self) -> sp.Symbol:
+        """The sympy symbol of the overlap q in `sympy_U` (declared real)."""
+        return _Q
 
     # -- construction checks --------------------------------------------------
     def _check_zero(self) -> None:
@@ -172,9 +234,10 @@ class Expression(Potential):
         n_sym = _limit0(_Q * self.dexpr / self.expr)
         if n_sym is not None:
             n = _as_float(n_sym)
+            self._n_exact = n_sym
         else:
             u, du = self._mp_funcs[:2]
-            a, b = (_mp_probe(lambda x: x * du(x) / u(x), p) for p in _N_PROBES)
+            a, b = (mp_accurate(lambda x: x * du(x) / u(x), p, 60.0, dps=_N_DPS) for p in _N_PROBES)
             agree = all(isinstance(v, mpmath.mpf) and mpmath.isfinite(v) for v in (a, b)) and (
                 abs(a - b) <= _N_RTOL * abs(b)
             )
@@ -192,8 +255,8 @@ class Expression(Potential):
             )
         return n
 
-    def _check_onset(self) -> None:
-        """U > 0 just above q = 0, in 60 digits so that no power underflows."""
+    def _check_real(self) -> None:
+        """U is real just above q = 0 (60 digits: no power underflows)."""
         probe = _N_PROBES[-1]
         value = _mp_probe(self._mp_funcs[0], probe)
         if isinstance(value, mpmath.mpc) and value.imag != 0:
@@ -201,12 +264,86 @@ class Expression(Potential):
                 f"Expression: U({probe}) = {mpmath.nstr(value, 6)} J is not real; "
                 f"U = {_short(self.source)} must be real for q >= 0"
             )
-        if not mpmath.re(value) > 0:
-            raise NonMonotoneError(
-                f"Expression: U(q) = {mpmath.nstr(value, 6)} J at q = {probe} m, but U must rise "
-                f"from U(0) = 0 (assumption 3 of section 3); check the sign of U = "
-                f"{_short(self.source)}"
+
+    def _find_leading_coefficient(self) -> float:
+        """c of U ~ c q^n at q -> 0+, decided exactly; c > 0 is assumption 3 at the onset."""
+        c_sym = _limit0(self.expr / _Q**self._n_exact) if self._n_exact is not None else None
+        src = _short(self.source)
+        if c_sym is not None and (c_sym.is_zero or c_sym.is_infinite):
+            raise HCVInputError(
+                f"Expression: U / q^n -> {c_sym} as q -> 0+ with n = {self.leading_exponent:.6g}: "
+                f"U = {src} is not c q^n times 1 + o(1) at contact (a logarithmic factor?); the "
+                "quadratures need a power-law onset"
             )
+        if c_sym is None:
+            # No symbolic limit: U(q) / q^n at a tiny overlap, at raised precision.
+            probe = mpmath.mpf(_N_PROBES[-1])
+            with mpmath.workdps(_N_DPS):
+                u = mp_accurate(self._mp_funcs[0], probe, self.leading_exponent, dps=_N_DPS)
+                c = u / probe ** mpmath.mpf(self.leading_exponent)
+            c_val = float(c) if mpmath.isfinite(c) else math.nan
+            positive = bool(mpmath.isfinite(c) and c > 0)
+        else:
+            c_val = _as_float(c_sym)
+            positive = bool(c_sym.is_positive)
+        if not positive:
+            raise NonMonotoneError(
+                f"Expression: U ~ {c_val:.6g} q^{self.leading_exponent:.6g} as q -> 0+, but U "
+                f"must rise from U(0) = 0 (assumption 3 of section 3); check the sign of U = {src}"
+            )
+        return c_val
+
+    def _setup_near_zero(self) -> None:
+        """Choose where the float64 path switches from the formula to the series of U at 0.
+
+        Each formula is trusted between its float floor and ceiling (where it
+        matches the raised-precision value to 1e-14); below the floor, the
+        Puiseux series of U (and its term-wise derivatives) is used once it has
+        been checked against the same reference. If no series passes, the
+        float64 path falls back to mpmath at raised precision below the floor.
+        """
+        n = self.leading_exponent
+        self._series: tuple[PowerSeries, ...] | None = None
+        self._mp_series_radius: dict[int, tuple[float, ...]] = {}
+        # Per formula (U, U', U''): below its float floor the formula cancels;
+        # from its ceiling on (cancellation far from contact) mpmath takes over.
+        ranges = [float_range(f, g, n) for f, g in zip(self._np_funcs, self._mp_funcs, strict=True)]
+        self._branches = tuple(r[0] for r in ranges)
+        self._ceilings = tuple(r[1] for r in ranges)
+        self._q_branch = max(self._branches)
+        if self._q_branch == 0.0:
+            return
+        for extra in _SERIES_EXTRA_ORDERS:
+            try:
+                with time_limit(_SERIES_SECONDS):
+                    s0 = PowerSeries(self.expr, int(math.ceil(n)) + extra)
+                    series = (s0, s0.derivative(), s0.derivative().derivative())
+            except (ValueError, TypeError, NotImplementedError, ZeroDivisionError, SeriesTimeout):
+                return
+            if self._series_ok(series):
+                self._series = series
+                return
+
+    def _series_ok(self, series) -> bool:
+        """Each series matches the raised-precision reference below its formula's floor."""
+        for ser, mp_f, qb in zip(series, self._mp_funcs, self._branches, strict=True):
+            if qb == 0.0:
+                continue
+            if not math.isfinite(qb):
+                # The formula is inaccurate even at the top of the scan: only an
+                # exact (terminating) series, e.g. of (q + 1e20)**2 - 1e40, can stand in.
+                if math.isfinite(ser.gap):
+                    return False
+                qb = _SCAN_TOP_Q
+            for frac in _SERIES_CHECK_FRACTIONS:
+                q = np.array([qb * frac])
+                ref = mp_accurate(mp_f, q[0], self.leading_exponent)
+                if not mpmath.isfinite(ref):
+                    return False
+                val = float(ser.eval_float(q)[0])
+                if abs(ref) > 1e-300 and not abs(mpmath.mpf(val) - ref) <= FLOAT_RTOL * abs(ref):
+                    return False
+        return True
 
     # -- evaluation -----------------------------------------------------------
     def _limit_at_zero(self, i: int) -> sp.Expr | None:
@@ -217,26 +354,61 @@ class Expression(Potential):
         return self._zero_limits[i]
 
     def _eval(self, i: int, q):
-        """Formula i (0: U, 1: U', 2: U'') at q; the exact limit where q = 0 gives inf/nan."""
+        """Formula i (0: U, 1: U', 2: U'') at q; the exact limit where q = 0 gives inf/nan.
+
+        Below the float floor ``_q_branch`` (where the formula cancels) the
+        float64 path uses the checked series of U at 0, or mpmath at raised
+        precision when no series passed; the mpmath path uses the series where
+        its truncation error is below the working precision and otherwise
+        raises the precision until the value settles.
+        """
         if is_mp(q):
-            try:
-                out = mpmath.mpf(self._mp_funcs[i](q))
-            except (ZeroDivisionError, ValueError, TypeError):
-                out = mpmath.nan
-            if q == 0 and (i == 0 or not mpmath.isfinite(out)):
-                out = _to_mpf(self._limit_at_zero(i))
-            return out
+            return self._eval_mp(i, q)
         q = np.asarray(q, dtype=float)
         with np.errstate(all="ignore"):
             out = np.asarray(self._np_funcs[i](q), dtype=float)
         # A formula constant in q (U'' of a quadratic) comes back as a scalar.
         out = np.array(np.broadcast_to(out, q.shape), dtype=float)
+        near = q < self._branches[i]
+        if np.any(near) and self._series is not None:
+            out[near] = self._series[i].eval_float(q[near])
+            near[:] = False
+        slow = near | (q >= self._ceilings[i])
+        if np.any(slow):
+            with mpmath.workdps(20):
+                out[slow] = [
+                    float(mp_accurate(self._mp_funcs[i], float(x), self.leading_exponent))
+                    for x in q[slow]
+                ]
         # U(0) = 0 was proved exactly at construction; round-off of a formula such
         # as (q + 0.1)**2 - 0.01 must not turn it into 1.7e-18.
         fix = (q == 0) & ((i == 0) | ~np.isfinite(out))
         if np.any(fix):
             out[fix] = _as_float(self._limit_at_zero(i))
         return out
+
+    def _eval_mp(self, i: int, q):
+        dps = mpmath.mp.dps
+        if q == 0:
+            return _to_mpf(self._limit_at_zero(i))
+        if self._series is not None:
+            if dps not in self._mp_series_radius:
+                self._mp_series_radius[dps] = tuple(
+                    s.mp_radius(b, FLOAT_RTOL, dps + 3)
+                    for s, b in zip(self._series, self._branches, strict=True)
+                )
+            if q < self._mp_series_radius[dps][i]:
+                return self._series[i].eval_mp(q)
+        if q < self._branches[i] or q < _MP_TINY_Q or q >= self._ceilings[i]:
+            out = mp_accurate(self._mp_funcs[i], q, self.leading_exponent, dps=dps)
+        else:
+            with mpmath.workdps(dps + _MP_GUARD_DPS):
+                try:
+                    out = self._mp_funcs[i](q)
+                except (ZeroDivisionError, ValueError, TypeError):
+                    out = mpmath.nan
+                out = mpmath.mpf(mpmath.re(out)) if isinstance(out, mpmath.mpc) else out
+        return +mpmath.mpf(out)
 
     def _U(self, q):
         return self._eval(0, q)
@@ -246,6 +418,29 @@ class Expression(Potential):
 
     def _d2U(self, q):
         return self._eval(2, q)
+
+    def check_monotone(self, q_max: float) -> None:
+        """U' > 0 on a dense grid of (0, q_max], each float failure re-decided at raised precision.
+
+        U(0) = 0 and U ~ c q^n with c > 0 were decided exactly at construction.
+        A grid point where the float64 U' is not > 0 (an underflow, as for
+        q**32 at 1e-12 m) counts as a violation only if the mpmath value, at a
+        precision raised until it settles, confirms it.
+        """
+        grid = q_max * np.concatenate(
+            [np.logspace(-12, 0, _SCAN_LOG_POINTS), np.linspace(0, 1, _SCAN_LIN_POINTS)[1:]]
+        )
+        grid = np.unique(grid[grid > 0])
+        with np.errstate(all="ignore"):
+            f = self._dU(grid)
+        for i in np.flatnonzero(~(np.isfinite(f) & (f > 0))):
+            ref = mp_accurate(self._mp_funcs[1], float(grid[i]), self.leading_exponent)
+            if not (mpmath.isfinite(ref) and ref > 0):
+                shown = mpmath.nstr(ref, 6) if mpmath.isfinite(ref) else f"{f[i]:.6g}"
+                raise NonMonotoneError(
+                    f"U'(q) = {shown} N at q = {grid[i]:.6g} m is not > 0: the potential is "
+                    f"not monotone on (0, q_max = {q_max:.6g} m] (assumption 3 of section 3)"
+                )
 
     # -- inverse ----------------------------------------------------------------
     def _inverse(self, u: np.ndarray) -> np.ndarray:
@@ -274,20 +469,30 @@ class Expression(Potential):
         return out
 
     def _bracket(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) with U(lo) < t <= U(hi), U increasing at the doubling points."""
-        lo = np.full_like(t, self.q_scale)
-        while True:
+        """(lo, hi) with U(lo) < t <= U(hi), U increasing at the doubling points.
+
+        The search starts at half the leading-term estimate (t / c)^(1/n), which
+        is within a small factor of the root for small energies at any scale
+        (1e300 q^2 at t = 1e-300 has its root at 1e-300 m). U(lo) = 0 is an
+        accepted lower end: U > 0 near 0 was decided exactly (c > 0) at
+        construction, so a zero is an underflow of a value below t.
+        """
+        with np.errstate(all="ignore"):
+            guess = np.exp((np.log(t) - math.log(self.leading_coefficient)) / self.leading_exponent)
+        guess = np.where(np.isfinite(guess) & (guess > 0), guess, self.q_scale)
+        lo = np.maximum(0.5 * guess, _TINY_Q)
+        for _ in range(_MAX_BRACKET_STEPS):
             u_lo = self._U(lo)
-            bad = ~((u_lo > 0) & (u_lo < t))
+            bad = ~(u_lo < t)
             if not np.any(bad):
                 break
-            if np.any(bad & (lo < _TINY_Q)):
-                i = int(np.argmax(bad & (lo < _TINY_Q)))
+            lo = np.where(bad, np.maximum(lo / 4, _TINY_Q), lo)
+            if np.any(bad & (lo <= _TINY_Q) & ~(self._U(lo) < t)):
+                i = int(np.argmax(bad & (lo <= _TINY_Q)))
                 raise NonMonotoneError(
-                    f"Expression: U(q) = {u_lo[i]:.6g} J at q = {lo[i]:.3g} m, but U must rise "
-                    f"from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
+                    f"Expression: U(q) >= {t[i]:.6g} J already at q = {lo[i]:.3g} m, but U must "
+                    f"rise from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
                 )
-            lo = np.where(bad, lo / 4, lo)
         hi, u_hi = lo.copy(), u_lo
         for _ in range(_MAX_BRACKET_STEPS):
             need = u_hi < t
@@ -321,8 +526,10 @@ class Expression(Potential):
         if np.any(need & (u1 < u0)):
             i = int(np.argmax(need & (u1 < u0)))
             raise self._not_monotone(q1[i], t[i])
-        if np.any(need & (u1 == u0)):
-            i = int(np.argmax(need & (u1 == u0)))
+        # Equal zeros are an underflow of two values below t, not a plateau.
+        flat = need & (u1 == u0) & (u0 != 0)
+        if np.any(flat):
+            i = int(np.argmax(flat))
             raise NoTurningPointError(
                 f"Expression: U = {src} levels off at {u0[i]:.6g} J (equal at q = {q0[i]:.6g} m "
                 f"and {q1[i]:.6g} m) below the energy {t[i]:.6g} J: {tail}"

@@ -32,6 +32,7 @@ class PowerLaw(Potential):
         self.k = positive("k", k, "PowerLaw")
         self.p = positive("p", p, "PowerLaw")
         self.leading_exponent = self.p + 1.0
+        self.leading_coefficient = self.k / self.leading_exponent
         # Overlap at which U = 1 J: a natural starting point for bracket searches.
         self.q_scale = float((self.leading_exponent / self.k) ** (1.0 / self.leading_exponent))
 

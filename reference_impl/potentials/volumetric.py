@@ -14,6 +14,7 @@ or passed through it, and the potential raises `DomainError`.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ._checks import positive
@@ -34,6 +35,10 @@ class _VolumetricCap(Potential):
         self.q_scale = a
         # V_c ~ delta^2 near contact onset, so U ~ delta^(2 (alpha + 1)).
         self.leading_exponent = 2.0 * (self.alpha + 1.0)
+        # V_c = (pi bc / a^2)(a delta^2 - delta^3 / 3) ~ (pi bc / a) delta^2.
+        self.leading_coefficient = (
+            self.Kn / (self.alpha + 1.0) * (math.pi * bc / a) ** (self.alpha + 1.0)
+        )
 
     def _c0(self, q):
         return self._ns(q).pi * self._bc / self._a**2
