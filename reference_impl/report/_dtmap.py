@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..dtcrit import KINDS, default_criterion
+from ..claims.sec6_dt_safe_bound import kind_counts
+from ..dtcrit import KINDS
 from ..dtcrit_map import dt_crit_map
 
 SCENE_COLOURS = {"impact": "#1f77b4", "two-sided": "#d62728", "two-walls": "#2ca02c"}
@@ -26,136 +27,6 @@ def run_map(quick: bool, progress=None) -> pd.DataFrame:
 
 def _label(row) -> str:
     return f"{row['case']} {row['v0']:g} m/s"
-
-
-def kind_counts(df: pd.DataFrame) -> dict:
-    """Failures at or below Delta t_safe, counted by kind (cases with Delta t_safe > 0).
-
-    Returns
-    -------
-    dict
-        ``runaway`` (instabilities: a confirmed runaway strictly below dt_safe,
-        i.e. ``holds`` False), ``bounded`` (sustained cases with a bounded
-        excursion at a step <= dt_safe: large but saturating, not an
-        instability), ``accuracy`` (impacts whose rebound gain exceeds the
-        tolerance at a step <= dt_safe: an accuracy threshold), each with the
-        number of cases it was counted over, and the same per scene kind.
-    """
-    usable = df[~df.degenerate]
-    kind = usable.failure_kind.fillna("none")
-    sustained = usable[usable.scene != "impact"]
-    impacts = usable[usable.scene == "impact"]
-
-    def count(sub):
-        k = sub.failure_kind.fillna("none")
-        return {
-            "runaway": int(((k == "runaway") & ~sub.holds).sum()),
-            "bounded": int(((sub.scene != "impact") & (sub.bounded_ratio <= 1)).sum()),
-            "accuracy": int(((k == "accuracy") & (sub.ratio <= 1)).sum()),
-            "cases": int(len(sub)),
-        }
-
-    out = count(usable)
-    out["sustained_cases"] = int(len(sustained))
-    out["impact_cases"] = int(len(impacts))
-    out["per_scene"] = {k: count(usable[usable.scene == k]) for k in KINDS}
-    out["kinds_in_range"] = {str(k): int((kind == k).sum()) for k in sorted(set(kind))}
-    return out
-
-
-def sec6_verdict(df: pd.DataFrame) -> dict:
-    """Refuted if a case with dt_safe > 0 has a runaway (instability) strictly below dt_safe.
-
-    Bounded excursions and impact accuracy failures below dt_safe are counted
-    and shown separately; they are not instabilities and do not refute the claim.
-    """
-    usable = df[~df.degenerate]
-    runs = usable[(usable.failure_kind == "runaway") & ~usable.holds]
-    counts = kind_counts(df)
-    degenerate = df[df.degenerate]
-    parts = [
-        f"{k}: {v['runaway']}/{v['cases']}" for k, v in counts["per_scene"].items() if k != "impact"
-    ]
-    crit = default_criterion("two-sided")
-    measured = {
-        "kind_counts": counts,
-        "degenerate_cases": int(len(degenerate)),
-        "cases": int(len(df)),
-        "rule": crit.describe(),
-    }
-    if len(runs):
-        worst = runs.loc[runs.ratio.idxmin()]
-        measured["worst"] = {
-            "case": worst["case"],
-            "v0": float(worst.v0),
-            "scene": worst.scene,
-            "ratio": float(worst.ratio),
-        }
-        dom = int((runs.runaway_evidence == "domain").sum())
-        text = (
-            f"runaway (instability) below Δt_safe in {len(runs)} of "
-            f"{counts['sustained_cases']} sustained cases with Δt_safe > 0 "
-            f"({', '.join(parts)}; {dom} of them by leaving the potential's domain, "
-            f"q > q_sup); worst Δt_crit/Δt_safe = {worst.ratio:.4f} ({_label(worst)}, "
-            f"{worst.scene})"
-        )
-    else:
-        text = (
-            f"no runaway at or below Δt_safe in any of {counts['sustained_cases']} sustained cases"
-        )
-    text += (
-        f"; not instabilities, counted apart: bounded excursions (> {crit.factor:g} E0, "
-        f"saturating below {crit.confirm_level:g} E0) at a step ≤ Δt_safe in "
-        f"{counts['bounded']} sustained cases, and the impact accuracy threshold (rebound "
-        f"energy gain above tolerance) below Δt_safe in {counts['accuracy']} of "
-        f"{counts['impact_cases']} impacts"
-    )
-    acc = usable[usable.scene == "impact"].accuracy_ratio
-    if acc.notna().any():
-        measured["impact_accuracy_min_ratio"] = float(acc.min())
-        text += f" (smallest Δt_accuracy/Δt_safe = {acc.min():.4f})"
-    lin = df[(df.family == "power") & (df.p == 1.0) & (df.scene == "two-sided")]
-    if len(lin):
-        r = lin.iloc[0]
-        measured["linear_two_sided"] = {
-            "ratio": float(r.ratio),
-            "failure_kind": r.failure_kind,
-            "bounded_ratio": float(r.bounded_ratio),
-        }
-        text += (
-            f"; p = 1 two-sided: runaway at Δt_crit/Δt_safe = {r.ratio:.4f} (2/ω), the "
-            f"bounded orbit E0/(1−(ωΔt/2)²) crosses {crit.factor:g} E0 from "
-            f"{r.bounded_ratio:.4f}"
-        )
-    if len(degenerate):
-        ps = sorted({float(p) for p in degenerate.p if np.isfinite(p)})
-        text += (
-            f"; p < 1 ({', '.join(f'{p:g}' for p in ps)}): Δt_safe = 0 (sup U'/√(2U) "
-            f"infinite at onset), the bound is degenerate while Δt_crit is finite"
-        )
-    rec = df.recommended_ratio
-    if rec.notna().any():
-        i = rec.idxmin()
-        measured["recommended_min_margin"] = float(rec.min())
-        text += (
-            f"; the recommended step stays below Δt_crit everywhere "
-            f"(smallest Δt_crit/Δt_rec = {rec.min():.2f}, {_label(df.loc[i])}, "
-            f"{df.loc[i].scene})"
-            if rec.min() > 1
-            else f"; the recommended step fails in {int((rec <= 1).sum())} cases"
-        )
-    verdict = "refuted" if len(runs) else ("verified" if len(usable) else "inconclusive")
-    return {
-        "verdict": verdict,
-        "evidence": text,
-        "rule": (
-            "refuted if any case with Δt_safe > 0 has a runaway ("
-            + crit.describe()
-            + ") strictly below Δt_safe; bounded excursions and impact accuracy "
-            "failures are reported, not counted"
-        ),
-        "measured": measured,
-    }
 
 
 def map_figure(df: pd.DataFrame, path) -> None:
