@@ -21,6 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from reference_impl.claims.sec6_dt_safe_bound import kind_counts, verdict_from_map
 from reference_impl.dtcrit import (
     FAILURE_KINDS,
     MAX_LANES_PER_CALL,
@@ -38,7 +39,6 @@ from reference_impl.dtcrit import (
 from reference_impl.dtcrit_map import MapCase, dt_crit_map, recommended_step
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import Expression, PowerLaw
-from reference_impl.claims.sec6_dt_safe_bound import kind_counts, verdict_from_map
 from verification.assertions import assert_true
 
 HERTZ = PowerLaw(1.0, 1.5)
