@@ -392,7 +392,13 @@ def _sensitivity(r) -> list:
     for (case, scene), xs in groups.items():
         ratios = [v for v in (_fin(x["ratio"]) for x in xs) if v is not None]
         kinds = sorted({x.get("failure_kind") or "none" for x in xs})
-        what = "tolerances" if scene == "impact" else "criteria"
+        names = {"factor": "F", "n_steps": "N", "confirm_horizon": "horizon", "tol": "tol"}
+        varied = [
+            f"{short} {', '.join(f'{v:g}' for v in vals)}"
+            for key, short in names.items()
+            if len(vals := sorted({x.get(key) for x in xs if _fin(x.get(key)) is not None})) > 1
+        ]
+        what = f"criteria ({'; '.join(varied)})" if varied else "criteria"
         line = f"{case}, {scene}: {'/'.join(kinds)}"
         if ratios:
             line += (
