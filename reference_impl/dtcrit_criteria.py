@@ -11,13 +11,16 @@ search itself is `reference_impl.dtcrit.search_scene`, which re-exports these.
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
 from .errors import HCVInputError
+from .potentials.base import Potential
 
 __all__ = [
     "KINDS",
@@ -292,3 +295,28 @@ class SearchGrid:
 def _check_kind(kind: str) -> None:
     if kind not in KINDS:
         raise HCVInputError(f"scene kind must be one of {', '.join(KINDS)}; got {kind!r}")
+
+
+def _validated(potential, m, velocities, kind, gap, zeta, criterion):
+    """Checked (speeds, zeta, criterion) of a search, or `HCVInputError` naming the value."""
+    _check_kind(kind)
+    if not isinstance(potential, Potential):
+        raise HCVInputError(f"potential must be a Potential, got {potential!r}")
+    if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
+        raise HCVInputError(f"mass m must be a finite number > 0 (kg), got {m!r}")
+    it = velocities if isinstance(velocities, Iterable) else [velocities]
+    vs = [float(v) for v in itertools.islice(it, MAX_SPEEDS + 1)]
+    if len(vs) > MAX_SPEEDS:
+        raise HCVInputError(f"at most {MAX_SPEEDS} impact speeds per search, got more")
+    if not vs or not all(math.isfinite(v) and v > 0 for v in vs):
+        raise HCVInputError(f"velocities must be finite numbers > 0 (m/s), got {velocities!r}")
+    if gap is not None and not (math.isfinite(gap) and gap >= 0):
+        raise HCVInputError(f"gap must be a finite number >= 0 (m), got {gap!r}")
+    z = 0.0 if zeta is None else float(zeta)
+    if not (math.isfinite(z) and z >= 0):
+        raise HCVInputError(f"damping ratio zeta must be finite and >= 0, got {zeta!r}")
+    crit = default_criterion(kind) if criterion is None else criterion
+    want = ImpactGain if kind == "impact" else EnergyGrowth
+    if not isinstance(crit, want):
+        raise HCVInputError(f"scene kind {kind!r} needs a {want.__name__} criterion, got {crit!r}")
+    return vs, z, crit
