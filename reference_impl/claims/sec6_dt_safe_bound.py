@@ -256,9 +256,11 @@ def verdict_from_map(df) -> Measurement:
             else f"; the recommended step fails in {int((rec <= 1).sum())} cases"
         )
     verdict = "refuted" if len(runs) else ("verified" if len(usable) else "inconclusive")
+    n_slow = len(hz["moves_with_horizon"])
     head = (
-        f"below Δt_safe: {counts[RUNAWAY]} runaways, {counts['bounded']} bounded, "
-        f"{counts['accuracy']} accuracy"
+        f"below Δt_safe: {counts[RUNAWAY]} runaways"
+        + (f" ({n_slow} of them with a step that moves with the horizon)" if n_slow else "")
+        + f", {counts['bounded']} bounded, {counts['accuracy']} accuracy"
     )
     if counter:
         head += f"; worst runaway {counter['ratio']:.2f} Δt_safe ({counter['case']}, {counter['scene']})"
