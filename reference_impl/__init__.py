@@ -6,6 +6,22 @@ from .damping import (
     tsuji_coefficient,
     zeta_from_restitution,
 )
+from .dtcrit_criteria import (  # numba-free: the lane engine is imported by dtcrit only
+    FAILURE_KINDS,
+    MAX_CONFIRM_STEPS,
+    MAX_FACTOR,
+    MAX_LANES_PER_CALL,
+    MAX_N_PHASES,
+    MAX_N_STEPS,
+    MAX_REFINE_POINTS,
+    MAX_SCAN_POINTS,
+    MAX_SPEEDS,
+    MAX_TOL,
+    EnergyGrowth,
+    ImpactGain,
+    SearchGrid,
+    parse_criterion,
+)
 from .errors import (
     DomainError,
     ExpressionError,
@@ -52,4 +68,19 @@ __all__ = [
     "stiffening_indicator",
     "tsuji_coefficient",
     "zeta_from_restitution",
+    # critical-step search: failure kinds, criteria and the bounds of user sizes
+    "FAILURE_KINDS",
+    "MAX_CONFIRM_STEPS",
+    "MAX_FACTOR",
+    "MAX_LANES_PER_CALL",
+    "MAX_N_PHASES",
+    "MAX_N_STEPS",
+    "MAX_REFINE_POINTS",
+    "MAX_SCAN_POINTS",
+    "MAX_SPEEDS",
+    "MAX_TOL",
+    "EnergyGrowth",
+    "ImpactGain",
+    "SearchGrid",
+    "parse_criterion",
 ]

@@ -247,9 +247,10 @@ def _cmd_dt_crit(args) -> int:
     from .scenes import load_scene
 
     scene = load_scene(args.scene)
+    # Any given --criterion is parsed, so an empty one is refused rather than defaulted.
     criterion = (
         parse_criterion(args.criterion, scene.kind)
-        if args.criterion
+        if args.criterion is not None
         else default_criterion(scene.kind)
     )
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
@@ -276,6 +277,9 @@ def _cmd_dt_crit(args) -> int:
             ("dt_crit", "measured dt_crit (smallest failing) [s]"),
             ("ratio", "dt_crit / dt_safe"),
             ("holds", "bound holds"),
+            ("failure_kind", "failure kind"),
+            ("dt_bounded", "dt_bounded [s]"),
+            ("dt_accuracy", "dt_accuracy [s]"),
             ("recommended_dt", "recommended dt (this suite) [s]"),
             ("criterion", "criterion"),
         ]
@@ -336,8 +340,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--json", action="store_true", help="print one JSON object with a results list")
     d.add_argument(
         "--criterion",
-        help="instability criterion: 'factor=100,n_steps=1e5' for two-sided / two-walls "
-        "(energy growth), 'tol=0.01,n_phases=16' for a single impact (energy gain)",
+        help="failure criterion: 'factor=100,n_steps=1e5,confirm_factor=1e4,confirm_horizon=10' "
+        "for two-sided / two-walls (runaway: energy growth, confirmed), "
+        "'tol=0.01,n_phases=16' for a single impact (accuracy: rebound energy gain)",
     )
     d.set_defaults(func=_cmd_dt_crit)
     rp = sub.add_parser(

@@ -22,7 +22,10 @@ What fails is a named criterion, and each failure has a kind (``failure_kind``):
             steps), or leaving the potential's domain (q > q_sup: the body
             passed through the wall) or becoming non-finite. Only this is an
             instability: ``holds`` is False only for a runaway strictly below
-            Delta t_safe.
+            Delta t_safe. Where the growth is slow (q^2/(1+q^2), the linear
+            spring between two walls) the confirmed step moves with
+            confirm_horizon; the counterexample's ``steps`` / n_steps is the
+            horizon that step needed (the section 6 claim reports it).
 "bounded"   sustained scenes: the lane crossed factor E_0 but stayed below the
             confirmation level to the end of the longer horizon: a large but
             saturating excursion (e.g. the linear spring just below 2/omega,
@@ -58,16 +61,34 @@ that the same searches found safe on every case measured.
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field
-from typing import Any
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .errors import HCVInputError
+from .dtcrit_criteria import (
+    FAILURE_KINDS,
+    KINDS,
+    MAX_CONFIRM_STEPS,
+    MAX_FACTOR,
+    MAX_LANES_PER_CALL,
+    MAX_N_PHASES,
+    MAX_N_STEPS,
+    MAX_REFINE_POINTS,
+    MAX_SCAN_POINTS,
+    MAX_SPEEDS,
+    MAX_TOL,
+    Criterion,
+    EnergyGrowth,
+    ImpactGain,
+    SearchGrid,
+    _validated,
+    default_criterion,
+    parse_criterion,
+)
+from .dtcrit_result import DtCritResult
 from .integrators.verlet import (
     SCENE_IMPACT,
     SCENE_WALLS,
@@ -101,33 +122,8 @@ __all__ = [
     "search_scene",
 ]
 
-KINDS = ("impact", "two-sided", "two-walls")
-# Values of DtCritResult.failure_kind (None: no failure in the search range).
-FAILURE_KINDS = ("runaway", "bounded", "accuracy", None)
-
-# Upper bounds of the user-controlled sizes, checked before any work starts.
-# Step budget of a sustained lane: 1e7 steps is ~0.3 s of one lane at the
-# measured 3.5e7 lane-steps/s, 100x the default.
-MAX_N_STEPS = 10_000_000
-# Steps of a lane followed on to its confirmation (n_steps * confirm_horizon):
-# ~3 s per lane; a search confirms a few tens of lanes.
-MAX_CONFIRM_STEPS = 100_000_000
-# Energy factors (factor, and factor * confirm_factor): beyond 1e12 E_0 the
-# energies of a finite-precision runaway turn non-finite anyway (caught as blown).
-MAX_FACTOR = 1e12
-# Impact energy tolerance: a rebound with 1000x the impact energy tests nothing.
-MAX_TOL = 1e3
-# Onset phases per step of the single impact: 1e4 is 600x the default; the
-# search time grows linearly with it (its memory does not: lanes are chunked).
-MAX_N_PHASES = 10_000
-# Impact speeds of one search.
-MAX_SPEEDS = 1_000
-# Grid points of one scan, and refinement points per round.
-MAX_SCAN_POINTS = 10_000
-MAX_REFINE_POINTS = 1_024
-# Lanes per engine call: bounds the memory of one round (~200 B per lane).
-MAX_LANES_PER_CALL = 1 << 16
-
+# The default scan and refinement (frozen, so one instance serves every call).
+_DEFAULT_GRID = SearchGrid()
 # Without a gap in the scene, two-walls uses gap = this many q_max: a flight of
 # a few contact durations, so that N steps contain thousands of impacts.
 _DEFAULT_GAP_QMAX = 5.0
@@ -141,349 +137,6 @@ _IMPACT_MIN_STEPS = 64
 # In-contact energy guard of an impact lane (multiples of E_0): only stops
 # runaway arithmetic; the verdict uses the rebound energy.
 _IMPACT_GUARD = 1e12
-
-
-def _check_int(name: str, value, lo: int, hi: int) -> None:
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    if not ok or not lo <= value <= hi:
-        raise HCVInputError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
-
-
-def _check_real(name: str, value, lo: float, hi: float, lo_open: bool = False) -> None:
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if (
-        not ok
-        or not math.isfinite(value)
-        or not (value > lo if lo_open else value >= lo)
-        or value > hi
-    ):
-        raise HCVInputError(
-            f"{name} must be a finite number in {'(' if lo_open else '['}{lo:g}, "
-            f"{hi:g}], got {value!r}"
-        )
-
-
-@dataclass(frozen=True)
-class EnergyGrowth:
-    """Sustained-scene criterion: a runaway is E_n > factor E_0 for some n <= n_steps, confirmed.
-
-    A lane that crosses factor E_0 is followed on: it is a runaway only if it
-    also exceeds factor * confirm_factor E_0 within confirm_horizon * n_steps
-    steps (or blows up); otherwise the excursion is bounded (not an instability).
-
-    Attributes
-    ----------
-    factor : float
-        Energy growth factor (> 1, <= `MAX_FACTOR`), default 100.
-    n_steps : int
-        Step budget N (1 .. `MAX_N_STEPS`), default 1e5.
-    confirm_factor : float
-        Further growth that confirms a runaway (> 1; factor * confirm_factor <=
-        `MAX_FACTOR`), default 1e4: the linear spring's bounded orbit, peak
-        E_0 / (1 - (omega dt/2)^2), then counts as a runaway only within
-        5e-7 of 2/omega.
-    confirm_horizon : int
-        Steps of the confirmation in units of n_steps (>= 1; n_steps *
-        confirm_horizon <= `MAX_CONFIRM_STEPS`), default 10.
-    """
-
-    factor: float = 100.0
-    n_steps: int = 100_000
-    confirm_factor: float = 1e4
-    confirm_horizon: int = 10
-
-    def __post_init__(self):
-        _check_real("EnergyGrowth factor", self.factor, 1.0, MAX_FACTOR, lo_open=True)
-        _check_int("EnergyGrowth n_steps", self.n_steps, 1, MAX_N_STEPS)
-        _check_real(
-            "EnergyGrowth confirm_factor",
-            self.confirm_factor,
-            1.0,
-            MAX_FACTOR / self.factor,
-            lo_open=True,
-        )
-        _check_int(
-            "EnergyGrowth confirm_horizon",
-            self.confirm_horizon,
-            1,
-            max(1, MAX_CONFIRM_STEPS // int(self.n_steps)),
-        )
-
-    @property
-    def confirm_level(self) -> float:
-        """Energy (in E_0) that confirms a runaway."""
-        return self.factor * self.confirm_factor
-
-    @property
-    def confirm_steps(self) -> int:
-        """Step budget of a lane followed on to its confirmation."""
-        return int(self.n_steps) * int(self.confirm_horizon)
-
-    def describe(self) -> str:
-        """One line saying what counts as unstable (the rule used)."""
-        return (
-            f"runaway: E_n > {self.factor:g} E_0 for some n <= {int(self.n_steps)}, "
-            f"confirmed by E_n > {self.confirm_level:g} E_0 within {self.confirm_steps} steps "
-            f"(or q > q_sup / non-finite); a crossing that stays below is bounded, "
-            f"not an instability"
-        )
-
-
-@dataclass(frozen=True)
-class ImpactGain:
-    """Single-impact criterion: unstable when the rebound energy exceeds (1 + tol) E_0.
-
-    Attributes
-    ----------
-    tol : float
-        Allowed relative energy gain of a passive collision (0 .. `MAX_TOL`), default 0.01.
-    n_phases : int
-        Number (0 .. `MAX_N_PHASES`) of onset phases phi = (j + 1/2) / n_phases inside a step (the
-        contact starts a fraction phi of a step after a step boundary), tried
-        in addition to phi = 0; default 16. 0 tries the step boundary only.
-    """
-
-    tol: float = 0.01
-    n_phases: int = 16
-
-    def __post_init__(self):
-        _check_real("ImpactGain tol", self.tol, 0.0, MAX_TOL)
-        _check_int("ImpactGain n_phases", self.n_phases, 0, MAX_N_PHASES)
-
-    def describe(self) -> str:
-        """One line saying what counts as a failure (an accuracy threshold, not an instability)."""
-        return (
-            f"accuracy: rebound energy > (1 + {self.tol:g}) E_0 at onset phase 0 or any of "
-            f"{int(self.n_phases)} phases in a step (not an instability)"
-        )
-
-    def phases(self) -> np.ndarray:
-        """Onset phases (fractions of a step): 0, then the stratified ones."""
-        j = np.arange(int(self.n_phases))
-        return np.concatenate([[0.0], (j + 0.5) / max(int(self.n_phases), 1)])
-
-
-Criterion = EnergyGrowth | ImpactGain
-
-
-def default_criterion(kind: str) -> Criterion:
-    """The issue's default criterion for a scene kind."""
-    _check_kind(kind)
-    return ImpactGain() if kind == "impact" else EnergyGrowth()
-
-
-def parse_criterion(text: str, kind: str) -> Criterion:
-    """Criterion from ``"key=value,key=value"`` text (for the CLI ``--criterion``).
-
-    Keys: ``factor``, ``n_steps``, ``confirm_factor``, ``confirm_horizon``
-    (sustained scenes); ``tol``, ``n_phases`` (impact). Values are decimal
-    numbers (``1e5`` allowed); integer keys refuse non-integral values (1.5 is
-    not truncated). Empty text or items, unknown or repeated keys, non-finite
-    values and values beyond the stated bounds raise `HCVInputError` with one
-    line naming the value.
-    """
-    _check_kind(kind)
-    base = default_criterion(kind)
-    if kind == "impact":
-        fields = {"tol": float, "n_phases": int}
-    else:
-        fields = {"factor": float, "n_steps": int, "confirm_factor": float, "confirm_horizon": int}
-    if not isinstance(text, str) or not text.strip():
-        raise HCVInputError(f"criterion is empty; give key=value items ({', '.join(fields)})")
-    kw: dict[str, Any] = {}
-    for part in (s.strip() for s in text.split(",")):
-        key, sep, val = part.partition("=")
-        key, val = key.strip(), val.strip()
-        if not sep or key not in fields:
-            raise HCVInputError(
-                f"criterion for {kind!r} takes {', '.join(fields)} as key=value, got {part!r}"
-            )
-        if key in kw:
-            raise HCVInputError(f"criterion key {key!r} given twice (second value {val!r})")
-        try:
-            num = float(val)
-        except ValueError:
-            raise HCVInputError(f"criterion value {key}={val!r} is not a number") from None
-        if not math.isfinite(num):
-            raise HCVInputError(f"criterion value {key}={val!r} is not finite")
-        if fields[key] is int:
-            if num != math.floor(num):
-                raise HCVInputError(f"criterion value {key}={val!r} is not an integer")
-            kw[key] = int(num)
-        else:
-            kw[key] = num
-    return type(base)(**{**asdict(base), **kw})
-
-
-@dataclass(frozen=True)
-class SearchGrid:
-    """Grid scan and refinement of the search, in units of the reference step.
-
-    The reference step is Delta t_safe, or `tangent_step` when Delta t_safe = 0.
-
-    Attributes
-    ----------
-    lo, hi, step : float
-        Uniform scan lo, lo + step, ..., hi (plus exactly 1, i.e. Delta t_safe).
-    resolution : float
-        Final bracket width; the issue asks for 0.1 % of Delta t_safe.
-    refine_points : int
-        Interior points per refinement round.
-    hi_max : float
-        Upward extension limit when no scanned step fails (geometric, x1.25).
-    lo_min : float
-        Downward extension limit when the smallest scanned step fails (x0.5).
-    """
-
-    lo: float = 0.02
-    hi: float = 3.0
-    step: float = 0.01
-    resolution: float = 1e-3
-    refine_points: int = 16
-    hi_max: float = 100.0
-    lo_min: float = 1e-4
-
-    def __post_init__(self):
-        _check_real("SearchGrid lo", self.lo, 0.0, 1e6, lo_open=True)
-        _check_real("SearchGrid hi", self.hi, self.lo, 1e6)
-        _check_real("SearchGrid step", self.step, 0.0, 1e6, lo_open=True)
-        n = (self.hi - self.lo) / self.step + 1
-        if n > MAX_SCAN_POINTS:
-            raise HCVInputError(
-                f"SearchGrid scan has {n:.6g} points, more than "
-                f"{MAX_SCAN_POINTS}; widen step={self.step!r}"
-            )
-        # Below 1e-12 relative the bracket is below the round-off of the steps themselves.
-        _check_real("SearchGrid resolution", self.resolution, 1e-12, 1.0)
-        _check_int("SearchGrid refine_points", self.refine_points, 1, MAX_REFINE_POINTS)
-        _check_real("SearchGrid hi_max", self.hi_max, self.hi, 1e6)
-        _check_real("SearchGrid lo_min", self.lo_min, 1e-12, self.lo)
-
-    def scan(self) -> np.ndarray:
-        """The scanned steps in units of the reference step."""
-        n = int(round((self.hi - self.lo) / self.step)) + 1
-        return np.unique(np.concatenate([self.lo + self.step * np.arange(n), [1.0]]))
-
-
-@dataclass
-class DtCritResult:
-    """Outcome of one critical-step search (one speed, one scene kind).
-
-    Attributes
-    ----------
-    v0 : float
-        Impact speed (m/s).
-    kind : str
-        Scene kind.
-    dt_safe : float
-        Section 6 bound, supremum over [0, q_max] (s); 0 when the supremum is infinite.
-    dt_safe_shortcut : float
-        Endpoint shortcut 2 m v0 / U'(q_max) (s).
-    dt_crit : float
-        Smallest failing step found (s): a runaway for the sustained scenes, the
-        accuracy threshold for the single impact; inf when none failed up to the
-        search limit.
-    ratio : float
-        dt_crit / dt_safe (inf when dt_safe = 0 or dt_crit = inf).
-    criterion : str
-        What counted as a failure (the rule used, see the module docstring).
-    holds : bool
-        False only for a runaway strictly below dt_safe (dt_crit < dt_safe with
-        failure_kind "runaway"); bounded excursions and impact accuracy failures
-        never make it False; vacuously True when dt_safe = 0 (see `degenerate`).
-    counterexample : dict or None
-        When dt_crit < dt_safe (a runaway, or an impact accuracy failure): the
-        failing step and its energy history.
-    dt_stable : float
-        Largest stable step tried below dt_crit (s); the bracket is [dt_stable, dt_crit].
-    dt_crit_onset : float or None
-        Impact only: dt_crit with the onset exactly at a step boundary (phase 0).
-    q_max : float
-        Turning point (m).
-    geometry : str
-        Geometry class of section 6 on (0, q_max].
-    degenerate : bool
-        dt_safe = 0 (sup U'/sqrt(2U) infinite at q -> 0, e.g. p < 1): no usable step.
-    dt_tangent : float
-        2 sqrt(m / max_[0, q_max] U'') (s), the linearised limit at the stiffest point.
-    recommended_dt : float
-        The recommended step (s), `reference_impl.dtcrit_map.recommended_step`.
-    lane_steps : int
-        Verlet steps integrated by the whole `search_scene` call (all lanes).
-    engine : str
-        "numba" or "numpy".
-    failure_kind : {"runaway", "bounded", "accuracy", None}
-        Kind of the failure found (module docstring): "runaway" when dt_crit is
-        a confirmed runaway, "bounded" when only bounded excursions were found,
-        "accuracy" for an impact's rebound-energy threshold, None when nothing
-        failed in the search range.
-    dt_bounded : float
-        Sustained scenes: smallest step with a bounded excursion below dt_crit
-        (s); inf when none.
-    bounded_E_max_over_E0 : float
-        Peak E_n / E_0 of the bounded excursion at dt_bounded (NaN when none).
-    dt_accuracy : float or None
-        Impact only: largest step below the first failure whose rebound energy
-        gain stays within tol (s), i.e. the lower end of the bracket.
-    accuracy_ratio : float or None
-        Impact only: dt_accuracy / dt_safe (inf when dt_safe = 0).
-    runaway_evidence : str or None
-        For a runaway: "confirmed" (E_n exceeded the confirmation level),
-        "domain" (q > q_sup or non-finite: the lane blew up).
-    """
-
-    v0: float
-    kind: str
-    dt_safe: float
-    dt_safe_shortcut: float
-    dt_crit: float
-    ratio: float
-    criterion: str
-    holds: bool
-    counterexample: dict | None
-    dt_stable: float
-    dt_crit_onset: float | None
-    q_max: float
-    geometry: str
-    degenerate: bool
-    dt_tangent: float
-    recommended_dt: float = math.nan
-    lane_steps: int = 0
-    engine: str = ""
-    failure_kind: str | None = None
-    dt_bounded: float = math.inf
-    bounded_E_max_over_E0: float = math.nan
-    dt_accuracy: float | None = None
-    accuracy_ratio: float | None = None
-    runaway_evidence: str | None = None
-    extra: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-ready dict (inf written as the string "inf")."""
-        d = asdict(self)
-        extra = d.pop("extra")
-        d.update(extra)
-        return _jsonable(d)
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        x = float(x)
-        return x if math.isfinite(x) else ("inf" if x > 0 else "-inf" if x < 0 else "nan")
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
-def _check_kind(kind: str) -> None:
-    if kind not in KINDS:
-        raise HCVInputError(f"scene kind must be one of {', '.join(KINDS)}; got {kind!r}")
 
 
 def tangent_step(pot: Potential, m: float, q_max: float) -> float:
@@ -797,30 +450,6 @@ def _result(
     )
 
 
-def _validated(potential, m, velocities, kind, gap, zeta, criterion):
-    _check_kind(kind)
-    if not isinstance(potential, Potential):
-        raise HCVInputError(f"potential must be a Potential, got {potential!r}")
-    if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
-        raise HCVInputError(f"mass m must be a finite number > 0 (kg), got {m!r}")
-    it = velocities if isinstance(velocities, Iterable) else [velocities]
-    vs = [float(v) for v in itertools.islice(it, MAX_SPEEDS + 1)]
-    if len(vs) > MAX_SPEEDS:
-        raise HCVInputError(f"at most {MAX_SPEEDS} impact speeds per search, got more")
-    if not vs or not all(math.isfinite(v) and v > 0 for v in vs):
-        raise HCVInputError(f"velocities must be finite numbers > 0 (m/s), got {velocities!r}")
-    if gap is not None and not (math.isfinite(gap) and gap >= 0):
-        raise HCVInputError(f"gap must be a finite number >= 0 (m), got {gap!r}")
-    z = 0.0 if zeta is None else float(zeta)
-    if not (math.isfinite(z) and z >= 0):
-        raise HCVInputError(f"damping ratio zeta must be finite and >= 0, got {zeta!r}")
-    crit = default_criterion(kind) if criterion is None else criterion
-    want = ImpactGain if kind == "impact" else EnergyGrowth
-    if not isinstance(crit, want):
-        raise HCVInputError(f"scene kind {kind!r} needs a {want.__name__} criterion, got {crit!r}")
-    return vs, z, crit
-
-
 def search_scene(
     potential: Potential,
     m: float,
@@ -830,7 +459,7 @@ def search_scene(
     gap: float | None = None,
     zeta: float | None = None,
     criterion: Criterion | None = None,
-    grid: SearchGrid = SearchGrid(),
+    grid: SearchGrid = _DEFAULT_GRID,
     progress: Callable[[float, float], None] | None = None,
     engine: str = "auto",
     recommend: Callable | None | str = "default",

@@ -197,7 +197,7 @@ def oscillation_period(pot: Potential, m: float, v0: float) -> float:
     return 4.0 * val
 
 
-def _row(case: MapCase, r, period: float) -> dict:
+def _row(case: MapCase, r, period: float, crit: Criterion) -> dict:
     ce = r.counterexample or {}
     return {
         "family": case.family,
@@ -207,6 +207,9 @@ def _row(case: MapCase, r, period: float) -> dict:
         "v0": r.v0,
         "scene": r.kind,
         "criterion": r.criterion,
+        # the sustained criterion's detection budget and confirmation horizon (in n_steps)
+        "n_steps": getattr(crit, "n_steps", np.nan),
+        "confirm_horizon": getattr(crit, "confirm_horizon", np.nan),
         "q_max": r.q_max,
         "geometry": r.geometry,
         "dt_safe": r.dt_safe,
@@ -269,7 +272,8 @@ def dt_crit_map(
     -------
     pandas.DataFrame
         One row per (case, v0, scene) with columns family, case, p, m, v0, scene,
-        criterion, q_max (m), geometry, dt_safe, dt_shortcut, dt_tangent,
+        criterion, n_steps and confirm_horizon (sustained criterion; NaN for
+        impacts), q_max (m), geometry, dt_safe, dt_shortcut, dt_tangent,
         dt_crit, dt_stable, dt_crit_onset (s), ratio = dt_crit / dt_safe,
         holds (False only for a runaway below dt_safe), failure_kind
         ("runaway", "bounded", "accuracy" or None, see `reference_impl.dtcrit`),
@@ -280,7 +284,8 @@ def dt_crit_map(
         dt_crit / recommended_dt (> 1 means the recommendation is safe),
         period T(E) (s), dt_crit_over_period, and the counterexample's step
         (s), E/E_0 (rebound energy for impacts, largest E_n otherwise), steps
-        run and status when the claim fails.
+        run and status when the claim fails (for a runaway, counterexample_steps
+        / n_steps is the confirmation horizon that step needed).
     """
     cases = coverage(quick) if cases is None else list(cases)
     criteria = criteria or {}
@@ -292,7 +297,7 @@ def dt_crit_map(
             for r in search_scene(
                 case.potential, case.m, case.velocities, kind, criterion=crit, grid=grid
             ):
-                rows.append(_row(case, r, periods[r.v0]))
+                rows.append(_row(case, r, periods[r.v0], crit))
             done += 1
             if progress is not None:
                 progress(done, total)
@@ -308,22 +313,29 @@ def criterion_sensitivity(
     factors: Sequence[float] = (10.0, 100.0, 1e4),
     n_steps: Sequence[int] = (1_000, 10_000, 100_000, 1_000_000),
     tols: Sequence[float] = (1e-3, 1e-2, 1e-1, 1.0),
+    horizons: Sequence[int] = (EnergyGrowth().confirm_horizon,),
     gap: float | None = None,
     grid: SearchGrid = _DEFAULT_GRID,
 ) -> pd.DataFrame:
     """How the measured Delta t_crit moves with the definition of "unstable".
 
-    Sustained scenes: every (factor, n_steps) pair of `EnergyGrowth`.
+    Sustained scenes: every (factor, n_steps, confirm_horizon) of `EnergyGrowth`
+    (``horizons``: confirmation horizons in units of n_steps).
     Impact: every tol of `ImpactGain`, with the onset at a step boundary
     (column dt_crit_onset) and at the worst of the stratified phases (dt_crit).
 
     Returns
     -------
     pandas.DataFrame
-        Columns scene, factor, n_steps, tol, dt_safe, dt_crit, dt_crit_onset, ratio,
-        failure_kind, dt_bounded.
+        Columns scene, factor, n_steps, confirm_horizon, tol, dt_safe, dt_crit,
+        dt_crit_onset, ratio, failure_kind, dt_bounded, bounded_ratio, dt_accuracy.
     """
-    for name, vals in (("factors", factors), ("n_steps", n_steps), ("tols", tols)):
+    for name, vals in (
+        ("factors", factors),
+        ("n_steps", n_steps),
+        ("tols", tols),
+        ("horizons", horizons),
+    ):
         if len(vals) > _MAX_SENS_VALUES:
             raise HCVInputError(
                 f"criterion_sensitivity takes at most {_MAX_SENS_VALUES} {name}, got {len(vals)}"
@@ -332,7 +344,12 @@ def criterion_sensitivity(
     if kind == "impact":
         crits = [replace(ImpactGain(), tol=float(t)) for t in tols]
     else:
-        crits = [EnergyGrowth(float(f), int(n)) for f in factors for n in n_steps]
+        crits = [
+            EnergyGrowth(float(f), int(n), confirm_horizon=int(h))
+            for f in factors
+            for n in n_steps
+            for h in horizons
+        ]
     for c in crits:
         r = search_scene(potential, m, [v0], kind, gap=gap, criterion=c, grid=grid)[0]
         rows.append(
@@ -340,6 +357,7 @@ def criterion_sensitivity(
                 "scene": kind,
                 "factor": getattr(c, "factor", np.nan),
                 "n_steps": getattr(c, "n_steps", np.nan),
+                "confirm_horizon": getattr(c, "confirm_horizon", np.nan),
                 "tol": getattr(c, "tol", np.nan),
                 "dt_safe": r.dt_safe,
                 "dt_crit": r.dt_crit,
@@ -347,6 +365,8 @@ def criterion_sensitivity(
                 "ratio": r.ratio,
                 "failure_kind": r.failure_kind,
                 "dt_bounded": r.dt_bounded,
+                "bounded_ratio": r.dt_bounded / r.dt_safe if r.dt_safe > 0 else math.inf,
+                "dt_accuracy": np.nan if r.dt_accuracy is None else r.dt_accuracy,
             }
         )
     return pd.DataFrame(rows)

@@ -21,6 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from reference_impl.claims.sec6_dt_safe_bound import kind_counts, verdict_from_map
 from reference_impl.dtcrit import (
     FAILURE_KINDS,
     MAX_LANES_PER_CALL,
@@ -38,7 +39,6 @@ from reference_impl.dtcrit import (
 from reference_impl.dtcrit_map import MapCase, dt_crit_map, recommended_step
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import Expression, PowerLaw
-from reference_impl.report._dtmap import kind_counts, sec6_verdict
 from verification.assertions import assert_true
 
 HERTZ = PowerLaw(1.0, 1.5)
@@ -95,6 +95,50 @@ def test_linear_two_sided_spring_holds_with_dt_crit_at_2_over_omega(tmp_path):
         should="in (0.99, 1) with peak <= E0/(1-x^2)",
         claim="tool",
         call="dt_bounded",
+    )
+
+
+@pytest.mark.parametrize("text", ["", "   "])
+def test_cli_refuses_an_empty_criterion(tmp_path, text):
+    """`--criterion ""` is parsed (not taken as the default): exit 2, one line, no search."""
+    out = _cli("dt-crit", "hertz", "--criterion", text, cwd=tmp_path)
+    lines = out.stderr.strip().splitlines()
+    assert_true(
+        out.returncode == 2 and len(lines) == 1 and "criterion" in lines[0] and not out.stdout,
+        got=f"exit {out.returncode}, stderr {out.stderr!r}, stdout {out.stdout[:200]!r}",
+        should="exit 2 with one line naming the criterion, nothing printed on stdout",
+        claim="tool",
+        call=f"hcv dt-crit hertz --criterion {text!r}",
+    )
+
+
+def test_cli_table_shows_failure_kind_and_sizes(tmp_path):
+    """The text table carries failure_kind, dt_bounded and dt_accuracy as the JSON does."""
+    (tmp_path / "lin.toml").write_text(
+        'name = "linear"\nmass = 1.0\nvelocities = [1.0]\nkind = "two-sided"\n\n'
+        '[potential]\nfamily = "power"\nk = 1.0\np = 1.0\n'
+    )
+    out = _cli("dt-crit", "lin.toml", "--criterion", "n_steps=2e4", cwd=tmp_path)
+    r = search_scene(LINEAR, 1.0, [1.0], "two-sided", criterion=EnergyGrowth(n_steps=20_000))[0]
+    rows = {
+        # rich may wrap the unit " [s]" onto the next line of a narrow terminal
+        line.split("│")[1].strip().removesuffix(" [s]"): line.split("│")[2].strip()
+        for line in out.stdout.splitlines()
+        if line.count("│") >= 3
+    }
+    # failure kind (runaway / bounded / accuracy), the bounded step and (impacts
+    # only, so empty here) the accuracy step, as `_fmt` prints them.
+    want = {
+        "failure kind": r.failure_kind,
+        "dt_bounded": f"{r.dt_bounded:.10g}",
+        "dt_accuracy": "",
+    }
+    assert_true(
+        out.returncode == 0 and all(rows.get(k) == v for k, v in want.items()),
+        got=f"exit {out.returncode}: {rows}",
+        should=f"rows {want}",
+        claim="tool",
+        call="hcv dt-crit lin.toml (table)",
     )
 
 
@@ -219,6 +263,9 @@ def test_map_rows_and_verdict_count_only_runaways():
         runaway_evidence=None,
         recommended_ratio=2.0,
         geometry="stiffening",
+        criterion="synthetic",
+        n_steps=100_000,
+        counterexample_steps=1_000,
     )
     rows = pd.DataFrame(
         [
@@ -246,20 +293,20 @@ def test_map_rows_and_verdict_count_only_runaways():
         claim="tool",
         call="kind_counts",
     )
-    v = sec6_verdict(rows.iloc[1:])
+    v = verdict_from_map(rows.iloc[1:])
     assert_true(
-        v["verdict"] == "verified" and v["measured"]["kind_counts"]["bounded"] == 1,
-        got=v["verdict"],
+        v.verdict == "verified" and v.figures["per_kind"] == dict(runaway=0, bounded=1, accuracy=1),
+        got=f"{v.verdict}: {v.figures['per_kind']}",
         should="verified: bounded and accuracy are not instabilities",
         claim="tool",
-        call="sec6_verdict",
+        call="verdict_from_map",
     )
     assert_true(
-        sec6_verdict(rows)["verdict"] == "refuted",
-        got=sec6_verdict(rows)["verdict"],
+        verdict_from_map(rows).verdict == "refuted",
+        got=verdict_from_map(rows).verdict,
         should="refuted by the runaway",
         claim="tool",
-        call="sec6_verdict",
+        call="verdict_from_map",
     )
 
 

@@ -2,16 +2,23 @@
 
 Measured on the critical-step map (`reference_impl.dtcrit_map.dt_crit_map`):
 for every case and scene the smallest failing step is searched and compared
-with Delta t_safe. A failing step below the bound is counted by its kind
-(``failure_kind`` of the map's rows):
+with Delta t_safe. Every map row carries the engine's ``failure_kind``; a
+failure at or below the bound is counted by kind:
 
-* ``runaway`` -- the energy grows without saturating: an instability, the only
-  kind that is a counterexample of the claim;
-* ``bounded`` -- a large but bounded orbit (e.g. the linear spring just below 2/omega);
-* ``accuracy`` -- a single impact whose rebound energy error exceeds a tolerance;
-* ``unclassified`` -- the map carries no ``failure_kind`` (an older map): the
-  failure cannot be told apart, so the verdict is inconclusive unless a runaway
-  is known.
+* ``runaway`` -- energy growth confirmed past the confirmation level (or the
+  body left the potential's domain) strictly below Delta t_safe (``holds`` is
+  False): an instability, the only kind that is a counterexample of the claim;
+* ``bounded`` -- a sustained scene whose energy crossed the detection level at a
+  step <= Delta t_safe but saturated below the confirmation level (e.g. the
+  linear spring just below 2/omega): not an instability;
+* ``accuracy`` -- a single impact whose rebound energy gain exceeds the
+  tolerance at a step <= Delta t_safe: an accuracy threshold, not an instability.
+
+A runaway is confirmed within ``confirm_horizon * n_steps`` steps. The map
+records how many steps the failing lane needed (``counterexample_steps``): a
+runaway that needed more than ``n_steps`` would not be a failure with a
+shorter horizon, so its Delta t_crit moves with the horizon (slow growth, e.g.
+q^2/(1+q^2)); those are reported by name beside the verdict.
 """
 
 from __future__ import annotations
@@ -31,13 +38,13 @@ STATEMENT = (
     "(2UU'' >= U'^2, all power laws p >= 1) it equals 2 m v0 / U'(qmax)."
 )
 
-# Kinds of a failing step (the map's failure_kind); only RUNAWAY is an instability.
+# Kinds of a failing step at or below the bound; only RUNAWAY is an instability.
 RUNAWAY = "runaway"
 FAILURE_KINDS = (RUNAWAY, "bounded", "accuracy")
-UNCLASSIFIED = "unclassified"
-# A failing step "lies below the bound" when dt_crit / dt_safe <= 1: the search brackets
-# dt_crit to 0.1 % of dt_safe (SearchGrid().resolution), so no extra margin is added;
-# the map's own `holds` flag is used where it says the bound fails.
+# "At or below the bound": a runaway counts when the engine's `holds` is False
+# (dt_crit < dt_safe); bounded excursions and accuracy limits when their step /
+# dt_safe <= 1. The search brackets every step to 0.1 % of dt_safe
+# (SearchGrid().resolution), so no extra margin is added.
 
 _MAPS: dict = {}
 
@@ -57,22 +64,48 @@ def use_map(quick: bool, df) -> None:
     measure.cache_clear()
 
 
-def failure_kind(row) -> str | None:
-    """Kind of the failing step of one map row below the bound; None if it holds there."""
-    kind = row.get("failure_kind") if hasattr(row, "get") else None
-    has_key = "failure_kind" in row
-    below = (not bool(row["holds"])) or (
-        kind is not None and _is_set(kind) and float(row["ratio"]) <= 1.0
-    )
-    if bool(row["degenerate"]) or not below:
-        return None
-    if not has_key or not _is_set(kind):
-        return UNCLASSIFIED
-    return str(kind)
+def _finite_le_1(x) -> bool:
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return False
+    return math.isfinite(x) and x <= 1.0
 
 
-def _is_set(kind) -> bool:
-    return kind is not None and not (isinstance(kind, float) and math.isnan(kind))
+def is_runaway_below(row) -> bool:
+    """A confirmed runaway strictly below Delta t_safe (the engine's ``holds`` is False)."""
+    return not bool(row["degenerate"]) and row["failure_kind"] == RUNAWAY and not bool(row["holds"])
+
+
+def kinds_below(row) -> list[str]:
+    """Kinds of failure found at or below Delta t_safe in one map row (may be several)."""
+    if bool(row["degenerate"]):
+        return []
+    out = []
+    if is_runaway_below(row):
+        out.append(RUNAWAY)
+    if row["scene"] != "impact" and _finite_le_1(row["bounded_ratio"]):
+        out.append("bounded")
+    if row["failure_kind"] == "accuracy" and _finite_le_1(row["ratio"]):
+        out.append("accuracy")
+    return out
+
+
+def confirm_horizon_needed(row) -> float:
+    """Steps the runaway at dt_crit took to be confirmed, in units of n_steps (NaN if none).
+
+    A value > 1 means the runaway is confirmed only after the detection budget:
+    with a confirmation horizon below this value, that step is not a failure and
+    Delta t_crit moves up.
+    """
+    n = row.get("n_steps", math.nan) if hasattr(row, "get") else math.nan
+    steps = row.get("counterexample_steps", math.nan)
+    if not is_runaway_below(row):
+        return math.nan
+    try:
+        return float(steps) / float(n)
+    except (TypeError, ValueError, ZeroDivisionError):
+        return math.nan
 
 
 def _label(row) -> str:
@@ -80,49 +113,81 @@ def _label(row) -> str:
 
 
 def describe(row) -> str:
-    """One line on a failing row, from its measured fields."""
-    kind = failure_kind(row)
+    """One line on a map row's failure at or below the bound, from its measured fields."""
+    kinds = kinds_below(row) or ["no failure"]
     E = row.get("counterexample_E_ratio", math.nan)
     steps = row.get("counterexample_steps", math.nan)
     status = row.get("counterexample_status", "")
+    h = confirm_horizon_needed(row)
     return (
-        f"{kind or 'no failure'} at Δt = {float(row['ratio']):.4f} Δt_safe ({_label(row)}; "
+        f"{'+'.join(kinds)} at Δt = {float(row['ratio']):.4f} Δt_safe ({_label(row)}; "
         f"{row['criterion']}; E/E0 = {g(E, 4)} after {g(steps, 6)} steps"
-        f"{', ' + str(status) if status else ''})"
+        f"{', ' + str(status) if status else ''}"
+        f"{f'; confirmed after {h:.2f} × n_steps' if math.isfinite(h) else ''})"
     )
+
+
+def kind_counts(df) -> dict:
+    """Failures at or below Delta t_safe counted by kind (cases with Delta t_safe > 0).
+
+    Returns
+    -------
+    dict
+        ``runaway``, ``bounded``, ``accuracy`` (see the module docstring) and
+        ``cases`` over all usable cases, ``sustained_cases``, ``impact_cases``,
+        the same per scene kind (``per_scene``), and ``kinds_in_range``: the
+        engine's failure_kind of every usable row, at any step.
+    """
+    usable = df[~df.degenerate]
+
+    def count(sub):
+        ks = [kinds_below(r) for _, r in sub.iterrows()]
+        out = {k: sum(k in x for x in ks) for k in FAILURE_KINDS}
+        out["cases"] = int(len(sub))
+        return out
+
+    out = count(usable)
+    out["sustained_cases"] = int((usable.scene != "impact").sum())
+    out["impact_cases"] = int((usable.scene == "impact").sum())
+    out["per_scene"] = {k: count(usable[usable.scene == k]) for k in dict.fromkeys(usable.scene)}
+    fk = usable.failure_kind.fillna("none")
+    out["kinds_in_range"] = {str(k): int((fk == k).sum()) for k in sorted(set(fk))}
+    return out
+
+
+def _horizon_findings(runs) -> dict:
+    """Runaways below the bound split by whether their step moves with the horizon."""
+    need = {_label(r): confirm_horizon_needed(r) for _, r in runs.iterrows()}
+    moving = {k: v for k, v in need.items() if math.isfinite(v) and v > 1.0}
+    return {"confirm_horizon_needed": need, "moves_with_horizon": moving}
 
 
 def verdict_from_map(df) -> Measurement:
-    """Refuted iff at least one runaway lies below Delta t_safe; counts per kind reported."""
+    """Refuted iff at least one runaway lies strictly below Delta t_safe; counts per kind."""
     usable = df[~df.degenerate]
-    kinds = [failure_kind(row) for _, row in df.iterrows()]
-    counts = {k: 0 for k in FAILURE_KINDS + (UNCLASSIFIED,)}
-    per_scene: dict[str, dict] = {}
-    for (_, row), kind in zip(df.iterrows(), kinds, strict=True):
-        if bool(row["degenerate"]):
-            continue
-        sc = per_scene.setdefault(row["scene"], {"cases": 0, **{k: 0 for k in counts}})
-        sc["cases"] += 1
-        if kind is not None:
-            counts[kind] = counts.get(kind, 0) + 1
-            sc[kind] = sc.get(kind, 0) + 1
-    runaways = [row for (_, row), k in zip(df.iterrows(), kinds, strict=True) if k == RUNAWAY]
+    runs = df[[is_runaway_below(r) for _, r in df.iterrows()]]
+    counts = kind_counts(df)
+    hz = _horizon_findings(runs)
     measured = {
-        "per_kind": counts,
-        "per_scene": per_scene,
+        "per_kind": {k: counts[k] for k in FAILURE_KINDS},
+        "kind_counts": counts,
         "cases": int(len(df)),
         "usable_cases": int(len(usable)),
         "degenerate_cases": int(df.degenerate.sum()),
-        "classified": "failure_kind" in df.columns,
+        **hz,
     }
-    kind_text = ", ".join(f"{n} {k}" for k, n in counts.items() if n) or "none"
+    sc = counts["sustained_cases"]
     text = (
-        f"failing steps at or below Δt_safe in {sum(counts.values())} of {len(usable)} "
-        f"cases with Δt_safe > 0, by kind: {kind_text}"
+        f"at or below Δt_safe, in {len(usable)} cases with Δt_safe > 0: "
+        f"{counts[RUNAWAY]} runaways (instabilities) in {sc} sustained cases, "
+        f"{counts['bounded']} bounded excursions (saturating, not instabilities) in {sc} "
+        f"sustained cases, {counts['accuracy']} impact accuracy limits (rebound gain above "
+        f"tolerance, not instabilities) in {counts['impact_cases']} impacts"
     )
     counter = None
-    if runaways:
-        worst = min(runaways, key=lambda r: float(r["ratio"]))
+    if len(runs):
+        worst = runs.loc[runs.ratio.idxmin()]
+        dom = int((runs.runaway_evidence == "domain").sum())
         counter = {
             "case": worst["case"],
             "v0": float(worst["v0"]),
@@ -130,19 +195,49 @@ def verdict_from_map(df) -> Measurement:
             "ratio": float(worst["ratio"]),
             "criterion": worst["criterion"],
             "failure_kind": RUNAWAY,
+            "confirm_horizon_needed": confirm_horizon_needed(worst),
         }
         measured["worst_runaway"] = counter
-        text += f"; worst runaway: {describe(worst)}"
-    if counts[UNCLASSIFIED]:
-        text += (
-            "; the map gives no failure_kind, so these failures are not told apart "
-            "(runaway, bounded orbit or accuracy)"
-        )
+        measured["runaways_by_domain_exit"] = dom
+        text += f"; {dom} of the runaways left the potential's domain; worst: {describe(worst)}"
+        fixed = runs[[not (confirm_horizon_needed(r) > 1.0) for _, r in runs.iterrows()]]
+        if hz["moves_with_horizon"]:
+            mv = ", ".join(f"{k} ({v:.2f})" for k, v in hz["moves_with_horizon"].items())
+            text += (
+                f"; {len(hz['moves_with_horizon'])} of the {len(runs)} runaways were confirmed "
+                f"only after the detection budget n_steps (needed horizon in n_steps: {mv}): "
+                f"their Δt_crit moves with the confirmation horizon (slow growth)"
+            )
+        if len(fixed):
+            wf = fixed.loc[fixed.ratio.idxmin()]
+            measured["worst_runaway_within_n_steps"] = {
+                "case": wf["case"],
+                "v0": float(wf["v0"]),
+                "scene": wf["scene"],
+                "ratio": float(wf["ratio"]),
+            }
+            text += (
+                f"; {len(fixed)} runaways are confirmed within n_steps (the same step for "
+                f"any horizon >= 1), worst at {float(wf.ratio):.4f} Δt_safe ({_label(wf)})"
+            )
     lin = df[(df.family == "power") & (df.p == 1.0) & (df.scene == "two-sided")]
     if len(lin):
-        r = float(lin.ratio.iloc[0])
-        measured["linear_two_sided_ratio"] = r
-        text += f"; linear spring two-sided: Δt_crit/Δt_safe = {r:.4f} (exact 2/ω bound: 1)"
+        r = lin.iloc[0]
+        measured["linear_two_sided"] = {
+            "ratio": float(r.ratio),
+            "failure_kind": r.failure_kind,
+            "holds": bool(r.holds),
+            "bounded_ratio": float(r.bounded_ratio),
+        }
+        text += (
+            f"; linear spring two-sided: {r.failure_kind or 'no failure'} at Δt_crit/Δt_safe = "
+            f"{float(r.ratio):.4f} (exact 2/ω bound: 1), bounded excursions from "
+            f"{g(r.bounded_ratio, 4)} Δt_safe"
+        )
+    acc = usable[usable.scene == "impact"].accuracy_ratio
+    if acc.notna().any():
+        measured["impact_accuracy_min_ratio"] = float(acc.min())
+        text += f"; smallest impact Δt_accuracy/Δt_safe = {acc.min():.4f}"
     degenerate = df[df.degenerate]
     if len(degenerate):
         ps = sorted({float(p) for p in degenerate.p if np.isfinite(p)})
@@ -160,30 +255,25 @@ def verdict_from_map(df) -> Measurement:
             if rec.min() > 1
             else f"; the recommended step fails in {int((rec <= 1).sum())} cases"
         )
-    if runaways:
-        verdict = "refuted"
-    elif counts[UNCLASSIFIED] or not len(usable):
-        verdict = "inconclusive"
-    else:
-        verdict = "verified"
+    verdict = "refuted" if len(runs) else ("verified" if len(usable) else "inconclusive")
+    n_slow = len(hz["moves_with_horizon"])
+    head = (
+        f"below Δt_safe: {counts[RUNAWAY]} runaways"
+        + (f" ({n_slow} of them with a step that moves with the horizon)" if n_slow else "")
+        + f", {counts['bounded']} bounded, {counts['accuracy']} accuracy"
+    )
+    if counter:
+        head += f"; worst runaway {counter['ratio']:.2f} Δt_safe ({counter['case']}, {counter['scene']})"
     return Measurement(
         ID,
         verdict,
         text,
-        "refuted iff at least one runaway (energy growth that does not saturate) "
-        "has a failing Verlet step ≤ Δt_safe; bounded orbits and accuracy "
-        "thresholds are counted apart, unclassified failures leave it inconclusive",
+        "refuted iff at least one runaway (energy confirmed past the confirmation level "
+        "within the confirmation horizon, or the body left the domain) has a failing Verlet "
+        "step < Δt_safe; bounded excursions and impact accuracy limits are counted apart",
         measured,
         counter,
-        headline=(
-            f"failing steps at or below Δt_safe by kind: {kind_text}"
-            + (
-                f"; worst runaway at {counter['ratio']:.2f} Δt_safe "
-                f"({counter['case']}, {counter['scene']})"
-                if counter
-                else ""
-            )
-        ),
+        headline=head,
     )
 
 
