@@ -69,9 +69,9 @@ class DtCritResult:
         failed in the search range.
     dt_bounded : float
         Sustained scenes: smallest step with a bounded excursion below dt_crit
-        (s); inf when none.
+        (s); inf when none (null in `to_dict`).
     bounded_E_max_over_E0 : float
-        Peak E_n / E_0 of the bounded excursion at dt_bounded (NaN when none).
+        Peak E_n / E_0 of the bounded excursion at dt_bounded (NaN when none; null in `to_dict`).
     dt_accuracy : float or None
         Impact only: largest step below the first failure whose rebound energy
         gain stays within tol (s), i.e. the lower end of the bracket.
@@ -109,11 +109,23 @@ class DtCritResult:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-ready dict (inf written as the string "inf")."""
+        """Plain JSON-ready dict (inf written as the string "inf").
+
+        Fields that only exist when a bounded excursion was seen (``dt_bounded``,
+        ``bounded_E_max_over_E0``) are ``None`` (JSON null) otherwise: "no such step"
+        is an absence, not an infinite or undefined number.
+        """
         d = asdict(self)
         extra = d.pop("extra")
         d.update(extra)
+        for key in _ABSENT_WHEN_NOT_FINITE:
+            if d.get(key) is not None and not math.isfinite(d[key]):
+                d[key] = None
         return _jsonable(d)
+
+
+# Optional measurements whose non-finite placeholder means "not observed".
+_ABSENT_WHEN_NOT_FINITE = ("dt_bounded", "bounded_E_max_over_E0")
 
 
 def _jsonable(x):
