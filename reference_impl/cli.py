@@ -211,12 +211,28 @@ def _check_out_dir(path: str) -> None:
         raise HCVInputError(f"--out {path}: parent directory {str(parent)!r} is not writable")
 
 
+# More local workers than this is a typo, not a machine (each is a process).
+_MAX_REPORT_WORKERS = 256
+
+
 def _cmd_report(args) -> int:
     from rich.console import Console
 
     from .report import build_report
 
     _check_out_dir(args.out)
+    if not 0 <= args.workers <= _MAX_REPORT_WORKERS:
+        raise HCVInputError(
+            f"--workers {args.workers}: must be 0 (no cluster) to {_MAX_REPORT_WORKERS}"
+        )
+    if args.workers:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            raise HCVInputError(
+                f"--workers {args.workers} needs Dask: pip install -e '.[sweep]' "
+                "(or leave --workers out)"
+            ) from None
 
     with Console(stderr=True).status("hcv report: starting") as status:
         results = build_report(
@@ -224,6 +240,7 @@ def _cmd_report(args) -> int:
             quick=args.quick,
             progress=lambda text: status.update(f"hcv report: {text}"),
             adapters=args.adapter or (),
+            workers=args.workers,
         )
     for c in results["claims"]:
         print(f"{c['verdict']:>12}  {c['id']}")
@@ -356,6 +373,14 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ADAPTER",
         help="also benchmark this contact code (as for hcv bench) and add its scorecard; "
         "repeatable",
+    )
+    rp.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        metavar="N",
+        help="run the critical-step map on a local Dask cluster of N processes "
+        "(sweep extra); 0 (default) runs it in one second process",
     )
     rp.set_defaults(func=_cmd_report)
     ls = sub.add_parser("scenes", help="list the embedded scenes")

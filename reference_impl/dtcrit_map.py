@@ -39,6 +39,7 @@ __all__ = [
     "MapCase",
     "coverage",
     "dt_crit_map",
+    "map_case_rows",
     "criterion_sensitivity",
     "oscillation_period",
     "recommended_step",
@@ -291,17 +292,26 @@ def dt_crit_map(
     criteria = criteria or {}
     rows, total, done = [], len(cases) * len(kinds), 0
     for case in cases:
-        periods = {v: oscillation_period(case.potential, case.m, v) for v in case.velocities}
         for kind in kinds:
-            crit = criteria.get(kind, default_criterion(kind))
-            for r in search_scene(
-                case.potential, case.m, case.velocities, kind, criterion=crit, grid=grid
-            ):
-                rows.append(_row(case, r, periods[r.v0], crit))
+            rows.extend(map_case_rows(case, kind, criteria.get(kind), grid))
             done += 1
             if progress is not None:
                 progress(done, total)
     return pd.DataFrame(rows)
+
+
+def map_case_rows(
+    case: MapCase, kind: str, criterion: Criterion | None = None, grid: SearchGrid = _DEFAULT_GRID
+) -> list[dict]:
+    """The map rows of one (case, scene kind) search: one dict per impact speed.
+
+    The single home of a map search, used by `dt_crit_map` here and by the sweep
+    engine (`reference_impl.sweep.dt_crit_map_on_cluster`) on worker processes.
+    """
+    crit = criterion if criterion is not None else default_criterion(kind)
+    periods = {v: oscillation_period(case.potential, case.m, v) for v in case.velocities}
+    results = search_scene(case.potential, case.m, case.velocities, kind, criterion=crit, grid=grid)
+    return [_row(case, r, periods[r.v0], crit) for r in results]
 
 
 def criterion_sensitivity(

@@ -162,3 +162,15 @@ def test_dt_crit_json_reports_each_velocity():
 def test_dt_crit_bad_criterion_exit_2():
     r = _hcv("dt-crit", "hertz", "--criterion", "factor=abc")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_report_workers_out_of_range_is_refused_before_work(tmp_path):
+    """``hcv report --workers`` is bounded and checked before anything is written."""
+    out = tmp_path / "rep"
+    r = _hcv("report", "--workers", "-1", "--out", str(out))
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "--workers -1" in lines[0], (
+        f"got exit {r.returncode}, stderr {r.stderr!r}, should be exit 2 with one line "
+        "naming --workers -1 [cli, hcv report --workers -1]"
+    )
+    assert not out.exists(), f"got {out} written, should be untouched [cli, hcv report]"

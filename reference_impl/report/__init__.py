@@ -125,6 +125,7 @@ def build_report(
     progress: Callable[[str], None] | None = None,
     adapters=(),
     readme: str | Path | None = "auto",
+    workers: int = 0,
 ) -> dict:
     """Run every verification and write the report; returns the results dict.
 
@@ -145,6 +146,10 @@ def build_report(
         README whose ``<!-- verdicts:start/end -->`` block is regenerated from this
         run's results (`readme_table`). "auto": the checkout's README.md when
         ``out_dir`` is the checkout's ``reports/``; None: leave any README alone.
+    workers : int
+        0 (default): the critical-step map runs in a second process beside the claims.
+        N > 0: it runs on a local Dask cluster of N processes (``hcv sweep``'s engine;
+        needs the ``sweep`` extra), which pays off on machines with more than 2 cores.
 
     Returns
     -------
@@ -165,7 +170,7 @@ def build_report(
     # Provenance first: the temporary directory must not make the checkout look dirty.
     env = environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
     with swap_in(out) as tmp:
-        results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound)
+        results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound, workers)
     if readme_path is not None:
         from .readme_table import rewrite_readme
 
@@ -199,7 +204,7 @@ def _readme_for(out: Path, readme) -> Path | None:
     return path
 
 
-def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
+def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers: int = 0) -> dict:
     """Run everything and write the report into ``out`` (a fresh, empty directory)."""
     from ..claims import fig1 as fig1_claim
     from ..claims import sec10_stiffening_domain, table1
@@ -224,7 +229,8 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
     # The critical-step map (pure computation, no timings) runs in a second process
     # while the claims, Fig. 1 and the hard cases run here; the timed speed-against-
     # error study runs afterwards, alone.
-    background = _start_map(quick)
+    # With workers > 0 the map runs on a local Dask cluster after the claims instead.
+    background = _start_map(quick) if workers == 0 else None
     if background is not None:
         say("critical-step map: started in a second process")
 
@@ -258,7 +264,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6) -> dict:
         except Exception:  # a broken worker: measure here instead
             dmap = None
     if dmap is None:
-        dmap = timed("critical-step map", _dtmap.run_map, quick, say)
+        dmap = timed("critical-step map", _dtmap.run_map, quick, say, workers)
     sec6.use_map(quick, dmap)
     measured[sec6.ID] = sec6.measure(quick)
     timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")

@@ -7,7 +7,6 @@ import pandas as pd
 
 from ..claims.sec6_dt_safe_bound import confirm_horizon_needed, kind_counts
 from ..dtcrit import KINDS
-from ..dtcrit_map import dt_crit_map
 
 SCENE_COLOURS = {"impact": "#1f77b4", "two-sided": "#d62728", "two-walls": "#2ca02c"}
 SCENE_MARKERS = {"impact": "o", "two-sided": "s", "two-walls": "^"}
@@ -15,14 +14,26 @@ SCENE_MARKERS = {"impact": "o", "two-sided": "s", "two-walls": "^"}
 _WHAT = {"impact": "accuracy limit", "two-sided": "runaway Δt_crit", "two-walls": "runaway Δt_crit"}
 
 
-def run_map(quick: bool, progress=None) -> pd.DataFrame:
-    """`dt_crit_map` with a textual progress callback."""
+def run_map(quick: bool, progress=None, workers: int = 0) -> pd.DataFrame:
+    """The critical-step map through the sweep engine, with a textual progress callback.
+
+    Parameters
+    ----------
+    quick : bool
+        The smaller coverage of `reference_impl.dtcrit_map.coverage`.
+    progress : callable, optional
+        Called with a short text after each search.
+    workers : int
+        0 runs the searches one after another in this process; N > 0 spreads them over
+        a local Dask cluster of N processes (`reference_impl.sweep`). Same table either way.
+    """
+    from ..sweep import dt_crit_map_on_cluster
 
     def tick(done, total):
         if progress:
             progress(f"critical-step map: search {done}/{total}")
 
-    return dt_crit_map(quick=quick, progress=tick)
+    return dt_crit_map_on_cluster(quick=quick, progress=tick, workers=workers)
 
 
 def _label(row) -> str:

@@ -24,15 +24,10 @@ _DEFAULT_GRID = SearchGrid()
 
 def _map_case(item) -> list[dict]:
     """One (case, kind) search of the map: its rows, as `dt_crit_map` builds them."""
-    from ..dtcrit import search_scene
-    from ..dtcrit_map import _row, oscillation_period
+    from ..dtcrit_map import map_case_rows
 
     case, kind, criterion, grid = item
-    periods = {v: oscillation_period(case.potential, case.m, v) for v in case.velocities}
-    results = search_scene(
-        case.potential, case.m, case.velocities, kind, criterion=criterion, grid=grid
-    )
-    return [_row(case, r, periods[r.v0]) for r in results]
+    return map_case_rows(case, kind, criterion, grid)
 
 
 def dt_crit_map_on_cluster(
