@@ -65,9 +65,13 @@ def _x_funcs(v0, z):
 def _inverse_mp(pot: Potential, u, n_lead, q_ref, u_ref):
     """q with U(q) = u at the working precision (Newton on log U against log q)."""
     uf = float(u)
+    q = mpmath.mpf(0)
     if 1e-290 < uf < 1e290:
-        q = mpmath.mpf(float(pot._inverse(np.array([uf]))[0]))
-    else:
+        with np.errstate(all="ignore"):
+            qf = float(pot._inverse(np.array([uf]))[0])
+        if 1e-300 < qf < 1e300:
+            q = mpmath.mpf(qf)
+    if q == 0:
         # Outside float range: seed from the leading power law U ~ u_ref (q/q_ref)^n.
         q = q_ref * (u / u_ref) ** (1 / n_lead)
     tol = mpmath.mpf(2) ** (-mpmath.mp.prec + 8)
@@ -130,8 +134,15 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
             q = _inverse_mp(potential, m * xv * xv / 2, n_lead, q_ref, u_ref)
             return m * xv / potential._dU(q)
 
+        # mpmath.quad stops at an absolute error of 10^-dps: integrate in units of a
+        # characteristic time (the rise time of the leading power law, q_peak / v0),
+        # so that its tolerance is relative whatever the scale of U (k = 1e+-300).
+        q_pk = _inverse_mp(potential, m * x(s_peak) ** 2 / 2, n_lead, q_ref, u_ref)
+        t_unit = q_pk / v0
+
         def quad(f, span):
-            val, err = mpmath.quad(f, span, error=True, maxdegree=10)
+            val, err = mpmath.quad(lambda s: f(s) / t_unit, span, error=True, maxdegree=10)
+            val, err = val * t_unit, err * t_unit
             if err > target * abs(val):
                 raise HCVInputError(
                     f"solve_impact_mp: quadrature error {mpmath.nstr(err, 3)} above 1e-{dps + 3} "
@@ -165,7 +176,7 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
                 t_end = t_rise + t_mid + tail
             else:
                 t_end = mpmath.inf
-        q_max = _inverse_mp(potential, m * x(s_peak) ** 2 / 2, n_lead, q_ref, u_ref)
+        q_max = q_pk
         rest = mpmath.exp(-mpmath.pi * z / mpmath.sqrt((1 - z) * (1 + z))) if z < 1 else 0
         out = {
             "contact_time": t_end,
