@@ -23,6 +23,7 @@ and of the node values (_NODE_ULPS ulps).
 from __future__ import annotations
 
 import math
+import weakref
 from fractions import Fraction
 from functools import lru_cache
 from typing import NamedTuple
@@ -32,13 +33,14 @@ import numpy as np
 from scipy import integrate
 from scipy.special import roots_jacobi
 
+from ._kernels import node_function
 from ._oscillator import VirtualOscillator
 from ._quadrature import rule, sums_from_values
 from .errors import HCVInputError
 from .potentials.base import Potential
 from .potentials.power import PowerLaw
 
-__all__ = ["Branches", "branch_integrals", "dq_dx", "power_law_scale"]
+__all__ = ["Branches", "branch_integrals", "compiled_nodes", "dq_dx", "power_law_scale"]
 
 _EPS = float(np.finfo(float).eps)
 # Round-off bound of a sum of N positive products w_k f_k: N ulps of the sum of |w f|
@@ -79,15 +81,23 @@ class Branches(NamedTuple):
     err_fall: float
 
 
-def _pow_rational(base: float, num: Fraction, den: Fraction) -> float:
-    """base ** (num / den) with the exponent carried beyond float precision.
+@lru_cache(maxsize=256)
+def _exponent_splits(p: float, n: float) -> tuple[float, float, float, float]:
+    """-p/n and (2 - n)/n as exact sums hi + lo of two floats (from the float p, n)."""
+    fp, fn = Fraction(p), Fraction(n)
+    out = []
+    for y in (-fp / fn, (2 - fn) / fn):
+        hi = float(y)
+        out += [hi, float(y - Fraction(hi))]
+    return tuple(out)
+
+
+def _pow_split(base: float, y_hi: float, y_lo: float) -> float:
+    """base ** (y_hi + y_lo) with the exponent carried beyond float precision.
 
     A rounded exponent y costs a relative error |y_err log(base)|, 2.6e-14 for
-    k = 1e300 (issue 12); splitting y = y_hi + y_lo exactly removes it.
+    k = 1e300 (issue 12); the exact split y = y_hi + y_lo removes it.
     """
-    y = num / den
-    y_hi = float(y)
-    y_lo = float(y - Fraction(y_hi))
     return base**y_hi * math.exp(y_lo * math.log(base))
 
 
@@ -96,11 +106,10 @@ def power_law_scale(pot: PowerLaw, m: float, v0: float) -> tuple[float, float]:
 
     q = (n m x^2 / 2k)^(1/n) gives dq/dx = (m/k) (n m / 2k)^(-p/n) x^(2/n - 1).
     """
-    p = Fraction(pot.p)
-    n = Fraction(pot.leading_exponent)
-    c = (m / pot.k) * _pow_rational(0.5 * float(n) * m / pot.k, -p, n)
-    c *= _pow_rational(v0, 2 - n, n)
-    return c, 2.0 / pot.leading_exponent - 1.0
+    n = pot.leading_exponent
+    a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
+    c = (m / pot.k) * _pow_split(0.5 * n * m / pot.k, a_hi, a_lo) * _pow_split(v0, b_hi, b_lo)
+    return c, 2.0 / n - 1.0
 
 
 def dq_dx(pot: Potential, m: float, x, v0: float):
@@ -136,22 +145,50 @@ def _sums(g, lengths, betas, r):
     return val, err
 
 
-def branch_integrals(pot: Potential, m: float, osc: VirtualOscillator, level: int) -> Branches:
-    """The three stretches of one impact (see the module docstring)."""
+def branch_integrals(
+    pot: Potential, m: float, osc: VirtualOscillator, level: int, q_hi: float
+) -> Branches:
+    """The three stretches of one impact (see the module docstring).
+
+    ``q_hi`` is the validated turning point of the impact energy: every overlap
+    met lies in (0, q_hi], which brackets the compiled inverse of U.
+    """
     beta = 2.0 / pot.leading_exponent - 1.0
     if type(pot) is PowerLaw:
         fast = _gauss_jacobi_power_law(pot, m, osc, beta)
         if fast is not None:
             return fast
-    return _tanh_sinh(pot, m, osc, beta, level)
+        return _tanh_sinh(pot, m, osc, beta, level, lambda x: dq_dx(pot, m, x, osc.v0))
+    compiled = compiled_nodes(pot)
+    if compiled is None:
+        return _tanh_sinh(pot, m, osc, beta, level, lambda x: dq_dx(pot, m, x, osc.v0))
+    return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
 
 
-def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int) -> Branches:
+_COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def compiled_nodes(pot: Potential):
+    """The compiled node function of `_kernels` for ``pot`` (cached per object), or None."""
+    try:
+        return _COMPILED[pot]
+    except KeyError:
+        pass
+    except TypeError:  # not weak-referenceable: build each time
+        return node_function(pot)
+    f = node_function(pot)
+    _COMPILED[pot] = f
+    return f
+
+
+def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) -> Branches:
     z, sp = osc.zeta, osc.s_peak
     r_s, r_0 = rule(level, beta), rule(level, 0.0)
 
     def g_of(x):
-        return _checked(dq_dx(pot, m, x, osc.v0), x, osc, pot)
+        with np.errstate(all="ignore"):
+            g = dqdx(x)
+        return _checked(g, x, osc, pot)
 
     # Singular rows (distance d from a singular end) and smooth rows (start + d).
     rise_x = osc.x(sp * r_s.d)

@@ -24,12 +24,13 @@ Two ends of contact are reported:
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.optimize import elementwise
 
-from ._branches import branch_integrals, dq_dx
+from ._branches import branch_integrals, compiled_nodes, dq_dx
 from ._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from ._quadrature import DEFAULT_LEVEL, integrate_left_singular
 from ._truth import solve_impact_mp
@@ -37,6 +38,7 @@ from .damping import _check_zeta
 from .errors import HCVInputError
 from .potentials._checks import positive
 from .potentials.base import Potential
+from .potentials.power import PowerLaw
 
 __all__ = [
     "ImpactSolution",
@@ -212,6 +214,31 @@ def _check_exponent(pot: Potential) -> float:
     return n
 
 
+_VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _validated_top(pot: Potential, E: float) -> float:
+    """An overlap q_top >= q_max(E) with U' > 0 checked on (0, q_top] (assumption 3).
+
+    The check (a grid of ~2600 points) dominated the cost of one impact; the
+    largest validated turning point is kept per potential object, and a lower
+    energy reuses it: its bracket (0, q_top] contains every overlap of the impact.
+    Potentials are immutable after construction, so the cache cannot go stale.
+    """
+    try:
+        e_c, q_c = _VALIDATED[pot]
+    except (KeyError, TypeError):
+        e_c = q_c = None
+    if e_c is not None and E <= e_c:
+        return q_c
+    q = pot.turning_point(E)
+    try:
+        _VALIDATED[pot] = (E, q)
+    except TypeError:
+        pass
+    return q
+
+
 def solve_impact(
     potential: Potential, m: float, v0: float, zeta: float = 0.0, *, level: int = DEFAULT_LEVEL
 ) -> ImpactSolution:
@@ -257,11 +284,16 @@ def solve_impact(
         )
     # Validates the turning point and monotonicity on (0, q(E)] (the damped
     # maximum penetration is smaller, so this covers every damped path too).
-    potential.turning_point(E)
-    br = branch_integrals(potential, m, osc, level)
+    q_top = _validated_top(potential, E)
+    br = branch_integrals(potential, m, osc, level, q_top)
     x_peak = float(osc.x(osc.s_peak))
-    q_max = float(potential._inverse(np.array([0.5 * m * x_peak**2]))[0])
-    max_force = float(potential._dU(np.array([q_max]))[0])
+    compiled = compiled_nodes(potential) if type(potential) is not PowerLaw else None
+    if compiled is not None:
+        g_pk, q_pk = compiled(np.array([x_peak]), m, q_top)
+        q_max, max_force = float(q_pk[0]), m * x_peak / float(g_pk[0])
+    else:
+        q_max = float(potential._inverse(np.array([0.5 * m * x_peak**2]))[0])
+        max_force = float(potential._dU(np.array([q_max]))[0])
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
     return ImpactSolution(
         v0=v0,
