@@ -35,7 +35,7 @@ from scipy.special import roots_jacobi
 
 from ._kernels import node_function
 from ._oscillator import VirtualOscillator
-from ._quadrature import rule, sums_from_values
+from ._quadrature import DEFAULT_LEVEL, rule, sums_from_values
 from .errors import HCVInputError
 from .potentials.base import Potential
 from .potentials.power import PowerLaw
@@ -49,6 +49,11 @@ _SUM_ULPS_PER_NODE = 1.0
 # Relative round-off of one node value dq/dx(x(s)): exp, sin and the power or the
 # inverse of U each contribute a few ulps, amplified by |beta| <= 1 in x^beta.
 _NODE_ULPS = 16.0
+# Tanh-sinh level of the compiled families (ellipsoid, sphere, sums, expressions):
+# level 4 (h = 1/16) has half the nodes of level 5 and measured errors <= 1.4e-14
+# against the mpmath truth on the benchmark scenes; the reported bound (fine minus
+# level 3) stays honest either way, and the tests check it against the truth.
+COMPILED_LEVEL = 4
 # Longest stretch (virtual time) integrated by one tanh-sinh rule: x(s) varies on a
 # unit time scale (the rates are zeta and sqrt(1 - zeta^2) <= 1 for zeta < 1).
 _PIECE = 1.0
@@ -146,10 +151,11 @@ def _sums(g, lengths, betas, r):
 
 
 def branch_integrals(
-    pot: Potential, m: float, osc: VirtualOscillator, level: int, q_hi: float
+    pot: Potential, m: float, osc: VirtualOscillator, level: int | None, q_hi: float
 ) -> Branches:
     """The three stretches of one impact (see the module docstring).
 
+    ``level`` None picks COMPILED_LEVEL for compiled families, else DEFAULT_LEVEL.
     ``q_hi`` is the validated turning point of the impact energy: every overlap
     met lies in (0, q_hi], which brackets the compiled inverse of U.
     """
@@ -158,11 +164,14 @@ def branch_integrals(
         fast = _gauss_jacobi_power_law(pot, m, osc, beta)
         if fast is not None:
             return fast
-        return _tanh_sinh(pot, m, osc, beta, level, lambda x: dq_dx(pot, m, x, osc.v0))
+        lv = DEFAULT_LEVEL if level is None else level
+        return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
     compiled = compiled_nodes(pot)
     if compiled is None:
-        return _tanh_sinh(pot, m, osc, beta, level, lambda x: dq_dx(pot, m, x, osc.v0))
-    return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
+        lv = DEFAULT_LEVEL if level is None else level
+        return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
+    lv = COMPILED_LEVEL if level is None else level
+    return _tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0])
 
 
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -284,19 +293,19 @@ def _branch_rows(osc: VirtualOscillator):
 
 
 @lru_cache(maxsize=32)
-def _jacobi_pair(beta: float):
-    """Nodes u in (0, 1) of the Gauss-Jacobi rules of sizes _GJ_SIZES for
+def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
+    """Nodes u in (0, 1) of the Gauss-Jacobi rules of two sizes (default _GJ_SIZES) for
     int_0^1 f(u) u^beta du, concatenated, and a (nodes, 2) weight matrix whose
     columns give the two rules (zeros on the other rule's nodes)."""
     us, cols = [], []
-    for size in _GJ_SIZES:
+    for size in sizes:
         y, w = roots_jacobi(size, 0.0, beta)
         us.append((1.0 + y) / 2.0)
         cols.append(w / 2.0 ** (beta + 1.0))
     u = np.concatenate(us)
     W = np.zeros((u.size, len(_GJ_SIZES)))
-    W[: _GJ_SIZES[0], 0] = cols[0]
-    W[_GJ_SIZES[0] :, 1] = cols[1]
+    W[: sizes[0], 0] = cols[0]
+    W[sizes[0] :, 1] = cols[1]
     return u, W
 
 
@@ -306,7 +315,7 @@ def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, bet
     For U = k q^n / n, dq/dx = c x^beta exactly and x(s) = s h(s) with h analytic, so
     dq/dx = c h^beta s^beta: Gauss-Jacobi with weight s^beta converges geometrically
     (rate set by the zero of h at s_end). Two rule sizes are compared and the result
-    is used only when they agree to _GJ_RTOL; scipy's Jacobi rules lose accuracy for
+    is used only when they agree to _GJ_RTOL (row by row); scipy's Jacobi rules lose accuracy for
     beta near -1, hence the range limit.
     """
     if osc.zeta >= _GJ_ZETA_MAX or beta < _GJ_BETA_MIN:
@@ -320,7 +329,9 @@ def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, bet
     coarse, fine = sums[:, 0], sums[:, 1]
     # Positive integrand: the round-off bound is relative to the sum itself.
     err = np.abs(fine - coarse) + (_SUM_ULPS_PER_NODE * _GJ_SIZES[1] + _NODE_ULPS) * _EPS * fine
-    if np.abs(fine - coarse).max() > _GJ_RTOL * abs(fine[0]):
+    # Each row's two rule sizes must agree to _GJ_RTOL of that row (the falling rows
+    # are several times the rising one near zeta = 0.9).
+    if not np.all(np.abs(fine - coarse) <= _GJ_RTOL * np.abs(fine)):
         return None
     rise, e_rise = float(fine[0]), float(err[0])
     if osc.zeta == 0.0:

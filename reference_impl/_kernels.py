@@ -89,22 +89,23 @@ def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, codes, P):  # pragma: no cover - 
             q = 0.5 * hi
         uq, duq = _terms_U_dU(q, codes, P)
         for _ in range(_NEWTON_MAX_ITER):
-            f = math.log(uq) - lt if uq > 0.0 else -math.inf
+            f = uq - u
             if f < 0.0:
                 lo = q
             elif f > 0.0:
                 hi = q
             else:
                 break
-            slope = q * duq / uq if uq > 0.0 else 0.0
-            qn = q * math.exp(-f / slope) if slope > 0.0 else -1.0
+            # Plain Newton on U (the warm start is already close; U - u keeps its
+            # relative precision there), safeguarded by the bracket.
+            step = f / duq if duq > 0.0 else math.inf
+            if abs(step) <= _NEWTON_XRTOL * q:
+                break  # converged: q is within a few ulps of the root
+            qn = q - step
             if not (qn > lo and qn < hi):
                 qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-            done = abs(qn - q) <= _NEWTON_XRTOL * q
             q = qn
             uq, duq = _terms_U_dU(q, codes, P)
-            if done:
-                break
         out[j] = m * xj / duq
         qs[j] = q
         if uq > 0.0 and duq > 0.0:
@@ -183,22 +184,23 @@ def _make_expression_kernel(fu, fdu):
                 q = 0.5 * hi
             uq, duq = fu(q), fdu(q)
             for _ in range(_NEWTON_MAX_ITER):
-                f = math.log(uq) - lt if uq > 0.0 else -math.inf
+                f = uq - u
                 if f < 0.0:
                     lo = q
                 elif f > 0.0:
                     hi = q
                 else:
                     break
-                slope = q * duq / uq if uq > 0.0 else 0.0
-                qn = q * math.exp(-f / slope) if slope > 0.0 else -1.0
+                # Plain Newton on U (the warm start is already close; U - u keeps its
+                # relative precision there), safeguarded by the bracket.
+                step = f / duq if duq > 0.0 else math.inf
+                if abs(step) <= _NEWTON_XRTOL * q:
+                    break  # converged: q is within a few ulps of the root
+                qn = q - step
                 if not (qn > lo and qn < hi):
                     qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-                done = abs(qn - q) <= _NEWTON_XRTOL * q
                 q = qn
                 uq, duq = fu(q), fdu(q)
-                if done:
-                    break
             out[j] = m * xj / duq
             qs[j] = q
             if uq > 0.0 and duq > 0.0:
