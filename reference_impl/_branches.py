@@ -54,6 +54,11 @@ _NODE_ULPS = 16.0
 # against the mpmath truth on the benchmark scenes; the reported bound (fine minus
 # level 3) stays honest either way, and the tests check it against the truth.
 COMPILED_LEVEL = 4
+# A compiled-family result whose bound exceeds this relative size is recomputed one
+# level up (each level halves the step, roughly squaring the quadrature error), up
+# to _MAX_LEVEL; the bound reported is the one of the last level.
+_LEVEL_UP_RTOL = 1e-13
+_MAX_LEVEL = 6
 # Longest stretch (virtual time) integrated by one tanh-sinh rule: x(s) varies on a
 # unit time scale (the rates are zeta and sqrt(1 - zeta^2) <= 1 for zeta < 1).
 _PIECE = 1.0
@@ -170,8 +175,22 @@ def branch_integrals(
     if compiled is None:
         lv = DEFAULT_LEVEL if level is None else level
         return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
-    lv = COMPILED_LEVEL if level is None else level
-    return _tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0])
+    if level is not None:
+        return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
+    # Start at COMPILED_LEVEL; go up a level while the bound exceeds _LEVEL_UP_RTOL.
+    for lv in range(COMPILED_LEVEL, _MAX_LEVEL + 1):
+        br = _tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0])
+        if _relative_bound(br) <= _LEVEL_UP_RTOL:
+            break
+    return br
+
+
+def _relative_bound(br: Branches) -> float:
+    """Largest relative error bound of the finite reported times."""
+    worst = (br.err_rise + br.err_mid) / (br.rise + br.mid)
+    if math.isfinite(br.fall):
+        worst = max(worst, (br.err_rise + br.err_fall) / (br.rise + br.fall))
+    return worst
 
 
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

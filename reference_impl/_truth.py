@@ -143,7 +143,9 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
         def quad(f, span):
             val, err = mpmath.quad(lambda s: f(s) / t_unit, span, error=True, maxdegree=10)
             val, err = val * t_unit, err * t_unit
-            if err > target * abs(val):
+            # Relative to the contact's time scale too: a vanishing stretch (zeta ~ 1e-200)
+            # needs no digits of its own.
+            if err > target * max(abs(val), t_unit):
                 raise HCVInputError(
                     f"solve_impact_mp: quadrature error {mpmath.nstr(err, 3)} above 1e-{dps + 3} "
                     f"relative (n = {float(n_lead):.6g}, zeta = {zeta!r}); not used as truth"

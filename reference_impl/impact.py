@@ -288,9 +288,14 @@ def solve_impact(
     # maximum penetration is smaller, so this covers every damped path too).
     q_top = _validated_top(potential, E)
     br = branch_integrals(potential, m, osc, level, q_top)
-    x_peak = float(osc.x(osc.s_peak))
+    # x(s_peak) = v0 exp(-zeta s_peak): S(s_peak) = 1 at the peak (see _oscillator).
+    x_peak = v0 * math.exp(-zeta * osc.s_peak)
     compiled = compiled_nodes(potential) if type(potential) is not PowerLaw else None
-    if compiled is not None:
+    if type(potential) is PowerLaw:
+        n = potential.leading_exponent
+        q_max = (0.5 * n * m * x_peak * x_peak / potential.k) ** (1.0 / n)
+        max_force = potential.k * q_max**potential.p
+    elif compiled is not None:
         g_pk, q_pk = compiled(np.array([x_peak]), m, q_top)
         q_max, max_force = float(q_pk[0]), m * x_peak / float(g_pk[0])
     else:
