@@ -48,7 +48,7 @@ _NEWTON_MAX_ITER = 3000
 _DESCENT = 1.0 / 64.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _terms_U_dU(q, codes, P):  # pragma: no cover - compiled
     """U(q) and U'(q) of a table of terms."""
     u = 0.0
@@ -69,7 +69,7 @@ def _terms_U_dU(q, codes, P):  # pragma: no cover - compiled
     return u, du
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, codes, P):  # pragma: no cover - compiled
     out = np.empty_like(x)
     qs = np.empty_like(x)
@@ -158,13 +158,15 @@ def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
     """Compiled node kernel for U and U' (cached by the sympy expressions, which
     carry the parameter values as exact numbers)."""
     # lambdify prints the validated sympy tree as math-module code; numba compiles it.
-    fu = numba.njit(sp.lambdify(q, expr, modules="math"))
-    fdu = numba.njit(sp.lambdify(q, dexpr, modules="math"))
+    # error_model="numpy": a division by zero gives inf/nan (refused by the caller's
+    # finiteness check) instead of raising inside the compiled loop.
+    fu = numba.njit(error_model="numpy")(sp.lambdify(q, expr, modules="math"))
+    fdu = numba.njit(error_model="numpy")(sp.lambdify(q, dexpr, modules="math"))
     return _make_expression_kernel(fu, fdu)
 
 
 def _make_expression_kernel(fu, fdu):
-    @numba.njit
+    @numba.njit(error_model="numpy")
     def nodes(x, m, q_hi, q_s, u_s, n_lead):  # pragma: no cover - compiled
         out = np.empty_like(x)
         qs = np.empty_like(x)

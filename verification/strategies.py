@@ -131,13 +131,13 @@ def exact_zetas() -> st.SearchStrategy[float]:
     from reference_impl._oscillator import S_END_MAX
 
     # Just inside the accepted band (the limit itself rounds either way).
-    z_lim = math.sqrt(1.0 - (math.pi / S_END_MAX) ** 2) - 1e-9
+    z_lim = math.sqrt(1.0 - (math.pi / S_END_MAX) ** 2) - 1e-7
     return st.one_of(
         st.floats(0.0, 10.0),
         st.floats(0.99, z_lim),
         st.floats(1.0, 1.001),
         st.floats(1e-12, 1e-3),
-    )
+    ).filter(lambda z: not z_lim < z < 1.0)
 
 
 __all__ += ["exact_zetas"]
