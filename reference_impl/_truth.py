@@ -74,8 +74,9 @@ def _inverse_mp(pot: Potential, u, n_lead, q_ref, u_ref):
     if q == 0:
         # Outside float range: seed from the leading power law U ~ u_ref (q/q_ref)^n.
         q = q_ref * (u / u_ref) ** (1 / n_lead)
-    tol = mpmath.mpf(2) ** (-mpmath.mp.prec + 8)
     lu = mpmath.log(u)
+    # log U carries an absolute rounding error ~ |log u| ulps: the step cannot get smaller.
+    tol = mpmath.mpf(2) ** (-mpmath.mp.prec + 8) * max(1, abs(lu))
     for _ in range(_NEWTON_MAX):
         U = pot._U(q)
         step = (mpmath.log(U) - lu) * U / (q * pot._dU(q))
@@ -174,7 +175,17 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
         else:
             t_mid = quad(lambda s: g(x(s)), [s_peak, (3 * s_peak) / 2, 2 * s_peak])
             if beta > 0:
-                tail = quad(lambda s: g(x(s)), [2 * s_peak, 4 * s_peak, mpmath.inf])
+                # x ~ exp(-a s), a = 1/(zeta + r): beyond s_cut the rest of the tail,
+                # ~ g(x(s_cut)) / (a beta), is below 10^-(dps + 8) of the contact time
+                # (an infinite interval put nodes at s ~ 1e18, where x has no float seed).
+                a = 1 / (z + mpmath.sqrt((z - 1) * (z + 1)))
+                s_cut = 2 * s_peak + ((dps + 8) * mpmath.log(10) + abs(mpmath.log(a * beta))) / (
+                    a * beta
+                )
+                pts = [2 * s_peak]
+                while pts[-1] < s_cut:
+                    pts.append(min(2 * pts[-1], s_cut))
+                tail = quad(lambda s: g(x(s)), pts)
                 t_end = t_rise + t_mid + tail
             else:
                 t_end = mpmath.inf
