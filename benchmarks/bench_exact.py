@@ -1,11 +1,16 @@
-"""Exact harmonic-map solver against scipy DOP853 on one damped Hertz impact.
+"""Exact harmonic-map solver against scipy DOP853, every potential family, and the batch API.
 
-Both are timed in the same process (median of repeats) and scored against
-the mpmath ground truth (`solve_impact_mp`, 30 digits). Goal of the project:
-the exact solver >= 300 times faster than DOP853 at rtol 1e-12, with a relative
-error <= 1e-13.
+Each row is one damped impact (universal law, zeta = 0.2): the exact solver and
+DOP853 (rtol 1e-12, lean scalar right-hand side with the same damping law) are
+timed in the same process (median of repeats) and scored against the mpmath
+ground truth (`solve_impact_mp`, 30 digits). The batch rows time
+`solve_impacts` on many Hertz impacts. The first-call time of each family
+(numba compilation or on-disk cache load) is reported separately.
 
-Run: ``python -m benchmarks.bench_exact [--json FILE]``.
+Goals (issue 9): every family <= 60 us per impact at <= 1e-13 relative error in
+contact time and restitution and >= 300x DOP853; batch >= 1e5 Hertz impacts/s.
+
+Run: ``python -m benchmarks.bench_exact [--json FILE] [--repeats N]``.
 """
 
 from __future__ import annotations
@@ -13,25 +18,103 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import statistics
 import time
 
+import numpy as np
+import sympy as sp
 from scipy.integrate import solve_ivp
 
-from reference_impl.impact import solve_impact, solve_impact_mp
-from reference_impl.potentials import PowerLaw
+from reference_impl import Ellipsoid, Expression, PowerLaw, Sphere, solve_impact, solve_impacts
+from reference_impl._kernels import expression_sympy
+from reference_impl.impact import solve_impact_mp
+from reference_impl.paper import PAPER_ELLIPSOID, PAPER_MASS
 
 from ._machine import machine_info
 
-# The scene: a 1 cm steel-like Hertz contact (k ~ 4/3 E* sqrt(R)), damped to e ~ 0.5.
-K_HERTZ = 1.0e9  # N / m^1.5
-P_HERTZ = 1.5
-MASS = 0.0041  # kg, steel sphere of radius 5 mm
-V0 = 1.0  # m/s
 ZETA = 0.2
 RTOL_ODE = 1e-12
+GOAL_US = 60.0
 GOAL_SPEEDUP = 300.0
 GOAL_ERROR = 1e-13
+GOAL_BATCH = 1e5  # Hertz impacts per second per core
+TRUTH_DPS = 30
+# Batch workloads: random (v0, zeta) pairs with every zeta distinct, and a sweep
+# grid of speeds at a few damping ratios (one oscillator sum per distinct zeta).
+BATCH_N = 100_000
+BATCH_ZETA_MAX = 0.85
+GRID_ZETAS, GRID_SPEEDS = 50, 2000
+STEEL = 7800.0  # kg/m^3, for the sphere's mass
+
+
+def _scenes():
+    """(name, potential, m, v0, scalar U, scalar U') of every family."""
+    sphere_R = 0.01
+    sphere_m = STEEL * 4.0 / 3.0 * math.pi * sphere_R**3
+    expr = Expression("k*q**2.5/2.5 + c*q**2/2", k=1e9, c=1e5)
+    return [
+        ("Hertz", PowerLaw(1.0e9, 1.5), 0.0041, 1.0),
+        ("paper ellipsoid", Ellipsoid(**PAPER_ELLIPSOID), PAPER_MASS, 0.99),
+        ("sphere R=0.01 Kn=1e8", Sphere(sphere_R, 1e8, 0.5), sphere_m, 1.0),
+        ("sum of two power laws", PowerLaw(1e5, 1.5) + PowerLaw(2e3, 1.0), 0.1, 0.3),
+        ("expression k*q**2.5/2.5 + c*q**2/2", expr, 0.0041, 1.0),
+    ]
+
+
+def _scalar_funcs(pot):
+    """Lean scalar U and U' (math module) for the ODE right-hand side."""
+    sym = expression_sympy(pot)
+    if sym is not None:
+        expr, dexpr, q = sym
+        return sp.lambdify(q, expr, modules="math"), sp.lambdify(q, dexpr, modules="math")
+    if isinstance(pot, PowerLaw):
+        k, p = pot.k, pot.p
+        return (lambda q: k * q ** (p + 1) / (p + 1)), (lambda q: k * q**p)
+    if hasattr(pot, "terms"):
+        fs = [_scalar_funcs(t) for t in pot.terms]
+        return (lambda q: sum(f[0](q) for f in fs)), (lambda q: sum(f[1](q) for f in fs))
+    a, Kn, al = pot._a, pot.Kn, pot.alpha
+    c0 = math.pi * pot._bc / a**2
+
+    def U(q):
+        return Kn / (al + 1) * (c0 * (a * q * q - q**3 / 3)) ** (al + 1)
+
+    def dU(q):
+        return Kn * (c0 * (a * q * q - q**3 / 3)) ** al * c0 * (2 * a * q - q * q)
+
+    return U, dU
+
+
+def _dop853(pot, m, v0, zeta):
+    """Contact time and restitution by DOP853 with the universal law
+    C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q)) (K = M = m)."""
+    U, dU = _scalar_funcs(pot)
+    c = 2.0 * zeta * math.sqrt(m)
+
+    def rhs(t, y):
+        q, v = y
+        if q <= 0.0:
+            return [v, 0.0]
+        f = dU(q)
+        return [v, -(f + c * f / math.sqrt(2.0 * U(q)) * v) / m]
+
+    def touch(t, y):
+        return y[0]
+
+    touch.terminal, touch.direction = True, -1
+    q_scale = pot.turning_point(0.5 * m * v0 * v0, check=False)
+    t_end = 50.0 * q_scale / v0
+    sol = solve_ivp(
+        rhs,
+        (0.0, t_end),
+        [0.0, v0],
+        method="DOP853",
+        rtol=RTOL_ODE,
+        atol=[RTOL_ODE * q_scale, RTOL_ODE * v0],
+        events=touch,
+    )
+    return float(sol.t_events[0][0]), -float(sol.y_events[0][0][1]) / v0, int(sol.nfev)
 
 
 def _median_time(fn, repeats: int, inner: int = 1) -> float:
@@ -44,69 +127,126 @@ def _median_time(fn, repeats: int, inner: int = 1) -> float:
     return statistics.median(times)
 
 
-def _dop853():
-    """DOP853 with a lean scalar right-hand side (the fastest fair use of solve_ivp)."""
-    k, p, m, z = K_HERTZ, P_HERTZ, MASS, ZETA
-    # Universal law for a power law: C(q) = 2 zeta sqrt(m k (p+1)/2) q^((p-1)/2).
-    c = 2.0 * z * math.sqrt(m * k * (p + 1.0) / 2.0)
-    e = (p - 1.0) / 2.0
-
-    def rhs(t, y):
-        q, v = y
-        if q <= 0.0:
-            return [v, 0.0]
-        return [v, -(k * q**p + c * q**e * v) / m]
-
-    def touch(t, y):
-        return y[0]
-
-    touch.terminal, touch.direction = True, -1
-    q_scale = ((p + 1) * 0.5 * m * V0**2 / k) ** (1 / (p + 1))
-    sol = solve_ivp(
-        rhs,
-        (0.0, 1.0),
-        [0.0, V0],
-        method="DOP853",
-        rtol=RTOL_ODE,
-        atol=[RTOL_ODE * q_scale, RTOL_ODE * V0],
-        events=touch,
+def _family_row(name, pot, m, v0, repeats):
+    t0 = time.perf_counter()
+    solve_impact(pot, m, v0, ZETA)
+    first = time.perf_counter() - t0
+    truth = solve_impact_mp(pot, m, v0, ZETA, dps=TRUTH_DPS)
+    t_true, e_true = float(truth["contact_time"]), float(truth["restitution"])
+    sol = solve_impact(pot, m, v0, ZETA)
+    t_exact = _median_time(lambda: solve_impact(pot, m, v0, ZETA), repeats, inner=20)
+    tc, e, nfev = _dop853(pot, m, v0, ZETA)
+    t_ode = _median_time(lambda: _dop853(pot, m, v0, ZETA), max(3, repeats // 2))
+    err_t = abs(sol.contact_time / t_true - 1)
+    err_e = abs(sol.restitution / e_true - 1)
+    row = {
+        "family": name,
+        "potential": repr(pot),
+        "m": m,
+        "v0": v0,
+        "zeta": ZETA,
+        "first_call_s": first,
+        "exact_us": t_exact * 1e6,
+        "exact_contact_time_rel_error": err_t,
+        "exact_restitution_rel_error": err_e,
+        "exact_reported_bound_rel": sol.quadrature_error / sol.contact_time,
+        "dop853_us": t_ode * 1e6,
+        "dop853_nfev": nfev,
+        "dop853_contact_time_rel_error": abs(tc / t_true - 1),
+        "dop853_restitution_rel_error": abs(e / e_true - 1),
+        "speedup": t_ode / t_exact,
+    }
+    row["goal_met"] = bool(
+        row["exact_us"] <= GOAL_US
+        and row["speedup"] >= GOAL_SPEEDUP
+        and max(err_t, err_e) <= GOAL_ERROR
     )
-    tc = float(sol.t_events[0][0])
-    return tc, -float(sol.y_events[0][0][1]) / V0, sol.nfev
+    return row
+
+
+def _batch_rows(repeats, dop_us):
+    pot, m = PowerLaw(1.0e9, 1.5), 0.0041
+    rng = np.random.default_rng(12345)
+    v = 10.0 ** rng.uniform(-1.0, 1.0, BATCH_N)
+    z = rng.uniform(0.0, BATCH_ZETA_MAX, BATCH_N)
+    zg = np.repeat(np.linspace(0.0, BATCH_ZETA_MAX, GRID_ZETAS), GRID_SPEEDS)
+    vg = np.tile(np.logspace(-1.0, 1.0, GRID_SPEEDS), GRID_ZETAS)
+    rows = []
+    for label, vs, zs in (
+        (f"Hertz batch, {BATCH_N} distinct zeta in [0, {BATCH_ZETA_MAX}]", v, z),
+        (f"Hertz batch, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0", vg, zg),
+    ):
+        t0 = time.perf_counter()
+        solve_impacts(pot, m, vs[:10], zs[:10])
+        first = time.perf_counter() - t0
+        dt = _median_time(lambda vs=vs, zs=zs: solve_impacts(pot, m, vs, zs), max(3, repeats // 2))
+        out = solve_impacts(pot, m, vs, zs)
+        # Spot check against the single-impact solver (same method, same round-off).
+        idx = rng.integers(0, vs.size, 20)
+        diff = max(
+            abs(out["contact_time"][i] / solve_impact(pot, m, vs[i], zs[i]).contact_time - 1)
+            for i in idx
+        )
+        per = dt / vs.size
+        rows.append(
+            {
+                "workload": label,
+                "first_call_s": first,
+                "impacts_per_s": 1.0 / per,
+                "us_per_impact": per * 1e6,
+                "speedup_vs_dop853": dop_us / (per * 1e6),
+                "max_rel_diff_vs_solve_impact": diff,
+                "goal_met": bool(1.0 / per >= GOAL_BATCH),
+            }
+        )
+    return rows
 
 
 def run(repeats: int = 7) -> dict:
-    pot = PowerLaw(K_HERTZ, P_HERTZ)
-    truth = solve_impact_mp(pot, MASS, V0, ZETA, dps=30)
-    t_true, e_true = float(truth["contact_time"]), float(truth["restitution"])
-    sol = solve_impact(pot, MASS, V0, ZETA)
-    t_exact = _median_time(lambda: solve_impact(pot, MASS, V0, ZETA), repeats, inner=20)
-    tc, e, nfev = _dop853()
-    t_ode = _median_time(_dop853, repeats)
-    res = {
-        "scene": {"k": K_HERTZ, "p": P_HERTZ, "m": MASS, "v0": V0, "zeta": ZETA},
-        "exact": {
-            "seconds": t_exact,
-            "contact_time_rel_error": abs(sol.contact_time / t_true - 1),
-            "restitution_rel_error": abs(sol.restitution / e_true - 1),
+    rows = [_family_row(*scene, repeats) for scene in _scenes()]
+    batch = _batch_rows(repeats, rows[0]["dop853_us"])
+    return {
+        "families": rows,
+        "batch": batch,
+        "goal": {
+            "us_per_impact": GOAL_US,
+            "speedup": GOAL_SPEEDUP,
+            "error": GOAL_ERROR,
+            "batch_impacts_per_s": GOAL_BATCH,
         },
-        "dop853": {
-            "rtol": RTOL_ODE,
-            "seconds": t_ode,
-            "nfev": nfev,
-            "contact_time_rel_error": abs(tc / t_true - 1),
-            "restitution_rel_error": abs(e / e_true - 1),
-        },
-        "speedup": t_ode / t_exact,
-        "goal": {"speedup": GOAL_SPEEDUP, "error": GOAL_ERROR},
+        "truth": f"solve_impact_mp, {TRUTH_DPS} digits",
+        "dop853_rtol": RTOL_ODE,
+        "load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
         "machine": machine_info(),
+        "goal_met": all(r["goal_met"] for r in rows) and all(b["goal_met"] for b in batch),
     }
-    res["goal_met"] = bool(
-        res["speedup"] >= GOAL_SPEEDUP
-        and res["exact"]["contact_time_rel_error"] <= GOAL_ERROR
-        and res["exact"]["restitution_rel_error"] <= GOAL_ERROR
+
+
+def _print(res: dict) -> None:
+    print(f"exact solver vs DOP853 (rtol {RTOL_ODE:g}), zeta = {ZETA}, truth: {res['truth']}")
+    head = (
+        f"{'family':36s} {'exact us':>9s} {'err t_c':>8s} {'err e':>8s} {'DOP853 us':>10s}"
+        f" {'err t_c':>8s} {'speed-up':>9s} {'1st call s':>10s} goal"
     )
-    return res
+    print(head)
+    for r in res["families"]:
+        print(
+            f"{r['family']:36s} {r['exact_us']:9.1f} {r['exact_contact_time_rel_error']:8.1e}"
+            f" {r['exact_restitution_rel_error']:8.1e} {r['dop853_us']:10.0f}"
+            f" {r['dop853_contact_time_rel_error']:8.1e} {r['speedup']:8.0f}x"
+            f" {r['first_call_s']:10.2f} {'met' if r['goal_met'] else 'NOT met'}"
+        )
+    for b in res["batch"]:
+        print(
+            f"{b['workload']:52s} {b['impacts_per_s']:10.3g} impacts/s"
+            f" ({b['us_per_impact']:.2f} us, {b['speedup_vs_dop853']:.0f}x DOP853)"
+            f" {'met' if b['goal_met'] else 'NOT met'}"
+        )
+    mi = res["machine"]
+    print(
+        f"machine: {mi['platform']}, {mi['cpu_count']} cpus, load {res['load_average_1min']},"
+        f" commit {mi['commit']}"
+    )
 
 
 def main(argv=None) -> int:
@@ -115,27 +255,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args(argv)
     res = run(args.repeats)
-    ex, od = res["exact"], res["dop853"]
-    print(f"damped Hertz impact (zeta={ZETA}), truth: mpmath 30 digits")
-    print(
-        f"  exact solver : {ex['seconds'] * 1e6:9.1f} us   rel err t_c {ex['contact_time_rel_error']:.2e}"
-        f"  e {ex['restitution_rel_error']:.2e}"
-    )
-    print(
-        f"  DOP853 {RTOL_ODE:g}: {od['seconds'] * 1e6:9.1f} us   rel err t_c {od['contact_time_rel_error']:.2e}"
-        f"  e {od['restitution_rel_error']:.2e}  ({od['nfev']} f-evals)"
-    )
-    print(
-        f"  speed-up     : {res['speedup']:.0f}x  (goal >= {GOAL_SPEEDUP:.0f}x at <= {GOAL_ERROR:g}):"
-        f" {'met' if res['goal_met'] else 'NOT met'}"
-    )
-    print(
-        f"  machine      : {res['machine']['platform']}, {res['machine']['cpu_count']} cpus, "
-        f"commit {res['machine']['commit']}"
-    )
+    _print(res)
     if args.json:
-        import os
-
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as fh:
             json.dump(res, fh, indent=2)

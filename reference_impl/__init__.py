@@ -1,5 +1,6 @@
 """Reference implementation of the hidden-harmonic theory of contact dynamics."""
 
+from .batch import solve_impacts
 from .damping import (
     UniversalDamping,
     restitution_from_zeta,
@@ -65,6 +66,7 @@ __all__ = [
     "restitution_from_zeta",
     "solve_impact",
     "solve_impact_mp",
+    "solve_impacts",
     "stiffening_indicator",
     "tsuji_coefficient",
     "zeta_from_restitution",

@@ -189,3 +189,29 @@ def expression_impacts(draw) -> tuple:
 
 
 __all__ += ["monotone_expressions", "expression_impacts", "EXPRESSION_Q_MAX"]
+
+
+# -- exact solver over its whole accepted range (appended for test_exact_*) ---------
+
+
+def exact_zetas() -> st.SearchStrategy[float]:
+    """Damping ratios over [0, 10] with extra weight near critical damping.
+
+    Draws avoid the band just below 1 that `solve_impact` refuses (the theory's
+    end of contact beyond virtual time S_END_MAX, i.e. outside float64 range).
+    """
+    import math
+
+    from reference_impl._oscillator import S_END_MAX
+
+    # Just inside the accepted band (the limit itself rounds either way).
+    z_lim = math.sqrt(1.0 - (math.pi / S_END_MAX) ** 2) - 1e-7
+    return st.one_of(
+        st.floats(0.0, 10.0),
+        st.floats(0.99, z_lim),
+        st.floats(1.0, 1.001),
+        st.floats(1e-12, 1e-3),
+    ).filter(lambda z: not z_lim < z < 1.0)
+
+
+__all__ += ["exact_zetas"]

@@ -1,0 +1,214 @@
+"""Many impacts of one potential in one call: `solve_impacts` (sweeps and benchmarks).
+
+For a power law U = k q^n / n every result follows from the dimensionless
+oscillator integrals of its damping ratio (dq/dx = c x^beta exactly, with c
+carrying m, k and v0), so one compiled loop evaluates the Gauss-Jacobi branch
+sums of every distinct damping ratio at once (a sweep over speeds at a few
+damping ratios costs a few sums plus array arithmetic); the impacts where that rule does not apply (zeta
+>= 0.9, n > 4, or the two rule sizes disagree) and every other family go
+through `solve_impact` one by one. Results agree with `solve_impact` to round-off.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ._branches import (
+    _EPS,
+    _GJ_BETA_MIN,
+    _GJ_RTOL,
+    _GJ_SIZES,
+    _GJ_ZETA_MAX,
+    _NODE_ULPS,
+    _SUM_ULPS_PER_NODE,
+    _exponent_splits,
+    _jacobi_pair,
+    _pow_split,
+)
+from .damping import _check_zeta
+from .errors import HCVInputError
+from .impact import ImpactSolution, _check_exponent, _validated_top, solve_impact
+from .potentials._checks import positive
+from .potentials.base import Potential
+from .potentials.power import PowerLaw
+
+__all__ = ["solve_impacts", "BATCH_MAX"]
+
+# Largest batch accepted: ~8 arrays of this many float64 (~0.6 GB would be 1e7);
+# larger sweeps should be chunked by the caller.
+BATCH_MAX = 10_000_000
+# Rule sizes of the second pass (zeta near 0.9, where (16, 24) do not agree to
+# _GJ_RTOL): measured to agree up to zeta = 0.9 for Hertz.
+_GJ_SIZES_LARGE = (32, 48)
+# Fields of the returned dict, as in `ImpactSolution`.
+_FIELDS = (
+    "max_penetration",
+    "max_force",
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "quadrature_error",
+    "quadrature_error_zero_force",
+)
+
+
+@numba.njit(cache=True)
+def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
+    """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok.
+
+    Same rows as `_branches._branch_rows` and the same sums as `_gj_sums`.
+    """
+    nz = zetas.shape[0]
+    out = np.zeros((nz, 6))
+    ok = np.zeros(nz, dtype=np.bool_)
+    nn = u.shape[0]
+    rows = np.zeros((3, 5))
+    for i in range(nz):
+        z = zetas[i]
+        if z >= zeta_max:
+            continue
+        wd = math.sqrt((1.0 - z) * (1.0 + z))
+        sp = math.atan2(wd, z) / wd
+        s_end = math.pi / wd
+        nr = 1
+        rows[0, 0], rows[0, 1], rows[0, 2], rows[0, 3], rows[0, 4] = 0.0, sp, 0.0, sp, sp
+        if z > 0.0:
+            lf = s_end - sp
+            lz = 2.0 * math.atan2(z, wd) / wd
+            if lz <= 0.0 or lz < 1e-250 * s_end:
+                continue
+            rows[1, 0], rows[1, 1], rows[1, 2], rows[1, 3], rows[1, 4] = s_end, -lf, 0.0, lf, lf
+            rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4] = s_end, -lz, 0.0, lz, lz
+            nr = 3
+        fine = np.zeros(3)
+        coarse = np.zeros(3)
+        for r in range(nr):
+            s0, s1, p0, p1, L = rows[r, 0], rows[r, 1], rows[r, 2], rows[r, 3], rows[r, 4]
+            scale = L ** (beta + 1.0)
+            for j in range(nn):
+                d = u[j]
+                x = math.exp(-z * (s0 + s1 * d)) * math.sin(wd * (p0 + p1 * d)) / wd
+                f = scale * (x / (L * d)) ** beta
+                coarse[r] += W[j, 0] * f
+                fine[r] += W[j, 1] * f
+        worst = 0.0
+        for r in range(nr):
+            worst = max(worst, abs(fine[r] - coarse[r]) / abs(fine[r]))
+        if not worst <= rtol:
+            continue
+        ok[i] = True
+        if nr == 1:
+            out[i, 0], out[i, 1], out[i, 2] = fine[0], fine[0], fine[0]
+            e = abs(fine[0] - coarse[0])
+            out[i, 3], out[i, 4], out[i, 5] = e, e, e
+        else:
+            out[i, 0], out[i, 1], out[i, 2] = fine[0], fine[1], fine[1] - fine[2]
+            out[i, 3] = abs(fine[0] - coarse[0])
+            out[i, 4] = abs(fine[1] - coarse[1])
+            out[i, 5] = abs(fine[1] - coarse[1]) + abs(fine[2] - coarse[2])
+    return out, ok
+
+
+def solve_impacts(potential: Potential, m: float, v0s, zetas) -> dict[str, np.ndarray]:
+    """Solve many impacts of one potential and mass.
+
+    Parameters
+    ----------
+    potential : Potential
+        Contact potential U(q).
+    m : float
+        Mass (kg), > 0.
+    v0s : array_like
+        Impact speeds (m/s), > 0.
+    zetas : array_like
+        Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        One array per field of `ImpactSolution` (max_penetration, max_force,
+        contact_time, restitution, contact_time_zero_force, restitution_zero_force,
+        quadrature_error, quadrature_error_zero_force), of the broadcast shape.
+
+    Raises
+    ------
+    HCVInputError
+        Invalid input (the message names the first offending value), or more
+        than BATCH_MAX impacts.
+    """
+    if not isinstance(potential, Potential):
+        raise HCVInputError(f"potential must be a Potential, got {potential!r}")
+    m = positive("m", m, "solve_impacts")
+    v, z = np.broadcast_arrays(np.asarray(v0s, dtype=float), np.asarray(zetas, dtype=float))
+    if v.size > BATCH_MAX:
+        raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
+    shape = v.shape
+    v, z = v.ravel(), z.ravel()
+    for vi in v[~(np.isfinite(v) & (v > 0))][:1]:
+        raise HCVInputError(f"impact speed v0 must be a finite number > 0, got {vi!r}")
+    for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
+        _check_zeta(zi)
+    _check_exponent(potential)
+    out = {key: np.full(v.size, np.nan) for key in _FIELDS}
+    todo = np.ones(v.size, dtype=bool)
+    beta = 2.0 / potential.leading_exponent - 1.0
+    if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN and v.size:
+        _validated_top(potential, 0.5 * m * float(v.max()) ** 2)
+        _power_law_batch(potential, m, v, z, beta, out, todo)
+    for i in np.flatnonzero(todo):
+        sol: ImpactSolution = solve_impact(potential, m, float(v[i]), float(z[i]))
+        for key in _FIELDS:
+            out[key][i] = getattr(sol, key)
+    return {key: arr.reshape(shape) for key, arr in out.items()}
+
+
+def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
+    """Fill ``out`` for the impacts the compiled Gauss-Jacobi loop accepts."""
+    # The dimensionless sums depend on zeta only: one evaluation per distinct zeta.
+    zu, inv = np.unique(z, return_inverse=True)
+    sums_u, ok_u = _gj_batch(zu, *_jacobi_pair(beta), beta, _GJ_ZETA_MAX, _GJ_RTOL)
+    # Damping ratios near 0.9 need larger rules (longer branches): a second pass.
+    again = np.flatnonzero(~ok_u & (zu < _GJ_ZETA_MAX))
+    if again.size:
+        s2, ok2 = _gj_batch(
+            zu[again], *_jacobi_pair(beta, _GJ_SIZES_LARGE), beta, _GJ_ZETA_MAX, _GJ_RTOL
+        )
+        sums_u[again[ok2]], ok_u[again[ok2]] = s2[ok2], True
+        nodes_u = np.full(zu.size, _GJ_SIZES[1])
+        nodes_u[again[ok2]] = _GJ_SIZES_LARGE[1]
+    else:
+        nodes_u = np.full(zu.size, _GJ_SIZES[1])
+    sums, ok, nodes = sums_u[inv], ok_u[inv], nodes_u[inv]
+    n = pot.leading_exponent
+    a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
+    c0 = (m / pot.k) * _pow_split(0.5 * n * m / pot.k, a_hi, a_lo)
+    # c v0^beta with the exponent split as in `_branches.power_law_scale`.
+    c = c0 * v**b_hi * np.exp(b_lo * np.log(v))
+    roundoff = (_SUM_ULPS_PER_NODE * nodes + _NODE_ULPS) * _EPS
+    rise, fall, mid = (c * sums[:, i] for i in range(3))
+    e_rise, e_fall, e_mid = (c * sums[:, i] for i in range(3, 6))
+    e_rise = e_rise + roundoff * rise
+    e_fall = e_fall + roundoff * fall
+    e_mid = e_mid + roundoff * (np.abs(fall) + np.abs(fall - mid))
+    zz = np.where(ok, z, 0.0)
+    wd = np.sqrt((1.0 - zz) * (1.0 + zz))
+    sp = np.arctan2(wd, zz) / wd
+    x_pk = v * np.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
+    q_max = (0.5 * n * m * x_pk**2 / pot.k) ** (1.0 / n)
+    vals = {
+        "max_penetration": q_max,
+        "max_force": pot.k * q_max**pot.p,
+        "contact_time": rise + fall,
+        "restitution": np.exp(-math.pi * zz / wd),
+        "contact_time_zero_force": rise + mid,
+        "restitution_zero_force": np.where(zz > 0, np.exp(-2.0 * zz * sp), 1.0),
+        "quadrature_error": e_rise + e_fall,
+        "quadrature_error_zero_force": e_rise + e_mid,
+    }
+    for key, arr in vals.items():
+        out[key][ok] = arr[ok]
+    todo[ok] = False
