@@ -33,6 +33,7 @@ _SOLVE_ROWS = (
     ("dt_safe_shortcut", "dt_safe shortcut 2 m v0 / U'(q_max) [s]"),
     ("geometry", "geometry (sec. 6)"),
     ("contact_time", "contact time, end at q = 0 [s]"),
+    ("returns_to_q0", "returns to q = 0"),
     ("restitution", "restitution, end at q = 0"),
     ("contact_time_zero_force", "contact time, end at zero force [s]"),
     ("restitution_zero_force", "restitution, end at zero force"),
@@ -47,7 +48,9 @@ def solve_scene(scene) -> list[dict]:
     Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
     dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
     geometry, contact_time and restitution (end at q = 0, the theory's
-    definition), contact_time_zero_force and restitution_zero_force (end when
+    definition; with zeta >= 1 and a leading exponent >= 2 the body never returns
+    to q = 0: contact_time is then None and returns_to_q0 False, an exact answer,
+    not a failure), contact_time_zero_force and restitution_zero_force (end when
     the total force vanishes, as in codes that forbid tension), action J(E) and
     period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
     """
@@ -71,7 +74,10 @@ def solve_scene(scene) -> list[dict]:
                 "dt_safe_shortcut": safe.dt_shortcut,
                 "dt_safe_at_q": safe.q_star,
                 "geometry": safe.geometry,
-                "contact_time": sol.contact_time,
+                # inf is the theory's answer for an overdamped contact that creeps back
+                # forever; it is written as an absence (null), not as a number.
+                "contact_time": sol.contact_time if math.isfinite(sol.contact_time) else None,
+                "returns_to_q0": math.isfinite(sol.contact_time),
                 "restitution": sol.restitution,
                 "contact_time_zero_force": sol.contact_time_zero_force,
                 "restitution_zero_force": sol.restitution_zero_force,
@@ -92,11 +98,13 @@ def _json_safe(value):
 def _print_table(title: str, rows: list[dict], columns) -> None:
     """One row per result, one column per field."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title=title)
     for _, header in columns:
-        table.add_column(header, justify="right")
+        # escape: rich would read units such as "[m]" or "[s]" as markup and drop them
+        table.add_column(escape(header), justify="right")
     for row in rows:
         table.add_row(*(_fmt(row.get(key)) for key, _ in columns))
     Console().print(table)
@@ -105,6 +113,7 @@ def _print_table(title: str, rows: list[dict], columns) -> None:
 def _print_transposed(title: str, rows: list[dict], fields, key: str, key_label: str) -> None:
     """One row per field, one column per result (keeps wide result sets readable)."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     table = Table(title=title)
@@ -112,7 +121,7 @@ def _print_transposed(title: str, rows: list[dict], fields, key: str, key_label:
     for row in rows:
         table.add_column(_fmt(row[key]), justify="right")
     for name, label in fields:
-        table.add_row(label, *(_fmt(row.get(name)) for row in rows))
+        table.add_row(escape(label), *(_fmt(row.get(name)) for row in rows))
     Console().print(table)
 
 
@@ -121,7 +130,7 @@ def _fmt(v) -> str:
         return f"{v:.10g}"
     if isinstance(v, bool):
         return "yes" if v else "NO"
-    return "" if v is None else str(v)
+    return "—" if v is None else str(v)
 
 
 def _cmd_solve(args) -> int:

@@ -280,3 +280,30 @@ def test_near_critical_damping_is_right_or_refused(tmp_path, capsys, zeta):
         f"[damping]\nlaw = 'universal'\nzeta = {zeta}\n"
     )
     _check(capsys, ["solve", str(path), "--json"], path.read_text())
+
+
+def test_overdamped_contact_never_returning_is_an_answer_not_a_refusal(tmp_path, capsys):
+    """Issue 12, section 2, zeta = 2 on Hertz: the zero-force end is finite and right.
+
+    Reference: an independent ODE integration (the issue's 1.9032 s); the theory's end
+    at q = 0 never comes for zeta >= 1 with a leading exponent >= 2, which the CLI states
+    as contact_time = null with returns_to_q0 = false, never as a refusal or a number.
+    """
+    path = tmp_path / "od.toml"
+    path.write_text(
+        "mass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = 'power'\nk = 1.0\np = 1.5\n"
+        "[damping]\nlaw = 'universal'\nzeta = 2.0\n"
+    )
+    code = main(["solve", str(path), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, f"got exit {code} ({err.strip()}), should be 0 [issue 12 s2, hcv solve]"
+    row = json.loads(out)["results"][0]
+    assert row["contact_time"] is None and row["returns_to_q0"] is False, (
+        f"got contact_time {row['contact_time']!r}, returns_to_q0 {row['returns_to_q0']!r}, "
+        "should be None and False [issue 12 s2, hcv solve zeta = 2]"
+    )
+    # The ODE reference is quoted to 5 significant digits (1.9032 s).
+    assert abs(row["contact_time_zero_force"] - 1.9032) < 1e-4, (
+        f"got {row['contact_time_zero_force']!r}, should be 1.9032 s (ODE) "
+        "[issue 12 s2, hcv solve zeta = 2]"
+    )
