@@ -235,6 +235,11 @@ def node_function(pot: Potential):
     sym = expression_sympy(pot)
     if sym is None:
         return None
+    if not getattr(pot, "float_formula_accurate", True):
+        # The raw formula cancels somewhere in float64 (e.g. exp(q) - 1 - q near 0):
+        # the compiled kernel would lose digits there, so the potential's corrected
+        # evaluation (series / raised precision) is used instead. Right before fast.
+        return None
     kernel = _compiled_expression(*sym)
 
     def f_expr(x, m, q_hi):

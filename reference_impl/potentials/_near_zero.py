@@ -78,8 +78,16 @@ _FLOAT_MIN = 1e-300
 _FLOAT_MAX = 1e307
 
 
-class SeriesTimeout(Exception):
-    """sympy's series did not finish within its budget (or could not be bounded)."""
+class SeriesTimeout(BaseException):
+    """sympy's series did not finish within its budget (or could not be bounded).
+
+    A BaseException, like KeyboardInterrupt: sympy catches ``Exception`` broadly in
+    places, and an alarm landing there would be swallowed and the series run on.
+    """
+
+
+# Interval (s) at which an expired series budget is signalled again until honoured.
+_REARM_SECONDS = 0.1
 
 
 @contextlib.contextmanager
@@ -104,7 +112,9 @@ def time_limit(seconds: float):
         raise SeriesTimeout(f"sympy's series took more than {seconds} s")
 
     previous = signal.signal(signal.SIGALRM, _expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    # The timer re-fires every _REARM_SECONDS after the first expiry, so that an alarm
+    # swallowed by a bare ``except:`` somewhere in sympy is raised again.
+    signal.setitimer(signal.ITIMER_REAL, seconds, _REARM_SECONDS)
     try:
         yield
     finally:

@@ -211,6 +211,18 @@ class Expression(Potential):
         """The sympy symbol of the overlap q in `sympy_U` (declared real)."""
         return _Q
 
+    @property
+    def float_formula_accurate(self) -> bool:
+        """True when U, U', U'' evaluated from `sympy_U` in float64 need no correction.
+
+        False when a formula cancels near contact (q - atan(q), 1 - cos(q): the series
+        branch takes over below a floor) or far from it (mpmath above a ceiling). Code
+        that compiles `sympy_U` directly (the exact solver's kernels, the Verlet
+        lanes) must use it only when this is True, and otherwise go through `U`,
+        `dU`, `d2U`, which apply the corrections.
+        """
+        return self._q_branch == 0.0 and all(math.isinf(c) for c in self._ceilings)
+
     # -- construction checks --------------------------------------------------
     def _check_zero(self) -> None:
         """U(0) = 0 exactly (assumption 2), by substitution or the limit q -> 0+."""
