@@ -26,14 +26,14 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from reference_impl import Ellipsoid, Expression, PowerLaw, Sphere, solve_impact, solve_impacts
+from reference_impl import PowerLaw, solve_impact, solve_impacts
 from reference_impl._kernels import expression_sympy
 from reference_impl.impact import solve_impact_mp
-from reference_impl.paper import PAPER_ELLIPSOID, PAPER_MASS
+from reference_impl.workprecision import FAMILY_ZETA, family_scenes
 
 from ._machine import machine_info
 
-ZETA = 0.2
+ZETA = FAMILY_ZETA  # the damping of every family scene
 RTOL_ODE = 1e-12
 GOAL_US = 60.0
 GOAL_SPEEDUP = 300.0
@@ -45,21 +45,11 @@ TRUTH_DPS = 30
 BATCH_N = 100_000
 BATCH_ZETA_MAX = 0.85
 GRID_ZETAS, GRID_SPEEDS = 50, 2000
-STEEL = 7800.0  # kg/m^3, for the sphere's mass
 
 
 def _scenes():
-    """(name, potential, m, v0, scalar U, scalar U') of every family."""
-    sphere_R = 0.01
-    sphere_m = STEEL * 4.0 / 3.0 * math.pi * sphere_R**3
-    expr = Expression("k*q**2.5/2.5 + c*q**2/2", k=1e9, c=1e5)
-    return [
-        ("Hertz", PowerLaw(1.0e9, 1.5), 0.0041, 1.0),
-        ("paper ellipsoid", Ellipsoid(**PAPER_ELLIPSOID), PAPER_MASS, 0.99),
-        ("sphere R=0.01 Kn=1e8", Sphere(sphere_R, 1e8, 0.5), sphere_m, 1.0),
-        ("sum of two power laws", PowerLaw(1e5, 1.5) + PowerLaw(2e3, 1.0), 0.1, 0.3),
-        ("expression k*q**2.5/2.5 + c*q**2/2", expr, 0.0041, 1.0),
-    ]
+    """(name, potential, m, v0) of every family: the study's `family_scenes` (one home)."""
+    return [(sc.name, sc.potential, sc.m, sc.v0) for sc in family_scenes()]
 
 
 def _scalar_funcs(pot):

@@ -43,8 +43,70 @@ def settings_text(quick: bool) -> str:
     )
 
 
-# Scene left out by --quick (its damped twin and the ellipsoid remain).
+# Scene left out by --quick (its damped twin, the ellipsoid and the other families remain).
 QUICK_SKIP = ("hertz",)
+# Potential family of a scene, by the class of its potential.
+FAMILY_NAMES = {
+    "PowerLaw": "power law (Hertz)",
+    "Ellipsoid": "ellipsoid (paper)",
+    "Sphere": "sphere",
+    "SumPotential": "sum of power laws",
+    "Expression": "user expression",
+}
+# The DOP853 tolerance the per-family summary quotes (the row whose rtol is nearest in log).
+SUMMARY_RTOL = 1e-12
+
+
+def scene_families() -> dict[str, str]:
+    """{scene name: family label} for `default_scenes`."""
+    return {
+        s.name: FAMILY_NAMES.get(type(s.potential).__name__, type(s.potential).__name__)
+        for s in default_scenes()
+    }
+
+
+def _rtol_of(setting: str) -> float:
+    return float(setting.split("=", 1)[1]) if setting.startswith("rtol=") else math.nan
+
+
+def family_summary(rows: list[dict]) -> list[dict]:
+    """Per scene, from the measured rows: the exact solver's time, largest error and own
+    contact-time bound, and DOP853's time and largest error at the rtol nearest
+    `SUMMARY_RTOL` (and that time over the exact solver's)."""
+    fam = scene_families()
+    out = []
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        ex = [r for r in rows if r["scene"] == scene and r["method"] == "exact"]
+        dop = [
+            r
+            for r in rows
+            if r["scene"] == scene
+            and r["method"] == "DOP853"
+            and r.get("seconds") is not None
+            and math.isfinite(float(r["seconds"]))
+        ]
+        if not ex:
+            continue
+        e = ex[0]
+        d = (
+            min(dop, key=lambda r: abs(math.log10(_rtol_of(r["setting"]) / SUMMARY_RTOL)))
+            if dop
+            else None
+        )
+        out.append(
+            {
+                "scene": scene,
+                "family": fam.get(scene, "?"),
+                "exact_seconds": float(e["seconds"]),
+                "exact_max_error": _max_err(e),
+                "exact_contact_time_bound": float(e.get("contact_time_bound", math.nan)),
+                "dop853_setting": d["setting"] if d else "not run",
+                "dop853_seconds": float(d["seconds"]) if d else math.nan,
+                "dop853_max_error": _max_err(d) if d else math.nan,
+                "dop853_over_exact": float(d["seconds"]) / float(e["seconds"]) if d else math.nan,
+            }
+        )
+    return out
 
 
 def run_wp(quick: bool, progress=None) -> pd.DataFrame:
@@ -59,10 +121,11 @@ def _short(info: str) -> str:
 
 
 def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, str]]:
-    """One figure per scene, four log-log panels; returns [(file name, caption)]."""
+    """The per-family overview, then one figure per scene with four log-log panels;
+    returns [(file name, caption)]."""
     from matplotlib.figure import Figure
 
-    out = []
+    out = [wp_overview_figure(df, fig_dir)]
     for scene in dict.fromkeys(df.scene):
         d = df[(df.scene == scene) & df.seconds.notna()]
         fig = Figure(figsize=(11.5, 8.4), dpi=110)
@@ -133,7 +196,79 @@ def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, 
     return out
 
 
+# Panels per row of the per-family overview figure.
+_OVERVIEW_COLS = 3
+
+
+def wp_overview_figure(df: pd.DataFrame, fig_dir) -> tuple[str, str]:
+    """One panel per scene (every family): the largest of the four relative errors
+    against wall time, every method; returns (file name, caption)."""
+    from matplotlib.figure import Figure
+
+    fam = scene_families()
+    scenes = list(dict.fromkeys(df.scene))
+    nrow = -(-len(scenes) // _OVERVIEW_COLS)
+    fig = Figure(figsize=(13.0, 3.9 * nrow + 0.6), dpi=110)
+    axes = np.atleast_2d(fig.subplots(nrow, _OVERVIEW_COLS, squeeze=False))
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.08, top=0.88, wspace=0.25, hspace=0.42)
+    for ax, scene in zip(axes.flat, scenes, strict=False):
+        d = df[(df.scene == scene) & df.seconds.notna()]
+        for method, style in METHOD_STYLE.items():
+            s = d[d.method == method]
+            if s.empty:
+                continue
+            y = np.maximum([_max_err(r) for r in s.to_dict("records")], FLOOR)
+            x = s.seconds.to_numpy(dtype=float)
+            ok = np.isfinite(x) & np.isfinite(y)
+            if ok.any():
+                ax.loglog(
+                    x[ok],
+                    y[ok],
+                    ls="-" if method != "exact" else "none",
+                    lw=1.3,
+                    label=method,
+                    **style,
+                )
+        ax.set(
+            xlabel="wall time per impact [s]",
+            ylabel="largest relative error (t_c, e, q_max, q(t))",
+            title=f"{scene}: {fam.get(scene, '?')}",
+        )
+        ax.axhline(FLOOR, color="0.6", lw=0.6, ls=":")
+        ax.grid(True, which="major", alpha=0.3)
+    for ax in list(axes.flat)[len(scenes) :]:
+        ax.set_visible(False)
+    handles, labels = {}, {}
+    for ax in axes.flat:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    labels = list(handles)
+    fig.legend(
+        [handles[k] for k in labels],
+        labels,
+        loc="upper center",
+        ncol=len(labels),
+        fontsize=9.5,
+        bbox_to_anchor=(0.5, 0.985),
+        frameon=False,
+    )
+    fig.suptitle(
+        "Work-precision, every potential family (truth: mpmath, 30 digits)",
+        fontsize=11.5,
+        y=0.94,
+    )
+    name = "work_precision_families.png"
+    fig.savefig(fig_dir / name)
+    return (
+        name,
+        "Largest of the four relative errors (contact time, restitution, maximum "
+        "penetration, trajectory) against wall time per impact, one panel per scene and "
+        f"so per potential family. Errors below {g(FLOOR)} are drawn at {g(FLOOR)}.",
+    )
+
+
 def _max_err(r) -> float:
+    """Largest of the four relative errors of a row (inf when one is missing)."""
     vals = [r.get(c, math.nan) for c, _ in METRICS]
     vals = [float(v) for v in vals if v is not None]
     return max(vals) if vals and all(math.isfinite(v) for v in vals) else math.inf

@@ -1,0 +1,114 @@
+"""Work-precision study: every potential family is in it, and the exact solver's
+row of each is within the solver's own error bound.
+
+One quick study (the scenes ``hcv report --quick`` runs, without Verlet points:
+the exact solver, DOP853 and RK45 at three tolerances, ~20 s) is computed once
+per module; the 30-digit truths are cached per process by
+`reference_impl.workprecision.ground_truth`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from reference_impl.report._wp import (
+    FAMILY_NAMES,
+    QUICK_SKIP,
+    family_summary,
+    scene_families,
+    wp_overview_figure,
+)
+from reference_impl.workprecision import default_scenes, family_scenes, work_precision
+from verification.assertions import assert_less, assert_true
+
+CALL = "work_precision(quick=True)"
+CLAIM = "work-precision"
+
+
+@pytest.fixture(scope="module")
+def study():
+    scenes = [s for s in default_scenes() if s.name not in QUICK_SKIP]
+    return work_precision(scenes, quick=True)
+
+
+def test_every_family_has_a_scene(study):
+    fams = scene_families()
+    present = {fams[s] for s in set(study.scene)}
+    assert_true(
+        present == set(FAMILY_NAMES.values()),
+        got=f"families {sorted(present)}",
+        should=f"every family {sorted(FAMILY_NAMES.values())}",
+        claim=CLAIM,
+        call=CALL,
+    )
+
+
+@pytest.mark.parametrize("scene", [s.name for s in default_scenes() if s.name not in QUICK_SKIP])
+def test_exact_row_within_own_bound(study, scene):
+    ex = study[(study.scene == scene) & (study.method == "exact")]
+    assert_true(
+        len(ex) == 1,
+        got=f"{len(ex)} exact rows",
+        should="one exact-solver row",
+        claim=CLAIM,
+        call=f"{CALL} [{scene}]",
+    )
+    row = ex.iloc[0]
+    bound = float(row.contact_time_bound)
+    assert_true(
+        math.isfinite(bound) and bound > 0,
+        got=f"bound {bound!r}",
+        should="a finite positive contact-time bound",
+        claim=CLAIM,
+        call=f"{CALL} [{scene}]",
+    )
+    # Tolerance: the solver's own quadrature_error (relative to t_c); the truth's
+    # error (30 digits) is negligible against it.
+    assert_less(
+        float(row.err_contact_time),
+        bound,
+        claim=CLAIM,
+        call=f"{CALL} [{scene}]",
+        what="relative contact-time error of the exact solver",
+    )
+
+
+def test_family_scenes_run_only_runge_kutta(study):
+    fam = {s.name for s in family_scenes()} - {"hertz-damped"}
+    methods = set(study[study.scene.isin(fam)].method)
+    assert_true(
+        methods == {"exact", "DOP853", "RK45"},
+        got=f"methods {sorted(methods)}",
+        should="exact, DOP853 and RK45 on the added family scenes",
+        claim=CLAIM,
+        call=CALL,
+    )
+
+
+def test_family_summary_and_overview(study, tmp_path):
+    rows = study.to_dict("records")
+    summ = family_summary(rows)
+    assert_true(
+        {x["scene"] for x in summ} == set(study.scene)
+        and all(
+            math.isfinite(x["exact_seconds"])
+            and math.isfinite(x["dop853_seconds"])
+            and x["dop853_setting"].startswith("rtol=")
+            for x in summ
+        ),
+        got=f"{summ}",
+        should="one line per scene with measured exact and DOP853 times",
+        claim=CLAIM,
+        call="family_summary",
+    )
+    pytest.importorskip("matplotlib")
+    name, caption = wp_overview_figure(study, tmp_path)
+    assert_true(
+        (tmp_path / name).stat().st_size > 10_000 and "per potential family" in caption,
+        got=f"{name} ({(tmp_path / name).stat().st_size} bytes)",
+        should="a drawn overview figure",
+        claim=CLAIM,
+        call="wp_overview_figure",
+    )
