@@ -338,3 +338,28 @@ def test_package_data_ships_every_toml_and_every_pattern_matches():
         if p.is_file() and p.suffix in (".toml", ".json", ".csv") and "__pycache__" not in p.parts
     }
     assert data_files <= shipped, sorted(map(str, data_files - shipped))
+
+
+def test_protocol_documents_u_of_every_family_with_units():
+    """Issue 10, point 3: docs/adapter-protocol.md gives U(q) of every family a scene can name.
+
+    The family list comes from the scene loader, so a family added there without its
+    documented law fails here.
+    """
+    import re
+    from pathlib import Path
+
+    from reference_impl.scenes._scene import _FAMILIES
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "adapter-protocol.md").read_text()
+    rows = dict(re.findall(r"^\| `([a-z]+)` \| ([^\n]*)$", doc, re.M))
+    missing = [f for f in _FAMILIES if f not in rows]
+    assert not missing, (
+        f"got no U(q) row for {missing}, should document every family of the scene "
+        "loader [issue 10 point 3, docs/adapter-protocol.md]"
+    )
+    no_units = [f for f in _FAMILIES if "(" not in rows[f]]
+    assert not no_units, (
+        f"got rows without units for {no_units}, should give the keys' SI units "
+        "[issue 10 point 3, docs/adapter-protocol.md]"
+    )

@@ -127,11 +127,11 @@ def test_cli_table_shows_failure_kind_and_sizes(tmp_path):
         if line.count("│") >= 3
     }
     # failure kind (runaway / bounded / accuracy), the bounded step and (impacts
-    # only, so empty here) the accuracy step, as `_fmt` prints them.
+    # only, so absent here: "—") the accuracy step, as `_fmt` prints them.
     want = {
         "failure kind": r.failure_kind,
         "dt_bounded": f"{r.dt_bounded:.10g}",
-        "dt_accuracy": "",
+        "dt_accuracy": "—",
     }
     assert_true(
         out.returncode == 0 and all(rows.get(k) == v for k, v in want.items()),

@@ -442,3 +442,26 @@ def test_adapter_section_html_has_side_by_side_table():
         claim="report",
         call=call,
     )
+
+
+def test_readme_speed_block_is_the_committed_benchmark():
+    """The README's speed figures are rendered from reports/bench/exact.json, never typed."""
+    from reference_impl.report.readme_table import SPEED_END, SPEED_START, speed_table
+
+    bench_json = ROOT / "reports" / "bench" / "exact.json"
+    readme = (ROOT / "README.md").read_text()
+    assert_true(
+        bench_json.is_file(),
+        got=f"no {bench_json.relative_to(ROOT)}",
+        should="the benchmark JSON behind the README's speed block (nox -s bench)",
+        claim="report",
+        call="readme_table",
+    )
+    want = speed_table(json.loads(bench_json.read_text()))
+    assert_true(
+        readme_block(readme, SPEED_START, SPEED_END) == want,
+        got="README speed block differs from reports/bench/exact.json",
+        should="identical (run python -m reference_impl.report.readme_table)",
+        claim="report",
+        call="readme_table",
+    )

@@ -3,8 +3,11 @@
 ``python -m reference_impl.report.readme_table [--results reports/results.json]
 [--readme README.md] [--check]`` rewrites only the block between
 ``<!-- verdicts:start -->`` and ``<!-- verdicts:end -->`` of the README with one
-row per claim of results.json (id, section, verdict, headline). ``--check``
-writes nothing and exits 1 when the block differs from what results.json gives.
+row per claim of results.json (id, section, verdict, headline), and, when
+``reports/bench/exact.json`` exists (``nox -s bench``), the block between
+``<!-- speed:start -->`` and ``<!-- speed:end -->`` with the exact solver's speed
+and error per potential family as that benchmark measured them. ``--check``
+writes nothing and exits 1 when a block differs from what the JSON files give.
 """
 
 from __future__ import annotations
@@ -16,10 +19,21 @@ from pathlib import Path
 
 from ..errors import HCVInputError
 
-__all__ = ["START", "END", "verdict_table", "readme_block", "rewrite_readme"]
+__all__ = [
+    "START",
+    "END",
+    "SPEED_START",
+    "SPEED_END",
+    "verdict_table",
+    "speed_table",
+    "readme_block",
+    "rewrite_readme",
+]
 
 START = "<!-- verdicts:start -->"
 END = "<!-- verdicts:end -->"
+SPEED_START = "<!-- speed:start -->"
+SPEED_END = "<!-- speed:end -->"
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -46,19 +60,64 @@ def verdict_table(results: dict) -> str:
     return "\n".join(lines)
 
 
-def readme_block(readme_text: str) -> str:
-    """The text between the markers (HCVInputError when they are missing or out of order)."""
-    i, j = readme_text.find(START), readme_text.find(END)
+def speed_table(bench: dict) -> str:
+    """Markdown table of `benchmarks.bench_exact`'s JSON: one row per family, then the batch."""
+    lines = [
+        "| scene | exact solver | error t_c | error e | DOP853 (rtol "
+        f"{bench.get('dop853_rtol', '?')}) | its error t_c | speed-up | goal |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in bench["families"]:
+        lines.append(
+            f"| {_cell(r['family'])} | {r['exact_us']:.0f} µs | "
+            f"{r['exact_contact_time_rel_error']:.1e} | {r['exact_restitution_rel_error']:.1e} | "
+            f"{r['dop853_us'] / 1e3:.1f} ms | {r['dop853_contact_time_rel_error']:.1e} | "
+            f"{r['speedup']:.0f}× | {'met' if r['goal_met'] else '**not met**'} |"
+        )
+    lines.append("")
+    for b in bench.get("batch", []):
+        lines.append(
+            f"- `solve_impacts`, {_cell(b['workload'])}: {b['impacts_per_s']:.3g} impacts/s "
+            f"({'met' if b['goal_met'] else '**not met**'})"
+        )
+    goal = bench.get("goal", {})
+    mi = bench.get("machine", {})
+    lines += [
+        "",
+        f"Goals (issue 9): ≤ {goal.get('us_per_impact', '?')} µs per impact at ≤ "
+        f"{goal.get('error', '?')} relative error and ≥ {goal.get('speedup', '?')}× DOP853; "
+        f"batch ≥ {goal.get('batch_impacts_per_s', '?'):.0e} impacts/s. Truth: "
+        f"{bench.get('truth', '?')}. Measured by `python -m benchmarks.bench_exact` "
+        f"({mi.get('cpu_count', '?')} cpus, load {bench.get('load_average_1min', '?')}, "
+        f"commit {str(mi.get('commit', '?'))[:12]}); `reports/bench/exact.json`.",
+    ]
+    return "\n".join(lines)
+
+
+def _between(text: str, start: str, end: str) -> tuple[int, int]:
+    i, j = text.find(start), text.find(end)
     if i < 0 or j < 0 or j < i:
-        raise HCVInputError(f"README has no {START} ... {END} block")
-    return readme_text[i + len(START) : j].strip("\n")
+        raise HCVInputError(f"README has no {start} ... {end} block")
+    return i + len(start), j
 
 
-def rewrite_readme(results: dict, readme_text: str) -> str:
-    """The README with only its verdict block replaced."""
-    readme_block(readme_text)  # markers present
-    i, j = readme_text.find(START), readme_text.find(END)
-    return readme_text[: i + len(START)] + "\n" + verdict_table(results) + "\n" + readme_text[j:]
+def readme_block(readme_text: str, start: str = START, end: str = END) -> str:
+    """The text between the markers (HCVInputError when they are missing or out of order)."""
+    i, j = _between(readme_text, start, end)
+    return readme_text[i:j].strip("\n")
+
+
+def _replace(text: str, start: str, end: str, body: str) -> str:
+    i, j = _between(text, start, end)
+    return text[:i] + "\n" + body + "\n" + text[j:]
+
+
+def rewrite_readme(results: dict, readme_text: str, bench: dict | None = None) -> str:
+    """The README with only its verdict block (and, given ``bench``, its speed block) replaced."""
+    new = _replace(readme_text, START, END, verdict_table(results))
+    if bench is not None:
+        new = _replace(new, SPEED_START, SPEED_END, speed_table(bench))
+    return new
 
 
 def main(argv=None) -> int:
@@ -67,19 +126,22 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--results", default=str(ROOT / "reports" / "results.json"))
     ap.add_argument("--readme", default=str(ROOT / "README.md"))
+    ap.add_argument("--bench", default=str(ROOT / "reports" / "bench" / "exact.json"))
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
     args = ap.parse_args(argv)
     try:
         results = json.loads(Path(args.results).read_text())
         readme = Path(args.readme).read_text()
-        new = rewrite_readme(results, readme)
+        bench_path = Path(args.bench)
+        bench = json.loads(bench_path.read_text()) if bench_path.is_file() else None
+        new = rewrite_readme(results, readme, bench)
     except (OSError, ValueError, KeyError, HCVInputError) as exc:
         print(f"readme_table: error: {exc}", file=sys.stderr)
         return 2
     if args.check:
         if new != readme:
             print(
-                f"readme_table: {args.readme} verdict block differs from {args.results}",
+                f"readme_table: {args.readme} differs from {args.results} / {args.bench}",
                 file=sys.stderr,
             )
             return 1
