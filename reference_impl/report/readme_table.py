@@ -88,10 +88,15 @@ def speed_table(bench: dict) -> str:
         f"{goal.get('error', '?')} relative error and ≥ {goal.get('speedup', '?')}× DOP853; "
         f"batch ≥ {goal.get('batch_impacts_per_s', '?'):.0e} impacts/s. Truth: "
         f"{bench.get('truth', '?')}. Measured by `python -m benchmarks.bench_exact` "
-        f"({mi.get('cpu_count', '?')} cpus, load {bench.get('load_average_1min', '?')}, "
+        f"({mi.get('cpu_count', '?')} cpus, load {_load(bench)}, "
         f"commit {str(mi.get('commit', '?'))[:12]}); `reports/bench/exact.json`.",
     ]
     return "\n".join(lines)
+
+
+def _load(bench: dict) -> str:
+    load = bench.get("load_average_1min")
+    return f"{load:.2f}" if isinstance(load, int | float) else "?"
 
 
 def _between(text: str, start: str, end: str) -> tuple[int, int]:
