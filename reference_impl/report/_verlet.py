@@ -124,8 +124,9 @@ def verlet_impact(pot, m: float, v0: float, zeta: float, dt: float, max_steps: i
     if terms is None:
         status = _path_python(pot, m, c_damp, dt, v0, ys, vs)
     else:
-        status = _path_kernel(terms[0], terms[1], float(pot.q_sup), float(m), c_damp, float(dt),
-                              float(v0), ys, vs)
+        status = _path_kernel(
+            terms[0], terms[1], float(pot.q_sup), float(m), c_damp, float(dt), float(v0), ys, vs
+        )
     return VerletPath(dt, v0, ys, vs, int(status))
 
 
