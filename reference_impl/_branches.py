@@ -15,6 +15,10 @@ are cut into pieces of at most _PIECE units of virtual time, over which the
 integrand, an analytic function of s with unit time scale, is resolved by a
 fixed tanh-sinh rule.
 
+Power laws, and compiled families whose exponents have small denominators, first
+try Gauss-Jacobi rules (in t = d^(1/b) for the latter, `_gauss_jacobi_compiled`),
+kept only when two rule sizes agree to _GJ_RTOL on every stretch.
+
 Every error returned is the quadrature estimate |fine - coarse| plus a bound on
 the round-off of the sum (numpy's pairwise sum for tanh-sinh, recursive summation
 in the compiled Gauss-Jacobi loops; relative to the sum of |w f|) and of the node
@@ -34,7 +38,7 @@ import numpy as np
 from scipy import integrate
 from scipy.special import roots_jacobi
 
-from ._kernels import node_function
+from ._kernels import node_function, substitution_order
 from ._oscillator import VirtualOscillator
 from ._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
 from .errors import HCVInputError
@@ -74,6 +78,14 @@ _PIECE = 1.0
 _GJ_SIZES = (16, 24)
 _GJ_RTOL = 1e-14
 _GJ_BETA_MIN = -0.5
+# Compiled families (`_gauss_jacobi_compiled`): rule sizes compared, and the largest
+# substitution order b (d = t^b) tried; larger b pushes the rule's singularities in t
+# toward [0, 1] and slows the convergence.
+_GJC_SIZES = (20, 32)
+_GJC_MAX_ORDER = 6
+# Round-off of a compiled Gauss-Jacobi row, relative to its (positive) value: the
+# recursive sum of the fine rule's terms plus the node values' ulps.
+_GJC_ROUND_ULPS = _SUM_ULPS_PER_NODE * _GJC_SIZES[1] + _NODE_ULPS
 _GJ_ZETA_MAX = 0.9
 # Branches shorter than this fraction of the contact (in virtual time) are empty.
 _TINY_BRANCH = 1e-250
@@ -87,6 +99,18 @@ _SHARE_SAFETY = 4.0
 _X_ASYMPTOTE = 1e-100
 # scipy.quad tolerance for the overdamped tail (zeta >= 1, n < 2), reported as its error.
 _TAIL_RTOL = 1e-13
+
+
+class _RoundUlps(dict):
+    """pairwise_ulps(N) + _NODE_ULPS per rule size N (cached: called on every impact)."""
+
+    def __missing__(self, n):
+        v = pairwise_ulps(n) + _NODE_ULPS
+        self[n] = v
+        return v
+
+
+_ROUND_ULPS = _RoundUlps()
 
 
 class Branches(NamedTuple):
@@ -186,6 +210,9 @@ def branch_integrals(
         return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
     if level is not None:
         return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
+    fast = _gauss_jacobi_compiled(pot, m, osc, beta, compiled, q_hi)
+    if fast is not None:
+        return fast
     # Start at COMPILED_LEVEL; go up a level while the bound exceeds _LEVEL_UP_RTOL,
     # keeping the result with the smallest bound.
     best = None
@@ -207,6 +234,8 @@ def _relative_bound(br: Branches) -> float:
 
 
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# Substitution order of `_gauss_jacobi_compiled` per potential (None: not applicable).
+_ORDERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def compiled_nodes(pot: Potential):
@@ -236,11 +265,16 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
         if _NEGLIGIBLE_SHARE <= (lz / sp) ** (1.0 + beta) and lz < sp:
             # The common case, in one evaluation: rise, fall from the end, and the short
             # stretch [2 s_peak, s_end] subtracted from the fall for the zero-force time.
+            # Nodes and sums are compiled (`_ts_common_x`, `_ts_common_sums`): numpy's
+            # per-call overhead on ~300 nodes cost more than the node evaluations.
             L = np.array([sp, osc.s_end - sp, lz])
-            xs = np.empty((3, r_s.d.size))
-            xs[0] = osc.x(sp * r_s.d)
-            xs[1:] = osc.x_from_end(L[1:, None] * r_s.d)
-            v, e = _sums(g_of(xs), L, beta, r_s)
+            xs = _ts_common_x(L, r_s.d, z, osc.wd, osc.s_end, osc.v0)
+            with np.errstate(all="ignore"):
+                g = dqdx(xs)
+            out = _ts_common_sums(g, L, r_s.w, r_s.w_diff, r_s.d[0], beta, _ROUND_ULPS[r_s.d.size])
+            if out is None:
+                _checked(g, xs, osc, pot)  # raises: a node value is not finite and > 0
+            v, e = out
             rise, fall, stretch = (float(t) for t in v)
             e_rise, e_fall, e_stretch = (float(t) for t in e)
             return Branches(rise, e_rise, fall - stretch, e_fall + e_stretch, fall, e_fall)
@@ -288,6 +322,62 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
         tail += float(np.sum(v))
         e_tail += float(np.sum(e))
     return Branches(rise, e_rise, mid, e_mid, mid + tail, e_mid + e_tail)
+
+
+@numba.njit(cache=True)
+def _ts_common_x(L, d, zeta, wd, s_end, v0):  # pragma: no cover - compiled
+    """x at the tanh-sinh nodes of the three common-case rows (same formulas as
+    `VirtualOscillator.x` for row 0 and `x_from_end` for rows 1 and 2)."""
+    n = d.shape[0]
+    xs = np.empty((3, n))
+    for j in range(n):
+        s = L[0] * d[j]
+        xs[0, j] = v0 * np.exp(-zeta * s) * (np.sin(wd * s) / wd)
+    for i in range(1, 3):
+        for j in range(n):
+            dd = L[i] * d[j]
+            xs[i, j] = v0 * np.exp(-zeta * (s_end - dd)) * (np.sin(wd * dd) / wd)
+    return xs
+
+
+@numba.njit(cache=True)
+def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps):  # pragma: no cover - compiled
+    """(values, errors) of the rows of g as `_sums` computes them, or None when a node
+    value is not finite and > 0 (the caller then raises through `_checked`).
+
+    The sums are compensated (Neumaier): their round-off is at most 2 ulps of the
+    sum of |terms| plus O(N eps^2), below the pairwise bound ``round_ulps`` charged
+    (the same bound as the numpy path, so both paths report the same error terms).
+    """
+    nr, n = g.shape
+    val = np.empty(nr)
+    err = np.empty(nr)
+    for i in range(nr):
+        if not L[i] > 0.0:
+            val[i] = 0.0
+            err[i] = 0.0
+            continue
+        s = 0.0
+        c = 0.0
+        sd = 0.0
+        sa = 0.0
+        for j in range(n):
+            gj = g[i, j]
+            if not (gj > 0.0 and gj < np.inf):
+                return None
+            t = gj * w[j]
+            u = s + t
+            if abs(s) >= abs(t):
+                c += (s - u) + t
+            else:
+                c += (t - u) + s
+            s = u
+            sd += gj * w_diff[j]
+            sa += t
+        tail = g[i, 0] * (L[i] * d0) / (1.0 + beta)
+        val[i] = L[i] * (s + c) + tail
+        err[i] = abs(L[i] * sd) + abs(L[i] * g[i, 0] * w[0]) + round_ulps * _EPS * L[i] * sa
+    return val, err
 
 
 def _smooth(g_of, x_of_s, start: float, length: float, r) -> tuple[float, float]:
@@ -356,7 +446,7 @@ def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
         us.append((1.0 + y) / 2.0)
         cols.append(w / 2.0 ** (beta + 1.0))
     u = np.concatenate(us)
-    W = np.zeros((u.size, len(_GJ_SIZES)))
+    W = np.zeros((u.size, len(sizes)))
     W[: sizes[0], 0] = cols[0]
     W[sizes[0] :, 1] = cols[1]
     return u, W
@@ -391,6 +481,106 @@ def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, bet
         return Branches(rise, e_rise, rise, e_rise, rise, e_rise)
     fall, e_fall = float(fine[1]), float(err[1])
     return Branches(rise, e_rise, fall - float(fine[2]), e_fall + float(err[2]), fall, e_fall)
+
+
+def _gauss_jacobi_compiled(pot, m: float, osc: VirtualOscillator, beta: float, compiled, q_hi):
+    """Branch integrals of a compiled family by Gauss-Jacobi in t = d^(1/b), or None.
+
+    Near a singular end (distance d, unit length), dq/dx / d^beta is an analytic
+    function of d and of the powers d^e_i that the potential's exponents bring in
+    (`_kernels.substitution_order`); with d = t^b every e_i b is an integer, so
+    int_0^1 g dd = b int_0^1 t^(2b/n - 1) [g d^-beta] dt has an analytic bracket
+    and a Gauss-Jacobi rule in t converges geometrically. Two rule sizes must agree
+    to _GJ_RTOL on every row, else None (the tanh-sinh path then runs).
+    """
+    if osc.zeta >= _GJ_ZETA_MAX:
+        return None
+    try:
+        b = _ORDERS[pot]
+    except KeyError:
+        b = _ORDERS[pot] = substitution_order(pot, _GJC_MAX_ORDER)
+    except TypeError:  # not weak-referenceable
+        b = substitution_order(pot, _GJC_MAX_ORDER)
+    if b is None:
+        return None
+    alpha_w = 2.0 * b / pot.leading_exponent - 1.0
+    if alpha_w < _GJ_BETA_MIN:
+        return None
+    rows = _branch_rows(osc)
+    if rows[:, 4].min() <= 0:
+        return None
+    d, fac, W = _gjc_nodes(alpha_w, b, beta)
+    xs = _gj_x(rows, d, osc.zeta, osc.wd, osc.v0)
+    with np.errstate(all="ignore"):
+        g = compiled(xs, m, q_hi)[0]
+    out = _gjc_branches(g, fac, W, rows[:, 4] * b, _GJ_RTOL, _GJC_ROUND_ULPS * _EPS)
+    if out is None:
+        # A node value not finite and > 0 (the tanh-sinh path reports it), or the two
+        # rule sizes disagree beyond _GJ_RTOL on some row (tanh-sinh resolves it).
+        return None
+    return Branches(*out.tolist())
+
+
+@lru_cache(maxsize=32)
+def _gjc_nodes(alpha_w: float, b: int, beta: float):
+    """Distances d = u^b of the two Gauss-Jacobi rules in t, and d^-beta."""
+    u, W = _jacobi_pair(alpha_w, _GJC_SIZES)
+    # Both rules' nodes in increasing order: the compiled inverse of U warm-starts
+    # each node from the previous one along a branch.
+    order = np.argsort(u)
+    d = u[order] ** b
+    return d, d ** (-beta), np.ascontiguousarray(W[order])
+
+
+@numba.njit(cache=True)
+def _gjc_branches(g, fac, W, scale, rtol, round_rel):  # pragma: no cover - compiled
+    """Branches fields (rise, err, mid, err, fall, err) from the node values g of the
+    rows of `_branch_rows`, or None when a node value is not finite and > 0 or the
+    two rules (columns of W) differ by more than rtol on some row.
+
+    Row value scale_i sum_j W[j, 1] g[i, j] fac[j]; its error bound is the difference
+    from the coarse rule plus round_rel times the value (positive terms).
+    """
+    nr, nn = g.shape
+    fine = np.empty(nr)
+    err = np.empty(nr)
+    for i in range(nr):
+        c = 0.0
+        f = 0.0
+        for j in range(nn):
+            gj = g[i, j]
+            if not (gj > 0.0 and gj < np.inf):
+                return None
+            t = gj * fac[j]
+            c += W[j, 0] * t
+            f += W[j, 1] * t
+        c *= scale[i]
+        f *= scale[i]
+        diff = abs(f - c)
+        if not diff <= rtol * f:
+            return None
+        fine[i] = f
+        err[i] = diff + round_rel * f
+    out = np.empty(6)
+    out[0], out[1] = fine[0], err[0]
+    if nr == 1:  # zeta = 0: the three stretches coincide
+        out[2], out[3], out[4], out[5] = fine[0], err[0], fine[0], err[0]
+    else:
+        out[2], out[3] = fine[1] - fine[2], err[1] + err[2]
+        out[4], out[5] = fine[1], err[1]
+    return out
+
+
+@numba.njit(cache=True)
+def _gj_x(rows, d, zeta, wd, v0):  # pragma: no cover - compiled
+    """x at unit distances d along each branch row of `_branch_rows`."""
+    nr, nn = rows.shape[0], d.shape[0]
+    xs = np.empty((nr, nn))
+    for i in range(nr):
+        s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
+        for j in range(nn):
+            xs[i, j] = v0 * np.exp(-zeta * (s0 + s1 * d[j])) * np.sin(wd * (p0 + p1 * d[j])) / wd
+    return xs
 
 
 @numba.njit(cache=True)

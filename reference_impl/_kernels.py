@@ -23,6 +23,7 @@ None when the family has no compiled form (the numpy path is used then).
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 from functools import lru_cache
 
 import numba
@@ -33,7 +34,7 @@ from .potentials.base import Potential, SumPotential
 from .potentials.power import PowerLaw
 from .potentials.volumetric import Ellipsoid, Sphere
 
-__all__ = ["node_function", "expression_sympy"]
+__all__ = ["node_function", "expression_sympy", "substitution_order"]
 
 # Term codes of the table form: U = k q^n / n, and the volumetric cap
 # U = Kn / (alpha + 1) V^(alpha + 1) with V = c0 (a q^2 - q^3 / 3).
@@ -46,6 +47,9 @@ _NEWTON_XRTOL = 4.0 * np.finfo(float).eps
 _NEWTON_MAX_ITER = 3000
 # Fraction of hi tried when the lower bracket is still 0 (geometric descent).
 _DESCENT = 1.0 / 64.0
+# Relative distance within which a float exponent is taken as the nearby rational
+# of small denominator (`substitution_order`): float quotients are off by ~1e-16.
+_EXPONENT_RTOL = 1e-12
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -248,3 +252,57 @@ def node_function(pot: Potential):
         return g.reshape(np.shape(x)), q.reshape(np.shape(x))
 
     return f_expr
+
+
+def substitution_order(pot: Potential, max_order: int) -> int | None:
+    """Smallest b <= max_order making every exponent of d in dq/dx / d^beta an
+    integer multiple of 1/b, or None (unknown exponents, or denominators too large).
+
+    With U = sum_i q^n_i (analytic in q) and q ~ x^(2/n), x = d h(d) (h analytic),
+    the exponents are 1, 2/n and 2 (n_i - n)/n. Expressions qualify only when every
+    term is a constant times q**p (read from the sympy form, exactly); any other
+    term gives None.
+    """
+    n = pot.leading_exponent
+    exps = _term_exponents(pot)
+    if exps is None:
+        return None
+    fr = []
+    for e in [2.0 / n] + [2.0 * (ni - n) / n for ni in exps]:
+        f = Fraction(e).limit_denominator(max_order)
+        # e is a float quotient of declared exponents (a few ulps off the rational);
+        # a wrong b would only cost the caller's two-rule check (it falls back).
+        if abs(float(f) - e) > _EXPONENT_RTOL * max(1.0, abs(e)):
+            return None
+        fr.append(f)
+    b = 1
+    for f in fr:
+        b = b * f.denominator // math.gcd(b, f.denominator)
+    return b if b <= max_order else None
+
+
+def _term_exponents(pot):
+    """Exponents n_i of the terms q^n_i (times functions analytic in q), or None."""
+    if type(pot) in (PowerLaw, Ellipsoid, Sphere):
+        # q^n, or the cap C q^n (1 - q / 3a)^(alpha + 1): analytic factor, one exponent.
+        return [pot.leading_exponent]
+    terms = getattr(pot, "terms", None)
+    if terms is not None:
+        out = []
+        for t in terms:
+            sub = _term_exponents(t)
+            if sub is None:
+                return None
+            out += sub
+        return out
+    sym = expression_sympy(pot)
+    if sym is None:
+        return None
+    expr, _, q = sym
+    out = []
+    for term in expr.as_ordered_terms():
+        coeff, e = term.as_coeff_exponent(q)
+        if coeff.has(q) or not e.is_number:
+            return None  # e.g. exp(q): not a q^p times a constant -- refuse, not guess
+        out.append(float(e))
+    return out

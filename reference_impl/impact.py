@@ -257,9 +257,12 @@ def solve_impact(
         narrow band just below 1 where the theory's end of contact leaves float64
         range (see `reference_impl._oscillator.S_END_MAX`); 0 is conservative.
     level : int, optional
-        Level of the tanh-sinh rules (accuracy); default: level 5 (round-off) for
-        the numpy path, 4 for the compiled families (errors <= ~1e-14, bounded by
-        `ImpactSolution.quadrature_error`).
+        Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
+        (power laws, and compiled families whose exponents have small
+        denominators) when two rule sizes agree to 1e-14, else tanh-sinh at
+        level 5 (round-off) for the numpy path, 4 for the compiled families
+        (errors <= ~1e-14, bounded by `ImpactSolution.quadrature_error`). A given
+        level always uses tanh-sinh.
 
     Returns
     -------
