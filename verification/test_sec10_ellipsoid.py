@@ -9,8 +9,7 @@ import pytest
 from hypothesis import given
 
 from reference_impl.claims import fig1, sec10_stiffening_domain, table1
-from reference_impl.damping import UniversalDamping, restitution_from_zeta
-from reference_impl.harmonic_map import HarmonicMap
+from reference_impl.damping import restitution_from_zeta
 from reference_impl.paper import (
     FIG1,
     PAPER_MASS,
@@ -163,30 +162,13 @@ def test_table1_supremum_is_at_max_compression(v0):
 # The transformed energy M x'^2/2 + K x^2/2 is algebraically the physical energy,
 # so its drift measures the integrator, not the theorem; the theorem is tested by
 # the sinusoid / spiral checks below and in test_sec5_harmonic.py.
-FIG1_RTOL = 1e-13
-FIG1_ATOL = 1e-13
 
 
 def _fig1_run(v0, C0, method="RK45"):
-    from reference_impl.integrators.ivp import integrate_impact
+    """The claim module's own Fig. 1 integration (one home), checked pointwise here."""
+    from reference_impl.claims import fig1
 
-    pot = paper_ellipsoid()
-    hmap = HarmonicMap(pot, PAPER_MASS, K=FIG1["K"], M=FIG1["M"])
-    damp = UniversalDamping(hmap, C0=C0) if C0 > 0 else None
-    run = integrate_impact(
-        pot,
-        PAPER_MASS,
-        v0,
-        C=None if damp is None else damp.C,
-        method=method,
-        rtol=FIG1_RTOL,
-        atol=FIG1_ATOL,
-        hmap=hmap,
-    )
-    x = hmap.x(np.maximum(run.q, 0.0))
-    xp = run.v * math.sqrt(PAPER_MASS / hmap.M)
-    H = 0.5 * hmap.M * xp**2 + 0.5 * hmap.K * x**2
-    return hmap, damp, run, x, xp, H
+    return fig1.trajectory(v0, C0, method)
 
 
 @pytest.mark.claim("fig1")

@@ -45,8 +45,12 @@ TABLE_KEYS = (
 )
 
 
-def run(v0: float, C0: float, method: str = "RK45") -> dict:
-    """One Fig. 1 run: drift of M x'^2/2 + K x^2/2 at the solver's steps, and curves."""
+def trajectory(v0: float, C0: float, method: str = "RK45", dense_output: bool = False):
+    """The Fig. 1 integration at the paper's tolerances: (hmap, damping, result, x, x', H).
+
+    The one home of the run that `run` summarises and the suite checks pointwise:
+    x = sqrt(2U/K), x' = dx/dtau and H = M x'^2/2 + K x^2/2 at the solver's steps.
+    """
     pot = paper_ellipsoid()
     hmap = HarmonicMap(pot, PAPER_MASS, K=FIG1["K"], M=FIG1["M"])
     damp = UniversalDamping(hmap, C0=C0) if C0 > 0 else None
@@ -59,12 +63,19 @@ def run(v0: float, C0: float, method: str = "RK45") -> dict:
         rtol=RTOL,
         atol=ATOL,
         hmap=hmap,
-        dense_output=True,
+        dense_output=dense_output,
     )
-    q = np.maximum(res.q, 0.0)
-    x = hmap.x(q)
+    x = hmap.x(np.maximum(res.q, 0.0))
     xp = res.v * math.sqrt(PAPER_MASS / hmap.M)  # dx/dtau = q' sqrt(m/M) (Theorem 2 proof)
     H = 0.5 * hmap.M * xp**2 + 0.5 * hmap.K * x**2
+    return hmap, damp, res, x, xp, H
+
+
+def run(v0: float, C0: float, method: str = "RK45") -> dict:
+    """One Fig. 1 run: drift of M x'^2/2 + K x^2/2 at the solver's steps, and curves."""
+    pot = paper_ellipsoid()
+    hmap, damp, res, x, xp, H = trajectory(v0, C0, method, dense_output=True)
+    q = np.maximum(res.q, 0.0)
     E_phys = 0.5 * PAPER_MASS * res.v**2 + pot.U(q)
     zeta = 0.0 if damp is None else damp.zeta
     w0 = hmap.omega0
