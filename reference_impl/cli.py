@@ -269,28 +269,14 @@ def _cmd_scenes(args) -> int:
 
 
 def _cmd_dt_crit(args) -> int:
-    from .dtcrit import default_criterion, parse_criterion, search_scene
+    from .dtcrit import search_loaded_scene
     from .scenes import load_scene
 
     scene = load_scene(args.scene)
-    # Any given --criterion is parsed, so an empty one is refused rather than defaulted.
-    criterion = (
-        parse_criterion(args.criterion, scene.kind)
-        if args.criterion is not None
-        else default_criterion(scene.kind)
-    )
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
+    # Any given --criterion is parsed, so an empty one is refused rather than defaulted.
     with _progress(sys.stderr.isatty()) as progress:
-        results = search_scene(
-            scene.potential,
-            scene.mass,
-            scene.velocities,
-            scene.kind,
-            gap=scene.gap,
-            zeta=scene.zeta if scene.damping_law == "universal" else None,
-            criterion=criterion,
-            progress=progress,
-        )
+        results = search_loaded_scene(scene, args.criterion, progress)
     rows = [r.to_dict() for r in results]
     if args.json:
         json.dump({"scene": scene.to_dict(), "results": rows}, sys.stdout, indent=2, default=str)

@@ -118,6 +118,7 @@ __all__ = [
     "DtCritResult",
     "default_criterion",
     "parse_criterion",
+    "search_loaded_scene",
     "tangent_step",
     "search_scene",
 ]
@@ -578,3 +579,36 @@ def search_scene(
     if progress is not None:
         progress(float(len(searches)), float(len(searches)))
     return out
+
+
+def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> list[DtCritResult]:
+    """`search_scene` on a loaded scene: its gap, its universal damping, a criterion text.
+
+    The one place where a scene file becomes a search, shared by ``hcv dt-crit`` and
+    the sweep's ``dt-crit`` task, so both give the same result for the same scene.
+
+    Parameters
+    ----------
+    scene : reference_impl.scenes.Scene
+        A validated scene.
+    criterion : str, optional
+        ``--criterion`` text (`parse_criterion`; an empty text is refused); None for the
+        scene kind's default criterion.
+    progress : callable, optional
+        As for `search_scene`.
+    """
+    crit = (
+        parse_criterion(criterion, scene.kind)
+        if criterion is not None
+        else default_criterion(scene.kind)
+    )
+    return search_scene(
+        scene.potential,
+        scene.mass,
+        scene.velocities,
+        scene.kind,
+        gap=scene.gap,
+        zeta=scene.zeta if scene.damping_law == "universal" else None,
+        criterion=crit,
+        progress=progress,
+    )

@@ -79,19 +79,10 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
     """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
-    from ..dtcrit import default_criterion, parse_criterion, search_scene
+    from ..dtcrit import search_loaded_scene
 
-    crit = parse_criterion(criterion, scene.kind) if criterion else default_criterion(scene.kind)
-    results = search_scene(
-        scene.potential,
-        scene.mass,
-        scene.velocities,
-        scene.kind,
-        gap=scene.gap,
-        zeta=scene.zeta if scene.damping_law == "universal" else None,
-        criterion=crit,
-        progress=check_deadline,
-    )
+    # An empty criterion text in a spec means the default, as an absent one.
+    results = search_loaded_scene(scene, criterion or None, check_deadline)
     return [_flat(r.to_dict()) for r in results]
 
 
