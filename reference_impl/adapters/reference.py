@@ -153,26 +153,8 @@ def verlet_trajectory(
     c_damp = 2.0 * zeta * math.sqrt(m)
     c_pow, a_pow = (0.0, 0.0) if damping is None else (float(damping.c), float(damping.exponent))
     terms = kernel_terms(pot)
-    if terms is None:
-        return _traj_python(
-            pot,
-            float(m),
-            c_damp,
-            c_pow,
-            a_pow,
-            bool(clip),
-            float(dt),
-            float(v0),
-            int(n_steps),
-            scene,
-            float(gap),
-        )
-    n = int(n_steps) + 1
-    t, q, v, f = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    k = _traj_kernel(
-        terms[0],
-        terms[1],
-        float(pot.q_sup),
+    # The same scalar arguments feed the Python fallback and the compiled kernel.
+    args = (
         float(m),
         c_damp,
         c_pow,
@@ -183,6 +165,16 @@ def verlet_trajectory(
         int(n_steps),
         scene,
         float(gap),
+    )
+    if terms is None:
+        return _traj_python(pot, *args)
+    n = int(n_steps) + 1
+    t, q, v, f = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    k = _traj_kernel(
+        terms[0],
+        terms[1],
+        float(pot.q_sup),
+        *args,
         t,
         q,
         v,
