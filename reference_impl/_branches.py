@@ -15,9 +15,10 @@ are cut into pieces of at most _PIECE units of virtual time, over which the
 integrand, an analytic function of s with unit time scale, is resolved by a
 fixed tanh-sinh rule.
 
-Power laws, and compiled families whose exponents have small denominators, first
-try Gauss-Jacobi rules (in t = d^(1/b) for the latter, `_gauss_jacobi_compiled`),
-kept only when two rule sizes agree to _GJ_RTOL on every stretch.
+Power laws first try Gauss-Jacobi rules, kept only when two rule sizes agree to
+_GJ_RTOL on every stretch. Compiled families (sums, caps, expressions) run their
+fast paths whole in compiled code (`_fused`, called by `solve_impact` first);
+what reaches this module for them is the general tanh-sinh path.
 
 Every error returned is the quadrature estimate |fine - coarse| plus a bound on
 the round-off of the sum (numpy's pairwise sum for tanh-sinh, recursive summation
@@ -38,7 +39,7 @@ import numpy as np
 from scipy import integrate
 from scipy.special import roots_jacobi
 
-from ._kernels import node_function, substitution_order
+from ._kernels import node_function
 from ._oscillator import VirtualOscillator
 from ._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
 from .errors import HCVInputError
@@ -78,14 +79,6 @@ _PIECE = 1.0
 _GJ_SIZES = (16, 24)
 _GJ_RTOL = 1e-14
 _GJ_BETA_MIN = -0.5
-# Compiled families (`_gauss_jacobi_compiled`): rule sizes compared, and the largest
-# substitution order b (d = t^b) tried; larger b pushes the rule's singularities in t
-# toward [0, 1] and slows the convergence.
-_GJC_SIZES = (20, 32)
-_GJC_MAX_ORDER = 6
-# Round-off of a compiled Gauss-Jacobi row, relative to its (positive) value: the
-# recursive sum of the fine rule's terms plus the node values' ulps.
-_GJC_ROUND_ULPS = _SUM_ULPS_PER_NODE * _GJC_SIZES[1] + _NODE_ULPS
 _GJ_ZETA_MAX = 0.9
 # Branches shorter than this fraction of the contact (in virtual time) are empty.
 _TINY_BRANCH = 1e-250
@@ -210,17 +203,28 @@ def branch_integrals(
         return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
     if level is not None:
         return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
-    fast = _gauss_jacobi_compiled(pot, m, osc, beta, compiled, q_hi)
-    if fast is not None:
-        return fast
-    # Start at COMPILED_LEVEL; go up a level while the bound exceeds _LEVEL_UP_RTOL,
-    # keeping the result with the smallest bound.
+    # The fast paths of compiled families (`_fused`) have run before; here the
+    # general tanh-sinh path, level by level.
+    return level_up(
+        lambda lv: (_tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0]),)
+    )[0]
+
+
+def level_up(run):
+    """Results of ``run(level)`` from COMPILED_LEVEL up, while the bound exceeds
+    _LEVEL_UP_RTOL: the one with the smallest bound (None if ``run`` gives None).
+
+    ``run`` returns a tuple whose first item is the level's `Branches`.
+    """
     best = None
     for lv in range(COMPILED_LEVEL, _MAX_LEVEL + 1):
-        br = _tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0])
-        if best is None or _relative_bound(br) < _relative_bound(best):
-            best = br
-        if _relative_bound(br) <= _LEVEL_UP_RTOL:
+        res = run(lv)
+        if res is None:
+            return None
+        bound = _relative_bound(res[0])
+        if best is None or bound < _relative_bound(best[0]):
+            best = res
+        if bound <= _LEVEL_UP_RTOL:
             break
     return best
 
@@ -234,8 +238,6 @@ def _relative_bound(br: Branches) -> float:
 
 
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# Substitution order of `_gauss_jacobi_compiled` per potential (None: not applicable).
-_ORDERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def compiled_nodes(pot: Potential):
@@ -271,10 +273,11 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
             xs = _ts_common_x(L, r_s.d, z, osc.wd, osc.s_end, osc.v0)
             with np.errstate(all="ignore"):
                 g = dqdx(xs)
-            out = _ts_common_sums(g, L, r_s.w, r_s.w_diff, r_s.d[0], beta, _ROUND_ULPS[r_s.d.size])
-            if out is None:
+            v, e = np.empty(3), np.empty(3)
+            if not _ts_common_sums(
+                g, L, r_s.w, r_s.w_diff, r_s.d[0], beta, _ROUND_ULPS[r_s.d.size], v, e
+            ):
                 _checked(g, xs, osc, pot)  # raises: a node value is not finite and > 0
-            v, e = out
             rise, fall, stretch = (float(t) for t in v)
             e_rise, e_fall, e_stretch = (float(t) for t in e)
             return Branches(rise, e_rise, fall - stretch, e_fall + e_stretch, fall, e_fall)
@@ -341,17 +344,16 @@ def _ts_common_x(L, d, zeta, wd, s_end, v0):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps):  # pragma: no cover - compiled
-    """(values, errors) of the rows of g as `_sums` computes them, or None when a node
-    value is not finite and > 0 (the caller then raises through `_checked`).
+def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps, val, err):  # pragma: no cover
+    """Values and errors of the rows of g as `_sums` computes them, into val and err;
+    False when a node value is not finite and > 0 (the caller then raises through
+    `_checked`).
 
     The sums are compensated (Neumaier): their round-off is at most 2 ulps of the
     sum of |terms| plus O(N eps^2), below the pairwise bound ``round_ulps`` charged
     (the same bound as the numpy path, so both paths report the same error terms).
     """
     nr, n = g.shape
-    val = np.empty(nr)
-    err = np.empty(nr)
     for i in range(nr):
         if not L[i] > 0.0:
             val[i] = 0.0
@@ -364,7 +366,7 @@ def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps):  # pragma: no cover 
         for j in range(n):
             gj = g[i, j]
             if not (gj > 0.0 and gj < np.inf):
-                return None
+                return False
             t = gj * w[j]
             u = s + t
             if abs(s) >= abs(t):
@@ -377,7 +379,7 @@ def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps):  # pragma: no cover 
         tail = g[i, 0] * (L[i] * d0) / (1.0 + beta)
         val[i] = L[i] * (s + c) + tail
         err[i] = abs(L[i] * sd) + abs(L[i] * g[i, 0] * w[0]) + round_ulps * _EPS * L[i] * sa
-    return val, err
+    return True
 
 
 def _smooth(g_of, x_of_s, start: float, length: float, r) -> tuple[float, float]:
@@ -419,20 +421,31 @@ def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float) -> tuple[float, 
 
 def _branch_rows(osc: VirtualOscillator):
     """Branches (S0, S1, Phi0, Phi1, length) with x = A exp(-zeta S) sin(wd Phi), S and Phi
-    affine in the distance d from the branch's singular end: the rising branch (from
-    s = 0), the falling branch (back from s_end) and the stretch from the zero-force
-    instant to s_end (back from s_end). Underdamped only; the falling rows are omitted
-    for zeta = 0 (symmetric)."""
-    sp = osc.s_peak
-    rows = [(0.0, sp, 0.0, sp, sp)]
-    if osc.zeta > 0.0:
-        lf = osc.s_end - sp
-        rows.append((osc.s_end, -lf, 0.0, lf, lf))
-        lz = osc.zero_force_stretch
-        if lz < _TINY_BRANCH * osc.s_end:
-            lz = 0.0
-        rows.append((osc.s_end, -lz, 0.0, lz, lz))
-    return np.array(rows)
+    affine in the distance d from the branch's singular end (see `_fill_rows`)."""
+    rows = np.empty((3, 5))
+    lz = osc.zero_force_stretch if osc.zeta > 0.0 else 0.0
+    nr = _fill_rows(osc.zeta, osc.s_peak, osc.s_end, lz, rows)
+    return rows[:nr]
+
+
+@numba.njit(cache=True)
+def _fill_rows(zeta, sp, s_end, lz, rows):  # pragma: no cover - compiled
+    """The rows of `_branch_rows` into ``rows`` (3 x 5); returns how many are used.
+
+    The rising branch (from s = 0), the falling branch (back from s_end) and the
+    stretch from the zero-force instant (lz = s_end - 2 s_peak before it) to s_end
+    (back from s_end). Underdamped only; the falling rows are omitted for zeta = 0
+    (symmetric).
+    """
+    rows[0, 0], rows[0, 1], rows[0, 2], rows[0, 3], rows[0, 4] = 0.0, sp, 0.0, sp, sp
+    if zeta == 0.0:
+        return 1
+    lf = s_end - sp
+    rows[1, 0], rows[1, 1], rows[1, 2], rows[1, 3], rows[1, 4] = s_end, -lf, 0.0, lf, lf
+    if lz < _TINY_BRANCH * s_end:
+        lz = 0.0
+    rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4] = s_end, -lz, 0.0, lz, lz
+    return 3
 
 
 @lru_cache(maxsize=32)
@@ -481,106 +494,6 @@ def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, bet
         return Branches(rise, e_rise, rise, e_rise, rise, e_rise)
     fall, e_fall = float(fine[1]), float(err[1])
     return Branches(rise, e_rise, fall - float(fine[2]), e_fall + float(err[2]), fall, e_fall)
-
-
-def _gauss_jacobi_compiled(pot, m: float, osc: VirtualOscillator, beta: float, compiled, q_hi):
-    """Branch integrals of a compiled family by Gauss-Jacobi in t = d^(1/b), or None.
-
-    Near a singular end (distance d, unit length), dq/dx / d^beta is an analytic
-    function of d and of the powers d^e_i that the potential's exponents bring in
-    (`_kernels.substitution_order`); with d = t^b every e_i b is an integer, so
-    int_0^1 g dd = b int_0^1 t^(2b/n - 1) [g d^-beta] dt has an analytic bracket
-    and a Gauss-Jacobi rule in t converges geometrically. Two rule sizes must agree
-    to _GJ_RTOL on every row, else None (the tanh-sinh path then runs).
-    """
-    if osc.zeta >= _GJ_ZETA_MAX:
-        return None
-    try:
-        b = _ORDERS[pot]
-    except KeyError:
-        b = _ORDERS[pot] = substitution_order(pot, _GJC_MAX_ORDER)
-    except TypeError:  # not weak-referenceable
-        b = substitution_order(pot, _GJC_MAX_ORDER)
-    if b is None:
-        return None
-    alpha_w = 2.0 * b / pot.leading_exponent - 1.0
-    if alpha_w < _GJ_BETA_MIN:
-        return None
-    rows = _branch_rows(osc)
-    if rows[:, 4].min() <= 0:
-        return None
-    d, fac, W = _gjc_nodes(alpha_w, b, beta)
-    xs = _gj_x(rows, d, osc.zeta, osc.wd, osc.v0)
-    with np.errstate(all="ignore"):
-        g = compiled(xs, m, q_hi)[0]
-    out = _gjc_branches(g, fac, W, rows[:, 4] * b, _GJ_RTOL, _GJC_ROUND_ULPS * _EPS)
-    if out is None:
-        # A node value not finite and > 0 (the tanh-sinh path reports it), or the two
-        # rule sizes disagree beyond _GJ_RTOL on some row (tanh-sinh resolves it).
-        return None
-    return Branches(*out.tolist())
-
-
-@lru_cache(maxsize=32)
-def _gjc_nodes(alpha_w: float, b: int, beta: float):
-    """Distances d = u^b of the two Gauss-Jacobi rules in t, and d^-beta."""
-    u, W = _jacobi_pair(alpha_w, _GJC_SIZES)
-    # Both rules' nodes in increasing order: the compiled inverse of U warm-starts
-    # each node from the previous one along a branch.
-    order = np.argsort(u)
-    d = u[order] ** b
-    return d, d ** (-beta), np.ascontiguousarray(W[order])
-
-
-@numba.njit(cache=True)
-def _gjc_branches(g, fac, W, scale, rtol, round_rel):  # pragma: no cover - compiled
-    """Branches fields (rise, err, mid, err, fall, err) from the node values g of the
-    rows of `_branch_rows`, or None when a node value is not finite and > 0 or the
-    two rules (columns of W) differ by more than rtol on some row.
-
-    Row value scale_i sum_j W[j, 1] g[i, j] fac[j]; its error bound is the difference
-    from the coarse rule plus round_rel times the value (positive terms).
-    """
-    nr, nn = g.shape
-    fine = np.empty(nr)
-    err = np.empty(nr)
-    for i in range(nr):
-        c = 0.0
-        f = 0.0
-        for j in range(nn):
-            gj = g[i, j]
-            if not (gj > 0.0 and gj < np.inf):
-                return None
-            t = gj * fac[j]
-            c += W[j, 0] * t
-            f += W[j, 1] * t
-        c *= scale[i]
-        f *= scale[i]
-        diff = abs(f - c)
-        if not diff <= rtol * f:
-            return None
-        fine[i] = f
-        err[i] = diff + round_rel * f
-    out = np.empty(6)
-    out[0], out[1] = fine[0], err[0]
-    if nr == 1:  # zeta = 0: the three stretches coincide
-        out[2], out[3], out[4], out[5] = fine[0], err[0], fine[0], err[0]
-    else:
-        out[2], out[3] = fine[1] - fine[2], err[1] + err[2]
-        out[4], out[5] = fine[1], err[1]
-    return out
-
-
-@numba.njit(cache=True)
-def _gj_x(rows, d, zeta, wd, v0):  # pragma: no cover - compiled
-    """x at unit distances d along each branch row of `_branch_rows`."""
-    nr, nn = rows.shape[0], d.shape[0]
-    xs = np.empty((nr, nn))
-    for i in range(nr):
-        s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
-        for j in range(nn):
-            xs[i, j] = v0 * np.exp(-zeta * (s0 + s1 * d[j])) * np.sin(wd * (p0 + p1 * d[j])) / wd
-    return xs
 
 
 @numba.njit(cache=True)

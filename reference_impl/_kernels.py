@@ -1,30 +1,44 @@
 """Compiled (numba) evaluation of dq/dx at quadrature nodes, for every potential family.
 
 The exact solver needs, at each node, q = U^-1(m x^2 / 2) and dq/dx = m x / U'(q).
-Through numpy each node costs a few microseconds of Python overhead; here one
-compiled call does every node of one impact: a safeguarded Newton iteration on
-log U against log q (Newton from the leading power-law guess, inside a bracket
-[lo, hi] that starts at [0, q_max] and shrinks with every step; a step leaving
-the bracket is replaced by a bisection), then the force.
+Here one compiled call does every node of a branch:
 
-Families dispatch on the potential's type and read its public attributes:
+* a single ellipsoid or sphere cap, U = Kn / (alpha + 1) V^(alpha + 1) with the
+  cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
+  power), q from V by Newton on the cubic (arithmetic only), and U' without a
+  second power, U' = (alpha + 1) u V' / V (`_cap_nodes`);
+* every other family: a safeguarded Halley iteration on U (`_newton_loop`),
+  warm-started from the previous node along the branch by log q against log u to
+  second order (slope 1/sigma, sigma = q U' / U, and its rate), inside a bracket [lo, hi] that starts at
+  [0, q_max] and shrinks with every step (a step leaving it is replaced by a
+  bisection). Once the step is below _TAYLOR_RTOL the root is taken one step on,
+  and U' there from its Taylor series (U'' and U''' come with U), which saves the
+  evaluation that would only confirm convergence.
 
-* power laws, ellipsoid and sphere caps, and sums of them: a table of terms
-  (code, four parameters) evaluated by one compiled function (`_TERM_*` codes);
-* user expressions: `sympy.lambdify` prints the validated sympy form (the
-  expression's public ``expr`` and ``dexpr``, parameters already substituted as
-  exact numbers) as ``math``-module code, which numba compiles; the result is
-  cached by the sympy expressions. The user's text itself is never evaluated.
+Families read the potential's public attributes:
 
-`node_function(pot)` returns a callable (x array, m, q_max) -> dq/dx array, or
-None when the family has no compiled form (the numpy path is used then).
+* power laws, caps, sums of them, and user expressions that are sums of
+  constants times powers of q (read exactly from the sympy form): a table of terms
+  (`_TERM_*` codes) evaluated by one compiled function, compiled once and cached
+  on disk;
+* other user expressions: `sympy.lambdify` prints the validated sympy forms of
+  U, U', U'' (parameters substituted as exact numbers) as ``math``-module code,
+  which numba compiles; cached by the sympy expressions. The user's text itself
+  is never evaluated.
+
+`node_function(pot)` returns a callable (x array, m, q_max) -> (dq/dx, q)
+arrays, or None when the family has no compiled form (the numpy path is used
+then). `node_kernel(pot)` gives the compiled pieces the whole-impact kernels of
+`_fused` are built from.
 """
 
 from __future__ import annotations
 
 import math
+import types
 from fractions import Fraction
 from functools import lru_cache
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -34,65 +48,128 @@ from .potentials.base import Potential, SumPotential
 from .potentials.power import PowerLaw
 from .potentials.volumetric import Ellipsoid, Sphere
 
-__all__ = ["node_function", "expression_sympy", "substitution_order"]
+__all__ = ["NodeKernel", "node_function", "node_kernel", "expression_sympy", "substitution_order"]
 
-# Term codes of the table form: U = k q^n / n, and the volumetric cap
-# U = Kn / (alpha + 1) V^(alpha + 1) with V = c0 (a q^2 - q^3 / 3).
-_TERM_POWER = 0
-_TERM_CAP = 1
-# Relative step at which Newton stops: a few ulps of q (as the numpy inverse).
-_NEWTON_XRTOL = 4.0 * np.finfo(float).eps
-# Newton/bisection steps allowed per node (Newton needs ~4; bisection from [0, q_max]
-# with geometric steps needs at most ~2200 to span float64).
+# Term codes of the table form (column 0 of P): U = k q^n / n (columns k, n), and
+# the volumetric cap U = Kn / (alpha + 1) V^(alpha + 1), V = c0 (a q^2 - q^3 / 3)
+# (columns Kn, alpha, a, c0).
+_TERM_POWER = 0.0
+_TERM_CAP = 1.0
+_EPS = float(np.finfo(float).eps)
+# Relative step below which the Halley iteration stops and takes the root one step on,
+# with U' there from its Taylor series to U''' step^2 / 2. With r = step/q <= 3e-7, the
+# dropped U'''' step^3 / 6 is at most n^3/6 r^3 <= 4e-17 of U' for n <= 21
+# (impact.N_MAX), and the root's error after a Halley step, ~ n^2/2 r^3 <= 6e-18 of q:
+# both below an ulp. From the second-order warm start most nodes need one evaluation.
+_TAYLOR_RTOL = 3e-7
+# Largest |2 e| of a power q**e computed by products and a square root instead of pow
+# (Hertz e = 1.5 is q sqrt(q)): at most |h|/2 + 1 roundings, <= 3 ulps.
+_HALF_POWER_MAX = 4
+# Column 3 of a power term when its exponent is not such a half-integer.
+_NOT_HALF = 99
+# Relative step at which the cap's cubic Newton stops: a few ulps of q (each step is
+# arithmetic only, so the confirming evaluation costs nothing worth saving).
+_CUBIC_XRTOL = 4.0 * _EPS
+# Steps allowed per node (Halley needs ~2 from the warm start; bisection from
+# [0, q_max] with geometric steps needs at most ~2200 to span float64).
 _NEWTON_MAX_ITER = 3000
 # Fraction of hi tried when the lower bracket is still 0 (geometric descent).
 _DESCENT = 1.0 / 64.0
 # Relative distance within which a float exponent is taken as the nearby rational
 # of small denominator (`substitution_order`): float quotients are off by ~1e-16.
 _EXPONENT_RTOL = 1e-12
+# The evaluator a copy of `_newton_loop` calls, bound by `specialise`.
+_EV = None
+# Empty parameter table of expression kernels (the signature is shared with terms).
+_NO_TERMS = np.zeros((0, 5))
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _terms_U_dU(q, codes, P):  # pragma: no cover - compiled
-    """U(q) and U'(q) of a table of terms."""
+def _power(q, e, h):  # pragma: no cover - compiled
+    """q**e; by products and one square root when e = h/2 with |h| <= _HALF_POWER_MAX."""
+    if h == _NOT_HALF:
+        return q**e
+    a = abs(h)
+    r = 1.0
+    for _ in range(a // 2):
+        r *= q
+    if a % 2 == 1:
+        r *= math.sqrt(q)
+    return r if h >= 0 else 1.0 / r
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _terms_eval(q, P):  # pragma: no cover - compiled
+    """U(q) and its first three derivatives for a table of terms (q > 0)."""
     u = 0.0
     du = 0.0
-    for i in range(codes.shape[0]):
-        if codes[i] == _TERM_POWER:
-            k, n = P[i, 0], P[i, 1]
-            qp = q ** (n - 1.0)
-            du += k * qp
-            u += k * qp * q / n
+    d2u = 0.0
+    d3u = 0.0
+    for i in range(P.shape[0]):
+        if P[i, 0] == _TERM_POWER:
+            k, n = P[i, 1], P[i, 2]
+            f = k * _power(q, n - 1.0, int(P[i, 3]))  # this term's U'
+            du += f
+            u += f * q / n
+            f2 = (n - 1.0) * f / q
+            d2u += f2
+            d3u += (n - 2.0) * f2 / q
         else:
-            kn, alpha, a, c0 = P[i, 0], P[i, 1], P[i, 2], P[i, 3]
-            v = c0 * (a * q * q - q * q * q / 3.0)
-            s = c0 * (2.0 * a * q - q * q)
-            va = v**alpha
-            du += kn * va * s
-            u += kn / (alpha + 1.0) * va * v
-    return u, du
+            kn, alpha, a, c0 = P[i, 1], P[i, 2], P[i, 3], P[i, 4]
+            v = c0 * q * q * (a - q / 3.0)
+            s = c0 * q * (2.0 * a - q)  # V'
+            s2 = 2.0 * c0 * (a - q)  # V''
+            f = kn * v**alpha  # Kn V^alpha
+            du += f * s
+            u += f * v / (alpha + 1.0)
+            d2u += f * (alpha * s * s / v + s2)
+            # d/dq of Kn V^alpha (alpha V'^2 / V + V''), with V''' = -2 c0.
+            d3u += f * (
+                alpha * (alpha - 1.0) * s * s * s / (v * v) + 3.0 * alpha * s * s2 / v - 2.0 * c0
+            )
+    return u, du, d2u, d3u
 
 
-@numba.njit(cache=True, error_model="numpy")
-def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, codes, P):  # pragma: no cover - compiled
-    out = np.empty_like(x)
-    qs = np.empty_like(x)
-    q_prev, lt_prev, slope_prev = -1.0, 0.0, 0.0
+def specialise(func, cache: bool, **bound):
+    """A numba-compiled copy of the plain function ``func`` whose globals named in
+    ``bound`` are the given compiled functions.
+
+    The node loops and whole-impact kernels are written once, generic in the
+    evaluator they call (``_EV``, ``_NODES``, ...), and compiled per evaluator. A
+    function argument or a closure would do the same, but numba then cannot cache
+    the result on disk (it keys closures by captured objects that change in every
+    process, and refuses functions passed as values); a copy bound through its
+    globals caches like any module function. Only the table form's copies are
+    cached (one per name, so no clash); each expression's copies are not.
+    """
+    glb = dict(func.__globals__)
+    glb.update(bound)
+    f = types.FunctionType(func.__code__, glb, func.__name__, func.__defaults__)
+    f.__qualname__, f.__module__, f.__doc__ = func.__qualname__, func.__module__, func.__doc__
+    return numba.njit(cache=cache, error_model="numpy")(f)
+
+
+def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - compiled
+    """dq/dx into g and q into qs at the virtual displacements x (one branch, in order),
+    by the Halley inverse of _EV(q, P) -> (U, U', U'', U''') (see `specialise`)."""
+    q_prev, u_prev, inv_sig, curv = -1.0, 0.0, 0.0, 0.0
     for j in range(x.shape[0]):
         xj = x[j]
         u = 0.5 * m * xj * xj
-        lo, hi = 0.0, q_hi
-        lt = math.log(u)
-        # Warm start: a log-log Newton step from the previous node (nodes come in
-        # order along each branch), else the leading power law.
+        # Warm start: log q against log u to second order from the previous node
+        # (nodes come in order along a branch), else the leading power law.
         if q_prev > 0.0:
-            q = q_prev * math.exp((lt - lt_prev) / slope_prev)
+            lr = math.log(u / u_prev)
+            q = q_prev * math.exp(lr * (inv_sig - curv * lr))
         else:
             q = q_s * (u / u_s) ** (1.0 / n_lead)
+        lo, hi = 0.0, q_hi
         if not (q > lo and q < hi):
             q = 0.5 * hi
-        uq, duq = _terms_U_dU(q, codes, P)
+        du = np.nan
+        d2u = 0.0
         for _ in range(_NEWTON_MAX_ITER):
+            uq, du, d2u, d3u = _EV(q, P)
             f = uq - u
             if f < 0.0:
                 lo = q
@@ -100,30 +177,99 @@ def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, codes, P):  # pragma: no cover - 
                 hi = q
             else:
                 break
-            # Plain Newton on U (the warm start is already close; U - u keeps its
-            # relative precision there), safeguarded by the bracket.
-            step = f / duq if duq > 0.0 else math.inf
-            if abs(step) <= _NEWTON_XRTOL * q:
-                break  # converged: q is within a few ulps of the root
+            if not (du > 0.0 and du < np.inf):
+                q = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
+                du = np.nan
+                continue
+            step = f / du
+            # Halley's correction, used while it is mild (far from the root the
+            # plain Newton step inside the bracket is the safer one).
+            h = 0.5 * step * d2u / du
+            if abs(h) < 0.5:
+                step = step / (1.0 - h)
+            if abs(step) <= _TAYLOR_RTOL * q:
+                du = du - step * (d2u - 0.5 * step * d3u)
+                d2u = d2u - step * d3u
+                q = q - step
+                break
             qn = q - step
             if not (qn > lo and qn < hi):
                 qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
             q = qn
-            uq, duq = _terms_U_dU(q, codes, P)
-        out[j] = m * xj / duq
+        else:
+            du = np.nan  # not converged: the caller refuses the node
+        g[j] = m * xj / du
         qs[j] = q
-        if uq > 0.0 and duq > 0.0:
-            q_prev, lt_prev, slope_prev = q, math.log(uq), q * duq / uq
-    return out, qs
+        if q > 0.0 and du > 0.0 and u > 0.0:
+            # sigma = q U'/U = d log u / d log q, and its rate, for the next start.
+            sig = q * du / u
+            dsig = sig * (1.0 - sig) + q * q * d2u / u
+            q_prev, u_prev, inv_sig = q, u, 1.0 / sig
+            curv = 0.5 * dsig / (sig * sig * sig)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cap_nodes(x, m, q_hi, P, g, qs):  # pragma: no cover - compiled
+    """`nodes` for a single cap: V in closed form, q from the cubic, U' = (alpha+1) u V'/V."""
+    kn, alpha, a, c0 = P[0, 1], P[0, 2], P[0, 3], P[0, 4]
+    e_inv = 1.0 / (alpha + 1.0)
+    to_v = (alpha + 1.0) / kn
+    q_prev, w_prev = -1.0, 0.0
+    for j in range(x.shape[0]):
+        xj = x[j]
+        u = 0.5 * m * xj * xj
+        v = (to_v * u) ** e_inv
+        w = v / c0  # the root of a q^2 - q^3/3 = w
+        if q_prev > 0.0:
+            q = q_prev * math.sqrt(w / w_prev)  # a q^2 dominates: q ~ sqrt(w)
+        else:
+            r = math.sqrt(w / a)
+            q = r * (1.0 + r / (6.0 * a))
+        lo, hi = 0.0, q_hi
+        if not (q > lo and q < hi):
+            q = 0.5 * hi
+        for _ in range(_NEWTON_MAX_ITER):
+            p = q * q * (a - q / 3.0) - w
+            if p < 0.0:
+                lo = q
+            elif p > 0.0:
+                hi = q
+            else:
+                break
+            dp = q * (2.0 * a - q)
+            step = p / dp if dp > 0.0 else np.inf
+            if abs(step) <= _CUBIC_XRTOL * q:
+                break
+            qn = q - step
+            if not (qn > lo and qn < hi):
+                qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
+            q = qn
+        du = (alpha + 1.0) * u * (c0 * q * (2.0 * a - q)) / v
+        g[j] = m * xj / du
+        qs[j] = q
+        if q > 0.0:
+            q_prev, w_prev = q, w
+
+
+_newton_terms_nodes = specialise(_newton_loop, cache=True, _EV=_terms_eval)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - compiled
+    """`nodes` of a table of terms: closed form for a single cap, else Halley."""
+    if P.shape[0] == 1 and P[0, 0] == _TERM_CAP:
+        _cap_nodes(x, m, q_hi, P, g, qs)
+    else:
+        _newton_terms_nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs)
 
 
 def _term_rows(pot: Potential):
-    """(code, 4 params) rows for power laws and caps, or None for other families."""
+    """(code, 4 params) rows of the table form, or None for other families."""
     if type(pot) is PowerLaw:
-        return [(_TERM_POWER, (pot.k, pot.leading_exponent, 0.0, 0.0))]
+        return [_power_row(pot.k, pot.leading_exponent)]
     if type(pot) in (Ellipsoid, Sphere):
         c0 = math.pi * pot._bc / pot._a**2
-        return [(_TERM_CAP, (pot.Kn, pot.alpha, pot._a, c0))]
+        return [(_TERM_CAP, pot.Kn, pot.alpha, pot._a, c0)]
     if type(pot) is SumPotential:
         rows = []
         for t in pot.terms:
@@ -132,7 +278,36 @@ def _term_rows(pot: Potential):
                 return None
             rows += sub
         return rows
-    return None
+    return _expression_power_rows(pot)
+
+
+def _power_row(k: float, n: float) -> tuple:
+    """The row of k q^n / n; column 3 is h = 2 (n - 1) when it is a small integer."""
+    h2 = 2.0 * (n - 1.0)
+    h = int(h2) if h2 == int(h2) and abs(h2) <= _HALF_POWER_MAX else _NOT_HALF
+    return (_TERM_POWER, k, n, float(h), 0.0)
+
+
+def _expression_power_rows(pot):
+    """Rows for an expression that is a sum of constants times q**e (e > 0), else None.
+
+    Read exactly from the sympy form; c q^e is the table's k q^n / n with n = e,
+    k = c e. Only when the float formula is accurate (no cancelling forms).
+    """
+    sym = expression_sympy(pot)
+    if sym is None or not getattr(pot, "float_formula_accurate", True):
+        return None
+    expr, _, q = sym
+    rows = []
+    for term in sp.Add.make_args(sp.expand(expr)):
+        coeff, e = term.as_coeff_exponent(q)
+        if coeff.has(q) or not (coeff.is_number and e.is_number and e.is_positive):
+            return None
+        c, n = float(coeff), float(e)
+        if not (math.isfinite(c) and math.isfinite(c * n) and c != 0.0):
+            return None
+        rows.append(_power_row(c * n, n))
+    return rows or None
 
 
 def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
@@ -159,99 +334,81 @@ def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
 
 @lru_cache(maxsize=64)
 def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
-    """Compiled node kernel for U and U' (cached by the sympy expressions, which
-    carry the parameter values as exact numbers)."""
+    """Compiled node loop for U, U', U'' of an expression (cached by the sympy
+    expressions, which carry the parameter values as exact numbers)."""
+    d2expr = sp.diff(dexpr, q)
+    d3expr = sp.diff(d2expr, q)
     # lambdify prints the validated sympy tree as math-module code; numba compiles it.
     # error_model="numpy": a division by zero gives inf/nan (refused by the caller's
     # finiteness check) instead of raising inside the compiled loop.
-    fu = numba.njit(error_model="numpy")(sp.lambdify(q, expr, modules="math"))
-    fdu = numba.njit(error_model="numpy")(sp.lambdify(q, dexpr, modules="math"))
-    return _make_expression_kernel(fu, fdu)
+    fu, fdu, fd2u, fd3u = (
+        numba.njit(error_model="numpy")(sp.lambdify(q, e, modules="math"))
+        for e in (expr, dexpr, d2expr, d3expr)
+    )
 
-
-def _make_expression_kernel(fu, fdu):
     @numba.njit(error_model="numpy")
-    def nodes(x, m, q_hi, q_s, u_s, n_lead):  # pragma: no cover - compiled
-        out = np.empty_like(x)
-        qs = np.empty_like(x)
-        q_prev, lt_prev, slope_prev = -1.0, 0.0, 0.0
-        for j in range(x.shape[0]):
-            xj = x[j]
-            u = 0.5 * m * xj * xj
-            lo, hi = 0.0, q_hi
-            lt = math.log(u)
-            # Warm start: a log-log Newton step from the previous node (nodes come in
-            # order along each branch), else the leading power law.
-            if q_prev > 0.0:
-                q = q_prev * math.exp((lt - lt_prev) / slope_prev)
-            else:
-                q = q_s * (u / u_s) ** (1.0 / n_lead)
-            if not (q > lo and q < hi):
-                q = 0.5 * hi
-            uq, duq = fu(q), fdu(q)
-            for _ in range(_NEWTON_MAX_ITER):
-                f = uq - u
-                if f < 0.0:
-                    lo = q
-                elif f > 0.0:
-                    hi = q
-                else:
-                    break
-                # Plain Newton on U (the warm start is already close; U - u keeps its
-                # relative precision there), safeguarded by the bracket.
-                step = f / duq if duq > 0.0 else math.inf
-                if abs(step) <= _NEWTON_XRTOL * q:
-                    break  # converged: q is within a few ulps of the root
-                qn = q - step
-                if not (qn > lo and qn < hi):
-                    qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-                q = qn
-                uq, duq = fu(q), fdu(q)
-            out[j] = m * xj / duq
-            qs[j] = q
-            if uq > 0.0 and duq > 0.0:
-                q_prev, lt_prev, slope_prev = q, math.log(uq), q * duq / uq
-        return out, qs
+    def ev(qv, P):  # pragma: no cover - compiled
+        return fu(qv), fdu(qv), fd2u(qv), fd3u(qv)
 
-    return nodes
+    return specialise(_newton_loop, cache=False, _EV=ev)
+
+
+class NodeKernel(NamedTuple):
+    """The compiled node loop of one potential and the constants it reads.
+
+    ``nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs)`` writes dq/dx and q at the
+    virtual displacements x (one branch, nodes in order) into g and qs.
+    ``terms`` is True for the table form (shared, disk-cached kernels).
+    """
+
+    nodes: object
+    P: np.ndarray
+    q_s: float
+    u_s: float
+    n_lead: float
+    terms: bool
+
+
+def node_kernel(pot: Potential) -> NodeKernel | None:
+    """The `NodeKernel` of ``pot``, or None when its family has no compiled form."""
+    rows = _term_rows(pot)
+    if rows is not None:
+        nodes, P, terms = _terms_nodes, np.array(rows, dtype=float), True
+    else:
+        sym = expression_sympy(pot)
+        if sym is None or not getattr(pot, "float_formula_accurate", True):
+            # The raw formula cancels somewhere in float64 (e.g. exp(q) - 1 - q near
+            # 0): a compiled kernel would lose digits there, so the potential's
+            # corrected evaluation (series / raised precision) is used instead.
+            return None
+        nodes, P, terms = _compiled_expression(*sym), _NO_TERMS, False
+    q_s = float(min(pot.q_scale, pot.q_sup))
+    u_s = float(pot._U(np.array([q_s]))[0])
+    return NodeKernel(nodes, P, q_s, u_s, float(pot.leading_exponent), terms)
 
 
 def node_function(pot: Potential):
     """Compiled dq/dx at nodes for ``pot``: f(x, m, q_hi) -> (dq/dx, q) arrays, or None.
 
     ``q_hi`` must bracket every root from above (the turning point of the
-    impact's energy, which `Potential.turning_point` has validated).
+    impact's energy, which `Potential.turning_point` has validated). The nodes
+    of each row of a 2-D ``x`` (or of a 1-D one) should come in order along the
+    branch: each warm-starts the next.
     """
-    q_s = float(min(pot.q_scale, pot.q_sup))
-    u_s = float(pot._U(np.array([q_s]))[0])
-    n_lead = float(pot.leading_exponent)
-    rows = _term_rows(pot)
-    if rows is not None:
-        codes = np.array([r[0] for r in rows], dtype=np.int64)
-        P = np.array([r[1] for r in rows], dtype=float)
-
-        def f_terms(x, m, q_hi):
-            flat = np.ascontiguousarray(x, dtype=float).ravel()
-            g, q = _terms_nodes(flat, m, q_hi, q_s, u_s, n_lead, codes, P)
-            return g.reshape(np.shape(x)), q.reshape(np.shape(x))
-
-        return f_terms
-    sym = expression_sympy(pot)
-    if sym is None:
+    k = node_kernel(pot)
+    if k is None:
         return None
-    if not getattr(pot, "float_formula_accurate", True):
-        # The raw formula cancels somewhere in float64 (e.g. exp(q) - 1 - q near 0):
-        # the compiled kernel would lose digits there, so the potential's corrected
-        # evaluation (series / raised precision) is used instead. Right before fast.
-        return None
-    kernel = _compiled_expression(*sym)
 
-    def f_expr(x, m, q_hi):
-        flat = np.ascontiguousarray(x, dtype=float).ravel()
-        g, q = kernel(flat, m, q_hi, q_s, u_s, n_lead)
-        return g.reshape(np.shape(x)), q.reshape(np.shape(x))
+    def f(x, m, q_hi):
+        xa = np.asarray(x, dtype=float)
+        rows = np.ascontiguousarray(xa.reshape(-1, xa.shape[-1]) if xa.ndim else xa.reshape(1, 1))
+        g = np.empty_like(rows)
+        q = np.empty_like(rows)
+        for i in range(rows.shape[0]):
+            k.nodes(rows[i], m, q_hi, k.q_s, k.u_s, k.n_lead, k.P, g[i], q[i])
+        return g.reshape(xa.shape), q.reshape(xa.shape)
 
-    return f_expr
+    return f
 
 
 def substitution_order(pot: Potential, max_order: int) -> int | None:

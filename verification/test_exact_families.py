@@ -200,7 +200,7 @@ def test_substitution_order_from_declared_exponents():
 def test_compiled_gauss_jacobi_path_taken_and_bounded(zeta):
     """The fast Gauss-Jacobi path runs on the benchmark's cap and sum scenes, and its
     reported bound holds against the truth (the generic draws above cover the rest)."""
-    from reference_impl._branches import _gauss_jacobi_compiled  # noqa: PLC0415
+    from reference_impl._fused import gauss_jacobi_impact  # noqa: PLC0415
     from reference_impl._oscillator import VirtualOscillator  # noqa: PLC0415
     from reference_impl.impact import _validated_top  # noqa: PLC0415
     from reference_impl.workprecision import family_scenes  # noqa: PLC0415
@@ -211,7 +211,6 @@ def test_compiled_gauss_jacobi_path_taken_and_bounded(zeta):
         pot, m, v0 = sc.potential, sc.m, sc.v0
         osc = VirtualOscillator(v0, zeta)
         q_top = _validated_top(pot, 0.5 * m * v0 * v0)
-        beta = 2.0 / pot.leading_exponent - 1.0
-        br = _gauss_jacobi_compiled(pot, m, osc, beta, compiled_nodes(pot), q_top)
+        br = gauss_jacobi_impact(pot, m, osc, q_top)
         assert br is not None, f"Gauss-Jacobi path refused for {name}, zeta = {zeta}"
         _check(pot, m, v0, zeta)

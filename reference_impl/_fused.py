@@ -1,0 +1,348 @@
+"""One impact of a compiled family in one compiled call (issue 9).
+
+`_branches` integrates through numpy-facing pieces: node positions, the node
+function, the sums and the peak are separate calls, and for the ~150 nodes of
+one impact their Python overhead cost as much as the nodes themselves. Here the
+two fast paths of the compiled families (power-law sums, caps, expressions) run
+whole inside numba, generic in the node loop of `_kernels`:
+
+* Gauss-Jacobi in t = d^(1/b) (`gauss_jacobi`): near a singular end (distance d,
+  unit length), dq/dx / d^beta is an analytic function of d and of the powers
+  d^e_i that the potential's exponents bring in (`_kernels.substitution_order`);
+  with d = t^b every e_i b is an integer, so int_0^1 g dd = b int_0^1
+  t^(2b/n - 1) [g d^-beta] dt has an analytic bracket and a Gauss-Jacobi rule in
+  t converges geometrically. Two rule sizes must agree to _GJ_RTOL on every row;
+  the rising row goes first, so a refusal costs a third of the evaluations;
+* tanh-sinh (`tanh_sinh`) for the common rows of `_branches._tanh_sinh` (zeta = 0,
+  or 0 < zeta < 1 with the zero-force instant close to s_end), level by level.
+
+Both also return the peak (q_max and U'(q_max)). Anything else (zeta >= 1, the
+rare stretches, a node outside float64 range) returns None and `solve_impact`
+runs the general path of `_branches`, which also names a bad node.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from functools import lru_cache
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ._branches import (
+    _EPS,
+    _GJ_BETA_MIN,
+    _GJ_RTOL,
+    _GJ_ZETA_MAX,
+    _NEGLIGIBLE_SHARE,
+    _NODE_ULPS,
+    _ROUND_ULPS,
+    _SUM_ULPS_PER_NODE,
+    Branches,
+    _fill_rows,
+    _jacobi_pair,
+    _ts_common_sums,
+    level_up,
+)
+from ._kernels import (
+    _TERM_POWER,
+    NodeKernel,
+    _terms_eval,
+    _terms_nodes,
+    node_kernel,
+    specialise,
+    substitution_order,
+)
+from ._oscillator import VirtualOscillator
+from ._quadrature import rule
+from .potentials.base import Potential
+
+__all__ = ["fused_impact", "gauss_jacobi_impact"]
+
+# Rule sizes compared on the compiled families, and the largest substitution order
+# b (d = t^b) tried; larger b pushes the rule's singularities in t toward [0, 1]
+# and slows the convergence.
+_GJC_SIZES = (20, 32)
+_GJC_MAX_ORDER = 6
+# Round-off of a compiled Gauss-Jacobi row, relative to its (positive) value: the
+# recursive sum of the fine rule's terms plus the node values' ulps.
+_GJC_ROUND_ULPS = _SUM_ULPS_PER_NODE * _GJC_SIZES[1] + _NODE_ULPS
+# Status codes of the kernels (out[8]).
+_OK, _BAD_NODE, _DISAGREE, _EMPTY, _CROSSOVER = 0.0, 1.0, 2.0, 3.0, 4.0
+# Gauss-Jacobi in t is not tried on a sum whose higher-exponent terms carry more than
+# this multiple of the leading terms' energy at q_max: the term ratio, a power of t,
+# puts a singularity of the bracket at t ~ -1/R, and the 20-node rule then cannot
+# reach 1e-14 (needs R below ~6 by the convergence rate; measured: every sum of
+# exponents 1.5-4 refused from R = 1.0-5.4). Only time is at stake: tanh-sinh runs.
+_GJ_RATIO_MAX = 8.0
+# Fields of the kernels' output: the six of `Branches`, q_max, U'(q_max), status.
+_OUT = 9
+
+
+# Whole-impact kernels, written once and compiled per node loop by `_kernels_for`
+# (`_kernels.specialise` binds _NODES, a `NodeKernel.nodes`, and _PEAK).
+_NODES = _PEAK = None
+
+
+def _peak(prm, P, out):  # pragma: no cover - compiled
+    """q_max and U'(q_max) into out[6:8]: x(s_peak) = v0 exp(-zeta s_peak) exactly."""
+    m, v0, zeta, sp = prm[0], prm[1], prm[2], prm[4]
+    xa = np.empty(1)
+    g = np.empty(1)
+    qs = np.empty(1)
+    xa[0] = v0 * math.exp(-zeta * sp)
+    _NODES(xa, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
+    out[6] = qs[0]
+    out[7] = m * xa[0] / g[0]
+
+
+def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cover
+    m, v0, zeta, wd = prm[0], prm[1], prm[2], prm[3]
+    rows = np.empty((3, 5))
+    nr = _fill_rows(zeta, prm[4], prm[5], prm[6], rows)
+    for i in range(nr):
+        if not rows[i, 4] > 0.0:
+            out[8] = _EMPTY
+            return
+    _PEAK(prm, P, out)
+    if _term_ratio(P, prm[10], out[6]) > _GJ_RATIO_MAX:
+        out[8] = _CROSSOVER
+        return
+    nn = d.shape[0]
+    xs = np.empty(nn)
+    g = np.empty(nn)
+    qs = np.empty(nn)
+    fine = np.empty(3)
+    err = np.empty(3)
+    for i in range(nr):
+        s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
+        for j in range(nn):
+            xs[j] = v0 * math.exp(-zeta * (s0 + s1 * d[j])) * math.sin(wd * (p0 + p1 * d[j])) / wd
+        _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
+        c = 0.0
+        f = 0.0
+        for j in range(nn):
+            gj = g[j]
+            if not (gj > 0.0 and gj < np.inf):
+                out[8] = _BAD_NODE
+                return
+            t = gj * fac[j]
+            c += W[j, 0] * t
+            f += W[j, 1] * t
+        scale = rows[i, 4] * b
+        c *= scale
+        f *= scale
+        diff = abs(f - c)
+        if not diff <= rtol * f:
+            out[8] = _DISAGREE
+            return
+        fine[i] = f
+        err[i] = diff + round_rel * f
+    _store(fine, err, nr, out)
+    out[8] = _OK
+
+
+def _tanh_sinh(prm, P, d, w, w_diff, beta, round_ulps, out):  # pragma: no cover
+    m, v0, zeta, wd, sp, s_end, lz = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    nr = 1 if zeta == 0.0 else 3
+    L = np.empty(nr)
+    L[0] = sp
+    if nr == 3:
+        L[1] = s_end - sp
+        L[2] = lz
+    nn = d.shape[0]
+    xs = np.empty(nn)
+    g = np.empty((nr, nn))
+    qs = np.empty(nn)
+    for i in range(nr):
+        # Row 0 from contact onset, rows 1 and 2 back from s_end (the formulas of
+        # `VirtualOscillator.x` and `x_from_end`).
+        for j in range(nn):
+            dd = L[i] * d[j]
+            s = dd if i == 0 else s_end - dd
+            xs[j] = v0 * math.exp(-zeta * s) * (math.sin(wd * dd) / wd)
+        _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
+    val = np.empty(nr)
+    err = np.empty(nr)
+    if not _ts_common_sums(g, L, w, w_diff, d[0], beta, round_ulps, val, err):
+        out[8] = _BAD_NODE
+        return
+    if nr == 1:
+        _store(val, err, 1, out)
+    else:
+        # Rise, fall, and the stretch [2 s_peak, s_end] taken off the fall.
+        out[0], out[1] = val[0], err[0]
+        out[2], out[3] = val[1] - val[2], err[1] + err[2]
+        out[4], out[5] = val[1], err[1]
+    _PEAK(prm, P, out)
+    out[8] = _OK
+
+
+def _kernels_for(nodes, cache: bool):
+    """(gauss_jacobi, tanh_sinh) compiled around the node loop ``nodes``."""
+    peak = specialise(_peak, cache, _NODES=nodes)
+    gauss_jacobi = specialise(_gauss_jacobi, cache, _NODES=nodes, _PEAK=peak)
+    tanh_sinh = specialise(_tanh_sinh, cache, _NODES=nodes, _PEAK=peak)
+    return gauss_jacobi, tanh_sinh
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _term_ratio(P, n_lead, q):  # pragma: no cover - compiled
+    """Energy at q of the terms beyond the leading exponent over the leading terms'
+    (0 for a single term or an expression, whose terms are not tabled)."""
+    lead = 0.0
+    rest = 0.0
+    for i in range(P.shape[0]):
+        n = P[i, 2] if P[i, 0] == _TERM_POWER else 2.0 * (P[i, 2] + 1.0)
+        u = _terms_eval(q, P[i : i + 1])[0]
+        if n == n_lead:
+            lead += u
+        else:
+            rest += u
+    return rest / lead if lead > 0.0 else 0.0
+
+
+@numba.njit(cache=True)
+def _store(fine, err, nr, out):  # pragma: no cover - compiled
+    """Branches fields from the rows of `_fill_rows` (rise, fall, zero-force stretch)."""
+    out[0], out[1] = fine[0], err[0]
+    if nr == 1:  # zeta = 0: the three stretches coincide
+        out[2], out[3], out[4], out[5] = fine[0], err[0], fine[0], err[0]
+    else:
+        out[2], out[3] = fine[1] - fine[2], err[1] + err[2]
+        out[4], out[5] = fine[1], err[1]
+
+
+# The table form's kernels, shared by every power-law sum and cap (disk-cached);
+# built after every helper they call exists (`specialise` copies the globals).
+_TERMS_KERNELS = _kernels_for(_terms_nodes, cache=True)
+
+
+@lru_cache(maxsize=64)
+def _expression_kernels(nodes):
+    # One expression's node loop (itself cached by the sympy form); not disk-cached.
+    return _kernels_for(nodes, cache=False)
+
+
+class _Plan(NamedTuple):
+    """What one potential's impacts need, computed once: its node kernel, the
+    whole-impact kernels, the Gauss-Jacobi arguments (d, d^-beta, W, b, rtol,
+    round-off; None when that path does not apply), beta, and the tanh-sinh
+    arguments per level (filled on first use)."""
+
+    kernel: NodeKernel
+    gauss_jacobi: object
+    tanh_sinh: object
+    gj: tuple | None
+    beta: float
+    ts_rules: dict
+
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _plan(pot: Potential) -> _Plan | None:
+    try:
+        return _PLANS[pot]
+    except KeyError:
+        pass
+    except TypeError:  # not weak-referenceable: build each time
+        return _build_plan(pot)
+    plan = _PLANS[pot] = _build_plan(pot)
+    return plan
+
+
+def _build_plan(pot: Potential) -> _Plan | None:
+    k = node_kernel(pot)
+    if k is None:
+        return None
+    gj_k, ts_k = _TERMS_KERNELS if k.terms else _expression_kernels(k.nodes)
+    n = float(pot.leading_exponent)
+    beta = 2.0 / n - 1.0
+    b = substitution_order(pot, _GJC_MAX_ORDER)
+    gj = None
+    if b is not None and 2.0 * b / n - 1.0 >= _GJ_BETA_MIN:
+        gj = (*_gjc_nodes(2.0 * b / n - 1.0, b, beta), b, _GJ_RTOL, _GJC_ROUND_ULPS * _EPS)
+    return _Plan(k, gj_k, ts_k, gj, beta, {})
+
+
+def _ts_args(plan: _Plan, level: int) -> tuple:
+    """(d, w, w_diff, beta, round-off ulps) of the tanh-sinh rule of ``level`` (cached)."""
+    try:
+        return plan.ts_rules[level]
+    except KeyError:
+        r = rule(level, plan.beta)
+        args = plan.ts_rules[level] = (r.d, r.w, r.w_diff, plan.beta, _ROUND_ULPS[r.d.size])
+        return args
+
+
+@lru_cache(maxsize=32)
+def _gjc_nodes(alpha_w: float, b: int, beta: float):
+    """Distances d = u^b of the two Gauss-Jacobi rules in t, d^-beta, and the weights."""
+    u, W = _jacobi_pair(alpha_w, _GJC_SIZES)
+    # Both rules' nodes in increasing order: the compiled inverse of U warm-starts
+    # each node from the previous one along a branch.
+    order = np.argsort(u)
+    d = u[order] ** b
+    return d, d ** (-beta), np.ascontiguousarray(W[order])
+
+
+def _params(osc: VirtualOscillator, m: float, q_top: float, k: NodeKernel) -> np.ndarray:
+    lz = osc.zero_force_stretch if osc.zeta > 0.0 else 0.0
+    return np.array(
+        [m, osc.v0, osc.zeta, osc.wd, osc.s_peak, osc.s_end, lz, q_top, k.q_s, k.u_s, k.n_lead]
+    )
+
+
+def _result(out: np.ndarray) -> tuple[Branches, float, float]:
+    v = out.tolist()
+    return Branches(*v[:6]), v[6], v[7]
+
+
+def gauss_jacobi_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float):
+    """(Branches, q_max, U'(q_max)) by Gauss-Jacobi in t = d^(1/b), or None when that
+    path does not apply or refuses (see the module docstring)."""
+    plan = _plan(pot)
+    if plan is None or plan.gj is None or osc.zeta >= _GJ_ZETA_MAX:
+        return None
+    out = np.empty(_OUT)
+    plan.gauss_jacobi(_params(osc, m, q_top, plan.kernel), plan.kernel.P, *plan.gj, out)
+    return _result(out) if out[8] == _OK else None
+
+
+def fused_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float):
+    """(Branches, q_max, U'(q_max)) of one impact in compiled code, or None.
+
+    Gauss-Jacobi first, then tanh-sinh from `_branches.COMPILED_LEVEL` up while the
+    bound exceeds `_branches._LEVEL_UP_RTOL` (`_branches.level_up`). None for a
+    family without compiled nodes, for the stretches only the general path covers,
+    and when a node value is not finite and > 0.
+    """
+    plan = _plan(pot)
+    if plan is None:
+        return None
+    z = osc.zeta
+    if z > 0.0:
+        if z >= 1.0:
+            return None
+        lz, sp = osc.zero_force_stretch, osc.s_peak
+        common = lz < sp and (lz / sp) ** (1.0 + plan.beta) >= _NEGLIGIBLE_SHARE
+    else:
+        common = True
+    k = plan.kernel
+    prm = _params(osc, m, q_top, k)
+    out = np.empty(_OUT)
+    if plan.gj is not None and z < _GJ_ZETA_MAX:
+        plan.gauss_jacobi(prm, k.P, *plan.gj, out)
+        if out[8] == _OK:
+            return _result(out)
+    if not common:
+        return None
+
+    def run(level):
+        plan.tanh_sinh(prm, k.P, *_ts_args(plan, level), out)
+        return _result(out) if out[8] == _OK else None
+
+    return level_up(run)
