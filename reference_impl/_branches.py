@@ -240,17 +240,23 @@ def _relative_bound(br: Branches) -> float:
 _COMPILED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def compiled_nodes(pot: Potential):
-    """The compiled node function of `_kernels` for ``pot`` (cached per object), or None."""
+def per_potential(cache: weakref.WeakKeyDictionary, build, pot: Potential):
+    """``build(pot)``, kept in ``cache`` per potential object (immutable after
+    construction, so an entry cannot go stale); built each time when ``pot`` is
+    not weak-referenceable."""
     try:
-        return _COMPILED[pot]
+        return cache[pot]
     except KeyError:
         pass
-    except TypeError:  # not weak-referenceable: build each time
-        return node_function(pot)
-    f = node_function(pot)
-    _COMPILED[pot] = f
-    return f
+    except TypeError:
+        return build(pot)
+    value = cache[pot] = build(pot)
+    return value
+
+
+def compiled_nodes(pot: Potential):
+    """The compiled node function of `_kernels` for ``pot`` (cached per object), or None."""
+    return per_potential(_COMPILED, node_function, pot)
 
 
 def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) -> Branches:

@@ -45,6 +45,7 @@ from ._branches import (
     _jacobi_pair,
     _ts_common_sums,
     level_up,
+    per_potential,
 )
 from ._kernels import (
     _TERM_POWER,
@@ -244,14 +245,7 @@ _PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _plan(pot: Potential) -> _Plan | None:
-    try:
-        return _PLANS[pot]
-    except KeyError:
-        pass
-    except TypeError:  # not weak-referenceable: build each time
-        return _build_plan(pot)
-    plan = _PLANS[pot] = _build_plan(pot)
-    return plan
+    return per_potential(_PLANS, _build_plan, pot)
 
 
 def _build_plan(pot: Potential) -> _Plan | None:
