@@ -36,7 +36,8 @@ from reference_impl.stability.search import (
     parse_criterion,
     search_scene,
 )
-from reference_impl.studies.dtcrit_map import MapCase, dt_crit_map, recommended_step
+from reference_impl.stability.recommend import recommended_step
+from reference_impl.studies.dtcrit_map import MapCase, dt_crit_map
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import Expression, PowerLaw
 from verification.assertions import assert_true

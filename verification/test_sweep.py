@@ -23,9 +23,9 @@ from reference_impl.sweep import (
     parse_spec,
     run_case,
     run_cases,
-    run_sweep,
     spec_from_dict,
 )
+from reference_impl.cli.sweep import run_sweep
 from reference_impl.sweep._runner import dask_available
 from verification.assertions import assert_true
 

@@ -213,3 +213,49 @@ def test_expression_lanes_are_compiled_and_match_the_power_law_kernel():
         claim="tool",
         call="run_lanes(Expression) short",
     )
+
+
+def test_cancelling_expression_is_never_compiled_from_its_float_formula(monkeypatch):
+    """q - atan(q) cancels in float64 near contact: the lanes run on its corrected U, dU.
+
+    The compiled kernel would evaluate sympy's float formula; the engines must agree
+    with the numpy engine (which uses the series branch) lane for lane.
+    """
+    import sympy as sp
+
+    from reference_impl.integrators.verlet_expression import _expression_kernel
+
+    expr = Expression("q - atan(q)")
+    q = sp.Symbol("q", real=True)
+    raw = sp.lambdify(q, expr.expr.subs({s: q for s in expr.expr.free_symbols}), "math")
+    x = 1e-6
+    exact = float(expr.U(np.array([x]))[0])
+    # The float formula loses about |log10(x^2)| digits: 1e-6 gives a relative error ~1e-4.
+    assert_true(
+        abs(raw(x) - exact) > 1e-6 * abs(exact),
+        got=f"float formula {raw(x)!r} vs {exact!r}",
+        should="a cancelling formula (else this test shows nothing)",
+        claim="tool",
+        call="lambdify(q - atan(q))",
+    )
+    assert_true(
+        _expression_kernel(expr) is None,
+        got="a compiled kernel",
+        should="None: float_formula_accurate is False",
+        claim="tool",
+        call="_expression_kernel(q - atan(q))",
+    )
+    dt = np.array([0.05, 0.2, 0.5])
+    # Lower the compile threshold so that a short batch is one auto would compile.
+    monkeypatch.setattr("reference_impl.integrators.verlet_expression._COMPILE_MIN_STEPS", 100)
+    b = LaneBatch(dt=dt, y0=0.0, v0=1e-3, gap=0.0, e_limit=50.0, max_steps=3_000)
+    auto = run_lanes(expr, 1.0, SCENE_WALLS, b)
+    ref = run_lanes(expr, 1.0, SCENE_WALLS, b, engine="numpy")
+    assert_true(
+        auto.engine == "numpy" and list(auto.status) == list(ref.status),
+        got=f"{auto.engine} {list(auto.status)}",
+        should=f"numpy {list(ref.status)}",
+        claim="tool",
+        call="run_lanes(q - atan(q)) auto",
+    )
+    assert_close(auto.e_max, ref.e_max, rtol=0.0, claim="tool", call="run_lanes engines")

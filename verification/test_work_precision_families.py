@@ -30,7 +30,7 @@ CLAIM = "work-precision"
 @pytest.fixture(scope="module")
 def study():
     scenes = [s for s in default_scenes() if s.name not in QUICK_SKIP]
-    return work_precision(scenes, quick=True)
+    return work_precision(scenes, quick=True, methods=("DOP853", "RK45"))
 
 
 def test_every_family_has_a_scene(study):
@@ -111,4 +111,25 @@ def test_family_summary_and_overview(study, tmp_path):
         should="a drawn overview figure",
         claim=CLAIM,
         call="wp_overview_figure",
+    )
+
+
+def test_a_users_ode_solver_joins_the_study_by_class(study):
+    """As scipy accepts an OdeSolver subclass for ``method``, so does the study's registry."""
+    from scipy.integrate import RK45
+
+    class MyRK45(RK45):
+        """A user's integrator: here RK45 itself, so its rows must equal RK45's."""
+
+    sc = [s for s in default_scenes() if s.name not in QUICK_SKIP][0]
+    mine = work_precision([sc], quick=True, methods=[MyRK45])
+    ref = study[(study.scene == sc.name) & (study.method == "RK45")]
+    got = mine[mine.method == "MyRK45"]
+    assert_true(
+        len(got) == len(ref) > 0
+        and list(got.err_contact_time) == list(ref.err_contact_time),
+        got=list(got.err_contact_time),
+        should=list(ref.err_contact_time),
+        claim=CLAIM,
+        call="work_precision(methods=[MyRK45])",
     )

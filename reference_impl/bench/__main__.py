@@ -2,7 +2,7 @@
 
 import sys
 
-from reference_impl.bench.command import main
+from reference_impl.cli.bench import main
 
 if __name__ == "__main__":
     sys.exit(main())

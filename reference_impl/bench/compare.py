@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from reference_impl.bench._cells import _PLAIN_STATUS, _UNITS, _fmt_v
+
 __all__ = ["plot_speed_error", "side_by_side", "side_by_side_markdown"]
 
 
@@ -32,8 +34,6 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
         scene (skipped). ``reference`` is the asked value where it is the same for
         every code (restitution_asked), else empty (each code's own exact law).
     """
-    from reference_impl.bench.report import _PLAIN_STATUS, _UNITS, _fmt_v  # report re-exports this module
-
     variants: list[str] = []
     cells: dict[tuple[str, str], dict[str, str]] = {}
     refs: dict[tuple[str, str], set] = {}

@@ -28,6 +28,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from reference_impl.bench._cells import _OURS, _PLAIN_STATUS, _UNITS, _fmt, _fmt_v
 from reference_impl.provenance import machine_info as _machine_info
 
 __all__ = [
@@ -53,8 +54,6 @@ __all__ = [
 SCHEMA = "hcv-bench/1"
 # Every metric status, in the order the summaries list them.
 STATUSES = ("pass", "fail", "skip", "error")
-# How the status "error" is shown: it is ours (the reference's), not the code's.
-_OURS = "ERROR (ours)"
 
 
 def machine_info() -> dict:
@@ -253,23 +252,12 @@ def write_junit(result, path) -> None:
     _atomic_write(path, text + "\n")
 
 
-def _fmt(v) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        if not math.isfinite(v):
-            return "inf" if v > 0 else ("-inf" if v < 0 else "nan")
-        return f"{v:.3g}"
-    return str(v)
-
-
 _STATUS = {
     "pass": "[green]pass[/]",
     "fail": "[bold red]FAIL[/]",
     "skip": "[dim]skip[/]",
     "error": f"[bold magenta]{_OURS}[/]",
 }
-_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS}
 # Metrics whose value is a relative error of one quantity, and that quantity's key.
 _RELATIVE = {
     "restitution_asked": "restitution",
@@ -277,7 +265,6 @@ _RELATIVE = {
     "max_penetration": "max_penetration",
     "contact_time": "contact_time",
 }
-_UNITS = {"max_penetration": " m", "contact_time": " s"}
 
 
 def _records(result, m) -> list:
@@ -352,14 +339,6 @@ def metric_columns(result, m) -> dict:
 
 # Significant digits of measured values and references (errors keep 3): enough to see
 # a restitution of 0.72925 against 0.729248.
-_VALUE_DIGITS = 6
-
-
-def _fmt_v(v, unit: str = "") -> str:
-    s = f"{v:.{_VALUE_DIGITS}g}" if isinstance(v, float) and math.isfinite(v) else _fmt(v)
-    return f"{s}{unit}" if s and unit and s not in ("nan", "inf", "-inf") else s
-
-
 def _count_text(counts: dict) -> str:
     """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)")."""
     text = f"{counts.get('pass', 0)} pass, {counts.get('fail', 0)} fail, {counts.get('skip', 0)} skipped"

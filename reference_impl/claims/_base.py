@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+
+from reference_impl._format import g, jsonable
 
 __all__ = ["Measurement", "VERDICTS", "g"]
 
@@ -51,8 +52,6 @@ class Measurement:
 
     def to_dict(self) -> dict:
         """JSON-ready dict: claim, verdict, evidence, rule, measured, counterexample."""
-        from reference_impl.report._common import jsonable
-
         return {
             "claim": self.claim,
             "verdict": self.verdict,
@@ -62,24 +61,3 @@ class Measurement:
             "counterexample": jsonable(self.counterexample),
             "headline": self.headline or self.evidence.split(";")[0],
         }
-
-
-def g(x, digits: int = 3) -> str:
-    """Short number: ``g(1.2345e-13) == '1.23e-13'``; NaN/None -> '–'."""
-    if x is None:
-        return "–"
-    if isinstance(x, str):
-        return x
-    x = float(x)
-    if math.isnan(x):
-        return "–"
-    if math.isinf(x):
-        return "∞" if x > 0 else "−∞"
-    if x == 0:
-        return "0"
-    if 1e-3 <= abs(x) < 1e5:
-        return f"{x:.0f}" if abs(x) >= 10**digits else f"{x:.{digits}g}"
-    mant, exp = f"{x:.{max(digits - 1, 0)}e}".split("e")
-    if "." in mant:
-        mant = mant.rstrip("0").rstrip(".")
-    return f"{mant}e{int(exp)}"

@@ -17,14 +17,10 @@ import sys
 from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, run_command
+from reference_impl.tasks import solve_scene
 
-__all__ = ["main", "run_command", "solve_scene"]
-
-# Exit statuses (shared with `hcv bench --gate`, which adds 3: our reference failed).
-EXIT_OK = 0
-EXIT_FAIL = 1
-EXIT_USAGE = 2
-EXIT_INTERRUPTED = 130  # 128 + SIGINT
+__all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
@@ -40,53 +36,6 @@ _SOLVE_ROWS = (
     ("action", "action J(E) (sec. 4) [J s]"),
     ("period", "period T(E) = 4 x quarter period [s]"),
 )
-
-
-def solve_scene(scene) -> list[dict]:
-    """Solve every velocity of an impact scene exactly; one dict per velocity.
-
-    Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
-    dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
-    geometry, contact_time and restitution (end at q = 0, the theory's
-    definition; with zeta >= 1 and a leading exponent >= 2 the body never returns
-    to q = 0: contact_time is then None and returns_to_q0 False, an exact answer,
-    not a failure), contact_time_zero_force and restitution_zero_force (end when
-    the total force vanishes, as in codes that forbid tension), action J(E) and
-    period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
-    """
-    from reference_impl.theory.action import action, period
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.stability.bound import dt_safe
-
-    zeta = scene.zeta or 0.0
-    rows = []
-    for v0 in scene.velocities:
-        sol = solve_impact(scene.potential, scene.mass, v0, zeta)
-        safe = dt_safe(scene.potential, scene.mass, v0)
-        E = 0.5 * scene.mass * v0 * v0
-        rows.append(
-            {
-                "v0": v0,
-                "zeta": zeta,
-                "max_penetration": sol.max_penetration,
-                "max_force": sol.max_force,
-                "dt_safe": safe.dt_safe,
-                "dt_safe_shortcut": safe.dt_shortcut,
-                "dt_safe_at_q": safe.q_star,
-                "geometry": safe.geometry,
-                # inf is the theory's answer for an overdamped contact that creeps back
-                # forever; it is written as an absence (null), not as a number.
-                "contact_time": sol.contact_time if math.isfinite(sol.contact_time) else None,
-                "returns_to_q0": math.isfinite(sol.contact_time),
-                "restitution": sol.restitution,
-                "contact_time_zero_force": sol.contact_time_zero_force,
-                "restitution_zero_force": sol.restitution_zero_force,
-                "action": action(scene.potential, scene.mass, E),
-                "period": period(scene.potential, scene.mass, E),
-                "quadrature_error": sol.quadrature_error,
-            }
-        )
-    return rows
 
 
 def _json_safe(value):
@@ -269,8 +218,8 @@ def _cmd_scenes(args) -> int:
 
 
 def _cmd_dt_crit(args) -> int:
-    from reference_impl.stability.search import search_loaded_scene
     from reference_impl.scenes import load_scene
+    from reference_impl.tasks import search_loaded_scene
 
     scene = load_scene(args.scene)
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
@@ -380,41 +329,13 @@ def _parser() -> argparse.ArgumentParser:
     rp.set_defaults(func=_cmd_report)
     ls = sub.add_parser("scenes", help="list the embedded scenes")
     ls.set_defaults(func=_cmd_scenes)
-    from reference_impl.bench.command import add_bench_parser
+    from reference_impl.cli.bench import add_bench_parser
 
     add_bench_parser(sub)
-    from reference_impl.sweep.command import add_parser as add_sweep_parser
+    from reference_impl.cli.sweep import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
     return p
-
-
-def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
-
-
-def run_command(args) -> int:
-    """Run a parsed command; every way out is one line on stderr and an exit status."""
-    try:
-        return args.func(args)
-    except HCVInputError as exc:
-        print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("hcv: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except (RecursionError, OverflowError, MemoryError) as exc:
-        # Sizes are bounded before work starts; this is the backstop for an input that
-        # still exhausts a limit (nesting, float range, memory).
-        print(
-            f"hcv: error: the input is too large or too deeply nested ({type(exc).__name__})",
-            file=sys.stderr,
-        )
-        return EXIT_USAGE
-    except BrokenPipeError:
-        # Output piped into e.g. `head`: stop quietly, as Unix tools do.
-        sys.stderr.close()
-        return EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:

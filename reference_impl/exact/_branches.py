@@ -17,7 +17,7 @@ fixed tanh-sinh rule.
 
 Power laws first try Gauss-Jacobi rules, kept only when two rule sizes agree to
 _GJ_RTOL on every stretch. Compiled families (sums, caps, expressions) run their
-fast paths whole in compiled code (`_fused`, called by `solve_impact` first);
+fast paths whole in compiled code (`_one_call`, called by `solve_impact` first);
 what reaches this module for them is the general tanh-sinh path.
 
 Every error returned is the quadrature estimate |fine - coarse| plus a bound on
@@ -203,7 +203,7 @@ def branch_integrals(
         return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
     if level is not None:
         return _tanh_sinh(pot, m, osc, beta, level, lambda x: compiled(x, m, q_hi)[0])
-    # The fast paths of compiled families (`_fused`) have run before; here the
+    # The fast paths of compiled families (`_one_call`) have run before; here the
     # general tanh-sinh path, level by level.
     return level_up(
         lambda lv: (_tanh_sinh(pot, m, osc, beta, lv, lambda x: compiled(x, m, q_hi)[0]),)
@@ -255,7 +255,7 @@ def per_potential(cache: weakref.WeakKeyDictionary, build, pot: Potential):
 
 
 def compiled_nodes(pot: Potential):
-    """The compiled node function of `_kernels` for ``pot`` (cached per object), or None."""
+    """The compiled node function of `_nodes` for ``pot`` (cached per object), or None."""
     return per_potential(_COMPILED, node_function, pot)
 
 

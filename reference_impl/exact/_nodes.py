@@ -29,13 +29,12 @@ Families read the potential's public attributes:
 `node_function(pot)` returns a callable (x array, m, q_max) -> (dq/dx, q)
 arrays, or None when the family has no compiled form (the numpy path is used
 then). `node_kernel(pot)` gives the compiled pieces the whole-impact kernels of
-`_fused` are built from.
+`_one_call` are built from.
 """
 
 from __future__ import annotations
 
 import math
-import types
 from fractions import Fraction
 from functools import lru_cache
 from typing import NamedTuple
@@ -44,6 +43,7 @@ import numba
 import numpy as np
 import sympy as sp
 
+from reference_impl._jit import specialise
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.potentials.volumetric import Ellipsoid, Sphere
@@ -128,25 +128,6 @@ def _terms_eval(q, P):  # pragma: no cover - compiled
                 alpha * (alpha - 1.0) * s * s * s / (v * v) + 3.0 * alpha * s * s2 / v - 2.0 * c0
             )
     return u, du, d2u, d3u
-
-
-def specialise(func, cache: bool, **bound):
-    """A numba-compiled copy of the plain function ``func`` whose globals named in
-    ``bound`` are the given compiled functions.
-
-    The node loops and whole-impact kernels are written once, generic in the
-    evaluator they call (``_EV``, ``_NODES``, ...), and compiled per evaluator. A
-    function argument or a closure would do the same, but numba then cannot cache
-    the result on disk (it keys closures by captured objects that change in every
-    process, and refuses functions passed as values); a copy bound through its
-    globals caches like any module function. Only the table form's copies are
-    cached (one per name, so no clash); each expression's copies are not.
-    """
-    glb = dict(func.__globals__)
-    glb.update(bound)
-    f = types.FunctionType(func.__code__, glb, func.__name__, func.__defaults__)
-    f.__qualname__, f.__module__, f.__doc__ = func.__qualname__, func.__module__, func.__doc__
-    return numba.njit(cache=cache, error_model="numpy")(f)
 
 
 def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - compiled

@@ -4,11 +4,11 @@
 function, the sums and the peak are separate calls, and for the ~150 nodes of
 one impact their Python overhead cost as much as the nodes themselves. Here the
 two fast paths of the compiled families (power-law sums, caps, expressions) run
-whole inside numba, generic in the node loop of `_kernels`:
+whole inside numba, generic in the node loop of `_nodes`:
 
 * Gauss-Jacobi in t = d^(1/b) (`gauss_jacobi`): near a singular end (distance d,
   unit length), dq/dx / d^beta is an analytic function of d and of the powers
-  d^e_i that the potential's exponents bring in (`_kernels.substitution_order`);
+  d^e_i that the potential's exponents bring in (`_nodes.substitution_order`);
   with d = t^b every e_i b is an integer, so int_0^1 g dd = b int_0^1
   t^(2b/n - 1) [g d^-beta] dt has an analytic bracket and a Gauss-Jacobi rule in
   t converges geometrically. Two rule sizes must agree to _GJ_RTOL on every row;
@@ -53,9 +53,9 @@ from reference_impl.exact._nodes import (
     _terms_eval,
     _terms_nodes,
     node_kernel,
-    specialise,
     substitution_order,
 )
+from reference_impl._jit import specialise
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import rule
 from reference_impl.potentials.base import Potential
@@ -83,7 +83,7 @@ _OUT = 9
 
 
 # Whole-impact kernels, written once and compiled per node loop by `_kernels_for`
-# (`_kernels.specialise` binds _NODES, a `NodeKernel.nodes`, and _PEAK).
+# (`reference_impl._jit.specialise` binds _NODES, a `NodeKernel.nodes`, and _PEAK).
 _NODES = _PEAK = None
 
 

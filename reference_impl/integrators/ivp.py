@@ -333,6 +333,12 @@ def _check_t_eval(t_eval) -> np.ndarray | None:
     return te
 
 
+def _is_ode_solver(method) -> bool:
+    from scipy.integrate import OdeSolver
+
+    return isinstance(method, type) and issubclass(method, OdeSolver)
+
+
 def integrate_impact(
     potential: Potential,
     m: float,
@@ -360,8 +366,9 @@ def integrate_impact(
     C : callable, optional
         Damping coefficient q -> C(q) (kg/s), called with a float overlap
         q >= 0; None (default) for the conservative contact.
-    method : str
-        solve_ivp method; default DOP853 (8th order, tight tolerances are cheap).
+    method : str or type
+        solve_ivp method: a name (default DOP853, 8th order, tight tolerances are cheap)
+        or, as ``solve_ivp`` accepts, a ``scipy.integrate.OdeSolver`` subclass.
     rtol : float
         Relative tolerance, >= 100 eps (default 1e-12).
     atol : float or array_like, optional
@@ -398,8 +405,11 @@ def integrate_impact(
     v0 = positive("v0", v0, "integrate_impact")
     if C is not None and not callable(C):
         raise HCVInputError(f"integrate_impact: C must be callable q -> C(q) or None, got {C!r}")
-    if method not in _METHODS:
-        raise HCVInputError(f"integrate_impact: method must be one of {_METHODS}, got {method!r}")
+    if not (isinstance(method, str) and method in _METHODS) and not _is_ode_solver(method):
+        raise HCVInputError(
+            f"integrate_impact: method must be one of {_METHODS} or a "
+            f"scipy.integrate.OdeSolver subclass, got {method!r}"
+        )
     rtol = positive("rtol", rtol, "integrate_impact")
     if not _RTOL_MIN <= rtol < 1:
         raise HCVInputError(

@@ -54,6 +54,11 @@ def _expression_kernel(pot: Potential):
 
     if type(pot) is not Expression:  # exact type: a subclass may change the law
         return None
+    if not pot.float_formula_accurate:
+        # The float formula cancels (q - atan(q), 1 - cos(q) near contact) or overflows:
+        # only the potential's own U, dU (series and mpmath branches) are accurate there,
+        # and those run in the numpy engine.
+        return None
     key = sp.srepr((pot.dexpr, pot.expr))
     if key in _EXPR_KERNELS:
         return _EXPR_KERNELS[key]

@@ -1,4 +1,4 @@
-"""Velocity-Verlet trajectories for the speed-against-error study.
+"""Velocity-Verlet trajectories: the one recorder of (y_n, v_n) along an impact.
 
 The lane engine (`reference_impl.integrators.verlet.run_lanes`) reports only
 energies and statuses, not a trajectory, so the work-precision points of
@@ -24,15 +24,8 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from reference_impl.integrators.verlet import _force_energy, kernel_terms
-from reference_impl.studies.workprecision import _median_time
 
-__all__ = ["VerletPath", "verlet_impact", "verlet_row"]
-
-# Step budget of one run, in multiples of the requested steps per contact, plus a
-# constant: damping lengthens the contact by at most ~2.3 (zeta <= 0.9).
-_BUDGET_FACTOR = 4
-_BUDGET_EXTRA = 64
-
+__all__ = ["VerletPath", "verlet_impact"]
 
 @numba.njit(cache=True)
 def _path_kernel(fam, par, q_sup, m, c_damp, dt, v0, ys, vs):
@@ -128,34 +121,3 @@ def verlet_impact(pot, m: float, v0: float, zeta: float, dt: float, max_steps: i
             terms[0], terms[1], float(pot.q_sup), float(m), c_damp, float(dt), float(v0), ys, vs
         )
     return VerletPath(dt, v0, ys, vs, int(status))
-
-
-def _rel(a: float, b: float) -> float:
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return math.nan
-    return abs(a - b) / abs(b) if b != 0 else abs(a - b)
-
-
-def verlet_row(sc, truth, steps_per_contact: int) -> dict:
-    """Work-precision row of velocity Verlet with dt = t_contact / steps_per_contact.
-
-    The callback `reference_impl.studies.workprecision.work_precision` expects: errors
-    against the mpmath ``truth`` and the median wall time of a whole impact.
-    """
-    dt = truth.contact_time / steps_per_contact
-    budget = _BUDGET_FACTOR * steps_per_contact + _BUDGET_EXTRA
-    path = verlet_impact(sc.potential, sc.m, sc.v0, sc.zeta, dt, budget)
-    secs = _median_time(lambda: verlet_impact(sc.potential, sc.m, sc.v0, sc.zeta, dt, budget))
-    q = path.q(truth.t_samples)
-    err_traj = float(np.max(np.abs(q - truth.q_samples))) / truth.max_penetration
-    return {
-        "scene": sc.name,
-        "method": "Verlet",
-        "setting": f"{steps_per_contact} steps/contact",
-        "seconds": secs,
-        "err_contact_time": _rel(path.contact_time, truth.contact_time),
-        "err_restitution": _rel(path.restitution, truth.restitution),
-        "err_max_penetration": _rel(path.max_penetration, truth.max_penetration),
-        "err_trajectory": err_traj if math.isfinite(err_traj) else math.nan,
-        "dt": dt,
-    }

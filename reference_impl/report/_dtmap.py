@@ -175,12 +175,12 @@ def map_table(df: pd.DataFrame) -> list[dict]:
 
 def describe_recommendation() -> str:
     """One line on the corrected bound (measured margins are in the table)."""
-    from reference_impl.studies.dtcrit_map import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
+    from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
 
     f = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR.items())
     fs = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR_SINGULAR.items())
     return (
-        f"Recommended step (beyond the paper, `dtcrit_map.recommended_step`): Δt_rec = "
+        f"Recommended step (beyond the paper, `stability.recommend.recommended_step`): Δt_rec = "
         f"c · 2√(m / max U'') over the path, with c = {f}; when U'' is unbounded at onset "
         f"(leading exponent < 2) U''(q_max) is used with c = {fs}. The factors were set "
         f"from these measurements (smallest measured ratio / 1.3–1.7), so the margins "

@@ -9,7 +9,6 @@ import pandas as pd
 
 from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS, default_scenes, work_precision
 from reference_impl.report._common import g
-from reference_impl.integrators.verlet_path import verlet_row
 
 METRICS = (
     ("err_contact_time", "contact time t_c"),
@@ -112,7 +111,7 @@ def family_summary(rows: list[dict]) -> list[dict]:
 def run_wp(quick: bool, progress=None) -> pd.DataFrame:
     """`work_precision` with the report's Verlet points (quick: without `QUICK_SKIP`)."""
     scenes = [s for s in default_scenes() if not (quick and s.name in QUICK_SKIP)]
-    return work_precision(scenes, quick=quick, verlet=verlet_row, progress=progress)
+    return work_precision(scenes, quick=quick, progress=progress)
 
 
 def _short(info: str) -> str:

@@ -57,7 +57,7 @@ class DtCritResult:
     dt_tangent : float
         2 sqrt(m / max_[0, q_max] U'') (s), the linearised limit at the stiffest point.
     recommended_dt : float
-        The recommended step (s), `reference_impl.studies.dtcrit_map.recommended_step`.
+        The recommended step (s), `reference_impl.stability.recommend.recommended_step`.
     lane_steps : int
         Verlet steps integrated by the whole `search_scene` call (all lanes).
     engine : str

@@ -55,7 +55,7 @@ scan step below the first failing grid point can be missed; in chaotic regimes
 (e.g. q^2/(1+q^2) at high speed) the outcome of a lane can change with the
 last bits of Delta t, so Delta t_crit there is known only to that extent.
 
-Beyond the paper, `reference_impl.studies.dtcrit_map.recommended_step` gives a step
+Beyond the paper, `reference_impl.stability.recommend.recommended_step` gives a step
 that the same searches found safe on every case measured.
 """
 
@@ -66,7 +66,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from reference_impl.stability.criteria import (
     FAILURE_KINDS,
@@ -88,6 +87,7 @@ from reference_impl.stability.criteria import (
     default_criterion,
     parse_criterion,
 )
+from reference_impl.stability.recommend import tangent_step
 from reference_impl.stability.result import DtCritResult
 from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
@@ -118,7 +118,6 @@ __all__ = [
     "DtCritResult",
     "default_criterion",
     "parse_criterion",
-    "search_loaded_scene",
     "tangent_step",
     "search_scene",
 ]
@@ -138,32 +137,6 @@ _IMPACT_MIN_STEPS = 64
 # In-contact energy guard of an impact lane (multiples of E_0): only stops
 # runaway arithmetic; the verdict uses the rebound energy.
 _IMPACT_GUARD = 1e12
-
-
-def tangent_step(pot: Potential, m: float, q_max: float) -> float:
-    """2 sqrt(m / max U'') over (0, q_max] (s): the linear Verlet limit at the stiffest point.
-
-    Returns 0 when U'' is unbounded on the path (leading exponent < 2, e.g.
-    power laws with p < 1).
-    """
-    if pot.leading_exponent < 2:
-        return 0.0
-    q = np.unique(q_max * np.concatenate([np.logspace(-12, 0, 200), np.linspace(0, 1, 801)]))
-    q = np.minimum(q, pot.q_sup)
-    with np.errstate(all="ignore"):
-        k = pot._d2U(q)
-    i = int(np.argmax(k))
-    kmax = float(k[i])
-    if not math.isfinite(kmax) or kmax <= 0:
-        return 0.0
-    if 0 < i < q.size - 1:  # interior maximum: refine between the grid neighbours
-        res = minimize_scalar(
-            lambda x: -float(pot._d2U(np.array([x]))[0]),
-            bounds=(q[i - 1], q[i + 1]),
-            method="bounded",
-        )
-        kmax = max(kmax, -float(res.fun))
-    return 2.0 * math.sqrt(m / kmax)
 
 
 # ----------------------------------------------------------------------------
@@ -492,7 +465,7 @@ def search_scene(
         Lane engine (auto: numba for known families).
     recommend : callable, None or "default"
         ``recommend(potential, m, v0, kind) -> float`` filling ``recommended_dt``;
-        "default" is `reference_impl.studies.dtcrit_map.recommended_step`, None leaves NaN.
+        "default" is `reference_impl.stability.recommend.recommended_step`, None leaves NaN.
 
     Returns
     -------
@@ -501,7 +474,7 @@ def search_scene(
     """
     vs, z, crit = _validated(potential, m, velocities, kind, gap, zeta, criterion)
     if isinstance(recommend, str):
-        from reference_impl.studies.dtcrit_map import recommended_step as recommend  # the map module imports this one
+        from reference_impl.stability.recommend import recommended_step as recommend
     info, searches, main_of = [], [], []
     for v0 in vs:
         ss = _dt_safe(potential, m, v0)
@@ -579,36 +552,3 @@ def search_scene(
     if progress is not None:
         progress(float(len(searches)), float(len(searches)))
     return out
-
-
-def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> list[DtCritResult]:
-    """`search_scene` on a loaded scene: its gap, its universal damping, a criterion text.
-
-    The one place where a scene file becomes a search, shared by ``hcv dt-crit`` and
-    the sweep's ``dt-crit`` task, so both give the same result for the same scene.
-
-    Parameters
-    ----------
-    scene : reference_impl.scenes.Scene
-        A validated scene.
-    criterion : str, optional
-        ``--criterion`` text (`parse_criterion`; an empty text is refused); None for the
-        scene kind's default criterion.
-    progress : callable, optional
-        As for `search_scene`.
-    """
-    crit = (
-        parse_criterion(criterion, scene.kind)
-        if criterion is not None
-        else default_criterion(scene.kind)
-    )
-    return search_scene(
-        scene.potential,
-        scene.mass,
-        scene.velocities,
-        scene.kind,
-        gap=scene.gap,
-        zeta=scene.zeta if scene.damping_law == "universal" else None,
-        criterion=crit,
-        progress=progress,
-    )

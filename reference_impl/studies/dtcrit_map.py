@@ -29,9 +29,13 @@ from reference_impl.stability.search import (
     SearchGrid,
     default_criterion,
     search_scene,
-    tangent_step,
 )
 from reference_impl.errors import HCVInputError
+from reference_impl.stability.recommend import (  # re-exported: the map measures its margins
+    RECOMMEND_FACTOR,
+    RECOMMEND_FACTOR_SINGULAR,
+    recommended_step,
+)
 from reference_impl.integrators.verlet import SaturatingForce
 from reference_impl.potentials import Ellipsoid, Potential, PowerLaw, Sphere
 
@@ -123,54 +127,6 @@ def coverage(quick: bool = False) -> list[MapCase]:
         )
     )
     return cases
-
-
-# Safety factors c of the recommendation dt_rec = c * 2 sqrt(m / k_t) (see
-# `recommended_step`), set from measurements with the default criteria. Smallest
-# measured dt_crit / (2 sqrt(m / k_t)): sustained scenes 0.26 (sphere pushed past
-# 0.735 R, random draw), 0.27 (q^2/(1+q^2) at v0 = 11 m/s); single impact 0.091
-# (q^2/(1+q^2) at v0 = 13 m/s). c is that minimum divided by about 1.3 (1.7 for
-# the singular impact factor below).
-RECOMMEND_FACTOR = {"two-sided": 0.2, "two-walls": 0.2, "impact": 0.07}
-# The same for contacts whose U'' is unbounded at onset (leading exponent < 2,
-# e.g. p < 1), where k_t = U''(q_max); smallest measured ratio: 0.025 (impact,
-# p = 0.5), 0.50 (two-walls, p = 0.75).
-RECOMMEND_FACTOR_SINGULAR = {"two-sided": 0.2, "two-walls": 0.2, "impact": 0.015}
-
-
-def recommended_step(potential: Potential, m: float, v0: float, kind: str) -> float:
-    """Recommended Verlet step (s): c_kind * 2 sqrt(m / k_t), beyond the paper.
-
-    k_t is the largest tangent stiffness U'' met on the path [0, q_max] (the
-    linear Verlet limit 2 sqrt(m / k_t) at the stiffest point); when U'' is
-    unbounded at onset (leading exponent < 2) it is U''(q_max); where that is
-    <= 0 (a concave, softening contact such as tanh(q), log(1 + q), sqrt(q))
-    there is no recommendation (NaN), never an error. The factors
-    c_kind (`RECOMMEND_FACTOR`, `RECOMMEND_FACTOR_SINGULAR`) are the smallest
-    measured dt_crit / (2 sqrt(m / k_t)) divided by 1.3 to 1.7;
-    `reference_impl.studies.dtcrit_map.dt_crit_map` reports the margin dt_crit / dt_rec
-    of every case (column recommended_ratio).
-
-    Returns
-    -------
-    float
-        Recommended time step (s); NaN for concave contacts (U''(q_max) <= 0 with
-        U'' unbounded or non-positive on the path): outside the measured classes.
-    """
-    if kind not in KINDS:
-        raise HCVInputError(f"scene kind must be one of {', '.join(KINDS)}; got {kind!r}")
-    q_max = potential.turning_point(0.5 * m * v0 * v0, check=False)
-    dt_t = tangent_step(potential, m, q_max)
-    if dt_t > 0:
-        return RECOMMEND_FACTOR[kind] * dt_t
-    k = float(potential._d2U(np.array([q_max]))[0])
-    if not (math.isfinite(k) and k > 0):
-        # Concave (softening) contacts such as tanh(q), log(1 + q), sqrt(q): no
-        # tangent stiffness to scale by, and none of the measured classes the
-        # factors come from (the chord stiffness U'(q_max)/q_max was measured
-        # unsafe: impact dt_crit / dt_rec = 0.013 to 0.5). No recommendation.
-        return math.nan
-    return RECOMMEND_FACTOR_SINGULAR[kind] * 2.0 * math.sqrt(m / k)
 
 
 def oscillation_period(pot: Potential, m: float, v0: float) -> float:

@@ -23,18 +23,27 @@ import mpmath
 import numpy as np
 import pandas as pd
 
+from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.integrators.ivp import integrate_impact
+from reference_impl.integrators.verlet_path import verlet_impact
 from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 from reference_impl.potentials import Expression, PowerLaw, Sphere
 from reference_impl.potentials.base import Potential
 
 __all__ = [
+    "DEFAULT_METHODS",
     "FAMILY_ZETA",
+    "METHODS",
+    "Method",
+    "QUICK_METHODS",
     "WPScene",
     "default_scenes",
     "family_scenes",
     "ground_truth",
+    "ivp_method",
+    "resolve_method",
+    "verlet_row",
     "work_precision",
 ]
 
@@ -302,55 +311,108 @@ def _damping(sc: WPScene):
     return C
 
 
-def _ivp_rows(sc: WPScene, truth: GroundTruth, methods, rtols) -> list[dict]:
-    rows = []
+def _ivp_row(sc: WPScene, truth: GroundTruth, method, rtol: float) -> dict:
+    """One solve_ivp point: ``method`` (a name or an OdeSolver subclass) at ``rtol``."""
     C = _damping(sc)
-    for method in methods:
-        for rtol in rtols:
+    name = method if isinstance(method, str) else method.__name__
 
-            def run(method=method, rtol=rtol, dense=False):
-                return integrate_impact(
-                    sc.potential, sc.m, sc.v0, C=C, method=method, rtol=rtol, dense_output=dense
-                )
+    def run(dense=False):
+        return integrate_impact(
+            sc.potential, sc.m, sc.v0, C=C, method=method, rtol=rtol, dense_output=dense
+        )
 
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    res = run(dense=True)
-                    q = np.asarray(res.sol(truth.t_samples))[0] if res.sol is not None else np.nan
-                    secs = _median_time(run)
-            except Exception as exc:  # a method that fails at this tolerance is a data point
-                rows.append(
-                    {
-                        "scene": sc.name,
-                        "method": method,
-                        "setting": f"rtol={rtol:g}",
-                        "seconds": math.nan,
-                        "failure": str(exc).splitlines()[0],
-                    }
-                )
-                continue
-            rows.append(
-                _row(
-                    sc,
-                    method,
-                    f"rtol={rtol:g}",
-                    secs,
-                    truth,
-                    res.contact_time,
-                    res.restitution,
-                    res.q_max,
-                    q,
-                )
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = run(dense=True)
+            q = np.asarray(res.sol(truth.t_samples))[0] if res.sol is not None else np.nan
+            secs = _median_time(run)
+    except Exception as exc:  # a method that fails at this tolerance is a data point
+        return {
+            "scene": sc.name,
+            "method": name,
+            "setting": f"rtol={rtol:g}",
+            "seconds": math.nan,
+            "failure": str(exc).splitlines()[0],
+        }
+    return _row(
+        sc, name, f"rtol={rtol:g}", secs, truth, res.contact_time, res.restitution, res.q_max, q
+    )
+
+
+@dataclass(frozen=True)
+class Method:
+    """A method of the study: its name, the settings it is run at, and how one point runs.
+
+    ``run(scene, truth, setting) -> dict`` returns one row (`_row`'s fields, or
+    ``failure``); ``settings`` are the full study's, ``quick_settings`` those of
+    ``hcv report --quick``. ``applies(scene)`` says whether the scene asks for it.
+    """
+
+    name: str
+    run: Callable[[WPScene, GroundTruth, object], dict]
+    settings: tuple
+    quick_settings: tuple
+    applies: Callable[[WPScene], bool] = lambda sc: True
+
+
+def ivp_method(method) -> Method:
+    """A `Method` for a solve_ivp method: a name of `IVP_METHODS` or, as scipy accepts,
+    a user's ``scipy.integrate.OdeSolver`` subclass (named by its class name)."""
+    name = method if isinstance(method, str) else getattr(method, "__name__", repr(method))
+    return Method(
+        name,
+        lambda sc, truth, rtol: _ivp_row(sc, truth, method, rtol),
+        IVP_RTOLS,
+        IVP_RTOLS[::2],
+        lambda sc: sc.ivp_methods is None or name in sc.ivp_methods,
+    )
+
+
+def _verlet_method() -> Method:
+    return Method(
+        "Verlet",
+        lambda sc, truth, n: verlet_row(sc, truth, n),
+        VERLET_STEPS,
+        VERLET_STEPS[::2],
+        lambda sc: sc.verlet,
+    )
+
+
+# name -> Method: the study's registry (`resolve_method` also takes a Method or an
+# OdeSolver subclass, so a user's integrator joins without an edit here).
+METHODS: dict[str, Method] = {m: ivp_method(m) for m in IVP_METHODS}
+METHODS["Verlet"] = _verlet_method()
+# What ``hcv report`` runs (quick: the two explicit Runge-Kutta pairs and Verlet).
+DEFAULT_METHODS = (*IVP_METHODS, "Verlet")
+QUICK_METHODS = ("DOP853", "RK45", "Verlet")
+
+
+def resolve_method(method) -> Method:
+    """A `Method` from a registered name, a `Method`, or an OdeSolver subclass."""
+    from scipy.integrate import OdeSolver
+
+    if isinstance(method, Method):
+        return method
+    if isinstance(method, str):
+        if method not in METHODS:
+            raise HCVInputError(
+                f"work_precision: unknown method {method!r}; known: {', '.join(METHODS)}, "
+                "or pass a scipy.integrate.OdeSolver subclass or a Method"
             )
-    return rows
+        return METHODS[method]
+    if isinstance(method, type) and issubclass(method, OdeSolver):
+        return ivp_method(method)
+    raise HCVInputError(
+        f"work_precision: a method must be a name, a Method or an OdeSolver subclass, got {method!r}"
+    )
 
 
 def work_precision(
     scenes=None,
     *,
     quick: bool = False,
-    verlet: Callable | None = None,
+    methods=None,
     progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
     """Run the study and return one row per (scene, method, setting).
@@ -361,25 +423,57 @@ def work_precision(
         Defaults to `default_scenes`.
     quick : bool
         Fewer tolerances and methods (for ``hcv report --quick``).
-    verlet : callable, optional
-        ``verlet(scene, truth, steps_per_contact) -> row dict`` adding velocity
-        Verlet points (provided by the report, which owns the Verlet engine).
+    methods : sequence, optional
+        Names in `METHODS`, `Method` objects, or ``scipy.integrate.OdeSolver``
+        subclasses; None runs `DEFAULT_METHODS` (`QUICK_METHODS` when quick). The
+        exact solver is always the first row of each scene.
     progress : callable, optional
         Called with a short description before each scene.
     """
     scenes = default_scenes() if scenes is None else scenes
-    methods = ("DOP853", "RK45") if quick else IVP_METHODS
-    rtols = IVP_RTOLS[::2] if quick else IVP_RTOLS
-    steps = VERLET_STEPS[::2] if quick else VERLET_STEPS
+    if methods is None:
+        methods = QUICK_METHODS if quick else DEFAULT_METHODS
+    resolved = [resolve_method(m) for m in methods]
     rows: list[dict] = []
     for sc in scenes:
         if progress:
             progress(f"work-precision: {sc.name}")
         truth = ground_truth(sc)
         rows += _exact_rows(sc, truth)
-        meth = methods if sc.ivp_methods is None else [x for x in methods if x in sc.ivp_methods]
-        rows += _ivp_rows(sc, truth, meth, rtols)
-        if verlet is not None and sc.verlet:
-            for n in steps:
-                rows.append(verlet(sc, truth, n))
+        for meth in resolved:
+            if not meth.applies(sc):
+                continue
+            for setting in meth.quick_settings if quick else meth.settings:
+                rows.append(meth.run(sc, truth, setting))
     return pd.DataFrame(rows)
+
+
+# Step budget of one run, in multiples of the requested steps per contact, plus a
+# constant: damping lengthens the contact by at most ~2.3 (zeta <= 0.9).
+_BUDGET_FACTOR = 4
+_BUDGET_EXTRA = 64
+
+
+def verlet_row(sc, truth, steps_per_contact: int) -> dict:
+    """Work-precision row of velocity Verlet with dt = t_contact / steps_per_contact.
+
+    The callback `reference_impl.studies.workprecision.work_precision` expects: errors
+    against the mpmath ``truth`` and the median wall time of a whole impact.
+    """
+    dt = truth.contact_time / steps_per_contact
+    budget = _BUDGET_FACTOR * steps_per_contact + _BUDGET_EXTRA
+    path = verlet_impact(sc.potential, sc.m, sc.v0, sc.zeta, dt, budget)
+    secs = _median_time(lambda: verlet_impact(sc.potential, sc.m, sc.v0, sc.zeta, dt, budget))
+    q = path.q(truth.t_samples)
+    err_traj = float(np.max(np.abs(q - truth.q_samples))) / truth.max_penetration
+    return {
+        "scene": sc.name,
+        "method": "Verlet",
+        "setting": f"{steps_per_contact} steps/contact",
+        "seconds": secs,
+        "err_contact_time": _rel(path.contact_time, truth.contact_time),
+        "err_restitution": _rel(path.restitution, truth.restitution),
+        "err_max_penetration": _rel(path.max_penetration, truth.max_penetration),
+        "err_trajectory": err_traj if math.isfinite(err_traj) else math.nan,
+        "dt": dt,
+    }

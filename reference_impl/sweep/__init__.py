@@ -1,9 +1,10 @@
-"""Parameter sweeps on Dask: ``hcv sweep`` and the `run_cases` engine other modules reuse.
+"""Parameter sweeps on Dask: the `run_cases` engine (``hcv sweep`` is `reference_impl.cli.sweep`).
 
 A sweep spec (TOML: ``task``, a ``[scene]``, a ``[sweep]`` table of dotted paths
 to lists) expands into the Cartesian product of cases (`load_spec`); each case
 is a pure task keyed by a hash of its parameters, run on a local cluster of
-processes or an existing Dask scheduler (`run_sweep`, `run_cases`). Dask is the
+processes or an existing Dask scheduler (`run_cases`; `reference_impl.cli.sweep.run_sweep`
+runs a whole spec). Dask is the
 ``sweep`` extra; `run_cases` falls back to serial in-process runs without it.
 """
 
@@ -20,7 +21,6 @@ from reference_impl.sweep._spec import (
     spec_from_dict,
 )
 from reference_impl.sweep._tasks import CaseTimeout, check_deadline, run_case
-from reference_impl.sweep.command import add_parser, run, run_sweep
 
 __all__ = [
     "DEFAULT_TIMEOUT",
@@ -31,7 +31,6 @@ __all__ = [
     "Outcome",
     "SweepSpec",
     "SweepSpecError",
-    "add_parser",
     "check_deadline",
     "dask_available",
     "dt_crit_map_on_cluster",
@@ -39,9 +38,7 @@ __all__ = [
     "load_spec",
     "open_client",
     "parse_spec",
-    "run",
     "run_case",
     "run_cases",
-    "run_sweep",
     "spec_from_dict",
 ]

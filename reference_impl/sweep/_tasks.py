@@ -79,7 +79,7 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
     """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
-    from reference_impl.stability.search import search_loaded_scene
+    from reference_impl.tasks import search_loaded_scene
 
     # An empty criterion text in a spec means the default, as an absent one.
     results = search_loaded_scene(scene, criterion or None, check_deadline)
@@ -87,8 +87,8 @@ def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
 
 
 def _solve_rows(scene) -> list[dict]:
-    """As ``hcv solve --json``: one row per speed of `reference_impl.cli.solve_scene`."""
-    from reference_impl.cli import solve_scene
+    """As ``hcv solve --json``: one row per speed of `reference_impl.tasks.solve_scene`."""
+    from reference_impl.tasks import solve_scene
 
     rows = []
     for v0 in scene.velocities:

@@ -191,6 +191,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     add_bench_parser(sub)
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
-    from reference_impl.cli import run_command
+    from reference_impl.cli._run import run_command
 
     return run_command(args)

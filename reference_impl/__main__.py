@@ -1,0 +1,7 @@
+"""``python -m reference_impl``: the ``hcv`` command."""
+
+import sys
+
+from reference_impl.cli import main
+
+sys.exit(main())

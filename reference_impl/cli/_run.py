@@ -1,0 +1,43 @@
+"""How every ``hcv`` command ends: its exit statuses and the one-line error contract."""
+
+from __future__ import annotations
+
+import sys
+
+from reference_impl.errors import HCVInputError
+
+__all__ = ["EXIT_FAIL", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "run_command"]
+
+# Exit statuses (shared with `hcv bench --gate`, which adds 3: our reference failed).
+EXIT_OK = 0
+EXIT_FAIL = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def run_command(args) -> int:
+    """Run a parsed command; every way out is one line on stderr and an exit status."""
+    try:
+        return args.func(args)
+    except HCVInputError as exc:
+        print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("hcv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (RecursionError, OverflowError, MemoryError) as exc:
+        # Sizes are bounded before work starts; this is the backstop for an input that
+        # still exhausts a limit (nesting, float range, memory).
+        print(
+            f"hcv: error: the input is too large or too deeply nested ({type(exc).__name__})",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
+    except BrokenPipeError:
+        # Output piped into e.g. `head`: stop quietly, as Unix tools do.
+        sys.stderr.close()
+        return EXIT_OK

@@ -1,0 +1,97 @@
+"""What a command or a sweep case runs: one place from a loaded scene to its results.
+
+``hcv solve`` and the sweep's ``solve`` task both call `solve_scene`; ``hcv dt-crit`` and
+the sweep's ``dt-crit`` task both call `search_loaded_scene`, so a scene gives the same
+result whichever way it is run.
+"""
+
+from __future__ import annotations
+
+import math
+
+from reference_impl.stability.result import DtCritResult
+
+__all__ = ["search_loaded_scene", "solve_scene"]
+
+
+def solve_scene(scene) -> list[dict]:
+    """Solve every velocity of an impact scene exactly; one dict per velocity.
+
+    Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
+    dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
+    geometry, contact_time and restitution (end at q = 0, the theory's
+    definition; with zeta >= 1 and a leading exponent >= 2 the body never returns
+    to q = 0: contact_time is then None and returns_to_q0 False, an exact answer,
+    not a failure), contact_time_zero_force and restitution_zero_force (end when
+    the total force vanishes, as in codes that forbid tension), action J(E) and
+    period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
+    """
+    from reference_impl.theory.action import action, period
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.stability.bound import dt_safe
+
+    zeta = scene.zeta or 0.0
+    rows = []
+    for v0 in scene.velocities:
+        sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+        safe = dt_safe(scene.potential, scene.mass, v0)
+        E = 0.5 * scene.mass * v0 * v0
+        rows.append(
+            {
+                "v0": v0,
+                "zeta": zeta,
+                "max_penetration": sol.max_penetration,
+                "max_force": sol.max_force,
+                "dt_safe": safe.dt_safe,
+                "dt_safe_shortcut": safe.dt_shortcut,
+                "dt_safe_at_q": safe.q_star,
+                "geometry": safe.geometry,
+                # inf is the theory's answer for an overdamped contact that creeps back
+                # forever; it is written as an absence (null), not as a number.
+                "contact_time": sol.contact_time if math.isfinite(sol.contact_time) else None,
+                "returns_to_q0": math.isfinite(sol.contact_time),
+                "restitution": sol.restitution,
+                "contact_time_zero_force": sol.contact_time_zero_force,
+                "restitution_zero_force": sol.restitution_zero_force,
+                "action": action(scene.potential, scene.mass, E),
+                "period": period(scene.potential, scene.mass, E),
+                "quadrature_error": sol.quadrature_error,
+            }
+        )
+    return rows
+
+
+
+def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> list[DtCritResult]:
+    """`search_scene` on a loaded scene: its gap, its universal damping, a criterion text.
+
+    The one place where a scene file becomes a search, shared by ``hcv dt-crit`` and
+    the sweep's ``dt-crit`` task, so both give the same result for the same scene.
+
+    Parameters
+    ----------
+    scene : reference_impl.scenes.Scene
+        A validated scene.
+    criterion : str, optional
+        ``--criterion`` text (`parse_criterion`; an empty text is refused); None for the
+        scene kind's default criterion.
+    progress : callable, optional
+        As for `search_scene`.
+    """
+    from reference_impl.stability.search import default_criterion, parse_criterion, search_scene
+
+    crit = (
+        parse_criterion(criterion, scene.kind)
+        if criterion is not None
+        else default_criterion(scene.kind)
+    )
+    return search_scene(
+        scene.potential,
+        scene.mass,
+        scene.velocities,
+        scene.kind,
+        gap=scene.gap,
+        zeta=scene.zeta if scene.damping_law == "universal" else None,
+        criterion=crit,
+        progress=progress,
+    )

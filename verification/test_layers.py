@@ -1,0 +1,226 @@
+"""The package's shape: layers import only downward, and no module imports itself back.
+
+Every import of ``reference_impl`` is read from the source (AST), deferred imports inside
+functions included, and checked against the layer order below; a cycle between modules
+(or between the rooms of one layer) fails too. ``test_planted_violation_is_caught`` runs the
+same checker on a small package made in a temporary directory, so the check can fail.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = "reference_impl"
+ROOT = Path(__file__).resolve().parent.parent / PKG
+
+# Bottom to top. A room (a top-level module or sub-package of reference_impl) may import
+# rooms of lower layers and itself, never a room of a higher layer or another room of its
+# own layer. The package face (reference_impl/__init__.py) re-exports public names and is
+# the only file above every layer.
+LAYERS: tuple[frozenset[str], ...] = tuple(
+    frozenset(x)
+    for x in (
+        {"errors", "provenance", "_format", "_jit"},
+        {"potentials"},
+        {"theory"},
+        {"integrators"},
+        {"exact"},
+        {"stability"},
+        {"scenes"},
+        {"tasks"},
+        {"studies"},
+        {"claims"},
+        {"adapters"},
+        {"bench"},
+        {"sweep"},
+        {"report"},
+        {"cli", "pytest_plugin"},
+    )
+)
+
+
+def _module_name(path: Path, root: Path, pkg: str) -> str:
+    parts = [pkg, *path.relative_to(root).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules(root: Path, pkg: str) -> dict[str, Path]:
+    return {_module_name(p, root, pkg): p for p in sorted(root.rglob("*.py"))}
+
+
+def _resolve(name: str, modules: dict[str, Path]) -> str | None:
+    """The longest known module that ``name`` (a dotted import target) lies in."""
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        cand = ".".join(parts[:i])
+        if cand in modules:
+            return cand
+    return None
+
+
+def import_edges(root: Path, pkg: str = PKG) -> list[tuple[str, str, int]]:
+    """(importer, imported, line) for every import of ``pkg`` inside it, deferred ones too."""
+    modules = _modules(root, pkg)
+    edges = []
+    for mod, path in modules.items():
+        is_pkg = path.name == "__init__.py"
+        base = mod.split(".") if is_pkg else mod.split(".")[:-1]
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    up = base[: len(base) - (node.level - 1)] if node.level > 1 else base
+                    head = ".".join(up + ([node.module] if node.module else []))
+                else:
+                    head = node.module or ""
+                # `from a.b import c` may name the module a.b.c or a name defined in a.b
+                targets = [f"{head}.{a.name}" for a in node.names]
+            for t in targets:
+                if t == pkg or t.startswith(pkg + "."):
+                    hit = _resolve(t, modules)
+                    if hit and hit != mod:
+                        edges.append((mod, hit, node.lineno))
+    return edges
+
+
+def _room(mod: str, pkg: str) -> str | None:
+    parts = mod.split(".")
+    return parts[1] if len(parts) > 1 else None  # None: the package face
+
+
+def _layer(room: str, layers) -> int:
+    for i, layer in enumerate(layers):
+        if room in layer:
+            return i
+    raise KeyError(room)
+
+
+def _cycles(edges) -> list[list[str]]:
+    """Strongly connected components with more than one member (Tarjan, iterative)."""
+    graph: dict[str, set[str]] = {}
+    for a, b, _ in edges:
+        graph.setdefault(a, set()).add(b)
+        graph.setdefault(b, set())
+    index, low, on, stack, out, counter = {}, {}, set(), [], [], [0]
+    for start in graph:
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = counter[0]
+        counter[0] += 1
+        stack.append(start)
+        on.add(start)
+        while work:
+            v, it = work[-1]
+            for w in it:
+                if w not in index:
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    if len(comp) > 1:
+                        out.append(sorted(comp))
+    return out
+
+
+def violations(root: Path, pkg: str = PKG, layers=LAYERS) -> list[str]:
+    """Every upward import, unknown room and cycle, as one readable line each."""
+    edges = import_edges(root, pkg)
+    problems = []
+    for a, b, line in edges:
+        ra, rb = _room(a, pkg), _room(b, pkg)
+        if ra is None or a.endswith(".__main__"):
+            continue  # the package face re-exports from every layer; __main__ is an entry point
+        if rb is None:
+            problems.append(f"{a}:{line} imports the package face {pkg}; import the module")
+            continue
+        try:
+            la, lb = _layer(ra, layers), _layer(rb, layers)
+        except KeyError as exc:
+            problems.append(f"{a}:{line}: room {exc.args[0]!r} is in no layer of test_layers.py")
+            continue
+        if ra != rb and lb >= la:
+            problems.append(
+                f"{a}:{line} imports {b}: layer {lb} ({rb}) is not below layer {la} ({ra})"
+            )
+    for comp in _cycles(edges):
+        problems.append("module cycle: " + " -> ".join(comp))
+    room_edges = [
+        (_room(a, pkg), _room(b, pkg), 0)
+        for a, b, _ in edges
+        if _room(a, pkg) and _room(b, pkg) and _room(a, pkg) != _room(b, pkg)
+        and not a.endswith(".__main__")
+    ]
+    for comp in _cycles(room_edges):
+        problems.append("package cycle: " + " -> ".join(comp))
+    return problems
+
+
+def test_every_room_has_a_layer():
+    rooms = {p.stem if p.is_file() else p.name for p in ROOT.iterdir()}
+    rooms = {r for r in rooms if r not in {"__init__", "__main__", "__pycache__"}}
+    rooms = {r for r in rooms if (ROOT / r).is_dir() or (ROOT / f"{r}.py").is_file()}
+    known = set().union(*LAYERS)
+    assert rooms <= known, f"got rooms {sorted(rooms - known)} outside every layer, should be in one"
+
+
+def test_imports_run_only_downward_and_never_in_a_circle():
+    problems = violations(ROOT)
+    assert not problems, "got upward imports or cycles, should be none:\n" + "\n".join(problems)
+
+
+def _write(root: Path, rel: str, text: str) -> None:
+    p = root / rel
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(text)
+
+
+@pytest.mark.parametrize(
+    "planted, expect",
+    [
+        # a potential importing the exact solver (deferred, inside a function)
+        ("def f():\n    from pkg.exact import solve\n", "is not below"),
+        # a module importing the package face
+        ("import pkg\n", "package face"),
+    ],
+)
+def test_planted_violation_is_caught(tmp_path, planted, expect):
+    root = tmp_path / "pkg"
+    _write(root, "__init__.py", "")
+    _write(root, "potentials/__init__.py", "")
+    _write(root, "exact/__init__.py", "")
+    _write(root, "exact/solve.py", "from pkg.potentials import base\n")
+    _write(root, "potentials/base.py", planted)
+    layers = (frozenset({"potentials"}), frozenset({"exact"}))
+    problems = violations(root, "pkg", layers)
+    assert any(expect in p for p in problems), f"got {problems}, should name {expect!r}"
+
+
+def test_planted_cycle_is_caught(tmp_path):
+    root = tmp_path / "pkg"
+    _write(root, "__init__.py", "")
+    _write(root, "a.py", "from . import b\n")
+    _write(root, "b.py", "def f():\n    from .a import x\n")
+    problems = violations(root, "pkg", (frozenset({"a", "b"}),))
+    assert any(p.startswith("module cycle") for p in problems), f"got {problems}"
