@@ -349,7 +349,7 @@ def test_protocol_documents_u_of_every_family_with_units():
     import re
     from pathlib import Path
 
-    from reference_impl.scenes._scene import _FAMILIES
+    from reference_impl.potentials import FAMILIES as _FAMILIES
 
     doc = (Path(__file__).resolve().parents[1] / "docs" / "adapter-protocol.md").read_text()
     rows = dict(re.findall(r"^\| `([a-z]+)` \| ([^\n]*)$", doc, re.M))

@@ -17,6 +17,7 @@ import numpy as np
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce
 from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["SCENE_IMPACT", "SCENE_WALLS", "STATUS_NAMES", "SaturatingForce", "kernel_terms"]
@@ -49,60 +50,6 @@ _FAM_POWER = 0  # (k, p, 1 / (p + 1), -)
 _FAM_CAP = 1  # (c0 = pi b c / a^2, a, Kn, alpha)
 _FAM_SATURATING = 2  # (F0, q_s, -, -)
 _N_PAR = 4
-# Below this x = q/q_s the saturating energy q_s F0 (x - atan x) is taken from
-# its series, because the difference loses all digits as x -> 0.
-_SAT_SERIES_X = 1e-2
-
-
-class SaturatingForce(Potential):
-    """Stiffening-then-softening contact, U'(q) = F0 x^2 / (1 + x^2), x = q / q_s.
-
-    U'/sqrt(2U) vanishes at q -> 0 (U ~ x^3) and as q -> infinity (U' -> F0), so
-    its supremum along a long enough path is interior: the third geometry class
-    of section 6. With F0 = 1 N and q_s = 1 m this is U'(q) = q^2 / (1 + q^2).
-
-    Parameters
-    ----------
-    F0 : float
-        Saturation force (N, > 0).
-    q_s : float
-        Crossover overlap (m, > 0).
-    """
-
-    leading_exponent = 3.0
-
-    def __init__(self, F0: float = 1.0, q_s: float = 1.0):
-        if not (math.isfinite(F0) and F0 > 0 and math.isfinite(q_s) and q_s > 0):
-            raise HCVInputError(
-                f"SaturatingForce needs F0 > 0 and q_s > 0, got F0={F0!r}, q_s={q_s!r}"
-            )
-        self.F0, self.q_s = float(F0), float(q_s)
-        self.q_scale = self.q_s
-
-    def _U(self, q):
-        ns = self._ns(q)
-        x = q / self.q_s
-        if ns is np:
-            x = np.asarray(x, dtype=float)
-            series = x**3 / 3 - x**5 / 5 + x**7 / 7
-            with np.errstate(invalid="ignore"):
-                exact = x - np.arctan(x)
-            return self.F0 * self.q_s * np.where(x < _SAT_SERIES_X, series, exact)
-        return self.F0 * self.q_s * (x - ns.atan(x))
-
-    def _dU(self, q):
-        x = q / self.q_s
-        return self.F0 * x**2 / (1 + x**2)
-
-    def _d2U(self, q):
-        x = q / self.q_s
-        return self.F0 / self.q_s * 2 * x / (1 + x**2) ** 2
-
-    def params(self) -> dict:
-        return {"F0": self.F0, "q_s": self.q_s}
-
-    def __repr__(self) -> str:
-        return f"SaturatingForce(F0={self.F0!r}, q_s={self.q_s!r})"
 
 
 def kernel_terms(pot: Potential) -> tuple[np.ndarray, np.ndarray] | None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from typing import Any
+from typing import Any, ClassVar
 
 import mpmath
 import numpy as np
@@ -61,6 +61,13 @@ class Potential(ABC):
     5. Set ``q_scale`` (metres), a typical overlap, used as the starting point of
        bracket searches.
     6. Implement ``params()`` returning the defining parameters as a dict.
+    7. To be a scene family (``[potential] family = NAME``), set ``family`` (NAME),
+       ``scene_keys`` ((required, optional) keys of its table) and ``label`` (one
+       line naming the law, with units), and decorate the class with
+       `reference_impl.potentials.register_family`. The default ``from_scene``
+       passes each key, read as a positive finite number, to the constructor by
+       name; ``scene_params`` (default ``params()``) is the table it writes back.
+       Override both when the table holds other kinds of value.
 
     The public methods ``U``, ``dU``, ``d2U`` validate the input (NaN, q < 0,
     q > q_sup) and then call the hooks. The float64 hooks must be accurate to
@@ -78,6 +85,10 @@ class Potential(ABC):
     leading_coefficient: float | None = None
     q_sup: float = math.inf
     q_scale: float = 1.0
+    # Scene family (contract item 7): its name, (required, optional) keys, a label.
+    family: ClassVar[str | None] = None
+    scene_keys: ClassVar[tuple[tuple[str, ...], tuple[str, ...]]] = ((), ())
+    label: ClassVar[str] = ""
 
     # -- hooks ------------------------------------------------------------
     @abstractmethod
@@ -98,6 +109,23 @@ class Potential(ABC):
 
     def _inverse(self, u: np.ndarray) -> np.ndarray:
         return self._numeric_inverse(u)
+
+    # -- scene family (contract item 7) -------------------------------------
+    @classmethod
+    def from_scene(cls, read) -> Potential:
+        """The potential of one scene table; ``read`` validates each value.
+
+        ``read`` is the scene parser's reader (duck-typed): ``read.has(key)``,
+        ``read.number(key)`` (a finite number > 0), ``read.text(key)`` (a bounded
+        string), ``read.numbers(key)`` (a bounded table of finite numbers) and
+        ``read.potentials(key)`` (an array of nested potential tables).
+        """
+        required, optional = cls.scene_keys
+        return cls(**{k: read.number(k) for k in (*required, *optional) if read.has(k)})
+
+    def scene_params(self) -> dict[str, Any]:
+        """The family's scene table (without ``family``), accepted back by `from_scene`."""
+        return self.params()
 
     # -- helpers for implementers ------------------------------------------
     @staticmethod
@@ -329,9 +357,15 @@ def _safeguarded_log_newton(pot: Potential, target, lo, hi, guess):
 class SumPotential(Potential):
     """Sum of potentials, U = sum_i U_i (built with ``+``).
 
+    Scene family ``sum``: ``terms`` is an array of two or more potential tables.
+
     Each term must satisfy the contract; the sum inherits the smallest domain
     and the smallest leading exponent (the lowest power dominates as q -> 0).
     """
+
+    family = "sum"
+    scene_keys = (("terms",), ())
+    label = "sum of potentials U = U_1 + U_2 + ..."
 
     def __init__(self, *terms: Potential):
         if len(terms) < 2 or not all(isinstance(t, Potential) for t in terms):
@@ -354,6 +388,15 @@ class SumPotential(Potential):
 
     def params(self) -> dict[str, Any]:
         return {"terms": [dict(family=type(t).__name__, **t.params()) for t in self.terms]}
+
+    @classmethod
+    def from_scene(cls, read) -> Potential:
+        return cls(*read.potentials("terms"))
+
+    def scene_params(self) -> dict[str, Any]:
+        return {
+            "terms": [{"family": t.family or type(t).__name__, **t.scene_params()} for t in self.terms]
+        }
 
     def __repr__(self) -> str:
         return " + ".join(repr(t) for t in self.terms)

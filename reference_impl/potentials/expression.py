@@ -37,6 +37,7 @@ from reference_impl.potentials._near_zero import (
     strip_abs,
     time_limit,
 )
+from reference_impl.potentials._families import register_family
 from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -106,6 +107,7 @@ def _mp_probe(func, probe: str):
         return +value if isinstance(value, (mpmath.mpf, mpmath.mpc)) else mpmath.mpf(value)
 
 
+@register_family
 class Expression(Potential):
     """Contact potential given as a formula in the overlap ``q``.
 
@@ -178,6 +180,10 @@ class Expression(Potential):
     >>> U.dU(0.5)
     1.0
     """
+
+    family = "expression"
+    scene_keys = (("U",), ("params",))
+    label = "user expression U(q) in J (whitelisted formula, parameters in [potential.params])"
 
     def __init__(self, source: str, **params: float):
         _check_inputs(source, params)
@@ -571,6 +577,11 @@ class Expression(Potential):
     # -- description ------------------------------------------------------------
     def params(self) -> dict[str, Any]:
         return {"U": self.source, "params": dict(self._params)}
+
+    @classmethod
+    def from_scene(cls, read) -> Expression:
+        params = read.numbers("params") if read.has("params") else {}
+        return cls(read.text("U"), **params)
 
     def __repr__(self) -> str:
         extra = "".join(f", {k}={v!r}" for k, v in self._params.items())

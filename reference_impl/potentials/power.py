@@ -12,11 +12,13 @@ from typing import Any
 import numpy as np
 
 from reference_impl.potentials._checks import positive
+from reference_impl.potentials._families import register_family
 from reference_impl.potentials.base import Potential
 
 __all__ = ["PowerLaw"]
 
 
+@register_family
 class PowerLaw(Potential):
     """Power-law potential U(q) = k q^(p+1) / (p+1), force U'(q) = k q^p.
 
@@ -27,6 +29,10 @@ class PowerLaw(Potential):
     p : float
         Force exponent (> 0): 1 linear, 1.5 Hertz, < 1 softening.
     """
+
+    family = "power"
+    scene_keys = (("k", "p"), ())
+    label = "power law U' = k q^p (k in N/m^p; p the force exponent, Hertz 1.5)"
 
     def __init__(self, k: float, p: float):
         self.k = positive("k", k, "PowerLaw")

@@ -18,6 +18,7 @@ import math
 from typing import Any
 
 from reference_impl.potentials._checks import positive
+from reference_impl.potentials._families import register_family
 from reference_impl.potentials.base import Potential
 
 __all__ = ["Ellipsoid", "Sphere"]
@@ -68,6 +69,7 @@ class _VolumetricCap(Potential):
         return self.Kn * self.volume(q) ** self.alpha * (self.alpha * s2_over_v + dS)
 
 
+@register_family
 class Ellipsoid(_VolumetricCap):
     """Ellipsoid with semi-axes (a, b, c) hitting a flat wall along its a-axis.
 
@@ -80,6 +82,10 @@ class Ellipsoid(_VolumetricCap):
     alpha : float
         Regularisation exponent (> 0); 0.5 gives U ~ delta^3 near onset.
     """
+
+    family = "ellipsoid"
+    scene_keys = (("a", "b", "c", "Kn"), ("alpha",))
+    label = "volumetric ellipsoid cap U = Kn V^(alpha+1) / (alpha+1) (a, b, c in m)"
 
     def __init__(self, a: float, b: float, c: float, Kn: float, alpha: float = 0.5):
         self.a = positive("a", a, "Ellipsoid")
@@ -94,6 +100,7 @@ class Ellipsoid(_VolumetricCap):
         return f"Ellipsoid(a={self.a!r}, b={self.b!r}, c={self.c!r}, Kn={self.Kn!r}, alpha={self.alpha!r})"
 
 
+@register_family
 class Sphere(_VolumetricCap):
     """Sphere of radius R hitting a flat wall (spherical-cap overlap volume).
 
@@ -106,6 +113,10 @@ class Sphere(_VolumetricCap):
     alpha : float
         Regularisation exponent (> 0).
     """
+
+    family = "sphere"
+    scene_keys = (("R", "Kn"), ("alpha",))
+    label = "volumetric sphere cap U = Kn V^(alpha+1) / (alpha+1) (R in m; not a Hertz sphere)"
 
     def __init__(self, R: float, Kn: float, alpha: float = 0.5):
         self.R = positive("R", R, "Sphere")

@@ -45,12 +45,13 @@ def settings_text(quick: bool) -> str:
 # Scene left out by --quick (its damped twin, the ellipsoid and the other families remain).
 QUICK_SKIP = ("hertz",)
 # Potential family of a scene, by the class of its potential.
+# The study's scene of each family, by the family's scene name (`Potential.family`).
 FAMILY_NAMES = {
-    "PowerLaw": "power law (Hertz)",
-    "Ellipsoid": "ellipsoid (paper)",
-    "Sphere": "sphere",
-    "SumPotential": "sum of power laws",
-    "Expression": "user expression",
+    "power": "power law (Hertz)",
+    "ellipsoid": "ellipsoid (paper)",
+    "sphere": "sphere",
+    "sum": "sum of power laws",
+    "expression": "user expression",
 }
 # The DOP853 tolerance the per-family summary quotes (the row whose rtol is nearest in log).
 SUMMARY_RTOL = 1e-12
@@ -59,7 +60,7 @@ SUMMARY_RTOL = 1e-12
 def scene_families() -> dict[str, str]:
     """{scene name: family label} for `default_scenes`."""
     return {
-        s.name: FAMILY_NAMES.get(type(s.potential).__name__, type(s.potential).__name__)
+        s.name: FAMILY_NAMES.get(s.potential.family, s.potential.label or type(s.potential).__name__)
         for s in default_scenes()
     }
 

@@ -8,7 +8,7 @@ A scene is a small TOML document::
     kind = "impact"                 # "impact" | "two-sided" | "two-walls"
     # gap = 0.01                    # m, two-walls only: free-flight gap between the walls
     [potential]
-    family = "ellipsoid"            # power | ellipsoid | sphere | expression | sum
+    family = "ellipsoid"            # power | ellipsoid | sphere | expression | sum | saturating
     a = 0.015
     b = 0.008
     c = 0.008
@@ -37,7 +37,7 @@ from typing import Any
 
 from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
-from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+from reference_impl.potentials import FAMILIES, Potential
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
 
@@ -58,16 +58,6 @@ _KINDS = ("impact", "two-sided", "two-walls")
 _LAWS = ("none", "universal")
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
 _DAMPING_KEYS = ("law", "zeta", "restitution", "C0", "K", "M")
-# family -> (required keys, optional keys), besides "family" itself.
-_FAMILIES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "power": (("k", "p"), ()),
-    "ellipsoid": (("a", "b", "c", "Kn"), ("alpha",)),
-    "sphere": (("R", "Kn"), ("alpha",)),
-    "expression": (("U",), ("params",)),
-    "sum": (("terms",), ()),
-}
-
-
 @dataclass(frozen=True)
 class Scene:
     """One validated scene.
@@ -129,11 +119,8 @@ class Scene:
 
 
 def potential_to_dict(pot: Potential) -> dict[str, Any]:
-    """A potential as a ``[potential]`` table of the scene schema."""
-    if isinstance(pot, SumPotential):
-        return {"family": "sum", "terms": [potential_to_dict(t) for t in pot.terms]}
-    family = {PowerLaw: "power", Ellipsoid: "ellipsoid", Sphere: "sphere", Expression: "expression"}
-    return {"family": family.get(type(pot), type(pot).__name__), **pot.params()}
+    """A potential as a ``[potential]`` table of the scene schema (its family's own)."""
+    return {"family": pot.family or type(pot).__name__, **pot.scene_params()}
 
 
 class _Where:
@@ -209,39 +196,61 @@ def _table(err: _Where, value, name: str) -> dict:
     return value
 
 
+class _Reader:
+    """What a family's ``from_scene`` reads its table with: each value checked, bounded,
+    and named by its scene path in the one-line error."""
+
+    def __init__(self, err: _Where, table: dict, path: str, depth: int):
+        self._err, self._table, self._path, self._depth = err, table, path, depth
+
+    def has(self, key: str) -> bool:
+        return key in self._table
+
+    def number(self, key: str) -> float:
+        return _number(self._err, self._table[key], f"{self._path}.{key}", low=0.0)
+
+    def text(self, key: str) -> str:
+        return _string(
+            self._err, self._table[key], f"{self._path}.{key}", max_chars=_MAX_EXPRESSION_CHARS
+        )
+
+    def numbers(self, key: str) -> dict[str, float]:
+        name = f"{self._path}.{key}"
+        table = _table(self._err, self._table[key], name)
+        if len(table) > _MAX_PARAMS:
+            raise self._err(f"{name} has {len(table)} entries; at most {_MAX_PARAMS}")
+        return {k: _number(self._err, v, f"{name}.{k}") for k, v in table.items()}
+
+    def potentials(self, key: str) -> list[Potential]:
+        name = f"{self._path}.{key}"
+        items = self._table[key]
+        if not isinstance(items, list) or not 2 <= len(items) <= _MAX_TERMS:
+            raise self._err(
+                f"{name} must be an array of at least two (at most {_MAX_TERMS}) "
+                "potential tables"
+            )
+        return [
+            _potential(self._err, item, f"{name}[{i}]", self._depth + 1)
+            for i, item in enumerate(items)
+        ]
+
+
 def _potential(err: _Where, table, path: str, depth: int = 0) -> Potential:
-    """Build the potential of one ``[potential]`` (or ``[[potential.terms]]``) table."""
+    """Build the potential of one ``[potential]`` (or ``[[potential.terms]]``) table.
+
+    The family's class (`reference_impl.potentials.FAMILIES`) names its keys and reads
+    its own table (`Potential.from_scene`); nothing here knows a family by name.
+    """
     if depth > _MAX_DEPTH:
         raise err(f"{path}: sums nested more than {_MAX_DEPTH} deep")
     table = _table(err, table, path)
     if "family" not in table:
-        raise err(f"missing key '{path}.family' (one of {', '.join(_FAMILIES)})")
-    family = _string(err, table["family"], f"{path}.family", _FAMILIES)
-    required, optional = _FAMILIES[family]
+        raise err(f"missing key '{path}.family' (one of {', '.join(FAMILIES)})")
+    family = _string(err, table["family"], f"{path}.family", tuple(FAMILIES))
+    cls = FAMILIES[family]
+    required, optional = cls.scene_keys
     _keys(err, table, f"{path}.", ("family", *required, *optional), required)
-    if family == "expression":
-        source = _string(err, table["U"], f"{path}.U", max_chars=_MAX_EXPRESSION_CHARS)
-        params = _table(err, table.get("params", {}), f"{path}.params")
-        if len(params) > _MAX_PARAMS:
-            raise err(f"{path}.params has {len(params)} entries; at most {_MAX_PARAMS}")
-        values = {k: _number(err, v, f"{path}.params.{k}") for k, v in params.items()}
-        return _construct(err, path, Expression, source, **values)
-    if family == "sum":
-        terms = table["terms"]
-        if not isinstance(terms, list) or not 2 <= len(terms) <= _MAX_TERMS:
-            raise err(
-                f"{path}.terms must be an array of at least two (at most {_MAX_TERMS}) "
-                "potential tables"
-            )
-        parts = [_potential(err, t, f"{path}.terms[{i}]", depth + 1) for i, t in enumerate(terms)]
-        return _construct(err, path, SumPotential, *parts)
-    args = {
-        k: _number(err, table[k], f"{path}.{k}", low=0.0)
-        for k in (*required, *optional)
-        if k in table
-    }
-    cls = {"power": PowerLaw, "ellipsoid": Ellipsoid, "sphere": Sphere}[family]
-    return _construct(err, path, cls, **args)
+    return _construct(err, path, cls.from_scene, _Reader(err, table, path, depth))
 
 
 def _construct(err: _Where, path: str, cls, *args, **kwargs) -> Potential:
