@@ -519,3 +519,40 @@ def test_builtin_adapter_classes_are_exported_without_loading_the_codes():
     r = _run([sys.executable, "-c", code], ROOT)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["[]", "KratosAdapter", "LammpsAdapter", "[]"], r.stdout
+
+
+def test_third_party_adapter_registers_by_entry_point(tmp_path):
+    """``pip install mycode-hcv`` then ``hcv bench mycode``: the ``hcv.adapters`` group.
+
+    A distribution's metadata (a ``*.dist-info`` with ``entry_points.txt``) on the path
+    is what pip leaves; the bench in a new process finds the adapter by its name.
+    """
+    dist = tmp_path / "mycode_hcv-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: mycode-hcv\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[hcv.adapters]\nmycode = mycode_adapter:MyCode\n")
+    (tmp_path / "mycode_adapter.py").write_text(
+        "from reference_impl.adapters.reference import ReferenceAdapter\n\n\n"
+        "class MyCode(ReferenceAdapter):\n    name = 'mycode'\n"
+    )
+    probe = (
+        "from reference_impl.adapters.registry import get_adapter, registered\n"
+        "print('mycode' in registered(), type(get_adapter('mycode')).__name__)\n"
+    )
+    env = {"PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    r = _run([sys.executable, "-c", probe], tmp_path, env)
+    assert_true(
+        r.returncode == 0 and r.stdout.split() == ["True", "MyCode"],
+        got=r.stdout + r.stderr,
+        should="True MyCode",
+        claim="tool",
+        call="registered() / get_adapter('mycode') with an hcv.adapters entry point",
+    )
+    r = _run([*_bench_command(), "--help"], tmp_path, env)
+    assert_true(
+        "mycode" in r.stdout,
+        got=r.stdout[-400:],
+        should="the entry point's name among the adapters in hcv bench --help",
+        claim="tool",
+        call="hcv bench --help",
+    )

@@ -2,7 +2,15 @@
 
 An adapter spec is one of
 
-* a registered name: ``reference``, ``lammps``, ``subprocess`` (see `registered`);
+* a registered name: ``reference``, ``lammps``, ``kratos``, ``subprocess`` (see
+  `registered`), or a name a third-party package declares in the entry-point group
+  ``hcv.adapters`` (as pytest plugins do), so that ``hcv bench mycode`` works after
+  ``pip install mycode-hcv``::
+
+      # pyproject.toml of mycode-hcv
+      [project.entry-points."hcv.adapters"]
+      mycode = "mycode_hcv.adapter:MyCodeAdapter"
+
 * an import path ``package.module:Class`` of a `ContactAdapter` subclass;
 * ``cmd:COMMAND``: the subprocess adapter running COMMAND (split like a shell
   does, see `reference_impl.adapters.subprocess`); ``cmd[key=value,...]:COMMAND``
@@ -29,7 +37,14 @@ from typing import Any
 from reference_impl.errors import HCVInputError
 from reference_impl.adapters.base import ContactAdapter
 
-__all__ = ["get_adapter", "parse_spec", "register", "registered", "resolve_class"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "get_adapter",
+    "parse_spec",
+    "register",
+    "registered",
+    "resolve_class",
+]
 
 _REGISTRY: dict[str, str | type] = {
     "reference": "reference_impl.adapters.reference:ReferenceAdapter",
@@ -54,9 +69,28 @@ def register(name: str, target: str | type) -> None:
     _REGISTRY[name] = target
 
 
+ENTRY_POINT_GROUP = "hcv.adapters"
+
+
+def _entry_points() -> dict[str, str]:
+    """name -> ``module:attr`` of the installed packages' ``hcv.adapters`` entry points.
+
+    Read at each call (cheap: metadata only, nothing imported), so a package installed
+    while a process runs is seen. A name that a built-in adapter already has is ignored:
+    built-ins cannot be replaced by an installed package.
+    """
+    from importlib.metadata import entry_points
+
+    found = {}
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name not in _REGISTRY and _NAME_RE.match(ep.name) and _IMPORT_RE.match(ep.value):
+            found.setdefault(ep.name, ep.value)
+    return found
+
+
 def registered() -> list[str]:
-    """The registered adapter names, sorted."""
-    return sorted(_REGISTRY)
+    """The registered adapter names (built-in, `register`-ed and entry points), sorted."""
+    return sorted({*_REGISTRY, *_entry_points()})
 
 
 def _value(text: str) -> Any:
@@ -144,6 +178,9 @@ def resolve_class(target: str) -> type:
     if target in _REGISTRY:
         entry = _REGISTRY[target]
         return _import(entry) if isinstance(entry, str) else entry
+    plugin = _entry_points().get(target)
+    if plugin is not None:
+        return _import(plugin)
     if _IMPORT_RE.match(target):
         return _import(target)
     raise HCVInputError(

@@ -96,9 +96,12 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         "configuration error; 3 no metric failed but our reference could not decide one; "
         "130 interrupted.",
     )
+    from reference_impl.adapters.registry import registered
+
     b.add_argument(
         "adapter",
-        help="registered name (reference, lammps, subprocess), "
+        help=f"registered name ({', '.join(registered())}; installed packages add theirs "
+        "through the hcv.adapters entry-point group), "
         "package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND for two-walls); "
         "NAME[key=value,...] "
         "passes arguments",
