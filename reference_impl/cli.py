@@ -206,6 +206,9 @@ def _check_out_dir(path: str) -> None:
     """An output directory must be a writable directory, or creatable in one."""
     from pathlib import Path
 
+    from ._userfiles import check_path
+
+    check_path(path, "--out")
     p = Path(path)
     if p.exists():
         if not p.is_dir():
@@ -250,6 +253,7 @@ def _cmd_report(args) -> int:
             progress=lambda text: status.update(f"hcv report: {text}"),
             adapters=args.adapter or (),
             workers=args.workers,
+            force=args.force,
         )
     for c in results["claims"]:
         print(f"{c['verdict']:>12}  {c['id']}")
@@ -363,6 +367,12 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
     rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
     rp.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a directory that holds files hcv report did not write (kept, "
+        "except files of the report's names, which are replaced)",
+    )
+    rp.add_argument(
         "--adapter",
         action="append",
         metavar="ADAPTER",
@@ -401,8 +411,7 @@ def run_command(args) -> int:
         print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
-        print("hcv: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted()
     except (RecursionError, OverflowError, MemoryError) as exc:
         # Sizes are bounded before work starts; this is the backstop for an input that
         # still exhausts a limit (nesting, float range, memory).
@@ -415,17 +424,67 @@ def run_command(args) -> int:
         # Output piped into e.g. `head`: stop quietly, as Unix tools do.
         sys.stderr.close()
         return EXIT_OK
+    except OSError as exc:
+        # Paths are checked before work starts; this is the backstop for one the file
+        # system still refuses (a name too long, a permission changed meanwhile).
+        where = f"{_short_path(exc.filename)}: " if exc.filename else ""
+        print(f"hcv: error: {where}{exc.strerror or _one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+def _short_path(name) -> str:
+    text = os.fsdecode(name) if isinstance(name, (bytes, str)) else str(name)
+    return text if len(text) <= 80 else text[:38] + "..." + text[-38:]
+
+
+def _interrupted() -> int:
+    """The line and status of Ctrl-C (130) or SIGTERM handled like it (143)."""
+    from ._procs import terminated
+
+    signum = terminated()
+    if signum is not None:
+        print("hcv: terminated (SIGTERM)", file=sys.stderr)
+        return 128 + signum
+    print("hcv: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+# Commands that start processes (adapters, cluster workers): run as a child subreaper so
+# that a daemonised adapter is still ours to kill at the end (reference_impl._procs).
+_SPAWNING = ("bench", "sweep", "report")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``hcv`` console script; returns the exit status."""
-    try:
-        parser = _parser()
-        args = parser.parse_args(argv)
-    except KeyboardInterrupt:
-        print("hcv: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    return run_command(args)
+    """Entry point of the ``hcv`` console script; returns the exit status.
+
+    Run from the command line (``argv`` None), SIGTERM is handled like Ctrl-C
+    (exit 143), and commands that start processes become the subreaper of their
+    descendants and kill any left when they end (`reference_impl._procs`). With
+    an explicit ``argv`` (tests, scripts) the caller's signals and children are
+    left alone.
+    """
+    from . import _procs
+
+    if argv is not None:
+        try:
+            args = _parser().parse_args(argv)
+        except KeyboardInterrupt:
+            return _interrupted()
+        return run_command(args)
+    with _procs.sigterm_as_interrupt():
+        try:
+            args = _parser().parse_args(argv)
+        except KeyboardInterrupt:
+            return _interrupted()
+        spawning = args.command in _SPAWNING and _procs.become_subreaper()
+        try:
+            code = run_command(args)
+        finally:
+            if spawning:
+                _procs.kill_descendants()
+        if code == EXIT_INTERRUPTED and _procs.terminated() is not None:
+            code = 128 + _procs.terminated()  # a command that reported the interrupt itself
+        return code
 
 
 if __name__ == "__main__":  # pragma: no cover
