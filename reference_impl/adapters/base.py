@@ -307,18 +307,18 @@ def _array(name: str, value, who: str) -> np.ndarray:
         )
         if bad is not _NONE:
             raise AdapterOutputError(
-                f"{who}: {name!r} must hold numbers (or null), got {_short_repr(bad)}"
+                f"{who}: {name!r} is not an array of numbers (or null): it holds {_short_repr(bad)}"
             )
         value = [np.nan if x is None else x for x in value]
     elif isinstance(value, (str, bytes, Mapping)):
         raise AdapterOutputError(
-            f"{who}: {name!r} must be an array of numbers, got {_short_repr(value)}"
+            f"{who}: {name!r} is not an array of numbers, got {_short_repr(value)}"
         )
     else:
         kind = getattr(np.asarray(value), "dtype", np.dtype(object)).kind
         if kind not in "fiu":
             raise AdapterOutputError(
-                f"{who}: {name!r} must be an array of numbers, got dtype {kind!r}"
+                f"{who}: {name!r} is not an array of numbers (dtype kind {kind!r})"
             )
     try:
         a = np.asarray(value, dtype=float)

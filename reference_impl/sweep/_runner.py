@@ -170,8 +170,10 @@ def check_scheduler_address(address) -> str:
     return address.strip()
 
 
-def probe_scheduler(address: str, timeout: float = _CONNECT_TIMEOUT) -> None:
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
     """Ask ``address`` for its identity within ``timeout`` s; `HCVInputError` unless a scheduler.
+
+    ``timeout`` defaults to `_CONNECT_TIMEOUT`.
 
     ``distributed.Client(address, timeout=...)`` bounds the TCP connection but not the
     handshake after it, so a server that accepts and never answers (a dashboard port,
@@ -180,6 +182,8 @@ def probe_scheduler(address: str, timeout: float = _CONNECT_TIMEOUT) -> None:
     import asyncio
 
     from distributed.core import rpc
+
+    timeout = _CONNECT_TIMEOUT if timeout is None else timeout
 
     async def identity():
         r = rpc(address, timeout=timeout)

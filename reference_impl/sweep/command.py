@@ -145,12 +145,15 @@ def run_sweep(
     scheduler: str | None = None,
     resume: bool = False,
     progress: bool | None = None,
+    on_start=None,
 ) -> dict:
     """Run a validated `SweepSpec` into ``out_dir``; the function ``hcv sweep`` calls.
 
     Returns a dict with ``cases``, ``ok``, ``failed``, ``rows``, ``seconds`` and
     ``interrupted`` (True after Ctrl-C; the results so far are written, the
     cluster closed). Raises `HCVInputError` for bad options (nothing run).
+    ``on_start()`` is called once the options are accepted and the cluster answers
+    (before anything is written), e.g. to print notes that a refusal must not precede.
     """
     from ._output import CaseStore
     from ._runner import check_scheduler_address, dask_available
@@ -171,7 +174,7 @@ def run_sweep(
     store = CaseStore(out)
     _check_out(out, store)
     with _claim(out, store, resume) as records:
-        return _run_claimed(spec, out, store, records, workers, scheduler, progress)
+        return _run_claimed(spec, out, store, records, workers, scheduler, progress, on_start)
 
 
 def _check_out(out: Path, store) -> None:
@@ -233,7 +236,7 @@ def _claim(out: Path, store, resume: bool):
             undo()  # refused or interrupted before anything was written
 
 
-def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress) -> dict:
+def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, on_start) -> dict:
     from ._output import consolidate, write_parquet, write_summary
     from ._runner import iter_outcomes, open_client
     from ._tasks import run_case
@@ -242,6 +245,8 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress) 
 
     def prepare() -> None:
         """Copy the spec, store the invalid cases (after the cluster is reachable)."""
+        if on_start is not None:
+            on_start()
         (out / "spec.toml").write_text(spec.text, encoding="utf-8")
         for case in spec.invalid:  # a row with the reason; never sent to a worker
             if case.key not in records:
@@ -332,15 +337,23 @@ def run(args) -> int:
     try:
         spec = load_spec(args.spec, progress=_Validating())
         out = Path(args.out or f"sweep-{Path(args.spec).stem}")
-        if spec.invalid:
-            first = spec.invalid[0]
-            print(
-                f"sweep: {len(spec.invalid)} of {len(spec.cases)} cases have invalid "
-                f"parameters and are recorded as failed (first: {first.error})",
-                file=sys.stderr,
-            )
+
+        def note() -> None:
+            if spec.invalid:
+                first = spec.invalid[0]
+                print(
+                    f"sweep: {len(spec.invalid)} of {len(spec.cases)} cases have invalid "
+                    f"parameters and are recorded as failed (first: {first.error})",
+                    file=sys.stderr,
+                )
+
         res = run_sweep(
-            spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume
+            spec,
+            out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            resume=args.resume,
+            on_start=note,
         )
     except KeyboardInterrupt:  # during validation or cluster start-up
         res = {"interrupted": True}
