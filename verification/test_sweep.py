@@ -543,3 +543,86 @@ def test_each_distinct_potential_is_validated_once(monkeypatch):
         f"got {spec.invalid[0].error!r}, should name its own case"
     )
     assert seen[-1] == (900, 900) and len(seen) == 901, "got no progress while validating"
+
+
+@needs_dask
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="process listing needs /proc")
+def test_sigterm_to_a_bench_sweep_leaves_no_adapter_running(tmp_path):
+    """Issue 22: SIGTERM (CI's cancel) to ``hcv sweep`` of ``bench:`` left the adapters running.
+
+    One worker, one case whose adapter is ``sleep MARKER`` (it never answers): SIGTERM
+    once it runs; hcv must exit 143 with nothing of it left (the adapter runs in its
+    own session, below a worker process of the local cluster).
+    """
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    marker = "95.3391"
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        textwrap.dedent(
+            f"""
+            task = "bench:cmd:sleep {marker}"
+            [scene]
+            name = "s"
+            mass = 1.0
+            velocities = [1.0]
+            [scene.potential]
+            family = "power"
+            k = 1.0
+            p = 1.5
+            [sweep]
+            mass = [1.0]
+            """
+        )
+    )
+
+    def running() -> list[int]:
+        pids = []
+        for entry in Path("/proc").iterdir():
+            if entry.name.isdigit():
+                try:
+                    line = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+                except OSError:
+                    continue
+                if line.startswith(f"sleep {marker}"):
+                    pids.append(int(entry.name))
+        return pids
+
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "reference_impl.cli",
+            "sweep",
+            str(spec),
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        env={**os.environ, "PYTHONPATH": str(root)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not running() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert running(), "the adapter never started"
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 143, f"got exit {proc.returncode} ({err[-400:]}), should be 143"
+        deadline = time.monotonic() + 5
+        while running() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not running(), "got the adapter still running after SIGTERM [issue 22]"
+    finally:
+        proc.kill()
+        for pid in running():  # only the marker processes, by pid
+            os.kill(pid, signal.SIGKILL)

@@ -301,7 +301,9 @@ def _array(name: str, value, who: str) -> np.ndarray:
             (
                 x
                 for x in value
-                if x is not None and (isinstance(x, bool) or not isinstance(x, (int, float)))
+                if x is not None
+                and not isinstance(x, (list, tuple))  # nested: refused below as not 1-D
+                and (isinstance(x, bool) or not isinstance(x, (int, float)))
             ),
             _NONE,
         )
