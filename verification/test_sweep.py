@@ -626,3 +626,43 @@ def test_sigterm_to_a_bench_sweep_leaves_no_adapter_running(tmp_path):
         proc.kill()
         for pid in running():  # only the marker processes, by pid
             os.kill(pid, signal.SIGKILL)
+
+
+def test_turning_points_are_searched_from_the_top_energy_down(monkeypatch):
+    """One search per potential, plus one per case that has no turning point.
+
+    U = 1 - exp(-q) never exceeds 1 J: the cases with E = m v0^2 / 2 >= 1 J have no
+    turning point and must be invalid with their own reason; every lower energy is
+    then known to have one (U rises continuously from 0), so it is not searched again.
+    """
+    from reference_impl.potentials import base
+
+    calls = []
+    real = base.Potential.turning_point
+
+    def counting(self, E, **kw):
+        calls.append(E)
+        return real(self, E, **kw)
+
+    monkeypatch.setattr(base.Potential, "turning_point", counting)
+    # E = 0.275 ... 1.525 J, never exactly 1 J (where the turning point is at infinity)
+    masses = [round(0.55 + 0.1 * i, 2) for i in range(26)]
+    spec = spec_from_dict(
+        {
+            "task": "solve",
+            "scene": {
+                "mass": 1.0,
+                "velocities": [1.0],
+                "potential": {"family": "expression", "U": "1 - exp(-q)"},
+            },
+            "sweep": {"mass": masses},
+        }
+    )
+    invalid = [c.params["mass"] for c in spec.cases if c.error]
+    assert invalid == [m for m in masses if m / 2 > 1.0], (
+        f"got invalid masses {invalid}, should be those with E >= 1 J [issue 22, validation]"
+    )
+    assert all("velocity 1 m/s" in c.error for c in spec.cases if c.error)
+    assert len(calls) == len(invalid) + 1, (
+        f"got {len(calls)} turning-point searches, should be {len(invalid) + 1}"
+    )

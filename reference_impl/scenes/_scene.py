@@ -295,14 +295,14 @@ def _damping(err: _Where, table) -> tuple[str, float | None]:
 _SOURCE_MARK = "\x00scene-source\x00"
 
 
-def _cached_potential(err: _Where, table, cache: dict | None) -> Potential:
-    """`_potential` of the scene's table, through ``cache`` when one is given."""
+def _cached_potential(err: _Where, table, cache: dict | None) -> tuple[Potential, str | None]:
+    """`_potential` of the scene's table and its cache key (None: not cached)."""
     if cache is None:
-        return _potential(err, table, "potential")
+        return _potential(err, table, "potential"), None
     try:
         key = json.dumps(table, sort_keys=True, default=repr)
     except (TypeError, ValueError, RecursionError):  # not plain data: no caching
-        return _potential(err, table, "potential")
+        return _potential(err, table, "potential"), None
     if key not in cache:
         try:
             cache[key] = _potential(_Where(_SOURCE_MARK), table, "potential")
@@ -311,7 +311,7 @@ def _cached_potential(err: _Where, table, cache: dict | None) -> Potential:
     hit = cache[key]
     if isinstance(hit, HCVInputError):
         raise type(hit)(str(hit).replace(_SOURCE_MARK, err.source))
-    return hit
+    return hit, key
 
 
 def _with_context(exc: HCVInputError, prefix: str) -> HCVInputError:
@@ -363,14 +363,21 @@ def scene_from_dict(
     elif "gap" in data:
         raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
     law, zeta = _damping(err, data.get("damping", {}))
-    potential = _cached_potential(err, data["potential"], potentials)
+    potential, key = _cached_potential(err, data["potential"], potentials)
+    # A potential with a turning point at energy E has one at every lower energy (U rises
+    # continuously from 0): with a cache, energies up to the largest one checked are known.
+    checked = potentials.get(("energy", key), 0.0) if key is not None else 0.0
     for v in velocities:
         energy = 0.5 * mass * v * v
+        if energy <= checked:
+            continue
         try:
             potential.turning_point(energy)
         except HCVInputError as exc:
             prefix = f"scene {source}: velocity {v:g} m/s (E = {energy:.6g} J)"
             raise _with_context(exc, prefix) from exc
+        if key is not None:
+            checked = potentials[("energy", key)] = energy
     return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source)
 
 
