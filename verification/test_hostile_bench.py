@@ -742,3 +742,21 @@ def test_an_adapter_that_daemonises_leaves_nothing_running(tmp_path, how):
     finally:
         proc.kill()
         _kill_leftovers(f"sleep {marker}")
+
+
+def test_a_missing_program_is_refused_by_report_and_sweep_before_any_work(tmp_path, capsys):
+    """``cmd:/nonexistent/prog`` through ``hcv report --adapter`` and a ``bench:`` sweep."""
+    out = tmp_path / "rep"
+    _one_line_exit_2(
+        capsys,
+        ["report", "--quick", "--out", str(out), "--adapter", "cmd:/nonexistent/prog"],
+        "does not exist",
+    )
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        'task = "bench:cmd:/nonexistent/prog"\n[scene]\nmass = 1.0\nvelocities = [1.0]\n'
+        '[scene.potential]\nfamily = "power"\nk = 1.0\np = 1.5\n[sweep]\nmass = [1.0, 2.0]\n'
+    )
+    pytest.importorskip("distributed")
+    _one_line_exit_2(capsys, ["sweep", str(spec), "--out", str(tmp_path / "sw")], "does not exist")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"], "got files written"

@@ -89,16 +89,19 @@ def _check_owned(out: Path, adapters, force: bool) -> None:
     if force or not out.is_dir():
         return
     owned = read_manifest(out)
-    present = [f for f in _files(out) if f != MANIFEST]
     if owned is None:
+        with os.scandir(out) as it:  # the first few entries tell: no need to walk it all
+            present = [e.name for _, e in zip(range(_SHOWN + 1), it, strict=False)]
         if present:
+            more = ", ..." if len(present) > _SHOWN else ""
             raise HCVInputError(
                 f"report directory {str(out)!r} holds files not written by hcv report "
-                f"({', '.join(sorted(present)[:_SHOWN])}{', ...' if len(present) > _SHOWN else ''}); "
-                "choose an empty or new directory, or give --force to write beside them "
-                "(files of the same names as the report's are then replaced)"
+                f"({', '.join(sorted(present)[:_SHOWN])}{more}); choose an empty or new "
+                "directory, or give --force to write beside them (files of the same names "
+                "as the report's are then replaced)"
             )
         return
+    present = [f for f in _files(out) if f != MANIFEST]
     ours = {"index.html", "index.md", "results.json", *(_adapter_json(a) for a in adapters)}
     clash = [f for f in present if f not in owned and (f in ours or Path(f).parts[0] == "figures")]
     if clash:
@@ -132,7 +135,7 @@ def validate_report_args(out_dir, adapters=(), force: bool = False) -> tuple[Pat
         One line naming the offending value: an unknown or malformed adapter, an
         output path that is a file, or a directory that cannot be written.
     """
-    from ..adapters.registry import parse_spec, resolve_class
+    from ..adapters.registry import get_adapter, parse_spec, resolve_class
 
     if out_dir is None or not str(out_dir).strip():
         raise HCVInputError(f"report directory must be a non-empty path, got {out_dir!r}")
@@ -152,6 +155,8 @@ def validate_report_args(out_dir, adapters=(), force: bool = False) -> tuple[Pat
             target, _ = parse_spec(spec)  # raises HCVInputError naming the spec
             if target != "subprocess":
                 resolve_class(target)  # unknown name or import path: HCVInputError
+            else:  # cheap (no process started): a missing program is refused now
+                get_adapter(spec).close()
     _check_owned(out, [s for s in specs if isinstance(s, str)], force)
     return out, specs
 

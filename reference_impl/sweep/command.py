@@ -170,6 +170,13 @@ def run_sweep(
         raise HCVInputError("hcv sweep needs dask.distributed: pip install -e '.[sweep]'")
     if scheduler is not None:
         scheduler = check_scheduler_address(scheduler)
+    elif spec.task.startswith("bench:"):
+        # The local workers build the adapter as this process would: a configuration
+        # error (a cmd: program that does not exist) is refused now, not once per case.
+        # (On a remote cluster the program lives on the workers: checked there.)
+        from ..adapters.registry import get_adapter
+
+        get_adapter(spec.task[len("bench:") :]).close()
     out = Path(out_dir)
     store = CaseStore(out)
     _check_out(out, store)
@@ -358,8 +365,13 @@ def run(args) -> int:
     except KeyboardInterrupt:  # during validation or cluster start-up
         res = {"interrupted": True}
     if res["interrupted"]:
-        print("interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        from .._procs import terminated
+
+        print(
+            "hcv: terminated (SIGTERM)" if terminated() else "interrupted",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED  # the CLI makes it 143 after SIGTERM
     print(
         f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ok, "
         f"{res['failed']} failed), {out / 'summary.md'} in {res['seconds']:.1f} s on {res['where']}"
