@@ -18,7 +18,7 @@ import errno
 import os
 from pathlib import Path
 
-from .errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "DirLock",

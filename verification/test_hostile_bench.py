@@ -639,7 +639,7 @@ def test_a_program_that_is_not_executable_is_a_configuration_error(tmp_path, cap
 def test_scenes_given_twice_are_all_run(capsys):
     """``--scenes a --scenes b`` names both (argparse's default kept only b)."""
     from reference_impl import cli
-    from reference_impl.bench.command import _scene_args
+    from reference_impl.cli.bench import _scene_args
 
     args = cli._parser().parse_args(
         ["bench", "reference", "--scenes", "hertz", "--scenes", "hooke-damped,hertz-damped"]

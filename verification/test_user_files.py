@@ -219,7 +219,7 @@ def test_sweep_never_overwrites_a_user_s_files(tmp_path, spec, capsys):
 
 def test_second_sweep_into_a_locked_directory_is_refused(tmp_path, spec, capsys):
     from reference_impl._userfiles import DirLock
-    from reference_impl.sweep.command import LOCK_NAME
+    from reference_impl.cli.sweep import LOCK_NAME
 
     out = tmp_path / "run"
     out.mkdir()

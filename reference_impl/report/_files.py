@@ -28,8 +28,8 @@ import tempfile
 import threading
 from pathlib import Path
 
-from .._userfiles import check_path
-from ..errors import HCVInputError
+from reference_impl._userfiles import check_path
+from reference_impl.errors import HCVInputError
 
 __all__ = ["MANIFEST", "REPORT_ENTRIES", "swap_in", "validate_report_args"]
 
@@ -135,7 +135,7 @@ def validate_report_args(out_dir, adapters=(), force: bool = False) -> tuple[Pat
         One line naming the offending value: an unknown or malformed adapter, an
         output path that is a file, or a directory that cannot be written.
     """
-    from ..adapters.registry import get_adapter, parse_spec, resolve_class
+    from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
 
     if out_dir is None or not str(out_dir).strip():
         raise HCVInputError(f"report directory must be a non-empty path, got {out_dir!r}")

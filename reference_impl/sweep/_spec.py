@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "MAX_CASES",
@@ -232,7 +232,7 @@ def _key(task: str, criterion: str | None, scene: dict) -> str:
 
 
 def _criterion_table(src: str, task: str, value) -> dict:
-    from ..dtcrit import KINDS
+    from reference_impl.stability.search import KINDS
 
     if value is None:
         return {}
@@ -401,8 +401,8 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     from 0), so the turning-point search runs about once per potential instead of
     once per case (issue 22: 1e5 cases of one expression took ~40 min).
     """
-    from ..dtcrit import parse_criterion
-    from ..scenes import scene_from_dict
+    from reference_impl.stability.search import parse_criterion
+    from reference_impl.scenes import scene_from_dict
 
     potentials: dict = {}
     errors = [""] * len(expanded)
@@ -490,7 +490,7 @@ def parse_spec(text: str, source: str = "<string>", progress=None) -> SweepSpec:
 
 def load_spec(path, progress=None) -> SweepSpec:
     """Load and validate a sweep spec file (one-line `SweepSpecError` on any problem)."""
-    from .._userfiles import check_path
+    from reference_impl._userfiles import check_path
 
     check_path(path, "spec file")
     p = Path(path)

@@ -27,8 +27,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from .._userfiles import check_path, refuse_output_onto_input
-from ..errors import HCVInputError
+from reference_impl._userfiles import check_path, refuse_output_onto_input
+from reference_impl.errors import HCVInputError
 
 __all__ = ["add_bench_parser", "cmd_bench", "main"]
 
@@ -148,8 +148,8 @@ def cmd_bench(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
-    from .report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
-    from .runner import run_bench
+    from reference_impl.bench.report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
+    from reference_impl.bench.runner import run_bench
 
     scenes = _scene_args(args.scenes)
     _check_files(args, scenes)
@@ -208,6 +208,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     add_bench_parser(sub)
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
-    from ..cli import run_command
+    from reference_impl.cli import run_command
 
     return run_command(args)

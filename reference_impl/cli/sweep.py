@@ -19,8 +19,8 @@ import sys
 import time
 from pathlib import Path
 
-from .._userfiles import DirLock, check_writable_dir
-from ..errors import HCVInputError
+from reference_impl._userfiles import DirLock, check_writable_dir
+from reference_impl.errors import HCVInputError
 
 __all__ = ["add_parser", "run", "run_sweep"]
 
@@ -155,8 +155,8 @@ def run_sweep(
     ``on_start()`` is called once the options are accepted and the cluster answers
     (before anything is written), e.g. to print notes that a refusal must not precede.
     """
-    from ._output import CaseStore
-    from ._runner import check_scheduler_address, dask_available
+    from reference_impl.sweep._output import CaseStore
+    from reference_impl.sweep._runner import check_scheduler_address, dask_available
 
     if workers is not None and workers < 1:
         raise HCVInputError(f"--workers must be >= 1, got {workers}")
@@ -174,7 +174,7 @@ def run_sweep(
         # The local workers build the adapter as this process would: a configuration
         # error (a cmd: program that does not exist) is refused now, not once per case.
         # (On a remote cluster the program lives on the workers: checked there.)
-        from ..adapters.registry import get_adapter
+        from reference_impl.adapters.registry import get_adapter
 
         get_adapter(spec.task[len("bench:") :]).close()
     out = Path(out_dir)
@@ -244,9 +244,9 @@ def _claim(out: Path, store, resume: bool):
 
 
 def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, on_start) -> dict:
-    from ._output import consolidate, write_parquet, write_summary
-    from ._runner import iter_outcomes, open_client
-    from ._tasks import run_case
+    from reference_impl.sweep._output import consolidate, write_parquet, write_summary
+    from reference_impl.sweep._runner import iter_outcomes, open_client
+    from reference_impl.sweep._tasks import run_case
 
     todo = [c for c in spec.cases if not c.error and c.key not in records]
 
@@ -339,7 +339,7 @@ class _Validating:
 
 def run(args) -> int:
     """``hcv sweep`` for parsed arguments; returns the exit status."""
-    from ._spec import load_spec
+    from reference_impl.sweep._spec import load_spec
 
     try:
         spec = load_spec(args.spec, progress=_Validating())
@@ -365,7 +365,7 @@ def run(args) -> int:
     except KeyboardInterrupt:  # during validation or cluster start-up
         res = {"interrupted": True}
     if res["interrupted"]:
-        from .._procs import terminated
+        from reference_impl._procs import terminated
 
         print(
             "hcv: terminated (SIGTERM)" if terminated() else "interrupted",
