@@ -2,7 +2,7 @@
 
 As a program (the subprocess protocol, docs/adapter-protocol.md)::
 
-    python verification/_adapter_script.py [--mode MODE] [--above V0]
+    python verification/_adapter_script.py [--mode MODE] [--above V0] [--daemon SECONDS]
 
 reads one JSON request on stdin and writes the trajectory on stdout, using
 nothing but the standard library (velocity Verlet of U' = k q^p with the
@@ -13,7 +13,9 @@ JSON), ``malformed`` (arrays of different lengths), ``error`` (reports an
 error), ``tsuji`` (declares an implemented law with half the damping ratio,
 and integrates it), ``decline`` (answers ``{"unsupported": ...}``), ``flood``
 (writes to stdout without end), ``flipq``, ``flipv``, ``flipf`` (report the
-overlap, its rate or the force with the wrong sign). It declines "sustained"
+overlap, its rate or the force with the wrong sign). ``--daemon S`` leaves
+``sleep S`` running in a new session at every run (an adapter that daemonises,
+escaping the process-group kill). It declines "sustained"
 requests (it has no two-walls model), as the protocol lets a code do.
 
 As Python adapters (run isolated in a worker by the benchmark): `ScriptAdapter`
@@ -82,6 +84,16 @@ def main(argv: list[str]) -> int:
             mode = args.pop(0)
         elif a == "--above":
             above = float(args.pop(0))
+        elif a == "--daemon":  # leave a process in its own session behind (escapes killpg)
+            import subprocess
+
+            subprocess.Popen(
+                ["sleep", args.pop(0)],
+                start_new_session=True,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
     request = json.load(sys.stdin)
     scene = request["scene"]
     if request["request"] != "impact":

@@ -561,3 +561,202 @@ def test_deeply_nested_json_answer_is_malformed_output(tmp_path):
 
 def test_script_path_is_usable():
     assert SCRIPT.exists()
+
+
+# ----------------------------------------------------------------------------
+# issue 22: lenient inputs refused, SIGTERM, adapters that daemonise
+# ----------------------------------------------------------------------------
+def _response(**changes) -> dict:
+    data = {"t": [0.0, 1.0, 2.0], "q": [0.0, 0.5, -0.1], "v": [1.0, 0.0, -1.0]}
+    data["force"] = [0.0, 1.0, 0.0]
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"q": ["0.0", "0.5", "-0.1"]},
+        {"v": [1.0, "0", -1.0]},
+        {"force": [0.0, True, 0.0]},
+        {"t": "0 1 2"},
+        {"q": {"0": 0.0}},
+    ],
+    ids=["q-strings", "one-string", "bool", "text", "object"],
+)
+def test_trajectory_values_must_be_numbers_not_text(changes):
+    from reference_impl.adapters.base import trajectory_from_mapping
+
+    with pytest.raises(AdapterOutputError, match="is not an array of numbers"):
+        trajectory_from_mapping(_response(**changes), who="code")
+
+
+@pytest.mark.parametrize(
+    "law, needle",
+    [
+        ({"clips_tension": "yes"}, "clips_tension' must be true or false"),
+        ({"clips_tension": 1}, "clips_tension' must be true or false"),
+        ({"clip_tension": True}, "unknown key 'implemented_law.clip_tension'"),
+        ({"dampign": {"law": "none"}}, "unknown key 'implemented_law.dampign'"),
+        ({"damping": {"law": "universal", "zeta": 0.1, "c": 2}}, "damping.c"),
+        ({"damping": {"law": "universal", "zeta": "0.1"}}, "bad 'implemented_law.damping'"),
+        ({"damping": {"law": "power", "c": "3.2"}}, "bad 'implemented_law.damping'"),
+        ({"mass": True}, "needs mass > 0"),
+        ({"description": ["x"]}, "description' must be a string"),
+    ],
+)
+def test_implemented_law_is_read_strictly(law, needle):
+    from reference_impl.adapters.subprocess import law_from_json
+
+    with pytest.raises(AdapterOutputError, match=re.escape(needle)):
+        law_from_json(law, ascene(), "code")
+
+
+@pytest.mark.parametrize(
+    "spec, needle",
+    [
+        ("cmd[sustained=maybe]:yes", "sustained must be true or false"),
+        ("cmd[sustained=1]:yes", "sustained must be true or false"),
+        ("cmd[label=3]:yes", "label must be text"),
+        ("cmd:/nonexistent/prog", "does not exist"),
+        ("cmd:./no-such-program --flag", "does not exist"),
+        ("cmd:no-such-program-hcv-22", "not found on PATH"),
+    ],
+)
+def test_adapter_configuration_errors_are_exit_2_not_a_code_failure(capsys, spec, needle):
+    with pytest.raises(HCVInputError, match=re.escape(needle)):
+        get_adapter(spec)
+    _one_line_exit_2(capsys, ["bench", spec, "--scenes", "hertz"], needle)
+
+
+def test_a_program_that_is_not_executable_is_a_configuration_error(tmp_path, capsys):
+    prog = tmp_path / "code.sh"
+    prog.write_text("#!/bin/sh\n")
+    prog.chmod(0o644)
+    _one_line_exit_2(capsys, ["bench", f"cmd:{prog}", "--scenes", "hertz"], "not executable")
+
+
+def test_scenes_given_twice_are_all_run(capsys):
+    """``--scenes a --scenes b`` names both (argparse's default kept only b)."""
+    from reference_impl import cli
+    from reference_impl.cli.bench import _scene_args
+
+    args = cli._parser().parse_args(
+        ["bench", "reference", "--scenes", "hertz", "--scenes", "hooke-damped,hertz-damped"]
+    )
+    got = _scene_args(args.scenes)
+    assert got == ["hertz", "hooke-damped", "hertz-damped"], (
+        f"got {got}, should be all three scenes [issue 22, --scenes twice]"
+    )
+
+
+def _start_hcv(args, cwd) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "reference_impl.cli", *args],
+        cwd=cwd,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def _wait_for(needle: str, seconds: float = 90) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if _processes_with(needle):
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def _gone(needle: str, seconds: float = 5) -> bool:
+    """No process starts with ``needle`` (a SIGKILLed process may take a moment to go)."""
+    deadline = time.monotonic() + seconds
+    while _processes_with(needle) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return not _processes_with(needle)
+
+
+def _kill_leftovers(needle: str) -> None:
+    for pid in _processes_with(needle):  # only our marker processes, by pid
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
+def test_sigterm_to_bench_kills_the_adapter_and_exits_143(tmp_path):
+    """SIGTERM (CI's cancel) is handled as Ctrl-C: adapter killed, JSON written, 143."""
+    (tmp_path / "s.toml").write_text(
+        'name = "s"\nmass = 1.0\nvelocities = [1.0]\n[potential]\nfamily = "power"\n'
+        "k = 1.0\np = 1.5\n"
+    )
+    marker = "97.6123"
+    proc = _start_hcv(
+        ["bench", f"cmd:sleep {marker}", "--scenes", "s.toml", "--json", "out.json"], tmp_path
+    )
+    try:
+        assert _wait_for(f"sleep {marker}"), "the adapter never started"
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=60)
+        assert proc.returncode == 143, f"got exit {proc.returncode} ({err[-400:]}), should be 143"
+        assert err.strip().splitlines()[-1] == "hcv: terminated (SIGTERM)", err[-400:]
+        assert "Traceback" not in err
+        assert _gone(f"sleep {marker}"), "got the adapter still running after SIGTERM"
+        assert json.loads((tmp_path / "out.json").read_text())["status"] == "interrupted"
+    finally:
+        proc.kill()
+        _kill_leftovers(f"sleep {marker}")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="subreaper is Linux only")
+@pytest.mark.parametrize("how", ["completes", "sigterm"])
+def test_an_adapter_that_daemonises_leaves_nothing_running(tmp_path, how):
+    """Each run leaves ``sleep`` in a new session (escapes killpg); hcv kills them at its end."""
+    (tmp_path / "s.toml").write_text(
+        'name = "s"\nmass = 4.1103e-3\nvelocities = [1.0]\n[potential]\nfamily = "power"\n'
+        "k = 1.0879e10\np = 1.5\n"
+    )
+    (tmp_path / "tol.toml").write_text(
+        "[dt_crit]\nresolution = 0.25\n[run]\nspeed_error_steps = [50, 100, 200]\n"
+    )
+    marker = "96.4417" if how == "completes" else "96.4418"
+    adapter = f"cmd:{sys.executable} {SCRIPT} --daemon {marker}"
+    proc = _start_hcv(
+        ["bench", adapter, "--scenes", "s.toml", "--tolerances", "tol.toml"], tmp_path
+    )
+    try:
+        assert _wait_for(f"sleep {marker}"), "the adapter never started"
+        if how == "sigterm":
+            proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=300)
+        want = 143 if how == "sigterm" else 0
+        assert proc.returncode == want, (
+            f"got exit {proc.returncode} ({err[-400:]}), should be {want}"
+        )
+        assert _gone(f"sleep {marker}"), (
+            f"got {len(_processes_with(f'sleep {marker}'))} daemonised adapter processes left, "
+            "should be 0 [issue 22, subreaper]"
+        )
+    finally:
+        proc.kill()
+        _kill_leftovers(f"sleep {marker}")
+
+
+def test_a_missing_program_is_refused_by_report_and_sweep_before_any_work(tmp_path, capsys):
+    """``cmd:/nonexistent/prog`` through ``hcv report --adapter`` and a ``bench:`` sweep."""
+    out = tmp_path / "rep"
+    _one_line_exit_2(
+        capsys,
+        ["report", "--quick", "--out", str(out), "--adapter", "cmd:/nonexistent/prog"],
+        "does not exist",
+    )
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        'task = "bench:cmd:/nonexistent/prog"\n[scene]\nmass = 1.0\nvelocities = [1.0]\n'
+        '[scene.potential]\nfamily = "power"\nk = 1.0\np = 1.5\n[sweep]\nmass = [1.0, 2.0]\n'
+    )
+    pytest.importorskip("distributed")
+    _one_line_exit_2(capsys, ["sweep", str(spec), "--out", str(tmp_path / "sw")], "does not exist")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"], "got files written"

@@ -307,3 +307,95 @@ def test_overdamped_contact_never_returning_is_an_answer_not_a_refusal(tmp_path,
         f"got {row['contact_time_zero_force']!r}, should be 1.9032 s (ODE) "
         "[issue 12 s2, hcv solve zeta = 2]"
     )
+
+
+# ----------------------------------------------------------------------------
+# issue 22: tracebacks that must be one line and exit 2
+# ----------------------------------------------------------------------------
+def _one_line_2(capsys, argv: list[str], needle: str = "") -> str:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err and needle in err, (
+        f"got exit {code}, stderr {err[-400:]!r}, should be 2 with one line"
+        f"{f' naming {needle!r}' if needle else ''} [issue 22, hcv {' '.join(argv[:1])}]"
+    )
+    return lines[0]
+
+
+_LONG = "a" * 300  # one path component over the 255 bytes a Linux file system allows
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["solve", _LONG],
+        ["solve", f"{_LONG}/scene.toml"],
+        ["dt-crit", _LONG],
+        ["report", "--out", _LONG],
+        ["report", "--out", f"{_LONG}/x"],
+        ["bench", "reference", "--scenes", f"{_LONG}.toml"],
+        ["bench", "reference", "--json", f"{_LONG}.json"],
+        ["bench", "reference", "--junit", f"{_LONG}/x.xml"],
+        ["bench", "reference", "--tolerances", _LONG],
+        ["bench", "reference", "--markdown", "é" * 200],  # 400 bytes in UTF-8
+        ["sweep", _LONG],
+        ["sweep", "SPEC", "--out", _LONG],
+    ],
+    ids=lambda a: " ".join(x[:12] for x in a),
+)
+def test_a_path_component_over_255_bytes_is_one_line_in_every_command(
+    tmp_path, monkeypatch, capsys, argv
+):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "SPEC").write_text(
+        'task = "solve"\n[scene]\nmass = 1.0\nvelocities = [1.0]\n[scene.potential]\n'
+        'family = "power"\nk = 1.0\np = 1.5\n[sweep]\nmass = [1.0, 2.0]\n'
+    )
+    _one_line_2(capsys, argv)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["SPEC"], "got files written"
+
+
+_SWEEP_BASE = (
+    'task = "solve"\n[scene]\nname = "m"\nmass = 1.0\nvelocities = [1.0]\n'
+    '[scene.potential]\nfamily = "power"\nk = 1.0\np = 1.5\n'
+)
+
+
+@pytest.mark.parametrize(
+    "sweep, needle",
+    [
+        ('"mass.x" = [1.0, 2.0]', "which is a value, not a table"),
+        ('"name.x" = [1.0, 2.0]', "which is a value, not a table"),
+        ('"potential.p.q" = [1.0, 2.0]', "which is a value, not a table"),
+        ('"potential" = [1.0, 2.0]\n"potential.p" = [1.0, 2.0]', "overlap"),
+        ('"potential.p" = [1.0, 2.0]\n"potential" = [{family = "power", k = 1, p = 2}]', "overlap"),
+        ('"velocities" = [1.0, [1.0]]', "give the same scene"),
+    ],
+)
+def test_sweep_keys_and_values_that_broke_the_expansion_are_one_line(
+    tmp_path, capsys, sweep, needle
+):
+    path = tmp_path / "spec.toml"
+    path.write_text(_SWEEP_BASE + "[sweep]\n" + sweep + "\n")
+    _one_line_2(capsys, ["sweep", str(path), "--out", str(tmp_path / "out")], needle)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    "address, needle",
+    [
+        ("not-an-address", "is not a Dask scheduler address"),
+        ("", "give the scheduler's address"),
+        ("   ", "give the scheduler's address"),
+        ("tcp://127.0.0.1", "is not a Dask scheduler address"),
+        ("tcp://127.0.0.1:99999", "is not a Dask scheduler address"),
+    ],
+)
+def test_bad_scheduler_addresses_are_one_line(tmp_path, capsys, address, needle):
+    path = tmp_path / "spec.toml"
+    path.write_text(_SWEEP_BASE + "[sweep]\nmass = [1.0, 2.0]\n")
+    pytest.importorskip("distributed")
+    argv = ["sweep", str(path), "--out", str(tmp_path / "out"), f"--scheduler={address}"]
+    _one_line_2(capsys, argv, needle)
+    assert not (tmp_path / "out").exists()

@@ -422,3 +422,247 @@ def test_any_sweep_expands_to_its_product_with_unique_keys(sizes, kind):
         claim="sweep",
         call=f"spec_from_dict(sweep={sweep})",
     )
+
+
+# --------------------------------------------------------------------------
+# issue 22: hangs
+# --------------------------------------------------------------------------
+class _NotAScheduler:
+    """A plain TCP server on 127.0.0.1: accepts and stays silent, or answers HTTP."""
+
+    def __init__(self, reply: bytes = b""):
+        import socket
+        import threading
+
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.port = self.sock.getsockname()[1]
+        self.reply, self.conns = reply, []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self):
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            self.conns.append(conn)
+            if self.reply:
+                conn.sendall(self.reply)
+
+    def close(self):
+        self.sock.close()
+        for c in self.conns:
+            c.close()
+
+
+@needs_dask
+@pytest.mark.parametrize(
+    "reply, needle",
+    [
+        (b"", "no Dask scheduler answered within 1 s"),
+        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 4, "not answer as a Dask scheduler"),
+    ],
+    ids=["silent", "http"],
+)
+def test_scheduler_address_of_another_service_times_out_in_one_line(
+    tmp_path, capsys, monkeypatch, reply, needle
+):
+    """Issue 22: ``--scheduler`` naming a non-Dask listener hung forever; now exit 2."""
+    import time
+
+    from reference_impl.sweep import _runner
+
+    monkeypatch.setattr(_runner, "_CONNECT_TIMEOUT", 1.0)  # 10 s in use
+    spec = tmp_path / "spec.toml"
+    spec.write_text(_SPEC)
+    server = _NotAScheduler(reply)
+    try:
+        t0 = time.monotonic()
+        code, out, err = _cli(
+            [
+                "sweep",
+                str(spec),
+                "--scheduler",
+                f"tcp://127.0.0.1:{server.port}",
+                "--out",
+                str(tmp_path / "out"),
+            ],
+            capsys,
+        )
+        waited = time.monotonic() - t0
+    finally:
+        server.close()
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and needle in lines[0], (
+        f"got exit {code}, stderr {err!r}, should be 2 with one line naming {needle!r}"
+    )
+    # The bound is the 1 s timeout plus start-up; a hang would never return.
+    assert waited < 30, f"got {waited:.1f} s, should return after the 1 s timeout"
+    assert not (tmp_path / "out").exists()
+
+
+def test_each_distinct_potential_is_validated_once(monkeypatch):
+    """Issue 22: 1e5 cases of one expression took ~40 min to validate (25 ms each)."""
+    from reference_impl.scenes import _scene
+
+    built = []
+    real = _scene._potential
+
+    def counting(err, table, path, depth=0):
+        if depth == 0:
+            built.append(json.dumps(table, sort_keys=True))
+        return real(err, table, path, depth)
+
+    monkeypatch.setattr(_scene, "_potential", counting)
+    masses = [round(0.5 + 0.01 * i, 4) for i in range(300)]
+    spec_text = textwrap.dedent(
+        f"""
+        task = "solve"
+        [scene]
+        mass = 1.0
+        velocities = [1.0]
+        [scene.potential]
+        family = "expression"
+        U = "k*q**2/2 + q**4/4"
+        params = {{ k = 1.0 }}
+        [sweep]
+        "potential.params.k" = [1.0, 2.0, -1.0]
+        mass = {masses}
+        """
+    )
+    seen = []
+    spec = parse_spec(spec_text, "<many>", progress=lambda done, total: seen.append((done, total)))
+    assert len(spec.cases) == 900 and len(spec.invalid) == 300
+    assert sorted(built) == sorted(set(built)) and len(built) == 3, (
+        f"got {len(built)} potential validations, should be 3 (one per distinct table)"
+    )
+    assert "potential.params.k" in spec.invalid[0].error or "k" in spec.invalid[0].error
+    assert spec.invalid[0].error.startswith(f"scene case {spec.invalid[0].index} ("), (
+        f"got {spec.invalid[0].error!r}, should name its own case"
+    )
+    assert seen[-1] == (900, 900) and len(seen) == 901, "got no progress while validating"
+
+
+@needs_dask
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="process listing needs /proc")
+def test_sigterm_to_a_bench_sweep_leaves_no_adapter_running(tmp_path):
+    """Issue 22: SIGTERM (CI's cancel) to ``hcv sweep`` of ``bench:`` left the adapters running.
+
+    One worker, one case whose adapter is ``sleep MARKER`` (it never answers): SIGTERM
+    once it runs; hcv must exit 143 with nothing of it left (the adapter runs in its
+    own session, below a worker process of the local cluster).
+    """
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    marker = "95.3391"
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        textwrap.dedent(
+            f"""
+            task = "bench:cmd:sleep {marker}"
+            [scene]
+            name = "s"
+            mass = 1.0
+            velocities = [1.0]
+            [scene.potential]
+            family = "power"
+            k = 1.0
+            p = 1.5
+            [sweep]
+            mass = [1.0]
+            """
+        )
+    )
+
+    def running() -> list[int]:
+        pids = []
+        for entry in Path("/proc").iterdir():
+            if entry.name.isdigit():
+                try:
+                    line = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+                except OSError:
+                    continue
+                if line.startswith(f"sleep {marker}"):
+                    pids.append(int(entry.name))
+        return pids
+
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "reference_impl.cli",
+            "sweep",
+            str(spec),
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        env={**os.environ, "PYTHONPATH": str(root)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not running() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert running(), "the adapter never started"
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 143, f"got exit {proc.returncode} ({err[-400:]}), should be 143"
+        deadline = time.monotonic() + 5
+        while running() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not running(), "got the adapter still running after SIGTERM [issue 22]"
+    finally:
+        proc.kill()
+        for pid in running():  # only the marker processes, by pid
+            os.kill(pid, signal.SIGKILL)
+
+
+def test_turning_points_are_searched_from_the_top_energy_down(monkeypatch):
+    """One search per potential, plus one per case that has no turning point.
+
+    U = 1 - exp(-q) never exceeds 1 J: the cases with E = m v0^2 / 2 >= 1 J have no
+    turning point and must be invalid with their own reason; every lower energy is
+    then known to have one (U rises continuously from 0), so it is not searched again.
+    """
+    from reference_impl.potentials import base
+
+    calls = []
+    real = base.Potential.turning_point
+
+    def counting(self, E, **kw):
+        calls.append(E)
+        return real(self, E, **kw)
+
+    monkeypatch.setattr(base.Potential, "turning_point", counting)
+    # E = 0.275 ... 1.525 J, never exactly 1 J (where the turning point is at infinity)
+    masses = [round(0.55 + 0.1 * i, 2) for i in range(26)]
+    spec = spec_from_dict(
+        {
+            "task": "solve",
+            "scene": {
+                "mass": 1.0,
+                "velocities": [1.0],
+                "potential": {"family": "expression", "U": "1 - exp(-q)"},
+            },
+            "sweep": {"mass": masses},
+        }
+    )
+    invalid = [c.params["mass"] for c in spec.cases if c.error]
+    assert invalid == [m for m in masses if m / 2 > 1.0], (
+        f"got invalid masses {invalid}, should be those with E >= 1 J [issue 22, validation]"
+    )
+    assert all("velocity 1 m/s" in c.error for c in spec.cases if c.error)
+    assert len(calls) == len(invalid) + 1, (
+        f"got {len(calls)} turning-point searches, should be {len(invalid) + 1}"
+    )

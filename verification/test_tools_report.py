@@ -18,6 +18,7 @@ import reference_impl.report as report
 from reference_impl import cli
 from reference_impl.errors import HCVInputError
 from reference_impl.report import _environment, build_report
+from reference_impl.report._files import MANIFEST
 from reference_impl.report.readme_table import END, START, readme_block, rewrite_readme
 from verification.assertions import assert_true
 
@@ -56,6 +57,9 @@ def _old_report(d: Path) -> dict[str, bytes]:
     (d / "NOTES.txt").write_text("not the report's")
     (d / "bench").mkdir()
     (d / "bench" / "exact.json").write_text("{}")  # written by nox -s bench, not the report
+    # What the previous run wrote, as its manifest lists it (NOTES.txt and bench/ are not).
+    files = ["figures/old.png", "index.html", "index.md", "results.json"]
+    (d / MANIFEST).write_text(json.dumps({"files": files}))
     return _snapshot(d)
 
 
@@ -120,6 +124,7 @@ def test_complete_run_swaps_in_and_keeps_foreign_files(tmp_path, fake):
     assert_true(
         set(snap)
         == {
+            MANIFEST,
             "NOTES.txt",
             "bench/exact.json",
             "figures/fig1.png",

@@ -284,15 +284,47 @@ class Trajectory:
         }
 
 
+_NONE = object()
+
+
+def _short_repr(value, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _array(name: str, value, who: str) -> np.ndarray:
     if value is None:
         raise AdapterOutputError(f"{who}: output has no {name!r}")
-    try:
-        a = np.asarray(
-            [np.nan if x is None else x for x in value] if isinstance(value, list) else value,
-            dtype=float,
+    if isinstance(value, (list, tuple)):
+        # Numbers only: numpy would read "1.5" or true as numbers, hiding a wrong writer.
+        bad = next(
+            (
+                x
+                for x in value
+                if x is not None
+                and not isinstance(x, (list, tuple))  # nested: refused below as not 1-D
+                and (isinstance(x, bool) or not isinstance(x, (int, float)))
+            ),
+            _NONE,
         )
-    except (TypeError, ValueError):
+        if bad is not _NONE:
+            raise AdapterOutputError(
+                f"{who}: {name!r} is not an array of numbers (or null): it holds {_short_repr(bad)}"
+            )
+        value = [np.nan if x is None else x for x in value]
+    elif isinstance(value, (str, bytes, Mapping)):
+        raise AdapterOutputError(
+            f"{who}: {name!r} is not an array of numbers, got {_short_repr(value)}"
+        )
+    else:
+        kind = getattr(np.asarray(value), "dtype", np.dtype(object)).kind
+        if kind not in "fiu":
+            raise AdapterOutputError(
+                f"{who}: {name!r} is not an array of numbers (dtype kind {kind!r})"
+            )
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
         raise AdapterOutputError(f"{who}: {name!r} is not an array of numbers") from None
     if a.ndim != 1:
         raise AdapterOutputError(f"{who}: {name!r} must be 1-D, got shape {a.shape}")

@@ -79,6 +79,7 @@ import math
 import os
 import selectors
 import shlex
+import shutil
 import signal
 import subprocess
 import time
@@ -137,6 +138,16 @@ def _tail(text: str) -> str:
     return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
 
 
+# Keys of a response's implemented_law object, and of its damping table per law: anything
+# else is a typo whose silent omission would change the law the code is judged against.
+_LAW_KEYS = ("potential", "mass", "damping", "clips_tension", "description")
+_DAMPING_KEYS = {
+    "none": ("law",),
+    "universal": ("law", "zeta"),
+    "power": ("law", "c", "exponent"),
+}
+
+
 def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     """An `ImplementedLaw` from the ``implemented_law`` object of a response."""
     if not isinstance(data, Mapping):
@@ -149,22 +160,42 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
         )
     except HCVInputError as exc:
         raise AdapterOutputError(f"{who}: {exc}") from None
+    unknown = sorted(set(data) - set(_LAW_KEYS))
+    if unknown:
+        raise AdapterOutputError(
+            f"{who}: unknown key 'implemented_law.{unknown[0]}' (allowed: {', '.join(_LAW_KEYS)})"
+        )
     mass = data.get("mass", scene.mass)
     damping = data.get("damping", {"law": "none"})
-    if not isinstance(mass, (int, float)) or not mass > 0 or not isinstance(damping, Mapping):
+    if (
+        isinstance(mass, bool)
+        or not isinstance(mass, (int, float))
+        or not mass > 0
+        or not isinstance(damping, Mapping)
+    ):
         raise AdapterOutputError(f"{who}: 'implemented_law' needs mass > 0 and a damping object")
     law = damping.get("law")
-    kw = dict(
-        clips_tension=bool(data.get("clips_tension", False)),
-        description=str(data.get("description", "")),
-    )
+    extra = sorted(set(damping) - set(_DAMPING_KEYS.get(law, ("law",))))
+    if extra:
+        raise AdapterOutputError(
+            f"{who}: unknown key 'implemented_law.damping.{extra[0]}' for law {law!r}"
+        )
+    clips = data.get("clips_tension", False)
+    if not isinstance(clips, bool):
+        raise AdapterOutputError(
+            f"{who}: 'implemented_law.clips_tension' must be true or false, got {clips!r}"
+        )
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise AdapterOutputError(f"{who}: 'implemented_law.description' must be a string")
+    kw = dict(clips_tension=clips, description=description)
     try:
         if law == "none":
             return ImplementedLaw(pot, float(mass), zeta=0.0, **kw)
         if law == "universal":
-            return ImplementedLaw(pot, float(mass), zeta=float(damping["zeta"]), **kw)
+            return ImplementedLaw(pot, float(mass), zeta=_num(damping["zeta"]), **kw)
         if law == "power":
-            c, a = float(damping["c"]), float(damping.get("exponent", 0.0))
+            c, a = _num(damping["c"]), _num(damping.get("exponent", 0.0))
             if not (math.isfinite(c) and c >= 0 and math.isfinite(a)):
                 raise ValueError("c must be >= 0 and exponent finite")
             return ImplementedLaw(pot, float(mass), C=PowerDamping(c, a), **kw)
@@ -173,6 +204,13 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     raise AdapterOutputError(
         f"{who}: implemented_law.damping.law must be none, universal or power, got {law!r}"
     )
+
+
+def _num(value) -> float:
+    """A JSON number (never a string or a boolean) as a float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"expected a number, got {value!r}")
+    return float(value)
 
 
 class SubprocessAdapter(ContactAdapter):
@@ -225,6 +263,15 @@ class SubprocessAdapter(ContactAdapter):
         timeout = 60.0 if timeout is None else timeout
         if not (isinstance(timeout, (int, float)) and math.isfinite(timeout) and timeout > 0):
             raise HCVInputError(f"subprocess adapter: timeout must be > 0 s, got {timeout!r}")
+        if not isinstance(sustained, bool):
+            raise HCVInputError(
+                f"subprocess adapter: sustained must be true or false, got {sustained!r}"
+            )
+        if label is not None and not isinstance(label, str):
+            raise HCVInputError(f"subprocess adapter: label must be text, got {label!r}")
+        if cwd is not None and not (isinstance(cwd, str) and os.path.isdir(cwd)):
+            raise HCVInputError(f"subprocess adapter: cwd {cwd!r} is not a directory")
+        _check_program(argv[0], cwd)
         self.argv = argv
         self.timeout = float(timeout)
         self.cwd = cwd
@@ -376,6 +423,27 @@ class SubprocessAdapter(ContactAdapter):
         """The law declared in the last response for this scene and speed, else the scene's."""
         law = self._laws.get((scene.name, scene.v0))
         return law if law is not None else super().implemented_law(scene)
+
+
+def _check_program(prog: str, cwd: str | None) -> None:
+    """The command's program exists and is executable: a configuration error otherwise.
+
+    A missing program is the user's setup, not a failure of the code under test, so
+    it is refused before any run (exit status 2) instead of failing every run.
+    """
+    if os.sep in prog or (os.altsep and os.altsep in prog):
+        path = prog if os.path.isabs(prog) else os.path.join(cwd or os.getcwd(), prog)
+        if not os.path.isfile(path):
+            raise HCVInputError(f"subprocess adapter: program {prog!r} does not exist")
+        if not os.access(path, os.X_OK):
+            raise HCVInputError(
+                f"subprocess adapter: program {prog!r} is not executable (chmod +x, or run "
+                "it through its interpreter, e.g. cmd:python3 my_code.py)"
+            )
+    elif shutil.which(prog) is None:
+        raise HCVInputError(
+            f"subprocess adapter: program {prog!r} is not found on PATH; give its path"
+        )
 
 
 def _signame(num: int) -> str:

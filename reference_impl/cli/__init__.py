@@ -17,7 +17,7 @@ import sys
 from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, run_command
+from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, interrupted, run_command
 from reference_impl.tasks import solve_scene
 
 __all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
@@ -155,6 +155,9 @@ def _check_out_dir(path: str) -> None:
     """An output directory must be a writable directory, or creatable in one."""
     from pathlib import Path
 
+    from reference_impl._userfiles import check_path
+
+    check_path(path, "--out")
     p = Path(path)
     if p.exists():
         if not p.is_dir():
@@ -199,6 +202,7 @@ def _cmd_report(args) -> int:
             progress=lambda text: status.update(f"hcv report: {text}"),
             adapters=args.adapter or (),
             workers=args.workers,
+            force=args.force,
         )
     for c in results["claims"]:
         print(f"{c['verdict']:>12}  {c['id']}")
@@ -312,6 +316,12 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
     rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
     rp.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a directory that holds files hcv report did not write (kept, "
+        "except files of the report's names, which are replaced)",
+    )
+    rp.add_argument(
         "--adapter",
         action="append",
         metavar="ADAPTER",
@@ -338,15 +348,42 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+# Commands that start processes (adapters, cluster workers): run as a child subreaper so
+# that a daemonised adapter is still ours to kill at the end (reference_impl._procs).
+_SPAWNING = ("bench", "sweep", "report")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``hcv`` console script; returns the exit status."""
-    try:
-        parser = _parser()
-        args = parser.parse_args(argv)
-    except KeyboardInterrupt:
-        print("hcv: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    return run_command(args)
+    """Entry point of the ``hcv`` console script; returns the exit status.
+
+    Run from the command line (``argv`` None), SIGTERM is handled like Ctrl-C
+    (exit 143), and commands that start processes become the subreaper of their
+    descendants and kill any left when they end (`reference_impl._procs`). With
+    an explicit ``argv`` (tests, scripts) the caller's signals and children are
+    left alone.
+    """
+    from reference_impl import _procs
+
+    if argv is not None:
+        try:
+            args = _parser().parse_args(argv)
+        except KeyboardInterrupt:
+            return interrupted()
+        return run_command(args)
+    with _procs.sigterm_as_interrupt():
+        try:
+            args = _parser().parse_args(argv)
+        except KeyboardInterrupt:
+            return interrupted()
+        spawning = args.command in _SPAWNING and _procs.become_subreaper()
+        try:
+            code = run_command(args)
+        finally:
+            if spawning:
+                _procs.kill_descendants()
+        if code == EXIT_INTERRUPTED and _procs.terminated() is not None:
+            code = 128 + _procs.terminated()  # a command that reported the interrupt itself
+        return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["EXIT_FAIL", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "run_command"]
+__all__ = ["EXIT_FAIL", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "interrupted", "run_command"]
 
 # Exit statuses (shared with `hcv bench --gate`, which adds 3: our reference failed).
 EXIT_OK = 0
@@ -27,8 +28,7 @@ def run_command(args) -> int:
         print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
-        print("hcv: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return interrupted()
     except (RecursionError, OverflowError, MemoryError) as exc:
         # Sizes are bounded before work starts; this is the backstop for an input that
         # still exhausts a limit (nesting, float range, memory).
@@ -41,3 +41,26 @@ def run_command(args) -> int:
         # Output piped into e.g. `head`: stop quietly, as Unix tools do.
         sys.stderr.close()
         return EXIT_OK
+    except OSError as exc:
+        # Paths are checked before work starts; this is the backstop for one the file
+        # system still refuses (a name too long, a permission changed meanwhile).
+        where = f"{_short_path(exc.filename)}: " if exc.filename else ""
+        print(f"hcv: error: {where}{exc.strerror or _one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+def _short_path(name) -> str:
+    text = os.fsdecode(name) if isinstance(name, (bytes, str)) else str(name)
+    return text if len(text) <= 80 else text[:38] + "..." + text[-38:]
+
+
+def interrupted() -> int:
+    """The line and status of Ctrl-C (130) or SIGTERM handled like it (143)."""
+    from reference_impl._procs import terminated
+
+    signum = terminated()
+    if signum is not None:
+        print("hcv: terminated (SIGTERM)", file=sys.stderr)
+        return 128 + signum
+    print("hcv: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED

@@ -27,6 +27,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from reference_impl._userfiles import check_path, refuse_output_onto_input
 from reference_impl.errors import HCVInputError
 
 __all__ = ["add_bench_parser", "cmd_bench", "main"]
@@ -70,6 +71,23 @@ def check_output_file(path: str, option: str) -> None:
         raise HCVInputError(f"{option} {path}: exists and is not a writable regular file")
 
 
+def _check_files(args, scenes: list[str] | None) -> None:
+    """Every path fits the file system; outputs are writable and never an input."""
+    outputs = {f"--{o}": getattr(args, o) for o in ("json", "junit", "plot", "markdown")}
+    inputs = {"--tolerances": args.tolerances}
+    for i, s in enumerate(scenes or ()):
+        check_path(s, "--scenes")
+        if os.path.isfile(s):  # a TOML file (else an embedded scene's name)
+            inputs[f"--scenes {s}" if i else "--scenes"] = s
+    if args.tolerances:
+        check_path(args.tolerances, "--tolerances")
+    for option, path in outputs.items():
+        if path:
+            check_path(path, option)
+            check_output_file(path, option)
+    refuse_output_onto_input(outputs, inputs)
+
+
 class _Lines:
     """Progress as plain lines on stderr (no terminal: CI logs), at most one per step."""
 
@@ -109,9 +127,10 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     b.add_argument(
         "--scenes",
         nargs="+",
+        action="extend",
         metavar="SCENE",
-        help="scene names or TOML files (space or comma separated); default: "
-        "hertz, hertz-damped, hooke-damped, hertz-walls",
+        help="scene names or TOML files (space or comma separated; repeatable, all are run); "
+        "default: hertz, hertz-damped, hooke-damped, hertz-walls",
     )
     b.add_argument(
         "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
@@ -136,9 +155,7 @@ def cmd_bench(args) -> int:
     from reference_impl.bench.runner import run_bench
 
     scenes = _scene_args(args.scenes)
-    for option in ("json", "junit", "plot", "markdown"):
-        if getattr(args, option):
-            check_output_file(getattr(args, option), f"--{option}")
+    _check_files(args, scenes)
     if sys.stderr.isatty():
         from rich.progress import Progress
 

@@ -13,10 +13,13 @@ written).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
 import time
 from pathlib import Path
 
+from reference_impl._userfiles import DirLock, check_writable_dir
 from reference_impl.errors import HCVInputError
 
 __all__ = ["add_parser", "run", "run_sweep"]
@@ -24,6 +27,10 @@ __all__ = ["add_parser", "run", "run_sweep"]
 EXIT_OK, EXIT_FAIL, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 # Plain progress lines (not a terminal): at most one per this many seconds.
 _PLAIN_EVERY = 5.0
+# The lock file that marks a directory as a sweep's and keeps a second sweep out of it.
+LOCK_NAME = ".hcv-sweep.lock"
+# What a sweep writes into DIR besides cases.jsonl (never over a user's files of these names).
+OUTPUT_NAMES = ("spec.toml", "summary.md", "summary.png", "results.parquet")
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -138,41 +145,115 @@ def run_sweep(
     scheduler: str | None = None,
     resume: bool = False,
     progress: bool | None = None,
+    on_start=None,
 ) -> dict:
     """Run a validated `SweepSpec` into ``out_dir``; the function ``hcv sweep`` calls.
 
     Returns a dict with ``cases``, ``ok``, ``failed``, ``rows``, ``seconds`` and
     ``interrupted`` (True after Ctrl-C; the results so far are written, the
     cluster closed). Raises `HCVInputError` for bad options (nothing run).
+    ``on_start()`` is called once the options are accepted and the cluster answers
+    (before anything is written), e.g. to print notes that a refusal must not precede.
     """
-    from reference_impl.sweep._output import CaseStore, consolidate, write_parquet, write_summary
-    from reference_impl.sweep._runner import dask_available, iter_outcomes, open_client
-    from reference_impl.sweep._tasks import run_case
+    from reference_impl.sweep._output import CaseStore
+    from reference_impl.sweep._runner import check_scheduler_address, dask_available
 
     if workers is not None and workers < 1:
         raise HCVInputError(f"--workers must be >= 1, got {workers}")
-    if workers is not None and scheduler:
-        raise HCVInputError(
-            "--workers sizes a local cluster; with --scheduler the cluster's "
-            "own workers run the sweep (give one or the other)"
-        )
+    if scheduler is not None:
+        if workers is not None:
+            raise HCVInputError(
+                "--workers sizes a local cluster; with --scheduler the cluster's "
+                "own workers run the sweep (give one or the other)"
+            )
     if not dask_available():
         raise HCVInputError("hcv sweep needs dask.distributed: pip install -e '.[sweep]'")
+    if scheduler is not None:
+        scheduler = check_scheduler_address(scheduler)
+    elif spec.task.startswith("bench:"):
+        # The local workers build the adapter as this process would: a configuration
+        # error (a cmd: program that does not exist) is refused now, not once per case.
+        # (On a remote cluster the program lives on the workers: checked there.)
+        from reference_impl.adapters.registry import get_adapter
+
+        get_adapter(spec.task[len("bench:") :]).close()
     out = Path(out_dir)
     store = CaseStore(out)
-    if out.exists() and not out.is_dir():
-        raise HCVInputError(f"--out {out}: exists and is not a directory")
-    if store.exists() and not resume:
+    _check_out(out, store)
+    with _claim(out, store, resume) as records:
+        return _run_claimed(spec, out, store, records, workers, scheduler, progress, on_start)
+
+
+def _check_out(out: Path, store) -> None:
+    """Refuse an output directory that cannot be written or holds a user's files."""
+    check_writable_dir(out, "--out")
+    if os.path.lexists(store.path) and not store.path.is_file():
         raise HCVInputError(
-            f"--out {out}: already holds a sweep (cases.jsonl); add --resume "
-            "to continue it or choose another directory"
+            f"--out {out}: {store.path.name} is not a regular file (a sweep stores its cases "
+            "there); move it away or choose another directory"
         )
-    records = store.load()
+    # A directory without the case store and without the lock file was not written by a
+    # sweep: its spec.toml, summary.md or results.parquet belong to someone else.
+    if out.is_dir() and not os.path.lexists(store.path) and not (out / LOCK_NAME).exists():
+        theirs = [n for n in OUTPUT_NAMES if os.path.lexists(out / n)]
+        if theirs:
+            raise HCVInputError(
+                f"--out {out}: holds {', '.join(theirs)} but no sweep ({store.path.name}); "
+                "a sweep would overwrite them: choose another directory"
+            )
+
+
+@contextlib.contextmanager
+def _claim(out: Path, store, resume: bool):
+    """Create DIR if needed and hold its lock; yield the stored records.
+
+    A second sweep into the same DIR is refused while the first runs (`DirLock`).
+    When nothing was written (refused: exit status 2, or interrupted before the
+    cluster answered), what this created is removed again (the lock file, DIR).
+    """
+    made_dir = not out.exists()
+    lock_path = out / LOCK_NAME
+    made_lock = not lock_path.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    lock = DirLock(out, LOCK_NAME, "--out")
+
+    def undo() -> None:
+        if made_lock and not os.path.lexists(store.path):
+            with contextlib.suppress(OSError):
+                lock_path.unlink()
+        if made_dir:
+            with contextlib.suppress(OSError):
+                out.rmdir()  # only when empty
+
+    try:
+        lock.acquire()
+    except BaseException:
+        undo()
+        raise
+    try:
+        if store.exists() and not resume:
+            raise HCVInputError(
+                f"--out {out}: already holds a sweep (cases.jsonl); add --resume "
+                "to continue it or choose another directory"
+            )
+        yield store.load()
+    finally:
+        lock.release()
+        if not os.path.lexists(store.path) and not os.path.lexists(out / "spec.toml"):
+            undo()  # refused or interrupted before anything was written
+
+
+def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, on_start) -> dict:
+    from reference_impl.sweep._output import consolidate, write_parquet, write_summary
+    from reference_impl.sweep._runner import iter_outcomes, open_client
+    from reference_impl.sweep._tasks import run_case
+
     todo = [c for c in spec.cases if not c.error and c.key not in records]
 
     def prepare() -> None:
-        """Create DIR, copy the spec, store the invalid cases (after the cluster is reachable)."""
-        out.mkdir(parents=True, exist_ok=True)
+        """Copy the spec, store the invalid cases (after the cluster is reachable)."""
+        if on_start is not None:
+            on_start()
         (out / "spec.toml").write_text(spec.text, encoding="utf-8")
         for case in spec.invalid:  # a row with the reason; never sent to a worker
             if case.key not in records:
@@ -216,7 +297,7 @@ def run_sweep(
                         disp.update(o.ok)
     except KeyboardInterrupt:
         interrupted = True
-        if not out.is_dir():  # interrupted before anything was written
+        if not (out / "spec.toml").exists():  # interrupted before anything was written
             return {"interrupted": True}
     seconds = time.perf_counter() - t0
     df = consolidate(spec, records)
@@ -236,28 +317,61 @@ def run_sweep(
     }
 
 
+class _Validating:
+    """Progress of spec validation: a plain line after 1 s, then every few seconds."""
+
+    def __init__(self):
+        self.t0 = time.monotonic()
+        self.last = None
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.monotonic()
+        if now - self.t0 < 1.0 or (self.last is not None and now - self.last < _PLAIN_EVERY):
+            if not (done == total and self.last is not None):
+                return
+        self.last = now
+        print(
+            f"sweep: validated {done}/{total} cases ({now - self.t0:.0f} s)",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
 def run(args) -> int:
     """``hcv sweep`` for parsed arguments; returns the exit status."""
     from reference_impl.sweep._spec import load_spec
 
     try:
-        spec = load_spec(args.spec)
+        spec = load_spec(args.spec, progress=_Validating())
         out = Path(args.out or f"sweep-{Path(args.spec).stem}")
-        if spec.invalid:
-            first = spec.invalid[0]
-            print(
-                f"sweep: {len(spec.invalid)} of {len(spec.cases)} cases have invalid "
-                f"parameters and are recorded as failed (first: {first.error})",
-                file=sys.stderr,
-            )
+
+        def note() -> None:
+            if spec.invalid:
+                first = spec.invalid[0]
+                print(
+                    f"sweep: {len(spec.invalid)} of {len(spec.cases)} cases have invalid "
+                    f"parameters and are recorded as failed (first: {first.error})",
+                    file=sys.stderr,
+                )
+
         res = run_sweep(
-            spec, out, workers=args.workers, scheduler=args.scheduler, resume=args.resume
+            spec,
+            out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            resume=args.resume,
+            on_start=note,
         )
     except KeyboardInterrupt:  # during validation or cluster start-up
         res = {"interrupted": True}
     if res["interrupted"]:
-        print("interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        from reference_impl._procs import terminated
+
+        print(
+            "hcv: terminated (SIGTERM)" if terminated() else "interrupted",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED  # the CLI makes it 143 after SIGTERM
     print(
         f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ok, "
         f"{res['failed']} failed), {out / 'summary.md'} in {res['seconds']:.1f} s on {res['where']}"

@@ -126,14 +126,17 @@ def build_report(
     adapters=(),
     readme: str | Path | None = "auto",
     workers: int = 0,
+    force: bool = False,
 ) -> dict:
     """Run every verification and write the report; returns the results dict.
 
     Parameters
     ----------
     out_dir : str or Path
-        Output directory. It is replaced as a whole when the run completes
-        (entries of it that the report does not write are kept).
+        Output directory (a symlink is followed). The report's files are moved in
+        when the run completes; files it did not write are kept, and a directory
+        holding files it does not own is refused unless ``force`` (see
+        `reference_impl.report._files`).
     quick : bool
         Smaller study (see `quick_drops`), for CI and ``hcv report --quick``.
     progress : callable, optional
@@ -150,6 +153,9 @@ def build_report(
         0 (default): the critical-step map runs in a second process beside the claims.
         N > 0: it runs on a local Dask cluster of N processes (``hcv sweep``'s engine;
         needs the ``sweep`` extra), which pays off on machines with more than 2 cores.
+    force : bool
+        Write into a directory that holds files the report did not write (its
+        manifest does not list them); files of the report's names are replaced.
 
     Returns
     -------
@@ -162,7 +168,7 @@ def build_report(
         A bad argument (unknown adapter, unwritable or non-directory ``out_dir``),
         before anything is run or written.
     """
-    out, adapters = validate_report_args(out_dir, adapters)
+    out, adapters = validate_report_args(out_dir, adapters, force=force)
     readme_path = _readme_for(out, readme)
     from reference_impl.claims import sec6_dt_safe_bound, thm2_harmonic
     from reference_impl.report._environment import environment

@@ -26,6 +26,7 @@ one line naming the scene and the offending key.
 from __future__ import annotations
 
 import difflib
+import json
 import math
 import os
 import sys
@@ -299,12 +300,37 @@ def _damping(err: _Where, table) -> tuple[str, float | None]:
     return law, c0 / (2.0 * math.sqrt(K * M))
 
 
+# Stands for the scene's source in a cached potential error (replaced by each scene's own).
+_SOURCE_MARK = "\x00scene-source\x00"
+
+
+def _cached_potential(err: _Where, table, cache: dict | None) -> tuple[Potential, str | None]:
+    """`_potential` of the scene's table and its cache key (None: not cached)."""
+    if cache is None:
+        return _potential(err, table, "potential"), None
+    try:
+        key = json.dumps(table, sort_keys=True, default=repr)
+    except (TypeError, ValueError, RecursionError):  # not plain data: no caching
+        return _potential(err, table, "potential"), None
+    if key not in cache:
+        try:
+            cache[key] = _potential(_Where(_SOURCE_MARK), table, "potential")
+        except HCVInputError as exc:
+            cache[key] = exc
+    hit = cache[key]
+    if isinstance(hit, HCVInputError):
+        raise type(hit)(str(hit).replace(_SOURCE_MARK, err.source))
+    return hit, key
+
+
 def _with_context(exc: HCVInputError, prefix: str) -> HCVInputError:
     """The same error type with the scene context in front of its message."""
     return type(exc)(f"{prefix}: {exc}")
 
 
-def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
+def scene_from_dict(
+    data: dict[str, Any], source: str = "<dict>", *, potentials: dict | None = None
+) -> Scene:
     """Validate a parsed scene document and build the `Scene`.
 
     Parameters
@@ -313,6 +339,10 @@ def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
         The TOML document as a dict (see the module docstring for the keys).
     source : str
         Label used in error messages and stored as ``Scene.source``.
+    potentials : dict, optional
+        A cache shared by many scenes (a sweep's cases): each distinct
+        ``[potential]`` table is validated once (an expression's exact sympy
+        checks cost ~25 ms) and its potential, or its error, reused.
 
     Raises
     ------
@@ -342,14 +372,21 @@ def scene_from_dict(data: dict[str, Any], source: str = "<dict>") -> Scene:
     elif "gap" in data:
         raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
     law, zeta = _damping(err, data.get("damping", {}))
-    potential = _potential(err, data["potential"], "potential")
+    potential, key = _cached_potential(err, data["potential"], potentials)
+    # A potential with a turning point at energy E has one at every lower energy (U rises
+    # continuously from 0): with a cache, energies up to the largest one checked are known.
+    checked = potentials.get(("energy", key), 0.0) if key is not None else 0.0
     for v in velocities:
         energy = 0.5 * mass * v * v
+        if energy <= checked:
+            continue
         try:
             potential.turning_point(energy)
         except HCVInputError as exc:
             prefix = f"scene {source}: velocity {v:g} m/s (E = {energy:.6g} J)"
             raise _with_context(exc, prefix) from exc
+        if key is not None:
+            checked = potentials[("energy", key)] = energy
     return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source)
 
 

@@ -24,7 +24,16 @@ from typing import Any
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["CaseFailed", "Outcome", "dask_available", "iter_outcomes", "open_client", "run_cases"]
+__all__ = [
+    "CaseFailed",
+    "Outcome",
+    "check_scheduler_address",
+    "dask_available",
+    "iter_outcomes",
+    "open_client",
+    "probe_scheduler",
+    "run_cases",
+]
 
 # Cases in flight per worker thread: enough to keep every worker busy while the
 # client stores results, small enough that Ctrl-C or a kill loses little.
@@ -33,8 +42,11 @@ _WINDOW_PER_THREAD = 4
 # an isolated bench adapter); one queued case per worker thread, so a worker
 # that dies takes down only the case it was running, not an innocent neighbour.
 _LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
-# Seconds to wait for an existing scheduler to answer.
+# Seconds to wait for an existing scheduler to answer (connection and handshake: a
+# scheduler answers its identity in milliseconds; a slow network gets 1000 times that).
 _CONNECT_TIMEOUT = 10
+# Transports whose addresses are host:port (distributed.comm); a port is 1..65535.
+_HOST_PORT_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
 # Loggers that report normal cluster shutdown as warnings.
 _QUIET_LOGGERS = (
     "distributed",
@@ -132,6 +144,82 @@ def _quiet():
             logging.getLogger(name).setLevel(level)
 
 
+def check_scheduler_address(address) -> str:
+    """The address of ``--scheduler`` checked for form (one-line `HCVInputError`); no I/O.
+
+    An empty address is refused rather than read as "no scheduler" (local cluster).
+    """
+    if not isinstance(address, str) or not address.strip():
+        raise HCVInputError(
+            f"--scheduler {address!r}: give the scheduler's address, e.g. tcp://host:8786, "
+            "or leave --scheduler out for a local cluster"
+        )
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, loc = parse_address(address.strip(), strict=False)
+        if scheme in _HOST_PORT_SCHEMES:
+            host, port = parse_host_port(loc)
+            if not 0 < int(port) < 65536:
+                raise ValueError(f"port {port} is not in 1..65535")
+    except (ValueError, TypeError) as exc:
+        raise HCVInputError(
+            f"--scheduler {address!r} is not a Dask scheduler address such as "
+            f"tcp://host:8786 ({exc})"
+        ) from None
+    return address.strip()
+
+
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
+    """Ask ``address`` for its identity within ``timeout`` s; `HCVInputError` unless a scheduler.
+
+    ``timeout`` defaults to `_CONNECT_TIMEOUT`.
+
+    ``distributed.Client(address, timeout=...)`` bounds the TCP connection but not the
+    handshake after it, so a server that accepts and never answers (a dashboard port,
+    any other service) would hang it forever; this bounds both.
+    """
+    import asyncio
+
+    from distributed.core import rpc
+
+    timeout = _CONNECT_TIMEOUT if timeout is None else timeout
+
+    async def identity():
+        r = rpc(address, timeout=timeout)
+        try:
+            return await r.identity()
+        finally:
+            await r.close_rpc()
+
+    async def bounded():
+        return await asyncio.wait_for(identity(), timeout)
+
+    with _quiet():
+        try:
+            info = asyncio.run(bounded())
+        except TimeoutError:
+            raise HCVInputError(
+                f"--scheduler {address}: no Dask scheduler answered within {timeout:g} s "
+                "(is this the scheduler's port, e.g. 8786, and not its dashboard?)"
+            ) from None
+        except OSError as exc:  # refused, reset, unreachable
+            raise HCVInputError(
+                f"cannot connect to the Dask scheduler {address!r}: {_one_line(exc)}"
+            ) from None
+        except Exception as exc:  # garbage on the wire: some other service listens there
+            raise HCVInputError(
+                f"--scheduler {address}: the server there does not answer as a Dask "
+                f"scheduler ({_one_line(exc)[:120]})"
+            ) from None
+    if not isinstance(info, dict) or info.get("type") != "Scheduler":
+        kind = info.get("type") if isinstance(info, dict) else type(info).__name__
+        raise HCVInputError(
+            f"--scheduler {address}: the server there is not a Dask scheduler "
+            f"(it says it is {kind!r})"
+        )
+
+
 @contextlib.contextmanager
 def open_client(workers: int | None = None, scheduler: str | None = None):
     """A `distributed.Client`: a new local cluster, or the scheduler at ``scheduler``.
@@ -154,10 +242,12 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
 
     cluster = client = None
     try:
-        if scheduler:
+        if scheduler is not None:
+            scheduler = check_scheduler_address(scheduler)
+            probe_scheduler(scheduler)
             try:
                 client = Client(scheduler, timeout=f"{_CONNECT_TIMEOUT}s")
-            except (OSError, TimeoutError) as exc:
+            except (OSError, TimeoutError, ValueError) as exc:
                 raise HCVInputError(
                     f"cannot connect to the Dask scheduler {scheduler!r}: {_one_line(exc)}"
                 ) from None

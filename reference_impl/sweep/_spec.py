@@ -171,8 +171,15 @@ def _set_path(table: dict, path: str, value: Any) -> None:
         if nxt is None:
             nxt = node[part] = [] if parts[i + 1].isdigit() else {}
         node = nxt
+        if not isinstance(node, (dict, list)):
+            raise SweepSpecError(
+                f"sweep key {path!r} goes through {'.'.join(parts[: i + 1])!r} = {node!r}, "
+                "which is a value, not a table"
+            )
     last = parts[-1]
     if isinstance(node, list):
+        if not last.isdigit() or int(last) >= len(node):
+            raise SweepSpecError(f"sweep key {path!r}: {last!r} is not an index of that array")
         node[int(last)] = value
     else:
         node[last] = value
@@ -186,7 +193,7 @@ def _check_path(err_src: str, path: str, scene: dict) -> None:
             f"spec {err_src}: sweep key {path!r} is not a dotted path such as 'potential.p'"
         )
     node: Any = scene
-    for part in parts:
+    for i, part in enumerate(parts):
         if isinstance(node, list):
             if not part.isdigit() or int(part) >= len(node):
                 raise SweepSpecError(
@@ -196,8 +203,25 @@ def _check_path(err_src: str, path: str, scene: dict) -> None:
             node = node[int(part)]
         elif isinstance(node, dict):
             node = node.get(part)
-        else:
+        elif node is None:  # a table the sweep creates (e.g. damping.zeta without [damping])
             return
+        else:
+            where = ".".join(parts[:i])
+            raise SweepSpecError(
+                f"spec {err_src}: sweep key {path!r} goes through {where!r} = {node!r}, "
+                "which is a value, not a table"
+            )
+
+
+def _check_nesting(err_src: str, paths: list[str]) -> None:
+    """No swept key may lie inside another ("potential" and "potential.p")."""
+    for a in paths:
+        for b in paths:
+            if a != b and b.startswith(a + "."):
+                raise SweepSpecError(
+                    f"spec {err_src}: sweep keys {a!r} and {b!r} overlap ({b!r} lies inside "
+                    f"{a!r}); sweep whole {a!r} tables or {b!r}, not both"
+                )
 
 
 def _key(task: str, criterion: str | None, scene: dict) -> str:
@@ -245,7 +269,9 @@ def _check_task(src: str, task) -> str:
     return task
 
 
-def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) -> SweepSpec:
+def spec_from_dict(
+    data: dict, source: str = "<dict>", text: str | None = None, progress=None
+) -> SweepSpec:
     """Validate a parsed spec and expand it into validated cases.
 
     Parameters
@@ -256,14 +282,15 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
         Label for messages.
     text : str, optional
         The TOML text (kept for DIR/spec.toml); rebuilt from ``data`` if None.
+    progress : callable, optional
+        ``progress(done, total)`` while the cases are validated (each distinct
+        potential is validated once, so a large sweep of one expression is quick).
 
     Raises
     ------
     SweepSpecError
         Any spec-level problem, or when every case's scene is invalid.
     """
-    from reference_impl.stability.search import parse_criterion
-    from reference_impl.scenes import scene_from_dict
 
     src = source
     if not isinstance(data, dict):
@@ -306,6 +333,7 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
                 raise SweepSpecError(f"spec {src}: sweep {path!r} repeats the value {v!r}")
             seen.add(canon)
         n *= len(values)
+    _check_nesting(src, list(sweep))
     if n > MAX_CASES:
         raise SweepSpecError(
             f"spec {src}: {n} cases is more than the maximum {MAX_CASES}; "
@@ -315,18 +343,79 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
         task, crit, float(timeout), scene, sweep, src, text if text is not None else _to_toml(data)
     )
     paths = list(sweep)
+    expanded = []  # (params, case scene) in product order
     for index, combo in enumerate(itertools.product(*(sweep[p] for p in paths))):
         case_scene = copy.deepcopy(scene)
         params = dict(zip(paths, combo, strict=True))
         for p, v in params.items():
             if p == "velocities" and not isinstance(v, list):
                 v = [v]  # a scalar speed: one speed per case
-            _set_path(case_scene, p, copy.deepcopy(v))
-        raw_kind = case_scene.get("kind", "impact")
-        ctext = crit.get(raw_kind) if isinstance(raw_kind, str) else None
-        error = ""
+            try:
+                _set_path(case_scene, p, copy.deepcopy(v))
+            except SweepSpecError as exc:
+                raise SweepSpecError(
+                    f"spec {src}: case {index} ({_label(params)}): {exc}"
+                ) from None
+        expanded.append((params, case_scene))
+    ctexts = [_case_criterion(crit, cs) for _, cs in expanded]
+    errors = _validate_cases(src, task, expanded, ctexts, progress)
+    keys: dict[str, int] = {}
+    for index, ((params, case_scene), ctext, error) in enumerate(
+        zip(expanded, ctexts, errors, strict=True)
+    ):
+        key = _key(task, ctext, case_scene)
+        if key in keys:
+            first = spec.cases[keys[key]]
+            raise SweepSpecError(
+                f"spec {src}: cases {first.index} ({_label(first.params)}) and {index} "
+                f"({_label(params)}) give the same scene; remove one of the values"
+            )
+        keys[key] = index
+        spec.cases.append(Case(index, key, params, case_scene, task, ctext, float(timeout), error))
+    if all(c.error for c in spec.cases):
+        raise SweepSpecError(f"spec {src}: every case is invalid; first: {spec.cases[0].error}")
+    return spec
+
+
+def _case_criterion(crit: dict, case_scene: dict) -> str | None:
+    raw_kind = case_scene.get("kind", "impact")
+    return crit.get(raw_kind) if isinstance(raw_kind, str) else None
+
+
+def _energy(case_scene: dict) -> float:
+    """Largest impact energy of a case scene (J), -inf when its numbers are not numbers."""
+    m, vels = case_scene.get("mass"), case_scene.get("velocities")
+    try:
+        e = max(0.5 * float(m) * float(v) ** 2 for v in vels)
+    except (TypeError, ValueError, OverflowError):
+        return -math.inf
+    return e if math.isfinite(e) else -math.inf
+
+
+def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
+    """Validate every case's scene; the error of each ('' when valid), in product order.
+
+    Each distinct potential is validated once (the cache of `scene_from_dict`), and
+    cases are validated from the largest impact energy down: once a potential has a
+    turning point at energy E it has one at every lower energy (U rises continuously
+    from 0), so the turning-point search runs about once per potential instead of
+    once per case (issue 22: 1e5 cases of one expression took ~40 min).
+    """
+    from reference_impl.stability.search import parse_criterion
+    from reference_impl.scenes import scene_from_dict
+
+    potentials: dict = {}
+    errors = [""] * len(expanded)
+    order = sorted(range(len(expanded)), key=lambda i: -_energy(expanded[i][1]))
+    for done, index in enumerate(order):
+        if progress is not None:
+            progress(done, len(order))
+        params, case_scene = expanded[index]
+        ctext = ctexts[index]
         try:
-            sc = scene_from_dict(case_scene, f"case {index} ({_label(params)})")
+            sc = scene_from_dict(
+                case_scene, f"case {index} ({_label(params)})", potentials=potentials
+            )
             if task == "solve" and sc.kind != "impact":
                 raise HCVInputError(
                     f"case {index} ({_label(params)}): task 'solve' solves "
@@ -338,7 +427,7 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
                     f"two-walls scenes, not {sc.kind!r}"
                 )
         except HCVInputError as exc:
-            error = str(exc)
+            errors[index] = str(exc)
         else:
             if ctext is not None:
                 try:
@@ -347,21 +436,9 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
                     raise SweepSpecError(
                         f"spec {src}: criterion {ctext!r} for kind {sc.kind!r}: {exc}"
                     ) from None
-        spec.cases.append(
-            Case(
-                index,
-                _key(task, ctext, case_scene),
-                params,
-                case_scene,
-                task,
-                ctext,
-                float(timeout),
-                error,
-            )
-        )
-    if all(c.error for c in spec.cases):
-        raise SweepSpecError(f"spec {src}: every case is invalid; first: {spec.cases[0].error}")
-    return spec
+    if progress is not None:
+        progress(len(order), len(order))
+    return errors
 
 
 def _label(params: dict) -> str:
@@ -402,17 +479,20 @@ def _to_toml(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def parse_spec(text: str, source: str = "<string>") -> SweepSpec:
+def parse_spec(text: str, source: str = "<string>", progress=None) -> SweepSpec:
     """Parse and validate the TOML text of a sweep spec (see `spec_from_dict`)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SweepSpecError(f"spec {source}: TOML syntax error: {exc}") from None
-    return spec_from_dict(data, source, text)
+    return spec_from_dict(data, source, text, progress)
 
 
-def load_spec(path) -> SweepSpec:
+def load_spec(path, progress=None) -> SweepSpec:
     """Load and validate a sweep spec file (one-line `SweepSpecError` on any problem)."""
+    from reference_impl._userfiles import check_path
+
+    check_path(path, "spec file")
     p = Path(path)
     if not p.is_file():
         raise SweepSpecError(f"spec file {path}: not found (give a .toml sweep spec)")
@@ -424,4 +504,4 @@ def load_spec(path) -> SweepSpec:
         text = p.read_text(encoding="utf-8")
     except (UnicodeDecodeError, OSError) as exc:
         raise SweepSpecError(f"spec file {path}: cannot be read ({exc})") from None
-    return parse_spec(text, str(path))
+    return parse_spec(text, str(path), progress)
