@@ -120,15 +120,27 @@ def _reap() -> None:
             return
 
 
+def _own_helpers() -> set[int]:
+    """Helper processes of this interpreter that end by themselves at its exit.
+
+    multiprocessing's resource tracker cleans up shared-memory segments and
+    semaphores the workers leaked once this process exits; killing it would leak them.
+    """
+    mp = sys.modules.get("multiprocessing.resource_tracker")
+    pid = getattr(getattr(mp, "_resource_tracker", None), "_pid", None)
+    return {pid} if isinstance(pid, int) else set()
+
+
 def kill_descendants() -> int:
     """SIGKILL every process still below this one; returns how many were killed.
 
     Called when a command ends, after its own cleanup: anything left is an
     adapter (or its daemonised child) that escaped its process-group kill.
     """
+    keep = _own_helpers()
     killed = 0
     for _ in range(_KILL_ROUNDS):
-        pids = descendants()
+        pids = [p for p in descendants() if p not in keep]
         if not pids:
             break
         for pid in pids:

@@ -666,3 +666,18 @@ def test_turning_points_are_searched_from_the_top_energy_down(monkeypatch):
     assert len(calls) == len(invalid) + 1, (
         f"got {len(calls)} turning-point searches, should be {len(invalid) + 1}"
     )
+
+
+@needs_dask
+def test_a_real_scheduler_passes_the_probe_and_runs_the_cases():
+    """The identity probe (bounded handshake) accepts a Dask scheduler: cases run there.
+
+    An in-process cluster (threads, no worker processes) keeps this to about a second.
+    """
+    from distributed import LocalCluster
+
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0"
+    ) as cluster:
+        got = run_cases([1, 2, 5], _square_or_fail, scheduler=cluster.scheduler_address)
+    assert got == [1, 4, 25], f"got {got}, should be [1, 4, 25] [issue 22, --scheduler probe]"

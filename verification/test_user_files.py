@@ -290,3 +290,12 @@ def test_bench_refuses_an_output_that_is_an_input(tmp_path, monkeypatch, capsys,
     assert (tmp_path / "my.toml").read_text() == _SCENE
     assert (tmp_path / "tol.toml").read_text() == "[run]\ntimeout = 10\n"
     assert not (tmp_path / "x.out").exists()
+
+
+@pytest.mark.skipif(not Path("/sys").is_dir(), reason="needs /sys (not writable, even for root)")
+@pytest.mark.parametrize("option", ["--json", "--junit", "--markdown", "--plot"])
+def test_bench_output_on_a_file_system_nobody_can_write_is_refused_first(capsys, option):
+    """/sys refuses new files even to root, whose permission bits say yes."""
+    _one_line_exit_2(
+        capsys, ["bench", "reference", option, "/sys/hcv-issue-22.out"], "not writable"
+    )

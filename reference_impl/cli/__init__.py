@@ -4,7 +4,8 @@ Every input problem (missing or malformed scene, a potential that violates the
 paper's assumptions, NaN, an output path that cannot be written) is reported as
 one line on stderr with exit status 2; nothing is computed for a scene that
 fails validation. Ctrl-C ends any command with the line "hcv: interrupted" and
-exit status 130 (128 + SIGINT, as shells report it).
+exit status 130 (128 + SIGINT, as shells report it); SIGTERM (CI's cancel) is
+handled the same way, with "hcv: terminated (SIGTERM)" and exit status 143.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from reference_impl._userfiles import check_path, refuse_output_onto_input
+from reference_impl._userfiles import check_path, check_writable_dir, refuse_output_onto_input
 from reference_impl.errors import HCVInputError
 
 __all__ = ["add_bench_parser", "cmd_bench", "main"]
@@ -67,6 +67,8 @@ def check_output_file(path: str, option: str) -> None:
         raise HCVInputError(f"{option} {path}: directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise HCVInputError(f"{option} {path}: directory {str(parent)!r} is not writable")
+    # Permission bits do not tell everything (root, read-only or virtual file systems).
+    check_writable_dir(parent, option)
     if p.exists() and not (p.is_file() and os.access(p, os.W_OK)):
         raise HCVInputError(f"{option} {path}: exists and is not a writable regular file")
 
@@ -112,7 +114,7 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
         epilog="exit status: 0 pass (or no --gate); 1 a metric failed; 2 usage or "
         "configuration error; 3 no metric failed but our reference could not decide one; "
-        "130 interrupted.",
+        "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C).",
     )
     from reference_impl.adapters.registry import registered
 

@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-from reference_impl._userfiles import DirLock, check_writable_dir
+from reference_impl._userfiles import DirLock, check_path, check_writable_dir
 from reference_impl.errors import HCVInputError
 
 __all__ = ["add_parser", "run", "run_sweep"]
@@ -317,6 +317,19 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, 
     }
 
 
+def _check_options(args, out: Path) -> None:
+    """The options that need no spec, checked before the (possibly long) validation."""
+    from reference_impl.sweep._output import CaseStore
+    from reference_impl.sweep._runner import check_scheduler_address, dask_available
+
+    check_path(args.spec, "spec file")
+    if args.workers is not None and args.workers < 1:
+        raise HCVInputError(f"--workers must be >= 1, got {args.workers}")
+    if args.scheduler is not None and dask_available():
+        check_scheduler_address(args.scheduler)
+    _check_out(out, CaseStore(out))
+
+
 class _Validating:
     """Progress of spec validation: a plain line after 1 s, then every few seconds."""
 
@@ -342,8 +355,9 @@ def run(args) -> int:
     from reference_impl.sweep._spec import load_spec
 
     try:
-        spec = load_spec(args.spec, progress=_Validating())
         out = Path(args.out or f"sweep-{Path(args.spec).stem}")
+        _check_options(args, out)  # cheap checks first: a refusal is the only line
+        spec = load_spec(args.spec, progress=_Validating())
 
         def note() -> None:
             if spec.invalid:

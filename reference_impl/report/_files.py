@@ -20,6 +20,7 @@ wrote, listed in its manifest (`MANIFEST`, one relative path per entry):
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import shutil
@@ -210,7 +211,7 @@ def _move_in(tmp: Path, out: Path) -> None:
         target.parent.mkdir(parents=True, exist_ok=True)
         if target.is_dir() and not target.is_symlink():
             shutil.rmtree(target)  # only with --force: a directory where a file goes
-        os.replace(tmp / rel, target)
+        _move(tmp / rel, target)
     for rel in sorted(old - set(new)):
         with contextlib.suppress(FileNotFoundError, IsADirectoryError, NotADirectoryError):
             (out / rel).unlink()
@@ -220,6 +221,18 @@ def _move_in(tmp: Path, out: Path) -> None:
     tmp_manifest.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     os.chmod(tmp_manifest, 0o666 & ~umask)
     os.replace(tmp_manifest, out / MANIFEST)
+
+
+def _move(src: Path, dst: Path) -> None:
+    """Rename ``src`` onto ``dst``; across file systems (DIR a mount point) copy, then rename."""
+    try:
+        os.replace(src, dst)
+    except OSError as exc:
+        if exc.errno != errno.EXDEV:
+            raise
+        part = dst.with_name(f".{dst.name}.hcv-part")
+        shutil.copy2(src, part)
+        os.replace(part, dst)
 
 
 def _prune(out: Path, d: Path) -> None:
