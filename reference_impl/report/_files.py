@@ -20,7 +20,7 @@ __all__ = ["REPORT_ENTRIES", "swap_in", "validate_report_args"]
 # What a report run replaces as a whole; anything else in the directory (e.g. the
 # benchmark JSON that ``nox -s bench`` writes into reports/bench/) is kept, file by
 # file, unless the new run wrote a file of the same name.
-REPORT_ENTRIES = ("index.html", "index.md", "results.json", "figures")
+REPORT_ENTRIES = ("index.html", "index.md", "erratum.md", "results.json", "figures")
 
 
 def _nearest_existing(path: Path) -> Path:

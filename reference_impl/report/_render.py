@@ -12,6 +12,7 @@ import html
 from pathlib import Path
 
 from ._blocks import DETAILS, IMG, UL, H, P, T, _num
+from ._erratum import blocks as _erratum_blocks
 from ._common import g
 from ._render_adapters import _adapters
 from ._render_sec6 import _dtmap
@@ -392,6 +393,7 @@ def _sections(r) -> list:
     return (
         _header(r)
         + _ledger(r)
+        + _erratum_blocks(r)
         + _table1(r)
         + _fig1(r)
         + _dtmap(r)
@@ -516,6 +518,7 @@ def html_page(r: dict, fig_dir: Path) -> str:
             f'<a href="#{a}">{t}</a>'
             for a, t in (
                 ("claims", "Claims"),
+                ("erratum", "Erratum"),
                 ("table1", "Table 1"),
                 ("fig1", "Fig. 1"),
                 ("dtcrit", "Critical step"),
