@@ -82,7 +82,7 @@ def outcomes():
     """claim -> (numbers, seconds, error) of every script, two processes at a time."""
     found = run_all.scripts(REPRO)
     with ThreadPoolExecutor(2) as pool:
-        return dict(zip(found, pool.map(run_all.run_script, found.values())))
+        return dict(zip(found, pool.map(run_all.run_script, found.values()), strict=True))
 
 
 @pytest.fixture(scope="module")

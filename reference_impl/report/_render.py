@@ -12,8 +12,9 @@ import html
 from pathlib import Path
 
 from ._blocks import DETAILS, IMG, UL, H, P, T, _num
-from ._erratum import blocks as _erratum_blocks
 from ._common import g
+from ._erratum import blocks as _erratum_blocks
+from ._erratum import script_path as _script_path
 from ._render_adapters import _adapters
 from ._render_sec6 import _dtmap
 
@@ -64,7 +65,7 @@ def _ledger(r) -> list:
                 c["section"],
                 VERDICT_MARK[c["verdict"]],
                 c["evidence"],
-                _tests_cell(c["tests"]),
+                f"{_tests_cell(c['tests'])}; script `{_script_path(c['id'])}`",
             ]
         )
         flags.append(
@@ -86,7 +87,7 @@ def _ledger(r) -> list:
     return [
         H(2, "1. Claims ledger", "claims"),
         T(
-            ["claim", "paper section", "verdict", "evidence (measured in this run)", "tests"],
+            ["claim", "paper section", "verdict", "evidence (measured in this run)", "tests; independent script"],
             rows,
             flags,
             cls="ledger",

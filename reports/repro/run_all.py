@@ -113,7 +113,7 @@ def main(argv=None):
     results = json.loads(Path(args.results).read_text())
     found = scripts()
     with ThreadPoolExecutor(max(1, args.j)) as pool:
-        outcomes = dict(zip(found, pool.map(run_script, found.values())))
+        outcomes = dict(zip(found, pool.map(run_script, found.values()), strict=True))
     rows = check(results, outcomes)
     print(f"{'claim':24} {'number':70} {'ours (results.json)':26} {'theirs (script)':26} {'tol':8} agreement")
     for r in rows:

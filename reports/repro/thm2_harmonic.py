@@ -20,7 +20,8 @@ def out(name, value, ours, tol, mode, why):
     print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
 
 
-def Vc(d, a=mp.mpf("0.015"), bc=mp.mpf("0.008") ** 2):  # Eq. 14
+def Vc(d):  # Eq. 14
+    a, bc = mp.mpf("0.015"), mp.mpf("0.008") ** 2
     return mp.pi * bc / a**2 * (a * d**2 - d**3 / 3)
 
 
@@ -39,7 +40,7 @@ def q_of_U(U, u, qm, E):
     return mp.exp(mp.findroot(lambda s: mp.log(U(mp.exp(s)) / u), mp.log(qm) + mp.log(u / E) / n))
 
 
-for i, (label, U, m, v0) in enumerate(CASES):
+for label, U, m, v0 in CASES:
     E = m * v0**2 / 2
     qm = mp.findroot(lambda q: U(q) - E, (mp.mpf(1e-6), mp.mpf("0.02")), solver="anderson")
     tc_phys = 2 * mp.quad(lambda s: 2 * s * qm / mp.sqrt(2 * max(E - U(qm * (1 - s * s)), mp.eps) / m), [0, 1])

@@ -50,7 +50,7 @@ for case, (U, dU), speeds in SETUPS:
     for law, C in laws.items():
         es = [restitution(U, dU, C, v, qmax(v)) for v in speeds]
         sel = path + [{"case": case, "law": law}]
-        for i, (v, e) in enumerate(zip(speeds, es)):
+        for i, (v, e) in enumerate(zip(speeds, es, strict=True)):
             out(f"restitution, {case}, {law}, v0 = {v} m/s", e, sel + ["restitution", i], 1e-8, "abs",
                 "DOP853 at rtol 1e-12: e to ~1e-10")
         if law == "universal":
