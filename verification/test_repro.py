@@ -159,3 +159,19 @@ def test_script_agrees_with_the_measurement(claim, outcomes, results):
         pytest.xfail("; ".join(f"{r['name']}: script {r['theirs']} vs results.json {r['ours']} "
                                f"({r['mode']} diff {r['diff']} > {r['tol']}): {KNOWN[(claim, r['name'])]}"
                                for r in bad))
+
+
+def test_a_wrong_measurement_is_caught(outcomes, results):
+    """A measurement off by more than a script's tolerance is reported as a disagreement."""
+    import copy
+
+    bad = copy.deepcopy(results)
+    thm1 = next(c for c in bad["claims"] if c["id"] == "thm1-period")
+    thm1["measured"]["Hertz"]["T_over_2pi_dJdE"] = "1.0"  # the printed Eq. (3)
+    t1 = next(c for c in bad["claims"] if c["id"] == "table1")
+    t1["measured"]["rows"][1]["max_force"]["computed_rounded"] = "10.000023"  # as printed
+    rows = run_all.check(bad, {k: outcomes[k] for k in ("thm1-period", "table1")})
+    caught = {r["name"] for r in rows if r["verdict"] == "DISAGREES"}
+    for name in ("T/(2 pi dJ/dE), Hertz", "max_force at v0 = 0.99, rounded to the printed digits"):
+        assert_true(name in caught, got=f"{name!r} not flagged", should="a disagreement",
+                    claim="meta", call="run_all.check(modified results)")
