@@ -20,21 +20,23 @@ def out(name, value, ours, tol, mode, why):
     print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
 
 
-def runaway(U, dU, m, v0, gap, dts, q_sup, block=16):
+def runaway(pot, m, v0, gap, dts, q_sup, block=16):
     """Per lane: a confirmed runaway? Every E_n counts (the criterion's wording); the lanes'
     bookkeeping runs once per block of steps on the block's maxima (block divides N)."""
     y, v, dt, idx = np.full(dts.size, gap), np.full(dts.size, v0), dts.copy(), np.arange(dts.size)
     E0, fail, seen, F = 0.5 * m * v0 * v0, np.zeros(dts.size, bool), np.zeros(dts.size, bool), 0.0
     for n0 in range(0, CONFIRM, block):
         Emax, qmax = np.zeros(idx.size), np.zeros(idx.size)
+        h = 0.5 * dt / m
         for _ in range(block):
-            v = v + 0.5 * dt * F / m
+            v = v + h * F
             y = y + dt * v
-            q1, q2 = np.maximum(y - gap, 0.0), np.maximum(-y, 0.0)
-            F = dU(q2) - dU(q1)
-            v = v + 0.5 * dt * F / m
-            Emax = np.maximum(Emax, 0.5 * m * v * v + U(q1 + q2))  # NaN propagates
-            qmax = np.maximum(qmax, q1 + q2)
+            q = np.maximum(np.maximum(y - gap, -y), 0.0)  # overlap with whichever wall
+            Uq, dUq = pot(q)
+            F = np.sign(0.5 * gap - y) * dUq  # push back from the wall touched (dU(0) = 0)
+            v = v + h * F
+            Emax = np.maximum(Emax, 0.5 * m * v * v + Uq)  # NaN propagates
+            qmax = np.maximum(qmax, q)
         seen[idx] |= Emax > F_DET * E0
         bad = ~np.isfinite(Emax) | (qmax > q_sup) | (Emax > F_CONF * E0)  # > 1e6 E0 implies seen
         fail[idx[bad]] = True
@@ -46,39 +48,42 @@ def runaway(U, dU, m, v0, gap, dts, q_sup, block=16):
     return fail
 
 
-def dt_crit_ratio(U, dU, m, v0, gap, dt_safe, q_sup):
+def dt_crit_ratio(pot, m, v0, gap, dt_safe, q_sup):
     coarse = np.round(np.arange(0.30, 1.0001, 0.01), 4)
-    f = runaway(U, dU, m, v0, gap, coarse * dt_safe, q_sup)
+    f = runaway(pot, m, v0, gap, coarse * dt_safe, q_sup)
     fine = np.round(coarse[np.argmax(f)] - 0.01 + 0.001 * np.arange(1, 11), 4)
-    return float(fine[np.argmax(runaway(U, dU, m, v0, gap, fine * dt_safe, q_sup))]) if f.any() else np.inf
+    return float(fine[np.argmax(runaway(pot, m, v0, gap, fine * dt_safe, q_sup))]) if f.any() else np.inf
 
 
 g0, a = np.pi * 0.008**2 / 0.015**2, 0.015
 V = lambda d: g0 * (a * d**2 - d**3 / 3)  # noqa: E731  Eq. 14
-ELL = (lambda d: 1e8 / 1.5 * V(d) ** 1.5, lambda d: 1e8 * np.sqrt(np.abs(V(d))) * g0 * (2 * a * d - d**2), 0.05, 2 * a)
-POW = lambda p: (lambda q: q ** (p + 1) / (p + 1), lambda q: q**p, 1.0, np.inf)  # noqa: E731  k = m = 1
-for case, v0, scene, (U, dU, m, q_sup) in [("p=1.5", 1.0, "two-sided", POW(1.5)),
-                                          ("ellipsoid", 0.99, "two-walls", ELL), ("p=4.75", 1.0, "two-walls", POW(4.75))]:
+
+
+ell = lambda d: (1e8 / 1.5 * np.sqrt(np.abs(V(d))) ** 3, 1e8 * np.sqrt(np.abs(V(d))) * g0 * (2 * a * d - d**2))  # noqa: E731
+power = lambda p: lambda q: (q * q**p / (p + 1), q**p)  # noqa: E731  k = m = 1: ratios are scale-free
+for case, v0, scene, pot, m, q_sup in [("p=1.5", 1.0, "two-sided", power(1.5), 1.0, np.inf),
+                                       ("ellipsoid", 0.99, "two-walls", ell, 0.05, 2 * a),
+                                       ("p=4.75", 1.0, "two-walls", power(4.75), 1.0, np.inf)]:
+    U, dU = (lambda q, pot=pot: pot(q)[0]), (lambda q, pot=pot: pot(q)[1])
     qmax = brentq(lambda q: U(q) - 0.5 * m * v0 * v0, 1e-9, min(10.0, 0.99 * q_sup), xtol=1e-300, rtol=1e-15)
     qq = qmax * np.linspace(1e-9, 1, 200_001)
     dts = 2 * np.sqrt(m) / np.max(dU(qq) / np.sqrt(2 * U(qq)))  # Eq. 7
     gap, sel = 5 * qmax if scene == "two-walls" else 0.0, ["dt_crit_map", {"case": case, "v0": v0, "scene": scene}]
     out(f"dt_safe (Eq. 7), {case} {v0} m/s", float(dts), sel + ["dt_safe"], 1e-9, "rel", "grid maximum at qmax")
     if case != "p=4.75":
-        out(f"dt_crit/dt_safe, {case} {v0} m/s, {scene}", dt_crit_ratio(U, dU, m, v0, gap, dts, q_sup), sel + ["ratio"],
+        out(f"dt_crit/dt_safe, {case} {v0} m/s, {scene}", dt_crit_ratio(pot, m, v0, gap, dts, q_sup), sel + ["ratio"],
             0.002, "abs", "both searches bracket the first failing step to 0.001 dt_safe")
         continue
-    # The map's worst runaway lies in a chaotic regime: failing steps are isolated points (a
-    # 0.001 scan fails at 0.499, 0.501, 0.514 but not between), so replay the reported step.
-    f = runaway(U, dU, m, v0, gap, np.array([0.4923529411764706 * dts]), q_sup)
+    # Chaotic regime: failing steps are isolated points (a 0.001 scan fails at 0.499, 0.501,
+    # 0.514, not between), so the map's worst runaway is replayed at its own step.
     y, v, n, E, F, dt = gap, v0, 0, 0.5, 0.0, 0.4923529411764706 * dts
-    while n < N and E < F_CONF * 0.5 and np.isfinite(E):
+    while n < N and E < F_CONF * 0.5 and np.isfinite(E):  # one lane, every step, m = 1
+        v, y = v + 0.5 * dt * F, y + dt * (v + 0.5 * dt * F)
+        (Uq, dUq), n = pot(max(y - gap, -y, 0.0)), n + 1
+        F = np.sign(0.5 * gap - y) * dUq
         v += 0.5 * dt * F
-        y += dt * v
-        F = -dU(max(y - gap, 0.0)) + dU(max(-y, 0.0))
-        v += 0.5 * dt * F
-        E, n = 0.5 * v * v + U(max(y - gap, 0.0) + max(-y, 0.0)), n + 1
-    out("worst runaway (p=4.75, two-walls, 0.49235 dt_safe): first n with E_n > 1e6 E0", n if f[0] else -1,
+        E = 0.5 * v * v + Uq
+    out("worst runaway (p=4.75, two-walls, 0.49235 dt_safe): first n with E_n > 1e6 E0", n if n < N else -1,
         sel + ["counterexample_steps"], None, "equal", "the same arithmetic, step for step")
     out("worst runaway: E_n / E0 at that step", E / 0.5, sel + ["counterexample_E_ratio"], 1e-6, "rel",
         "24276 steps of round-off in another evaluation order")
