@@ -18,8 +18,8 @@ import re
 import sys
 from pathlib import Path
 
-from ._blocks import UL, H, P
-from ._common import g
+from reference_impl.report._blocks import UL, H, P
+from reference_impl.report._common import g
 
 __all__ = ["PRINTED", "entries", "markdown", "blocks", "plain", "script_path"]
 
@@ -191,7 +191,7 @@ def blocks(results: dict, level: int = 2) -> list:
 
 def markdown(results: dict) -> str:
     """reports/erratum.md."""
-    from ._render import _md
+    from reference_impl.report._render import _md
 
     out = ["# Erratum: " + results["title"].split(": ", 1)[-1] + "\n"]
     _md(blocks(results, level=2)[1:], out)
