@@ -79,7 +79,7 @@ def _strict_json(path: Path):
 
 def test_files_are_written(report):
     out, results, messages = report
-    for name in ("index.html", "index.md", "results.json"):
+    for name in ("index.html", "index.md", "erratum.md", "results.json"):
         p = out / name
         assert_true(
             p.is_file() and p.stat().st_size > 0,

@@ -6,6 +6,7 @@ scenes, and writes into ``out_dir``:
 
 * ``index.html`` -- one self-contained page (figures embedded as data URIs);
 * ``index.md`` -- the same content for a code host (figures linked);
+* ``erratum.md`` -- the referee's erratum (`_erratum`), also a section of both pages;
 * ``results.json`` -- machine-readable results (claims, table1, dt_crit_map,
   work_precision, hard_cases, environment, ...);
 * ``figures/*.png``.
@@ -217,7 +218,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     """Run everything and write the report into ``out`` (a fresh, empty directory)."""
     from reference_impl.claims import fig1 as fig1_claim
     from reference_impl.claims import sec10_stiffening_domain, table1
-    from reference_impl.report import _dtmap, _fig1, _hardcases, _render, _wp
+    from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _render, _wp
 
     def say(text: str) -> None:
         if progress is not None:
@@ -350,5 +351,6 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
         json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
     )
     (out / "index.md").write_text(_render.markdown(results))
+    (out / "erratum.md").write_text(_erratum.markdown(results))
     (out / "index.html").write_text(_render.html_page(results, fig_dir))
     return results

@@ -35,7 +35,7 @@ from reference_impl.errors import HCVInputError
 __all__ = ["MANIFEST", "REPORT_ENTRIES", "swap_in", "validate_report_args"]
 
 # The report's top-level files and directories (the names a run writes).
-REPORT_ENTRIES = ("index.html", "index.md", "results.json", "figures", "bench")
+REPORT_ENTRIES = ("index.html", "index.md", "erratum.md", "results.json", "figures", "bench")
 # The list of files the report wrote (JSON), kept in the output directory.
 MANIFEST = ".hcv-report-manifest.json"
 # Entries named in a refusal (the first few).
@@ -103,7 +103,7 @@ def _check_owned(out: Path, adapters, force: bool) -> None:
             )
         return
     present = [f for f in _files(out) if f != MANIFEST]
-    ours = {"index.html", "index.md", "results.json", *(_adapter_json(a) for a in adapters)}
+    ours = {"index.html", "index.md", "erratum.md", "results.json", *(_adapter_json(a) for a in adapters)}
     clash = [f for f in present if f not in owned and (f in ours or Path(f).parts[0] == "figures")]
     if clash:
         raise HCVInputError(

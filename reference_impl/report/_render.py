@@ -13,6 +13,8 @@ from pathlib import Path
 
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._common import g
+from reference_impl.report._erratum import blocks as _erratum_blocks
+from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._render_adapters import _adapters
 from reference_impl.report._render_sec6 import _dtmap
 
@@ -63,7 +65,7 @@ def _ledger(r) -> list:
                 c["section"],
                 VERDICT_MARK[c["verdict"]],
                 c["evidence"],
-                _tests_cell(c["tests"]),
+                f"{_tests_cell(c['tests'])}; script `{_script_path(c['id'])}`",
             ]
         )
         flags.append(
@@ -85,7 +87,7 @@ def _ledger(r) -> list:
     return [
         H(2, "1. Claims ledger", "claims"),
         T(
-            ["claim", "paper section", "verdict", "evidence (measured in this run)", "tests"],
+            ["claim", "paper section", "verdict", "evidence (measured in this run)", "tests; independent script"],
             rows,
             flags,
             cls="ledger",
@@ -392,6 +394,7 @@ def _sections(r) -> list:
     return (
         _header(r)
         + _ledger(r)
+        + _erratum_blocks(r)
         + _table1(r)
         + _fig1(r)
         + _dtmap(r)
@@ -516,6 +519,7 @@ def html_page(r: dict, fig_dir: Path) -> str:
             f'<a href="#{a}">{t}</a>'
             for a, t in (
                 ("claims", "Claims"),
+                ("erratum", "Erratum"),
                 ("table1", "Table 1"),
                 ("fig1", "Fig. 1"),
                 ("dtcrit", "Critical step"),
