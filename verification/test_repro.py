@@ -31,11 +31,6 @@ ALLOWED = {"numpy", "scipy", "mpmath"}
 
 # (claim, number) -> cause, for disagreements investigated and explained.
 KNOWN = {
-    ("sec10-stiffening-domain", "root of 2UU'' - U'^2 in units of a"): (
-        "the script's root is the closed form 2 - 2 sqrt(10)/5 (exact, independent of b, c, Kn); "
-        "reference_impl's mpmath path of the ellipsoid evaluates Kn/(alpha+1) in float64 "
-        "(potentials/volumetric.py _U), so its 30-digit root is right to ~1e-16 only"
-    ),
     **{
         ("fig1", f"C0 = 0, v0 = {v}: max |H/H0 - 1| (RK45, 1e-13)"): (
             "the drift of an RK45 run at rtol = atol = 1e-13 depends on the state scaling: the "

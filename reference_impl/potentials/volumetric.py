@@ -54,7 +54,10 @@ class _VolumetricCap(Potential):
         return self._c0(q) * (2 * self._a * q - q**2)
 
     def _U(self, q):
-        return self.Kn / (self.alpha + 1) * self.volume(q) ** (self.alpha + 1)
+        # Kn V^(alpha+1) / (alpha+1), not (Kn / (alpha+1)) V^...: the quotient would be
+        # rounded to float64 before an mpmath V multiplies it, and the 30-digit path
+        # would then carry a 1e-16 relative error (found by reports/repro, sec10).
+        return self.Kn * self.volume(q) ** (self.alpha + 1) / (self.alpha + 1)
 
     def _dU(self, q):
         return self.Kn * self.volume(q) ** self.alpha * self.area(q)
