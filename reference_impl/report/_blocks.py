@@ -6,6 +6,8 @@ HTML; section builders return lists of them.
 
 from __future__ import annotations
 
+import html
+
 from reference_impl.report._common import g
 
 
@@ -43,3 +45,37 @@ def _num(x, d=4):
         if not isinstance(x, (bool, str))
         else ("yes" if x is True else "no" if x is False else x)
     )
+
+
+def _md_cell(s) -> str:
+    return str(s).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_lines(blocks, out: list[str]) -> None:
+    """Append the Markdown of ``blocks`` (the report's block tuples) to ``out``."""
+    for b in blocks:
+        kind = b[0]
+        if kind == "h":
+            out.append(f"{'#' * b[1]} {b[2]}\n")
+        elif kind == "p":
+            out.append(("> " if b[2] == "warn" else "") + b[1] + "\n")
+        elif kind == "table":
+            _, headers, rows, flags, _cls = b
+            out.append("| " + " | ".join(_md_cell(h) for h in headers) + " |")
+            out.append("|" + "---|" * len(headers))
+            for i, row in enumerate(rows):
+                cells = []
+                for j, c in enumerate(row):
+                    f = flags[i][j] if flags else None
+                    c = _md_cell(c)
+                    cells.append(f"**{c}**" if f == "bad" and c else c)
+                out.append("| " + " | ".join(cells) + " |")
+            out.append("")
+        elif kind == "img":
+            out.append(f"![{b[2]}](figures/{b[1]})\n\n*{b[2]}*\n")
+        elif kind == "ul":
+            out += [f"- {it}" for it in b[1]] + [""]
+        elif kind == "details":
+            out.append(f"<details><summary>{html.escape(b[1])}</summary>\n")
+            markdown_lines(b[2], out)
+            out.append("</details>\n")

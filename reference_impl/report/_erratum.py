@@ -191,7 +191,7 @@ def blocks(results: dict, level: int = 2) -> list:
 
 def markdown(results: dict) -> str:
     """reports/erratum.md."""
-    from reference_impl.report._render import _md
+    from reference_impl.report._blocks import markdown_lines as _md
 
     out = ["# Erratum: " + results["title"].split(": ", 1)[-1] + "\n"]
     _md(blocks(results, level=2)[1:], out)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._common import g
+from reference_impl.report._blocks import markdown_lines as _md
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._render_adapters import _adapters
@@ -408,39 +409,6 @@ def _sections(r) -> list:
 # ----------------------------------------------------------------------------------
 # Markdown
 # ----------------------------------------------------------------------------------
-def _md_cell(s) -> str:
-    return str(s).replace("|", "\\|").replace("\n", " ")
-
-
-def _md(blocks, out: list[str]) -> None:
-    for b in blocks:
-        kind = b[0]
-        if kind == "h":
-            out.append(f"{'#' * b[1]} {b[2]}\n")
-        elif kind == "p":
-            out.append(("> " if b[2] == "warn" else "") + b[1] + "\n")
-        elif kind == "table":
-            _, headers, rows, flags, _cls = b
-            out.append("| " + " | ".join(_md_cell(h) for h in headers) + " |")
-            out.append("|" + "---|" * len(headers))
-            for i, row in enumerate(rows):
-                cells = []
-                for j, c in enumerate(row):
-                    f = flags[i][j] if flags else None
-                    c = _md_cell(c)
-                    cells.append(f"**{c}**" if f == "bad" and c else c)
-                out.append("| " + " | ".join(cells) + " |")
-            out.append("")
-        elif kind == "img":
-            out.append(f"![{b[2]}](figures/{b[1]})\n\n*{b[2]}*\n")
-        elif kind == "ul":
-            out += [f"- {it}" for it in b[1]] + [""]
-        elif kind == "details":
-            out.append(f"<details><summary>{html.escape(b[1])}</summary>\n")
-            _md(b[2], out)
-            out.append("</details>\n")
-
-
 def markdown(r: dict) -> str:
     out = [f"# {r['title']}\n"]
     _md(_sections(r), out)
