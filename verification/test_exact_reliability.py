@@ -1,0 +1,112 @@
+"""Issue 22, wrong numbers: the exact solver against truths that share none of its code.
+
+Truths come from `verification._independent_truth` (the classical energy integral
+in mpmath, no virtual time, no solver quadrature or inverse). Each result must be
+within 1e-12 of the truth and within its own reported bound, or be refused in one
+line (`UnsupportedError`, naming the bound).
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+
+import mpmath
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from reference_impl import Expression, PowerLaw, SumPotential, UnsupportedError, solve_impact
+from reference_impl.impact import RTOL_STATED
+from verification._independent_truth import contact_time_undamped, power_sum, turning_point
+from verification.strategies import log_uniform
+
+# Digits of the truths: the energy integral is evaluated at twice this internally
+# (see contact_time_undamped), which leaves ~1e-19 relative error at 20 digits,
+# far below the 1e-12 asked and the solver's ~1e-14 bounds.
+_TRUTH_DPS = 20
+# Accuracy asked of every contact time by issue 22 (the solver's stated accuracy).
+_RTOL = 1e-12
+
+# The scan of issue 22: U' = c q^p1 + q^p2 (m = 1, zeta = 0); 3 x 3 x 4 x 4 = 144 cases.
+_P1 = (0.01, 0.5, 1.5)
+_P2 = (5.0, 12.0, 20.0)
+_C = (1e-12, 1e-6, 1.0, 1e6)
+_V0 = (0.01, 1.0, 10.0, 100.0)
+SCAN = list(itertools.product(_P1, _P2, _C, _V0))
+
+
+@functools.lru_cache(maxsize=None)
+def sum_truth(terms: tuple, m: float, v0: float) -> float:
+    """Undamped contact time of U' = sum k q^p (terms ((k, p), ...)), independent mpmath."""
+    with mpmath.workdps(_TRUTH_DPS):
+        U, cross = power_sum(terms)
+        E = mpmath.mpf(m) * mpmath.mpf(v0) ** 2 / 2
+        # Each term alone reaches E at q_i; the sum reaches it first, below min q_i.
+        q_hi = min((E * (p + 1) / mpmath.mpf(k)) ** (1 / mpmath.mpf(p + 1)) for k, p in terms)
+        q_max = turning_point(U, E, q_hi * (1 + mpmath.mpf(10) ** -12))
+        return float(contact_time_undamped(U, m, q_max, cross))
+
+
+def _check(pot, m, v0, truth, label):
+    try:
+        sol = solve_impact(pot, m, v0)
+    except UnsupportedError as exc:  # refused in one line, naming the bound
+        msg = str(exc)
+        assert "\n" not in msg and "error bound" in msg, (
+            f"got refusal {msg!r}, should be one line naming the bound [{label}]"
+        )
+        return
+    err = abs(sol.contact_time - truth)
+    assert err <= _RTOL * truth, (
+        f"got t_c = {sol.contact_time!r}, should be {truth!r} within {_RTOL:g} "
+        f"(error {err / truth:.2e}) [issue 22, {label}]"
+    )
+    assert err <= sol.quadrature_error, (
+        f"got error {err:.3g} s above its reported bound {sol.quadrature_error:.3g} s [issue 22, {label}]"
+    )
+    assert sol.quadrature_error <= RTOL_STATED * sol.contact_time
+
+
+@pytest.mark.parametrize("p1,p2,c,v0", SCAN)
+def test_sum_scan_contact_time(p1, p2, c, v0):
+    """Issue 22 item 1: 144 sums whose exponents are far apart."""
+    truth = sum_truth(((c, p1), (1.0, p2)), 1.0, v0)
+    _check(PowerLaw(c, p1) + PowerLaw(1.0, p2), 1.0, v0, truth, f"sum c={c:g} p1={p1} p2={p2} v0={v0}")
+
+
+def test_issue_example_and_its_expression_form():
+    """U' = 1e-12 q^0.01 + q^20, m = 1, v0 = 100: t_c = 0.036922299686136 s (was 6.4 % off)."""
+    truth = sum_truth(((1e-12, 0.01), (1.0, 20.0)), 1.0, 100.0)
+    assert abs(truth - 0.036922299686136) < 1e-14, f"got truth {truth!r}, should be the issue's"
+    _check(PowerLaw(1e-12, 0.01) + PowerLaw(1.0, 20.0), 1.0, 100.0, truth, "issue example")
+    expr = Expression("c*q**1.01/1.01 + q**21/21", c=1e-12)
+    _check(expr, 1.0, 100.0, truth, "issue example, expression form")
+
+
+@pytest.mark.parametrize("p1,p2,c,v0", [(0.5, 12.0, 1e-6, 10.0), (1.5, 5.0, 1e-12, 100.0)])
+def test_sum_scan_expression_form(p1, p2, c, v0):
+    """The expression form of the scan's law gives the same answers."""
+    truth = sum_truth(((c, p1), (1.0, p2)), 1.0, v0)
+    expr = Expression("c*q**(a+1)/(a+1) + q**(b+1)/(b+1)", c=c, a=p1, b=p2)
+    _check(expr, 1.0, v0, truth, f"expression c={c:g} p1={p1} p2={p2} v0={v0}")
+
+
+@st.composite
+def _sums(draw):
+    n = draw(st.integers(2, 3))
+    terms = tuple(
+        (draw(log_uniform(1e-12, 1e12)), draw(st.floats(0.01, 20.0))) for _ in range(n)
+    )
+    return terms, draw(log_uniform(1e-2, 1e2))
+
+
+@settings(deadline=None)
+@given(_sums())
+def test_bound_covers_true_error_for_random_sums(case):
+    """Issue 22: sums with exponents 0.01-20 and coefficients 1e-12-1e12; the reported
+    bound covers the true error in every draw (or the case is refused in one line)."""
+    terms, v0 = case
+    pot = SumPotential(*(PowerLaw(k, p) for k, p in terms))
+    truth = sum_truth(terms, 1.0, v0)
+    _check(pot, 1.0, v0, truth, f"sum {terms}, v0={v0}")
