@@ -110,3 +110,56 @@ def test_bound_covers_true_error_for_random_sums(case):
     pot = SumPotential(*(PowerLaw(k, p) for k, p in terms))
     truth = sum_truth(terms, 1.0, v0)
     _check(pot, 1.0, v0, truth, f"sum {terms}, v0={v0}")
+
+
+# Potentials that rise from 0 up to a pole or a maximum (issue 22, items 2-3), with
+# the turning point in closed form (E = m v0^2 / 2) and U in mpmath for the truth.
+_POLES = {
+    "tan(q)": (mpmath.tan, lambda E: mpmath.atan(E)),
+    "q**2/(1-q)": (lambda q: q**2 / (1 - q), lambda E: (-E + mpmath.sqrt(E * E + 4 * E)) / 2),
+    "-log(cos(q))": (lambda q: -mpmath.log(mpmath.cos(q)), lambda E: mpmath.acos(mpmath.exp(-E))),
+    "1/cos(q) - 1": (lambda q: 1 / mpmath.cos(q) - 1, lambda E: mpmath.acos(1 / (1 + E))),
+    "1 - cos(q)": (lambda q: 1 - mpmath.cos(q), lambda E: mpmath.acos(1 - E)),
+}
+POLE_CASES = [("tan(q)", v0) for v0 in (2.0, 3.0, 5.0, 10.0)] + [
+    (src, 1.99) for src in _POLES if src != "tan(q)"
+]
+
+
+@functools.lru_cache(maxsize=None)
+def pole_truth(src: str, v0: float) -> tuple[float, float]:
+    """(q_max, t_c) of U = src, m = 1, zeta = 0, from the closed-form turning point."""
+    U, q_of_E = _POLES[src]
+    with mpmath.workdps(_TRUTH_DPS):
+        q_max = q_of_E(mpmath.mpf(v0) ** 2 / 2)
+        return float(q_max), float(contact_time_undamped(U, 1.0, q_max))
+
+
+@pytest.mark.parametrize("src,v0", POLE_CASES)
+def test_turning_point_on_the_rising_interval(src, v0):
+    """Issue 22 items 2-3: the turning point lies where U rises from 0 (tan(q), v0 = 3:
+    q_max = atan(4.5), not the root 4.49 m on the next branch), and potentials that
+    rise only up to a pole or a maximum past q_max are solved, not refused."""
+    q_true, t_true = pole_truth(src, v0)
+    pot = Expression(src)
+    q_tp = pot.turning_point(0.5 * v0 * v0)
+    # The inverse is a root finder to a few ulps of q (_INVERSE_XRTOL = 4 eps).
+    assert abs(q_tp - q_true) <= 1e-14 * q_true, (
+        f"got q_max = {q_tp!r}, should be {q_true!r} [issue 22, Expression({src!r}).turning_point]"
+    )
+    sol = solve_impact(pot, 1.0, v0)
+    assert abs(sol.max_penetration - q_true) <= 1e-14 * q_true, (
+        f"got q_max = {sol.max_penetration!r}, should be {q_true!r} [issue 22, solve_impact {src}]"
+    )
+    _check(pot, 1.0, v0, t_true, f"{src}, v0 = {v0}")
+
+
+@pytest.mark.parametrize("src,v0", [("1 - cos(q)", 2.01), ("sin(q)", 1.5), ("q**2*exp(-q)", 1.2)])
+def test_no_turning_point_on_the_rising_interval_is_refused(src, v0):
+    """U that stops rising (a maximum) below the energy is refused in one line naming
+    where, never solved on a later branch."""
+    from reference_impl import HCVInputError
+
+    with pytest.raises(HCVInputError) as info:
+        solve_impact(Expression(src), 1.0, v0)
+    assert "\n" not in str(info.value) and "q =" in str(info.value), str(info.value)
