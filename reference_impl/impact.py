@@ -64,6 +64,9 @@ N_MAX = 21.0
 # table), so this refuses only what they cannot resolve, e.g. an ill-conditioned
 # turning point (see `_conditioning`).
 RTOL_STATED = 1e-12
+# Smallest normal float64: energies, overlaps, forces and times below it have lost
+# relative precision (subnormal) or underflowed to 0 (issue 22).
+_TINY = float(np.finfo(float).tiny)
 # Relative tolerance for locating s(t) in `ImpactSolution.state`: a few ulps.
 _STATE_XRTOL = 8.0 * np.finfo(float).eps
 # Number of table points used to bracket s(t) before the root finder polishes it.
@@ -263,7 +266,9 @@ def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tup
     x_peak = osc.v0 * math.exp(-osc.zeta * osc.s_peak)
     if type(pot) is PowerLaw:
         n = pot.leading_exponent
-        q_max = (0.5 * n * m * x_peak * x_peak / pot.k) ** (1.0 / n)
+        # Factored so that no intermediate leaves the normal range before the root
+        # (0.5 n m x^2 / k underflows for m = 1e-300 even when q_max is a normal number).
+        q_max = (0.5 * n * m / pot.k) ** (1.0 / n) * x_peak ** (2.0 / n)
         return q_max, pot.k * q_max**pot.p
     compiled = compiled_nodes(pot)
     if compiled is not None:
@@ -271,6 +276,18 @@ def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tup
         return float(q_pk[0]), m * x_peak / float(g_pk[0])
     q_max = float(pot._inverse(np.array([0.5 * m * x_peak**2]))[0])
     return q_max, float(pot._dU(np.array([q_max]))[0])
+
+
+def _check_normal(values: dict, m: float, v0: float) -> None:
+    """Refuse results that left the normal float64 range (never report 0.0 or a
+    subnormal number, whose relative precision is lost)."""
+    for name, val in values.items():
+        if not (val >= _TINY):  # inf is allowed (contact time for zeta >= 1)
+            raise UnsupportedError(
+                f"{name} = {val!r} is below the normal float64 range ({_TINY:.3g}) for m = {m!r} "
+                f"kg, v0 = {v0!r} m/s: rescale the units (e.g. mm, g, ms) so that it is a normal "
+                "number"
+            )
 
 
 def _check_bound(br, pot: Potential, m: float, v0: float, zeta: float) -> None:
@@ -335,9 +352,11 @@ def solve_impact(
     _check_exponent(potential)
     osc = VirtualOscillator(v0, zeta)
     E = 0.5 * m * v0 * v0
-    if not (math.isfinite(E) and E > 0):
+    if not (math.isfinite(E) and E >= _TINY):
         raise HCVInputError(
-            f"kinetic energy m v0^2 / 2 = {E!r} J (m = {m!r}, v0 = {v0!r}) is not a positive float64"
+            f"kinetic energy m v0^2 / 2 = {E!r} J (m = {m!r}, v0 = {v0!r}) is not a positive "
+            f"float64 in the normal range [{_TINY:.3g}, {np.finfo(float).max:.3g}] J: rescale the "
+            "units (e.g. mm, g, ms) so that the energy and the overlaps are normal numbers"
         )
     # Validates the turning point and monotonicity on (0, q(E)] (the damped
     # maximum penetration is smaller, so this covers every damped path too).
@@ -360,6 +379,11 @@ def solve_impact(
         q_max, max_force = _peak(potential, m, osc, q_top)
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
     _check_bound(br, potential, m, v0, zeta)
+    _check_normal(
+        {"max_penetration": q_max, "max_force": max_force, "contact_time": br.rise + br.fall},
+        m,
+        v0,
+    )
     return ImpactSolution._fast(
         v0=v0,
         m=m,
