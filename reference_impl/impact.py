@@ -64,6 +64,10 @@ N_MAX = 21.0
 # table), so this refuses only what they cannot resolve, e.g. an ill-conditioned
 # turning point (see `_conditioning`).
 RTOL_STATED = 1e-12
+# Relative accuracy of U in ulps assumed by the conditioning term (the potentials'
+# contract: "a few ulps"), and the machine epsilon.
+_NODE_ULPS_U = 16.0
+_EPS = float(np.finfo(float).eps)
 # Smallest normal float64: energies, overlaps, forces and times below it have lost
 # relative precision (subnormal) or underflowed to 0 (issue 22).
 _TINY = float(np.finfo(float).tiny)
@@ -278,6 +282,29 @@ def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tup
     return q_max, float(pot._dU(np.array([q_max]))[0])
 
 
+def _conditioning(pot: Potential, m: float, osc: VirtualOscillator, q_max: float, f_max: float) -> float:
+    """Relative error of the times from the rounding of U, amplified by the problem.
+
+    A node value dq/dx = m x / U'(q) at q = U^-1(m x^2 / 2) moves by a relative
+    c = |U U''| / U'^2 per relative error of U (d ln g / d ln u = 1 - c), so a U
+    accurate to _NODE_ULPS ulps (the potentials' contract) gives the times an error
+    of up to c _NODE_ULPS eps beyond the quadrature's. c is largest at the peak
+    where U' is smallest relative to U: (n - 1)/n < 1 for a power law, but 1e10 for
+    a cap 1e-11 below full overlap, where U' -> 0 (issue 22: an error of 1.9e-6
+    against a bound of 1.4e-9). Charged at q_max; negligible (< 1 ulp) unless U'
+    is small there.
+    """
+    if type(pot) is PowerLaw:
+        return 0.0  # c = (n - 1)/n < 1: within the node ulps already charged
+    u = 0.5 * m * (osc.v0 * math.exp(-osc.zeta * osc.s_peak)) ** 2
+    with np.errstate(all="ignore"):
+        d2 = float(pot._d2U(np.array([q_max]))[0])
+    c = abs(u * d2) / (f_max * f_max) if f_max > 0 else math.inf
+    if not math.isfinite(c):
+        c = math.inf
+    return _NODE_ULPS_U * _EPS * c
+
+
 def _check_normal(values: dict, m: float, v0: float) -> None:
     """Refuse results that left the normal float64 range (never report 0.0 or a
     subnormal number, whose relative precision is lost)."""
@@ -378,6 +405,13 @@ def solve_impact(
             br = branch_integrals(potential, m, osc, level, q_top)
         q_max, max_force = _peak(potential, m, osc, q_top)
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
+    cond = _conditioning(potential, m, osc, q_max, max_force)
+    if cond > 0.0:
+        br = br._replace(
+            err_rise=br.err_rise + cond * br.rise,
+            err_mid=br.err_mid + cond * br.mid,
+            err_fall=br.err_fall + cond * br.fall,
+        )
     _check_bound(br, potential, m, v0, zeta)
     _check_normal(
         {"max_penetration": q_max, "max_force": max_force, "contact_time": br.rise + br.fall},

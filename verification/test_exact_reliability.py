@@ -163,3 +163,31 @@ def test_no_turning_point_on_the_rising_interval_is_refused(src, v0):
     with pytest.raises(HCVInputError) as info:
         solve_impact(Expression(src), 1.0, v0)
     assert "\n" not in str(info.value) and "q =" in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("gap", [1e-2, 1e-3, 1e-11])
+def test_cap_near_full_overlap_bound_includes_conditioning(gap):
+    """Issue 22 item 4: a sphere cap driven to v0 = v_max (1 - gap) (U' -> 0 at full
+    overlap) is ill-conditioned; the bound includes the condition number times U's
+    rounding, so it covers the true error (gap = 1e-11: error 1.9e-6 against a bound
+    of 1.4e-9 before), or the result is refused naming the bound."""
+    from reference_impl import Sphere
+
+    pot, m = Sphere(0.01, 1e8, 0.5), 0.05
+    u_max = float(pot.U(pot.q_sup))
+    v0 = (2.0 * u_max / m) ** 0.5 * (1.0 - gap)
+    with mpmath.workdps(_TRUTH_DPS + 10):
+        # The float v0 is the input: the truth is for exactly that number. U in mpmath
+        # through the potential's own formula (the solver's quadrature is not used).
+        E = mpmath.mpf(m) * mpmath.mpf(v0) ** 2 / 2
+        q_max = turning_point(pot._U, E, mpmath.mpf(pot.q_sup))
+        truth = float(contact_time_undamped(pot._U, m, q_max))
+    try:
+        sol = solve_impact(pot, m, v0)
+    except UnsupportedError as exc:
+        assert gap < 1e-2 and "error bound" in str(exc), str(exc)
+        return
+    err = abs(sol.contact_time - truth)
+    assert err <= sol.quadrature_error, (
+        f"got error {err:.3g} s above the bound {sol.quadrature_error:.3g} s [issue 22, cap gap {gap:g}]"
+    )
