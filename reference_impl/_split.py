@@ -36,6 +36,7 @@ import numpy as np
 from ._branches import (
     _EPS,
     _NODE_ULPS,
+    _PIECE,
     Branches,
     _checked,
     compiled_nodes,
@@ -43,12 +44,14 @@ from ._branches import (
     level_up,
     per_potential,
 )
+from ._fused import _term_ratio
 from ._kernels import _TERM_POWER, _term_rows, _terms_eval
 from ._oscillator import VirtualOscillator
 from ._quadrature import pairwise_ulps, rule, sums_from_values
+from .errors import UnsupportedError
 from .potentials.base import Potential
 
-__all__ = ["SPLIT_SHARE", "higher_share", "split_impact"]
+__all__ = ["SPLIT_SHARE", "SPLIT_ZETA_MAX", "higher_share", "needs_split", "split_impact"]
 
 # Where each branch is cut, as a fraction of the virtual time from its singular
 # end to the peak: x there is ~0.7 of its peak (zeta = 0), far from both ends, so
@@ -151,12 +154,18 @@ class _Split:
     # -- pieces ----------------------------------------------------------------
     def s_piece(self, x_of, a: float, b: float, r):
         """int_a^b dq/dx(x(d)) dd for a smooth stretch (x > 0 throughout)."""
-        L = b - a
-        if not L > 0:
+        if not b > a:
             return 0.0, 0.0
-        x = x_of(a + L * r.d)
-        g, _ = self.g_and_q(x)
-        return _sum(g, L, r)
+        # Pieces of at most _PIECE of virtual time: x(s) varies on a unit scale, and
+        # near zeta = 1 the falling branch is ~pi / sqrt(1 - zeta^2) long.
+        pieces = max(1, math.ceil((b - a) / _PIECE))
+        h = (b - a) / pieces
+        val = err = 0.0
+        for i in range(pieces):
+            g, _ = self.g_and_q(x_of(a + i * h + h * r.d))
+            v, e = _sum(g, h, r)
+            val, err = val + v, err + e
+        return val, err
 
     def q_piece(self, branch: str, d_hi: float, q_lo: float, q_hi: float, r):
         """int_{q_lo}^{q_hi} dq / |x'| with d(q) in [0, d_hi] solving x(d) = sqrt(2U/m)."""
@@ -190,7 +199,10 @@ class _Split:
             return (Branches(rise, e_rise, rise, e_rise, rise, e_rise),)
         # Falling branch, by distance d from s_end: s-part on [d_b, D], q-part below d_b.
         D = o.s_end - sp
-        d_b = _CUT * D
+        # Cut where x is still ~linear in d (as on the rising branch): near zeta = 1
+        # the fall is long and x grows like exp(zeta d), which in q would be a
+        # near-singular 1/q^(n/2) over many decades; the rest is in s, in pieces.
+        d_b = _CUT * min(D, sp)
         q_b = self.q_of(float(self.fall_x(d_b)))
         up, e_up = self.s_piece(self.fall_x, d_b, D, r)
         lo, e_lo = self.q_piece("fall", d_b, 0.0, q_b, r)
@@ -221,13 +233,18 @@ def _sum(f, L: float, r):
 
 
 def split_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float):
-    """`Branches` of one underdamped impact by the split quadrature, or None for zeta >= 1.
+    """`Branches` of one impact by the split quadrature (zeta <= SPLIT_ZETA_MAX, else
+    UnsupportedError).
 
     Levels from `_branches.COMPILED_LEVEL` up while the bound exceeds
     `_branches._LEVEL_UP_RTOL` (`_branches.level_up`).
     """
-    if osc.zeta >= 1.0:
-        return None
+    if osc.zeta > SPLIT_ZETA_MAX:
+        raise UnsupportedError(
+            f"damping ratio zeta = {osc.zeta!r} above {SPLIT_ZETA_MAX:g} for a sum whose terms hand "
+            f"over deep inside the contact ({pot!r}): the split quadrature is checked against the "
+            "truth only up to there; use solve_impact_mp"
+        )
     sp = _Split(pot, m, osc, q_top)
     return level_up(sp.run)[0]
 
@@ -238,12 +255,87 @@ def split_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float)
 # terms change dq/dx by less than this fraction, smoothly near the peak, which the
 # rules of `_branches` resolve (measured on the issue-22 scan, see the tests).
 SPLIT_SHARE = 1e-3
+# ... and only when the hand-over lies deep in the contact: the higher terms still
+# carry that share where x = _SPLIT_RHO v0 (U = _SPLIT_RHO^2 E). The unsplit rules of
+# `_branches` resolve a hand-over near the peak, and a deep one that is smooth
+# (log-rate kappa = 2 (n_max - n_lead) / n_lead of the term ratio in log x at most
+# _SMOOTH_KAPPA) as long as it lies above their first node (virtual distance ~1e-16
+# of the branch; _TAIL_RHO leaves a margin), where the analytic end correction
+# assumes the leading law. Measured on the issue-22 scan and 150 random sums with
+# the split disabled: every hand-over at x >= 0.06 v0 and every deep one with
+# kappa <= 2.7 above 1e-12 was within 1e-13 and its bound; sharper or deeper ones
+# were off (up to 7 %) or refused.
+_SPLIT_RHO = 0.05
+# Largest damping ratio of the split path: checked against solve_impact_mp at
+# zeta = 0.1-0.95 (errors <= 7e-16, within the bounds); nearer 1 the falling branch
+# grows long (pi / sqrt(1 - zeta^2)) and it was not checked, so it is refused.
+SPLIT_ZETA_MAX = 0.95
+_SMOOTH_KAPPA = 2.0
+_TAIL_RHO = 1e-12
 _ROWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _rows_of(pot: Potential):
     rows = _term_rows(pot)
     return None if rows is None else np.array(rows, dtype=float)
+
+
+def needs_split(pot: Potential, q_of_energy) -> bool:
+    """True when a sum's higher terms take over from the leading one where only the
+    split quadrature resolves it (see SPLIT_SHARE, _SPLIT_RHO, _SMOOTH_KAPPA).
+
+    ``q_of_energy()`` gives the undamped turning point of the impact (called only
+    for sums): the decision depends on this impact alone, never on which energies
+    were validated before (a cached bracket), so batch and single calls agree.
+    """
+    info = per_potential(_INFO, _split_info, pot)
+    if info is None:
+        return False
+    share, n_max, kappa = info
+    q_top = q_of_energy()
+    if share(q_top) <= SPLIT_SHARE:
+        return False
+    # Every exponent is <= n_max, so U(q_top r^(2/n_max)) >= r^2 E: the true overlap of
+    # the energy r^2 E is no larger, and the share (increasing in q) is over-estimated
+    # there (conservative: it errs toward the split).
+    if share(q_top * _SPLIT_RHO ** (2.0 / n_max)) <= SPLIT_SHARE:
+        return False
+    if kappa > _SMOOTH_KAPPA:
+        return True
+    return share(q_top * _TAIL_RHO ** (2.0 / n_max)) > SPLIT_SHARE
+
+
+_INFO: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _split_info(pot: Potential):
+    """(share(q), n_max, kappa) of a sum with more than one exponent, else None.
+
+    share(q) is `higher_share`, by one compiled call for the table form."""
+    n = float(pot.leading_exponent)
+    P = _rows_of(pot)
+    if P is not None:
+        exps = [P[i, 2] if P[i, 0] == _TERM_POWER else 2.0 * (P[i, 2] + 1.0) for i in range(P.shape[0])]
+        if max(exps) == n:
+            return None
+
+        def share(q, P=P, n=n):
+            r = _term_ratio(P, n, q)
+            return r / (1.0 + r)
+
+    else:
+        terms = getattr(pot, "terms", None)
+        if terms is None:
+            return None
+        exps = [t.leading_exponent for t in terms]
+
+        def share(q, pot=pot):
+            return higher_share(pot, q)
+
+    n_max = float(max(exps))
+    if n_max == n:
+        return None
+    return share, n_max, 2.0 * (n_max - n) / n
 
 
 def higher_share(pot: Potential, q: float) -> float:

@@ -31,10 +31,10 @@ import numpy as np
 from scipy.optimize import elementwise
 
 from ._branches import branch_integrals, compiled_nodes, dq_dx
-from ._fused import fused_impact, gauss_jacobi_impact
+from ._fused import curvature, fused_impact, gauss_jacobi_impact
 from ._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from ._quadrature import integrate_left_singular
-from ._split import SPLIT_SHARE, higher_share, split_impact
+from ._split import needs_split, split_impact
 from ._truth import solve_impact_mp
 from .damping import _check_zeta
 from .errors import HCVInputError, UnsupportedError
@@ -265,6 +265,14 @@ def _validated_top(pot: Potential, E: float) -> float:
     return q
 
 
+def _turning_point(pot: Potential, m: float, v0: float, q_top: float) -> float:
+    """q with U(q) = m v0^2 / 2 (compiled inverse inside (0, q_top] when available)."""
+    compiled = compiled_nodes(pot)
+    if compiled is not None:
+        return float(compiled(np.array([v0]), m, q_top)[1][0])
+    return float(pot._inverse(np.array([0.5 * m * v0 * v0]))[0])
+
+
 def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tuple[float, float]:
     """q_max and U'(q_max): x(s_peak) = v0 exp(-zeta s_peak) (S(s_peak) = 1, see _oscillator)."""
     x_peak = osc.v0 * math.exp(-osc.zeta * osc.s_peak)
@@ -297,8 +305,10 @@ def _conditioning(pot: Potential, m: float, osc: VirtualOscillator, q_max: float
     if type(pot) is PowerLaw:
         return 0.0  # c = (n - 1)/n < 1: within the node ulps already charged
     u = 0.5 * m * (osc.v0 * math.exp(-osc.zeta * osc.s_peak)) ** 2
-    with np.errstate(all="ignore"):
-        d2 = float(pot._d2U(np.array([q_max]))[0])
+    d2 = curvature(pot, q_max)
+    if d2 is None:
+        with np.errstate(all="ignore"):
+            d2 = float(pot._d2U(np.array([q_max]))[0])
     c = abs(u * d2) / (f_max * f_max) if f_max > 0 else math.inf
     if not math.isfinite(c):
         c = math.inf
@@ -390,7 +400,7 @@ def solve_impact(
     q_top = _validated_top(potential, E)
     fast = br = None
     if level is None and type(potential) is not PowerLaw:
-        if zeta < 1.0 and higher_share(potential, q_top) > SPLIT_SHARE:
+        if zeta < 1.0 and needs_split(potential, lambda: _turning_point(potential, m, v0, q_top)):
             # Terms hand over inside the contact: Gauss-Jacobi when its two rule sizes
             # agree, else the quadrature split at the hand-over (`_split`).
             fast = gauss_jacobi_impact(potential, m, osc, q_top)

@@ -191,3 +191,31 @@ def test_cap_near_full_overlap_bound_includes_conditioning(gap):
     assert err <= sol.quadrature_error, (
         f"got error {err:.3g} s above the bound {sol.quadrature_error:.3g} s [issue 22, cap gap {gap:g}]"
     )
+
+
+@pytest.mark.parametrize(
+    "c,p1,p2,v0,zeta", [(1e-6, 0.5, 12.0, 10.0, 0.5), (1.0, 0.5, 3.0, 10.0, 0.95), (1e-3, 1.0, 4.0, 3.0, 0.1)]
+)
+def test_damped_sums_split_quadrature(c, p1, p2, v0, zeta):
+    """Damped sums whose terms hand over deep in the contact (the split path) against
+    the project's separate mpmath solver (tanh-sinh at 20 digits, where it converges):
+    both ends of contact within 1e-12 and within their bounds."""
+    from reference_impl import solve_impact_mp
+
+    pot = PowerLaw(c, p1) + PowerLaw(1.0, p2)
+    sol = solve_impact(pot, 1.0, v0, zeta)
+    mp = solve_impact_mp(pot, 1.0, v0, zeta, dps=20)
+    for key, bound in (("contact_time", "quadrature_error"), ("contact_time_zero_force", "quadrature_error_zero_force")):
+        got, truth = getattr(sol, key), float(mp[key])
+        err = abs(got - truth)
+        assert err <= min(_RTOL * truth, getattr(sol, bound)), (
+            f"got {key} = {got!r}, should be {truth!r} (error {err:.2g}, bound "
+            f"{getattr(sol, bound):.2g}) [issue 22, damped sum zeta = {zeta}]"
+        )
+
+
+def test_split_refuses_damping_beyond_its_checked_range():
+    from reference_impl._split import SPLIT_ZETA_MAX
+
+    with pytest.raises(UnsupportedError, match="zeta"):
+        solve_impact(PowerLaw(1e-12, 0.01) + PowerLaw(1.0, 20.0), 1.0, 100.0, SPLIT_ZETA_MAX + 0.01)
