@@ -33,7 +33,7 @@ import weakref
 
 import numpy as np
 
-from ._branches import (
+from reference_impl.exact._branches import (
     _EPS,
     _NODE_ULPS,
     _PIECE,
@@ -44,12 +44,12 @@ from ._branches import (
     level_up,
     per_potential,
 )
-from ._fused import _term_ratio
-from ._kernels import _TERM_POWER, _term_rows, _terms_eval
-from ._oscillator import VirtualOscillator
-from ._quadrature import pairwise_ulps, rule, sums_from_values
-from .errors import UnsupportedError
-from .potentials.base import Potential
+from reference_impl.exact._one_call import _term_ratio
+from reference_impl.exact._nodes import _TERM_POWER, _term_rows, _terms_eval
+from reference_impl.exact._oscillator import VirtualOscillator
+from reference_impl.exact._quadrature import pairwise_ulps, rule, sums_from_values
+from reference_impl.errors import UnsupportedError
+from reference_impl.potentials.base import Potential
 
 __all__ = ["SPLIT_SHARE", "SPLIT_ZETA_MAX", "higher_share", "needs_split", "split_impact"]
 

@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from reference_impl import Expression, PowerLaw, SumPotential, UnsupportedError, solve_impact
-from reference_impl.impact import RTOL_STATED
+from reference_impl.exact.solve import RTOL_STATED
 from verification._independent_truth import contact_time_undamped, power_sum, turning_point
 from verification.strategies import log_uniform
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["finite", "is_real_number", "positive", "real_array", "show"]
 

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .errors import HCVInputError
-from .potentials._checks import positive, show
-from .potentials.base import Potential
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials._checks import positive, show
+from reference_impl.potentials.base import Potential
 
 __all__ = [
     "SafeStep",
