@@ -15,12 +15,13 @@ x'(s) -> v0 (1/x' = 1/v0 (1 + O(x/v0)), whatever the terms of U do). Each
 branch is therefore cut where x is a fixed fraction of its peak:
 
 * the part near x = 0 is integrated in q (tanh-sinh on [0, q_a], nodes as
-  distances from q = 0; s(q) by a safeguarded Newton on the elementary x(s));
+  distances from q = 0; s(q) from the elementary x(s));
 * the part near the peak, where x'(s) -> 0 and q would carry an inverse
   square root, stays in s (a smooth integrand: x is bounded away from 0).
 
-Used for sums whose higher terms outweigh the leading one at the peak, where the
-fast rules cannot resolve the hand-over, and for every underdamped zeta. The
+Used (`needs_split`) for sums whose terms hand over deep inside the contact,
+where the rules of `_branches` cannot resolve it, for 0 <= zeta <= SPLIT_ZETA_MAX.
+s(q) comes from Newton on log x, which is concave in s on both branches. The
 reported errors are the rules' fine-minus-coarse estimates, the first node's
 share, the round-off of the sums and of the node values, and the mismatch of the
 cut (q_a is known to a few ulps).
@@ -76,8 +77,11 @@ def _solve_log_concave(logF, dlogF, log_X, start):
         step = np.where(np.isfinite(step) & (step < 0), step, 0.0)
         d = d - step
         if np.all(-step <= _NEWTON_RTOL * d):
-            break
-    return d
+            return d
+    raise UnsupportedError(
+        f"split quadrature: the virtual time of a node did not converge in {_NEWTON_MAX} "
+        "Newton steps; use solve_impact_mp"
+    )
 
 
 class _Split:
@@ -135,7 +139,11 @@ class _Split:
         """-x'(s_end - d) > 0 on the falling branch, accurate for small d."""
         o = self.osc
         wd = o.wd
-        return o.v0 * np.exp(-o.zeta * (o.s_end - d)) * (np.cos(wd * d) + o.zeta * (np.sin(wd * d) / wd))
+        return (
+            o.v0
+            * np.exp(-o.zeta * (o.s_end - d))
+            * (np.cos(wd * d) + o.zeta * (np.sin(wd * d) / wd))
+        )
 
     def fall_logx(self, d):
         o = self.osc
@@ -280,42 +288,58 @@ def _rows_of(pot: Potential):
     return None if rows is None else np.array(rows, dtype=float)
 
 
-def needs_split(pot: Potential, q_of_energy) -> bool:
+def needs_split(pot: Potential, q_of_energy, q_top: float) -> bool:
     """True when a sum's higher terms take over from the leading one where only the
     split quadrature resolves it (see SPLIT_SHARE, _SPLIT_RHO, _SMOOTH_KAPPA).
 
     ``q_of_energy()`` gives the undamped turning point of the impact (called only
-    for sums): the decision depends on this impact alone, never on which energies
-    were validated before (a cached bracket), so batch and single calls agree.
+    when needed) and ``q_top`` >= it the validated bracket: the decision depends on
+    this impact alone, never on which energies were validated before (the cached
+    bracket), so batch and single calls agree.
     """
     info = per_potential(_INFO, _split_info, pot)
     if info is None:
         return False
-    share, n_max, kappa = info
-    q_top = q_of_energy()
-    if share(q_top) <= SPLIT_SHARE:
+    # The decision is increasing in the overlap (each share is): a False at q_top,
+    # which bounds the turning point from above, is the answer at the turning point
+    # too, and the turning point is computed only when q_top says True. The largest
+    # overlap found False is kept (info[3]), so repeated impacts skip the shares.
+    if q_top <= info[3][0]:
         return False
-    # Every exponent is <= n_max, so U(q_top r^(2/n_max)) >= r^2 E: the true overlap of
-    # the energy r^2 E is no larger, and the share (increasing in q) is over-estimated
+    if not _decide(info, q_top):
+        info[3][0] = max(info[3][0], q_top)
+        return False
+    return _decide(info, q_of_energy())
+
+
+def _decide(info, q: float) -> bool:
+    share, n_max, kappa, _ = info
+    if share(q) <= SPLIT_SHARE:
+        return False
+    # Every exponent is <= n_max, so U(q r^(2/n_max)) >= r^2 U(q): the true overlap of
+    # the energy r^2 U(q) is no larger, and the share (increasing in q) is over-estimated
     # there (conservative: it errs toward the split).
-    if share(q_top * _SPLIT_RHO ** (2.0 / n_max)) <= SPLIT_SHARE:
+    if share(q * _SPLIT_RHO ** (2.0 / n_max)) <= SPLIT_SHARE:
         return False
     if kappa > _SMOOTH_KAPPA:
         return True
-    return share(q_top * _TAIL_RHO ** (2.0 / n_max)) > SPLIT_SHARE
+    return share(q * _TAIL_RHO ** (2.0 / n_max)) > SPLIT_SHARE
 
 
 _INFO: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _split_info(pot: Potential):
-    """(share(q), n_max, kappa) of a sum with more than one exponent, else None.
+    """(share(q), n_max, kappa, [largest q decided False]) of a sum with more than one
+    exponent, else None.
 
     share(q) is `higher_share`, by one compiled call for the table form."""
     n = float(pot.leading_exponent)
     P = _rows_of(pot)
     if P is not None:
-        exps = [P[i, 2] if P[i, 0] == _TERM_POWER else 2.0 * (P[i, 2] + 1.0) for i in range(P.shape[0])]
+        exps = [
+            P[i, 2] if P[i, 0] == _TERM_POWER else 2.0 * (P[i, 2] + 1.0) for i in range(P.shape[0])
+        ]
         if max(exps) == n:
             return None
 
@@ -335,7 +359,7 @@ def _split_info(pot: Potential):
     n_max = float(max(exps))
     if n_max == n:
         return None
-    return share, n_max, 2.0 * (n_max - n) / n
+    return share, n_max, 2.0 * (n_max - n) / n, [0.0]
 
 
 def higher_share(pot: Potential, q: float) -> float:
@@ -359,6 +383,6 @@ def higher_share(pot: Potential, q: float) -> float:
         return 0.0
     qa = np.array([q])
     u = [float(t._U(qa)[0]) for t in terms]
-    rest = sum(ui for ui, t in zip(u, terms) if t.leading_exponent != n)
+    rest = sum(ui for ui, t in zip(u, terms, strict=True) if t.leading_exponent != n)
     total = sum(u)
     return rest / total if total > 0 else 0.0

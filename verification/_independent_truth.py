@@ -25,7 +25,7 @@ def power_sum(terms):
     ps = [mpmath.mpf(p) for _, p in terms]
 
     def U(q):
-        return mpmath.fsum(k * q ** (p + 1) / (p + 1) for k, p in zip(ks, ps))
+        return mpmath.fsum(k * q ** (p + 1) / (p + 1) for k, p in zip(ks, ps, strict=True))
 
     cross = []
     for i in range(len(ks)):

@@ -38,7 +38,10 @@ def _refused(call, *words):
         (lambda: solve_impact(HERTZ, 10**400, 1.0), ("parameter m", "1000")),
         (lambda: solve_impacts(HERTZ, 1.0, [1 + 2j], 0.0), ("v0s", "(1+2j)")),
         (lambda: solve_impacts(HERTZ, 1.0, {"a": 1.0}, 0.0), ("v0s", "{'a': 1.0}")),
-        (lambda: solve_impacts(HERTZ, 1.0, [[1.0, 2.0], [1.0]], 0.0), ("v0s", "[[1.0, 2.0], [1.0]]")),
+        (
+            lambda: solve_impacts(HERTZ, 1.0, [[1.0, 2.0], [1.0]], 0.0),
+            ("v0s", "[[1.0, 2.0], [1.0]]"),
+        ),
         (lambda: solve_impacts(HERTZ, 1.0, [10**400], 0.0), ("v0s", "1000")),
         (lambda: solve_impacts(HERTZ, 1.0, ["1.0"], 0.0), ("v0s", "'1.0'")),
         (lambda: solve_impacts(HERTZ, 1.0, 1.0, [True]), ("zetas", "True")),
@@ -97,4 +100,6 @@ def test_dt_safe_of_a_tiny_mass(m):
     on the supremum's grid); dt_safe = 2 sqrt(m / k) exactly for U = k q^2 / 2."""
     got = dt_safe(PowerLaw(1.0, 1.0), m, 1.0).dt_safe
     # sqrt and the ratio's arithmetic: a few ulps.
-    assert got == pytest.approx(2.0 * math.sqrt(m), rel=1e-14), f"got {got!r}, should be {2 * math.sqrt(m)!r}"
+    assert got == pytest.approx(2.0 * math.sqrt(m), rel=1e-14), (
+        f"got {got!r}, should be {2 * math.sqrt(m)!r}"
+    )

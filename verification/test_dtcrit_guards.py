@@ -41,6 +41,10 @@ def test_search_floor_is_never_reported_as_a_critical_step():
     grid = SearchGrid(lo=0.6, lo_min=0.5)
     with pytest.raises(HCVInputError, match="search floor"):
         search_scene(
-            PowerLaw(1e9, 1.5), 0.0041, [1.0], "impact",
-            criterion=ImpactGain(tol=MIN_TOL, n_phases=2), grid=grid,
+            PowerLaw(1e9, 1.5),
+            0.0041,
+            [1.0],
+            "impact",
+            criterion=ImpactGain(tol=MIN_TOL, n_phases=2),
+            grid=grid,
         )

@@ -14,12 +14,11 @@ import itertools
 import mpmath
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from reference_impl import Expression, PowerLaw, SumPotential, UnsupportedError, solve_impact
 from reference_impl.exact.solve import RTOL_STATED
 from verification._independent_truth import contact_time_undamped, power_sum, turning_point
-from verification.strategies import log_uniform
+from verification.strategies import far_apart_sum_terms
 
 # Digits of the truths: the energy integral is evaluated at twice this internally
 # (see contact_time_undamped), which leaves ~1e-19 relative error at 20 digits,
@@ -36,7 +35,7 @@ _V0 = (0.01, 1.0, 10.0, 100.0)
 SCAN = list(itertools.product(_P1, _P2, _C, _V0))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def sum_truth(terms: tuple, m: float, v0: float) -> float:
     """Undamped contact time of U' = sum k q^p (terms ((k, p), ...)), independent mpmath."""
     with mpmath.workdps(_TRUTH_DPS):
@@ -72,7 +71,9 @@ def _check(pot, m, v0, truth, label):
 def test_sum_scan_contact_time(p1, p2, c, v0):
     """Issue 22 item 1: 144 sums whose exponents are far apart."""
     truth = sum_truth(((c, p1), (1.0, p2)), 1.0, v0)
-    _check(PowerLaw(c, p1) + PowerLaw(1.0, p2), 1.0, v0, truth, f"sum c={c:g} p1={p1} p2={p2} v0={v0}")
+    _check(
+        PowerLaw(c, p1) + PowerLaw(1.0, p2), 1.0, v0, truth, f"sum c={c:g} p1={p1} p2={p2} v0={v0}"
+    )
 
 
 def test_issue_example_and_its_expression_form():
@@ -92,17 +93,8 @@ def test_sum_scan_expression_form(p1, p2, c, v0):
     _check(expr, 1.0, v0, truth, f"expression c={c:g} p1={p1} p2={p2} v0={v0}")
 
 
-@st.composite
-def _sums(draw):
-    n = draw(st.integers(2, 3))
-    terms = tuple(
-        (draw(log_uniform(1e-12, 1e12)), draw(st.floats(0.01, 20.0))) for _ in range(n)
-    )
-    return terms, draw(log_uniform(1e-2, 1e2))
-
-
 @settings(deadline=None)
-@given(_sums())
+@given(far_apart_sum_terms())
 def test_bound_covers_true_error_for_random_sums(case):
     """Issue 22: sums with exponents 0.01-20 and coefficients 1e-12-1e12; the reported
     bound covers the true error in every draw (or the case is refused in one line)."""
@@ -126,7 +118,7 @@ POLE_CASES = [("tan(q)", v0) for v0 in (2.0, 3.0, 5.0, 10.0)] + [
 ]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def pole_truth(src: str, v0: float) -> tuple[float, float]:
     """(q_max, t_c) of U = src, m = 1, zeta = 0, from the closed-form turning point."""
     U, q_of_E = _POLES[src]
@@ -194,7 +186,8 @@ def test_cap_near_full_overlap_bound_includes_conditioning(gap):
 
 
 @pytest.mark.parametrize(
-    "c,p1,p2,v0,zeta", [(1e-6, 0.5, 12.0, 10.0, 0.5), (1.0, 0.5, 3.0, 10.0, 0.95), (1e-3, 1.0, 4.0, 3.0, 0.1)]
+    "c,p1,p2,v0,zeta",
+    [(1e-6, 0.5, 12.0, 10.0, 0.5), (1.0, 0.5, 3.0, 10.0, 0.95), (1e-3, 1.0, 4.0, 3.0, 0.1)],
 )
 def test_damped_sums_split_quadrature(c, p1, p2, v0, zeta):
     """Damped sums whose terms hand over deep in the contact (the split path) against
@@ -205,7 +198,10 @@ def test_damped_sums_split_quadrature(c, p1, p2, v0, zeta):
     pot = PowerLaw(c, p1) + PowerLaw(1.0, p2)
     sol = solve_impact(pot, 1.0, v0, zeta)
     mp = solve_impact_mp(pot, 1.0, v0, zeta, dps=20)
-    for key, bound in (("contact_time", "quadrature_error"), ("contact_time_zero_force", "quadrature_error_zero_force")):
+    for key, bound in (
+        ("contact_time", "quadrature_error"),
+        ("contact_time_zero_force", "quadrature_error_zero_force"),
+    ):
         got, truth = getattr(sol, key), float(mp[key])
         err = abs(got - truth)
         assert err <= min(_RTOL * truth, getattr(sol, bound)), (

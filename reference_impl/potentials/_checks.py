@@ -35,6 +35,8 @@ def is_real_number(value) -> bool:
 
 def finite(name: str, value, owner: str) -> float:
     """Return ``value`` as float, or raise naming it when it is not a finite real."""
+    if type(value) is float and math.isfinite(value):  # the common case, without the checks
+        return value
     if not is_real_number(value):
         raise HCVInputError(
             f"{owner}: parameter {name} must be a real number (int or float; bool, str, complex "

@@ -37,6 +37,7 @@ from reference_impl.potentials._near_zero import (
     strip_abs,
     time_limit,
 )
+from reference_impl.potentials._rising import on_first_branch, rising_top
 from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -57,14 +58,6 @@ _INVERSE_XRTOL = 4.0 * np.finfo(float).eps
 # resolve q -> 0, linear ones the rest (the sizes of Potential.check_monotone).
 _SCAN_LOG_POINTS = 600
 _SCAN_LIN_POINTS = 2000
-# Grid points per doubling of q in the walk that finds where U stops rising
-# (`_rising_top`), and bisection steps locating that point (float64: ~1100 at most
-# from a doubling; 200 reach a few ulps of q from any bracket within 2**100).
-_WALK_POINTS = 16
-# Relative distance of U from its leading term c q^n within which an overlap is
-# taken to lie on the branch of U that starts at 0 (where the walk begins).
-_LEADING_RTOL = 0.01
-_BISECT_STEPS = 200
 # Series orders (beyond the leading exponent) tried for the branch near 0; each
 # try is checked against the raised-precision reference before it is used.
 _SERIES_EXTRA_ORDERS = (24, 48, 96)
@@ -502,7 +495,7 @@ class Expression(Potential):
         guess = np.where(np.isfinite(guess) & (guess > 0), guess, self.q_scale)
         lo = np.maximum(0.5 * guess, _TINY_Q)
         # Start on the branch of U that rises from 0 (the guess may lie past a pole).
-        lo = np.minimum(lo, self._on_first_branch(float(lo.max())))
+        lo = np.minimum(lo, on_first_branch(self, float(lo.max())))
         for _ in range(_MAX_BRACKET_STEPS):
             u_lo = self._U(lo)
             bad = ~(u_lo < t)
@@ -515,7 +508,7 @@ class Expression(Potential):
                     f"Expression: U(q) >= {t[i]:.6g} J already at q = {lo[i]:.3g} m, but U must "
                     f"rise from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
                 )
-        top = self._rising_top(float(t.max()), float(lo.max()))
+        top = rising_top(self, float(t.max()), float(lo.max()))
         hi, u_hi = lo.copy(), u_lo
         for _ in range(_MAX_BRACKET_STEPS):
             need = u_hi < t
@@ -529,121 +522,6 @@ class Expression(Potential):
             self._check_step(need, hi, u_hi, new, u_new, t)
             lo, hi, u_hi = np.where(need, hi, lo), new, u_new
         raise AssertionError("unreachable: 1100 doublings overflow float64")
-
-    def _rising_top(self, energy: float, q0: float) -> float:
-        """An overlap q_top with U(q_top) >= energy and U rising on [q0, q_top].
-
-        The turning point is searched only on the connected interval where U
-        increases from 0 (issue 22): U is walked upward in doublings of q, each
-        checked on a grid of _WALK_POINTS (U finite, not decreasing, U' >= 0);
-        at the first grid point that fails, the interval before it is bisected to
-        where U stops rising (a pole, a maximum, the end of the domain), and the
-        energy must be reached before that point. Cached: a lower energy reuses
-        the top of a higher one.
-        """
-        cached = getattr(self, "_top_cache", None)
-        if cached is not None and energy <= cached[0] and q0 < cached[1]:
-            return cached[1]
-        a = self._on_first_branch(q0)
-        with np.errstate(all="ignore"):
-            ua = float(self._U(np.array([a]))[0])
-        for _ in range(_MAX_BRACKET_STEPS):
-            b = 2.0 * a
-            if not math.isfinite(b):
-                raise NoTurningPointError(
-                    f"Expression: U = {_short(self.source)} stays below the energy {energy:.6g} J "
-                    f"for every float64 overlap (U = {ua:.6g} J at q = {a:.3g} m): no turning "
-                    "point (assumption 4 of section 3); lower the impact speed"
-                )
-            grid = np.linspace(a, b, _WALK_POINTS + 1)[1:]
-            with np.errstate(all="ignore"):
-                ug = self._U(grid)
-                fg = self._dU(grid)
-            prev = np.concatenate(([ua], ug[:-1]))
-            ok = np.isfinite(ug) & np.isfinite(fg) & (ug >= prev) & (fg >= 0)
-            stop = ~ok | (ug >= energy)
-            # Equal non-zero values below the energy: U levels off (equal zeros are an
-            # underflow of values below it, not a plateau).
-            flat = ok & (ug == prev) & (ug != 0) & (ug < energy)
-            if np.any(flat) and (not np.any(stop) or np.argmax(flat) < np.argmax(stop)):
-                k = int(np.argmax(flat))
-                q_prev = float(grid[k - 1]) if k else a
-                raise NoTurningPointError(
-                    f"Expression: U = {_short(self.source)} levels off at {ug[k]:.6g} J (equal at "
-                    f"q = {q_prev:.6g} m and {grid[k]:.6g} m) below the energy {energy:.6g} J: no "
-                    "turning point (assumption 4 of section 3); lower the impact speed"
-                )
-            if np.any(stop):
-                k = int(np.argmax(stop))
-                if ok[k]:
-                    top = float(grid[k])
-                else:
-                    top = self._last_rising(
-                        float(prev[k]),
-                        float(grid[k - 1]) if k else a,
-                        float(grid[k]),
-                        energy,
-                        (float(grid[k]), float(ug[k]), float(fg[k])),
-                    )
-                self._top_cache = (energy, top)
-                return top
-            a, ua = b, float(ug[-1])
-        raise AssertionError("unreachable: 1100 doublings overflow float64")
-
-    def _on_first_branch(self, q: float) -> float:
-        """q, or a smaller overlap where U is within _LEADING_RTOL of its leading term
-        c q^n, which holds near 0 (decided exactly at construction): the bracket's
-        start from the leading-term guess can lie past a pole (tan(q) at 4.5 J: the
-        guess 2.25 m is on the next branch), and the walk must start on the first."""
-        c, n = self.leading_coefficient, self.leading_exponent
-        for _ in range(_MAX_BRACKET_STEPS):
-            with np.errstate(all="ignore"):
-                lead = c * q**n
-                u = float(self._U(np.array([q]))[0])
-            if not (math.isfinite(lead) and lead > 0) or abs(u / lead - 1.0) <= _LEADING_RTOL:
-                return q
-            if q <= _TINY_Q:
-                return q
-            q = max(q / 4.0, _TINY_Q)
-        return q
-
-    def _last_rising(self, ua: float, a: float, b: float, energy: float, bad) -> float:
-        """Bisect [a, b] (U rising at a, below the energy; not at b) for an overlap where
-        U reaches the energy while still rising, else refuse naming where it stops
-        (``bad``: (q, U, U') at b, the witness named unless bisection finds a closer one
-        where U' < 0 or U is not finite)."""
-        qb, ub, fb = bad
-        for _ in range(_BISECT_STEPS):
-            mid = 0.5 * (a + b)
-            if not a < mid < b:
-                break
-            with np.errstate(all="ignore"):
-                um = float(self._U(np.array([mid]))[0])
-                fm = float(self._dU(np.array([mid]))[0])
-            if math.isfinite(um) and math.isfinite(fm) and um >= ua and fm >= 0:
-                if um >= energy:
-                    return mid
-                a, ua = mid, um
-            else:
-                b = mid
-                if not (math.isfinite(um) and math.isfinite(fm)) or fm < 0:
-                    qb, ub, fb = mid, um, fm
-        src, tail = _short(self.source), "lower the impact speed or fix U"
-        reached = f"U = {src} rises from 0 only to {ua:.6g} J (at q = {a:.6g} m), below the energy {energy:.6g} J"
-        if math.isfinite(fb) and math.isfinite(ub):
-            where = (
-                f"U'(q) = {fb:.6g} N at q = {qb:.6g} m is not > 0"
-                if fb < 0
-                else f"U decreases after q = {a:.6g} m (U = {ub:.6g} J at q = {qb:.6g} m)"
-            )
-            raise NonMonotoneError(
-                f"Expression: {where}: {reached}, and turns down there (assumption 3 of "
-                f"section 3); {tail}"
-            )
-        raise NoTurningPointError(
-            f"Expression: U(q) = {ub:.6g} J is not a finite number at q = {qb:.6g} m: {reached} "
-            f"(a pole or the end of its domain): no turning point (assumption 4 of section 3); {tail}"
-        )
 
     def _check_step(self, need, q0, u0, q1, u1, t) -> None:
         """Raise when U, stepping from q0 to q1 = 2 q0 while below the energy t, misbehaves."""
