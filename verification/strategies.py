@@ -215,3 +215,16 @@ def exact_zetas() -> st.SearchStrategy[float]:
 
 
 __all__ += ["exact_zetas"]
+
+
+@st.composite
+def far_apart_sum_terms(draw):
+    """((k, p), ...) of U' = sum k q^p with 2-3 terms, exponents p in [0.01, 20] and
+    coefficients in [1e-12, 1e12] (issue 22: hand-overs anywhere in the contact), and
+    an impact speed in [0.01, 100] m/s; plain tuples so that truths can be cached."""
+    n = draw(st.integers(2, 3))
+    terms = tuple((draw(log_uniform(1e-12, 1e12)), draw(st.floats(0.01, 20.0))) for _ in range(n))
+    return terms, draw(log_uniform(1e-2, 1e2))
+
+
+__all__ += ["far_apart_sum_terms"]

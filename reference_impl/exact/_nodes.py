@@ -315,8 +315,9 @@ def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
 
 @lru_cache(maxsize=64)
 def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
-    """Compiled node loop for U, U', U'' of an expression (cached by the sympy
-    expressions, which carry the parameter values as exact numbers)."""
+    """Compiled node loop for U, U', U'' of an expression, and its evaluator
+    q -> (U and its first three derivatives) (cached by the sympy expressions,
+    which carry the parameter values as exact numbers)."""
     d2expr = sp.diff(dexpr, q)
     d3expr = sp.diff(d2expr, q)
     # lambdify prints the validated sympy tree as math-module code; numba compiles it.
@@ -331,7 +332,7 @@ def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
     def ev(qv, P):  # pragma: no cover - compiled
         return fu(qv), fdu(qv), fd2u(qv), fd3u(qv)
 
-    return specialise(_newton_loop, cache=False, _EV=ev)
+    return specialise(_newton_loop, cache=False, _EV=ev), ev
 
 
 class NodeKernel(NamedTuple):
@@ -340,6 +341,7 @@ class NodeKernel(NamedTuple):
     ``nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs)`` writes dq/dx and q at the
     virtual displacements x (one branch, nodes in order) into g and qs.
     ``terms`` is True for the table form (shared, disk-cached kernels).
+    ``ev(q, P)`` gives U and its first three derivatives at one overlap q > 0.
     """
 
     nodes: object
@@ -348,13 +350,14 @@ class NodeKernel(NamedTuple):
     u_s: float
     n_lead: float
     terms: bool
+    ev: object = None
 
 
 def node_kernel(pot: Potential) -> NodeKernel | None:
     """The `NodeKernel` of ``pot``, or None when its family has no compiled form."""
     rows = _term_rows(pot)
     if rows is not None:
-        nodes, P, terms = _terms_nodes, np.array(rows, dtype=float), True
+        nodes, ev, P, terms = _terms_nodes, _terms_eval, np.array(rows, dtype=float), True
     else:
         sym = expression_sympy(pot)
         if sym is None or not getattr(pot, "float_formula_accurate", True):
@@ -362,10 +365,10 @@ def node_kernel(pot: Potential) -> NodeKernel | None:
             # 0): a compiled kernel would lose digits there, so the potential's
             # corrected evaluation (series / raised precision) is used instead.
             return None
-        nodes, P, terms = _compiled_expression(*sym), _NO_TERMS, False
+        (nodes, ev), P, terms = _compiled_expression(*sym), _NO_TERMS, False
     q_s = float(min(pot.q_scale, pot.q_sup))
     u_s = float(pot._U(np.array([q_s]))[0])
-    return NodeKernel(nodes, P, q_s, u_s, float(pot.leading_exponent), terms)
+    return NodeKernel(nodes, P, q_s, u_s, float(pot.leading_exponent), terms, ev)
 
 
 def node_function(pot: Potential):

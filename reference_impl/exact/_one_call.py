@@ -60,7 +60,7 @@ from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import rule
 from reference_impl.potentials.base import Potential
 
-__all__ = ["fused_impact", "gauss_jacobi_impact"]
+__all__ = ["curvature", "fused_impact", "gauss_jacobi_impact"]
 
 # Rule sizes compared on the compiled families, and the largest substitution order
 # b (d = t^b) tried; larger b pushes the rule's singularities in t toward [0, 1]
@@ -340,3 +340,12 @@ def fused_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float)
         return _result(out) if out[8] == _OK else None
 
     return level_up(run)
+
+
+def curvature(pot: Potential, q: float) -> float | None:
+    """The second derivative of U at q by the potential's compiled evaluator (one call,
+    ~1 us), or None when it has no compiled form."""
+    plan = _plan(pot)
+    if plan is None or plan.kernel.ev is None:
+        return None
+    return float(plan.kernel.ev(q, plan.kernel.P)[2])

@@ -29,9 +29,9 @@ from reference_impl.exact._branches import (
     _pow_split,
 )
 from reference_impl.theory.damping import _check_zeta
-from reference_impl.errors import HCVInputError
+from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact.solve import ImpactSolution, _check_exponent, _validated_top, solve_impact
-from reference_impl.potentials._checks import positive
+from reference_impl.potentials._checks import positive, real_array
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
 
@@ -143,13 +143,30 @@ def solve_impacts(potential: Potential, m: float, v0s, zetas) -> dict[str, np.nd
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impacts")
-    v, z = np.broadcast_arrays(np.asarray(v0s, dtype=float), np.asarray(zetas, dtype=float))
+    v_in = real_array("v0s", v0s, "solve_impacts")
+    z_in = real_array("zetas", zetas, "solve_impacts")
+    try:
+        v, z = np.broadcast_arrays(v_in, z_in)
+    except ValueError:
+        raise HCVInputError(
+            f"solve_impacts: v0s of shape {v_in.shape} and zetas of shape {z_in.shape} do not "
+            "broadcast together; give arrays of one shape, or a scalar for either"
+        ) from None
     if v.size > BATCH_MAX:
         raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
     shape = v.shape
     v, z = v.ravel(), z.ravel()
     for vi in v[~(np.isfinite(v) & (v > 0))][:1]:
         raise HCVInputError(f"impact speed v0 must be a finite number > 0, got {vi!r}")
+    with np.errstate(all="ignore"):
+        energy = 0.5 * m * v * v
+    tiny = float(np.finfo(float).tiny)
+    for i in np.flatnonzero(~(np.isfinite(energy) & (energy >= tiny)))[:1]:
+        raise HCVInputError(
+            f"solve_impacts: kinetic energy m v0^2 / 2 = {float(energy[i])!r} J (m = {m!r}, v0 = "
+            f"{float(v[i])!r}) is not a positive float64 in the normal range [{tiny:.3g}, "
+            f"{np.finfo(float).max:.3g}] J: rescale the units (e.g. mm, g, ms)"
+        )
     for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
         _check_zeta(zi)
     _check_exponent(potential)
@@ -198,7 +215,8 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
     wd = np.sqrt((1.0 - zz) * (1.0 + zz))
     sp = np.arctan2(wd, zz) / wd
     x_pk = v * np.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
-    q_max = (0.5 * n * m * x_pk**2 / pot.k) ** (1.0 / n)
+    # Factored as in `impact._peak` (no intermediate underflow for tiny m or v0).
+    q_max = (0.5 * n * m / pot.k) ** (1.0 / n) * x_pk ** (2.0 / n)
     vals = {
         "max_penetration": q_max,
         "max_force": pot.k * q_max**pot.p,
@@ -209,6 +227,16 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
         "quadrature_error": e_rise + e_fall,
         "quadrature_error_zero_force": e_rise + e_mid,
     }
+    # As `solve_impact` (`impact._check_normal`): a result outside the normal float64
+    # range is refused, never returned as 0.0 or a subnormal number.
+    tiny = float(np.finfo(float).tiny)
+    for key in ("max_penetration", "max_force", "contact_time"):
+        for i in np.flatnonzero(ok & ~(vals[key] >= tiny))[:1]:
+            raise UnsupportedError(
+                f"solve_impacts: {key} = {float(vals[key][i])!r} is below the normal float64 "
+                f"range ({tiny:.3g}) for m = {m!r} kg, v0 = {float(v[i])!r} m/s: rescale the units "
+                "(e.g. mm, g, ms) so that it is a normal number"
+            )
     for key, arr in vals.items():
         out[key][ok] = arr[ok]
     todo[ok] = False

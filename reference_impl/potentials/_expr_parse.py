@@ -18,6 +18,7 @@ import numpy as np
 import sympy as sp
 
 from reference_impl.errors import ExpressionError
+from reference_impl.potentials._checks import is_real_number
 
 # Longest accepted source: a contact law is a line of algebra; the cap keeps
 # parsing and sympy's work bounded on hostile or accidental input.
@@ -220,8 +221,7 @@ def _check_inputs(source, params: dict[str, Any]) -> None:
                 f"Expression: parameter name {name!r} collides with the variable q or a built-in "
                 "function or constant; rename the parameter"
             )
-        real = isinstance(value, (int, float, np.integer, np.floating))
-        if not real or isinstance(value, (bool, np.bool_)) or not math.isfinite(_as_float(value)):
+        if not is_real_number(value) or not math.isfinite(_as_float(value)):
             raise ExpressionError(
                 f"Expression: parameter {name} = {repr(value)[:_QUOTE_CHARS]} must be a finite "
                 "real number"

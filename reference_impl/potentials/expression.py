@@ -38,6 +38,7 @@ from reference_impl.potentials._near_zero import (
     time_limit,
 )
 from reference_impl.potentials._families import register_family
+from reference_impl.potentials._rising import on_first_branch, rising_top
 from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -499,6 +500,8 @@ class Expression(Potential):
             guess = np.exp((np.log(t) - math.log(self.leading_coefficient)) / self.leading_exponent)
         guess = np.where(np.isfinite(guess) & (guess > 0), guess, self.q_scale)
         lo = np.maximum(0.5 * guess, _TINY_Q)
+        # Start on the branch of U that rises from 0 (the guess may lie past a pole).
+        lo = np.minimum(lo, on_first_branch(self, float(lo.max())))
         for _ in range(_MAX_BRACKET_STEPS):
             u_lo = self._U(lo)
             bad = ~(u_lo < t)
@@ -511,13 +514,16 @@ class Expression(Potential):
                     f"Expression: U(q) >= {t[i]:.6g} J already at q = {lo[i]:.3g} m, but U must "
                     f"rise from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
                 )
+        top = rising_top(self, float(t.max()), float(lo.max()))
         hi, u_hi = lo.copy(), u_lo
         for _ in range(_MAX_BRACKET_STEPS):
             need = u_hi < t
             if not np.any(need):
                 return lo, hi
+            # Doubling is capped at `top`: past it U may have a pole or turn down, and
+            # a root there belongs to another branch (tan(q) at 4.49 m for 4.5 J).
             with np.errstate(over="ignore"):
-                new = np.where(need, 2 * hi, hi)
+                new = np.where(need, np.minimum(2 * hi, top), hi)
             u_new = self._U(new)
             self._check_step(need, hi, u_hi, new, u_new, t)
             lo, hi, u_hi = np.where(need, hi, lo), new, u_new

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials._checks import positive, show
 from reference_impl.potentials.base import Potential
 
 __all__ = [
@@ -30,6 +32,8 @@ _SUP_GRID_LOG = 200
 # Location tolerance of the bounded refinement, relative to q_max: the ratio is
 # flat at its maximum, so a q error of 1e-10 q_max changes it by ~1e-20.
 _SUP_XATOL = 1e-10
+# Smallest normal float64 (below it values have lost relative precision).
+_TINY = float(np.finfo(float).tiny)
 # Relative band within which 2UU'' - U'^2 counts as zero (round-off of the
 # products, a few ulps times the size of U'^2).
 _INDICATOR_RTOL = 1e-10
@@ -56,7 +60,7 @@ def _ratio_at_zero(pot: Potential) -> float:
 def _ratio(pot: Potential, q: np.ndarray) -> np.ndarray:
     """U'(q) / sqrt(2 U(q)) (N / sqrt(J)); the limit value is used at q = 0.
 
-    Where U underflows to 0 at q > 0 the leading-term limit stands in (the
+    Where U underflows to 0 or below the normal range at q > 0 the leading-term limit stands in (the
     ratio there is within round-off of its limit for n = 2 and negligible
     against the supremum for n > 2; for n < 2 the supremum is infinite anyway).
     """
@@ -65,7 +69,9 @@ def _ratio(pot: Potential, q: np.ndarray) -> np.ndarray:
     dU = pot._dU(q)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = dU / np.sqrt(2 * U)
-    return np.where(U > 0, r, _ratio_at_zero(pot))
+    # A subnormal U has lost relative precision (m = 1e-300 made the supremum 15 %
+    # too high, issue 22): there, as where U underflows, the limit stands in.
+    return np.where(U >= _TINY, r, _ratio_at_zero(pot))
 
 
 def stiffening_indicator(pot: Potential, q) -> np.ndarray:
@@ -128,6 +134,17 @@ def dt_safe_shortcut(pot: Potential, m: float, v0: float, q_max: float | None = 
     return 2.0 * m * v0 / float(pot._dU(np.array([q_max]))[0])
 
 
+def _energy(m: float, v0: float, owner: str) -> float:
+    """m v0^2 / 2 (J), refused when it is not a positive float64."""
+    E = 0.5 * m * v0 * v0
+    if not (math.isfinite(E) and E >= _TINY):
+        raise HCVInputError(
+            f"{owner}: kinetic energy m v0^2 / 2 = {E!r} J (m = {m!r}, v0 = {v0!r}) is not a "
+            "positive float64 in the normal range; rescale the units (e.g. mm, g, ms)"
+        )
+    return E
+
+
 def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
     """Delta t_safe as the supremum over the whole path [0, q_max] (section 6).
 
@@ -140,7 +157,11 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
     v0 : float
         Impact speed (m/s); E = m v0^2 / 2 fixes q_max.
     """
-    q_max = pot.turning_point(0.5 * m * v0 * v0)
+    if not isinstance(pot, Potential):
+        raise HCVInputError(f"dt_safe: potential must be a Potential, got {show(pot)}")
+    m = positive("m", m, "dt_safe")
+    v0 = positive("v0", v0, "dt_safe")
+    q_max = pot.turning_point(_energy(m, v0, "dt_safe"))
     grid = q_max * np.concatenate(
         [np.logspace(-12, 0, _SUP_GRID_LOG), np.linspace(0, 1, _SUP_GRID_LIN)]
     )

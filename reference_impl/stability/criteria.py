@@ -29,6 +29,7 @@ __all__ = [
     "MAX_CONFIRM_STEPS",
     "MAX_FACTOR",
     "MAX_TOL",
+    "MIN_TOL",
     "MAX_N_PHASES",
     "MAX_SPEEDS",
     "MAX_SCAN_POINTS",
@@ -58,6 +59,12 @@ MAX_CONFIRM_STEPS = 100_000_000
 MAX_FACTOR = 1e12
 # Impact energy tolerance: a rebound with 1000x the impact energy tests nothing.
 MAX_TOL = 1e3
+# Smallest energy gain tolerance of the single-impact criterion: a correct Verlet
+# rebound carries round-off of ~N eps in E (N up to ~1e5 steps at the search floor,
+# _IMPACT_TIME_BUDGET q_max / (v0 dt)), ~2e-11; below 1e-9 the criterion would
+# measure round-off, and tol = 0 made every step fail down to the search floor,
+# which was then reported as a measured critical step (issue 22).
+MIN_TOL = 1e-9
 # Onset phases per step of the single impact: 1e4 is 600x the default; the
 # search time grows linearly with it (its memory does not: lanes are chunked).
 MAX_N_PHASES = 10_000
@@ -163,7 +170,7 @@ class ImpactGain:
     Attributes
     ----------
     tol : float
-        Allowed relative energy gain of a passive collision (0 .. `MAX_TOL`), default 0.01.
+        Allowed relative energy gain of a passive collision (`MIN_TOL` .. `MAX_TOL`), default 0.01.
     n_phases : int
         Number (0 .. `MAX_N_PHASES`) of onset phases phi = (j + 1/2) / n_phases inside a step (the
         contact starts a fraction phi of a step after a step boundary), tried
@@ -175,6 +182,12 @@ class ImpactGain:
 
     def __post_init__(self):
         _check_real("ImpactGain tol", self.tol, 0.0, MAX_TOL)
+        if self.tol < MIN_TOL:
+            raise HCVInputError(
+                f"ImpactGain tol = {self.tol!r} is below {MIN_TOL:g}, the round-off of a correct "
+                "Verlet rebound's energy: the search would measure round-off, not the step; use "
+                f"tol >= {MIN_TOL:g}"
+            )
         _check_int("ImpactGain n_phases", self.n_phases, 0, MAX_N_PHASES)
 
     def describe(self) -> str:

@@ -89,6 +89,7 @@ from reference_impl.stability.criteria import (
 )
 from reference_impl.stability.recommend import tangent_step
 from reference_impl.stability.result import DtCritResult
+from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
     SCENE_WALLS,
@@ -127,6 +128,12 @@ _DEFAULT_GRID = SearchGrid()
 # Without a gap in the scene, two-walls uses gap = this many q_max: a flight of
 # a few contact durations, so that N steps contain thousands of impacts.
 _DEFAULT_GAP_QMAX = 5.0
+# A two-walls lane's positions lie near the gap, so its overlap is resolved to
+# ulp(gap): refused when that exceeds this fraction of q_max (the energy then
+# carries ~n ulp(gap) / q_max of noise per contact, which must stay far below
+# every criterion's threshold; a gap of 1e14 m left the overlap below one ulp and
+# no failure was ever seen, issue 22).
+_GAP_ULP_RTOL = 1e-8
 # A single-impact lane stops (as no-separation) after this many times the
 # straight-line time q_max / v0: an elastic power-law contact U ~ q^n lasts
 # 2 q_max / v0 * int_0^1 ds / sqrt(1 - s^n) <= 4 q_max / v0 for n >= 1, so the
@@ -381,6 +388,14 @@ def _result(
     used,
 ) -> DtCritResult:
     """The DtCritResult of one speed from its finished search(es)."""
+    if lo == 0.0 and math.isfinite(f):
+        # Every step tried failed, down to the search floor: that floor is where the
+        # search stopped, not a measured critical step (issue 22).
+        raise UnsupportedError(
+            f"every step tried failed for v0 = {v0!r} m/s, down to the search floor dt = {f:.3g} s "
+            f"({f / s.dt_ref:.3g} of the reference step {s.dt_ref:.3g} s) under the criterion "
+            f"'{crit.describe()}': no critical step was measured; loosen the criterion"
+        )
     ratio = f / ss.dt_safe if ss.dt_safe > 0 else math.inf
     extra = {"gap": g} if kind == "two-walls" else {}
     if z > 0:
@@ -482,6 +497,13 @@ def search_scene(
         dt_tan = tangent_step(potential, m, q_max)
         ref = ss.dt_safe if ss.dt_safe > 0 else (dt_tan if dt_tan > 0 else ss.dt_shortcut)
         g = 0.0 if kind != "two-walls" else (_DEFAULT_GAP_QMAX * q_max if gap is None else gap)
+        if kind == "two-walls" and math.ulp(g + q_max) > _GAP_ULP_RTOL * q_max:
+            raise HCVInputError(
+                f"two-walls gap = {g:.6g} m is too large for the overlap q_max = {q_max:.3g} m at "
+                f"v0 = {v0!r} m/s: positions near the gap are float64 numbers {math.ulp(g + q_max):.3g}"
+                f" m apart, more than {_GAP_ULP_RTOL:g} q_max, so the overlap is not resolved; "
+                f"use a gap below {_GAP_ULP_RTOL * q_max / np.finfo(float).eps:.3g} m"
+            )
         info.append((ss, q_max, dt_tan, g))
         main_of.append(len(searches))
         if kind == "impact":
