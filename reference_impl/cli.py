@@ -28,54 +28,70 @@ EXIT_INTERRUPTED = 130  # 128 + SIGINT
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
-    ("max_force", "max force U'(q_max) [N]"),
+    ("max_force", "elastic force at q_max, U'(q_max) [N]"),
+    ("peak_force", "peak contact force, max(U' + C q') [N]"),
     ("dt_safe", "dt_safe, sup over [0, q_max] [s]"),
     ("dt_safe_shortcut", "dt_safe shortcut 2 m v0 / U'(q_max) [s]"),
     ("geometry", "geometry (sec. 6)"),
     ("contact_time", "contact time, end at q = 0 [s]"),
     ("returns_to_q0", "returns to q = 0"),
-    ("restitution", "restitution, end at q = 0"),
+    ("restitution", "restitution, end at q = 0 (overlap)"),
     ("contact_time_zero_force", "contact time, end at zero force [s]"),
-    ("restitution_zero_force", "restitution, end at zero force"),
+    ("restitution_zero_force", "restitution, end at zero force (zero-force)"),
     ("action", "action J(E) (sec. 4) [J s]"),
     ("period", "period T(E) = 4 x quarter period [s]"),
 )
 
 
 def solve_scene(scene) -> list[dict]:
-    """Solve every velocity of an impact scene exactly; one dict per velocity.
+    """Solve every velocity of an impact scene; one dict per velocity.
 
-    Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
-    dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
-    geometry, contact_time and restitution (end at q = 0, the theory's
-    definition; with zeta >= 1 and a leading exponent >= 2 the body never returns
-    to q = 0: contact_time is then None and returns_to_q0 False, an exact answer,
-    not a failure), contact_time_zero_force and restitution_zero_force (end when
-    the total force vanishes, as in codes that forbid tension), action J(E) and
-    period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
+    Fields (SI units): v0, damping_law, zeta (universal law only, else None),
+    max_penetration, max_force (elastic force U'(q_max)), peak_force (peak total
+    contact force max (U' + C q')), dt_safe (supremum over [0, q_max]),
+    dt_safe_shortcut (2 m v0 / U'(q_max)), geometry, contact_time and restitution
+    (end at q = 0, the "overlap" end, the theory's definition; a body that never
+    returns to q = 0, e.g. zeta >= 1 with a leading exponent >= 2 or a constant
+    dashpot at low speed, has contact_time None and returns_to_q0 False, an answer,
+    not a failure), contact_time_zero_force and restitution_zero_force (the
+    "zero-force" end, where U' + C q' first vanishes after q_max, as in codes that
+    forbid tension), action J(E) and period T(E) with the paper's definitions
+    (section 4) at E = m v0^2 / 2, and the error bound of the contact time
+    (quadrature_error, s). The universal law and ``none`` are solved by the exact
+    quadrature, the other laws by `reference_impl.general_law`.
     """
     from .action import action, period
+    from .general_law import solve_law_impact
     from .impact import solve_impact
     from .stability import dt_safe
 
-    zeta = scene.zeta or 0.0
+    law = scene.law
+    exact = law.name in ("none", "universal")
+    zeta = (scene.zeta or 0.0) if exact else None
     rows = []
     for v0 in scene.velocities:
-        sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+        if exact:
+            sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+            err_t = sol.quadrature_error
+        else:
+            sol = solve_law_impact(scene.potential, scene.mass, v0, law)
+            err_t = sol.error_time
         safe = dt_safe(scene.potential, scene.mass, v0)
         E = 0.5 * scene.mass * v0 * v0
         rows.append(
             {
                 "v0": v0,
+                "damping_law": law.name,
                 "zeta": zeta,
                 "max_penetration": sol.max_penetration,
                 "max_force": sol.max_force,
+                "peak_force": sol.peak_force,
                 "dt_safe": safe.dt_safe,
                 "dt_safe_shortcut": safe.dt_shortcut,
                 "dt_safe_at_q": safe.q_star,
                 "geometry": safe.geometry,
-                # inf is the theory's answer for an overdamped contact that creeps back
-                # forever; it is written as an absence (null), not as a number.
+                # inf is the answer for a contact that creeps back forever; it is written
+                # as an absence (null), not as a number.
                 "contact_time": sol.contact_time if math.isfinite(sol.contact_time) else None,
                 "returns_to_q0": math.isfinite(sol.contact_time),
                 "restitution": sol.restitution,
@@ -83,10 +99,21 @@ def solve_scene(scene) -> list[dict]:
                 "restitution_zero_force": sol.restitution_zero_force,
                 "action": action(scene.potential, scene.mass, E),
                 "period": period(scene.potential, scene.mass, E),
-                "quadrature_error": sol.quadrature_error,
+                "quadrature_error": err_t,
             }
         )
     return rows
+
+
+def restitution_spread(rows: list[dict]) -> dict | None:
+    """max - min of the restitution at each end over the speeds (None for one speed)."""
+    if len(rows) < 2:
+        return None
+    out = {}
+    for end, key in (("overlap", "restitution"), ("zero-force", "restitution_zero_force")):
+        vals = [r[key] for r in rows]
+        out[end] = max(vals) - min(vals)
+    return out
 
 
 def _json_safe(value):
@@ -144,28 +171,51 @@ def _cmd_solve(args) -> int:
         )
     rows = solve_scene(scene)
     _require_finite(rows, scene)
+    spread = restitution_spread(rows)
     if args.json:
         out = {
             "scene": scene.to_dict(),
             "end_of_contact": {
-                "contact_time/restitution": "q returns to 0 (theory; the damper may pull)",
-                "contact_time_zero_force/restitution_zero_force": "total force U' + C q' reaches 0",
+                "contact_time/restitution": "overlap end: q returns to 0 (theory; the damper may pull)",
+                "contact_time_zero_force/restitution_zero_force": (
+                    "zero-force end: total force U' + C q' first reaches 0 after q_max"
+                ),
+            },
+            "forces": {
+                "max_force": "elastic force U'(q_max) at maximum penetration [N]",
+                "peak_force": "peak total contact force max over the contact of U' + C q' [N]",
             },
             "results": [{k: _json_safe(v) for k, v in r.items()} for r in rows],
         }
+        if spread is not None:
+            out["restitution_spread"] = {
+                k: _json_safe(v) for k, v in spread.items()
+            }
         json.dump(out, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
+        law_txt = (
+            f"zeta = {rows[0]['zeta']:.6g}"
+            if rows[0]["zeta"] is not None
+            else ", ".join(f"{k} = {v}" for k, v in scene.law.to_dict().items())
+        )
         _print_transposed(
-            f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']:.6g})",
+            f"hcv solve: {scene.name} (m = {scene.mass} kg, {law_txt})",
             rows,
             _SOLVE_ROWS,
             "v0",
             "impact speed v0 [m/s]",
         )
+        if spread is not None:
+            print(
+                f"restitution spread over the {len(rows)} speeds (max - min): "
+                f"{spread['overlap']:.3g} at the overlap end (q = 0), "
+                f"{spread['zero-force']:.3g} at the zero-force end"
+            )
         print(
-            "e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
-            "(codes that forbid tension). J, T: section 4 definitions."
+            "Ends of contact: 'overlap' = q back to 0 (theory); 'zero-force' = total force "
+            "U' + C q' first 0 (codes that forbid tension). Forces: U'(q_max) is elastic, "
+            "peak = max of U' + C q'. J, T: section 4 definitions."
         )
     return EXIT_OK
 
@@ -175,6 +225,7 @@ def _cmd_solve(args) -> int:
 _NON_NEGATIVE = (
     "max_penetration",
     "max_force",
+    "peak_force",
     "dt_safe",
     "dt_safe_shortcut",
     "contact_time",
@@ -197,7 +248,7 @@ def _require_finite(rows: list[dict], scene) -> None:
             if wrong:
                 raise UnsupportedError(
                     f"scene {scene.name!r}, v0 = {row['v0']:g} m/s: the solver gives {key} = "
-                    f"{value!r}; this scene (zeta = {row.get('zeta', 0.0):g}) is outside what it "
+                    f"{value!r}; this scene (damping {scene.law.to_dict()}) is outside what it "
                     "computes reliably"
                 )
 

@@ -76,7 +76,8 @@ class ImpactSolution:
     max_penetration : float
         Largest overlap q_max (m).
     max_force : float
-        Elastic force U'(q_max) at maximum penetration (N), as in Table 1.
+        Elastic force U'(q_max) at maximum penetration (N), as in Table 1; the peak
+        total force max (U' + C q') is the property `peak_force`.
     contact_time : float
         Duration until q returns to 0 (s); inf when it never does (zeta >= 1).
     restitution : float
@@ -117,11 +118,35 @@ class ImpactSolution:
         return obj
 
     def to_dict(self) -> dict:
-        """The scalar results as a plain dict (for JSON)."""
+        """The scalar results as a plain dict (for JSON), with ``peak_force``."""
         d = asdict(self)
         for key in ("potential", "_osc", "_t_peak"):
             d.pop(key, None)
+        d["peak_force"] = self.peak_force
+        d["returns_to_q0"] = self.returns_to_q0
         return d
+
+    @property
+    def returns_to_q0(self) -> bool:
+        """False when the body never gets back to q = 0 (zeta >= 1 with n >= 2)."""
+        return math.isfinite(self.contact_time)
+
+    @property
+    def peak_force(self) -> float:
+        """Peak total contact force max_t (U'(q) + C(q) q') in N (not U'(q_max)).
+
+        Computed on first use by the general-law integrator (`reference_impl.general_law`,
+        ~1e-14 relative), since the harmonic map gives no closed form for it.
+        """
+        cached = self.__dict__.get("_peak_force")
+        if cached is None:
+            from .general_law import solve_law_impact
+
+            cached = solve_law_impact(
+                self.potential, self.m, self.v0, {"law": "universal", "zeta": self.zeta}
+            ).peak_force
+            self.__dict__["_peak_force"] = cached
+        return cached
 
     # -- trajectory ---------------------------------------------------------
     def _g(self, s_or_d, from_end: bool = False):
@@ -265,8 +290,14 @@ def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tup
 
 
 def solve_impact(
-    potential: Potential, m: float, v0: float, zeta: float = 0.0, *, level: int | None = None
-) -> ImpactSolution:
+    potential: Potential,
+    m: float,
+    v0: float,
+    zeta: float = 0.0,
+    *,
+    law=None,
+    level: int | None = None,
+):
     """Solve one normal impact exactly through the harmonic map.
 
     Parameters
@@ -281,6 +312,11 @@ def solve_impact(
         Damping ratio of the universal law, 0 <= zeta <= ZETA_MAX, except for the
         narrow band just below 1 where the theory's end of contact leaves float64
         range (see `reference_impl._oscillator.S_END_MAX`); 0 is conservative.
+    law : DampingLaw or dict, optional
+        Any damping law of `reference_impl.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
+        ``universal`` (give ``zeta`` there, not both) and ``none`` use this exact
+        quadrature; the other laws are integrated by `reference_impl.general_law`
+        and return its `LawImpactSolution` (same field names, plus ``peak_force``).
     level : int, optional
         Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
         (power laws, and compiled families whose exponents have small
@@ -291,7 +327,7 @@ def solve_impact(
 
     Returns
     -------
-    ImpactSolution
+    ImpactSolution or LawImpactSolution
 
     Raises
     ------
@@ -300,6 +336,18 @@ def solve_impact(
         supported range) or a potential that violates the paper's assumptions
         on [0, q_max].
     """
+    if law is not None:
+        from .general_law import solve_law_impact
+        from .laws import law_from_dict
+
+        dl = law_from_dict(law)
+        if dl.name not in ("universal", "none"):
+            return solve_law_impact(potential, m, v0, dl)
+        if zeta:
+            raise HCVInputError(
+                f"give the damping once: zeta = {zeta!r} and law = {dl.to_dict()} both set"
+            )
+        zeta = dl.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impact")
