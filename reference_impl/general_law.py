@@ -19,7 +19,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._general_kernel import OUT_FIELDS, make_solver, power_sum_fc
+from ._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
+from ._general_kernel import solve as _compiled_solve
 from .errors import HCVInputError, UnsupportedError
 from .laws import DampingLaw, law_from_dict
 from .potentials._checks import positive
@@ -37,16 +38,9 @@ _EPS = np.finfo(float).eps
 _SOLVERS: dict = {}
 
 
-def _compiled():
-    """The numba solver for power sums (compiled once per process, ~3 s)."""
-    if "power" not in _SOLVERS:
-        _SOLVERS["power"] = make_solver(power_sum_fc(), jit=True)
-    return _SOLVERS["power"]
-
-
 def _python_solver():
     if "python" not in _SOLVERS:
-        _SOLVERS["python"] = make_solver(_generic_fc, jit=False)
+        _SOLVERS["python"] = python_solver(_generic_fc)
     return _SOLVERS["python"]
 
 
@@ -64,7 +58,8 @@ def _generic_fc(q, full, pot, _unused, cs, es, sc):
             C += c
         else:
             C += c * q**e
-            dC += c * e * q ** (e - 1.0)
+            with np.errstate(all="ignore"):  # C' is infinite at q = 0 for e < 1: a sign only
+                dC += c * e * np.float64(q) ** (e - 1.0)
     alpha, A, zf = sc[1], sc[2], sc[3]
     if alpha:
         C += alpha * dU
@@ -170,8 +165,18 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     cs = np.array([c for c, _ in terms], float)
     es = np.array([e for _, e in terms], float)
     zf = 2.0 * law.zeta * math.sqrt(m)
-    sc = np.array([m, law.alpha, law.A, zf], float)
     n = float(pot.leading_exponent)
+    # Leading exponent a of C ~ q^a at contact: a creeping return takes int C / U' dq,
+    # finite only for a > n - 2 (see _general_kernel).
+    leads = [e for c, e in terms if c > 0]
+    if law.alpha:
+        leads.append(n - 1.0)
+    if law.A:
+        leads.append(n - 2.0)
+    if law.zeta:
+        leads.append(n / 2.0 - 1.0)
+    creeps = 1.0 if leads and min(leads) <= n - 2.0 + 1e-12 else 0.0
+    sc = np.array([m, law.alpha, law.A, zf, creeps], float)
     if law.A and n < 2.0:
         raise HCVInputError(
             f"damping law 'viscoelastic' needs U'' finite at contact (leading exponent n >= 2, "
@@ -221,13 +226,13 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     cs, es, sc = _law_arrays(law, m, potential)
     pk = _power_terms(potential)
     if pk is not None:
-        out = _compiled()(v0, qE, pk[0], pk[1], cs, es, sc)
+        out = _compiled_solve(v0, qE, pk[0], pk[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
     r = dict(zip(OUT_FIELDS, out.tolist()))
     if r["status"] != 0.0 or not math.isfinite(r["q_max"]):
         raise UnsupportedError(
-            f"solve_law_impact: integration did not finish within {int(r['n_steps'] or 0)} steps "
+            f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "
             f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
         )
     returns = r["returns"] == 1.0

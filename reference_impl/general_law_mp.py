@@ -189,7 +189,37 @@ def _step(series_list, tol, h_max):
 
 
 def _root(poly, lo, hi):
-    return mpmath.findroot(lambda x: _horner(poly, x), (lo, hi), solver="anderson")
+    """Root of a series with a sign change on [lo, hi], by bisection to the working precision.
+
+    (A secant-type `findroot` fails its residual test on the tiny force values near the
+    exit, e.g. C = c q, where F = q (k sqrt(q) + c w) and the end point is a root too.)
+    """
+    glo = _horner(poly, lo)
+    for _ in range(mpmath.mp.prec + 4):
+        mid = (lo + hi) / 2
+        if mid in (lo, hi):
+            break
+        gm = _horner(poly, mid)
+        if gm == 0:
+            return mid
+        if (gm > 0) == (glo > 0):
+            lo, glo = mid, gm
+        else:
+            hi = mid
+    return (lo + hi) / 2
+
+
+def _first_crossing(poly, h):
+    """Bracket of the first + to - sign change of a series on [0, h] (32 samples), or None."""
+    xs = [h * j / 32 for j in range(33)]
+    prev = _horner(poly, xs[0])
+    for j in range(1, 33):
+        g = _horner(poly, xs[j])
+        if prev > 0 and g < 0:
+            return xs[j - 1], xs[j]
+        if g > 0:
+            prev = g
+    return None
 
 
 def _maxima(Gc, h, best):
@@ -285,7 +315,8 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
                 x = _root(Vs, 0, h)
                 s_max, Qm = t + x, _horner(Qs, x)
             if s_max is not None and t_zf is None and Fend <= 0:
-                x = _root(Gs, 0, h)
+                br = _first_crossing(Gs, h) or (0, h)
+                x = _root(Gs, *br)
                 t_zf, V_zf = t + x, _horner(Vs, x)
             t, Q, V = t + h, Qn, Vn
             if s_max is not None and V < 0:
@@ -302,8 +333,9 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
             if h >= r * (1 - mpmath.mpf(10) ** (-dps - 5)):
                 h = r
             peak = _maxima(Gs, h, peak)
-            if t_zf is None and _horner(Gs, h) < 0 and Gs[0] > 0:
-                x = _root(Gs, 0, h)
+            br = _first_crossing(Gs, h) if t_zf is None and Gs[0] > 0 else None
+            if br is not None:
+                x = _root(Gs, *br)
                 t_zf, V_zf = _horner(Ss, x), _horner(Vs, x)
             V, S, r = _horner(Vs, h), _horner(Ss, h), r - h
         if t_zf is None:  # the force never pulls: the two ends coincide
