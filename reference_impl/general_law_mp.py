@@ -308,6 +308,10 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
                 raise HCVInputError("general-law truth: the body does not return (not a truth case)")
             Qs, Vs, Gs = _mid_series(model, Q, V, K)
             h = _step([Qs, Vs], tol, mpmath.mpf(1))
+            # q^p is analytic through q = 0 for integer p (Hooke): the radius does not stop
+            # the step there, so keep the step end at q > 0 explicitly.
+            while _horner(Qs, h) <= 0:
+                h /= 2
             peak = _maxima(Gs, h, peak)
             Qn, Vn = _horner(Qs, h), _horner(Vs, h)
             Fend = _horner(Gs, h)
