@@ -14,6 +14,7 @@ from pathlib import Path
 from ._blocks import DETAILS, IMG, UL, H, P, T, _num
 from ._common import g
 from ._render_adapters import _adapters
+from ._laws import laws_blocks
 from ._render_sec6 import _dtmap
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
@@ -396,6 +397,7 @@ def _sections(r) -> list:
         + _fig1(r)
         + _dtmap(r)
         + _wp(r)
+        + laws_blocks(r)
         + _hard(r)
         + _adapters(r)
         + _env(r)
