@@ -100,10 +100,18 @@ def speed_table(bench: dict) -> str:
                 f"{r['dop853_us'] / 1e3:.1f} ms | {r['dop853_contact_time_rel_error']:.1e} | "
                 f"{r['speedup']:.0f}× | {'met' if r['goal_met'] else '**not met**'} |"
             )
+        lmi = bench.get("laws_machine")
+        run = (
+            f" Law rows measured in their own run (`python -m benchmarks.bench_exact --laws-only`, "
+            f"{lmi.get('cpu_count', '?')} cpus, load {bench.get('laws_load_average_1min') or 0:.2f}, "
+            f"commit {str(lmi.get('commit', '?'))[:12]})."
+            if lmi
+            else ""
+        )
         lines += [
             "",
             f"Goal (issue 18): ≤ {lg.get('us_per_impact', '?')} µs per impact at ≤ "
-            f"{lg.get('error', '?')} relative error and ≥ {lg.get('speedup', '?')}× DOP853.",
+            f"{lg.get('error', '?')} relative error and ≥ {lg.get('speedup', '?')}× DOP853.{run}",
         ]
     goal = bench.get("goal", {})
     mi = bench.get("machine", {})
