@@ -158,21 +158,17 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
         clips_tension=bool(data.get("clips_tension", False)),
         description=str(data.get("description", "")),
     )
+    from ..laws import LAWS
+    from .law_damping import implemented_law_from_table
+
+    if law not in LAWS:
+        raise AdapterOutputError(
+            f"{who}: implemented_law.damping.law must be one of {', '.join(LAWS)}, got {law!r}"
+        )
     try:
-        if law == "none":
-            return ImplementedLaw(pot, float(mass), zeta=0.0, **kw)
-        if law == "universal":
-            return ImplementedLaw(pot, float(mass), zeta=float(damping["zeta"]), **kw)
-        if law == "power":
-            c, a = float(damping["c"]), float(damping.get("exponent", 0.0))
-            if not (math.isfinite(c) and c >= 0 and math.isfinite(a)):
-                raise ValueError("c must be >= 0 and exponent finite")
-            return ImplementedLaw(pot, float(mass), C=PowerDamping(c, a), **kw)
+        return implemented_law_from_table(pot, float(mass), dict(damping), **kw)
     except (KeyError, TypeError, ValueError, HCVInputError) as exc:
         raise AdapterOutputError(f"{who}: bad 'implemented_law.damping' ({exc})") from None
-    raise AdapterOutputError(
-        f"{who}: implemented_law.damping.law must be none, universal or power, got {law!r}"
-    )
 
 
 class SubprocessAdapter(ContactAdapter):
