@@ -89,6 +89,7 @@ from .dtcrit_criteria import (
     parse_criterion,
 )
 from .dtcrit_result import DtCritResult
+from .errors import HCVInputError
 from .integrators.verlet import (
     SCENE_IMPACT,
     SCENE_WALLS,
@@ -597,6 +598,13 @@ def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> l
     progress : callable, optional
         As for `search_scene`.
     """
+    if scene.damping_law not in ("none", "universal"):
+        # The Verlet lanes integrate the universal law only; running the scene undamped
+        # would answer another question.
+        raise HCVInputError(
+            f"scene {scene.name!r}: hcv dt-crit runs damping law 'none' or 'universal', "
+            f"got {scene.damping_law!r}"
+        )
     crit = (
         parse_criterion(criterion, scene.kind)
         if criterion is not None

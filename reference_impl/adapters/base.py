@@ -233,6 +233,13 @@ class AdapterScene:
     @classmethod
     def from_scene(cls, scene, v0: float, dt: float, n_steps: int) -> AdapterScene:
         """Build from a validated `reference_impl.scenes.Scene` at one speed."""
+        if scene.damping_law not in ("none", "universal"):
+            # Sending it as "none" would score codes against the wrong law.
+            raise HCVInputError(
+                f"scene {scene.name!r}: hcv bench sends scenes with damping law 'none' or "
+                f"'universal' (got {scene.damping_law!r}); a code that integrates another law "
+                "declares it in implemented_law.damping and is scored against it"
+            )
         zeta = float(scene.zeta or 0.0) if scene.damping_law == "universal" else 0.0
         return cls(
             name=scene.name,
