@@ -296,3 +296,75 @@ def test_declared_law_is_run_by_the_references(table):
     # Verlet at ~1300 steps per contact: second order, measured 1e-5..2e-5 relative
     assert_close(got, sol.restitution, rtol=1e-4, claim="general-law",
                  call=f"law_trajectory({table})")
+
+
+_SCENE = """name = "hertz-{law}"
+mass = 0.0041103
+velocities = [0.1, 1.0]
+[potential]
+family = "power"
+k = 1.0879e10
+p = 1.5
+[damping]
+law = "{law}"
+{params}
+"""
+
+
+def _hcv(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "reference_impl.cli", *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_cli_solve_any_law_both_ends_and_spread(tmp_path):
+    """Measured in a new process, as the user runs it: both ends, both forces, the spread."""
+    import json
+
+    path = tmp_path / "s.toml"
+    path.write_text(_SCENE.format(law="hunt-crossley", params="alpha = 0.3"))
+    r = _hcv("solve", str(path), "--json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    rows = out["results"]
+    sols = [solve_law_impact(PowerLaw(1.0879e10, 1.5), 0.0041103, v, {"law": "hunt-crossley",
+                                                                       "alpha": 0.3})
+            for v in (0.1, 1.0)]
+    for row, sol in zip(rows, sols):
+        for key in ("restitution", "restitution_zero_force", "peak_force", "max_force"):
+            assert row[key] == getattr(sol, key), key
+    es = [s.restitution for s in sols]
+    assert out["restitution_spread"]["overlap"] == max(es) - min(es)
+    assert "peak_force" in out["forces"] and "overlap" in json.dumps(out["end_of_contact"])
+    r = _hcv("solve", str(path))
+    assert r.returncode == 0 and "restitution spread over the 2 speeds" in r.stdout
+
+
+@pytest.mark.parametrize(
+    "law, params, needle",
+    [("linear", "c = -3.0", "c = -3.0"), ("polynomial", 'c = "x"', "'x'"),
+     ("viscoelastic", "zeta = 0.1", "zeta"), ("magic", "", "magic"),
+     ("universal", 'restitution = 0.5\nrestitution_end = "q0"', "q0")],
+)
+def test_cli_bad_law_is_one_line_exit_2(tmp_path, law, params, needle):
+    path = tmp_path / "bad.toml"
+    path.write_text(_SCENE.format(law=law, params=params))
+    r = _hcv("solve", str(path))
+    assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], r.stderr
+
+
+def test_scene_restitution_end(tmp_path):
+    from reference_impl import load_scene
+
+    path = tmp_path / "zf.toml"
+    path.write_text(_SCENE.format(law="universal",
+                                  params='restitution = 0.5\nrestitution_end = "zero-force"'))
+    sc = load_scene(str(path))
+    sol = solve_impact(sc.potential, sc.mass, 1.0, sc.zeta)
+    assert_close(sol.restitution_zero_force, 0.5, rtol=1e-13, claim="general-law",
+                 call="scene restitution_end = zero-force")
+    assert sc.to_dict()["damping"] == {"law": "universal", "zeta": sc.zeta}
