@@ -34,9 +34,9 @@ from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
 from reference_impl._kernels import expression_sympy
-from reference_impl.impact import solve_impact_mp
 from reference_impl.general_law import solve_law_impact
 from reference_impl.general_law_mp import solve_law_impact_mp
+from reference_impl.impact import solve_impact_mp
 from reference_impl.law_study import calibrated_laws, hertz
 from reference_impl.laws import law_from_dict
 from reference_impl.workprecision import FAMILY_ZETA, family_scenes
@@ -236,7 +236,9 @@ def _law_row(name, law, repeats):
     errs = {
         "contact_time": rel(sol.contact_time, truth["contact_time"]),
         "restitution": rel(sol.restitution, truth["restitution"]),
-        "contact_time_zero_force": rel(sol.contact_time_zero_force, truth["contact_time_zero_force"]),
+        "contact_time_zero_force": rel(
+            sol.contact_time_zero_force, truth["contact_time_zero_force"]
+        ),
         "restitution_zero_force": rel(sol.restitution_zero_force, truth["restitution_zero_force"]),
         "max_penetration": rel(sol.max_penetration, truth["max_penetration"]),
         "peak_force": rel(sol.peak_force, truth["peak_force"]),
@@ -308,8 +310,11 @@ def _batch_rows(repeats, dop_us):
 def run(repeats: int = 7) -> dict:
     rows = [_family_row(*scene, repeats) for scene in _scenes()]
     batch = _batch_rows(repeats, rows[0]["dop853_us"])
-    laws = [_law_row(name, law, repeats) for name, law in calibrated_laws().items()
-            if name != "universal"]
+    laws = [
+        _law_row(name, law, repeats)
+        for name, law in calibrated_laws().items()
+        if name != "universal"
+    ]
     return {
         "families": rows,
         "batch": batch,
@@ -355,7 +360,7 @@ def _print(res: dict) -> None:
             f" ({b['us_per_impact']:.2f} us, {b['speedup_vs_dop853']:.0f}x DOP853)"
             f" {'met' if b['goal_met'] else 'NOT met'}"
         )
-    print(f"Hertz with each damping law (e = 0.8 at 1 m/s), general solver vs DOP853:")
+    print("Hertz with each damping law (e = 0.8 at 1 m/s), general solver vs DOP853:")
     for r in res.get("laws", []):
         print(
             f"{r['law']:36s} {r['exact_us']:9.1f} {r['exact_max_rel_error']:8.1e}"
@@ -375,13 +380,19 @@ def _laws_only(args) -> dict:
     if args.json and os.path.exists(args.json):
         with open(args.json) as fh:
             res = json.load(fh)
-    laws = [_law_row(name, law, args.repeats) for name, law in calibrated_laws().items()
-            if name != "universal"]
+    laws = [
+        _law_row(name, law, args.repeats)
+        for name, law in calibrated_laws().items()
+        if name != "universal"
+    ]
     res.update(
         {
             "laws": laws,
-            "law_goal": {"us_per_impact": LAW_GOAL_US, "speedup": LAW_GOAL_SPEEDUP,
-                         "error": LAW_GOAL_ERROR},
+            "law_goal": {
+                "us_per_impact": LAW_GOAL_US,
+                "speedup": LAW_GOAL_SPEEDUP,
+                "error": LAW_GOAL_ERROR,
+            },
             "law_truth": f"solve_law_impact_mp, {TRUTH_DPS} digits",
             "law_goal_met": all(r["goal_met"] for r in laws),
             "laws_load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
@@ -403,8 +414,11 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the result to this JSON file")
     ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--laws-only", action="store_true",
-                    help="only the damping-law rows (merged into an existing --json file)")
+    ap.add_argument(
+        "--laws-only",
+        action="store_true",
+        help="only the damping-law rows (merged into an existing --json file)",
+    )
     args = ap.parse_args(argv)
     if args.laws_only:
         res = _laws_only(args)

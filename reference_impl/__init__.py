@@ -4,6 +4,7 @@ from .batch import solve_impacts
 from .damping import (
     UniversalDamping,
     restitution_from_zeta,
+    restitution_zero_force_from_zeta,
     tsuji_coefficient,
     zeta_from_restitution,
 )
@@ -32,8 +33,10 @@ from .errors import (
     SceneError,
     UnsupportedError,
 )
+from .general_law import LawImpactSolution, solve_law_impact
 from .harmonic_map import HarmonicMap
 from .impact import ImpactSolution, solve_impact, solve_impact_mp
+from .laws import LAWS, DampingLaw
 from .potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 from .scenes import Scene, embedded_scenes, load_scene, parse_scene
 from .stability import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator
@@ -64,6 +67,11 @@ __all__ = [
     "load_scene",
     "parse_scene",
     "restitution_from_zeta",
+    "restitution_zero_force_from_zeta",
+    "DampingLaw",
+    "LAWS",
+    "LawImpactSolution",
+    "solve_law_impact",
     "solve_impact",
     "solve_impact_mp",
     "solve_impacts",

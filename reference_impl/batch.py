@@ -113,7 +113,9 @@ def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
     return out, ok
 
 
-def solve_impacts(potential: Potential, m: float, v0s, zetas=0.0, *, law=None) -> dict[str, np.ndarray]:
+def solve_impacts(
+    potential: Potential, m: float, v0s, zetas=0.0, *, law=None
+) -> dict[str, np.ndarray]:
     """Solve many impacts of one potential and mass.
 
     Parameters

@@ -188,9 +188,7 @@ def _cmd_solve(args) -> int:
             "results": [{k: _json_safe(v) for k, v in r.items()} for r in rows],
         }
         if spread is not None:
-            out["restitution_spread"] = {
-                k: _json_safe(v) for k, v in spread.items()
-            }
+            out["restitution_spread"] = {k: _json_safe(v) for k, v in spread.items()}
         json.dump(out, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:

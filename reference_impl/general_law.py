@@ -53,7 +53,7 @@ def _generic_fc(q, full, pot, _unused, cs, es, sc):
         d2U = float(pot._d2U(arr)[0])
     C = 0.0
     dC = 0.0
-    for c, e in zip(cs, es):
+    for c, e in zip(cs, es, strict=False):
         if e == 0.0:
             C += c
         else:
@@ -176,7 +176,9 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     if law.zeta:
         leads.append(n / 2.0 - 1.0)
     creeps = 1.0 if leads and min(leads) <= n - 2.0 + 1e-12 else 0.0
-    sc = np.array([m, law.alpha, law.A, zf, creeps], float)
+    # C q' outweighs U' as q -> 0 (a < n - 1): the force pulls just before q = 0.
+    pulls = 1.0 if leads and min(leads) < n - 1.0 - 1e-12 else 0.0
+    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls], float)
     if law.A and n < 2.0:
         raise HCVInputError(
             f"damping law 'viscoelastic' needs U'' finite at contact (leading exponent n >= 2, "
@@ -229,7 +231,7 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
         out = _compiled_solve(v0, qE, pk[0], pk[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
-    r = dict(zip(OUT_FIELDS, out.tolist()))
+    r = dict(zip(OUT_FIELDS, out.tolist(), strict=False))
     if r["status"] != 0.0 or not math.isfinite(r["q_max"]):
         raise UnsupportedError(
             f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "

@@ -57,7 +57,9 @@ def _common_n(exponents) -> int:
             )
         n = n * fr.denominator // math.gcd(n, fr.denominator)
     if n > _N_MAX:
-        raise HCVInputError(f"general-law truth: common denominator {n} of the exponents > {_N_MAX}")
+        raise HCVInputError(
+            f"general-law truth: common denominator {n} of the exponents > {_N_MAX}"
+        )
     return n
 
 
@@ -84,14 +86,18 @@ class _Model:
         terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
         mm, vv = mpmath.mpf(m), mpmath.mpf(v0)
         self.N = N
-        self.F = [(mpmath.mpf(t.k) * L ** (mpmath.mpf(t.p) + 1) / (mm * vv * vv), t.p) for t in terms]
+        self.F = [
+            (mpmath.mpf(t.k) * L ** (mpmath.mpf(t.p) + 1) / (mm * vv * vv), t.p) for t in terms
+        ]
         self.C = [(mpmath.mpf(c) * L ** (mpmath.mpf(e) + 1) / (mm * vv), e) for c, e in law.terms()]
         self.hc = mpmath.mpf(law.alpha) * vv
         if law.A:
             self.C += [(mpmath.mpf(law.A) * vv / L * a * p, p - 1) for a, p in self.F]
         if law.zeta:
             a, p = self.F[0]
-            self.C.append((2 * mpmath.mpf(law.zeta) * mpmath.sqrt(a * (mpmath.mpf(p) + 1) / 2), (p - 1) / 2))
+            self.C.append(
+                (2 * mpmath.mpf(law.zeta) * mpmath.sqrt(a * (mpmath.mpf(p) + 1) / 2), (p - 1) / 2)
+            )
 
     def exps(self):
         return sorted({p for _, p in self.F} | {e for _, e in self.C})
@@ -150,13 +156,13 @@ def _rho_series(model, rc, sign, V0, S0, K):
     Fser = [mpmath.mpf(0)] * (K + 1)
     for a, p in model.F:
         ps = pow_series(int(round(N * p)))
-        Fser = [x + a * y for x, y in zip(Fser, ps)]
+        Fser = [x + a * y for x, y in zip(Fser, ps, strict=False)]
     Cser = [mpmath.mpf(0)] * (K + 1)
     for c, e in model.C:
         ps = pow_series(int(round(N * e)))
-        Cser = [x + c * y for x, y in zip(Cser, ps)]
+        Cser = [x + c * y for x, y in zip(Cser, ps, strict=False)]
     if model.hc:
-        Cser = [x + model.hc * y for x, y in zip(Cser, Fser)]
+        Cser = [x + model.hc * y for x, y in zip(Cser, Fser, strict=False)]
     D = [sign * N * x for x in pow_series(N - 1)]  # dQ/dh
     V, S, R, G, H, J, DR = [V0], [S0], [], [], [], [], []
     for k in range(K):
@@ -298,14 +304,18 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
                 break
             Q1 /= 4
             if Q1 < mpmath.mpf("1e-8"):
-                raise HCVInputError("general-law truth: the damping stops the body at contact onset")
+                raise HCVInputError(
+                    "general-law truth: the damping stops the body at contact onset"
+                )
         # ---- middle ---------------------------------------------------------------
         t, Q = S, Q1
         s_max = Qm = t_zf = V_zf = None
         while True:
             nsteps += 1
             if nsteps > _MAX_STEPS:
-                raise HCVInputError("general-law truth: the body does not return (not a truth case)")
+                raise HCVInputError(
+                    "general-law truth: the body does not return (not a truth case)"
+                )
             Qs, Vs, Gs = _mid_series(model, Q, V, K)
             h = _step([Qs, Vs], tol, mpmath.mpf(1))
             # q^p is analytic through q = 0 for integer p (Hooke): the radius does not stop

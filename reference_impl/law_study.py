@@ -15,7 +15,7 @@ C1 = Gamma(3/5) sqrt(pi) / (2^(1/5) 5^(2/5) Gamma(21/10)), C2 = (3/5) C1^2.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from scipy.optimize import brentq
@@ -84,7 +84,7 @@ def _e(name, g, pot, m, v0):
     return solve_law_impact(pot, m, v0, law_from_strength(name, g, pot, m)).restitution
 
 
-@lru_cache(maxsize=None)
+@cache
 def calibrated_laws(e_cal: float = E_CAL, v_cal: float = V_CAL) -> dict[str, dict]:
     """Each study law with its strength set so that e(v_cal) = e_cal at the overlap end."""
     pot, m = hertz()
@@ -94,7 +94,10 @@ def calibrated_laws(e_cal: float = E_CAL, v_cal: float = V_CAL) -> dict[str, dic
         while _e(name, g_hi, pot, m, v_cal) > e_cal:
             g_hi *= 4.0
         g = brentq(
-            lambda g: _e(name, g, pot, m, v_cal) - e_cal, g_hi / 4.0, g_hi, rtol=_CAL_RTOL
+            lambda g, name=name: _e(name, g, pot, m, v_cal) - e_cal,
+            g_hi / 4.0,
+            g_hi,
+            rtol=_CAL_RTOL,
         )
         out[name] = law_from_strength(name, g, pot, m)
     return out

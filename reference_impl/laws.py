@@ -157,9 +157,8 @@ class DampingLaw:
 
     def is_zero(self) -> bool:
         """True when C(q) = 0 identically."""
-        return (
-            self.name == "none"
-            or (not self.terms() and self.alpha == 0 and self.A == 0 and self.zeta == 0)
+        return self.name == "none" or (
+            not self.terms() and self.alpha == 0 and self.A == 0 and self.zeta == 0
         )
 
     def to_dict(self) -> dict[str, Any]:

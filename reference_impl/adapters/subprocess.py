@@ -93,7 +93,6 @@ from .base import (
     AdapterScene,
     ContactAdapter,
     ImplementedLaw,
-    PowerDamping,
     trajectory_from_mapping,
 )
 

@@ -82,15 +82,28 @@ def laws_figure(data: dict, path) -> None:
     for i, row in enumerate(data["laws"]):
         color = f"C{i}"
         ax.semilogx(v, row["overlap"], "-", color=color, label=f"{row['law']} (end q = 0)")
-        ax.semilogx(v, row["zero_force"], "--", color=color, lw=1.0,
-                    label=f"{row['law']} (end U' + C q' = 0)")
+        ax.semilogx(
+            v,
+            row["zero_force"],
+            "--",
+            color=color,
+            lw=1.0,
+            label=f"{row['law']} (end U' + C q' = 0)",
+        )
     sp = data["schwager_poeschel"]
-    ax.semilogx(v, [1 - r["one_minus_e_expansion"] for r in sp], ":", color="k",
-                label="Schwager & Pöschel, 2 terms (viscoelastic)")
+    ax.semilogx(
+        v,
+        [1 - r["one_minus_e_expansion"] for r in sp],
+        ":",
+        color="k",
+        label="Schwager & Pöschel, 2 terms (viscoelastic)",
+    )
     ax.axvline(data["v_cal"], color="0.6", lw=0.8)
     ax.set_xlabel("impact speed v0 [m/s]")
     ax.set_ylabel("coefficient of restitution e = -v_out / v0")
-    ax.set_title(f"Hertz contact, each law calibrated to e = {data['e_cal']} at {data['v_cal']} m/s")
+    ax.set_title(
+        f"Hertz contact, each law calibrated to e = {data['e_cal']} at {data['v_cal']} m/s"
+    )
     ax.set_ylim(0, 1.02)
     ax.legend(fontsize=7, ncol=2, loc="lower left")
     ax.grid(True, which="both", alpha=0.3)
@@ -114,9 +127,14 @@ def laws_blocks(r) -> list:
             [
                 row["law"],
                 ", ".join(
-                    f"{k} = " + (_num(x, 6) if not isinstance(x, list)
-                                 else "[" + ", ".join(_num(y, 6) for y in x) + "]")
-                    for k, x in row["damping"].items() if k != "law"
+                    f"{k} = "
+                    + (
+                        _num(x, 6)
+                        if not isinstance(x, list)
+                        else "[" + ", ".join(_num(y, 6) for y in x) + "]"
+                    )
+                    for k, x in row["damping"].items()
+                    if k != "law"
                 ),
                 _num(row["overlap_at_vmin"], 4),
                 _num(row["overlap_at_vmax"], 4),
@@ -124,7 +142,9 @@ def laws_blocks(r) -> list:
                 _num(row["zero_force_at_vmin"], 4),
                 _num(row["zero_force_at_vmax"], 4),
                 _num(row["zero_force_spread"], 3),
-                "all" if all(row["returns"]) else f"{sum(not x for x in row['returns'])} speeds do not",
+                "all"
+                if all(row["returns"])
+                else f"{sum(not x for x in row['returns'])} speeds do not",
             ]
         )
         if row["law"] == "universal":
@@ -163,14 +183,26 @@ def laws_blocks(r) -> list:
         ),
         UL_(bullets),
         T(
-            ["law", "parameters (SI)", f"e at {v[0]:g} m/s", f"e at {v[-1]:g} m/s", "spread",
-             f"e_F=0 at {v[0]:g}", f"e_F=0 at {v[-1]:g}", "spread (F = 0)", "returns to q = 0"],
+            [
+                "law",
+                "parameters (SI)",
+                f"e at {v[0]:g} m/s",
+                f"e at {v[-1]:g} m/s",
+                "spread",
+                f"e_F=0 at {v[0]:g}",
+                f"e_F=0 at {v[-1]:g}",
+                "spread (F = 0)",
+                "returns to q = 0",
+            ],
             rows,
         ),
         P(sp_text),
-        IMG(FIGURE, "Restitution against impact speed, each law calibrated to e = 0.8 at 1 m/s; "
+        IMG(
+            FIGURE,
+            "Restitution against impact speed, each law calibrated to e = 0.8 at 1 m/s; "
             "solid: end at q = 0, dashed: end at zero total force; dotted: Schwager & Pöschel's "
-            "two-term expansion for the viscoelastic law."),
+            "two-term expansion for the viscoelastic law.",
+        ),
     ]
 
 

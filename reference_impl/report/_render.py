@@ -13,8 +13,8 @@ from pathlib import Path
 
 from ._blocks import DETAILS, IMG, UL, H, P, T, _num
 from ._common import g
-from ._render_adapters import _adapters
 from ._laws import laws_blocks
+from ._render_adapters import _adapters
 from ._render_sec6 import _dtmap
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}

@@ -37,8 +37,8 @@ from pathlib import Path
 from typing import Any
 
 from ..damping import zeta_from_restitution
-from ..laws import LAWS, DampingLaw, law_from_dict
 from ..errors import HCVInputError, SceneError
+from ..laws import LAWS, DampingLaw, law_from_dict
 from ..potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
@@ -61,7 +61,17 @@ _LAWS = LAWS
 _ENDS = ("overlap", "zero-force")
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
 _DAMPING_KEYS = (
-    "law", "zeta", "restitution", "restitution_end", "C0", "K", "M", "c", "exponent", "A", "alpha"
+    "law",
+    "zeta",
+    "restitution",
+    "restitution_end",
+    "C0",
+    "K",
+    "M",
+    "c",
+    "exponent",
+    "A",
+    "alpha",
 )
 # family -> (required keys, optional keys), besides "family" itself.
 _FAMILIES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -305,7 +315,9 @@ def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw]:
         zeta = _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
     elif forms[0] == "restitution":
         e = _number(err, table["restitution"], "damping.restitution", low=0.0, high=1.0)
-        end = _string(err, table.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS)
+        end = _string(
+            err, table.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
+        )
         try:
             zeta = zeta_from_restitution(e, end=end)
         except HCVInputError as exc:
