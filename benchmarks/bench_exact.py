@@ -33,13 +33,13 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
-from reference_impl._kernels import expression_sympy
+from reference_impl.exact._nodes import expression_sympy
 from reference_impl.general_law import solve_law_impact
 from reference_impl.general_law_mp import solve_law_impact_mp
-from reference_impl.impact import solve_impact_mp
+from reference_impl.exact.solve import solve_impact_mp
 from reference_impl.law_study import calibrated_laws, hertz
 from reference_impl.laws import law_from_dict
-from reference_impl.workprecision import FAMILY_ZETA, family_scenes
+from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from ._machine import machine_info
 

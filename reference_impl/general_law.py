@@ -3,7 +3,7 @@
     m q'' + C(q) q' + U'(q) = 0,   q(0) = 0,  q'(0) = v0 > 0,
 
 for every potential family and every law of `reference_impl.laws`. The universal
-law keeps its exact quadrature (`reference_impl.impact.solve_impact`); this module
+law keeps its exact quadrature (`reference_impl.exact.solve.solve_impact`); this module
 integrates the others (method: `reference_impl._general_kernel`), compiled with
 numba for sums of power laws (Hooke, Hertz, power, sum) and in plain Python for
 the other families (sphere, ellipsoid, expression; ~100x slower, same method).
@@ -19,13 +19,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
-from ._general_kernel import solve as _compiled_solve
-from .errors import HCVInputError, UnsupportedError
-from .laws import DampingLaw, law_from_dict
-from .potentials._checks import positive
-from .potentials.base import Potential, SumPotential
-from .potentials.power import PowerLaw
+from reference_impl._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
+from reference_impl._general_kernel import solve as _compiled_solve
+from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.laws import DampingLaw, law_from_dict
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential, SumPotential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["LawImpactSolution", "solve_law_impact", "ERROR_SAFETY"]
 
@@ -221,7 +221,7 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     E = 0.5 * m * v0 * v0
     if not (math.isfinite(E) and E > 0):
         raise HCVInputError(f"kinetic energy m v0^2 / 2 = {E!r} J is not a positive float64")
-    from .impact import _check_exponent, _validated_top
+    from reference_impl.exact.solve import _check_exponent, _validated_top
 
     _check_exponent(potential)
     qE = _validated_top(potential, E)

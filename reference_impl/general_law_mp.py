@@ -30,10 +30,10 @@ from fractions import Fraction
 
 import mpmath
 
-from .errors import HCVInputError
-from .laws import law_from_dict
-from .potentials.base import Potential, SumPotential
-from .potentials.power import PowerLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.laws import law_from_dict
+from reference_impl.potentials.base import Potential, SumPotential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["solve_law_impact_mp"]
 

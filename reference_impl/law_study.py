@@ -20,10 +20,10 @@ from functools import cache
 import numpy as np
 from scipy.optimize import brentq
 
-from .damping import zeta_from_restitution
-from .general_law import solve_law_impact
-from .impact import solve_impact
-from .potentials.power import PowerLaw
+from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.general_law import solve_law_impact
+from reference_impl.exact.solve import solve_impact
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "E_CAL",

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "LAWS",

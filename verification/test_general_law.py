@@ -17,7 +17,7 @@ from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
-from reference_impl.damping import (
+from reference_impl.theory.damping import (
     restitution_zero_force_from_zeta,
     tsuji_coefficient,
     zeta_from_restitution,

@@ -8,7 +8,7 @@ skip, not a failure). The built-in codes' classes `KratosAdapter` and
 loading them never imports Kratos or LAMMPS (that happens when a run starts).
 """
 
-from .base import (
+from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterError,
     AdapterOutputError,
@@ -20,8 +20,8 @@ from .base import (
     Trajectory,
     trajectory_from_mapping,
 )
-from .law_damping import LawDamping, implemented_law_from_table
-from .registry import get_adapter, register, registered
+from reference_impl.adapters.law_damping import LawDamping, implemented_law_from_table
+from reference_impl.adapters.registry import get_adapter, register, registered
 
 __all__ = [
     "AdapterDeclined",

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..laws import DampingLaw, law_C, law_from_dict
-from ..potentials.base import Potential
-from .base import ImplementedLaw, PowerDamping
+from reference_impl.laws import DampingLaw, law_C, law_from_dict
+from reference_impl.potentials.base import Potential
+from reference_impl.adapters.base import ImplementedLaw, PowerDamping
 
 __all__ = ["LawDamping", "implemented_law_from_table"]
 
@@ -62,7 +62,7 @@ def implemented_law_from_table(pot: Potential, mass: float, table, **kw) -> Impl
             pot, float(mass), C=PowerDamping(law.params["c"], law.params["exponent"]), **kw
         )
     if law.A and float(pot.leading_exponent) < 2.0:
-        from ..errors import HCVInputError
+        from reference_impl.errors import HCVInputError
 
         raise HCVInputError(
             "implemented_law.damping: 'viscoelastic' needs U'' finite at contact (leading "

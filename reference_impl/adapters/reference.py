@@ -15,8 +15,8 @@ import math
 import numba
 import numpy as np
 
-from ..integrators.verlet import SCENE_IMPACT, SCENE_WALLS, _force_energy, kernel_terms
-from .base import AdapterScene, ContactAdapter, ImplementedLaw, PowerDamping, Trajectory
+from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, _force_energy, kernel_terms
+from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, PowerDamping, Trajectory
 
 __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
 
@@ -195,7 +195,7 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
     TypeError
         When the law's damping is an opaque callable (not `LawDamping` / `PowerDamping`).
     """
-    from .law_damping import LawDamping
+    from reference_impl.adapters.law_damping import LawDamping
 
     if isinstance(law.C, LawDamping):
         # any law of the table: the same loop, C(q) evaluated per step (plain Python)

@@ -84,9 +84,9 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
-from ..errors import HCVInputError
-from ..scenes._scene import _potential, _Where
-from .base import (
+from reference_impl.errors import HCVInputError
+from reference_impl.scenes._scene import _potential, _Where
+from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterOutputError,
     AdapterRunError,
@@ -157,8 +157,8 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
         clips_tension=bool(data.get("clips_tension", False)),
         description=str(data.get("description", "")),
     )
-    from ..laws import LAWS
-    from .law_damping import implemented_law_from_table
+    from reference_impl.laws import LAWS
+    from reference_impl.adapters.law_damping import implemented_law_from_table
 
     if law not in LAWS:
         raise AdapterOutputError(

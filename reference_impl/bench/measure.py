@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
-from ..potentials.power import PowerLaw
+from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["check_conventions", "exact_reference", "measure", "universal_zeta"]
 
@@ -122,14 +122,14 @@ def universal_zeta(law: ImplementedLaw) -> float | None:
 
 def _table_law(law: ImplementedLaw):
     """The `DampingLaw` of a declared law of the table, or None (opaque callable)."""
-    from ..adapters.law_damping import law_of
+    from reference_impl.adapters.law_damping import law_of
 
     return law_of(law.C)
 
 
 def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
     """Exact peak tensile total force / peak compressive force along the damped ODE."""
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     if law.clips_tension:
         return 0.0
@@ -157,8 +157,8 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
 
     With ``timing`` the wall time of the exact solver is measured too ("seconds").
     """
-    from ..impact import solve_impact
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     pot, m = law.potential, law.mass
     zeta = universal_zeta(law)
@@ -179,7 +179,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
             out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
     elif not law.clips_tension and _table_law(law) is not None:
         # a law of the table: the general-law reference (both ends, ~1e-14)
-        from ..general_law import solve_law_impact
+        from reference_impl.general_law import solve_law_impact
 
         dl = _table_law(law)
         sol = solve_law_impact(pot, m, v0, dl)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ._blocks import IMG, H, P, T, _num
+from reference_impl.report._blocks import IMG, H, P, T, _num
 
 __all__ = ["run_laws", "laws_figure", "laws_blocks", "FIGURE"]
 
@@ -19,7 +19,7 @@ FIGURE = "damping_laws.png"
 
 def run_laws(quick: bool = False) -> dict:
     """Curves at both ends, drift per law and the Schwager-Poeschel comparison (JSON-safe)."""
-    from ..law_study import (
+    from reference_impl.law_study import (
         E_CAL,
         HERTZ,
         SPEEDS,
@@ -207,6 +207,6 @@ def laws_blocks(r) -> list:
 
 
 def UL_(items):
-    from ._blocks import UL
+    from reference_impl.report._blocks import UL
 
     return UL(items)

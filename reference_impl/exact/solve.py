@@ -30,16 +30,16 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.optimize import elementwise
 
-from ._branches import branch_integrals, compiled_nodes, dq_dx
-from ._fused import fused_impact
-from ._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
-from ._quadrature import integrate_left_singular
-from ._truth import solve_impact_mp
-from .damping import _check_zeta
-from .errors import HCVInputError
-from .potentials._checks import positive
-from .potentials.base import Potential
-from .potentials.power import PowerLaw
+from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
+from reference_impl.exact._one_call import fused_impact
+from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
+from reference_impl.exact._quadrature import integrate_left_singular
+from reference_impl.exact._truth import solve_impact_mp
+from reference_impl.theory.damping import _check_zeta
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "ImpactSolution",
@@ -140,7 +140,7 @@ class ImpactSolution:
         """
         cached = self.__dict__.get("_peak_force")
         if cached is None:
-            from .general_law import solve_law_impact
+            from reference_impl.general_law import solve_law_impact
 
             cached = solve_law_impact(
                 self.potential, self.m, self.v0, {"law": "universal", "zeta": self.zeta}
@@ -311,7 +311,7 @@ def solve_impact(
     zeta : float
         Damping ratio of the universal law, 0 <= zeta <= ZETA_MAX, except for the
         narrow band just below 1 where the theory's end of contact leaves float64
-        range (see `reference_impl._oscillator.S_END_MAX`); 0 is conservative.
+        range (see `reference_impl.exact._oscillator.S_END_MAX`); 0 is conservative.
     law : DampingLaw or dict, optional
         Any damping law of `reference_impl.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
         ``universal`` (give ``zeta`` there, not both) and ``none`` use this exact
@@ -337,8 +337,8 @@ def solve_impact(
         on [0, q_max].
     """
     if law is not None:
-        from .general_law import solve_law_impact
-        from .laws import law_from_dict
+        from reference_impl.general_law import solve_law_impact
+        from reference_impl.laws import law_from_dict
 
         dl = law_from_dict(law)
         if dl.name not in ("universal", "none"):
