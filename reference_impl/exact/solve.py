@@ -139,6 +139,8 @@ class ImpactSolution:
         ~1e-14 relative), since the harmonic map gives no closed form for it.
         """
         cached = self.__dict__.get("_peak_force")
+        if cached is None and self.zeta == 0:
+            cached = self.max_force  # undamped: the total force is U', largest at q_max
         if cached is None:
             from reference_impl.general_law import solve_law_impact
 
