@@ -10,9 +10,9 @@ ground truth (`solve_impact_mp`, 30 digits). The batch rows time
 Goals (issue 9): every family <= 60 us per impact at <= 1e-13 relative error in
 contact time and restitution and >= 300x DOP853; batch >= 1e5 Hertz impacts/s.
 
-Law rows (issue 18): Hertz with each damping law of `reference_impl.laws` (the
-calibrated laws of `reference_impl.law_study`, e = 0.8 at 1 m/s), solved by
-`reference_impl.general_law` and by DOP853 (rtol 1e-12) with the same C(q), both
+Law rows (issue 18): Hertz with each damping law of `reference_impl.theory.laws` (the
+calibrated laws of `reference_impl.studies.laws`, e = 0.8 at 1 m/s), solved by
+`reference_impl.exact.general_law` and by DOP853 (rtol 1e-12) with the same C(q), both
 scored against the 30-digit Taylor truth (`solve_law_impact_mp`). Goal: <= 200 us
 per impact at <= 1e-12 relative error (both ends, peak force) and >= 50x DOP853.
 
@@ -34,11 +34,11 @@ from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
 from reference_impl.exact._nodes import expression_sympy
-from reference_impl.general_law import solve_law_impact
-from reference_impl.general_law_mp import solve_law_impact_mp
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact.solve import solve_impact_mp
-from reference_impl.law_study import calibrated_laws, hertz
-from reference_impl.laws import law_from_dict
+from reference_impl.studies.laws import calibrated_laws, hertz
+from reference_impl.theory.laws import law_from_dict
 from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from ._machine import machine_info

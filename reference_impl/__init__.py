@@ -33,10 +33,10 @@ from reference_impl.errors import (
     SceneError,
     UnsupportedError,
 )
-from reference_impl.general_law import LawImpactSolution, solve_law_impact
+from reference_impl.exact.general_law import LawImpactSolution, solve_law_impact
 from reference_impl.theory.harmonic_map import HarmonicMap
 from reference_impl.exact.solve import ImpactSolution, solve_impact, solve_impact_mp
-from reference_impl.laws import LAWS, DampingLaw
+from reference_impl.theory.laws import LAWS, DampingLaw
 from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 from reference_impl.scenes import Scene, embedded_scenes, load_scene, parse_scene
 from reference_impl.stability.bound import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator

@@ -1,6 +1,6 @@
 """Damping laws beyond the universal one (issue 18): the general-law reference solver.
 
-References: the 30-digit Taylor-series truth (`reference_impl.general_law_mp`, exact
+References: the 30-digit Taylor-series truth (`reference_impl.exact._general_law_mp`, exact
 series in rho = q^(1/N) at the ends), the exact quadrature of the universal law
 (given to the general solver through its Tsuji power form or polynomial form), and
 closed forms of the linear spring-dashpot (overdamped: no return).
@@ -23,9 +23,9 @@ from reference_impl.theory.damping import (
     zeta_from_restitution,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.general_law import solve_law_impact
-from reference_impl.general_law_mp import solve_law_impact_mp
-from reference_impl.laws import LAWS, DampingLaw, law_from_dict
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
+from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 from reference_impl.potentials import Expression, SumPotential
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less, assert_true

@@ -46,7 +46,7 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
 6. Optional: ``implemented_law(scene) -> ImplementedLaw`` says which force law the
    code *actually* integrates (potential, mass, damping: a universal ratio
    ``zeta`` or a coefficient ``C(q)``, e.g. `PowerDamping`, or any law of
-   `reference_impl.laws` as a `LawDamping` (built by
+   `reference_impl.theory.laws` as a `LawDamping` (built by
    `reference_impl.adapters.implemented_law_from_table`); ``clips_tension`` if
    the code never lets the total force pull). The scorecard compares the code with
    the exact solution of that law as well as with what was asked; the references

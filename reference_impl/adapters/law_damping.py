@@ -1,4 +1,4 @@
-"""Any damping law of `reference_impl.laws` as the ``C`` of an `ImplementedLaw` (issue 18).
+"""Any damping law of `reference_impl.theory.laws` as the ``C`` of an `ImplementedLaw` (issue 18).
 
 `LawDamping` is picklable (Python adapters run in worker processes) and describes
 itself in the protocol's ``implemented_law.damping`` form, so a code that declares,
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_impl.laws import DampingLaw, law_C, law_from_dict
+from reference_impl.theory.laws import DampingLaw, law_C, law_from_dict
 from reference_impl.potentials.base import Potential
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping
 

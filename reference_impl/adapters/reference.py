@@ -215,7 +215,7 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
         )
     if law.C is not None and not isinstance(law.C, PowerDamping):
         raise TypeError(
-            f"the reference Verlet runs the laws of reference_impl.laws (LawDamping, "
+            f"the reference Verlet runs the laws of reference_impl.theory.laws (LawDamping, "
             f"PowerDamping, universal), not {law.C!r}"
         )
     return verlet_trajectory(

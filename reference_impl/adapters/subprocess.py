@@ -157,7 +157,7 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
         clips_tension=bool(data.get("clips_tension", False)),
         description=str(data.get("description", "")),
     )
-    from reference_impl.laws import LAWS
+    from reference_impl.theory.laws import LAWS
     from reference_impl.adapters.law_damping import implemented_law_from_table
 
     if law not in LAWS:

@@ -179,7 +179,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
             out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
     elif not law.clips_tension and _table_law(law) is not None:
         # a law of the table: the general-law reference (both ends, ~1e-14)
-        from reference_impl.general_law import solve_law_impact
+        from reference_impl.exact.general_law import solve_law_impact
 
         dl = _table_law(law)
         sol = solve_law_impact(pot, m, v0, dl)

@@ -58,10 +58,10 @@ def solve_scene(scene) -> list[dict]:
     forbid tension), action J(E) and period T(E) with the paper's definitions
     (section 4) at E = m v0^2 / 2, and the error bound of the contact time
     (quadrature_error, s). The universal law and ``none`` are solved by the exact
-    quadrature, the other laws by `reference_impl.general_law`.
+    quadrature, the other laws by `reference_impl.exact.general_law`.
     """
     from reference_impl.theory.action import action, period
-    from reference_impl.general_law import solve_law_impact
+    from reference_impl.exact.general_law import solve_law_impact
     from reference_impl.exact.solve import solve_impact
     from reference_impl.stability.bound import dt_safe
 

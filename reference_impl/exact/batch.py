@@ -129,9 +129,9 @@ def solve_impacts(
     zetas : array_like
         Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
     law : DampingLaw or dict, optional
-        A damping law of `reference_impl.laws` other than ``universal`` / ``none``
+        A damping law of `reference_impl.theory.laws` other than ``universal`` / ``none``
         (then ``zetas`` must stay 0): every speed is solved by
-        `reference_impl.general_law.solve_law_impact`, and the arrays are its fields
+        `reference_impl.exact.general_law.solve_law_impact`, and the arrays are its fields
         (max_penetration, max_force, peak_force, contact_time, restitution,
         contact_time_zero_force, restitution_zero_force, returns_to_q0,
         error_time, error_restitution).
@@ -150,7 +150,7 @@ def solve_impacts(
         than BATCH_MAX impacts.
     """
     if law is not None:
-        from reference_impl.laws import law_from_dict
+        from reference_impl.theory.laws import law_from_dict
 
         dl = law_from_dict(law)
         if np.any(np.asarray(zetas, dtype=float) != 0):
@@ -249,7 +249,7 @@ _LAW_FIELDS = (
 
 def _law_batch(potential, m, v0s, law) -> dict[str, np.ndarray]:
     """One `solve_law_impact` per speed (the general law has no batch kernel)."""
-    from reference_impl.general_law import solve_law_impact
+    from reference_impl.exact.general_law import solve_law_impact
 
     v = np.asarray(v0s, dtype=float)
     if v.size > BATCH_MAX:

@@ -135,14 +135,14 @@ class ImpactSolution:
     def peak_force(self) -> float:
         """Peak total contact force max_t (U'(q) + C(q) q') in N (not U'(q_max)).
 
-        Computed on first use by the general-law integrator (`reference_impl.general_law`,
+        Computed on first use by the general-law integrator (`reference_impl.exact.general_law`,
         ~1e-14 relative), since the harmonic map gives no closed form for it.
         """
         cached = self.__dict__.get("_peak_force")
         if cached is None and self.zeta == 0:
             cached = self.max_force  # undamped: the total force is U', largest at q_max
         if cached is None:
-            from reference_impl.general_law import solve_law_impact
+            from reference_impl.exact.general_law import solve_law_impact
 
             cached = solve_law_impact(
                 self.potential, self.m, self.v0, {"law": "universal", "zeta": self.zeta}
@@ -315,9 +315,9 @@ def solve_impact(
         narrow band just below 1 where the theory's end of contact leaves float64
         range (see `reference_impl.exact._oscillator.S_END_MAX`); 0 is conservative.
     law : DampingLaw or dict, optional
-        Any damping law of `reference_impl.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
+        Any damping law of `reference_impl.theory.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
         ``universal`` (give ``zeta`` there, not both) and ``none`` use this exact
-        quadrature; the other laws are integrated by `reference_impl.general_law`
+        quadrature; the other laws are integrated by `reference_impl.exact.general_law`
         and return its `LawImpactSolution` (same field names, plus ``peak_force``).
     level : int, optional
         Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
@@ -339,8 +339,8 @@ def solve_impact(
         on [0, q_max].
     """
     if law is not None:
-        from reference_impl.general_law import solve_law_impact
-        from reference_impl.laws import law_from_dict
+        from reference_impl.exact.general_law import solve_law_impact
+        from reference_impl.theory.laws import law_from_dict
 
         dl = law_from_dict(law)
         if dl.name not in ("universal", "none"):

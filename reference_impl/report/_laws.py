@@ -1,6 +1,6 @@
 """Report section: restitution against impact speed for every damping law (issue 18).
 
-Measured by `reference_impl.law_study` (calibration e = 0.8 at 1 m/s, Hertz); every
+Measured by `reference_impl.studies.laws` (calibration e = 0.8 at 1 m/s, Hertz); every
 number of the text is generated from that measurement.
 """
 
@@ -19,7 +19,7 @@ FIGURE = "damping_laws.png"
 
 def run_laws(quick: bool = False) -> dict:
     """Curves at both ends, drift per law and the Schwager-Poeschel comparison (JSON-safe)."""
-    from reference_impl.law_study import (
+    from reference_impl.studies.laws import (
         E_CAL,
         HERTZ,
         SPEEDS,
@@ -175,10 +175,10 @@ def laws_blocks(r) -> list:
         H(2, "Damping laws: restitution against impact speed (Theorem 3)", "laws"),
         P(
             f"Hertz contact (U' = k q^{d['hertz_p']}, k = {d['hertz_k']:.4g} N/m^1.5, reduced mass "
-            f"{d['mass']:.4g} kg) with each damping law of `reference_impl.laws`, its strength "
+            f"{d['mass']:.4g} kg) with each damping law of `reference_impl.theory.laws`, its strength "
             f"calibrated so that e = {d['e_cal']} at {d['v_cal']} m/s at the end q = 0, solved at "
             f"{len(v)} speeds from {v[0]:g} to {v[-1]:g} m/s (universal law: exact quadrature; the "
-            "others: `reference_impl.general_law`, checked against a 30-digit truth by the suite). "
+            "others: `reference_impl.exact.general_law`, checked against a 30-digit truth by the suite). "
             "Theorem 3 says only the universal law keeps e independent of speed; measured:"
         ),
         UL_(bullets),

@@ -85,8 +85,8 @@ def speed_table(bench: dict) -> str:
         lg = bench.get("law_goal", {})
         lines += [
             "",
-            "Damping laws (issue 18): Hertz with each law of `reference_impl.laws`, calibrated to "
-            "e = 0.8 at 1 m/s (overlap end), v0 = 1 m/s, solved by `reference_impl.general_law`; "
+            "Damping laws (issue 18): Hertz with each law of `reference_impl.theory.laws`, calibrated to "
+            "e = 0.8 at 1 m/s (overlap end), v0 = 1 m/s, solved by `reference_impl.exact.general_law`; "
             "error = largest relative error over both ends' contact time and restitution, "
             f"q_max and the peak force, against {bench.get('law_truth', '?')}.",
             "",

@@ -16,7 +16,7 @@ A scene is a small TOML document::
     alpha = 0.5
     [damping]                       # optional; default law = "none"
     law = "universal"               # none | universal | linear | power | polynomial |
-                                    # viscoelastic | hunt-crossley (reference_impl.laws)
+                                    # viscoelastic | hunt-crossley (reference_impl.theory.laws)
     zeta = 0.2                      # or restitution = 0.8 (+ restitution_end), or C0 with K and M
 
 Every problem raises `SceneError` (or, for a potential that breaks the
@@ -38,7 +38,7 @@ from typing import Any
 
 from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
-from reference_impl.laws import LAWS, DampingLaw, law_from_dict
+from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
@@ -104,7 +104,7 @@ class Scene:
         The contact potential U(q).
     damping_law : str
         ``"none"``, ``"universal"`` (Theorem 3) or another law of
-        `reference_impl.laws` (``linear``, ``power``, ``polynomial``,
+        `reference_impl.theory.laws` (``linear``, ``power``, ``polynomial``,
         ``viscoelastic``, ``hunt-crossley``).
     zeta : float or None
         Damping ratio zeta = C0 / (2 sqrt(K M)) of the universal law; None

@@ -1,7 +1,7 @@
-"""30-digit truth for `reference_impl.general_law`: Taylor-series integration in analytic variables.
+"""30-digit truth for `reference_impl.exact.general_law`: Taylor-series integration in analytic variables.
 
 m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i (power laws and their sums) and
-any law of `reference_impl.laws`, integrated by a Taylor method whose series are
+any law of `reference_impl.theory.laws`, integrated by a Taylor method whose series are
 built exactly (recurrences for products, reciprocals and powers; no numerical
 differentiation) at dps + 10 digits. A Taylor method needs a right-hand side
 analytic at each expansion point, which q^1.5 and q^0.25 are not at q = 0. So, as
@@ -31,7 +31,7 @@ from fractions import Fraction
 import mpmath
 
 from reference_impl.errors import HCVInputError
-from reference_impl.laws import law_from_dict
+from reference_impl.theory.laws import law_from_dict
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
 

@@ -1,4 +1,4 @@
-"""The integrator behind `reference_impl.general_law`: one impact m q'' + C(q) q' + U'(q) = 0.
+"""The integrator behind `reference_impl.exact.general_law`: one impact m q'' + C(q) q' + U'(q) = 0.
 
 One algorithm around a force function ``fc(q, full, ks, ps, cs, es, sc)`` returning
 (U, U', U'', C, C') at one overlap q: compiled with numba (cached on disk) for sums

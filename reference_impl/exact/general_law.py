@@ -2,14 +2,14 @@
 
     m q'' + C(q) q' + U'(q) = 0,   q(0) = 0,  q'(0) = v0 > 0,
 
-for every potential family and every law of `reference_impl.laws`. The universal
+for every potential family and every law of `reference_impl.theory.laws`. The universal
 law keeps its exact quadrature (`reference_impl.exact.solve.solve_impact`); this module
-integrates the others (method: `reference_impl._general_kernel`), compiled with
+integrates the others (method: `reference_impl.exact._general_kernel`), compiled with
 numba for sums of power laws (Hooke, Hertz, power, sum) and in plain Python for
 the other families (sphere, ellipsoid, expression; ~100x slower, same method).
 
 Both ends of contact are reported (see `LawImpactSolution`), with an error bound
-that the suite checks against a 30-digit truth (`reference_impl.general_law_mp`).
+that the suite checks against a 30-digit truth (`reference_impl.exact._general_law_mp`).
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from reference_impl._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
-from reference_impl._general_kernel import solve as _compiled_solve
+from reference_impl.exact._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
+from reference_impl.exact._general_kernel import solve as _compiled_solve
 from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.laws import DampingLaw, law_from_dict
+from reference_impl.theory.laws import DampingLaw, law_from_dict
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
@@ -119,7 +119,7 @@ class LawImpactSolution:
         -q'/v0 at that instant.
     returns_to_q0 : bool
         False when the body creeps back along the slow manifold of an overdamped
-        law and never reaches q = 0 (see `reference_impl._general_kernel`).
+        law and never reaches q = 0 (see `reference_impl.exact._general_kernel`).
     error_time : float
         Bound on the absolute error of the contact times and of the time of q_max (s).
     error_restitution : float
@@ -199,7 +199,7 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     v0 : float
         Approach speed in m/s, > 0.
     law : DampingLaw or dict
-        E.g. ``{"law": "hunt-crossley", "alpha": 0.2}`` (see `reference_impl.laws`).
+        E.g. ``{"law": "hunt-crossley", "alpha": 0.2}`` (see `reference_impl.theory.laws`).
         The universal law is accepted too (integrated like the others; the exact
         quadrature is `solve_impact`).
 

@@ -1,10 +1,10 @@
 """Theorem 3 for the laws contact codes use: restitution against impact speed (issue 18).
 
-Every law of `reference_impl.laws` on one Hertz contact, each with its one strength
+Every law of `reference_impl.theory.laws` on one Hertz contact, each with its one strength
 parameter calibrated so that the restitution at the overlap end (q = 0) is
 ``E_CAL`` at ``V_CAL``; then the restitution at both ends over impact speeds from
 1e-3 to 1e2 m/s. The universal law is the exact quadrature (flat by Theorem 3);
-the others come from `reference_impl.general_law`. Shared by the benchmark
+the others come from `reference_impl.exact.general_law`. Shared by the benchmark
 (`benchmarks/bench_exact.py`) and the report section (one home for the calibration).
 
 The viscoelastic law is compared with the expansion of Schwager & Poeschel (1998),
@@ -21,7 +21,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from reference_impl.theory.damping import zeta_from_restitution
-from reference_impl.general_law import solve_law_impact
+from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
 
