@@ -10,6 +10,12 @@ ground truth (`solve_impact_mp`, 30 digits). The batch rows time
 Goals (issue 9): every family <= 60 us per impact at <= 1e-13 relative error in
 contact time and restitution and >= 300x DOP853; batch >= 1e5 Hertz impacts/s.
 
+Law rows (issue 18): Hertz with each damping law of `reference_impl.theory.laws` (the
+calibrated laws of `reference_impl.studies.laws`, e = 0.8 at 1 m/s), solved by
+`reference_impl.exact.general_law` and by DOP853 (rtol 1e-12) with the same C(q), both
+scored against the 30-digit Taylor truth (`solve_law_impact_mp`). Goal: <= 200 us
+per impact at <= 1e-12 relative error (both ends, peak force) and >= 50x DOP853.
+
 Run: ``python -m benchmarks.bench_exact [--json FILE] [--repeats N]``.
 """
 
@@ -28,7 +34,11 @@ from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
 from reference_impl.exact._nodes import expression_sympy
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact.solve import solve_impact_mp
+from reference_impl.studies.laws import calibrated_laws, hertz
+from reference_impl.theory.laws import law_from_dict
 from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from ._machine import machine_info
@@ -45,6 +55,11 @@ TRUTH_DPS = 30
 BATCH_N = 100_000
 BATCH_ZETA_MAX = 0.85
 GRID_ZETAS, GRID_SPEEDS = 50, 2000
+# Issue 18: general damping laws on Hertz.
+LAW_GOAL_US = 200.0
+LAW_GOAL_SPEEDUP = 50.0
+LAW_GOAL_ERROR = 1e-12
+LAW_V0 = 1.0
 
 
 def _scenes():
@@ -154,6 +169,106 @@ def _family_row(name, pot, m, v0, repeats):
     return row
 
 
+def _dop853_law(pot, m, v0, law):
+    """DOP853 (rtol 1e-12) with C(q) of ``law`` (lean scalar right-hand side): contact time,
+    restitution (q = 0 end), zero-force end time and restitution, peak force, nfev."""
+    k, p = pot.k, pot.p
+    dl = law_from_dict(law)
+    terms = dl.terms()
+    alpha, A = dl.alpha, dl.A
+
+    def C(q):
+        c = sum(cj * q**ej for cj, ej in terms)
+        if alpha:
+            c += alpha * k * q**p
+        if A:
+            c += A * k * p * q ** (p - 1)
+        return c
+
+    def rhs(t, y):
+        q, v = y
+        if q <= 0.0:
+            return [v, 0.0]
+        return [v, -(k * q**p + C(q) * v) / m]
+
+    def touch(t, y):
+        return y[0]
+
+    def zero_force(t, y):
+        q, v = y
+        return k * max(q, 0.0) ** p + C(max(q, 0.0)) * v if t > 0 else 1.0
+
+    touch.terminal, touch.direction = True, -1
+    zero_force.direction = -1
+    q_scale = pot.turning_point(0.5 * m * v0 * v0, check=False)
+    sol = solve_ivp(
+        rhs,
+        (0.0, 50.0 * q_scale / v0),
+        [0.0, v0],
+        method="DOP853",
+        rtol=RTOL_ODE,
+        atol=[RTOL_ODE * q_scale, RTOL_ODE * v0],
+        events=(touch, zero_force),
+        dense_output=False,
+    )
+    tc, ec = float(sol.t_events[0][0]), -float(sol.y_events[0][0][1]) / v0
+    if len(sol.t_events[1]):
+        tz, ez = float(sol.t_events[1][0]), -float(sol.y_events[1][0][1]) / v0
+    else:  # the force never pulls (hunt-crossley): the two ends coincide
+        tz, ez = tc, ec
+    return tc, ec, tz, ez, int(sol.nfev)
+
+
+def _law_row(name, law, repeats):
+    pot, m = hertz()
+    v0 = LAW_V0
+    t0 = time.perf_counter()
+    sol = solve_law_impact(pot, m, v0, law)
+    first = time.perf_counter() - t0
+    truth = solve_law_impact_mp(pot, m, v0, law, dps=TRUTH_DPS)
+    t_gen = _median_time(lambda: solve_law_impact(pot, m, v0, law), repeats, inner=5)
+    tc, ec, tz, ez, nfev = _dop853_law(pot, m, v0, law)
+    t_ode = _median_time(lambda: _dop853_law(pot, m, v0, law), max(3, repeats // 2))
+
+    def rel(a, b):
+        return abs(a / float(b) - 1)
+
+    errs = {
+        "contact_time": rel(sol.contact_time, truth["contact_time"]),
+        "restitution": rel(sol.restitution, truth["restitution"]),
+        "contact_time_zero_force": rel(
+            sol.contact_time_zero_force, truth["contact_time_zero_force"]
+        ),
+        "restitution_zero_force": rel(sol.restitution_zero_force, truth["restitution_zero_force"]),
+        "max_penetration": rel(sol.max_penetration, truth["max_penetration"]),
+        "peak_force": rel(sol.peak_force, truth["peak_force"]),
+    }
+    row = {
+        "law": name,
+        "damping": law,
+        "potential": repr(pot),
+        "m": m,
+        "v0": v0,
+        "first_call_s": first,
+        "exact_us": t_gen * 1e6,
+        "exact_rel_errors": errs,
+        "exact_max_rel_error": max(errs.values()),
+        "exact_reported_bound_rel": sol.error_time / sol.contact_time,
+        "dop853_us": t_ode * 1e6,
+        "dop853_nfev": nfev,
+        "dop853_contact_time_rel_error": rel(tc, truth["contact_time"]),
+        "dop853_restitution_rel_error": rel(ec, truth["restitution"]),
+        "dop853_zero_force_time_rel_error": rel(tz, truth["contact_time_zero_force"]),
+        "speedup": t_ode / t_gen,
+    }
+    row["goal_met"] = bool(
+        row["exact_us"] <= LAW_GOAL_US
+        and row["speedup"] >= LAW_GOAL_SPEEDUP
+        and row["exact_max_rel_error"] <= LAW_GOAL_ERROR
+    )
+    return row
+
+
 def _batch_rows(repeats, dop_us):
     pot, m = PowerLaw(1.0e9, 1.5), 0.0041
     rng = np.random.default_rng(12345)
@@ -195,9 +310,21 @@ def _batch_rows(repeats, dop_us):
 def run(repeats: int = 7) -> dict:
     rows = [_family_row(*scene, repeats) for scene in _scenes()]
     batch = _batch_rows(repeats, rows[0]["dop853_us"])
+    laws = [
+        _law_row(name, law, repeats)
+        for name, law in calibrated_laws().items()
+        if name != "universal"
+    ]
     return {
         "families": rows,
         "batch": batch,
+        "laws": laws,
+        "law_goal": {
+            "us_per_impact": LAW_GOAL_US,
+            "speedup": LAW_GOAL_SPEEDUP,
+            "error": LAW_GOAL_ERROR,
+        },
+        "law_truth": f"solve_law_impact_mp, {TRUTH_DPS} digits",
         "goal": {
             "us_per_impact": GOAL_US,
             "speedup": GOAL_SPEEDUP,
@@ -209,6 +336,7 @@ def run(repeats: int = 7) -> dict:
         "load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
         "machine": machine_info(),
         "goal_met": all(r["goal_met"] for r in rows) and all(b["goal_met"] for b in batch),
+        "law_goal_met": all(r["goal_met"] for r in laws),
     }
 
 
@@ -232,6 +360,13 @@ def _print(res: dict) -> None:
             f" ({b['us_per_impact']:.2f} us, {b['speedup_vs_dop853']:.0f}x DOP853)"
             f" {'met' if b['goal_met'] else 'NOT met'}"
         )
+    print("Hertz with each damping law (e = 0.8 at 1 m/s), general solver vs DOP853:")
+    for r in res.get("laws", []):
+        print(
+            f"{r['law']:36s} {r['exact_us']:9.1f} {r['exact_max_rel_error']:8.1e}"
+            f" {'':8s} {r['dop853_us']:10.0f} {r['dop853_contact_time_rel_error']:8.1e}"
+            f" {r['speedup']:8.0f}x {r['first_call_s']:10.2f} {'met' if r['goal_met'] else 'NOT met'}"
+        )
     mi = res["machine"]
     print(
         f"machine: {mi['platform']}, {mi['cpu_count']} cpus, load {res['load_average_1min']},"
@@ -239,11 +374,56 @@ def _print(res: dict) -> None:
     )
 
 
+def _laws_only(args) -> dict:
+    """Law rows only, merged into the JSON file given (its other rows kept as measured)."""
+    res = {}
+    if args.json and os.path.exists(args.json):
+        with open(args.json) as fh:
+            res = json.load(fh)
+    laws = [
+        _law_row(name, law, args.repeats)
+        for name, law in calibrated_laws().items()
+        if name != "universal"
+    ]
+    res.update(
+        {
+            "laws": laws,
+            "law_goal": {
+                "us_per_impact": LAW_GOAL_US,
+                "speedup": LAW_GOAL_SPEEDUP,
+                "error": LAW_GOAL_ERROR,
+            },
+            "law_truth": f"solve_law_impact_mp, {TRUTH_DPS} digits",
+            "law_goal_met": all(r["goal_met"] for r in laws),
+            "laws_load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+            "laws_machine": machine_info(),
+        }
+    )
+    res.setdefault("families", [])
+    res.setdefault("batch", [])
+    res.setdefault("truth", "?")
+    res.setdefault("load_average_1min", None)
+    res.setdefault("machine", machine_info())
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(res, fh, indent=2)
+    return res
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the result to this JSON file")
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument(
+        "--laws-only",
+        action="store_true",
+        help="only the damping-law rows (merged into an existing --json file)",
+    )
     args = ap.parse_args(argv)
+    if args.laws_only:
+        res = _laws_only(args)
+        _print(res)
+        return 0
     res = run(args.repeats)
     _print(res)
     if args.json:

@@ -4,6 +4,7 @@ from reference_impl.exact.batch import solve_impacts
 from reference_impl.theory.damping import (
     UniversalDamping,
     restitution_from_zeta,
+    restitution_zero_force_from_zeta,
     tsuji_coefficient,
     zeta_from_restitution,
 )
@@ -32,8 +33,10 @@ from reference_impl.errors import (
     SceneError,
     UnsupportedError,
 )
+from reference_impl.exact.general_law import LawImpactSolution, solve_law_impact
 from reference_impl.theory.harmonic_map import HarmonicMap
 from reference_impl.exact.solve import ImpactSolution, solve_impact, solve_impact_mp
+from reference_impl.theory.laws import LAWS, DampingLaw
 from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 from reference_impl.scenes import Scene, embedded_scenes, load_scene, parse_scene
 from reference_impl.stability.bound import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator
@@ -64,6 +67,11 @@ __all__ = [
     "load_scene",
     "parse_scene",
     "restitution_from_zeta",
+    "restitution_zero_force_from_zeta",
+    "DampingLaw",
+    "LAWS",
+    "LawImpactSolution",
+    "solve_law_impact",
     "solve_impact",
     "solve_impact_mp",
     "solve_impacts",

@@ -9,45 +9,61 @@ from __future__ import annotations
 
 import math
 
+from reference_impl.errors import HCVInputError
 from reference_impl.stability.result import DtCritResult
 
-__all__ = ["search_loaded_scene", "solve_scene"]
+__all__ = ["restitution_spread", "search_loaded_scene", "solve_scene"]
 
 
 def solve_scene(scene) -> list[dict]:
-    """Solve every velocity of an impact scene exactly; one dict per velocity.
+    """Solve every velocity of an impact scene; one dict per velocity.
 
-    Fields (SI units): v0, zeta, max_penetration, max_force (U' at q_max),
-    dt_safe (supremum over [0, q_max]), dt_safe_shortcut (2 m v0 / U'(q_max)),
-    geometry, contact_time and restitution (end at q = 0, the theory's
-    definition; with zeta >= 1 and a leading exponent >= 2 the body never returns
-    to q = 0: contact_time is then None and returns_to_q0 False, an exact answer,
-    not a failure), contact_time_zero_force and restitution_zero_force (end when
-    the total force vanishes, as in codes that forbid tension), action J(E) and
-    period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
+    Fields (SI units): v0, damping_law, zeta (universal law only, else None),
+    max_penetration, max_force (elastic force U'(q_max)), peak_force (peak total
+    contact force max (U' + C q')), dt_safe (supremum over [0, q_max]),
+    dt_safe_shortcut (2 m v0 / U'(q_max)), geometry, contact_time and restitution
+    (end at q = 0, the "overlap" end, the theory's definition; a body that never
+    returns to q = 0, e.g. zeta >= 1 with a leading exponent >= 2 or a constant
+    dashpot at low speed, has contact_time None and returns_to_q0 False, an answer,
+    not a failure), contact_time_zero_force and restitution_zero_force (the
+    "zero-force" end, where U' + C q' first vanishes after q_max, as in codes that
+    forbid tension), action J(E) and period T(E) with the paper's definitions
+    (section 4) at E = m v0^2 / 2, and the error bound of the contact time
+    (quadrature_error, s). The universal law and ``none`` are solved by the exact
+    quadrature, the other laws by `reference_impl.exact.general_law`.
     """
     from reference_impl.theory.action import action, period
+    from reference_impl.exact.general_law import solve_law_impact
     from reference_impl.exact.solve import solve_impact
     from reference_impl.stability.bound import dt_safe
 
-    zeta = scene.zeta or 0.0
+    law = scene.law
+    exact = law.name in ("none", "universal")
+    zeta = (scene.zeta or 0.0) if exact else None
     rows = []
     for v0 in scene.velocities:
-        sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+        if exact:
+            sol = solve_impact(scene.potential, scene.mass, v0, zeta)
+            err_t = sol.quadrature_error
+        else:
+            sol = solve_law_impact(scene.potential, scene.mass, v0, law)
+            err_t = sol.error_time
         safe = dt_safe(scene.potential, scene.mass, v0)
         E = 0.5 * scene.mass * v0 * v0
         rows.append(
             {
                 "v0": v0,
+                "damping_law": law.name,
                 "zeta": zeta,
                 "max_penetration": sol.max_penetration,
                 "max_force": sol.max_force,
+                "peak_force": sol.peak_force,
                 "dt_safe": safe.dt_safe,
                 "dt_safe_shortcut": safe.dt_shortcut,
                 "dt_safe_at_q": safe.q_star,
                 "geometry": safe.geometry,
-                # inf is the theory's answer for an overdamped contact that creeps back
-                # forever; it is written as an absence (null), not as a number.
+                # inf is the answer for a contact that creeps back forever; it is written
+                # as an absence (null), not as a number.
                 "contact_time": sol.contact_time if math.isfinite(sol.contact_time) else None,
                 "returns_to_q0": math.isfinite(sol.contact_time),
                 "restitution": sol.restitution,
@@ -55,11 +71,21 @@ def solve_scene(scene) -> list[dict]:
                 "restitution_zero_force": sol.restitution_zero_force,
                 "action": action(scene.potential, scene.mass, E),
                 "period": period(scene.potential, scene.mass, E),
-                "quadrature_error": sol.quadrature_error,
+                "quadrature_error": err_t,
             }
         )
     return rows
 
+
+def restitution_spread(rows: list[dict]) -> dict | None:
+    """max - min of the restitution at each end over the speeds (None for one speed)."""
+    if len(rows) < 2:
+        return None
+    out = {}
+    for end, key in (("overlap", "restitution"), ("zero-force", "restitution_zero_force")):
+        vals = [r[key] for r in rows]
+        out[end] = max(vals) - min(vals)
+    return out
 
 
 def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> list[DtCritResult]:
@@ -80,6 +106,13 @@ def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> l
     """
     from reference_impl.stability.search import default_criterion, parse_criterion, search_scene
 
+    if scene.damping_law not in ("none", "universal"):
+        # The Verlet lanes integrate the universal law only; running the scene undamped
+        # would answer another question.
+        raise HCVInputError(
+            f"scene {scene.name!r}: hcv dt-crit runs damping law 'none' or 'universal', "
+            f"got {scene.damping_law!r}"
+        )
     crit = (
         parse_criterion(criterion, scene.kind)
         if criterion is not None

@@ -214,7 +214,7 @@ def test_compiled_gauss_jacobi_path_taken_and_bounded(zeta):
     reported bound holds against the truth (the generic draws above cover the rest)."""
     from reference_impl.exact._one_call import gauss_jacobi_impact  # noqa: PLC0415
     from reference_impl.exact._oscillator import VirtualOscillator  # noqa: PLC0415
-    from reference_impl.exact.solve import _validated_top  # noqa: PLC0415
+    from reference_impl.exact._validate import _validated_top  # noqa: PLC0415
     from reference_impl.studies.workprecision import family_scenes  # noqa: PLC0415
 
     scenes = {sc.name: sc for sc in family_scenes()}

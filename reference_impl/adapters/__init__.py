@@ -20,6 +20,7 @@ from reference_impl.adapters.base import (
     Trajectory,
     trajectory_from_mapping,
 )
+from reference_impl.adapters.law_damping import LawDamping, implemented_law_from_table
 from reference_impl.adapters.registry import get_adapter, register, registered
 
 __all__ = [
@@ -33,6 +34,8 @@ __all__ = [
     "KratosAdapter",
     "LammpsAdapter",
     "PowerDamping",
+    "LawDamping",
+    "implemented_law_from_table",
     "Trajectory",
     "get_adapter",
     "register",

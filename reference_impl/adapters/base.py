@@ -45,12 +45,15 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
    numbers as ``null``.
 6. Optional: ``implemented_law(scene) -> ImplementedLaw`` says which force law the
    code *actually* integrates (potential, mass, damping: a universal ratio
-   ``zeta`` or a coefficient ``C(q)``, e.g. `PowerDamping`; ``clips_tension`` if
+   ``zeta`` or a coefficient ``C(q)``, e.g. `PowerDamping`, or any law of
+   `reference_impl.theory.laws` as a `LawDamping` (built by
+   `reference_impl.adapters.implemented_law_from_table`); ``clips_tension`` if
    the code never lets the total force pull). The scorecard compares the code with
-   the exact solution of that law as well as with what was asked. The default
-   claims the scene's own law. For adapters run in a worker process the law is
-   pickled: use `PowerDamping` or a module-level function for ``C``. ``cmd:``:
-   the ``"implemented_law"`` key of the response.
+   the exact solution of that law as well as with what was asked; the references
+   (exact solution, textbook Verlet) run every law of the table, not an opaque
+   callable. The default claims the scene's own law. For adapters run in a worker
+   process the law is pickled: use `LawDamping`, `PowerDamping` or a module-level
+   function for ``C``. ``cmd:``: the ``"implemented_law"`` key of the response.
 7. Declining a scene. Optional: ``supports(scene) -> str | None`` returns why a
    scene cannot be run (e.g. "only power laws with p = 1 or 1.5"); such scenes
    are skipped, not failed. A code that finds out only while running raises
@@ -233,6 +236,13 @@ class AdapterScene:
     @classmethod
     def from_scene(cls, scene, v0: float, dt: float, n_steps: int) -> AdapterScene:
         """Build from a validated `reference_impl.scenes.Scene` at one speed."""
+        if scene.damping_law not in ("none", "universal"):
+            # Sending it as "none" would score codes against the wrong law.
+            raise HCVInputError(
+                f"scene {scene.name!r}: hcv bench sends scenes with damping law 'none' or "
+                f"'universal' (got {scene.damping_law!r}); a code that integrates another law "
+                "declares it in implemented_law.damping and is scored against it"
+            )
         zeta = float(scene.zeta or 0.0) if scene.damping_law == "universal" else 0.0
         return cls(
             name=scene.name,

@@ -83,8 +83,9 @@ def _traj_kernel(
     return n_steps + 1
 
 
-def _traj_python(pot, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap):
-    """The same loop for potentials without a kernel (one scalar call per step)."""
+def _traj_python(pot, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap, c_fun=None):
+    """The same loop for potentials without a kernel (one scalar call per step); ``c_fun``
+    adds any other damping C(q) (a `LawDamping`), evaluated at each step."""
     t = np.zeros(n_steps + 1)
     q = np.zeros(n_steps + 1)
     v = np.zeros(n_steps + 1)
@@ -115,6 +116,8 @@ def _traj_python(pot, m, c_damp, c_pow, a_pow, clip, dt, v0, n_steps, scene, gap
                 rep += c_damp * fe / math.sqrt(2.0 * U) * (-sgn * vh)
             if c_pow > 0.0:
                 rep += c_pow * qq**a_pow * (-sgn * vh)
+            if c_fun is not None:
+                rep += float(c_fun(arr)[0]) * (-sgn * vh)
             if clip and rep < 0.0:
                 rep = 0.0
             touched = True
@@ -190,10 +193,31 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
     Raises
     ------
     TypeError
-        When the law's damping is a callable other than `PowerDamping`.
+        When the law's damping is an opaque callable (not `LawDamping` / `PowerDamping`).
     """
+    from reference_impl.adapters.law_damping import LawDamping
+
+    if isinstance(law.C, LawDamping):
+        # any law of the table: the same loop, C(q) evaluated per step (plain Python)
+        return _traj_python(
+            law.potential,
+            float(law.mass),
+            0.0,
+            0.0,
+            0.0,
+            bool(law.clips_tension),
+            float(dt),
+            float(v0),
+            int(n_steps),
+            SCENE_IMPACT,
+            0.0,
+            c_fun=law.C,
+        )
     if law.C is not None and not isinstance(law.C, PowerDamping):
-        raise TypeError(f"the reference Verlet runs PowerDamping or universal laws, not {law.C!r}")
+        raise TypeError(
+            f"the reference Verlet runs the laws of reference_impl.theory.laws (LawDamping, "
+            f"PowerDamping, universal), not {law.C!r}"
+        )
     return verlet_trajectory(
         law.potential,
         law.mass,

@@ -94,7 +94,6 @@ from reference_impl.adapters.base import (
     AdapterScene,
     ContactAdapter,
     ImplementedLaw,
-    PowerDamping,
     trajectory_from_mapping,
 )
 
@@ -138,14 +137,10 @@ def _tail(text: str) -> str:
     return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
 
 
-# Keys of a response's implemented_law object, and of its damping table per law: anything
-# else is a typo whose silent omission would change the law the code is judged against.
+# Keys of a response's implemented_law object (its damping table is checked by
+# `DampingLaw`): anything else is a typo whose silent omission would change the law the
+# code is judged against.
 _LAW_KEYS = ("potential", "mass", "damping", "clips_tension", "description")
-_DAMPING_KEYS = {
-    "none": ("law",),
-    "universal": ("law", "zeta"),
-    "power": ("law", "c", "exponent"),
-}
 
 
 def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
@@ -175,11 +170,6 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     ):
         raise AdapterOutputError(f"{who}: 'implemented_law' needs mass > 0 and a damping object")
     law = damping.get("law")
-    extra = sorted(set(damping) - set(_DAMPING_KEYS.get(law, ("law",))))
-    if extra:
-        raise AdapterOutputError(
-            f"{who}: unknown key 'implemented_law.damping.{extra[0]}' for law {law!r}"
-        )
     clips = data.get("clips_tension", False)
     if not isinstance(clips, bool):
         raise AdapterOutputError(
@@ -189,21 +179,18 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(description, str):
         raise AdapterOutputError(f"{who}: 'implemented_law.description' must be a string")
     kw = dict(clips_tension=clips, description=description)
+    from reference_impl.adapters.law_damping import implemented_law_from_table
+    from reference_impl.theory.laws import LAWS
+
+    if law not in LAWS:
+        raise AdapterOutputError(
+            f"{who}: implemented_law.damping.law must be one of {', '.join(LAWS)}, got {law!r}"
+        )
     try:
-        if law == "none":
-            return ImplementedLaw(pot, float(mass), zeta=0.0, **kw)
-        if law == "universal":
-            return ImplementedLaw(pot, float(mass), zeta=_num(damping["zeta"]), **kw)
-        if law == "power":
-            c, a = _num(damping["c"]), _num(damping.get("exponent", 0.0))
-            if not (math.isfinite(c) and c >= 0 and math.isfinite(a)):
-                raise ValueError("c must be >= 0 and exponent finite")
-            return ImplementedLaw(pot, float(mass), C=PowerDamping(c, a), **kw)
+        # Unknown keys and non-numbers of every law are refused by `DampingLaw`.
+        return implemented_law_from_table(pot, float(mass), dict(damping), **kw)
     except (KeyError, TypeError, ValueError, HCVInputError) as exc:
         raise AdapterOutputError(f"{who}: bad 'implemented_law.damping' ({exc})") from None
-    raise AdapterOutputError(
-        f"{who}: implemented_law.damping.law must be none, universal or power, got {law!r}"
-    )
 
 
 def _num(value) -> float:

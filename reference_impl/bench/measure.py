@@ -120,6 +120,13 @@ def universal_zeta(law: ImplementedLaw) -> float | None:
     return None
 
 
+def _table_law(law: ImplementedLaw):
+    """The `DampingLaw` of a declared law of the table, or None (opaque callable)."""
+    from reference_impl.adapters.law_damping import law_of
+
+    return law_of(law.C)
+
+
 def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
     """Exact peak tensile total force / peak compressive force along the damped ODE."""
     from reference_impl.integrators.ivp import integrate_impact
@@ -170,6 +177,17 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         out["zeta"] = zeta
         if timing:
             out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
+    elif not law.clips_tension and _table_law(law) is not None:
+        # a law of the table: the general-law reference (both ends, ~1e-14)
+        from reference_impl.exact.general_law import solve_law_impact
+
+        dl = _table_law(law)
+        sol = solve_law_impact(pot, m, v0, dl)
+        out["method"] = "general-law reference (GBS, ~1e-14)"
+        out["max_penetration"] = sol.max_penetration
+        out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
+        if timing:
+            out["seconds"] = _time(lambda: solve_law_impact(pot, m, v0, dl))
     else:
         C = law.damping_coefficient
         res = integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=law.clips_tension)

@@ -19,21 +19,22 @@ from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, interrupted, run_command
-from reference_impl.tasks import solve_scene
+from reference_impl.tasks import restitution_spread, solve_scene
 
 __all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
-    ("max_force", "max force U'(q_max) [N]"),
+    ("max_force", "elastic force at q_max, U'(q_max) [N]"),
+    ("peak_force", "peak contact force, max(U' + C q') [N]"),
     ("dt_safe", "dt_safe, sup over [0, q_max] [s]"),
     ("dt_safe_shortcut", "dt_safe shortcut 2 m v0 / U'(q_max) [s]"),
     ("geometry", "geometry (sec. 6)"),
     ("contact_time", "contact time, end at q = 0 [s]"),
     ("returns_to_q0", "returns to q = 0"),
-    ("restitution", "restitution, end at q = 0"),
+    ("restitution", "restitution, end at q = 0 (overlap)"),
     ("contact_time_zero_force", "contact time, end at zero force [s]"),
-    ("restitution_zero_force", "restitution, end at zero force"),
+    ("restitution_zero_force", "restitution, end at zero force (zero-force)"),
     ("action", "action J(E) (sec. 4) [J s]"),
     ("period", "period T(E) = 4 x quarter period [s]"),
 )
@@ -94,28 +95,49 @@ def _cmd_solve(args) -> int:
         )
     rows = solve_scene(scene)
     _require_finite(rows, scene)
+    spread = restitution_spread(rows)
     if args.json:
         out = {
             "scene": scene.to_dict(),
             "end_of_contact": {
-                "contact_time/restitution": "q returns to 0 (theory; the damper may pull)",
-                "contact_time_zero_force/restitution_zero_force": "total force U' + C q' reaches 0",
+                "contact_time/restitution": "overlap end: q returns to 0 (theory; the damper may pull)",
+                "contact_time_zero_force/restitution_zero_force": (
+                    "zero-force end: total force U' + C q' first reaches 0 after q_max"
+                ),
+            },
+            "forces": {
+                "max_force": "elastic force U'(q_max) at maximum penetration [N]",
+                "peak_force": "peak total contact force max over the contact of U' + C q' [N]",
             },
             "results": [{k: _json_safe(v) for k, v in r.items()} for r in rows],
         }
+        if spread is not None:
+            out["restitution_spread"] = {k: _json_safe(v) for k, v in spread.items()}
         json.dump(out, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
+        law_txt = (
+            f"zeta = {rows[0]['zeta']:.6g}"
+            if rows[0]["zeta"] is not None
+            else ", ".join(f"{k} = {v}" for k, v in scene.law.to_dict().items())
+        )
         _print_transposed(
-            f"hcv solve: {scene.name} (m = {scene.mass} kg, zeta = {rows[0]['zeta']:.6g})",
+            f"hcv solve: {scene.name} (m = {scene.mass} kg, {law_txt})",
             rows,
             _SOLVE_ROWS,
             "v0",
             "impact speed v0 [m/s]",
         )
+        if spread is not None:
+            print(
+                f"restitution spread over the {len(rows)} speeds (max - min): "
+                f"{spread['overlap']:.3g} at the overlap end (q = 0), "
+                f"{spread['zero-force']:.3g} at the zero-force end"
+            )
         print(
-            "e, t_c: end at q = 0 (theory); e_F=0, t_c,F=0: end at zero total force "
-            "(codes that forbid tension). J, T: section 4 definitions."
+            "Ends of contact: 'overlap' = q back to 0 (theory); 'zero-force' = total force "
+            "U' + C q' first 0 (codes that forbid tension). Forces: U'(q_max) is elastic, "
+            "peak = max of U' + C q'. J, T: section 4 definitions."
         )
     return EXIT_OK
 
@@ -125,6 +147,7 @@ def _cmd_solve(args) -> int:
 _NON_NEGATIVE = (
     "max_penetration",
     "max_force",
+    "peak_force",
     "dt_safe",
     "dt_safe_shortcut",
     "contact_time",
@@ -147,7 +170,7 @@ def _require_finite(rows: list[dict], scene) -> None:
             if wrong:
                 raise UnsupportedError(
                     f"scene {scene.name!r}, v0 = {row['v0']:g} m/s: the solver gives {key} = "
-                    f"{value!r}; this scene (zeta = {row.get('zeta', 0.0):g}) is outside what it "
+                    f"{value!r}; this scene (damping {scene.law.to_dict()}) is outside what it "
                     "computes reliably"
                 )
 

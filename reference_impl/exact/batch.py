@@ -30,7 +30,8 @@ from reference_impl.exact._branches import (
 )
 from reference_impl.theory.damping import _check_zeta
 from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.exact.solve import ImpactSolution, _check_exponent, _validated_top, solve_impact
+from reference_impl.exact._validate import _check_exponent, _validated_top
+from reference_impl.exact.solve import ImpactSolution, solve_impact
 from reference_impl.potentials._checks import positive, real_array
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -113,7 +114,9 @@ def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
     return out, ok
 
 
-def solve_impacts(potential: Potential, m: float, v0s, zetas) -> dict[str, np.ndarray]:
+def solve_impacts(
+    potential: Potential, m: float, v0s, zetas=0.0, *, law=None
+) -> dict[str, np.ndarray]:
     """Solve many impacts of one potential and mass.
 
     Parameters
@@ -126,6 +129,13 @@ def solve_impacts(potential: Potential, m: float, v0s, zetas) -> dict[str, np.nd
         Impact speeds (m/s), > 0.
     zetas : array_like
         Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
+    law : DampingLaw or dict, optional
+        A damping law of `reference_impl.theory.laws` other than ``universal`` / ``none``
+        (then ``zetas`` must stay 0): every speed is solved by
+        `reference_impl.exact.general_law.solve_law_impact`, and the arrays are its fields
+        (max_penetration, max_force, peak_force, contact_time, restitution,
+        contact_time_zero_force, restitution_zero_force, returns_to_q0,
+        error_time, error_restitution).
 
     Returns
     -------
@@ -140,6 +150,16 @@ def solve_impacts(potential: Potential, m: float, v0s, zetas) -> dict[str, np.nd
         Invalid input (the message names the first offending value), or more
         than BATCH_MAX impacts.
     """
+    if law is not None:
+        from reference_impl.theory.laws import law_from_dict
+
+        dl = law_from_dict(law)
+        if np.any(np.asarray(zetas, dtype=float) != 0):
+            raise HCVInputError(f"give the damping once: zetas and law = {dl.to_dict()} both set")
+        if dl.name in ("universal", "none"):
+            zetas = dl.zeta
+        else:
+            return _law_batch(potential, m, v0s, dl)
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impacts")
@@ -240,3 +260,32 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
     for key, arr in vals.items():
         out[key][ok] = arr[ok]
     todo[ok] = False
+
+
+_LAW_FIELDS = (
+    "max_penetration",
+    "max_force",
+    "peak_force",
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "returns_to_q0",
+    "error_time",
+    "error_restitution",
+)
+
+
+def _law_batch(potential, m, v0s, law) -> dict[str, np.ndarray]:
+    """One `solve_law_impact` per speed (the general law has no batch kernel)."""
+    from reference_impl.exact.general_law import solve_law_impact
+
+    v = np.asarray(v0s, dtype=float)
+    if v.size > BATCH_MAX:
+        raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
+    out = {key: np.full(v.size, np.nan) for key in _LAW_FIELDS}
+    for i, vi in enumerate(v.ravel()):
+        sol = solve_law_impact(potential, m, float(vi), law)
+        for key in _LAW_FIELDS:
+            out[key][i] = float(getattr(sol, key))
+    return {key: arr.reshape(v.shape) for key, arr in out.items()}

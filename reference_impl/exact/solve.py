@@ -35,6 +35,7 @@ from reference_impl.exact._one_call import curvature, fused_impact, gauss_jacobi
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
 from reference_impl.exact._split import needs_split, split_impact
+from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.exact._truth import solve_impact_mp
 from reference_impl.theory.damping import _check_zeta
 from reference_impl.errors import HCVInputError, UnsupportedError
@@ -53,10 +54,6 @@ __all__ = [
     "solve_impact_mp",
 ]
 
-# Largest leading exponent n (U ~ q^n) accepted: beta = 2/n - 1 >= -0.905. Above it
-# the endpoint singularity s^beta is so close to non-integrable that the float rules
-# lost digits (p = 50: 8th digit, p = 1000: 5th, issue 12).
-N_MAX = 21.0
 # Stated accuracy of the float solver: every reported time's error bound
 # (`ImpactSolution.quadrature_error`) must be at most this fraction of the time.
 # A result whose bound exceeds it is refused (UnsupportedError naming the bound),
@@ -92,7 +89,8 @@ class ImpactSolution:
     max_penetration : float
         Largest overlap q_max (m).
     max_force : float
-        Elastic force U'(q_max) at maximum penetration (N), as in Table 1.
+        Elastic force U'(q_max) at maximum penetration (N), as in Table 1; the peak
+        total force max (U' + C q') is the property `peak_force`.
     contact_time : float
         Duration until q returns to 0 (s); inf when it never does (zeta >= 1).
     restitution : float
@@ -135,11 +133,37 @@ class ImpactSolution:
         return obj
 
     def to_dict(self) -> dict:
-        """The scalar results as a plain dict (for JSON)."""
+        """The scalar results as a plain dict (for JSON), with ``peak_force``."""
         d = asdict(self)
         for key in ("potential", "_osc", "_t_peak"):
             d.pop(key, None)
+        d["peak_force"] = self.peak_force
+        d["returns_to_q0"] = self.returns_to_q0
         return d
+
+    @property
+    def returns_to_q0(self) -> bool:
+        """False when the body never gets back to q = 0 (zeta >= 1 with n >= 2)."""
+        return math.isfinite(self.contact_time)
+
+    @property
+    def peak_force(self) -> float:
+        """Peak total contact force max_t (U'(q) + C(q) q') in N (not U'(q_max)).
+
+        Computed on first use by the general-law integrator (`reference_impl.exact.general_law`,
+        ~1e-14 relative), since the harmonic map gives no closed form for it.
+        """
+        cached = self.__dict__.get("_peak_force")
+        if cached is None and self.zeta == 0:
+            cached = self.max_force  # undamped: the total force is U', largest at q_max
+        if cached is None:
+            from reference_impl.exact.general_law import solve_law_impact
+
+            cached = solve_law_impact(
+                self.potential, self.m, self.v0, {"law": "universal", "zeta": self.zeta}
+            ).peak_force
+            self.__dict__["_peak_force"] = cached
+        return cached
 
     # -- trajectory ---------------------------------------------------------
     def _g(self, s_or_d, from_end: bool = False):
@@ -230,43 +254,6 @@ class ImpactSolution:
         return np.where(exact_lo, grid[0], res.x)
 
 
-def _check_exponent(pot: Potential) -> float:
-    """The leading exponent n, refused above N_MAX (see there)."""
-    n = float(pot.leading_exponent)
-    if not (math.isfinite(n) and 0.0 < n <= N_MAX):
-        raise HCVInputError(
-            f"leading exponent n = {n:.6g} of U ~ q^n is outside (0, {N_MAX:g}] (power law "
-            f"p = n - 1 <= {N_MAX - 1:g}): dq/dx ~ s^(2/n - 1) is then too close to "
-            "non-integrable for the float quadrature to keep 1e-13"
-        )
-    return n
-
-
-_VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _validated_top(pot: Potential, E: float) -> float:
-    """An overlap q_top >= q_max(E) with U' > 0 checked on (0, q_top] (assumption 3).
-
-    The check (a grid of ~2600 points) dominated the cost of one impact; the
-    largest validated turning point is kept per potential object, and a lower
-    energy reuses it: its bracket (0, q_top] contains every overlap of the impact.
-    Potentials are immutable after construction, so the cache cannot go stale.
-    """
-    try:
-        e_c, q_c = _VALIDATED[pot]
-    except (KeyError, TypeError):
-        e_c = q_c = None
-    if e_c is not None and E <= e_c:
-        return q_c
-    q = pot.turning_point(E)
-    try:
-        _VALIDATED[pot] = (E, q)
-    except TypeError:
-        pass
-    return q
-
-
 def _turning_point(pot: Potential, m: float, v0: float, q_top: float) -> float:
     """q with U(q) = m v0^2 / 2 (compiled inverse inside (0, q_top] when available)."""
     compiled = compiled_nodes(pot)
@@ -344,8 +331,14 @@ def _check_bound(br, pot: Potential, m: float, v0: float, zeta: float) -> None:
 
 
 def solve_impact(
-    potential: Potential, m: float, v0: float, zeta: float = 0.0, *, level: int | None = None
-) -> ImpactSolution:
+    potential: Potential,
+    m: float,
+    v0: float,
+    zeta: float = 0.0,
+    *,
+    law=None,
+    level: int | None = None,
+):
     """Solve one normal impact exactly through the harmonic map.
 
     Parameters
@@ -360,6 +353,11 @@ def solve_impact(
         Damping ratio of the universal law, 0 <= zeta <= ZETA_MAX, except for the
         narrow band just below 1 where the theory's end of contact leaves float64
         range (see `reference_impl.exact._oscillator.S_END_MAX`); 0 is conservative.
+    law : DampingLaw or dict, optional
+        Any damping law of `reference_impl.theory.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
+        ``universal`` (give ``zeta`` there, not both) and ``none`` use this exact
+        quadrature; the other laws are integrated by `reference_impl.exact.general_law`
+        and return its `LawImpactSolution` (same field names, plus ``peak_force``).
     level : int, optional
         Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
         (power laws, and compiled families whose exponents have small
@@ -370,7 +368,7 @@ def solve_impact(
 
     Returns
     -------
-    ImpactSolution
+    ImpactSolution or LawImpactSolution
 
     Raises
     ------
@@ -383,6 +381,18 @@ def solve_impact(
         message names the bound): the result is refused, never returned as if
         it met the stated accuracy.
     """
+    if law is not None:
+        from reference_impl.exact.general_law import solve_law_impact
+        from reference_impl.theory.laws import law_from_dict
+
+        dl = law_from_dict(law)
+        if dl.name not in ("universal", "none"):
+            return solve_law_impact(potential, m, v0, dl)
+        if zeta:
+            raise HCVInputError(
+                f"give the damping once: zeta = {zeta!r} and law = {dl.to_dict()} both set"
+            )
+        zeta = dl.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impact")

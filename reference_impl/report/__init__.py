@@ -218,7 +218,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     """Run everything and write the report into ``out`` (a fresh, empty directory)."""
     from reference_impl.claims import fig1 as fig1_claim
     from reference_impl.claims import sec10_stiffening_domain, table1
-    from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _render, _wp
+    from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _laws, _render, _wp
 
     def say(text: str) -> None:
         if progress is not None:
@@ -282,6 +282,8 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
 
     wp = timed("speed against error", _wp.run_wp, quick, say)
     wp_figs = timed("speed against error: figures", _wp.wp_figures, wp, fig_dir, _scene_info())
+    laws = timed("damping laws: restitution against speed", _laws.run_laws, quick)
+    timed("damping laws: figure", _laws.laws_figure, laws, fig_dir / _laws.FIGURE)
 
     tests = claim_tests()
     claims = []
@@ -308,6 +310,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir) for spec in adapters]
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
+    figures.append(_laws.FIGURE)
     figures += [b["figure"] for b in bench if b.get("figure")]
     results = {
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
@@ -338,6 +341,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
             "sweeps": jsonable(sweeps),
             "accuracy": _hardcases.lost_accuracy(hard, sweeps["speed"] + sweeps["depth"]),
         },
+        "damping_laws": laws,
         "figures": [f"figures/{n}" for n in figures],
         "figure_captions": {n: cap for n, cap in wp_figs},
         "environment": env,

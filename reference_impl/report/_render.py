@@ -16,6 +16,7 @@ from reference_impl.report._common import g
 from reference_impl.report._blocks import markdown_lines as _md
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
+from reference_impl.report._laws import laws_blocks
 from reference_impl.report._render_adapters import _adapters
 from reference_impl.report._render_sec6 import _dtmap
 
@@ -400,6 +401,7 @@ def _sections(r) -> list:
         + _fig1(r)
         + _dtmap(r)
         + _wp(r)
+        + laws_blocks(r)
         + _hard(r)
         + _adapters(r)
         + _env(r)

@@ -80,6 +80,39 @@ def speed_table(bench: dict) -> str:
             f"- `solve_impacts`, {_cell(b['workload'])}: {b['impacts_per_s']:.3g} impacts/s "
             f"({'met' if b['goal_met'] else '**not met**'})"
         )
+    laws = bench.get("laws")
+    if laws:
+        lg = bench.get("law_goal", {})
+        lines += [
+            "",
+            "Damping laws (issue 18): Hertz with each law of `reference_impl.theory.laws`, calibrated to "
+            "e = 0.8 at 1 m/s (overlap end), v0 = 1 m/s, solved by `reference_impl.exact.general_law`; "
+            "error = largest relative error over both ends' contact time and restitution, "
+            f"q_max and the peak force, against {bench.get('law_truth', '?')}.",
+            "",
+            "| law | general solver | its error | DOP853 (rtol "
+            f"{bench.get('dop853_rtol', '?')}) | its error t_c | speed-up | goal |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for r in laws:
+            lines.append(
+                f"| {_cell(r['law'])} | {r['exact_us']:.0f} µs | {r['exact_max_rel_error']:.1e} | "
+                f"{r['dop853_us'] / 1e3:.1f} ms | {r['dop853_contact_time_rel_error']:.1e} | "
+                f"{r['speedup']:.0f}× | {'met' if r['goal_met'] else '**not met**'} |"
+            )
+        lmi = bench.get("laws_machine")
+        run = (
+            f" Law rows measured in their own run (`python -m benchmarks.bench_exact --laws-only`, "
+            f"{lmi.get('cpu_count', '?')} cpus, load {bench.get('laws_load_average_1min') or 0:.2f}, "
+            f"commit {str(lmi.get('commit', '?'))[:12]})."
+            if lmi
+            else ""
+        )
+        lines += [
+            "",
+            f"Goal (issue 18): ≤ {lg.get('us_per_impact', '?')} µs per impact at ≤ "
+            f"{lg.get('error', '?')} relative error and ≥ {lg.get('speedup', '?')}× DOP853.{run}",
+        ]
     goal = bench.get("goal", {})
     mi = bench.get("machine", {})
     lines += [

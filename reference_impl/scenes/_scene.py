@@ -15,8 +15,9 @@ A scene is a small TOML document::
     Kn = 1e8
     alpha = 0.5
     [damping]                       # optional; default law = "none"
-    law = "universal"               # "none" | "universal"
-    zeta = 0.2                      # or restitution = 0.8, or C0 with K and M
+    law = "universal"               # none | universal | linear | power | polynomial |
+                                    # viscoelastic | hunt-crossley (reference_impl.theory.laws)
+    zeta = 0.2                      # or restitution = 0.8 (+ restitution_end), or C0 with K and M
 
 Every problem raises `SceneError` (or, for a potential that breaks the
 paper's assumptions, the `HCVInputError` subclass the potential raised) with
@@ -39,6 +40,7 @@ from typing import Any
 from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
+from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
 
@@ -56,9 +58,22 @@ _MAX_TERMS = 64
 _MAX_DEPTH = 8
 _MAX_NAME_CHARS = 200
 _KINDS = ("impact", "two-sided", "two-walls")
-_LAWS = ("none", "universal")
+_LAWS = LAWS
+_ENDS = ("overlap", "zero-force")
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
-_DAMPING_KEYS = ("law", "zeta", "restitution", "C0", "K", "M")
+_DAMPING_KEYS = (
+    "law",
+    "zeta",
+    "restitution",
+    "restitution_end",
+    "C0",
+    "K",
+    "M",
+    "c",
+    "exponent",
+    "A",
+    "alpha",
+)
 @dataclass(frozen=True)
 class Scene:
     """One validated scene.
@@ -79,10 +94,14 @@ class Scene:
     potential : Potential
         The contact potential U(q).
     damping_law : str
-        ``"none"`` or ``"universal"`` (Theorem 3).
+        ``"none"``, ``"universal"`` (Theorem 3) or another law of
+        `reference_impl.theory.laws` (``linear``, ``power``, ``polynomial``,
+        ``viscoelastic``, ``hunt-crossley``).
     zeta : float or None
         Damping ratio zeta = C0 / (2 sqrt(K M)) of the universal law; None
-        when ``damping_law == "none"``.
+        for every other law (use `law`).
+    law : DampingLaw
+        The damping law with its parameters (SI units), whatever its name.
     source : str
         Where the scene came from (a path, ``<embedded>/name.toml`` or the
         label given to `parse_scene`).
@@ -97,6 +116,15 @@ class Scene:
     damping_law: str
     zeta: float | None
     source: str
+    law: DampingLaw | None = None
+
+    def __post_init__(self):
+        if self.law is None:  # built positionally by older callers: derive it
+            if self.damping_law == "universal":
+                law = DampingLaw("universal", {"zeta": float(self.zeta or 0.0)})
+            else:
+                law = DampingLaw("none")
+            object.__setattr__(self, "law", law)
 
     def to_dict(self) -> dict[str, Any]:
         """The scene in the schema of the TOML file, plus ``source`` (JSON-safe).
@@ -112,9 +140,7 @@ class Scene:
         if self.gap is not None:
             out["gap"] = self.gap
         out["potential"] = potential_to_dict(self.potential)
-        out["damping"] = {"law": self.damping_law}
-        if self.zeta is not None:
-            out["damping"]["zeta"] = self.zeta
+        out["damping"] = self.law.to_dict()
         out["source"] = self.source
         return out
 
@@ -264,19 +290,26 @@ def _construct(err: _Where, path: str, cls, *args, **kwargs) -> Potential:
         raise _with_context(exc, f"scene {err.source}: {path}") from exc
 
 
-def _damping(err: _Where, table) -> tuple[str, float | None]:
-    """(law, zeta) from the optional ``[damping]`` table."""
+def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw]:
+    """(law name, zeta of the universal law or None, DampingLaw) from ``[damping]``."""
     table = _table(err, table, "damping")
     _keys(err, table, "damping.", _DAMPING_KEYS)
     law = _string(err, table.get("law", "none"), "damping.law", _LAWS)
-    given = [k for k in ("zeta", "restitution", "C0", "K", "M") if k in table]
-    if law == "none":
-        if given:
+    if law != "universal":
+        bad = [k for k in ("zeta", "restitution", "restitution_end", "C0", "K", "M") if k in table]
+        if bad:
             raise err(
-                f"damping.{given[0]} is set but damping.law is 'none'; set law = "
-                '"universal" or remove it'
+                f"damping.{bad[0]} belongs to law = 'universal', but damping.law is {law!r}; "
+                "remove it or change the law"
             )
-        return law, None
+        try:
+            dl = law_from_dict(dict(table), where="damping")
+        except HCVInputError as exc:
+            raise err(str(exc)) from None
+        return law, None, dl
+    other = [k for k in ("c", "exponent", "A", "alpha") if k in table]
+    if other:
+        raise err(f"damping.{other[0]} does not belong to law = 'universal'; remove it")
     forms = [k for k in ("zeta", "restitution", "C0") if k in table]
     if len(forms) != 1:
         what = "none" if not forms else " and ".join(forms)
@@ -286,18 +319,30 @@ def _damping(err: _Where, table) -> tuple[str, float | None]:
         )
     if forms[0] != "C0" and ("K" in table or "M" in table):
         raise err("damping.K and damping.M go with damping.C0 only; remove them")
+    if "restitution_end" in table and forms[0] != "restitution":
+        raise err("damping.restitution_end goes with damping.restitution only; remove it")
     if forms[0] == "zeta":
-        return law, _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
-    if forms[0] == "restitution":
+        zeta = _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
+    elif forms[0] == "restitution":
         e = _number(err, table["restitution"], "damping.restitution", low=0.0, high=1.0)
-        return law, zeta_from_restitution(e)
-    for key in ("K", "M"):
-        if key not in table:
-            raise err(f"damping.C0 needs damping.{key} too (zeta = C0 / (2 sqrt(K M)), section 8)")
-    c0 = _number(err, table["C0"], "damping.C0", low=0.0, strict=False)
-    K = _number(err, table["K"], "damping.K", low=0.0)
-    M = _number(err, table["M"], "damping.M", low=0.0)
-    return law, c0 / (2.0 * math.sqrt(K * M))
+        end = _string(
+            err, table.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
+        )
+        try:
+            zeta = zeta_from_restitution(e, end=end)
+        except HCVInputError as exc:
+            raise err(f"damping.restitution = {e!r}: {exc}") from None
+    else:
+        for key in ("K", "M"):
+            if key not in table:
+                raise err(
+                    f"damping.C0 needs damping.{key} too (zeta = C0 / (2 sqrt(K M)), section 8)"
+                )
+        c0 = _number(err, table["C0"], "damping.C0", low=0.0, strict=False)
+        K = _number(err, table["K"], "damping.K", low=0.0)
+        M = _number(err, table["M"], "damping.M", low=0.0)
+        zeta = c0 / (2.0 * math.sqrt(K * M))
+    return law, zeta, DampingLaw("universal", {"zeta": zeta})
 
 
 # Stands for the scene's source in a cached potential error (replaced by each scene's own).
@@ -371,7 +416,7 @@ def scene_from_dict(
         gap = _number(err, data["gap"], "gap", low=0.0)
     elif "gap" in data:
         raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
-    law, zeta = _damping(err, data.get("damping", {}))
+    law, zeta, dlaw = _damping(err, data.get("damping", {}))
     potential, key = _cached_potential(err, data["potential"], potentials)
     # A potential with a turning point at energy E has one at every lower energy (U rises
     # continuously from 0): with a cache, energies up to the largest one checked are known.
@@ -387,7 +432,7 @@ def scene_from_dict(
             raise _with_context(exc, prefix) from exc
         if key is not None:
             checked = potentials[("energy", key)] = energy
-    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source)
+    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source, dlaw)
 
 
 def parse_scene(text: str, source: str = "<string>") -> Scene:

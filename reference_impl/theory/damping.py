@@ -20,7 +20,9 @@ from reference_impl.potentials.power import PowerLaw
 __all__ = [
     "UniversalDamping",
     "restitution_from_zeta",
+    "restitution_zero_force_from_zeta",
     "zeta_from_restitution",
+    "RESTITUTION_ENDS",
     "tsuji_coefficient",
 ]
 
@@ -44,13 +46,80 @@ def restitution_from_zeta(zeta: float) -> float:
     return math.exp(-math.pi * z / math.sqrt(1.0 - z * z))
 
 
-def zeta_from_restitution(e: float) -> float:
-    """Damping ratio for a restitution 0 < e <= 1: zeta = -ln e / sqrt(pi^2 + ln^2 e)."""
+RESTITUTION_ENDS = ("overlap", "zero-force")
+# Largest zeta searched by the zero-force inverse (the solvers' ZETA_MAX).
+_ZETA_SEARCH_MAX = 1000.0
+
+
+def restitution_zero_force_from_zeta(zeta: float) -> float:
+    """Restitution at the zero-force end of the universal law, exp(-2 zeta s_peak).
+
+    s_peak is the virtual time of maximum compression: atan2(wd, zeta) / wd with
+    wd = sqrt(1 - zeta^2) (zeta < 1), 1 (zeta = 1), ln(zeta + r) / r with
+    r = sqrt(zeta^2 - 1) (zeta > 1). This is what a code that clips tension delivers
+    (the contact ends where U' + C q' = 0, at twice s_peak), at every speed.
+    """
+    z = _check_zeta(zeta)
+    if z == 0:
+        return 1.0
+    if z < 1:
+        wd = math.sqrt((1.0 - z) * (1.0 + z))
+        s_peak = math.atan2(wd, z) / wd
+    elif z == 1:
+        s_peak = 1.0
+    else:
+        r = math.sqrt((z - 1.0) * (z + 1.0))
+        s_peak = math.log(z + r) / r
+    return math.exp(-2.0 * z * s_peak)
+
+
+def zeta_from_restitution(e: float, end: str = "overlap") -> float:
+    """Damping ratio of the universal law for a restitution 0 < e <= 1 at the given end.
+
+    Parameters
+    ----------
+    e : float
+        Coefficient of restitution -v_out / v0 (dimensionless).
+    end : {"overlap", "zero-force"}
+        ``"overlap"`` (default): e is measured where q returns to 0 (the theory's end),
+        zeta = -ln e / sqrt(pi^2 + ln^2 e). ``"zero-force"``: e is measured where the
+        total force U' + C q' first vanishes (codes that clip tension: Kratos, MuJoCo,
+        most DEM codes); inverted from `restitution_zero_force_from_zeta` to round-off.
+
+    Returns
+    -------
+    float
+        zeta (dimensionless, >= 0).
+    """
+    if end not in RESTITUTION_ENDS:
+        raise HCVInputError(
+            f"restitution end must be one of {', '.join(RESTITUTION_ENDS)}, got {end!r}"
+        )
     ev = finite("restitution", e, "damping")
     if not 0 < ev <= 1:
         raise HCVInputError(f"restitution must be in (0, 1], got {e!r}")
-    le = math.log(ev)
-    return -le / math.sqrt(math.pi**2 + le * le)
+    if end == "overlap":
+        le = math.log(ev)
+        return -le / math.sqrt(math.pi**2 + le * le)
+    if ev == 1.0:
+        return 0.0
+    e_min = restitution_zero_force_from_zeta(_ZETA_SEARCH_MAX)
+    if ev < e_min:
+        raise HCVInputError(
+            f"zero-force restitution {e!r} is below {e_min:.3g}, reached only for zeta > "
+            f"{_ZETA_SEARCH_MAX:g}"
+        )
+    from scipy.optimize import brentq
+
+    # e_zf(zeta) decreases monotonically from 1; brentq to a few ulps of zeta.
+    return brentq(
+        lambda z: restitution_zero_force_from_zeta(z) - ev,
+        0.0,
+        _ZETA_SEARCH_MAX,
+        xtol=1e-300,
+        rtol=4 * 2.0**-52,
+        maxiter=500,
+    )
 
 
 class UniversalDamping:

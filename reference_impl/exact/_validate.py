@@ -1,0 +1,57 @@
+"""What every exact solver checks of a potential before it integrates (validate once, at the top).
+
+Shared by the universal-law quadrature (`reference_impl.exact.solve`) and the general-law
+solver (`reference_impl.exact.general_law`), so that both refuse the same inputs.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential
+
+__all__ = ["N_MAX"]
+
+# Largest leading exponent n (U ~ q^n) accepted: beta = 2/n - 1 >= -0.905. Above it
+# the endpoint singularity s^beta is so close to non-integrable that the float rules
+# lost digits (p = 50: 8th digit, p = 1000: 5th, issue 12).
+N_MAX = 21.0
+
+
+def _check_exponent(pot: Potential) -> float:
+    """The leading exponent n, refused above N_MAX (see there)."""
+    n = float(pot.leading_exponent)
+    if not (math.isfinite(n) and 0.0 < n <= N_MAX):
+        raise HCVInputError(
+            f"leading exponent n = {n:.6g} of U ~ q^n is outside (0, {N_MAX:g}] (power law "
+            f"p = n - 1 <= {N_MAX - 1:g}): dq/dx ~ s^(2/n - 1) is then too close to "
+            "non-integrable for the float quadrature to keep 1e-13"
+        )
+    return n
+
+
+_VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _validated_top(pot: Potential, E: float) -> float:
+    """An overlap q_top >= q_max(E) with U' > 0 checked on (0, q_top] (assumption 3).
+
+    The check (a grid of ~2600 points) dominated the cost of one impact; the
+    largest validated turning point is kept per potential object, and a lower
+    energy reuses it: its bracket (0, q_top] contains every overlap of the impact.
+    Potentials are immutable after construction, so the cache cannot go stale.
+    """
+    try:
+        e_c, q_c = _VALIDATED[pot]
+    except (KeyError, TypeError):
+        e_c = q_c = None
+    if e_c is not None and E <= e_c:
+        return q_c
+    q = pot.turning_point(E)
+    try:
+        _VALIDATED[pot] = (E, q)
+    except TypeError:
+        pass
+    return q
