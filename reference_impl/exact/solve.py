@@ -24,7 +24,6 @@ Two ends of contact are reported:
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import asdict, dataclass, field
 
 import numpy as np

@@ -14,7 +14,6 @@ import math
 import numba
 import numpy as np
 
-from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce
