@@ -2,7 +2,7 @@
 
 An adapter spec is one of
 
-* a registered name: ``reference``, ``lammps``, ``subprocess`` (see `registered`);
+* a registered name: ``reference``, ``lammps``, ``kratos``, ``mujoco``, ``subprocess`` (see `registered`);
 * an import path ``package.module:Class`` of a `ContactAdapter` subclass;
 * ``cmd:COMMAND``: the subprocess adapter running COMMAND (split like a shell
   does, see `reference_impl.adapters.subprocess`); ``cmd[key=value,...]:COMMAND``
@@ -35,6 +35,7 @@ _REGISTRY: dict[str, str | type] = {
     "reference": "reference_impl.adapters.reference:ReferenceAdapter",
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
+    "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
