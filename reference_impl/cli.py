@@ -386,6 +386,9 @@ def _parser() -> argparse.ArgumentParser:
     from .sweep.command import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
+    from .bench.calibrate import add_calibrate_parser
+
+    add_calibrate_parser(sub)
     return p
 
 

@@ -335,3 +335,63 @@ def test_hcv_bench_mujoco_gate(tmp_path):
     default = [m for m in mine if m["variant"] == labels[5]]
     assert all(m["status"] == "skip" for m in default)
     assert sorted(os.listdir(tmp_path)) == ["fast.toml", "m.json"]  # nothing left
+
+
+# --------------------------------------------------------------------------
+# hcv calibrate on MuJoCo
+# --------------------------------------------------------------------------
+_EULER = "mujoco[solref=direct,impedance=constant,integrator=Euler]"
+
+
+def test_calibrate_dampratio_meets_the_fine_step_closed_form():
+    """At 800 steps per contact the dampratio found is the closed form's zeta.
+
+    MuJoCo clips tension, so its restitution is the zero-force end of its linear law:
+    zeta_zf(e) solves exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e. Euler's
+    first-order error moves the answer by O(1/N): measured 0.3 % at N = 200, so 0.2 %
+    at N = 800 bounds it with room.
+    """
+    from reference_impl.bench.calibrate import calibrate
+
+    res = calibrate(_EULER, "hooke-damped", param="dampratio", target=0.5,
+                    steps_per_contact=800)  # fmt: skip
+    assert res.found, res.message
+    assert abs(res.achieved - 0.5) < 1e-6, res.achieved  # root tolerance 1e-9 on zeta
+    assert_close(res.value, zeta_zero_force(0.5), rtol=2e-3, claim=CLAIM, call=res.message)
+    assert res.metrics["error_vs_declared_law"]["contact_time"] < 5e-3
+
+
+def test_calibrate_out_of_reach_and_bad_input(capsys):
+    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.cli import main as hcv_main
+
+    res = calibrate(_EULER, "hooke-damped", param="dampratio", target=0.999,
+                    steps_per_contact=50, bracket=(0.1, 1.0))  # fmt: skip
+    assert not res.found and "out of reach" in res.message and "0.1" in res.message
+    code = hcv_main(["calibrate", _EULER, "--scene", "hooke-damped", "--target",
+                     "restitution=0.999", "--param", "dampratio", "--range", "0.1", "1",
+                     "--steps-per-contact", "50"])  # fmt: skip
+    out = capsys.readouterr()
+    assert code == 1 and "out of reach" in out.out
+    code = hcv_main(["calibrate", _EULER, "--scene", "hooke-damped", "--target",
+                     "restitution=0.5", "--param", "stiffness"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "stiffness" in err[0] and "dampratio" in err[0]
+
+
+def test_calibrate_is_a_sweep_task():
+    from reference_impl.sweep import parse_spec, run_case
+
+    spec = parse_spec(
+        f'task = "calibrate:{_EULER}"\n'
+        "[calibrate]\nparam = \"dampratio\"\ntarget = 0.5\n"
+        "[scene]\nname = \"lin\"\nmass = 4.1103e-3\nvelocities = [1.0]\n"
+        "[scene.potential]\nfamily = \"power\"\nk = 1.0e6\np = 1.0\n"
+        "[scene.damping]\nlaw = \"universal\"\nrestitution = 0.5\n"
+        "[sweep]\n\"run.steps_per_contact\" = [10, 200]\n"
+    )
+    rows = [run_case(c.payload())[0] for c in spec.cases]
+    assert [r["steps_per_contact"] for r in rows] == [10, 200]
+    assert all(r["found"] and abs(r["achieved"] - 0.5) < 1e-6 for r in rows)
+    # a coarser step needs a different dampratio for the same restitution
+    assert abs(rows[0]["value"] - rows[1]["value"]) > 1e-3

@@ -290,6 +290,20 @@ class MujocoAdapter(ContactAdapter):
         self.radius = _positive("radius", radius)
 
     # -- configuration ----------------------------------------------------------
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Default search range of an option for ``hcv calibrate`` (None: none known).
+
+        Damping ratios 1e-3 to 3 (asked at full impedance): restitution from 0.997
+        down to 0.02 at the zero-force end of a clipped linear contact.
+        """
+        if param == "dampratio":
+            return (1e-3, 3.0)
+        if param == "damping":
+            c1 = 2.0 * math.sqrt(scene.mass * scene.potential.k)  # zeta = 1
+            return (1e-3 * c1, 3.0 * c1)
+        return None
+
     def _options(self) -> dict:
         return {
             "dampratio": self.dampratio,

@@ -18,6 +18,15 @@ A spec is a TOML document::
     "potential.p" = [1.0, 1.5, 2.0, 3.0]
     "kind" = ["two-sided", "impact"]
 
+Besides dotted paths into ``[scene]``, a ``bench:`` or ``calibrate:`` task may
+sweep what belongs to the code: ``"adapter.KEY"`` (a constructor option of the
+adapter, any variant key, e.g. ``"adapter.dampratio" = [0.1, 0.2]``) and
+``"run.steps_per_contact"`` (dt = exact contact time / N); a ``calibrate:`` task
+also ``"calibrate.target"`` and ``"calibrate.end"``. A ``calibrate:ADAPTER`` task
+needs a ``[calibrate]`` table: ``param`` (the option searched), ``target``
+(restitution), optionally ``end``, ``range = [LO, HI]``, ``v0``,
+``steps_per_contact`` (see `reference_impl.bench.calibrate`).
+
 The sweep is the Cartesian product of the ``[sweep]`` lists, in the order the
 keys are written (the last key varies fastest). Spec-level problems (syntax,
 unknown keys, a sweep value that is not a non-empty list, a task or criterion
@@ -41,6 +50,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import HCVInputError
+from ._code import _CALIBRATE_KEYS, _CODE_PREFIXES, SweepSpecError, _check_code, _code_key  # noqa: F401
 
 __all__ = [
     "MAX_CASES",
@@ -63,12 +73,8 @@ MAX_CASES = 100_000
 DEFAULT_TIMEOUT = 600.0
 # A spec is a few lines; refusing large files keeps a wrong path from being read whole.
 _MAX_SPEC_BYTES = 1_000_000
-TASKS = ("dt-crit", "solve", "bench:ADAPTER")
-_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep")
-
-
-class SweepSpecError(HCVInputError):
-    """A sweep specification that cannot run (one line naming the offending value)."""
+TASKS = ("dt-crit", "solve", "bench:ADAPTER", "calibrate:ADAPTER")
+_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep", "calibrate")
 
 
 @dataclass(frozen=True)
@@ -94,6 +100,9 @@ class Case:
         Time limit of the case (s).
     error : str
         Empty for a valid case; else the one-line reason its scene is invalid.
+    code : dict
+        What belongs to the code (bench / calibrate): ``adapter`` options, ``run``
+        settings, ``calibrate`` settings, each a dict (empty when none).
     """
 
     index: int
@@ -104,6 +113,7 @@ class Case:
     criterion: str | None
     timeout: float
     error: str = ""
+    code: dict = field(default_factory=dict)
 
     def payload(self) -> dict:
         """What a worker needs to run the case (plain data, picklable)."""
@@ -113,6 +123,7 @@ class Case:
             "criterion": self.criterion,
             "scene": self.scene,
             "timeout": self.timeout,
+            **({"code": self.code} if self.code else {}),
         }
 
 
@@ -200,10 +211,11 @@ def _check_path(err_src: str, path: str, scene: dict) -> None:
             return
 
 
-def _key(task: str, criterion: str | None, scene: dict) -> str:
-    text = json.dumps(
-        {"task": task, "criterion": criterion, "scene": scene}, sort_keys=True, default=str
-    )
+def _key(task: str, criterion: str | None, scene: dict, code: dict | None = None) -> str:
+    what = {"task": task, "criterion": criterion, "scene": scene}
+    if code:  # only when present, so the keys of scene-only sweeps stay as they were
+        what["code"] = code
+    text = json.dumps(what, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -237,10 +249,13 @@ def _criterion_table(src: str, task: str, value) -> dict:
 
 def _check_task(src: str, task) -> str:
     if not isinstance(task, str) or not (
-        task in ("dt-crit", "solve") or (task.startswith("bench:") and task[6:].strip())
+        task in ("dt-crit", "solve")
+        or (task.startswith("bench:") and task[6:].strip())
+        or (task.startswith("calibrate:") and task[10:].strip())
     ):
         raise SweepSpecError(
-            f"spec {src}: task = {task!r} is not one of 'dt-crit', 'solve', 'bench:ADAPTER'"
+            f"spec {src}: task = {task!r} is not one of 'dt-crit', 'solve', 'bench:ADAPTER', "
+            "'calibrate:ADAPTER'"
         )
     return task
 
@@ -288,13 +303,32 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
             f"spec {src}: timeout must be a number of seconds > 0, got {timeout!r}"
         )
     scene, sweep = data["scene"], data["sweep"]
+    calib = data.get("calibrate")
+    if task.startswith("calibrate:"):
+        if not isinstance(calib, dict):
+            raise SweepSpecError(
+                f"spec {src}: task {task!r} needs a [calibrate] table with param and target"
+            )
+        for k in calib:
+            if k not in _CALIBRATE_KEYS:
+                raise SweepSpecError(
+                    f"spec {src}: calibrate.{k}: not one of {', '.join(_CALIBRATE_KEYS)}"
+                )
+        for k in ("param", "target"):
+            if k not in calib and f"calibrate.{k}" not in (sweep or {}):
+                raise SweepSpecError(f"spec {src}: [calibrate] needs {k!r}")
+    elif calib is not None:
+        raise SweepSpecError(f"spec {src}: [calibrate] applies to 'calibrate:ADAPTER' tasks only")
     if not isinstance(scene, dict):
         raise SweepSpecError(f"spec {src}: [scene] must be a table, got {scene!r}")
     if not isinstance(sweep, dict) or not sweep:
         raise SweepSpecError(f"spec {src}: [sweep] must be a table of dotted path = [values]")
     n = 1
     for path, values in sweep.items():
-        _check_path(src, path, scene)
+        if path.startswith(_CODE_PREFIXES):
+            _code_key(src, task, path)
+        else:
+            _check_path(src, path, scene)
         if not isinstance(values, list) or not values:
             raise SweepSpecError(
                 f"spec {src}: sweep {path!r} must be a non-empty array of values, got {values!r}"
@@ -318,7 +352,12 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
     for index, combo in enumerate(itertools.product(*(sweep[p] for p in paths))):
         case_scene = copy.deepcopy(scene)
         params = dict(zip(paths, combo, strict=True))
+        code: dict = {"calibrate": dict(calib)} if isinstance(calib, dict) else {}
         for p, v in params.items():
+            if p.startswith(_CODE_PREFIXES):
+                head, _, name = p.partition(".")
+                code.setdefault(head, {})[name] = copy.deepcopy(v)
+                continue
             if p == "velocities" and not isinstance(v, list):
                 v = [v]  # a scalar speed: one speed per case
             _set_path(case_scene, p, copy.deepcopy(v))
@@ -337,6 +376,15 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
                     f"case {index} ({_label(params)}): bench runs impact and "
                     f"two-walls scenes, not {sc.kind!r}"
                 )
+            if task.startswith("calibrate:") and sc.kind != "impact":
+                raise HCVInputError(
+                    f"case {index} ({_label(params)}): calibrate runs impact scenes, "
+                    f"not {sc.kind!r}"
+                )
+            try:
+                _check_code(code)
+            except HCVInputError as exc:
+                raise HCVInputError(f"case {index} ({_label(params)}): {exc}") from None
         except HCVInputError as exc:
             error = str(exc)
         else:
@@ -350,13 +398,14 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
         spec.cases.append(
             Case(
                 index,
-                _key(task, ctext, case_scene),
+                _key(task, ctext, case_scene, code),
                 params,
                 case_scene,
                 task,
                 ctext,
                 float(timeout),
                 error,
+                code,
             )
         )
     if all(c.error for c in spec.cases):
