@@ -50,6 +50,7 @@ __all__ = [
     "CalibrationResult",
     "add_calibrate_parser",
     "calibrate",
+    "delivered",
     "spec_with_options",
 ]
 
@@ -418,6 +419,35 @@ def calibrate(
         f"{target:g}) at {steps_per_contact} steps per contact, v0 = {v0:g} m/s"
     )
     return res
+
+
+def delivered(
+    adapter: str,
+    scene,
+    *,
+    param: str,
+    value: float,
+    end: str = "overlap",
+    steps_per_contact: int = 200,
+    v0: float | None = None,
+    isolate: bool = False,
+) -> float:
+    """The restitution (at ``end``) the code delivers with option ``param = value``.
+
+    Same scene, speed and dt = t_c / N as `calibrate`; NaN when the run gives none.
+    """
+    from ..impact import solve_impact
+    from ..scenes import Scene, load_scene
+    from .measure import measure
+
+    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    if v0 is None:
+        v0 = float(sorted(sc.velocities)[len(sc.velocities) // 2])
+    t_c = float(solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time)
+    n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
+    ascene = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, n)
+    tr, _law, _err = _run(spec_with_options(adapter, {param: value}), ascene, 60.0, isolate)
+    return _quantity(measure(tr, v0), end) if tr is not None else math.nan
 
 
 # ----------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from ._blocks import DETAILS, IMG, UL, H, P, T, _num
 from ._common import g
 from ._render_adapters import _adapters
 from ._render_sec6 import _dtmap
+from ._steps import resolution_blocks
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -398,6 +399,7 @@ def _sections(r) -> list:
         + _wp(r)
         + _hard(r)
         + _adapters(r)
+        + resolution_blocks(r)
         + _env(r)
     )
 
