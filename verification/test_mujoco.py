@@ -395,3 +395,33 @@ def test_calibrate_is_a_sweep_task():
     assert all(r["found"] and abs(r["achieved"] - 0.5) < 1e-6 for r in rows)
     # a coarser step needs a different dampratio for the same restitution
     assert abs(rows[0]["value"] - rows[1]["value"]) > 1e-3
+
+
+def test_steps_per_contact_study_measures_first_order():
+    """The report's study on MuJoCo's Euler: every N runs, fitted order about 1.
+
+    Semi-implicit Euler is first order, and the clipped dashpot's jump at contact
+    onset keeps any scheme at first order in the restitution: the fitted slope over
+    N >= 20 must lie in [0.8, 1.3] (the bench's own min_order is 0.8; 1.3 would mean
+    the fit sees a higher-order scheme, which Euler is not).
+    """
+    from reference_impl.report._steps import STEPS, _one_code, resolution_blocks
+
+    code = _one_code("mujoco[solref=direct,impedance=constant,integrator=Euler]")
+    ran = [v for v in code["variants"] if "rows" in v]
+    assert [v["scene"] for v in ran] == ["hooke-damped"]
+    rows = ran[0]["rows"]
+    assert [r["steps_per_contact"] for r in rows] == list(STEPS)
+    assert not [r for r in rows if "failure" in r]
+    for key in ("order_restitution", "order_contact_time"):
+        assert_true(
+            0.8 <= ran[0][key] <= 1.3,
+            got=f"{key} = {ran[0][key]:.3g}",
+            should="in [0.8, 1.3] (first-order Euler)",
+            claim=CLAIM,
+            call="report._steps._one_code(mujoco Euler)",
+        )
+    skipped = [v for v in code["variants"] if v["scene"] == "hertz-damped"]
+    assert skipped and "p = 1" in skipped[0]["skipped"]
+    blocks = resolution_blocks({"steps_per_contact": [code]})
+    assert any(b[0] == "table" and b[2][0][0] == ran[0]["label"] for b in blocks)
