@@ -450,7 +450,10 @@ _BENCH_SPEC = textwrap.dedent(
 
 def test_code_keys_are_kept_apart_from_the_scene():
     """run.* / adapter.* keys go to the case's code settings, never into the scene."""
-    spec = parse_spec(_BENCH_SPEC.replace("[sweep]", '[sweep]\n"adapter.eta_n0" = [1.0, 2.0]'))
+    spec = parse_spec(
+        _BENCH_SPEC.replace("bench:reference", "bench:lammps[damping=velocity]")
+        .replace("[sweep]", '[sweep]\n"adapter.eta_n0" = [1.0, 2.0]')
+    )  # the adapter's module is imported to check the option name; LAMMPS is not loaded
     assert len(spec.cases) == 6 and not spec.invalid
     c = spec.cases[1]
     assert c.code == {"adapter": {"eta_n0": 1.0}, "run": {"steps_per_contact": 40}}
@@ -476,6 +479,15 @@ def test_bad_code_keys_are_refused_with_one_line(edit, needle):
         parse_spec(edit(_BENCH_SPEC), "bad.toml")
     msg = str(info.value)
     assert needle in msg and "\n" not in msg, msg
+
+
+def test_unknown_adapter_option_is_an_invalid_case():
+    spec = parse_spec(_BENCH_SPEC.replace('task = "bench:reference"', 'task = "bench:cmd:true"')
+                      .replace("[sweep]", '[sweep]\n"adapter.timeout" = [5, 10]'))  # fmt: skip
+    assert not spec.invalid
+    with pytest.raises(SweepSpecError) as info:  # every case invalid: the spec is refused
+        parse_spec(_BENCH_SPEC.replace("[sweep]", '[sweep]\n"adapter.nosuch" = [1]'))
+    assert "nosuch" in str(info.value)
 
 
 def test_bad_steps_per_contact_is_an_invalid_case():

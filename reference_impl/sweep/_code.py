@@ -42,8 +42,12 @@ def _code_key(src: str, task: str, path: str) -> None:
         raise SweepSpecError(f"spec {src}: sweep key {path!r}: {name!r} is not {hint}")
 
 
-def _check_code(code: dict) -> None:
-    """Validate one case's code settings (HCVInputError: the case is invalid)."""
+def _check_code(code: dict, task: str = "") -> None:
+    """Validate one case's code settings (HCVInputError: the case is invalid).
+
+    Adapter option names are checked against the adapter's constructor (its module is
+    imported, the code itself is not loaded).
+    """
     spc = code.get("run", {}).get("steps_per_contact")
     spc = code.get("calibrate", {}).get("steps_per_contact", spc)
     if spc is not None and (
@@ -58,3 +62,9 @@ def _check_code(code: dict) -> None:
     for key, val in code.get("adapter", {}).items():
         if not (val is None or isinstance(val, (bool, int, float, str))):
             raise HCVInputError(f"adapter option {key} = {val!r} must be a number or a string")
+    adapter = task.partition(":")[2]
+    if adapter and code.get("adapter"):
+        from ..bench.calibrate import check_option
+
+        for key in code["adapter"]:
+            check_option(adapter, key)

@@ -382,7 +382,7 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
                     f"not {sc.kind!r}"
                 )
             try:
-                _check_code(code)
+                _check_code(code, task)
             except HCVInputError as exc:
                 raise HCVInputError(f"case {index} ({_label(params)}): {exc}") from None
         except HCVInputError as exc:
