@@ -525,3 +525,21 @@ def test_builtin_adapter_classes_are_exported_without_loading_the_codes():
     assert r.stdout.split() == [
         "[]", "KratosAdapter", "LammpsAdapter", "MujocoAdapter", "[]"
     ], r.stdout  # fmt: skip
+
+
+def test_measure_reads_the_restitution_at_both_ends():
+    """restitution at q = 0 (first sample out of contact) and at the first zero of the
+    total force after the deepest overlap, interpolated linearly in the force."""
+    import numpy as np
+
+    from reference_impl.adapters.base import Trajectory
+    from reference_impl.bench.measure import measure
+
+    t = np.arange(5.0)
+    q = np.array([0.0, 1.0, 2.0, 1.0, -0.5])
+    v = np.array([1.0, 0.5, 0.0, -0.4, -0.6])
+    pulls = measure(Trajectory(t, q, v, np.array([0.0, 2.0, 1.0, -1.0, 0.0])), 1.0)
+    assert pulls["restitution"] == 0.6
+    assert abs(pulls["restitution_zero_force"] - 0.2) < 1e-15  # halfway between 0 and -0.4
+    never = measure(Trajectory(t, q, v, np.array([0.0, 2.0, 1.0, 0.5, 0.0])), 1.0)
+    assert never["restitution_zero_force"] == never["restitution"] == 0.6  # ends coincide
