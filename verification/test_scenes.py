@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from reference_impl.damping import restitution_from_zeta, zeta_from_restitution
+from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
 from reference_impl.errors import (
     ExpressionError,
     HCVInputError,

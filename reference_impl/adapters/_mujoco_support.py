@@ -9,8 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import HCVInputError
-from .base import AdapterScene, ImplementedLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw
 
 __all__ = ["PolynomialDamping", "restitution_zero_force_linear", "zeta_zero_force"]
 
@@ -78,7 +78,7 @@ def _bench_runs(law: ImplementedLaw, scene: AdapterScene) -> str | None:
     damping but `PowerDamping` and the dt_crit metric would then be failed for a reason
     that is ours, not MuJoCo's: the default-impedance variant declines until it runs.
     """
-    from .reference import law_trajectory
+    from reference_impl.adapters.reference import law_trajectory
 
     try:
         law_trajectory(law, scene.v0, 1e-3 * scene.dt, 2)

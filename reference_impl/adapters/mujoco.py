@@ -87,10 +87,10 @@ from importlib import metadata
 
 import numpy as np
 
-from ..errors import HCVInputError
-from ..potentials.base import SumPotential
-from ..potentials.power import PowerLaw
-from ._mujoco_support import (
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import SumPotential
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.adapters._mujoco_support import (
     PolynomialDamping,
     _badqacc_index,
     _bench_runs,
@@ -98,7 +98,7 @@ from ._mujoco_support import (
     restitution_zero_force_linear,
     zeta_zero_force,
 )
-from .base import AdapterDeclined, AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
+from reference_impl.adapters.base import AdapterDeclined, AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 
 __all__ = [
     "END",

@@ -26,8 +26,8 @@ import re
 import sys
 from typing import Any
 
-from ..errors import HCVInputError
-from .base import ContactAdapter
+from reference_impl.errors import HCVInputError
+from reference_impl.adapters.base import ContactAdapter
 
 __all__ = ["get_adapter", "parse_spec", "register", "registered", "resolve_class"]
 

@@ -41,9 +41,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from ..adapters.base import AdapterScene, ImplementedLaw
-from ..adapters.registry import get_adapter, parse_spec, resolve_class
-from ..errors import HCVInputError
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw
+from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "ENDS",
@@ -188,7 +188,7 @@ def _range(cls: type, param: str, scene, given) -> tuple[float, float]:
 
 def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
     """One run: (trajectory, implemented law, error); HCVInputError when declined."""
-    from .worker import make_executor
+    from reference_impl.bench.worker import make_executor
 
     executor = make_executor(spec, isolate=isolate)
     try:
@@ -219,8 +219,8 @@ def _quantity(meas: dict, end: str) -> float:
 
 def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
     """Measured quantities at the calibrated value, against the declared law and the scene."""
-    from ..impact import solve_impact
-    from .measure import exact_reference, measure
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.bench.measure import exact_reference, measure
 
     meas = measure(tr, v0)
     keys = ("restitution", "restitution_zero_force", "contact_time", "max_penetration")
@@ -314,9 +314,9 @@ def calibrate(
         Bad input: unknown option, quantity or end, target outside (0, 1], a
         steps-per-contact out of bounds, a non-impact scene, a declined scene.
     """
-    from ..impact import solve_impact
-    from ..scenes import Scene, load_scene
-    from .measure import measure
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.scenes import Scene, load_scene
+    from reference_impl.bench.measure import measure
 
     if quantity not in QUANTITIES:
         raise HCVInputError(f"--target {quantity}=...: quantity must be one of {QUANTITIES}")
@@ -436,9 +436,9 @@ def delivered(
 
     Same scene, speed and dt = t_c / N as `calibrate`; NaN when the run gives none.
     """
-    from ..impact import solve_impact
-    from ..scenes import Scene, load_scene
-    from .measure import measure
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.scenes import Scene, load_scene
+    from reference_impl.bench.measure import measure
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if v0 is None:
@@ -543,7 +543,7 @@ def cmd_calibrate(args) -> int:
 
 
 def main(argv=None) -> int:  # pragma: no cover - thin wrapper
-    from ..cli import run_command
+    from reference_impl.cli import run_command
 
     p = argparse.ArgumentParser(prog="hcv")
     add_calibrate_parser(p.add_subparsers(dest="command", required=True))

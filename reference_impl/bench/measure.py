@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
-from ..potentials.power import PowerLaw
+from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["check_conventions", "exact_reference", "measure", "universal_zeta"]
 
@@ -146,7 +146,7 @@ def universal_zeta(law: ImplementedLaw) -> float | None:
 
 def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
     """Exact peak tensile total force / peak compressive force along the damped ODE."""
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     if law.clips_tension:
         return 0.0
@@ -174,8 +174,8 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
 
     With ``timing`` the wall time of the exact solver is measured too ("seconds").
     """
-    from ..impact import solve_impact
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     pot, m = law.potential, law.mass
     zeta = universal_zeta(law)

@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..adapters.base import AdapterScene, ImplementedLaw, Trajectory
-from ..errors import HCVInputError
-from ..impact import solve_impact
-from ..scenes import Scene, load_scene
-from ..stability import dt_safe as _dt_safe
-from .metrics import (
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
+from reference_impl.scenes import Scene, load_scene
+from reference_impl.stability.bound import dt_safe as _dt_safe
+from reference_impl.bench.metrics import (
     METRICS,
     MetricResult,
     SceneContext,
@@ -42,8 +42,8 @@ from .metrics import (
     exact_reference,
     measure,
 )
-from .tolerances import load_tolerances
-from .worker import Outcome, _one_line, make_executor
+from reference_impl.bench.tolerances import load_tolerances
+from reference_impl.bench.worker import Outcome, _one_line, make_executor
 
 __all__ = ["DEFAULT_SCENES", "BenchResult", "bench_scene_names", "resolve_scenes", "run_bench"]
 
@@ -175,7 +175,7 @@ class BenchResult:
         return EXIT_INTERNAL if self.internal_errors else 0
 
     def to_dict(self) -> dict:
-        from .report import result_to_dict
+        from reference_impl.bench.report import result_to_dict
 
         return result_to_dict(self)
 
@@ -288,7 +288,7 @@ class _SceneRun:
     def _verlet_stable(
         self, law: ImplementedLaw, v0: float, dt: float, q_max: float
     ) -> tuple[bool, str]:
-        from ..adapters.reference import law_trajectory
+        from reference_impl.adapters.reference import law_trajectory
 
         n = int(math.ceil(_DTCRIT_BUDGET * q_max / (v0 * dt))) + _EXTRA_STEPS
         t, q, v, f = law_trajectory(law, v0, dt, n)
@@ -526,7 +526,7 @@ def run_bench(
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from .report import machine_info, write_json, write_junit
+    from reference_impl.bench.report import machine_info, write_json, write_junit
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)

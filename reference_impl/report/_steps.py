@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._blocks import IMG, H, P, T
+from reference_impl.report._blocks import IMG, H, P, T
 
 __all__ = ["FIT_FROM", "SCENES", "STEPS", "resolution_blocks", "resolution_study"]
 
@@ -51,11 +51,11 @@ def _order(ns, errs) -> float | None:
 
 def _one_code(spec: str, timeout: float = 120.0) -> dict:
     """Every variant of ``spec`` on every scene of `SCENES` it runs, at every N of `STEPS`."""
-    from ..adapters.base import AdapterScene, ImplementedLaw
-    from ..bench.measure import exact_reference, measure
-    from ..bench.worker import make_executor
-    from ..impact import solve_impact
-    from ..scenes import load_scene
+    from reference_impl.adapters.base import AdapterScene, ImplementedLaw
+    from reference_impl.bench.measure import exact_reference, measure
+    from reference_impl.bench.worker import make_executor
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.scenes import load_scene
 
     executor = make_executor(spec)
     out: dict = {"adapter": spec, "v0": V0, "variants": []}

@@ -44,8 +44,8 @@ def _zeta_textbook(e: float) -> float:
 
 def calibration_rows() -> list[dict]:
     """One dict per integrator, target and resolution: calibrated, naive, closed form."""
-    from ..adapters.mujoco import zeta_zero_force
-    from ..bench.calibrate import calibrate, delivered
+    from reference_impl.adapters.mujoco import zeta_zero_force
+    from reference_impl.bench.calibrate import calibrate, delivered
 
     rows = []
     for integ in INTEGRATORS:
@@ -91,7 +91,7 @@ def markdown_table(rows: list[dict]) -> str:
             f"| {_f(r['textbook_delivers'])} | {_f(r['zero_force_limit_dampratio'])} |"
         )
     lines += ["", _summary(rows)]
-    from ..scenes import load_scene
+    from reference_impl.scenes import load_scene
 
     sc = load_scene(SCENE)
     lines += [
@@ -133,7 +133,7 @@ def _summary(rows: list[dict]) -> str:
 def rewrite_readme(readme: Path, block: str) -> None:
     text = readme.read_text(encoding="utf-8")
     if START not in text or END not in text:
-        from ..errors import HCVInputError
+        from reference_impl.errors import HCVInputError
 
         raise HCVInputError(f"{readme}: no {START} ... {END} block")
     head, rest = text.split(START, 1)

@@ -8,7 +8,7 @@ They are kept apart from the scene (`Case.code`) and checked here.
 
 from __future__ import annotations
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["SweepSpecError"]
 
@@ -64,7 +64,7 @@ def _check_code(code: dict, task: str = "") -> None:
             raise HCVInputError(f"adapter option {key} = {val!r} must be a number or a string")
     adapter = task.partition(":")[2]
     if adapter and code.get("adapter"):
-        from ..bench.calibrate import check_option
+        from reference_impl.bench.calibrate import check_option
 
         for key in code["adapter"]:
             check_option(adapter, key)

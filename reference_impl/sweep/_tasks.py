@@ -20,7 +20,7 @@ import threading
 import time
 from dataclasses import replace
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["CaseTimeout", "check_deadline", "deadline", "run_case"]
 
@@ -79,7 +79,7 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
     """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
-    from ..dtcrit import search_loaded_scene
+    from reference_impl.stability.search import search_loaded_scene
 
     # An empty criterion text in a spec means the default, as an absent one.
     results = search_loaded_scene(scene, criterion or None, check_deadline)
@@ -88,7 +88,7 @@ def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
 
 def _solve_rows(scene) -> list[dict]:
     """As ``hcv solve --json``: one row per speed of `reference_impl.cli.solve_scene`."""
-    from ..cli import solve_scene
+    from reference_impl.cli import solve_scene
 
     rows = []
     for v0 in scene.velocities:
@@ -120,8 +120,8 @@ def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
     relative errors as ``rel_error.*`` columns. ``code`` holds swept adapter options
     (``adapter``) and run settings (``run``: steps_per_contact).
     """
-    from ..bench.calibrate import spec_with_options
-    from ..bench.runner import run_bench
+    from reference_impl.bench.calibrate import spec_with_options
+    from reference_impl.bench.runner import run_bench
 
     code = code or {}
     spec = spec_with_options(adapter, code.get("adapter", {}))
@@ -155,7 +155,7 @@ def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
 
 def _calibrate_rows(scene, adapter: str, code: dict) -> list[dict]:
     """``hcv calibrate`` on the case's scene: one row (value found, achieved, metrics)."""
-    from ..bench.calibrate import calibrate, spec_with_options
+    from reference_impl.bench.calibrate import calibrate, spec_with_options
 
     cal = dict(code.get("calibrate", {}))
     spc = cal.pop("steps_per_contact", code.get("run", {}).get("steps_per_contact", 200))
@@ -187,7 +187,7 @@ def run_case(payload: dict) -> list[dict]:
 
     Pure: the result depends on the payload only (its ``key`` hashes it).
     """
-    from ..scenes import scene_from_dict
+    from reference_impl.scenes import scene_from_dict
 
     scene = scene_from_dict(payload["scene"], f"case {payload['key']}")
     task = payload["task"]
