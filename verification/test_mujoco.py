@@ -190,7 +190,7 @@ def test_first_step_carries_no_force_and_force_is_at_the_sample():
     )
 
 
-def test_autoreset_is_disabled_so_stiff_runs_are_not_reset():
+def test_autoreset_is_disabled_so_stiff_runs_are_not_reset(tmp_path, monkeypatch, capfd):
     """|qacc| > 1e10 makes MuJoCo reset the state unless autoreset is off.
 
     A stiff linear contact (k/m = 1e18 s^-2, v0 = 10 m/s: peak acceleration
@@ -201,6 +201,7 @@ def test_autoreset_is_disabled_so_stiff_runs_are_not_reset():
     from reference_impl.adapters.mujoco import load_mujoco
     from reference_impl.potentials import PowerLaw
 
+    monkeypatch.chdir(tmp_path)  # where MuJoCo's default handler would write its log
     mj = load_mujoco()
     base = scene_at("hooke-damped", 1.0)
     pot = PowerLaw(1e15, 1.0)
@@ -213,6 +214,10 @@ def test_autoreset_is_disabled_so_stiff_runs_are_not_reset():
     adapter = get_adapter("mujoco[solref=direct,impedance=constant,integrator=Euler]")
     tr = adapter.impact(scene)
     assert tr.meta["badqacc_warnings"] > 0  # MuJoCo did flag the accelerations
+    # its warning went to stderr, not to stdout or a MUJOCO_LOG.TXT file here
+    assert not Path("MUJOCO_LOG.TXT").exists()
+    seen = capfd.readouterr()
+    assert "QACC" not in seen.out and "MuJoCo warning" in seen.err, seen
     got = measure(tr, v0)["restitution"]
     want = exact_reference(adapter.implemented_law(scene), v0)["restitution"]
     assert_close(got, want, rtol=1e-2, claim=CLAIM, call="stiff run, autoreset disabled")

@@ -73,6 +73,8 @@ Facts the adapter handles
   run with non-finite samples instead of a clean-looking restart.
 * MuJoCo 4 renamed ``efc_diagApprox`` to ``efc_diagA``: both are read.
 * Numbers are written into the XML as ``repr(float(x))``.
+* MuJoCo's warnings (printed on stdout and appended to ``MUJOCO_LOG.TXT`` in the
+  current directory by default) go to stderr: no stray output, no file left.
 
 Integrators: ``Euler`` (semi-implicit: v then q with the new v), ``RK4``,
 ``implicit`` (implicit only in passive damping and actuators, so the same
@@ -83,6 +85,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import sys
 from importlib import metadata
 
 import numpy as np
@@ -143,8 +146,18 @@ def load_mujoco():
             raise HCVInputError(reason)
         import mujoco
 
+        # MuJoCo's default warning handler prints to stdout and appends to
+        # MUJOCO_LOG.TXT in the current directory: route warnings to stderr instead
+        # (stdout is the worker's channel, and an adapter leaves no files behind).
+        setter = getattr(mujoco, "set_mju_user_warning", None)
+        if setter is not None:
+            setter(_warning_to_stderr)
         _MUJOCO = mujoco
     return _MUJOCO
+
+
+def _warning_to_stderr(message) -> None:
+    print(f"MuJoCo warning: {message}", file=sys.stderr)
 
 
 def _clamp_imp(x: float) -> float:
