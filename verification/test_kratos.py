@@ -191,3 +191,16 @@ def test_hcv_bench_kratos_gate(tmp_path):
     tree = ET.parse(xml)
     assert tree.getroot().get("failures") == "0"
     assert sorted(os.listdir(tmp_path)) == ["fast.toml", "k.json", "k.xml"]  # nothing left
+
+
+def test_kratos_restitution_option_is_what_kratos_is_given():
+    """``restitution=`` replaces the scene's e as Kratos' input (the calibrate knob)."""
+    scene = scene_at("hooke-damped", 1.0)
+    base = get_adapter("kratos[law=linear,scheme=euler]")
+    given = get_adapter("kratos[law=linear,scheme=euler,restitution=0.7]")
+    assert given.label == "kratos[linear,euler,restitution=0.7]"
+    assert given.calibration_range("restitution", scene) == (0.001, 0.999)
+    z0, z1 = base.implemented_law(scene).zeta, given.implemented_law(scene).zeta
+    assert z1 < z0  # less damping for e = 0.7 than for the scene's 0.5
+    assert_close(exact_reference(given.implemented_law(scene), 1.0)["restitution"], 0.7,
+                 rtol=3e-4, claim=CLAIM, call="kratos restitution=0.7")  # fmt: skip

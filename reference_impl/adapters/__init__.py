@@ -4,8 +4,8 @@
 ``package.module:Class`` import path or a ``cmd:COMMAND`` subprocess adapter.
 `AdapterDeclined` is what an adapter raises to decline a scene at run time (a
 skip, not a failure). The built-in codes' classes `KratosAdapter` and
-`LammpsAdapter` are importable from here; they are loaded on first use, and
-loading them never imports Kratos or LAMMPS (that happens when a run starts).
+`LammpsAdapter`, `MujocoAdapter` are importable from here; they are loaded on first use, and
+loading them never imports Kratos, LAMMPS or MuJoCo (that happens when a run starts).
 """
 
 from reference_impl.adapters.base import (
@@ -33,6 +33,7 @@ __all__ = [
     "ImplementedLaw",
     "KratosAdapter",
     "LammpsAdapter",
+    "MujocoAdapter",
     "PowerDamping",
     "LawDamping",
     "implemented_law_from_table",
@@ -49,6 +50,7 @@ __all__ = [
 _LAZY = {
     "KratosAdapter": ".kratos",
     "LammpsAdapter": ".lammps",
+    "MujocoAdapter": ".mujoco",
 }
 
 

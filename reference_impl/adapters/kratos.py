@@ -179,6 +179,9 @@ class KratosAdapter(ContactAdapter):
         Euler on two spheres.
     radius : float, optional
         Sphere radius R (m); default 100 q_max at the scene's largest speed.
+    restitution : float, optional
+        COEFFICIENT_OF_RESTITUTION given to Kratos instead of the scene's (Kratos' own
+        damping knob; what ``hcv calibrate kratos --param restitution`` searches).
     """
 
     name = "kratos"
@@ -190,6 +193,7 @@ class KratosAdapter(ContactAdapter):
         scheme: str | None = None,
         geometry: str = "wall",
         radius: float | None = None,
+        restitution: float | None = None,
     ):
         reason = kratos_available()
         if reason:
@@ -203,6 +207,20 @@ class KratosAdapter(ContactAdapter):
         ):
             raise HCVInputError(f"adapter kratos: radius must be a number > 0, got {radius!r}")
         self.laws, self.schemes, self.geoms, self.radius = laws, schemes, geoms, radius
+        if restitution is not None and not (
+            isinstance(restitution, (int, float))
+            and not isinstance(restitution, bool)
+            and 0 < restitution <= 1
+        ):
+            raise HCVInputError(
+                f"adapter kratos: restitution must be a number in (0, 1], got {restitution!r}"
+            )
+        self.restitution = None if restitution is None else float(restitution)
+
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Default range of an option for ``hcv calibrate``: Kratos' own e limits."""
+        return (0.001, 0.999) if param == "restitution" else None
 
     # -- configuration ----------------------------------------------------------
     @property
@@ -214,7 +232,8 @@ class KratosAdapter(ContactAdapter):
         if not self.single:
             return "kratos"
         geom = "" if self.geoms[0] == "wall" else f",{self.geoms[0]}"
-        return f"kratos[{self.laws[0]},{self.schemes[0]}{geom}]"
+        given = "" if self.restitution is None else f",restitution={self.restitution!r}"
+        return f"kratos[{self.laws[0]},{self.schemes[0]}{geom}{given}]"
 
     @property
     def staggering(self) -> dict:
@@ -229,14 +248,22 @@ class KratosAdapter(ContactAdapter):
         if self.single:
             return [self]
         out: list[ContactAdapter] = [
-            KratosAdapter(law=la, scheme=s, geometry=g, radius=self.radius)
+            KratosAdapter(
+                law=la, scheme=s, geometry=g, radius=self.radius, restitution=self.restitution
+            )
             for g in self.geoms
             for la in self.laws
             for s in self.schemes
         ]
         if self._default_set:
             out.append(
-                KratosAdapter(law="hertz", scheme="euler", geometry="pair", radius=self.radius)
+                KratosAdapter(
+                    law="hertz",
+                    scheme="euler",
+                    geometry="pair",
+                    radius=self.radius,
+                    restitution=self.restitution,
+                )
             )
         return out
 
@@ -284,7 +311,7 @@ class KratosAdapter(ContactAdapter):
             e_star = pot.k / (beta * math.pi * _LINEAR_RADIUS_FACTOR * r_eff)
         body_mass = m if geom == "wall" else 2.0 * m
         density = body_mass / (4.0 / 3.0 * math.pi * R**3)
-        e = scene.restitution
+        e = scene.restitution if self.restitution is None else self.restitution
         gamma = kratos_gamma(law, e)
         zeta = gamma * math.sqrt(1.2) if law == "hertz" else gamma
         desc = (

@@ -2,7 +2,7 @@
 
 An adapter spec is one of
 
-* a registered name: ``reference``, ``lammps``, ``kratos``, ``subprocess`` (see
+* a registered name: ``reference``, ``lammps``, ``kratos``, ``mujoco``, ``subprocess`` (see
   `registered`), or a name a third-party package declares in the entry-point group
   ``hcv.adapters`` (as pytest plugins do), so that ``hcv bench mycode`` works after
   ``pip install mycode-hcv``::
@@ -50,6 +50,7 @@ _REGISTRY: dict[str, str | type] = {
     "reference": "reference_impl.adapters.reference:ReferenceAdapter",
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
+    "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)

@@ -62,7 +62,7 @@ def check_conventions(tr: Trajectory, v0: float) -> str | None:
 
 
 def measure(tr: Trajectory, v0: float) -> dict:
-    """Restitution, contact time, max penetration and tensile peak of one impact.
+    """Restitution (at q = 0 and at zero force), contact time, max penetration, tensile peak.
 
     The contact ends at the first sample with q <= 0 after some q > 0; the
     restitution is -v there / v0 (free flight), the contact time the linear
@@ -100,8 +100,32 @@ def measure(tr: Trajectory, v0: float) -> dict:
     out["energy_ratio"] = float((v[j] / v0) ** 2)
     qa, qb = float(q[j - 1]), float(q[j])
     out["contact_time"] = float(t[j - 1] + qa / (qa - qb) * (t[j] - t[j - 1]))
+    out["restitution_zero_force"] = _restitution_zero_force(q, v, f, j, v0)
     out["steps"] = int(j)
     return out
+
+
+def _restitution_zero_force(q, v, f, end: int, v0: float) -> float:
+    """-v / v0 where the total force first vanishes after the deepest overlap.
+
+    The first sample from the peak on with force <= 0 (the out-of-contact sample
+    ``end`` has force 0, so a code whose force never pulls ends there and both ends
+    coincide); v is interpolated linearly in the force between that sample and the
+    one before. NaN when a force sample on the way is not finite (lagged force whose
+    aligned value is unknown).
+    """
+    peak = int(np.argmax(q[:end]))
+    seg = f[peak : end + 1]
+    if not np.all(np.isfinite(seg[:-1])):
+        return math.nan
+    hit = np.nonzero(seg[:-1] <= 0.0)[0]
+    if not hit.size:
+        return float(-v[end] / v0)
+    i = peak + int(hit[0])
+    if i == 0 or f[i - 1] <= 0.0:
+        return float(-v[i] / v0)
+    fa, fb = float(f[i - 1]), float(f[i])
+    return float(-(v[i - 1] + fa / (fa - fb) * (v[i] - v[i - 1])) / v0)
 
 
 # ----------------------------------------------------------------------------
@@ -174,6 +198,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
             out["contact_time"] = sol.contact_time_zero_force + q_zf / (e * v0)
         else:
             out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
+        out["restitution_zero_force"] = sol.restitution_zero_force if zeta > 0 else 1.0
         out["zeta"] = zeta
         if timing:
             out["seconds"] = _time(lambda: solve_impact(pot, m, v0, zeta))
@@ -200,6 +225,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
             out["contact_time"] = res.t_zero_force + q_zf / (e * v0)
         else:
             out["restitution"], out["contact_time"] = res.restitution, res.contact_time
+        out["restitution_zero_force"] = res.restitution_zero_force
         if timing:
             out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
     out["energy_ratio"] = out["restitution"] ** 2

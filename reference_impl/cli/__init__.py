@@ -369,6 +369,9 @@ def _parser() -> argparse.ArgumentParser:
     from reference_impl.cli.sweep import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
+    from reference_impl.cli.calibrate import add_calibrate_parser
+
+    add_calibrate_parser(sub)
     return p
 
 

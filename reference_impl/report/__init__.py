@@ -36,6 +36,7 @@ from reference_impl.claims import CLAIMS, VERDICTS
 from reference_impl.studies.dtcrit_map import coverage
 from reference_impl.report._common import claim_tests, jsonable, records
 from reference_impl.report._files import swap_in, validate_report_args
+from reference_impl.report._steps import resolution_study
 
 __all__ = ["build_report", "quick_drops", "validate_report_args"]
 
@@ -308,10 +309,12 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
         )
 
     bench = [timed(f"benchmark of {spec}", _bench_adapter, spec, out, fig_dir) for spec in adapters]
+    steps = timed("steps per contact", resolution_study, adapters, fig_dir) if adapters else []
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures.append(_laws.FIGURE)
     figures += [b["figure"] for b in bench if b.get("figure")]
+    figures += [c["figure"] for c in steps if c.get("figure")]
     results = {
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
         "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
@@ -346,6 +349,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
         "figure_captions": {n: cap for n, cap in wp_figs},
         "environment": env,
         "adapters": [b["result"] for b in bench],
+        "steps_per_contact": steps,
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings

@@ -19,6 +19,7 @@ from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._laws import laws_blocks
 from reference_impl.report._render_adapters import _adapters
 from reference_impl.report._render_sec6 import _dtmap
+from reference_impl.report._steps import resolution_blocks
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -404,6 +405,7 @@ def _sections(r) -> list:
         + laws_blocks(r)
         + _hard(r)
         + _adapters(r)
+        + resolution_blocks(r)
         + _env(r)
     )
 

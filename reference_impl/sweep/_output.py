@@ -30,12 +30,14 @@ _Y = {
     "dt-crit": ("ratio", "Δt_crit / Δt_safe (measured / section 6 bound)"),
     "solve": ("contact_time", "contact time t_c [s]"),
     "bench": ("metrics_fail", "failed metrics (hcv bench)"),
+    "calibrate": ("value", "option value delivering the target (hcv calibrate)"),
 }
 # Task fields shown in the summary table beside the swept parameters.
 _SHOWN = {
     "dt-crit": ("v0", "dt_safe", "dt_crit", "ratio", "holds"),
     "solve": ("v0", "dt_safe", "contact_time", "restitution", "max_penetration"),
     "bench": ("variant", "v0", "status", "metrics_fail", "failed_metrics"),
+    "calibrate": ("param", "target", "steps_per_contact", "found", "value", "achieved"),
 }
 
 
@@ -174,6 +176,8 @@ def _short(v, width: int = _TICK_CHARS) -> str:
 
 
 def _task_family(task: str) -> str:
+    if task.startswith("calibrate:"):
+        return "calibrate"
     return "bench" if task.startswith("bench:") else task
 
 

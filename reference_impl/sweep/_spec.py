@@ -18,6 +18,15 @@ A spec is a TOML document::
     "potential.p" = [1.0, 1.5, 2.0, 3.0]
     "kind" = ["two-sided", "impact"]
 
+Besides dotted paths into ``[scene]``, a ``bench:`` or ``calibrate:`` task may
+sweep what belongs to the code: ``"adapter.KEY"`` (a constructor option of the
+adapter, any variant key, e.g. ``"adapter.dampratio" = [0.1, 0.2]``) and
+``"run.steps_per_contact"`` (dt = exact contact time / N); a ``calibrate:`` task
+also ``"calibrate.target"`` and ``"calibrate.end"``. A ``calibrate:ADAPTER`` task
+needs a ``[calibrate]`` table: ``param`` (the option searched), ``target``
+(restitution), optionally ``end``, ``range = [LO, HI]``, ``v0``,
+``steps_per_contact`` (see `reference_impl.bench.calibrate`).
+
 The sweep is the Cartesian product of the ``[sweep]`` lists, in the order the
 keys are written (the last key varies fastest). Spec-level problems (syntax,
 unknown keys, a sweep value that is not a non-empty list, a task or criterion
@@ -41,6 +50,7 @@ from pathlib import Path
 from typing import Any
 
 from reference_impl.errors import HCVInputError
+from reference_impl.sweep._code import _CALIBRATE_KEYS, _CODE_PREFIXES, SweepSpecError, _check_code, _code_key  # noqa: F401
 
 __all__ = [
     "MAX_CASES",
@@ -63,12 +73,8 @@ MAX_CASES = 100_000
 DEFAULT_TIMEOUT = 600.0
 # A spec is a few lines; refusing large files keeps a wrong path from being read whole.
 _MAX_SPEC_BYTES = 1_000_000
-TASKS = ("dt-crit", "solve", "bench:ADAPTER")
-_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep")
-
-
-class SweepSpecError(HCVInputError):
-    """A sweep specification that cannot run (one line naming the offending value)."""
+TASKS = ("dt-crit", "solve", "bench:ADAPTER", "calibrate:ADAPTER")
+_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep", "calibrate")
 
 
 @dataclass(frozen=True)
@@ -94,6 +100,9 @@ class Case:
         Time limit of the case (s).
     error : str
         Empty for a valid case; else the one-line reason its scene is invalid.
+    code : dict
+        What belongs to the code (bench / calibrate): ``adapter`` options, ``run``
+        settings, ``calibrate`` settings, each a dict (empty when none).
     """
 
     index: int
@@ -104,6 +113,7 @@ class Case:
     criterion: str | None
     timeout: float
     error: str = ""
+    code: dict = field(default_factory=dict)
 
     def payload(self) -> dict:
         """What a worker needs to run the case (plain data, picklable)."""
@@ -113,6 +123,7 @@ class Case:
             "criterion": self.criterion,
             "scene": self.scene,
             "timeout": self.timeout,
+            **({"code": self.code} if self.code else {}),
         }
 
 
@@ -224,10 +235,11 @@ def _check_nesting(err_src: str, paths: list[str]) -> None:
                 )
 
 
-def _key(task: str, criterion: str | None, scene: dict) -> str:
-    text = json.dumps(
-        {"task": task, "criterion": criterion, "scene": scene}, sort_keys=True, default=str
-    )
+def _key(task: str, criterion: str | None, scene: dict, code: dict | None = None) -> str:
+    what = {"task": task, "criterion": criterion, "scene": scene}
+    if code:  # only when present, so the keys of scene-only sweeps stay as they were
+        what["code"] = code
+    text = json.dumps(what, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
@@ -261,10 +273,13 @@ def _criterion_table(src: str, task: str, value) -> dict:
 
 def _check_task(src: str, task) -> str:
     if not isinstance(task, str) or not (
-        task in ("dt-crit", "solve") or (task.startswith("bench:") and task[6:].strip())
+        task in ("dt-crit", "solve")
+        or (task.startswith("bench:") and task[6:].strip())
+        or (task.startswith("calibrate:") and task[10:].strip())
     ):
         raise SweepSpecError(
-            f"spec {src}: task = {task!r} is not one of 'dt-crit', 'solve', 'bench:ADAPTER'"
+            f"spec {src}: task = {task!r} is not one of 'dt-crit', 'solve', 'bench:ADAPTER', "
+            "'calibrate:ADAPTER'"
         )
     return task
 
@@ -315,13 +330,32 @@ def spec_from_dict(
             f"spec {src}: timeout must be a number of seconds > 0, got {timeout!r}"
         )
     scene, sweep = data["scene"], data["sweep"]
+    calib = data.get("calibrate")
+    if task.startswith("calibrate:"):
+        if not isinstance(calib, dict):
+            raise SweepSpecError(
+                f"spec {src}: task {task!r} needs a [calibrate] table with param and target"
+            )
+        for k in calib:
+            if k not in _CALIBRATE_KEYS:
+                raise SweepSpecError(
+                    f"spec {src}: calibrate.{k}: not one of {', '.join(_CALIBRATE_KEYS)}"
+                )
+        for k in ("param", "target"):
+            if k not in calib and f"calibrate.{k}" not in (sweep or {}):
+                raise SweepSpecError(f"spec {src}: [calibrate] needs {k!r}")
+    elif calib is not None:
+        raise SweepSpecError(f"spec {src}: [calibrate] applies to 'calibrate:ADAPTER' tasks only")
     if not isinstance(scene, dict):
         raise SweepSpecError(f"spec {src}: [scene] must be a table, got {scene!r}")
     if not isinstance(sweep, dict) or not sweep:
         raise SweepSpecError(f"spec {src}: [sweep] must be a table of dotted path = [values]")
     n = 1
     for path, values in sweep.items():
-        _check_path(src, path, scene)
+        if path.startswith(_CODE_PREFIXES):
+            _code_key(src, task, path)
+        else:
+            _check_path(src, path, scene)
         if not isinstance(values, list) or not values:
             raise SweepSpecError(
                 f"spec {src}: sweep {path!r} must be a non-empty array of values, got {values!r}"
@@ -347,7 +381,12 @@ def spec_from_dict(
     for index, combo in enumerate(itertools.product(*(sweep[p] for p in paths))):
         case_scene = copy.deepcopy(scene)
         params = dict(zip(paths, combo, strict=True))
+        code: dict = {"calibrate": dict(calib)} if isinstance(calib, dict) else {}
         for p, v in params.items():
+            if p.startswith(_CODE_PREFIXES):
+                head, _, name = p.partition(".")
+                code.setdefault(head, {})[name] = copy.deepcopy(v)
+                continue
             if p == "velocities" and not isinstance(v, list):
                 v = [v]  # a scalar speed: one speed per case
             try:
@@ -356,14 +395,14 @@ def spec_from_dict(
                 raise SweepSpecError(
                     f"spec {src}: case {index} ({_label(params)}): {exc}"
                 ) from None
-        expanded.append((params, case_scene))
-    ctexts = [_case_criterion(crit, cs) for _, cs in expanded]
+        expanded.append((params, case_scene, code))
+    ctexts = [_case_criterion(crit, cs) for _, cs, _code in expanded]
     errors = _validate_cases(src, task, expanded, ctexts, progress)
     keys: dict[str, int] = {}
-    for index, ((params, case_scene), ctext, error) in enumerate(
+    for index, ((params, case_scene, code), ctext, error) in enumerate(
         zip(expanded, ctexts, errors, strict=True)
     ):
-        key = _key(task, ctext, case_scene)
+        key = _key(task, ctext, case_scene, code)
         if key in keys:
             first = spec.cases[keys[key]]
             raise SweepSpecError(
@@ -371,7 +410,9 @@ def spec_from_dict(
                 f"({_label(params)}) give the same scene; remove one of the values"
             )
         keys[key] = index
-        spec.cases.append(Case(index, key, params, case_scene, task, ctext, float(timeout), error))
+        spec.cases.append(
+            Case(index, key, params, case_scene, task, ctext, float(timeout), error, code)
+        )
     if all(c.error for c in spec.cases):
         raise SweepSpecError(f"spec {src}: every case is invalid; first: {spec.cases[0].error}")
     return spec
@@ -393,7 +434,7 @@ def _energy(case_scene: dict) -> float:
 
 
 def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
-    """Validate every case's scene; the error of each ('' when valid), in product order.
+    """Validate every case's scene and code options; the error of each ('' when valid).
 
     Each distinct potential is validated once (the cache of `scene_from_dict`), and
     cases are validated from the largest impact energy down: once a potential has a
@@ -410,7 +451,7 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     for done, index in enumerate(order):
         if progress is not None:
             progress(done, len(order))
-        params, case_scene = expanded[index]
+        params, case_scene, code = expanded[index]
         ctext = ctexts[index]
         try:
             sc = scene_from_dict(
@@ -426,6 +467,15 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
                     f"case {index} ({_label(params)}): bench runs impact and "
                     f"two-walls scenes, not {sc.kind!r}"
                 )
+            if task.startswith("calibrate:") and sc.kind != "impact":
+                raise HCVInputError(
+                    f"case {index} ({_label(params)}): calibrate runs impact scenes, "
+                    f"not {sc.kind!r}"
+                )
+            try:
+                _check_code(code, task)
+            except HCVInputError as exc:
+                raise HCVInputError(f"case {index} ({_label(params)}): {exc}") from None
         except HCVInputError as exc:
             errors[index] = str(exc)
         else:

@@ -3,8 +3,8 @@
 Every task returns one dict per impact speed (per adapter variant and speed for
 ``bench:ADAPTER``) with the same fields as the task's ``--json`` result:
 ``hcv dt-crit --json`` (whatever `DtCritResult.to_dict` returns), ``hcv solve
---json``, or the per-speed records of ``hcv bench --json`` flattened with dotted
-names. Nested values (a counterexample) become JSON text so the table stays flat;
+--json``, the per-speed records of ``hcv bench --json`` flattened with dotted
+names (plus ``rel_error.*`` relative errors), or one ``hcv calibrate --json`` row. Nested values (a counterexample) become JSON text so the table stays flat;
 "inf"/"nan" written as strings by the JSON encoders become floats again.
 
 The per-case time limit is cooperative: `check_deadline` is called between
@@ -97,15 +97,36 @@ def _solve_rows(scene) -> list[dict]:
     return rows
 
 
-def _bench_rows(scene, adapter: str) -> list[dict]:
+def _errors(speed: dict) -> dict:
+    """Relative errors of one speed record: measured against the declared law's exact
+    values, and the restitution against the one asked (columns ``rel_error.*``)."""
+    meas, ex = speed.get("measured") or {}, speed.get("exact") or {}
+    out = {}
+    for k in ("restitution", "restitution_zero_force", "contact_time", "max_penetration"):
+        got, want = meas.get(k), ex.get(k)
+        if isinstance(got, float) and isinstance(want, float) and want:
+            out[f"rel_error.{k}"] = abs(got - want) / abs(want)
+    asked, got = speed.get("asked_restitution"), meas.get("restitution")
+    if isinstance(got, float) and isinstance(asked, float) and asked:
+        out["rel_error.restitution_asked"] = abs(got - asked) / asked
+    return out
+
+
+def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
     """``hcv bench ADAPTER`` on the case's scene: one row per variant and speed.
 
     Each row carries the case's scorecard (metric counts, failed metric names,
-    status) and the per-speed record of the JSON report, flattened.
+    status) and the per-speed record of the JSON report, flattened, with the
+    relative errors as ``rel_error.*`` columns. ``code`` holds swept adapter options
+    (``adapter``) and run settings (``run``: steps_per_contact).
     """
+    from reference_impl.bench.calibrate import spec_with_options
     from reference_impl.bench.runner import run_bench
 
-    result = run_bench(adapter, scenes=[scene], progress=check_deadline)
+    code = code or {}
+    spec = spec_with_options(adapter, code.get("adapter", {}))
+    tol = {"run": dict(code["run"])} if code.get("run") else None
+    result = run_bench(spec, scenes=[scene], tolerances=tol, progress=check_deadline)
     d = result.to_dict()
     rows = []
     for ctx in d["records"]:
@@ -122,7 +143,7 @@ def _bench_rows(scene, adapter: str) -> list[dict]:
             "skipped": ctx["skipped"],
         }
         if ctx["speeds"]:
-            rows.extend(_flat({**head, **s}) for s in ctx["speeds"])
+            rows.extend(_flat({**head, **s}) | _errors(s) for s in ctx["speeds"])
         else:
             rows.append(
                 _flat({**head, "v0": scene.velocities[0], "sustained": ctx["sustained"] or {}})
@@ -130,6 +151,35 @@ def _bench_rows(scene, adapter: str) -> list[dict]:
     if result.interrupted:
         raise KeyboardInterrupt
     return rows
+
+
+def _calibrate_rows(scene, adapter: str, code: dict) -> list[dict]:
+    """``hcv calibrate`` on the case's scene: one row (value found, achieved, metrics)."""
+    from reference_impl.bench.calibrate import calibrate, spec_with_options
+
+    cal = dict(code.get("calibrate", {}))
+    spc = cal.pop("steps_per_contact", code.get("run", {}).get("steps_per_contact", 200))
+    res = calibrate(
+        spec_with_options(adapter, code.get("adapter", {})),
+        scene,
+        param=cal["param"],
+        target=float(cal["target"]),
+        end=cal.get("end", "overlap"),
+        steps_per_contact=spc,
+        v0=cal.get("v0"),
+        bracket=cal.get("range"),
+        progress=check_deadline,
+    )
+    d = res.to_dict()
+    metrics = d.pop("metrics")
+    row = _flat({k: v for k, v in d.items() if k not in ("range", "delivered")})
+    row["range_lo"], row["range_hi"] = d["range"]
+    row["delivered_min"], row["delivered_max"] = d["delivered"]
+    for part, values in metrics.items():
+        for k, v in values.items():
+            if isinstance(v, (int, float)):
+                row[f"{part}.{k}"] = v
+    return [row]
 
 
 def run_case(payload: dict) -> list[dict]:
@@ -147,5 +197,7 @@ def run_case(payload: dict) -> list[dict]:
         if task == "solve":
             return _solve_rows(scene)
         if task.startswith("bench:"):
-            return _bench_rows(scene, task[len("bench:") :])
+            return _bench_rows(scene, task[len("bench:") :], payload.get("code"))
+        if task.startswith("calibrate:"):
+            return _calibrate_rows(scene, task[len("calibrate:") :], payload.get("code") or {})
     raise HCVInputError(f"unknown task {task!r}")

@@ -1,0 +1,624 @@
+"""MuJoCo adapter: a body on a slide joint hitting a plane, through the ``mujoco`` Python module.
+
+Install with ``pip install -e '.[mujoco]'`` (MuJoCo 3.x or 4.x wheels). The
+model is written as MJCF in memory: no gravity, a sphere of mass m (the scene's
+effective mass) on a slide joint along z over a plane, ``condim = 1``
+(frictionless normal contact), the same ``solref`` / ``solimp`` on both geoms
+(so MuJoCo's mixing leaves them unchanged), margin 0. The sphere starts touching
+the plane (distance 0) moving into it at v0. The overlap is q = -qpos (the joint
+displacement, so R never enters q's rounding), dq/dt = -qvel, and the force the
+contact puts on the body is ``qfrc_constraint`` (equal to ``efc_force`` of the
+contact row and to ``mj_contactForce``; checked in the tests).
+
+What MuJoCo integrates (engine_core_constraint.c, checked by measurement)
+-------------------------------------------------------------------------
+A frictionless contact row gets the reference acceleration
+aref = -B v_n - K I(r) r (r = -q the signed distance, v_n = -dq/dt) and, with no
+other force, the solver gives the acceleration a = g(I) aref with
+g(I) = I / (I + rho (1 - I)), rho = m A_diag (A_diag = ``efc_diagA``, MuJoCo 4;
+``efc_diagApprox`` before; 1/m for this model, so rho = 1 and a = I aref). The
+force is m a when a >= 0 and 0 otherwise: a contact never pulls (tension
+clipped). With d_w = solimp[1]:
+
+* ``solref = "direct"``: solref = (-S, -D), K = S / d_w^2, B = D / d_w. These are
+  per unit mass (1/s^2, 1/s): the adapter writes S = k / m and D = c / m. Never
+  clamped.
+* ``solref = "timeconst"``: solref = (tc, dr), K = 1 / (d_w^2 tc^2 dr^2),
+  B = 2 / (d_w tc). MuJoCo replaces tc by max(tc, 2 timestep) (``refsafe``, the
+  positive form only): the adapter applies the same clamp and declares the law of
+  the clamped value. dr = 0 would be a *mixed-sign* solref, which MuJoCo silently
+  replaces by its default (0.02, 1): undamped scenes are declined in this form.
+
+Impedance I(r) (``solimp`` = dmin, dmax, width, midpoint, power; every value
+clamped by MuJoCo to [1e-4, 0.9999], as the adapter does before declaring):
+
+* ``impedance = "constant"``: dmin = dmax = d (option ``imp``, default 0.9).
+  Then the force is m g(d) (K d q + B dq/dt), clipped at 0: a linear spring
+  k q with a constant dashpot c, i.e. the universal law of p = 1 with
+  zeta = c / (2 sqrt(m k)), tension clipped. With rho = 1 the direct form
+  gives exactly k = m S, c = m D and the timeconst form k = m / (tc dr)^2,
+  c = 2 m / tc (so dr is the damping ratio and 1/(tc dr) the natural frequency).
+* ``impedance = "default"``: MuJoCo's default solimp (0.9, 0.95, 0.001, 0.5, 2)
+  (``width`` overridable). For q <= midpoint x width, I = dmin + 2 (dmax - dmin)
+  (q / width)^2, so the law is a sum of powers U'(q) = m K I(q)^2 q (terms q,
+  q^3, q^5) with the polynomial damping C(q) = m B I(q) (terms 1, q^2),
+  declared as ``{"law": "polynomial", "c": [...]}``. Beyond the midpoint I is
+  another polynomial piece: scenes whose overlap would reach it are declined with
+  the width that would hold them. Declared for rho = 1 only (else g(I) is not a
+  polynomial).
+
+The stiffness asked is the scene's k (at full impedance dmax); the damping is
+calibrated to the asked restitution at the end option ``end``: ``overlap`` (the
+q = 0 end the scene states: zeta = scene zeta, restitution exp(-pi zeta /
+sqrt(1 - zeta^2))) or ``zero-force`` (what a code that clips tension delivers:
+zeta from exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e, see
+`zeta_zero_force`). Options ``dampratio`` (the damping ratio used, replaces the
+calibration) or ``damping`` (c in N s/m) set it directly: they are what
+``hcv calibrate mujoco --param dampratio`` searches.
+
+Facts the adapter handles
+-------------------------
+* A contact at distance 0 gets no constraint row (``dist < margin`` creates it),
+  so the first step from q = 0 carries no force although the dashpot law has
+  c v0 there: part of MuJoCo's first-order error, not hidden.
+* After ``mj_step`` the ``efc_*`` arrays and ``qfrc_constraint`` hold the state
+  the step started from (for RK4 its last stage): the adapter calls
+  ``mj_forward`` after every step so that the force is the one at the sampled
+  state (no staggering left to declare).
+* MuJoCo resets the state silently when an acceleration is non-finite or above
+  1e10 m/s^2 (``mjMAXVAL``; a stiff contact reaches it with a valid state)
+  unless ``autoreset`` is disabled: the adapter disables it, so the run goes on
+  and a blow-up shows as one (non-finite samples); the warnings are counted in
+  ``meta["badqacc_warnings"]``. On a MuJoCo without that flag a reset ends the
+  run with non-finite samples instead of a clean-looking restart.
+* MuJoCo 4 renamed ``efc_diagApprox`` to ``efc_diagA``: both are read.
+* Numbers are written into the XML as ``repr(float(x))``.
+* MuJoCo's warnings (printed on stdout and appended to ``MUJOCO_LOG.TXT`` in the
+  current directory by default) go to stderr: no stray output, no file left.
+
+Integrators: ``Euler`` (semi-implicit: v then q with the new v), ``RK4``,
+``implicit`` (implicit only in passive damping and actuators, so the same
+contact as ``Euler``; run as its own variant to show it).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from importlib import metadata
+
+import numpy as np
+
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import SumPotential
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.adapters._mujoco_support import (
+    _badqacc_index,
+    _diag,
+    restitution_zero_force_linear,
+    zeta_zero_force,
+)
+from reference_impl.adapters.base import AdapterDeclined, AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
+from reference_impl.adapters.law_damping import LawDamping
+from reference_impl.theory.laws import DampingLaw
+
+__all__ = [
+    "END",
+    "IMPEDANCES",
+    "INTEGRATORS",
+    "MujocoAdapter",
+    "SOLREF_FORMS",
+    "mujoco_available",
+    "restitution_zero_force_linear",
+    "zeta_zero_force",
+]
+
+SOLREF_FORMS = ("direct", "timeconst")
+IMPEDANCES = ("constant", "default")
+INTEGRATORS = ("Euler", "RK4", "implicit")
+END = ("overlap", "zero-force")
+# MuJoCo's impedance clamp (mjMINIMP, mjMAXIMP) and default solimp / solref.
+_MINIMP, _MAXIMP = 1e-4, 0.9999
+_DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
+_CONSTANT_IMP = 0.9  # MuJoCo's default dmin, used as the constant impedance
+# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %): the
+# radius does not enter the sphere-plane distance law, only the picture.
+_RADIUS_OVER_QMAX = 100.0
+
+_MUJOCO = None
+
+
+def mujoco_available() -> str | None:
+    """None when the ``mujoco`` module is installed, else a one-line reason."""
+    if importlib.util.find_spec("mujoco") is None:
+        return "MuJoCo is not installed; install it with pip install -e '.[mujoco]'"
+    return None
+
+
+def load_mujoco():
+    """Import ``mujoco`` (once)."""
+    global _MUJOCO
+    if _MUJOCO is None:
+        reason = mujoco_available()
+        if reason:
+            raise HCVInputError(reason)
+        import mujoco
+
+        # MuJoCo's default warning handler prints to stdout and appends to
+        # MUJOCO_LOG.TXT in the current directory: route warnings to stderr instead
+        # (stdout is the worker's channel, and an adapter leaves no files behind).
+        setter = getattr(mujoco, "set_mju_user_warning", None)
+        if setter is not None:
+            setter(_warning_to_stderr)
+        _MUJOCO = mujoco
+    return _MUJOCO
+
+
+def _warning_to_stderr(message) -> None:
+    print(f"MuJoCo warning: {message}", file=sys.stderr)
+
+
+def _clamp_imp(x: float) -> float:
+    return min(_MAXIMP, max(_MINIMP, float(x)))
+
+
+def _split(what: str, value, allowed: tuple) -> tuple:
+    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
+    for x in items:
+        if x not in allowed:
+            raise HCVInputError(f"adapter mujoco: {what} {x!r} is not one of {', '.join(allowed)}")
+    return items
+
+
+def _positive(name: str, value, allow_zero: bool = False):
+    if value is None:
+        return None
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value < 0
+        or (value == 0 and not allow_zero)
+    ):
+        raise HCVInputError(
+            f"adapter mujoco: {name} must be a number {'>=' if allow_zero else '>'} 0, "
+            f"got {value!r}"
+        )
+    return float(value)
+
+
+class MujocoAdapter(ContactAdapter):
+    """Normal impacts of a body on a plane in MuJoCo (see the module docstring for the law).
+
+    Parameters
+    ----------
+    solref : str, optional
+        "direct" (-S -D), "timeconst" (timeconst dampratio), joined by "+", or "all".
+    impedance : str, optional
+        "constant" (solimp dmin = dmax) or "default" (MuJoCo's solimp), "+" or "all".
+    integrator : str, optional
+        "Euler", "RK4", "implicit", "+" or "all".
+    end : str, optional
+        Calibration of the damping: "overlap" (asked restitution at q = 0) or
+        "zero-force" (at the zero-force end), "+" or "all"; default "overlap".
+    dampratio : float, optional
+        Damping ratio used instead of the calibration (dimensionless, >= 0).
+    damping : float, optional
+        Dashpot c (N s/m, at full impedance) used instead of the calibration.
+    imp : float, optional
+        Constant impedance d of ``impedance=constant`` (default 0.9; clamped to
+        [1e-4, 0.9999] like MuJoCo).
+    width : float, optional
+        solimp width (m) of ``impedance=default`` (default MuJoCo's 0.001 m).
+    radius : float, optional
+        Sphere radius (m); default 100 q_max at the scene's largest speed.
+
+    Without options the variants are: direct/constant with each integrator,
+    timeconst/constant/Euler, direct/constant/Euler calibrated at the zero-force
+    end, and direct/default/Euler.
+    """
+
+    name = "mujoco"
+    isolate = True
+
+    def __init__(
+        self,
+        solref: str | None = None,
+        impedance: str | None = None,
+        integrator: str | None = None,
+        end: str | None = None,
+        dampratio: float | None = None,
+        damping: float | None = None,
+        imp: float = _CONSTANT_IMP,
+        width: float | None = None,
+        radius: float | None = None,
+    ):
+        reason = mujoco_available()
+        if reason:
+            raise HCVInputError(f"adapter mujoco: {reason}")
+        self._default_set = solref is None and impedance is None and integrator is None
+        self._default_set = self._default_set and end is None
+        self.forms = _split("solref", solref, SOLREF_FORMS)
+        self.imps = _split("impedance", impedance, IMPEDANCES)
+        self.integrators = _split("integrator", integrator, INTEGRATORS)
+        # the calibration end is a setting (default overlap), a variant axis only when asked
+        self.ends = _split("end", "overlap" if end is None else end, END)
+        if dampratio is not None and damping is not None:
+            raise HCVInputError("adapter mujoco: give dampratio or damping, not both")
+        self.dampratio = _positive("dampratio", dampratio, allow_zero=True)
+        self.damping = _positive("damping", damping, allow_zero=True)
+        self.imp = _positive("imp", imp)
+        self.width = _positive("width", width)
+        self.radius = _positive("radius", radius)
+
+    # -- configuration ----------------------------------------------------------
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Default search range of an option for ``hcv calibrate`` (None: none known).
+
+        Damping ratios 1e-3 to 3 (asked at full impedance): restitution from 0.997
+        down to 0.02 at the zero-force end of a clipped linear contact.
+        """
+        if param == "dampratio":
+            return (1e-3, 3.0)
+        if param == "damping":
+            c1 = 2.0 * math.sqrt(scene.mass * scene.potential.k)  # zeta = 1
+            return (1e-3 * c1, 3.0 * c1)
+        return None
+
+    def _options(self) -> dict:
+        return {
+            "dampratio": self.dampratio,
+            "damping": self.damping,
+            "imp": self.imp,
+            "width": self.width,
+            "radius": self.radius,
+        }
+
+    @property
+    def single(self) -> bool:
+        return all(len(x) == 1 for x in (self.forms, self.imps, self.integrators, self.ends))
+
+    @property
+    def label(self) -> str:
+        if not self.single:
+            return "mujoco"
+        parts = [self.forms[0], self.imps[0], self.integrators[0]]
+        if self.ends[0] != "overlap":
+            parts.append(self.ends[0])
+        for key in ("dampratio", "damping"):
+            val = getattr(self, key)
+            if val is not None:
+                parts.append(f"{key}={val!r}")
+        return f"mujoco[{','.join(parts)}]"
+
+    def variants(self) -> list[ContactAdapter]:
+        if self.single:
+            return [self]
+        kw = self._options()
+        if self._default_set:
+            combos = [("direct", "constant", i, "overlap") for i in INTEGRATORS] + [
+                ("timeconst", "constant", "Euler", "overlap"),
+                ("direct", "constant", "Euler", "zero-force"),
+                ("direct", "default", "Euler", "overlap"),
+            ]
+        else:
+            combos = [
+                (f, i, g, e)
+                for f in self.forms
+                for i in self.imps
+                for g in self.integrators
+                for e in self.ends
+            ]
+        return [
+            MujocoAdapter(solref=f, impedance=i, integrator=g, end=e, **kw)
+            for f, i, g, e in combos
+        ]
+
+    def describe(self) -> dict:
+        d = {
+            "name": self.name,
+            "label": self.label,
+            "solref": list(self.forms),
+            "impedance": list(self.imps),
+            "integrator": list(self.integrators),
+            "end": list(self.ends),
+        }
+        try:
+            d["version"] = metadata.version("mujoco")
+        except metadata.PackageNotFoundError:  # pragma: no cover - installed from source
+            pass
+        return d
+
+    def supports(self, scene: AdapterScene) -> str | None:
+        if not self.single:
+            return "configure one solref form, impedance, integrator and end (see variants())"
+        if scene.kind != "impact":
+            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
+        pot = scene.potential
+        if type(pot) is not PowerLaw or pot.p != 1.0:
+            return (
+                f"MuJoCo's soft contact is a linear spring (U' = k q, power p = 1); scene "
+                f"potential {pot!r} has no equivalent"
+            )
+        if self.forms[0] == "timeconst" and self._zeta(scene) == 0.0:
+            return (
+                "solref timeconst form cannot express zero damping: dampratio 0 makes a "
+                "mixed-sign solref, which MuJoCo silently replaces by its default (0.02, 1); "
+                "use solref=direct"
+            )
+        if self.imps[0] == "default":
+            mp = self._mapping(scene)
+            if "declined" in mp:
+                return mp["declined"]
+        return None
+
+    # -- the mapping ------------------------------------------------------------
+    def _zeta(self, scene: AdapterScene) -> float:
+        """Damping ratio asked of MuJoCo at full impedance."""
+        if self.dampratio is not None:
+            return self.dampratio
+        if self.damping is not None:
+            return self.damping / (2.0 * math.sqrt(scene.mass * scene.potential.k))
+        if scene.damping != "universal" or not scene.zeta:
+            return 0.0
+        if self.ends[0] == "zero-force":
+            return zeta_zero_force(scene.restitution)
+        return float(scene.zeta)
+
+    def _mapping(self, scene: AdapterScene, rho: float = 1.0) -> dict:
+        """MuJoCo parameters and the law it integrates for one scene.
+
+        ``rho`` = m efc_diagA (1 for this model in every version measured; the
+        run reads the real value and re-declares with it).
+        """
+        pot, m = scene.potential, scene.mass
+        k = float(pot.k)
+        w0 = math.sqrt(k / m)
+        zeta = self._zeta(scene)
+        c = 2.0 * zeta * math.sqrt(m * k)
+        vmax = max(scene.velocities or (scene.v0,))
+        q_top = float(pot.turning_point(0.5 * m * vmax * vmax))
+        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
+        if self.imps[0] == "constant":
+            d = _clamp_imp(self.imp)
+            solimp = (d, d, _DEFAULT_SOLIMP[2], _DEFAULT_SOLIMP[3], _DEFAULT_SOLIMP[4])
+        else:
+            w = self.width if self.width is not None else _DEFAULT_SOLIMP[2]
+            solimp = (
+                _clamp_imp(_DEFAULT_SOLIMP[0]),
+                _clamp_imp(_DEFAULT_SOLIMP[1]),
+                w,
+                _clamp_imp(_DEFAULT_SOLIMP[3]),
+                max(1.0, _DEFAULT_SOLIMP[4]),
+            )
+        dw = solimp[1]
+        out: dict = {"R": R, "solimp": solimp, "zeta_asked": zeta, "clamped": False}
+        if self.forms[0] == "direct":
+            S, D = k / m, c / m
+            out["solref"] = (-S, -D)
+            K, B = S / dw**2, D / dw
+        else:
+            tc, dr = 1.0 / (w0 * zeta) if zeta > 0 else math.inf, zeta
+            tc_used = max(tc, 2.0 * scene.dt)  # MuJoCo's refsafe clamp (positive form only)
+            out["clamped"] = tc_used > tc
+            out["solref"] = (tc_used, dr)
+            if zeta > 0:
+                K, B = 1.0 / (dw**2 * tc_used**2 * dr**2), 2.0 / (dw * tc_used)
+            else:  # declined in supports(); keep the mapping defined
+                K, B = k / m / dw**2, 0.0
+        out["K"], out["B"] = K, B
+        how = (
+            f"dampratio {self.dampratio!r} given"
+            if self.dampratio is not None
+            else f"damping {self.damping!r} N s/m given"
+            if self.damping is not None
+            else f"calibrated at the {self.ends[0]} end"
+        )
+        head = (
+            f"MuJoCo solref {self.forms[0]} {out['solref'][0]!r} {out['solref'][1]!r}"
+            + (" (timeconst clamped to 2 timestep)" if out["clamped"] else "")
+            + f", {self.integrators[0]}, zeta asked {zeta:.6g} ({how})"
+        )
+        if self.imps[0] == "constant":
+            d = solimp[0]
+            g = d / (d + rho * (1.0 - d))
+            k_eff, c_eff = m * g * K * d, m * g * B
+            z_eff = c_eff / (2.0 * math.sqrt(m * k_eff))
+            out["law"] = ImplementedLaw(
+                PowerLaw(k_eff, 1.0),
+                m,
+                zeta=z_eff,
+                clips_tension=True,
+                description=f"{head}; constant impedance {d:g}: linear spring k = {k_eff:.7g} "
+                f"N/m, dashpot c = {c_eff:.7g} N s/m (universal law zeta = {z_eff:.6g}), "
+                "tension clipped",
+            )
+            return out
+        dmin, dmax, w, mid, power = solimp
+        if rho != 1.0:
+            out["declined"] = (
+                f"default impedance with m efc_diagA = {rho!r} != 1: MuJoCo's law is not a "
+                "sum of powers the suite can declare"
+            )
+            return out
+        if power != 2.0:  # pragma: no cover - the default solimp has power 2
+            out["declined"] = "default impedance declared for solimp power 2 only"
+            return out
+        # I(q) = dmin + (dmax - dmin) q^2 / (mid w^2) for q <= mid w (power 2).
+        a0, a2 = dmin, (dmax - dmin) / (mid * w * w)
+        terms = [(m * K * a0 * a0, 1.0), (2.0 * m * K * a0 * a2, 3.0), (m * K * a2 * a2, 5.0)]
+        elastic = SumPotential(*(PowerLaw(kk, pp) for kk, pp in terms))
+        q_law = float(elastic.turning_point(0.5 * m * vmax * vmax))
+        if q_law > mid * w:
+            out["declined"] = (
+                f"default impedance: the overlap reaches {q_law:.4g} m at v0 = {vmax:g} m/s, "
+                f"past solimp's midpoint x width = {mid * w:.4g} m where MuJoCo's impedance "
+                f"switches to its second polynomial piece; give width >= {q_law / mid:.3g}"
+            )
+            return out
+        coeffs = [m * B * a0, 0.0, m * B * a2]
+        damp = LawDamping(DampingLaw("polynomial", {"c": coeffs}), elastic, m)
+        out["law"] = ImplementedLaw(
+            elastic,
+            m,
+            C=damp,
+            clips_tension=True,
+            description=f"{head}; default impedance solimp {solimp}: U' = "
+            + " + ".join(f"{kk:.6g} q^{pp:g}" for kk, pp in terms)
+            + f", C = {coeffs[0]:.6g} + {coeffs[2]:.6g} q^2 (polynomial), tension clipped",
+        )
+        return out
+
+    def _rho(self, scene: AdapterScene) -> float:
+        """m efc_diagA measured on the compiled model (constant for a slide joint)."""
+        key = (scene.mass, scene.dt, tuple(sorted(scene.potential_spec.items())))
+        cache = self.__dict__.setdefault("_rho_cache", {})
+        if key not in cache:
+            q_top = float(scene.potential.turning_point(0.5 * scene.mass * scene.v0**2))
+            probe = self.probe(scene, 0.5 * q_top, 0.0)
+            if "rho" not in probe:
+                raise HCVInputError(
+                    f"adapter {self.label}: MuJoCo made no contact at q = {0.5 * q_top:g} m"
+                )
+            rho = probe["rho"]
+            # m * (1/m) is 1 to a few ulps; 1e-12 keeps g(I) - 1 below 1e-13
+            cache[key] = 1.0 if math.isclose(rho, 1.0, rel_tol=1e-12) else rho
+        return cache[key]
+
+    def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
+        mp = self._mapping(scene, self._rho(scene))
+        if "law" not in mp:
+            raise HCVInputError(f"adapter {self.label}: {mp.get('declined')}")
+        law = mp["law"]
+        return ImplementedLaw(
+            law.potential,
+            law.mass,
+            zeta=law.zeta,
+            C=law.C,
+            clips_tension=True,
+            description=law.description,
+            params={
+                "solref": list(mp["solref"]),
+                "solimp": list(mp["solimp"]),
+                "timeconst_clamped": mp["clamped"],
+                "integrator": self.integrators[0],
+                "zeta_asked": mp["zeta_asked"],
+                "version": self.describe().get("version"),
+            },
+        )
+
+    # -- running MuJoCo -----------------------------------------------------------
+    def _xml(self, mp: dict, scene: AdapterScene) -> str:
+        def num(x) -> str:
+            return repr(float(x))
+
+        solref = f"{num(mp['solref'][0])} {num(mp['solref'][1])}"
+        solimp = " ".join(num(x) for x in mp["solimp"])
+        R = mp["R"]
+        size = num(10.0 * R)
+        contact = f'condim="1" solref="{solref}" solimp="{solimp}" margin="0" gap="0"'
+        inertia = num(0.4 * scene.mass * R * R)
+        return (
+            "<mujoco>\n"
+            f'  <option timestep="{num(scene.dt)}" gravity="0 0 0" '
+            f'integrator="{self.integrators[0]}"/>\n'
+            "  <worldbody>\n"
+            f'    <geom name="plane" type="plane" size="{size} {size} {size}" {contact}/>\n'
+            f'    <body name="ball" pos="0 0 {num(R)}">\n'
+            '      <joint name="z" type="slide" axis="0 0 1"/>\n'
+            f'      <inertial pos="0 0 0" mass="{num(scene.mass)}" '
+            f'diaginertia="{inertia} {inertia} {inertia}"/>\n'
+            f'      <geom name="ball" type="sphere" size="{num(R)}" mass="0" {contact}/>\n'
+            "    </body>\n"
+            "  </worldbody>\n"
+            "</mujoco>\n"
+        )
+
+    def build(self, scene: AdapterScene, autoreset: bool = False):
+        """The compiled (MjModel, MjData, mapping) of one scene, autoreset disabled.
+
+        ``autoreset=True`` keeps MuJoCo's default (for the test that shows the hazard).
+        """
+        mj = load_mujoco()
+        mp = self._mapping(scene)
+        if "declined" in mp:
+            raise AdapterDeclined(mp["declined"])
+        model = mj.MjModel.from_xml_string(self._xml(mp, scene))
+        bit = getattr(mj.mjtDisableBit, "mjDSBL_AUTORESET", None)
+        if bit is not None and not autoreset:
+            model.opt.disableflags |= int(bit)
+        data = mj.MjData(model)
+        return model, data, mp
+
+    def probe(self, scene: AdapterScene, q: float, rate: float) -> dict:
+        """MuJoCo's contact force at overlap q (m) and dq/dt = rate (m/s), read three ways.
+
+        One ``mj_forward`` at that state: ``qfrc_constraint``, ``efc_force`` of the
+        contact row and ``mj_contactForce`` (N, + repulsive), and m efc_diagA.
+        """
+        mj = load_mujoco()
+        model, data, _mp = self.build(scene)
+        data.qpos[0], data.qvel[0] = -q, -rate
+        mj.mj_forward(model, data)
+        out = {"qfrc_constraint": float(data.qfrc_constraint[0]), "ncon": int(data.ncon)}
+        if data.ncon:
+            adr = int(data.contact.efc_address[0])
+            out["efc_force"] = float(data.efc_force[adr])
+            f6 = np.zeros(6)
+            mj.mj_contactForce(model, data, 0, f6)
+            out["contact_force"] = float(f6[0])
+            out["rho"] = scene.mass * float(_diag(data)[adr])
+        return out
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        mj = load_mujoco()
+        model, data, mp = self.build(scene)
+        mp = self._mapping(scene, self._rho(scene))
+        if "declined" in mp:
+            raise AdapterDeclined(mp["declined"])
+        n = int(scene.n_steps)
+        t = np.empty(n + 1)
+        q = np.empty(n + 1)
+        v = np.empty(n + 1)
+        f = np.empty(n + 1)
+        data.qvel[0] = -scene.v0
+        mj.mj_forward(model, data)
+        t[0], q[0], v[0], f[0] = 0.0, 0.0, scene.v0, float(data.qfrc_constraint[0])
+        warn = _badqacc_index(mj)
+        autoreset_off = getattr(mj.mjtDisableBit, "mjDSBL_AUTORESET", None) is not None
+        reset_seen = data.warning[warn].number
+        touched, k = False, n + 1
+        for i in range(1, n + 1):
+            mj.mj_step(model, data)
+            # the efc_* arrays after mj_step are those of the state the step started from:
+            # recompute them at the new state so the force sample is the force at t[i]
+            mj.mj_forward(model, data)
+            t[i] = i * scene.dt
+            q[i], v[i], f[i] = -data.qpos[0], -data.qvel[0], data.qfrc_constraint[0]
+            if not autoreset_off and data.warning[warn].number > reset_seen:
+                # this MuJoCo has no autoreset flag and has just reset the state
+                q[i] = v[i] = f[i] = math.nan  # a blow-up, never a silent reset
+                k = i + 1
+                break
+            if not (math.isfinite(q[i]) and math.isfinite(v[i])):
+                k = i + 1
+                break
+            touched = touched or q[i] > 0.0
+            if touched and q[i] <= 0.0:
+                k = i + 1
+                break
+        meta = {
+            "code": f"MuJoCo {self.describe().get('version', '?')}",
+            "solref": list(mp["solref"]),
+            "solimp": list(mp["solimp"]),
+            "integrator": self.integrators[0],
+            "timeconst_clamped": mp["clamped"],
+            "steps": k - 1,
+            "m_diagA": self._rho(scene),
+            # |qacc| > 1e10 (mjMAXVAL) or non-finite: MuJoCo warns; with autoreset
+            # disabled it goes on, so the count says how often, not that the run is void
+            "badqacc_warnings": int(data.warning[warn].number),
+        }
+        return Trajectory(t[:k], q[:k], v[:k], f[:k], meta)
