@@ -39,7 +39,9 @@ from .metrics import (
     SceneContext,
     SpeedRecord,
     check_conventions,
+    contact_sample_times,
     exact_reference,
+    exact_tensile_on_samples,
     measure,
 )
 from .tolerances import load_tolerances
@@ -261,11 +263,54 @@ class _SceneRun:
         rec.law = law.value
         try:
             rec.exact = exact_reference(rec.law, v0)
+            rec.exact["tensile_sampled"] = exact_tensile_on_samples(
+                rec.law, v0, rec.exact["contact_time"], contact_sample_times(out.value, rec.measured)
+            )
         except Exception as exc:  # our solver on the declared law: never the code's failure
             rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
             return rec
+        rec.textbook = self.textbook(rec.law, ascene, rec.exact)
         rec.dt_crit = self.dt_crit(ascene, rec.law)
         return rec
+
+    def textbook(self, law: ImplementedLaw, ascene: AdapterScene, exact: dict) -> dict:
+        """Errors of textbook velocity Verlet with the implemented law, at the run's own step.
+
+        The error a correct code makes at the step the suite gives it (tolerances.toml,
+        [allowance]): relative errors of restitution, contact time and max penetration
+        against ``exact``, |E_out/E_in - 1|, and the tensile peak against the exact law
+        sampled at Verlet's own instants. ``{"error": reason}`` when the reference
+        Verlet cannot run the declared damping (a callable C(q)); ``{"internal": ...}``
+        when it failed (ours).
+        """
+        from ..adapters.reference import law_trajectory
+
+        v0 = ascene.v0
+        try:
+            t, q, v, f = law_trajectory(law, v0, ascene.dt, ascene.n_steps)
+        except TypeError as exc:  # a damping the reference Verlet cannot run
+            return {"error": f"textbook Verlet cannot run the declared law ({_one_line(exc)})"}
+        except Exception as exc:  # ours
+            return {"internal": f"textbook Verlet with the implemented law failed: {_one_line(exc)}"}
+        tr = Trajectory(t, q, v, f)
+        m = measure(tr, v0)
+        out: dict = {"restitution_value": m.get("restitution", math.nan)}
+        for k in ("restitution", "contact_time", "max_penetration"):
+            got, want = m.get(k, math.nan), exact[k]
+            out[k] = abs(got - want) / abs(want) if want else math.inf
+        out["energy_ratio"] = abs(m.get("energy_ratio", math.nan) - 1.0)
+        try:
+            ref = exact_tensile_on_samples(
+                law, v0, exact["contact_time"], contact_sample_times(tr, m)
+            )
+        except Exception as exc:  # ours
+            return {"internal": f"exact tensile peak on textbook Verlet's samples: {_one_line(exc)}"}
+        out["tensile"] = abs(m.get("tensile", math.nan) - ref)
+        for k, x in list(out.items()):
+            if not math.isfinite(x):
+                # a correct scheme at this step did not measure it: no allowance can be derived
+                return {"internal": f"textbook Verlet at dt = {ascene.dt:.4g} s gave no finite {k}"}
+        return out
 
     def _stable(self, ascene: AdapterScene, dt: float, q_max: float) -> tuple[bool, str]:
         v0 = ascene.v0
@@ -315,8 +360,8 @@ class _SceneRun:
         try:
             verlet = _search(lambda f: self._verlet_stable(law, v0, f * ref, q_max), res)
             out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
-        except TypeError as exc:  # a damping the reference Verlet cannot run
-            out["verlet_error"] = str(exc)
+        except TypeError as exc:  # a damping the reference Verlet cannot run: no baseline
+            out["verlet_error"] = f"textbook Verlet cannot run the declared law ({_one_line(exc)})"
         except Exception as exc:  # ours, not the code's
             out["internal"] = f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
         return out
@@ -330,7 +375,10 @@ class _SceneRun:
             if ours:
                 ctx.order_internal = ours
             else:
-                ctx.order_error = "no speed with a successful run and exact reference"
+                first = next((r for r in ctx.speeds if r.error), None)
+                ctx.order_error = "no speed with a successful run and exact reference" + (
+                    f" (v0 = {first.v0:g} m/s: {first.error})" if first is not None else ""
+                )
             return
         rec = recs[len(recs) // 2]
         try:
@@ -355,6 +403,7 @@ class _SceneRun:
         )
         t_c = ex["contact_time"]
         pts = []
+        self.textbook_order(rec, ex, t_c)
         for n in self.tol["run"]["speed_error_steps"]:
             dt = t_c / n
             ascene = AdapterScene.from_scene(sc, rec.v0, dt, self.budget(dt, t_c))
@@ -402,6 +451,40 @@ class _SceneRun:
                 f"table failed: {failed[0]['failure']}"
             )
 
+    def textbook_order(self, rec: SpeedRecord, ex: dict, t_c: float) -> None:
+        """Convergence order of textbook Verlet with the implemented law on the same table.
+
+        The order a correct code shows on this scene at these steps (velocity Verlet is
+        second order, first order once a velocity-dependent dashpot is evaluated
+        explicitly; heavily damped scenes are pre-asymptotic at 25-800 steps). Sets
+        ``ctx.textbook_order``, or ``ctx.textbook_order_error`` when it cannot be run.
+        """
+        from ..adapters.reference import law_trajectory
+
+        pts = []
+        for n in self.tol["run"]["speed_error_steps"]:
+            dt = t_c / n
+            try:
+                t, q, v, f = law_trajectory(rec.law, rec.v0, dt, self.budget(dt, t_c))
+            except TypeError as exc:
+                self.ctx.textbook_order_error = (
+                    f"textbook Verlet cannot run the declared law ({_one_line(exc)})"
+                )
+                return
+            meas = measure(Trajectory(t, q, v, f), rec.v0)
+            errs = [
+                abs(meas.get(k, math.nan) - ex[k]) / abs(ex[k])
+                for k in ("restitution", "contact_time", "max_penetration")
+            ]
+            worst = max(errs)
+            if math.isfinite(worst) and worst > _ORDER_FLOOR:
+                pts.append((dt, worst))
+        if len(pts) >= 3:
+            x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            self.ctx.textbook_order = float(np.polyfit(x, y, 1)[0])
+        else:
+            self.ctx.textbook_order = math.inf  # at round-off: nothing left to converge
+
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
         v0 = sc.velocities[0]
@@ -426,11 +509,29 @@ class _SceneRun:
         impacts = int(np.sum((tr.q[1:] > 0) & (tr.q[:-1] <= 0)))
         ctx.sustained = {
             "drift": drift,
+            "textbook_drift": self.textbook_drift(v0, dt, n),
             "steps": int(tr.t.size - 1),
             "impacts": impacts,
             "dt": dt,
             "seconds": out.seconds,
         }
+
+    def textbook_drift(self, v0: float, dt: float, n: int) -> float:
+        """Energy drift of textbook Verlet on the same two-walls run (the allowance's scale)."""
+        from ..adapters.reference import verlet_trajectory
+
+        sc = self.scene
+        try:
+            t, q, v, f = verlet_trajectory(
+                sc.potential, sc.mass, v0, dt, n, zeta=sc.zeta or 0.0, kind="two-walls",
+                gap=float(sc.gap or 0.0),
+            )
+            with np.errstate(all="ignore"):
+                E = 0.5 * sc.mass * v**2 + sc.potential._U(np.clip(q, 0.0, None))
+        except Exception as exc:  # ours
+            raise _Ours(f"textbook Verlet on the two-walls scene: {_one_line(exc)}") from None
+        E0 = 0.5 * sc.mass * v0 * v0
+        return float(np.max(np.abs(E / E0 - 1.0))) if np.all(np.isfinite(E)) else math.inf
 
     def run(self, rows: list[dict]) -> SceneContext:
         ctx = self.ctx

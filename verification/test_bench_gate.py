@@ -1,0 +1,191 @@
+"""The gate never fails a correct code, and fails known-wrong codes on their fault (issue 17).
+
+Two hypothesis tests over generated scenes, run through `run_bench` with the shipped
+tolerances (reference_impl/bench/tolerances.toml), so that widening a tolerance until
+a wrong code passes fails `test_wrong_codes_fail_on_their_fault`:
+
+* correct codes (the suite's reference adapter, a velocity Verlet, and the C example
+  docs/examples/power_verlet.c) pass every metric on every generated scene
+  (families, exponents 1-3, zeta 0-0.9, speeds four decades apart, impact and
+  two-walls);
+* wrong codes (verification/_wrong_codes.py) fail on the metric that names their
+  fault, by a margin.
+
+Each example is a whole benchmark (a main run, a critical-step search of ~20 runs per
+speed and a speed table of 6 runs), ~1-2 s: the example counts below are set under the
+ci profile's 25 to keep this module near a minute on 2 cores.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from reference_impl.adapters.reference import ReferenceAdapter
+from reference_impl.bench.runner import run_bench
+from reference_impl.scenes import scene_from_dict
+
+from .strategies import log_uniform
+
+sys.path.insert(0, str(Path(__file__).parent))
+import _wrong_codes as wrong  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE_C = ROOT / "docs" / "examples" / "power_verlet.c"
+# A wrong code must miss its fault's limit by this factor (error / limit), so that a
+# tolerance widened by less than this still fails it and a wider one fails this test.
+MARGIN = 1.5
+# Its convergence order must fall this far below the limit (orders are not ratios).
+ORDER_MARGIN = 0.2
+_FEW = settings(max_examples=8, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+
+
+def _potential(draw, family: str, p) -> dict:
+    if family == "power":
+        return {"family": "power", "k": draw(log_uniform(1e4, 1e10)), "p": draw(p)}
+    if family == "sphere":
+        return {"family": "sphere", "R": draw(log_uniform(1e-3, 1e-1)), "Kn": 1e12}
+    if family == "ellipsoid":
+        a = draw(log_uniform(1e-3, 1e-1))
+        return {"family": "ellipsoid", "a": a, "b": 0.6 * a, "c": 0.8 * a, "Kn": 1e12}
+    return {
+        "family": "sum",
+        "terms": [
+            {"family": "power", "k": draw(log_uniform(1e4, 1e8)), "p": 1.0},
+            {"family": "power", "k": draw(log_uniform(1e6, 1e10)), "p": draw(st.floats(1.2, 3))},
+        ],
+    }
+
+
+@st.composite
+def gate_scenes(draw, families=("power", "sphere", "ellipsoid", "sum"), kinds=("impact",),
+                zeta=st.one_of(st.just(0.0), st.floats(0.01, 0.9)),
+                p=st.floats(1, 3)):  # fmt: skip
+    """A bench scene: a family, mass, two speeds four decades apart, a damping ratio."""
+    family = draw(st.sampled_from(families))
+    pot = _potential(draw, family, p)
+    v_lo = draw(log_uniform(1e-3, 1e-2))
+    kind = draw(st.sampled_from(kinds))
+    speeds = [v_lo, v_lo * 1e4] if kind == "impact" else [v_lo * 100]
+    probe = scene_from_dict({"name": "probe", "mass": 1.0, "velocities": [1e-6],
+                             "potential": pot})  # fmt: skip
+    mass = draw(log_uniform(1e-4, 1.0))
+    if math.isfinite(probe.potential.q_sup):
+        # volumetric laws end at q = 2a: the fastest impact reaches a drawn fraction of it
+        q_top = draw(st.floats(0.05, 0.4)) * probe.potential.q_sup
+        mass = 2.0 * float(probe.potential._U(q_top)) / max(speeds) ** 2
+    data = {
+        "name": "generated",
+        "mass": mass,
+        "velocities": speeds,
+        "kind": kind,
+        "potential": pot,
+        "damping": {"law": "universal", "zeta": draw(zeta)},
+    }
+    if kind == "two-walls":
+        q_max = probe.potential.turning_point(0.5 * mass * speeds[0] ** 2)
+        data["gap"] = 10.0 * q_max
+        data["damping"]["zeta"] = 0.0 if draw(st.booleans()) else data["damping"]["zeta"]
+    return scene_from_dict(data)
+
+
+def _verdicts(result) -> dict:
+    return {m.metric: m for m in result.metrics}
+
+
+def _assert_gate_passes(result, scene):
+    bad = [m for m in result.metrics if m.status in ("fail", "error")]
+    measured = [m for m in result.metrics if m.status == "pass"]
+    assert not bad and measured, (
+        f"got {[(m.metric, m.status, m.explanation) for m in bad]}, should be no failure "
+        f"[correct code {result.adapter}, scene {scene.to_dict()}]"
+    )
+    assert result.exit_status(gate=True) == 0
+
+
+@_FEW
+@given(scene=gate_scenes(kinds=("impact", "two-walls")))
+def test_reference_verlet_passes_the_gate(scene):
+    _assert_gate_passes(run_bench(ReferenceAdapter(), [scene]), scene)
+
+
+@pytest.fixture(scope="module")
+def c_example(tmp_path_factory):
+    if shutil.which("cc") is None:
+        pytest.skip("no C compiler (cc) on this machine")
+    exe = tmp_path_factory.mktemp("c_example") / "power_verlet"  # built outside the tree
+    cc = subprocess.run(
+        ["cc", "-O2", "-std=c99", "-o", str(exe), str(EXAMPLE_C), "-lm"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert cc.returncode == 0, cc.stderr
+    return exe
+
+
+@_FEW
+@given(scene=gate_scenes(families=("power",)))
+def test_c_example_passes_the_gate(c_example, scene):
+    _assert_gate_passes(run_bench(f"cmd:{c_example}", [scene]), scene)
+
+
+def _assert_fails_on(result, metric: str, scene, *, order: bool = False):
+    m = _verdicts(result)[metric]
+    where = f"[{result.adapter}, {metric}, scene {scene.to_dict()}]"
+    assert m.status == "fail", f"got {m.status} ({m.explanation}), should be fail {where}"
+    if m.error is None or m.limit is None:
+        return  # failed without a number: the run itself broke (no measurement at all)
+    if order:
+        assert m.error <= m.limit - ORDER_MARGIN, (
+            f"got order {m.error:.3g}, should be <= {m.limit - ORDER_MARGIN:.3g} {where}"
+        )
+    else:
+        assert m.error >= MARGIN * m.limit, (
+            f"got error {m.error:.3g}, should be >= {MARGIN} x limit {m.limit:.3g} {where}"
+        )
+
+
+@settings(max_examples=5, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@given(data=st.data())
+@pytest.mark.parametrize("code", ["constant-dashpot", "flipped-sign", "lagged-force", "first-order"])
+def test_wrong_codes_fail_on_their_fault(code, data):
+    """Each wrong code fails the metric that names its fault, by a margin.
+
+    * constant dashpot on Hertz (p = 1.5): its restitution depends on v0
+      (``restitution_v0_spread``);
+    * flipped sign: every run is refused with "sign convention" (all metrics);
+    * force lagged a step: ``attractive_force``, where the tensile peak sits at the end
+      of contact (a linear dashpot, p = 1, with zeta < 0.5, where dF/dt = k v (1 -
+      4 zeta^2) at q = 0 keeps the force falling to the end; elsewhere the peak is an
+      interior minimum that a one-step lag moves by O(dt^2) only: no metric can see it);
+    * first-order scheme (explicit Euler): ``speed_error`` on elastic scenes, where a
+      correct Verlet converges at second order (with a dashpot both are first order).
+    """
+    if code == "constant-dashpot":
+        scene = data.draw(
+            gate_scenes(families=("power",), zeta=st.floats(0.05, 0.5), p=st.just(1.5))
+        )
+        _assert_fails_on(run_bench(wrong.ConstantDashpot(), [scene]), "restitution_v0_spread", scene)
+    elif code == "flipped-sign":
+        scene = data.draw(gate_scenes(families=("power",)))
+        result = run_bench(wrong.FlippedSign(), [scene])
+        for m in result.metrics:
+            if m.status != "skip":
+                assert m.status == "fail" and "sign convention" in m.explanation, (
+                    f"got {m.status} ({m.explanation}), should be a sign-convention "
+                    f"failure [{m.metric}]"
+                )
+    elif code == "lagged-force":
+        scene = data.draw(
+            gate_scenes(families=("power",), zeta=st.floats(0.02, 0.2), p=st.just(1.0))
+        )
+        _assert_fails_on(run_bench(wrong.LaggedForce(), [scene]), "attractive_force", scene)
+    else:
+        scene = data.draw(gate_scenes(families=("power",), zeta=st.just(0.0)))
+        _assert_fails_on(run_bench(wrong.FirstOrder(), [scene]), "speed_error", scene, order=True)
