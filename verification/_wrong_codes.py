@@ -72,8 +72,13 @@ class ConstantDashpot(_PowerOnly):
         v_mid = vs[len(vs) // 2]
         q_ref = 0.5 * scene.potential.turning_point(0.5 * m * v_mid * v_mid)
         # the universal law's C(q) = 2 zeta sqrt(m) U'/sqrt(2U), frozen at q_ref
-        c = 2.0 * scene.zeta * math.sqrt(m) * k * q_ref**p / math.sqrt(
-            2.0 * k * q_ref ** (p + 1) / (p + 1)
+        c = (
+            2.0
+            * scene.zeta
+            * math.sqrt(m)
+            * k
+            * q_ref**p
+            / math.sqrt(2.0 * k * q_ref ** (p + 1) / (p + 1))
         )
         return _loop(scene, k, p, lambda q, vel: k * q**p + c * vel, verlet=True)
 
@@ -116,3 +121,54 @@ def _loop(scene, k, p, force, verlet: bool) -> Trajectory:
         if (touched and y <= 0) or not math.isfinite(y):
             break
     return Trajectory(np.array(t), np.array(q), np.array(v), np.array(f))
+
+
+def constant_damping(q):
+    """A damping coefficient given as a plain callable, C(q) = 1 kg/s."""
+    return 0.0 * np.asarray(q, dtype=float) + 1.0
+
+
+class DeclaresLaw(ContactAdapter):
+    """Runs the reference Verlet but declares another law (``which``), for the gate tests.
+
+    ``which``: "p25" (power law p = 25), "zeta" (zeta = 1e308), "sphere" (R = 1e-12 m),
+    "c" (power damping c = 1e300) or "callable" (a plain callable C(q)).
+    """
+
+    name = "declares-law"
+    isolate = False
+
+    def __init__(self, which: str = "p25", **kw):
+        super().__init__(**kw)
+        self.which = which
+
+    def _impact_impl(self, scene):
+        t, q, v, f = verlet_trajectory(
+            scene.potential, scene.mass, scene.v0, scene.dt, scene.n_steps, zeta=scene.zeta
+        )
+        return Trajectory(t, q, v, f)
+
+    def implemented_law(self, scene):
+        from reference_impl.adapters import ImplementedLaw, PowerDamping
+        from reference_impl.potentials import PowerLaw, Sphere
+
+        pot, m, z = scene.potential, scene.mass, scene.zeta
+        return {
+            "p25": lambda: ImplementedLaw(PowerLaw(1e10, 25.0), m, zeta=z),
+            "zeta": lambda: ImplementedLaw(pot, m, zeta=1e308),
+            "sphere": lambda: ImplementedLaw(Sphere(R=1e-12, Kn=1e10), m, zeta=z),
+            "c": lambda: ImplementedLaw(pot, m, zeta=None, C=PowerDamping(1e300, 0.25)),
+            "callable": lambda: ImplementedLaw(pot, m, zeta=None, C=constant_damping),
+        }[self.which]()
+
+
+class DeclinesAll(ContactAdapter):
+    """Declines every scene while running (contract item 7)."""
+
+    name = "declines-all"
+    isolate = False
+
+    def _impact_impl(self, scene):
+        from reference_impl.adapters import AdapterDeclined
+
+        raise AdapterDeclined("no model for this scene")

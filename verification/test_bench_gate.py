@@ -66,9 +66,11 @@ def _potential(draw, family: str, p) -> dict:
 
 @st.composite
 def gate_scenes(draw, families=("power", "sphere", "ellipsoid", "sum"), kinds=("impact",),
-                zeta=st.one_of(st.just(0.0), st.floats(0.01, 0.9)),
-                p=st.floats(1, 3)):  # fmt: skip
-    """A bench scene: a family, mass, two speeds four decades apart, a damping ratio."""
+                zeta=None, p=None):  # fmt: skip
+    """A bench scene: a family, mass, two speeds four decades apart, a damping ratio
+    (default: 0 or 0.01-0.9), exponent of a power law (default 1-3)."""
+    zeta = zeta if zeta is not None else st.one_of(st.just(0.0), st.floats(0.01, 0.9))
+    p = p if p is not None else st.floats(1, 3)
     family = draw(st.sampled_from(families))
     pot = _potential(draw, family, p)
     v_lo = draw(log_uniform(1e-3, 1e-2))
@@ -153,7 +155,9 @@ def _assert_fails_on(result, metric: str, scene, *, order: bool = False):
 
 @settings(max_examples=5, suppress_health_check=[HealthCheck.too_slow], deadline=None)
 @given(data=st.data())
-@pytest.mark.parametrize("code", ["constant-dashpot", "flipped-sign", "lagged-force", "first-order"])
+@pytest.mark.parametrize(
+    "code", ["constant-dashpot", "flipped-sign", "lagged-force", "first-order"]
+)
 def test_wrong_codes_fail_on_their_fault(code, data):
     """Each wrong code fails the metric that names its fault, by a margin.
 
@@ -171,7 +175,9 @@ def test_wrong_codes_fail_on_their_fault(code, data):
         scene = data.draw(
             gate_scenes(families=("power",), zeta=st.floats(0.05, 0.5), p=st.just(1.5))
         )
-        _assert_fails_on(run_bench(wrong.ConstantDashpot(), [scene]), "restitution_v0_spread", scene)
+        _assert_fails_on(
+            run_bench(wrong.ConstantDashpot(), [scene]), "restitution_v0_spread", scene
+        )
     elif code == "flipped-sign":
         scene = data.draw(gate_scenes(families=("power",)))
         result = run_bench(wrong.FlippedSign(), [scene])
@@ -189,3 +195,59 @@ def test_wrong_codes_fail_on_their_fault(code, data):
     else:
         scene = data.draw(gate_scenes(families=("power",), zeta=st.just(0.0)))
         _assert_fails_on(run_bench(wrong.FirstOrder(), [scene]), "speed_error", scene, order=True)
+
+
+# -- nothing measured is not a pass; the code's own error is not ours ---------------------
+def test_a_gate_that_measured_nothing_does_not_pass():
+    result = run_bench(wrong.DeclinesAll(), ["hertz-damped"])
+    statuses = {m.status for m in result.metrics}
+    assert statuses == {"skip"}, f"got {statuses}, should be only skips [declines-all]"
+    assert result.measured_nothing
+    assert result.exit_status(gate=True) == 1, (
+        f"got {result.exit_status(gate=True)}, should be 1 [a gate that measured nothing]"
+    )
+
+
+@pytest.mark.parametrize(
+    "which, field",
+    [
+        ("p25", "implemented_law at v0"),  # the solver's leading exponent 21
+        ("zeta", "implemented_law.damping.zeta"),
+        ("sphere", "implemented_law.potential"),
+        ("c", "implemented_law.damping"),
+    ],
+)
+def test_an_invalid_declared_law_is_the_codes_configuration_error(which, field):
+    from reference_impl.bench.runner import DeclaredLawError
+
+    with pytest.raises(DeclaredLawError, match=field) as info:
+        run_bench(wrong.DeclaresLaw(which=which), ["hertz-damped"])
+    assert "\n" not in str(info.value)
+
+
+def test_an_invalid_declared_law_exits_2_in_one_line(tmp_path):
+    import os
+
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "bench",
+         "verification._wrong_codes:DeclaresLaw[which=zeta]", "--scenes", "hertz-damped",
+         "--gate"],
+        cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True,
+        text=True, timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 2, r.stdout + r.stderr
+    err = [line for line in r.stderr.splitlines() if line.startswith("hcv:")]
+    assert len(err) == 1 and "implemented_law.damping.zeta" in err[0], r.stderr
+    assert "FAIL" not in r.stdout
+
+
+def test_a_callable_damping_is_skipped_with_the_reason_never_failed():
+    """The reference Verlet runs universal and power dampings only: with a callable C(q)
+    no metric that needs it may fail on a made-up baseline (issue 18)."""
+    result = run_bench(wrong.DeclaresLaw(which="callable"), ["hertz-damped"])
+    by = _verdicts(result)
+    assert by["dt_crit"].status == "skip", by["dt_crit"]
+    assert "textbook Verlet cannot run" in by["dt_crit"].explanation
+    assert not [m for m in result.metrics if m.status == "fail"], [
+        (m.metric, m.explanation) for m in result.metrics if m.status == "fail"
+    ]

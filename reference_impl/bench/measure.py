@@ -19,6 +19,7 @@ from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
 from ..potentials.power import PowerLaw
 
 __all__ = [
+    "check_declared_law",
     "check_conventions",
     "contact_sample_times",
     "exact_reference",
@@ -126,6 +127,62 @@ def contact_sample_times(tr: Trajectory, meas: dict) -> np.ndarray:
     if "contact_time" in meas:
         return float(meas["contact_time"]) - t[idx]
     return -t[idx]
+
+
+# ----------------------------------------------------------------------------
+# the declared law
+# ----------------------------------------------------------------------------
+# Bound of a declared damping, as an effective damping ratio C(q_max) / (2 sqrt(m k_eff))
+# with k_eff = U'(q_max) / q_max: the exact solver's own bound on zeta (beyond it the body
+# creeps back over ~zeta contact times and an ODE reference cannot finish).
+_MAX_DECLARED_ZETA = 1000.0
+
+
+def check_declared_law(law: ImplementedLaw, v0: float) -> None:
+    """Refuse a declared law no reference can be computed for, naming the field.
+
+    Raises
+    ------
+    HCVInputError
+        ``implemented_law.mass``, ``.damping.zeta``, ``.damping.c`` / ``.exponent``
+        or ``.potential`` out of range (e.g. no turning point at v0): a configuration
+        error of the code that declared it (``hcv bench`` exit status 2), not a failed
+        metric and not an error of ours.
+    """
+    from ..errors import HCVInputError
+
+    m = law.mass
+    if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
+        raise HCVInputError(f"implemented_law.mass must be a finite number > 0, got {m!r}")
+    if law.C is None and not (0.0 <= float(law.zeta or 0.0) <= _MAX_DECLARED_ZETA):
+        raise HCVInputError(
+            f"implemented_law.damping.zeta must be in [0, {_MAX_DECLARED_ZETA:g}], got {law.zeta!r}"
+        )
+    if isinstance(law.C, PowerDamping):
+        c, a = law.C.c, law.C.exponent
+        if not (math.isfinite(c) and c >= 0):
+            raise HCVInputError(f"implemented_law.damping.c must be finite and >= 0, got {c!r}")
+        if not (math.isfinite(a) and 0.0 <= a <= 20.0):
+            raise HCVInputError(f"implemented_law.damping.exponent must be in [0, 20], got {a!r}")
+    try:
+        q_max = law.potential.turning_point(0.5 * m * v0 * v0)
+    except HCVInputError as exc:
+        raise HCVInputError(f"implemented_law.potential at v0 = {v0:g} m/s: {exc}") from None
+    if law.C is not None:
+        try:
+            c_max = float(np.max(np.asarray(law.C(np.array([q_max])), dtype=float)))
+        except Exception as exc:
+            raise HCVInputError(
+                f"implemented_law.damping: C(q) fails at q = {q_max:.3g} m ({exc})"
+            ) from None
+        k_eff = float(law.potential._dU(np.array([q_max]))[0]) / q_max
+        zeta_eff = c_max / (2.0 * math.sqrt(m * k_eff)) if k_eff > 0 else math.inf
+        if not (math.isfinite(c_max) and c_max >= 0 and zeta_eff <= _MAX_DECLARED_ZETA):
+            raise HCVInputError(
+                f"implemented_law.damping: C(q_max) = {c_max:.3g} kg/s at v0 = {v0:g} m/s "
+                f"is an effective damping ratio {zeta_eff:.3g} > {_MAX_DECLARED_ZETA:g} "
+                "(the body would creep back over that many contact times)"
+            )
 
 
 # ----------------------------------------------------------------------------

@@ -26,9 +26,7 @@ import numpy as np
 from ..adapters.base import ImplementedLaw
 from .measure import (
     check_conventions,
-    contact_sample_times,
     exact_reference,
-    exact_tensile_on_samples,
     measure,
 )
 
@@ -73,7 +71,10 @@ class MetricResult:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["per_v0"] = [
-            {k: (v if not isinstance(v, float) or math.isfinite(v) else str(v)) for k, v in r.items()}
+            {
+                k: (v if not isinstance(v, float) or math.isfinite(v) else str(v))
+                for k, v in r.items()
+            }
             for r in self.per_v0
         ]
         for k in ("value", "reference", "error", "limit", "measured", "expected"):
@@ -316,10 +317,7 @@ class _RelativeToExact(Metric):
 
     @property
     def rule(self):
-        return (
-            f"|{self.quantity} - exact| / exact of the implemented law, every speed, "
-            "<= limit"
-        )
+        return f"|{self.quantity} - exact| / exact of the implemented law, every speed, <= limit"
 
     def _evaluate(self, ctx, base, factor):
         rows = []

@@ -33,6 +33,7 @@ from ..errors import HCVInputError
 from ..impact import solve_impact
 from ..scenes import Scene, load_scene
 from ..stability import dt_safe as _dt_safe
+from .measure import check_declared_law
 from .metrics import (
     METRICS,
     MetricResult,
@@ -167,12 +168,18 @@ class BenchResult:
         """Metrics not decided because the suite's own reference failed (never the code's fault)."""
         return [m for m in self.metrics if m.status == "error"]
 
+    @property
+    def measured_nothing(self) -> bool:
+        """No metric was decided (every one skipped: declined scenes, no reference)."""
+        return not any(m.status in ("pass", "fail", "error") for m in self.metrics)
+
     def exit_status(self, gate: bool) -> int:
-        """0; with ``gate`` 1 when a metric failed (or the run was interrupted), else
-        `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
+        """0; with ``gate`` 1 when a metric failed, nothing was measured (every metric
+        skipped: a gate that measured nothing does not pass) or the run was interrupted,
+        else `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
         if not gate:
             return 0
-        if self.failures or self.interrupted:
+        if self.failures or self.interrupted or self.measured_nothing:
             return 1
         return EXIT_INTERNAL if self.internal_errors else 0
 
@@ -191,6 +198,11 @@ class _Declined(Exception):
 
 class _Ours(Exception):
     """The suite's own reference failed: an internal error, never the code's failure."""
+
+
+class DeclaredLawError(HCVInputError):
+    """A code declared an implemented law no reference can be computed for (its
+    configuration error): ``hcv bench`` stops with exit status 2, naming the field."""
 
 
 class _SceneRun:
@@ -261,17 +273,57 @@ class _SceneRun:
             )
             return rec
         rec.law = law.value
+        self.check_law(rec.law, v0)
         try:
             rec.exact = exact_reference(rec.law, v0)
             rec.exact["tensile_sampled"] = exact_tensile_on_samples(
-                rec.law, v0, rec.exact["contact_time"], contact_sample_times(out.value, rec.measured)
+                rec.law,
+                v0,
+                rec.exact["contact_time"],
+                contact_sample_times(out.value, rec.measured),
             )
+        except HCVInputError as exc:
+            if self.is_scene_law(rec.law):  # the scene's own law, validated: ours
+                rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
+                return rec
+            # the solver refuses the law the code declares (e.g. a power law p = 25,
+            # beyond the quadrature's leading exponent 21): its configuration error
+            raise DeclaredLawError(
+                f"adapter {self.ctx.variant!r} on scene {self.scene.name!r}: "
+                f"implemented_law at v0 = {v0:g} m/s is refused by the exact solver: "
+                f"{exc} (fix the law the adapter declares)"
+            ) from None
         except Exception as exc:  # our solver on the declared law: never the code's failure
             rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
             return rec
         rec.textbook = self.textbook(rec.law, ascene, rec.exact)
         rec.dt_crit = self.dt_crit(ascene, rec.law)
         return rec
+
+    def is_scene_law(self, law: ImplementedLaw) -> bool:
+        """The declared law is the scene's own (what was asked), not one the code chose."""
+        from ..scenes import potential_to_dict
+
+        try:
+            same_pot = potential_to_dict(law.potential) == potential_to_dict(self.scene.potential)
+        except Exception:
+            return False
+        return (
+            same_pot
+            and law.C is None
+            and law.mass == self.scene.mass
+            and float(law.zeta or 0.0) == float(self.scene.zeta or 0.0)
+        )
+
+    def check_law(self, law: ImplementedLaw, v0: float) -> None:
+        """`DeclaredLawError` when the code declares a law we cannot accept (not ours)."""
+        try:
+            check_declared_law(law, v0)
+        except HCVInputError as exc:
+            raise DeclaredLawError(
+                f"adapter {self.ctx.variant!r} on scene {self.scene.name!r}: {exc} "
+                "(fix the law the adapter declares)"
+            ) from None
 
     def textbook(self, law: ImplementedLaw, ascene: AdapterScene, exact: dict) -> dict:
         """Errors of textbook velocity Verlet with the implemented law, at the run's own step.
@@ -291,7 +343,9 @@ class _SceneRun:
         except TypeError as exc:  # a damping the reference Verlet cannot run
             return {"error": f"textbook Verlet cannot run the declared law ({_one_line(exc)})"}
         except Exception as exc:  # ours
-            return {"internal": f"textbook Verlet with the implemented law failed: {_one_line(exc)}"}
+            return {
+                "internal": f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
+            }
         tr = Trajectory(t, q, v, f)
         m = measure(tr, v0)
         out: dict = {"restitution_value": m.get("restitution", math.nan)}
@@ -304,7 +358,9 @@ class _SceneRun:
                 law, v0, exact["contact_time"], contact_sample_times(tr, m)
             )
         except Exception as exc:  # ours
-            return {"internal": f"exact tensile peak on textbook Verlet's samples: {_one_line(exc)}"}
+            return {
+                "internal": f"exact tensile peak on textbook Verlet's samples: {_one_line(exc)}"
+            }
         out["tensile"] = abs(m.get("tensile", math.nan) - ref)
         for k, x in list(out.items()):
             if not math.isfinite(x):
@@ -523,7 +579,13 @@ class _SceneRun:
         sc = self.scene
         try:
             t, q, v, f = verlet_trajectory(
-                sc.potential, sc.mass, v0, dt, n, zeta=sc.zeta or 0.0, kind="two-walls",
+                sc.potential,
+                sc.mass,
+                v0,
+                dt,
+                n,
+                zeta=sc.zeta or 0.0,
+                kind="two-walls",
                 gap=float(sc.gap or 0.0),
             )
             with np.errstate(all="ignore"):
