@@ -251,3 +251,40 @@ def test_a_callable_damping_is_skipped_with_the_reason_never_failed():
     assert not [m for m in result.metrics if m.status == "fail"], [
         (m.metric, m.explanation) for m in result.metrics if m.status == "fail"
     ]
+
+
+# -- the first hour (issue 17): variant labels as printed are accepted specs ---------------
+@pytest.mark.parametrize(
+    "spec, kwargs",
+    [
+        ("kratos[hertz,verlet]", {"law": "hertz", "scheme": "verlet"}),
+        ("kratos[hertz,euler,pair]", {"law": "hertz", "scheme": "euler", "geometry": "pair"}),
+        ("lammps[tsuji]", {"damping": "tsuji"}),
+        ("lammps[tsuji,wall,limit_damping]",
+         {"damping": "tsuji", "geometry": "wall", "limit_damping": True}),
+    ],
+)  # fmt: skip
+def test_variant_labels_as_printed_are_accepted(spec, kwargs):
+    from reference_impl.adapters.registry import _resolve_bare, parse_spec, resolve_class
+
+    target, got = parse_spec(spec)
+    _resolve_bare(resolve_class(target), got, spec)
+    assert got == kwargs, f"got {got}, should be {kwargs} [{spec}]"
+
+
+def test_an_unknown_bare_value_names_the_keys():
+    from reference_impl.adapters.registry import _resolve_bare, parse_spec, resolve_class
+    from reference_impl.errors import HCVInputError
+
+    target, got = parse_spec("kratos[hertzz]")
+    with pytest.raises(HCVInputError, match="law = hertz | linear"):
+        _resolve_bare(resolve_class(target), got, "kratos[hertzz]")
+
+
+def test_bench_help_lists_every_adapter_with_its_keys():
+    from reference_impl.adapters.registry import adapter_help
+
+    text = adapter_help()
+    for needle in ("kratos: law = hertz | linear", "scheme = euler | verlet", "lammps: damping",
+                   "tsuji", "limit_damping (flag)", "reference", "cmd[sustained=true"):  # fmt: skip
+        assert needle in text, f"got {text!r}, should name {needle!r} [hcv bench --help]"

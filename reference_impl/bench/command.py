@@ -3,7 +3,7 @@
     hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE] [--gate]
                       [--json FILE] [--junit FILE] [--plot FILE] [--markdown FILE]
 
-ADAPTER is a registered name (``reference``, ``lammps``, ``subprocess``), an
+ADAPTER is a registered name (``kratos``, ``lammps``, ``reference``, ``subprocess``), an
 import path ``package.module:Class``, or ``cmd:COMMAND`` (a program speaking the
 JSON protocol of docs/adapter-protocol.md); names and import paths take
 constructor arguments as ``NAME[key=value,...]``.
@@ -87,19 +87,25 @@ class _Lines:
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object."""
+    from ..adapters.registry import adapter_help
+
     b = subparsers.add_parser(
         "bench",
         help="benchmark a contact code against the exact solution (CI gate)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
-        epilog="exit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
+        epilog="adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
+        "kratos[hertz,verlet] or lammps[tsuji], names its key):\n"
+        + adapter_help()
+        + "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
         "measured (every metric skipped); 2 usage or configuration error (also a law "
         "the adapter declares that no reference can be computed for); 3 no metric failed but our reference could not decide one; "
         "130 interrupted.",
     )
     b.add_argument(
         "adapter",
-        help="registered name (reference, lammps, subprocess), "
+        help="registered name (kratos, lammps, reference, subprocess), "
         "package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND for two-walls); "
         "NAME[key=value,...] "
         "passes arguments",

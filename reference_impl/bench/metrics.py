@@ -24,11 +24,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..adapters.base import ImplementedLaw
-from .measure import (
-    check_conventions,
-    exact_reference,
-    measure,
-)
+from .measure import check_conventions, exact_reference, measure
 
 __all__ = [
     "METRICS",

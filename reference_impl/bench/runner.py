@@ -33,18 +33,15 @@ from ..errors import HCVInputError
 from ..impact import solve_impact
 from ..scenes import Scene, load_scene
 from ..stability import dt_safe as _dt_safe
-from .measure import check_declared_law
-from .metrics import (
-    METRICS,
-    MetricResult,
-    SceneContext,
-    SpeedRecord,
+from .measure import (
     check_conventions,
+    check_declared_law,
     contact_sample_times,
     exact_reference,
     exact_tensile_on_samples,
     measure,
 )
+from .metrics import METRICS, MetricResult, SceneContext, SpeedRecord
 from .tolerances import load_tolerances
 from .worker import Outcome, _one_line, make_executor
 
