@@ -261,10 +261,18 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from .scenes import embedded_scenes
+    from .scenes import embedded_scenes, load_scene, scene_toml
 
+    if args.show:
+        print(scene_toml(args.show), end="")
+        return EXIT_OK
     for name in embedded_scenes():
-        print(name)
+        sc = load_scene(name)
+        law = f"{sc.damping_law}" + (f" zeta={sc.zeta:.4g}" if sc.zeta else "")
+        print(
+            f"{name:24s} {sc.kind:10s} {sc.potential.__class__.__name__:14s} "
+            f"m={sc.mass:.4g} kg  v0={list(sc.velocities)} m/s  damping {law}"
+        )
     return EXIT_OK
 
 
@@ -378,7 +386,14 @@ def _parser() -> argparse.ArgumentParser:
         "(sweep extra); 0 (default) runs it in one second process",
     )
     rp.set_defaults(func=_cmd_report)
-    ls = sub.add_parser("scenes", help="list the embedded scenes")
+    ls = sub.add_parser(
+        "scenes",
+        help="list the scene catalogue (the same names work in every command); "
+        "--show NAME prints one as TOML",
+    )
+    ls.add_argument(
+        "--show", metavar="NAME", help="print this scene's TOML (a catalogue name or a file)"
+    )
     ls.set_defaults(func=_cmd_scenes)
     from .bench.command import add_bench_parser
 

@@ -32,7 +32,11 @@ from reference_impl.scenes import (
 from verification.assertions import assert_close, assert_true
 
 _REQUIRED_EMBEDDED = (
-    "paper-ellipsoid", "paper-ellipsoid-damped", "hertz", "hertz-damped", "sphere"
+    "paper-ellipsoid",
+    "paper-ellipsoid-damped",
+    "hertz",
+    "hertz-damped",
+    "sphere",
 )
 _TABLE1_SPEEDS = (0.50, 0.99, 1.50)
 # Steel sphere of hertz.toml: E = 210 GPa, nu = 0.3, R = 5 mm, rho = 7850 kg/m^3.
@@ -71,22 +75,37 @@ def _refused(text: str, needle: str, error=SceneError, source: str = "bad.toml")
 
 def test_required_scenes_are_embedded():
     missing = sorted(set(_REQUIRED_EMBEDDED) - set(embedded_scenes()))
-    assert_true(not missing, got=f"missing {missing}", should="none", claim="scene",
-                call="embedded_scenes()")
+    assert_true(
+        not missing,
+        got=f"missing {missing}",
+        should="none",
+        claim="scene",
+        call="embedded_scenes()",
+    )
 
 
 @pytest.mark.parametrize("name", embedded_scenes())
 def test_every_embedded_scene_loads_and_round_trips(name):
     scene = load_scene(name)
-    assert_true(isinstance(scene, Scene) and scene.name == name, got=repr(scene.name),
-                should=name, claim="scene", call=f"load_scene({name!r})")
+    assert_true(
+        isinstance(scene, Scene) and scene.name == name,
+        got=repr(scene.name),
+        should=name,
+        claim="scene",
+        call=f"load_scene({name!r})",
+    )
     data = scene.to_dict()
     json.dumps(data)  # JSON-safe for reports
     again = scene_from_dict({k: v for k, v in data.items() if k != "source"}, "round-trip")
     again_data = again.to_dict()
     again_data["source"] = data["source"]
-    assert_true(again_data == data, got=str(again_data), should=str(data), claim="scene",
-                call=f"scene_from_dict(to_dict()) for {name}")
+    assert_true(
+        again_data == data,
+        got=str(again_data),
+        should=str(data),
+        claim="scene",
+        call=f"scene_from_dict(to_dict()) for {name}",
+    )
 
 
 def test_paper_ellipsoid_has_the_papers_numbers():
@@ -95,9 +114,14 @@ def test_paper_ellipsoid_has_the_papers_numbers():
     assert_true(
         isinstance(pot, Ellipsoid)
         and (pot.a, pot.b, pot.c, pot.Kn, pot.alpha) == (0.015, 0.008, 0.008, 1e8, 0.5)
-        and scene.mass == 0.05 and scene.velocities == _TABLE1_SPEEDS
-        and scene.damping_law == "none" and scene.zeta is None and scene.kind == "impact",
-        got=str(scene.to_dict()), should="section 10 / Table 1 values", claim="scene",
+        and scene.mass == 0.05
+        and scene.velocities == _TABLE1_SPEEDS
+        and scene.damping_law == "none"
+        and scene.zeta is None
+        and scene.kind == "impact",
+        got=str(scene.to_dict()),
+        should="section 10 / Table 1 values",
+        claim="scene",
         call="load_scene('paper-ellipsoid')",
     )
 
@@ -105,11 +129,20 @@ def test_paper_ellipsoid_has_the_papers_numbers():
 def test_paper_ellipsoid_damped_converts_fig1_constants():
     """C0 = 0.5 with K = 1, M = 0.75 (Fig. 1) is zeta = C0 / (2 sqrt(K M))."""
     scene = load_scene("paper-ellipsoid-damped")
-    assert_close(scene.zeta, 0.5 / (2.0 * math.sqrt(0.75)), rtol=1e-15, claim="scene",
-                 call="paper-ellipsoid-damped zeta")
-    assert_true(scene.damping_law == "universal" and scene.velocities == _TABLE1_SPEEDS,
-                got=str(scene.to_dict()), should="universal, Table 1 speeds", claim="scene",
-                call="load_scene('paper-ellipsoid-damped')")
+    assert_close(
+        scene.zeta,
+        0.5 / (2.0 * math.sqrt(0.75)),
+        rtol=1e-15,
+        claim="scene",
+        call="paper-ellipsoid-damped zeta",
+    )
+    assert_true(
+        scene.damping_law == "universal" and scene.velocities == _TABLE1_SPEEDS,
+        got=str(scene.to_dict()),
+        should="universal, Table 1 speeds",
+        claim="scene",
+        call="load_scene('paper-ellipsoid-damped')",
+    )
 
 
 def test_hertz_scenes_are_a_steel_sphere():
@@ -119,17 +152,28 @@ def test_hertz_scenes_are_a_steel_sphere():
     m = _STEEL_RHO * 4.0 / 3.0 * math.pi * _HERTZ_R**3
     for name, zeta in (("hertz", None), ("hertz-damped", 0.1)):
         scene = load_scene(name)
-        assert_true(isinstance(scene.potential, PowerLaw) and scene.potential.p == 1.5
-                    and scene.zeta == zeta, got=str(scene.to_dict()),
-                    should=f"PowerLaw p = 1.5, zeta {zeta}", claim="scene", call=name)
+        assert_true(
+            isinstance(scene.potential, PowerLaw)
+            and scene.potential.p == 1.5
+            and scene.zeta == zeta,
+            got=str(scene.to_dict()),
+            should=f"PowerLaw p = 1.5, zeta {zeta}",
+            claim="scene",
+            call=name,
+        )
         assert_close(scene.potential.k, k, rtol=_QUOTED_RTOL, claim="scene", call=f"{name} k")
         assert_close(scene.mass, m, rtol=_QUOTED_RTOL, claim="scene", call=f"{name} mass")
 
 
 def test_sphere_scene():
     scene = load_scene("sphere")
-    assert_true(isinstance(scene.potential, Sphere), got=repr(scene.potential), should="Sphere",
-                claim="scene", call="load_scene('sphere')")
+    assert_true(
+        isinstance(scene.potential, Sphere),
+        got=repr(scene.potential),
+        should="Sphere",
+        claim="scene",
+        call="load_scene('sphere')",
+    )
 
 
 def test_load_from_path_and_pathlike(tmp_path):
@@ -137,9 +181,13 @@ def test_load_from_path_and_pathlike(tmp_path):
     path.write_text(_BASE)
     for arg in (str(path), path):
         scene = load_scene(arg)
-        assert_true(scene.name == "mine" and scene.source == str(path), got=repr(scene),
-                    should="name from the file stem, source = path", claim="scene",
-                    call=f"load_scene({arg!r})")
+        assert_true(
+            scene.name == "mine" and scene.source == str(path),
+            got=repr(scene),
+            should="name from the file stem, source = path",
+            claim="scene",
+            call=f"load_scene({arg!r})",
+        )
 
 
 def test_sum_and_expression_families():
@@ -159,11 +207,19 @@ def test_sum_and_expression_families():
     """
     scene = parse_scene(text, "sum.toml")
     pot = scene.potential
-    assert_true(isinstance(pot, SumPotential) and isinstance(pot.terms[1], Expression)
-                and scene.velocities == (0.2, 1.0) and scene.name == "sum",
-                got=repr(pot), should="PowerLaw + Expression", claim="scene", call="sum scene")
-    assert_close(pot.U(1e-3), 1e5 * 1e-6 / 2 + 2e9 * 1e-9, rtol=1e-15, claim="scene",
-                 call="sum U(1e-3)")
+    assert_true(
+        isinstance(pot, SumPotential)
+        and isinstance(pot.terms[1], Expression)
+        and scene.velocities == (0.2, 1.0)
+        and scene.name == "sum",
+        got=repr(pot),
+        should="PowerLaw + Expression",
+        claim="scene",
+        call="sum scene",
+    )
+    assert_close(
+        pot.U(1e-3), 1e5 * 1e-6 / 2 + 2e9 * 1e-9, rtol=1e-15, claim="scene", call="sum U(1e-3)"
+    )
 
 
 @pytest.mark.parametrize(
@@ -181,14 +237,24 @@ def test_damping_forms(damping, zeta):
     assert_close(scene.zeta, zeta, rtol=1e-15, atol=1e-300, claim="scene", call=damping)
     if damping.startswith("restitution"):
         e = float(damping.split("=")[1])
-        assert_close(restitution_from_zeta(scene.zeta), e, rtol=1e-14, claim="scene",
-                     call="restitution round trip")
+        assert_close(
+            restitution_from_zeta(scene.zeta),
+            e,
+            rtol=1e-14,
+            claim="scene",
+            call="restitution round trip",
+        )
 
 
 def test_two_walls_with_gap():
     scene = parse_scene(_BASE.replace('kind = "impact"', 'kind = "two-walls"\ngap = 0.01'), "w")
-    assert_true(scene.kind == "two-walls" and scene.gap == 0.01, got=repr(scene), should="gap",
-                claim="scene", call="two-walls")
+    assert_true(
+        scene.kind == "two-walls" and scene.gap == 0.01,
+        got=repr(scene),
+        should="gap",
+        claim="scene",
+        call="two-walls",
+    )
 
 
 # -- refusals ---------------------------------------------------------------------
@@ -203,8 +269,13 @@ def test_missing_file_and_unknown_name(tmp_path):
         with pytest.raises(SceneError) as info:
             load_scene(arg)
         msg = str(info.value)
-        assert_true(needle in msg and "\n" not in msg, got=msg, should=f"contains {needle!r}",
-                    claim="scene", call=f"load_scene({arg!r})")
+        assert_true(
+            needle in msg and "\n" not in msg,
+            got=msg,
+            should=f"contains {needle!r}",
+            claim="scene",
+            call=f"load_scene({arg!r})",
+        )
 
 
 def test_unreadable_files(tmp_path):
@@ -292,8 +363,10 @@ def test_damping_not_a_table():
 
 
 def test_sum_needs_two_terms():
-    text = _BASE.replace('family = "power"\nk = 1e6\np = 1.5',
-                         'family = "sum"\n[[potential.terms]]\nfamily = "power"\nk = 1\np = 1')
+    text = _BASE.replace(
+        'family = "power"\nk = 1e6\np = 1.5',
+        'family = "sum"\n[[potential.terms]]\nfamily = "power"\nk = 1\np = 1',
+    )
     _refused(text, "potential.terms must be an array of at least two")
 
 
@@ -308,33 +381,46 @@ def test_bad_term_is_named_by_path():
 
 def _expression_scene(U: str, params: str = "", velocities: str = "[0.5]") -> str:
     return (
-        f"mass = 0.05\nvelocities = {velocities}\n[potential]\nfamily = \"expression\"\n"
+        f'mass = 0.05\nvelocities = {velocities}\n[potential]\nfamily = "expression"\n'
         f"U = {json.dumps(U)}\n" + (f"params = {{ {params} }}\n" if params else "")
     )
 
 
 def test_expression_errors_keep_their_type_and_name_the_scene():
-    err = _refused(_expression_scene("__import__('os').system('echo pwned')"), "'__import__'",
-                   ExpressionError)
-    assert_true(isinstance(err, HCVInputError), got=type(err).__name__, should="HCVInputError",
-                claim="scene", call="hostile U")
+    err = _refused(
+        _expression_scene("__import__('os').system('echo pwned')"), "'__import__'", ExpressionError
+    )
+    assert_true(
+        isinstance(err, HCVInputError),
+        got=type(err).__name__,
+        should="HCVInputError",
+        claim="scene",
+        call="hostile U",
+    )
     _refused(_expression_scene("k*q**2", "k = nan"), "potential.params.k must be a finite")
     _refused(_expression_scene("1 + q"), "U(0) = 1 but assumption (2)", HCVInputError)
-    _refused(_expression_scene("k*q**2", "k = 1, z = 2"), "parameter 'z' is not used",
-             ExpressionError)
+    _refused(
+        _expression_scene("k*q**2", "k = 1, z = 2"), "parameter 'z' is not used", ExpressionError
+    )
 
 
 def test_non_monotone_potential_is_refused():
     """U = q^2 - q^3 peaks at 4/27 J: 0.05 kg at 0.5 m/s (6.25e-3 J) is fine, 3 m/s is not."""
     parse_scene(_expression_scene("q**2 - q**3"), "ok.toml")
-    _refused(_expression_scene("q**2 - q**3", velocities="[0.5, 3.0]"),
-             "velocity 3 m/s (E = 0.225 J)", NonMonotoneError)
+    _refused(
+        _expression_scene("q**2 - q**3", velocities="[0.5, 3.0]"),
+        "velocity 3 m/s (E = 0.225 J)",
+        NonMonotoneError,
+    )
 
 
 def test_no_turning_point_is_refused():
     """U = 1 - exp(-q) < 1 J and an ellipsoid beyond its 2a range: no turning point."""
-    _refused(_expression_scene("1 - exp(-q)", velocities="[7.0]"), "levels off at 1 J",
-             NoTurningPointError)
+    _refused(
+        _expression_scene("1 - exp(-q)", velocities="[7.0]"),
+        "levels off at 1 J",
+        NoTurningPointError,
+    )
     text = load_scene_text("paper-ellipsoid").replace("[0.50, 0.99, 1.50]", "[0.5, 400.0]")
     _refused(text, "velocity 400 m/s", NoTurningPointError)
 
@@ -349,8 +435,13 @@ def test_embedded_files_have_a_source_comment():
     """Each shipped scene says where its numbers come from (a leading comment)."""
     for name in embedded_scenes():
         first = load_scene_text(name).lstrip().splitlines()[0]
-        assert_true(first.startswith("#"), got=repr(first), should="a comment line",
-                    claim="scene", call=f"{name}.toml")
+        assert_true(
+            first.startswith("#"),
+            got=repr(first),
+            should="a comment line",
+            claim="scene",
+            call=f"{name}.toml",
+        )
 
 
 def test_scene_is_frozen():
@@ -374,3 +465,51 @@ def test_source_in_message_is_the_path(tmp_path):
     path.write_text(_BASE.replace("mass", "mas"))
     with pytest.raises(SceneError, match=str(Path(path)).replace("\\", "\\\\")):
         load_scene(path)
+
+
+# -- one catalogue (issue 17, first hour item 2) -------------------------------------------
+def test_every_scene_name_the_speed_table_and_report_show_is_in_the_catalogue():
+    """The work-precision study and the README's speed table name their scenes; each name
+    loads in every command (``load_scene``), and the four family rows are read from it."""
+    import math
+
+    from reference_impl.workprecision import default_scenes, family_scenes
+
+    names = embedded_scenes()
+    for wp in [*family_scenes(), *default_scenes()]:
+        assert wp.name in names, (
+            f"got {wp.name!r} missing, should be in {names} [one catalogue, load_scene]"
+        )
+    sphere = load_scene("sphere-damped")
+    want = 7800.0 * 4.0 / 3.0 * math.pi * 0.01**3
+    assert abs(sphere.mass - want) <= 1e-15 * want, (
+        f"got {sphere.mass!r}, should be {want!r} [sphere-damped mass, steel R = 10 mm]"
+    )
+
+
+def test_scenes_show_prints_a_scene_toml_that_loads_back(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "scenes", "--show", "power-sum-damped"],
+        cwd=root, capture_output=True, text=True, timeout=120,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    back = parse_scene(r.stdout, "shown")
+    want = load_scene("power-sum-damped").to_dict()
+    got = back.to_dict()
+    assert (got["potential"], got["mass"], got["damping"]) == (
+        want["potential"],
+        want["mass"],
+        want["damping"],
+    ), f"got {got}, should be {want} [hcv scenes --show]"
+    bad = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "scenes", "--show", "no-such-scene"],
+        cwd=root, capture_output=True, text=True, timeout=120,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+    )  # fmt: skip
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
