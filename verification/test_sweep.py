@@ -277,7 +277,7 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
     out = tmp_path / "out"
     code, stdout, err = _cli(["sweep", str(spec_path), "--workers", "2", "--out", str(out)], capsys)
     assert_true(
-        code == 1 and "6 cases ok, 2 failed" in stdout,
+        code == 1 and "6 cases ran, 2 failed to run" in stdout,
         got=f"exit {code}: {stdout}{err}",
         should="exit 1 (some cases failed), 6 ok, 2 failed",
         claim="sweep",
@@ -421,4 +421,47 @@ def test_any_sweep_expands_to_its_product_with_unique_keys(sizes, kind):
         should=f"{n} valid cases, unique keys",
         claim="sweep",
         call=f"spec_from_dict(sweep={sweep})",
+    )
+
+
+@needs_dask
+def test_a_bench_sweep_whose_metrics_fail_says_so_and_exits_1(tmp_path, capsys):
+    """Runs that all break (a flipped sign) are cases that ran but failed their
+    scorecard: not "2 cases ok" and exit 0 (issue 17)."""
+    spec = tmp_path / "bench.toml"
+    spec.write_text(
+        textwrap.dedent(
+            """
+            task = "bench:verification._wrong_codes:FlippedSign"
+            [scene]
+            name = "s"
+            mass = 0.01
+            velocities = [1.0]
+            kind = "impact"
+            [scene.potential]
+            family = "power"
+            k = 1e6
+            p = 1.0
+            [sweep]
+            "potential.p" = [1.0, 1.5]
+            """
+        ),
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    code, stdout, err = _cli(["sweep", str(spec), "--workers", "1", "--out", str(out)], capsys)
+    assert_true(
+        code == 1 and "2 of 2 benchmarked cases did not pass" in stdout,
+        got=f"exit {code}: {stdout}{err}",
+        should="exit 1, both scorecards failed",
+        claim="sweep",
+        call="hcv sweep bench:FlippedSign",
+    )
+    summary = (out / "summary.md").read_text()
+    assert_true(
+        "scorecards: 0 of 2 (case, variant) passed; 2 fail" in summary,
+        got=summary[:600],
+        should="the summary counts the failed scorecards",
+        claim="sweep",
+        call="summary.md",
     )

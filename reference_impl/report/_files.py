@@ -102,9 +102,21 @@ def swap_in(out: Path):
     shutil.rmtree(old, ignore_errors=True)
 
 
+# Figures another run wrote (``hcv report --adapter lammps`` writes bench_lammps.png):
+# a run without that adapter keeps them rather than deleting them (issue 17).
+_OTHER_RUNS_FIGURES = "bench_"
+
+
 def _carry_over(old: Path, new: Path, top: bool = True) -> None:
     """Move what the new report did not write from the old directory into the new one."""
     for entry in old.iterdir():
+        if top and entry.name == "figures" and entry.is_dir():
+            for fig in entry.iterdir():
+                target = new / "figures" / fig.name
+                if fig.name.startswith(_OTHER_RUNS_FIGURES) and not target.exists():
+                    target.parent.mkdir(exist_ok=True)
+                    fig.rename(target)
+            continue
         if top and entry.name in REPORT_ENTRIES:
             continue
         target = new / entry.name
