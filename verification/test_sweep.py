@@ -465,3 +465,38 @@ def test_a_bench_sweep_whose_metrics_fail_says_so_and_exits_1(tmp_path, capsys):
         claim="sweep",
         call="summary.md",
     )
+
+
+@needs_dask
+def test_ctrl_c_on_a_sweep_prints_one_line(tmp_path):
+    """Ctrl-C reaches the whole process group; the workers must not print tracebacks."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    p = subprocess.Popen(
+        [sys.executable, "-m", "reference_impl.cli", "sweep",
+         str(root / "docs" / "examples" / "sweep-hertz-map.toml"), "--workers", "2",
+         "--out", str(tmp_path / "out")],
+        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )  # fmt: skip
+    while True:  # the cluster is up once progress is printed
+        line = p.stderr.readline()
+        if line.startswith("sweep:") or not line:
+            break
+    time.sleep(0.5)
+    os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
+    _, err = p.communicate(timeout=120)
+    rest = [x for x in err.splitlines() if not x.startswith("sweep:")]
+    assert_true(
+        p.returncode == 130 and rest == ["interrupted"],
+        got=f"exit {p.returncode}, stderr {err[-800:]!r}",
+        should="exit 130 and the one line 'interrupted'",
+        claim="sweep",
+        call="Ctrl-C on hcv sweep",
+    )
