@@ -188,3 +188,12 @@ def test_the_readme_examples_leave_no_untracked_files():
     paths = ["pv", "power_verlet", "c.json", "out/results.parquet", "sweep-hertz-map/summary.md"]
     r = subprocess.run(["git", "check-ignore", *paths], cwd=root, capture_output=True, text=True)
     assert r.stdout.split() == paths, f"got ignored {r.stdout.split()}, should be {paths}"
+
+
+def test_the_readme_cites_the_paper_by_its_arxiv_identifier():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    assert "arXiv:2604.02533" in text and "../shared" not in text, (
+        "got a path a clone does not have, should cite arXiv 2604.02533 [README]"
+    )

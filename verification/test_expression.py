@@ -76,16 +76,28 @@ def test_matches_power_law_float64(k, p):
     q = ref.q_scale * np.concatenate([[0.0], np.logspace(-6, 1, 40)]).reshape(41, 1)
     for name in ("U", "dU", "d2U"):
         got, want = getattr(expr, name)(q), getattr(ref, name)(q)
-        assert_true(got.shape == q.shape, got=f"shape {got.shape}", should=f"{q.shape}",
-                    claim="expression", call=f"Expression.{name}(q)")
+        assert_true(
+            got.shape == q.shape,
+            got=f"shape {got.shape}",
+            should=f"{q.shape}",
+            claim="expression",
+            call=f"Expression.{name}(q)",
+        )
         # U'' of a softening law (p < 1) is +inf at q = 0 in both.
         fin = np.isfinite(want)
-        assert_true(np.array_equal(got[~fin], want[~fin]), got=str(got[~fin]),
-                    should=str(want[~fin]), claim="expression", call=f"{expr!r}.{name} at 0")
-        assert_close(got[fin], want[fin], rtol=_F64_RTOL, claim="expression",
-                     call=f"{expr!r}.{name}")
-    assert_close(expr.leading_exponent, p + 1.0, rtol=1e-15, claim="expression",
-                 call="leading_exponent")
+        assert_true(
+            np.array_equal(got[~fin], want[~fin]),
+            got=str(got[~fin]),
+            should=str(want[~fin]),
+            claim="expression",
+            call=f"{expr!r}.{name} at 0",
+        )
+        assert_close(
+            got[fin], want[fin], rtol=_F64_RTOL, claim="expression", call=f"{expr!r}.{name}"
+        )
+    assert_close(
+        expr.leading_exponent, p + 1.0, rtol=1e-15, claim="expression", call="leading_exponent"
+    )
 
 
 @pytest.mark.mpmath
@@ -98,11 +110,21 @@ def test_matches_power_law_50_digits(k, p):
             q = mpmath.mpf(qs) * ref.q_scale
             for name in ("U", "dU", "d2U"):
                 got, want = getattr(expr, name)(q), getattr(ref, name)(q)
-                assert_true(isinstance(got, mpmath.mpf), got=type(got).__name__, should="mpf",
-                            claim="expression", call=f"{name}(mpf)")
+                assert_true(
+                    isinstance(got, mpmath.mpf),
+                    got=type(got).__name__,
+                    should="mpf",
+                    claim="expression",
+                    call=f"{name}(mpf)",
+                )
                 err = abs(got - want) / abs(want)
-                assert_true(err < _MP_RTOL, got=f"rel err {mpmath.nstr(err, 3)} at q = {qs}",
-                            should=f"< {_MP_RTOL}", claim="expression", call=f"{expr!r}.{name}")
+                assert_true(
+                    err < _MP_RTOL,
+                    got=f"rel err {mpmath.nstr(err, 3)} at q = {qs}",
+                    should=f"< {_MP_RTOL}",
+                    claim="expression",
+                    call=f"{expr!r}.{name}",
+                )
 
 
 @pytest.mark.mpmath
@@ -112,8 +134,13 @@ def test_decimal_literals_are_exact_at_50_digits():
     with mpmath.workdps(_MP_DPS):
         got = expr.U(mpmath.mpf(3))
         want = mpmath.mpf(9) / 10
-        assert_true(abs(got - want) < mpmath.mpf("1e-48"), got=mpmath.nstr(got, 50),
-                    should="0.9 to 48 digits", claim="expression", call="U(3)")
+        assert_true(
+            abs(got - want) < mpmath.mpf("1e-48"),
+            got=mpmath.nstr(got, 50),
+            should="0.9 to 48 digits",
+            claim="expression",
+            call="U(3)",
+        )
     assert_close(expr.U(3.0), 0.1 * 9.0, rtol=1e-16, claim="expression", call="U(3.0)")
 
 
@@ -125,13 +152,23 @@ def test_derivatives_are_exact():
     assert_close(expr.U(q), k * q**3 / 3 + q**2 / 2, rtol=1e-15, claim="expression", call="U")
     assert_close(expr.dU(q), k * q**2 + q, rtol=1e-15, claim="expression", call="dU")
     assert_close(expr.d2U(q), 2 * k * q + 1, rtol=1e-15, claim="expression", call="d2U")
-    assert_true(expr.dU(0.5) == 1.0 and isinstance(expr.dU(0.5), float), got=repr(expr.dU(0.5)),
-                should="1.0 (float)", claim="expression", call="dU(0.5)")
+    assert_true(
+        expr.dU(0.5) == 1.0 and isinstance(expr.dU(0.5), float),
+        got=repr(expr.dU(0.5)),
+        should="1.0 (float)",
+        claim="expression",
+        call="dU(0.5)",
+    )
     with mpmath.workdps(_MP_DPS):
         third = mpmath.mpf(1) / 3
         got = expr.d2U(third)
-        assert_true(abs(got - (2 * k * third + 1)) < mpmath.mpf("1e-49"), got=str(got),
-                    should="7/3", claim="expression", call="d2U(1/3)")
+        assert_true(
+            abs(got - (2 * k * third + 1)) < mpmath.mpf("1e-49"),
+            got=str(got),
+            should="7/3",
+            claim="expression",
+            call="d2U(1/3)",
+        )
 
 
 def test_constant_derivative_keeps_shape():
@@ -139,27 +176,62 @@ def test_constant_derivative_keeps_shape():
     expr = Expression("q**2/2")
     q = np.full((2, 3), 0.25)
     got = expr.d2U(q)
-    assert_true(got.shape == (2, 3) and np.all(got == 1.0), got=repr(got), should="ones (2, 3)",
-                claim="expression", call="d2U")
-    assert_true(isinstance(expr.d2U(mpmath.mpf("0.3")), mpmath.mpf), got="non-mpf", should="mpf",
-                claim="expression", call="d2U(mpf)")
+    assert_true(
+        got.shape == (2, 3) and np.all(got == 1.0),
+        got=repr(got),
+        should="ones (2, 3)",
+        claim="expression",
+        call="d2U",
+    )
+    assert_true(
+        isinstance(expr.d2U(mpmath.mpf("0.3")), mpmath.mpf),
+        got="non-mpf",
+        should="mpf",
+        claim="expression",
+        call="d2U(mpf)",
+    )
 
 
 def test_values_at_zero_are_limits():
     """At q = 0 the exact limit replaces 0/0 (U'), inf (U'') and round-off (U)."""
     smooth = Expression("sqrt(q**2 + q**4)")  # U' = (q + 2q^3)/sqrt(...) is 0/0 at 0
-    assert_true(smooth.dU(0.0) == 1.0, got=repr(smooth.dU(0.0)), should="1.0",
-                claim="expression", call="sqrt(q**2+q**4).dU(0)")
-    assert_true(smooth.dU(mpmath.mpf(0)) == 1, got=str(smooth.dU(mpmath.mpf(0))), should="1",
-                claim="expression", call="dU(mpf 0)")
+    assert_true(
+        smooth.dU(0.0) == 1.0,
+        got=repr(smooth.dU(0.0)),
+        should="1.0",
+        claim="expression",
+        call="sqrt(q**2+q**4).dU(0)",
+    )
+    assert_true(
+        smooth.dU(mpmath.mpf(0)) == 1,
+        got=str(smooth.dU(mpmath.mpf(0))),
+        should="1",
+        claim="expression",
+        call="dU(mpf 0)",
+    )
     soft = Expression("q**1.5")  # U'' = 0.75 q^-0.5
-    assert_true(soft.d2U(0.0) == math.inf, got=repr(soft.d2U(0.0)), should="inf",
-                claim="expression", call="q**1.5 .d2U(0)")
-    assert_true(soft.d2U(mpmath.mpf(0)) == mpmath.inf, got=str(soft.d2U(mpmath.mpf(0))),
-                should="+inf", claim="expression", call="q**1.5 .d2U(mpf 0)")
+    assert_true(
+        soft.d2U(0.0) == math.inf,
+        got=repr(soft.d2U(0.0)),
+        should="inf",
+        claim="expression",
+        call="q**1.5 .d2U(0)",
+    )
+    assert_true(
+        soft.d2U(mpmath.mpf(0)) == mpmath.inf,
+        got=str(soft.d2U(mpmath.mpf(0))),
+        should="+inf",
+        claim="expression",
+        call="q**1.5 .d2U(mpf 0)",
+    )
     shifted = Expression("(q + 0.1)**2 - 0.01")  # float round-off would give 1.7e-18
-    assert_true(shifted.U(0.0) == 0.0, got=repr(shifted.U(0.0)), should="0.0",
-                claim="expression", call="U(0)")
+    assert_true(
+        shifted.U(0.0) == 0.0,
+        got=repr(shifted.U(0.0)),
+        should="0.0",
+        claim="expression",
+        call="U(0)",
+    )
     shifted.check_monotone(1.0)  # the base-class U(0) = 0 check passes
 
 
@@ -169,28 +241,46 @@ def test_ellipsoid_formula_matches_family():
     ref = Ellipsoid(**_ELLIPSOID_PARAMS)
     q = np.linspace(0.0, 0.02, 41)
     for name in ("U", "dU", "d2U"):
-        assert_close(getattr(expr, name)(q), getattr(ref, name)(q), rtol=1e-12, atol=0.0,
-                     claim="expression", call=f"ellipsoid formula .{name}")
-    assert_close(expr.leading_exponent, ref.leading_exponent, rtol=1e-15, claim="expression",
-                 call="leading_exponent")
+        assert_close(
+            getattr(expr, name)(q),
+            getattr(ref, name)(q),
+            rtol=1e-12,
+            atol=0.0,
+            claim="expression",
+            call=f"ellipsoid formula .{name}",
+        )
+    assert_close(
+        expr.leading_exponent,
+        ref.leading_exponent,
+        rtol=1e-15,
+        claim="expression",
+        call="leading_exponent",
+    )
     for v in (0.50, 0.99, 1.50):
         E = 0.5 * 0.05 * v * v
-        assert_close(expr.turning_point(E), ref.turning_point(E), rtol=1e-13, claim="expression",
-                     call=f"turning_point(E at v = {v})")
+        assert_close(
+            expr.turning_point(E),
+            ref.turning_point(E),
+            rtol=1e-13,
+            claim="expression",
+            call=f"turning_point(E at v = {v})",
+        )
 
 
 def test_inverse_matches_power_law():
     expr, ref = _power_expr(1e10, 1.5), PowerLaw(1e10, 1.5)
     u = np.concatenate([[0.0], np.logspace(-9, 3, 25)])
-    assert_close(expr.inverse(u), ref.inverse(u), rtol=_INVERSE_RTOL, claim="expression",
-                 call="inverse")
+    assert_close(
+        expr.inverse(u), ref.inverse(u), rtol=_INVERSE_RTOL, claim="expression", call="inverse"
+    )
 
 
 @st.composite
 def _polynomials(draw):
     """Sums c_i q^n_i with c_i > 0 and distinct n_i > 1 (so each term is a PowerLaw)."""
-    exps = draw(st.lists(st.sampled_from([1.5, 2, 2.5, 3, 4, 5]), min_size=2, max_size=4,
-                         unique=True))
+    exps = draw(
+        st.lists(st.sampled_from([1.5, 2, 2.5, 3, 4, 5]), min_size=2, max_size=4, unique=True)
+    )
     coefs = [draw(log_uniform(1e-2, 1e8)) for _ in exps]
     return exps, coefs
 
@@ -205,10 +295,20 @@ def test_random_polynomials_match_sums_of_power_laws(poly):
     ref = SumPotential(*(PowerLaw(c * n, n - 1.0) for c, n in zip(coefs, exps, strict=True)))
     q = np.logspace(-4, 1, 30)
     for name in ("U", "dU", "d2U"):
-        assert_close(getattr(expr, name)(q), getattr(ref, name)(q), rtol=1e-12,
-                     claim="expression", call=f"{source}.{name}")
-    assert_true(expr.leading_exponent == min(exps), got=str(expr.leading_exponent),
-                should=str(min(exps)), claim="expression", call="leading_exponent")
+        assert_close(
+            getattr(expr, name)(q),
+            getattr(ref, name)(q),
+            rtol=1e-12,
+            claim="expression",
+            call=f"{source}.{name}",
+        )
+    assert_true(
+        expr.leading_exponent == min(exps),
+        got=str(expr.leading_exponent),
+        should=str(min(exps)),
+        claim="expression",
+        call="leading_exponent",
+    )
 
 
 # -- leading exponent -------------------------------------------------------------
@@ -227,16 +327,26 @@ def test_random_polynomials_match_sums_of_power_laws(poly):
     ],
 )
 def test_leading_exponent(source, n):
-    assert_close(Expression(source).leading_exponent, n, rtol=1e-15, claim="expression",
-                 call=f"Expression({source!r}).leading_exponent")
+    assert_close(
+        Expression(source).leading_exponent,
+        n,
+        rtol=1e-15,
+        claim="expression",
+        call=f"Expression({source!r}).leading_exponent",
+    )
 
 
 def test_leading_exponent_numeric_fallback(monkeypatch):
     """Without sympy's limit, the 60-digit estimate q U'/U gives the same n."""
     monkeypatch.setattr(expression_module, "_limit0", lambda expr: None)
     for source, n in (("q**2/2 + q**3", 2.0), ("q**2.5 + q**4", 2.5), ("1 - exp(-q)", 1.0)):
-        assert_close(Expression(source).leading_exponent, n, rtol=1e-12, claim="expression",
-                     call=f"numeric fallback for {source!r}")
+        assert_close(
+            Expression(source).leading_exponent,
+            n,
+            rtol=1e-12,
+            claim="expression",
+            call=f"numeric fallback for {source!r}",
+        )
 
 
 @pytest.mark.parametrize(
@@ -261,8 +371,13 @@ def test_leading_exponent_refused(source, pattern):
 def test_nonzero_U0_is_refused(source, shown):
     with pytest.raises(HCVInputError, match=rf"U\(0\) = {shown} but assumption \(2\)") as info:
         Expression(source)
-    assert_true(type(info.value) is HCVInputError, got=type(info.value).__name__,
-                should="HCVInputError", claim="expression", call=source)
+    assert_true(
+        type(info.value) is HCVInputError,
+        got=type(info.value).__name__,
+        should="HCVInputError",
+        claim="expression",
+        call=source,
+    )
 
 
 def test_negative_onset_is_refused():
@@ -280,10 +395,20 @@ def test_non_monotone_turning_point():
     start = time.perf_counter()
     with pytest.raises(NonMonotoneError, match=r"at q = 0\.66\d* m is not > 0.*0\.148148 J") as e:
         pot.turning_point(0.5)
-    assert_less(time.perf_counter() - start, _SEARCH_SECONDS, claim="expression",
-                call="turning_point(0.5)", what="seconds")
-    assert_true("\n" not in str(e.value), got=repr(str(e.value)), should="one line",
-                claim="expression", call="turning_point(0.5)")
+    assert_less(
+        time.perf_counter() - start,
+        _SEARCH_SECONDS,
+        claim="expression",
+        call="turning_point(0.5)",
+        what="seconds",
+    )
+    assert_true(
+        "\n" not in str(e.value),
+        got=repr(str(e.value)),
+        should="one line",
+        claim="expression",
+        call="turning_point(0.5)",
+    )
 
 
 @pytest.mark.parametrize(
@@ -300,13 +425,23 @@ def test_no_turning_point_is_fast(source, energy, pattern):
     start = time.perf_counter()
     with pytest.raises(NoTurningPointError, match=pattern):
         pot.turning_point(energy)
-    assert_less(time.perf_counter() - start, _SEARCH_SECONDS, claim="expression",
-                call=f"turning_point({energy})", what="seconds")
+    assert_less(
+        time.perf_counter() - start,
+        _SEARCH_SECONDS,
+        claim="expression",
+        call=f"turning_point({energy})",
+        what="seconds",
+    )
 
 
 def test_bounded_potential_below_its_supremum():
-    assert_close(Expression("1 - exp(-q)").turning_point(0.5), math.log(2.0), rtol=1e-14,
-                 claim="expression", call="turning_point(0.5)")
+    assert_close(
+        Expression("1 - exp(-q)").turning_point(0.5),
+        math.log(2.0),
+        rtol=1e-14,
+        claim="expression",
+        call="turning_point(0.5)",
+    )
 
 
 # -- hostile and malformed text ---------------------------------------------------
@@ -386,8 +521,13 @@ def _refuse(source: str, needle: str) -> None:
     call = f"Expression({source[:40]!r})"
     assert_less(elapsed, _REFUSE_SECONDS, claim="expression", call=call, what="seconds")
     msg = str(info.value)
-    assert_true(needle in msg and "\n" not in msg and len(msg) < 400, got=repr(msg),
-                should=f"one short line containing {needle!r}", claim="expression", call=call)
+    assert_true(
+        needle in msg and "\n" not in msg and len(msg) < 400,
+        got=repr(msg),
+        should=f"one short line containing {needle!r}",
+        claim="expression",
+        call=call,
+    )
 
 
 def test_hostile_strings_are_refused_and_nothing_runs(tmp_path, monkeypatch):
@@ -398,8 +538,13 @@ def test_hostile_strings_are_refused_and_nothing_runs(tmp_path, monkeypatch):
             mp.setattr(builtins, "exec", _exec_guard)
             mp.setattr(builtins, "compile", _compile_ast_only)
             _refuse(source, needle)
-    assert_true(not sentinel.exists(), got="sentinel file created", should="nothing executed",
-                claim="expression", call="hostile strings")
+    assert_true(
+        not sentinel.exists(),
+        got="sentinel file created",
+        should="nothing executed",
+        claim="expression",
+        call="hostile strings",
+    )
 
 
 def test_power_towers_fail_fast_in_a_fresh_process():
@@ -412,13 +557,22 @@ def test_power_towers_fail_fast_in_a_fresh_process():
         "        print(type(e).__name__)\n"
     )
     try:
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             timeout=_SUBPROCESS_SECONDS)
+        out = subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True,
+            text=True,
+            timeout=_SUBPROCESS_SECONDS,
+        )
     except subprocess.TimeoutExpired:
         out = None
     got = "timeout" if out is None else (out.stdout + out.stderr).split()
-    assert_true(got == ["ExpressionError"] * 4, got=str(got), should="4 x ExpressionError",
-                claim="expression", call="power towers")
+    assert_true(
+        got == ["ExpressionError"] * 4,
+        got=str(got),
+        should="4 x ExpressionError",
+        claim="expression",
+        call="power towers",
+    )
 
 
 @pytest.mark.parametrize(
@@ -453,8 +607,13 @@ def test_module_never_calls_eval():
             if isinstance(n, ast.Call)
         ]
     hits = sorted(set(calls) & banned)
-    assert_true(not hits, got=f"calls {hits}", should="none", claim="expression",
-                call="expression.py and _expr_parse.py source")
+    assert_true(
+        not hits,
+        got=f"calls {hits}",
+        should="none",
+        claim="expression",
+        call="expression.py and _expr_parse.py source",
+    )
 
 
 @pytest.mark.parametrize(
@@ -475,16 +634,31 @@ def test_module_never_calls_eval():
 def test_bad_parameters(params, needle):
     with pytest.raises(ExpressionError) as info:
         Expression("k*q**2", **params)
-    assert_true(needle in str(info.value), got=str(info.value), should=f"contains {needle!r}",
-                claim="expression", call=f"Expression('k*q**2', **{params})")
+    assert_true(
+        needle in str(info.value),
+        got=str(info.value),
+        should=f"contains {needle!r}",
+        claim="expression",
+        call=f"Expression('k*q**2', **{params})",
+    )
 
 
 def test_params_and_repr():
     expr = Expression("k*q**3/3 + q**2/2", k=2.0)
-    assert_true(expr.params() == {"U": "k*q**3/3 + q**2/2", "params": {"k": 2.0}},
-                got=repr(expr.params()), should="U and params", claim="expression", call="params")
-    assert_true(repr(expr) == "Expression('k*q**3/3 + q**2/2', k=2.0)", got=repr(expr),
-                should="Expression('k*q**3/3 + q**2/2', k=2.0)", claim="expression", call="repr")
+    assert_true(
+        expr.params() == {"U": "k*q**3/3 + q**2/2", "params": {"k": 2.0}},
+        got=repr(expr.params()),
+        should="U and params",
+        claim="expression",
+        call="params",
+    )
+    assert_true(
+        repr(expr) == "Expression('k*q**3/3 + q**2/2', k=2.0)",
+        got=repr(expr),
+        should="Expression('k*q**3/3 + q**2/2', k=2.0)",
+        claim="expression",
+        call="repr",
+    )
     again = Expression(expr.params()["U"], **expr.params()["params"])
     assert_close(again.U(1.5), expr.U(1.5), rtol=0.0, claim="expression", call="round trip")
 
