@@ -27,9 +27,9 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
-from reference_impl._kernels import expression_sympy
-from reference_impl.impact import solve_impact_mp
-from reference_impl.workprecision import FAMILY_ZETA, family_scenes
+from reference_impl.exact._nodes import expression_sympy
+from reference_impl.exact.solve import solve_impact_mp
+from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from ._machine import machine_info
 

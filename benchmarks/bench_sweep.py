@@ -70,7 +70,7 @@ def _noop(x):
 def _warm(dask_worker=None) -> float:
     """Load the package and the numba kernels in a worker (time in s)."""
     t = time.perf_counter()
-    from reference_impl.dtcrit import search_scene
+    from reference_impl.stability.search import search_scene
     from reference_impl.potentials import PowerLaw
 
     search_scene(PowerLaw(1.0, 1.5), 1.0, [1.0], "impact")

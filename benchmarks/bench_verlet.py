@@ -26,7 +26,7 @@ import time  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
-from reference_impl.dtcrit import search_scene  # noqa: E402
+from reference_impl.stability.search import search_scene  # noqa: E402
 from reference_impl.integrators.verlet import SCENE_WALLS, LaneBatch, run_lanes  # noqa: E402
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw  # noqa: E402
 from reference_impl.provenance import machine_info  # noqa: E402

@@ -1,13 +1,13 @@
 """Reference implementation of the hidden-harmonic theory of contact dynamics."""
 
-from .batch import solve_impacts
-from .damping import (
+from reference_impl.exact.batch import solve_impacts
+from reference_impl.theory.damping import (
     UniversalDamping,
     restitution_from_zeta,
     tsuji_coefficient,
     zeta_from_restitution,
 )
-from .dtcrit_criteria import (  # numba-free: the lane engine is imported by dtcrit only
+from reference_impl.stability.criteria import (  # numba-free: the lane engine is imported by dtcrit only
     FAILURE_KINDS,
     MAX_CONFIRM_STEPS,
     MAX_FACTOR,
@@ -23,7 +23,7 @@ from .dtcrit_criteria import (  # numba-free: the lane engine is imported by dtc
     SearchGrid,
     parse_criterion,
 )
-from .errors import (
+from reference_impl.errors import (
     DomainError,
     ExpressionError,
     HCVInputError,
@@ -32,11 +32,11 @@ from .errors import (
     SceneError,
     UnsupportedError,
 )
-from .harmonic_map import HarmonicMap
-from .impact import ImpactSolution, solve_impact, solve_impact_mp
-from .potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
-from .scenes import Scene, embedded_scenes, load_scene, parse_scene
-from .stability import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator
+from reference_impl.theory.harmonic_map import HarmonicMap
+from reference_impl.exact.solve import ImpactSolution, solve_impact, solve_impact_mp
+from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+from reference_impl.scenes import Scene, embedded_scenes, load_scene, parse_scene
+from reference_impl.stability.bound import SafeStep, dt_safe, dt_safe_shortcut, geometry_class, stiffening_indicator
 
 __all__ = [
     "DomainError",

@@ -109,11 +109,11 @@ class ContactAdapterCollector(pytest.Collector):
     """Collects the metric items of one adapter (no file behind it)."""
 
     def collect(self):
-        from .adapters.base import AdapterScene
-        from .adapters.registry import get_adapter
-        from .bench.metrics import metric_names
-        from .bench.runner import resolve_scenes
-        from .errors import HCVInputError
+        from reference_impl.adapters.base import AdapterScene
+        from reference_impl.adapters.registry import get_adapter
+        from reference_impl.bench.metrics import metric_names
+        from reference_impl.bench.runner import resolve_scenes
+        from reference_impl.errors import HCVInputError
 
         spec = self.config.getoption("contact_adapter")
         try:
@@ -141,8 +141,8 @@ class ContactAdapterCollector(pytest.Collector):
 def _bench(config):
     result = config.stash.get(_RESULT_KEY, None)
     if result is None:
-        from .bench.runner import run_bench
-        from .errors import HCVInputError
+        from reference_impl.bench.runner import run_bench
+        from reference_impl.errors import HCVInputError
 
         try:
             result = run_bench(

@@ -202,7 +202,7 @@ def exact_zetas() -> st.SearchStrategy[float]:
     """
     import math
 
-    from reference_impl._oscillator import S_END_MAX
+    from reference_impl.exact._oscillator import S_END_MAX
 
     # Just inside the accepted band (the limit itself rounds either way).
     z_lim = math.sqrt(1.0 - (math.pi / S_END_MAX) ** 2) - 1e-7

@@ -1,7 +1,7 @@
 """Tool tests of the critical-step search: failure kinds, criterion parsing, bounds, memory.
 
-No claim marks: these test the measuring instrument (`reference_impl.dtcrit`,
-`reference_impl.dtcrit_map`), not a statement of the paper. The done-when checks
+No claim marks: these test the measuring instrument (`reference_impl.stability.search`,
+`reference_impl.studies.dtcrit_map`), not a statement of the paper. The done-when checks
 of issue 8 section 2 (linear spring holds, Hertz is a runaway) and the bad-input
 items of issue 12 that concern `hcv dt-crit` live here.
 """
@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from reference_impl.claims.sec6_dt_safe_bound import kind_counts, verdict_from_map
-from reference_impl.dtcrit import (
+from reference_impl.stability.search import (
     FAILURE_KINDS,
     MAX_LANES_PER_CALL,
     MAX_N_PHASES,
@@ -36,7 +36,7 @@ from reference_impl.dtcrit import (
     parse_criterion,
     search_scene,
 )
-from reference_impl.dtcrit_map import MapCase, dt_crit_map, recommended_step
+from reference_impl.studies.dtcrit_map import MapCase, dt_crit_map, recommended_step
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import Expression, PowerLaw
 from verification.assertions import assert_true

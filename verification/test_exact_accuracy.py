@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from reference_impl.errors import HCVInputError
-from reference_impl.impact import N_MAX, solve_impact, solve_impact_mp
+from reference_impl.exact.solve import N_MAX, solve_impact, solve_impact_mp
 from reference_impl.potentials import Ellipsoid, PowerLaw
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less, assert_true

@@ -17,10 +17,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from reference_impl import Expression, PowerLaw, solve_impacts
-from reference_impl._branches import compiled_nodes, dq_dx
-from reference_impl._kernels import _compiled_expression, expression_sympy
+from reference_impl.exact._branches import compiled_nodes, dq_dx
+from reference_impl.exact._nodes import _compiled_expression, expression_sympy
 from reference_impl.errors import HCVInputError, NoTurningPointError
-from reference_impl.impact import solve_impact, solve_impact_mp
+from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less
 
@@ -181,7 +181,7 @@ def test_dq_dx_numpy_path_unchanged_for_power_laws():
 def test_substitution_order_from_declared_exponents():
     """b makes 2/n and 2 (n_i - n)/n integer multiples of 1/b; refuses what it cannot read."""
     from reference_impl import Ellipsoid, Sphere  # noqa: PLC0415
-    from reference_impl._kernels import substitution_order  # noqa: PLC0415
+    from reference_impl.exact._nodes import substitution_order  # noqa: PLC0415
 
     assert substitution_order(PowerLaw(1e9, 1.5), 6) == 5  # 2/n = 4/5
     assert substitution_order(Sphere(0.01, 1e8, 0.5), 6) == 3  # n = 3
@@ -200,10 +200,10 @@ def test_substitution_order_from_declared_exponents():
 def test_compiled_gauss_jacobi_path_taken_and_bounded(zeta):
     """The fast Gauss-Jacobi path runs on the benchmark's cap and sum scenes, and its
     reported bound holds against the truth (the generic draws above cover the rest)."""
-    from reference_impl._fused import gauss_jacobi_impact  # noqa: PLC0415
-    from reference_impl._oscillator import VirtualOscillator  # noqa: PLC0415
-    from reference_impl.impact import _validated_top  # noqa: PLC0415
-    from reference_impl.workprecision import family_scenes  # noqa: PLC0415
+    from reference_impl.exact._one_call import gauss_jacobi_impact  # noqa: PLC0415
+    from reference_impl.exact._oscillator import VirtualOscillator  # noqa: PLC0415
+    from reference_impl.exact.solve import _validated_top  # noqa: PLC0415
+    from reference_impl.studies.workprecision import family_scenes  # noqa: PLC0415
 
     scenes = {sc.name: sc for sc in family_scenes()}
     for name in ("ellipsoid-damped", "sphere-damped", "power-sum-damped"):

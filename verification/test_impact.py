@@ -1,4 +1,4 @@
-"""The exact impact solver (reference_impl.impact) against independent references.
+"""The exact impact solver (reference_impl.exact.solve) against independent references.
 
 References: Beta-function closed forms (power laws), a direct mpmath quadrature
 of the physical integral 2 sqrt(m/2) int dq / sqrt(E - U) (no harmonic map
@@ -16,9 +16,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.special import beta as beta_fn
 
-from reference_impl.damping import restitution_from_zeta
+from reference_impl.theory.damping import restitution_from_zeta
 from reference_impl.errors import HCVInputError, NonMonotoneError, NoTurningPointError
-from reference_impl.impact import solve_impact
+from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials import Ellipsoid, PowerLaw, Sphere
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_true

@@ -41,7 +41,7 @@ from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory  
 from reference_impl.bench import run_bench  # noqa: E402
 from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
 from reference_impl.bench.runner import resolve_scenes  # noqa: E402
-from reference_impl.damping import restitution_from_zeta  # noqa: E402
+from reference_impl.theory.damping import restitution_from_zeta  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
 

@@ -21,9 +21,9 @@ import pytest
 import sympy as sp
 
 from reference_impl.errors import ExpressionError, HCVInputError
-from reference_impl.impact import solve_impact, solve_impact_mp
+from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from reference_impl.potentials import Expression
-from reference_impl.stability import dt_safe
+from reference_impl.stability.bound import dt_safe
 from verification.assertions import assert_close, assert_true
 
 # Float64 values against the correctly rounded value: the formula above its

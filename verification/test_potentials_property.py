@@ -16,7 +16,7 @@ import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from reference_impl.impact import solve_impact
+from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials import Expression
 from verification.assertions import assert_close, assert_true
 from verification.strategies import expression_impacts, log_uniform, monotone_expressions
@@ -111,7 +111,7 @@ _DT_GRID = 60
 @given(case=expression_impacts())
 def test_dt_safe_is_the_supremum_of_the_mpmath_ratio(case):
     """2 sqrt(m) / dt_safe bounds U'/sqrt(2U) on a grid of [0, q_max] and is attained."""
-    from reference_impl.stability import dt_safe
+    from reference_impl.stability.bound import dt_safe
 
     pot, source, n, m, v0 = case
     step = dt_safe(pot, m, v0)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from reference_impl.damping import restitution_from_zeta, zeta_from_restitution
+from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
 from reference_impl.errors import (
     ExpressionError,
     HCVInputError,
@@ -473,7 +473,7 @@ def test_every_scene_name_the_speed_table_and_report_show_is_in_the_catalogue():
     loads in every command (``load_scene``), and the four family rows are read from it."""
     import math
 
-    from reference_impl.workprecision import default_scenes, family_scenes
+    from reference_impl.studies.workprecision import default_scenes, family_scenes
 
     names = embedded_scenes()
     for wp in [*family_scenes(), *default_scenes()]:

@@ -22,10 +22,10 @@ import pytest
 from hypothesis import given
 from scipy.integrate import solve_ivp
 
-from reference_impl import action as act
+from reference_impl.theory import action as act
 from reference_impl.claims import thm1_period
 from reference_impl.integrators.taylor import taylor_impact, taylor_zero_crossings
-from reference_impl.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 from reference_impl.potentials import PowerLaw
 from verification.assertions import assert_true, check_measurement
 from verification.strategies import (
@@ -37,7 +37,7 @@ from verification.strategies import (
 CLAIM = thm1_period.ID
 
 # Float64 route against the power-law closed forms. Its Gauss rules converge to
-# far below round-off (< 1e-30 by the Bernstein bounds in reference_impl.action),
+# far below round-off (< 1e-30 by the Bernstein bounds in reference_impl.theory.action),
 # so what remains is round-off of ~100 summed terms, of q_max and of scipy's Beta
 # (a few ulps); the worst error measured over p in [0.1, 5] and E in [1e-6, 1e3]
 # is 3.7e-15, and 2e-14 leaves a factor ~5 for other parameter draws.

@@ -41,7 +41,7 @@ from reference_impl.claims._tolerances import (
     TAU_EVENT_RTOL,
 )
 from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 from verification.assertions import assert_close, assert_less, assert_true, check_measurement
 from verification.strategies import impacts, reference_constants
 

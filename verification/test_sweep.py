@@ -368,7 +368,7 @@ def test_report_map_through_run_cases_equals_dt_crit_map():
     """The bridge the report's map uses gives dt_crit_map's table, and its cases pickle."""
     import pickle
 
-    from reference_impl.dtcrit_map import coverage, dt_crit_map
+    from reference_impl.studies.dtcrit_map import coverage, dt_crit_map
     from reference_impl.sweep import dt_crit_map_on_cluster
 
     cases = [c for c in coverage(quick=True) if c.family != "power"]

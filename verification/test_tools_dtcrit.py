@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from reference_impl.damping import restitution_from_zeta
-from reference_impl.dtcrit import (
+from reference_impl.theory.damping import restitution_from_zeta
+from reference_impl.stability.search import (
     EnergyGrowth,
     ImpactGain,
     SearchGrid,
@@ -25,7 +25,7 @@ from reference_impl.dtcrit import (
     parse_criterion,
     search_scene,
 )
-from reference_impl.dtcrit_map import criterion_sensitivity
+from reference_impl.studies.dtcrit_map import criterion_sensitivity
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
@@ -35,7 +35,7 @@ from reference_impl.integrators.verlet import (
     run_lanes,
 )
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw
-from reference_impl.stability import dt_safe
+from reference_impl.stability.bound import dt_safe
 from verification.assertions import assert_close, assert_true
 from verification.test_sec6_dtcrit import HERTZ, RES, TWO_BRACKETS  # noqa: E402
 

@@ -4,7 +4,7 @@ row of each is within the solver's own error bound.
 One quick study (the scenes ``hcv report --quick`` runs, without Verlet points:
 the exact solver, DOP853 and RK45 at three tolerances, ~20 s) is computed once
 per module; the 30-digit truths are cached per process by
-`reference_impl.workprecision.ground_truth`.
+`reference_impl.studies.workprecision.ground_truth`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from reference_impl.report._wp import (
     scene_families,
     wp_overview_figure,
 )
-from reference_impl.workprecision import default_scenes, family_scenes, work_precision
+from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
 from verification.assertions import assert_less, assert_true
 
 CALL = "work_precision(quick=True)"

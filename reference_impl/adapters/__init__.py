@@ -8,7 +8,7 @@ skip, not a failure). The built-in codes' classes `KratosAdapter` and
 loading them never imports Kratos or LAMMPS (that happens when a run starts).
 """
 
-from .base import (
+from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterError,
     AdapterOutputError,
@@ -20,7 +20,7 @@ from .base import (
     Trajectory,
     trajectory_from_mapping,
 )
-from .registry import get_adapter, register, registered
+from reference_impl.adapters.registry import get_adapter, register, registered
 
 __all__ = [
     "AdapterDeclined",

@@ -29,8 +29,8 @@ import re
 import sys
 from typing import Any
 
-from ..errors import HCVInputError
-from .base import ContactAdapter
+from reference_impl.errors import HCVInputError
+from reference_impl.adapters.base import ContactAdapter
 
 __all__ = [
     "adapter_help",

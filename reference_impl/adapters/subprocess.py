@@ -84,9 +84,9 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
-from ..errors import HCVInputError
-from ..scenes._scene import _potential, _Where
-from .base import (
+from reference_impl.errors import HCVInputError
+from reference_impl.scenes._scene import _potential, _Where
+from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterOutputError,
     AdapterRunError,

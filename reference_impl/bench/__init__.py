@@ -11,8 +11,8 @@ failed (or the run was interrupted), 3 when none failed but one is "error";
 usage and configuration errors raise `HCVInputError` (exit status 2).
 """
 
-from .metrics import METRICS, MetricResult, metric_names
-from .report import (
+from reference_impl.bench.metrics import METRICS, MetricResult, metric_names
+from reference_impl.bench.report import (
     plot_speed_error,
     render_scorecard,
     render_speed_error,
@@ -21,8 +21,8 @@ from .report import (
     write_junit,
     write_markdown,
 )
-from .runner import DEFAULT_SCENES, BenchResult, bench_scene_names, resolve_scenes, run_bench
-from .tolerances import default_tolerances, load_tolerances
+from reference_impl.bench.runner import DEFAULT_SCENES, BenchResult, bench_scene_names, resolve_scenes, run_bench
+from reference_impl.bench.tolerances import default_tolerances, load_tolerances
 
 __all__ = [
     "DEFAULT_SCENES",

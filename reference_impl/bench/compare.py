@@ -32,7 +32,7 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
         scene (skipped). ``reference`` is the asked value where it is the same for
         every code (restitution_asked), else empty (each code's own exact law).
     """
-    from .report import _PLAIN_STATUS, _UNITS, _fmt_v  # report re-exports this module
+    from reference_impl.bench.report import _PLAIN_STATUS, _UNITS, _fmt_v  # report re-exports this module
 
     variants: list[str] = []
     cells: dict[tuple[str, str], dict[str, str]] = {}

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..adapters.base import ImplementedLaw, PowerDamping, Trajectory
-from ..potentials.power import PowerLaw
+from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "check_declared_law",
@@ -149,7 +149,7 @@ def check_declared_law(law: ImplementedLaw, v0: float) -> None:
         error of the code that declared it (``hcv bench`` exit status 2), not a failed
         metric and not an error of ours.
     """
-    from ..errors import HCVInputError
+    from reference_impl.errors import HCVInputError
 
     m = law.mass
     if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
@@ -203,7 +203,7 @@ def universal_zeta(law: ImplementedLaw) -> float | None:
 
 def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
     """Exact peak tensile total force / peak compressive force along the damped ODE."""
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     if law.clips_tension:
         return 0.0
@@ -239,7 +239,7 @@ def exact_tensile_on_samples(
     |dF/dt| dt (0.011 of the peak force for Hooke, zeta = 0.1, at t_c/200): the
     same sampling on both sides leaves only the integrator's own error.
     """
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     if law.clips_tension:
         return 0.0
@@ -261,8 +261,8 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
 
     With ``timing`` the wall time of the exact solver is measured too ("seconds").
     """
-    from ..impact import solve_impact
-    from ..integrators.ivp import integrate_impact
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.integrators.ivp import integrate_impact
 
     pot, m = law.potential, law.mass
     zeta = universal_zeta(law)

@@ -23,8 +23,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..adapters.base import ImplementedLaw
-from .measure import check_conventions, exact_reference, measure
+from reference_impl.adapters.base import ImplementedLaw
+from reference_impl.bench.measure import check_conventions, exact_reference, measure
 
 __all__ = [
     "METRICS",

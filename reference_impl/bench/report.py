@@ -28,7 +28,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from ..provenance import machine_info as _machine_info
+from reference_impl.provenance import machine_info as _machine_info
 
 __all__ = [
     "UNITS",
@@ -646,7 +646,7 @@ def write_markdown(result, path) -> None:
 
 
 # Kept importable from here (their home is `reference_impl.bench.compare`).
-from .compare import (  # noqa: E402
+from reference_impl.bench.compare import (  # noqa: E402
     json_number,
     plot_speed_error,
     side_by_side,

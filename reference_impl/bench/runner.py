@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..adapters.base import AdapterScene, ImplementedLaw, Trajectory
-from ..errors import HCVInputError
-from ..impact import solve_impact
-from ..scenes import Scene, load_scene
-from ..stability import dt_safe as _dt_safe
-from .measure import (
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
+from reference_impl.scenes import Scene, load_scene
+from reference_impl.stability.bound import dt_safe as _dt_safe
+from reference_impl.bench.measure import (
     check_conventions,
     check_declared_law,
     contact_sample_times,
@@ -41,9 +41,9 @@ from .measure import (
     exact_tensile_on_samples,
     measure,
 )
-from .metrics import METRICS, MetricResult, SceneContext, SpeedRecord
-from .tolerances import load_tolerances
-from .worker import Outcome, _one_line, make_executor
+from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.tolerances import load_tolerances
+from reference_impl.bench.worker import Outcome, _one_line, make_executor
 
 __all__ = ["DEFAULT_SCENES", "BenchResult", "bench_scene_names", "resolve_scenes", "run_bench"]
 
@@ -181,7 +181,7 @@ class BenchResult:
         return EXIT_INTERNAL if self.internal_errors else 0
 
     def to_dict(self) -> dict:
-        from .report import result_to_dict
+        from reference_impl.bench.report import result_to_dict
 
         return result_to_dict(self)
 
@@ -299,7 +299,7 @@ class _SceneRun:
 
     def is_scene_law(self, law: ImplementedLaw) -> bool:
         """The declared law is the scene's own (what was asked), not one the code chose."""
-        from ..scenes import potential_to_dict
+        from reference_impl.scenes import potential_to_dict
 
         try:
             same_pot = potential_to_dict(law.potential) == potential_to_dict(self.scene.potential)
@@ -332,7 +332,7 @@ class _SceneRun:
         Verlet cannot run the declared damping (a callable C(q)); ``{"internal": ...}``
         when it failed (ours).
         """
-        from ..adapters.reference import law_trajectory
+        from reference_impl.adapters.reference import law_trajectory
 
         v0 = ascene.v0
         try:
@@ -386,7 +386,7 @@ class _SceneRun:
     def _verlet_stable(
         self, law: ImplementedLaw, v0: float, dt: float, q_max: float
     ) -> tuple[bool, str]:
-        from ..adapters.reference import law_trajectory
+        from reference_impl.adapters.reference import law_trajectory
 
         n = int(math.ceil(_DTCRIT_BUDGET * q_max / (v0 * dt))) + _EXTRA_STEPS
         t, q, v, f = law_trajectory(law, v0, dt, n)
@@ -512,7 +512,7 @@ class _SceneRun:
         explicitly; heavily damped scenes are pre-asymptotic at 25-800 steps). Sets
         ``ctx.textbook_order``, or ``ctx.textbook_order_error`` when it cannot be run.
         """
-        from ..adapters.reference import law_trajectory
+        from reference_impl.adapters.reference import law_trajectory
 
         pts = []
         for n in self.tol["run"]["speed_error_steps"]:
@@ -571,7 +571,7 @@ class _SceneRun:
 
     def textbook_drift(self, v0: float, dt: float, n: int) -> float:
         """Energy drift of textbook Verlet on the same two-walls run (the allowance's scale)."""
-        from ..adapters.reference import verlet_trajectory
+        from reference_impl.adapters.reference import verlet_trajectory
 
         sc = self.scene
         try:
@@ -686,7 +686,7 @@ def run_bench(
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from .report import machine_info, write_json, write_junit
+    from reference_impl.bench.report import machine_info, write_json, write_junit
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)

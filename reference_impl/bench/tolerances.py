@@ -15,7 +15,7 @@ import tomllib
 from importlib import resources
 from typing import Any
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["default_tolerances", "load_tolerances"]
 

@@ -27,9 +27,9 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
-from ..adapters.base import ContactAdapter
-from ..adapters.registry import get_adapter
-from ..errors import HCVInputError
+from reference_impl.adapters.base import ContactAdapter
+from reference_impl.adapters.registry import get_adapter
+from reference_impl.errors import HCVInputError
 
 __all__ = ["InProcessExecutor", "Outcome", "WorkerExecutor", "make_executor"]
 

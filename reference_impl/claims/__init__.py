@@ -18,7 +18,7 @@ import importlib
 from dataclasses import dataclass
 from types import ModuleType
 
-from ._base import VERDICTS, Measurement
+from reference_impl.claims._base import VERDICTS, Measurement
 
 __all__ = ["Claim", "CLAIMS", "VERDICTS", "Measurement", "claim_ids", "get_claim", "measure"]
 

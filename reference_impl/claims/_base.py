@@ -51,7 +51,7 @@ class Measurement:
 
     def to_dict(self) -> dict:
         """JSON-ready dict: claim, verdict, evidence, rule, measured, counterexample."""
-        from ..report._common import jsonable
+        from reference_impl.report._common import jsonable
 
         return {
             "claim": self.claim,

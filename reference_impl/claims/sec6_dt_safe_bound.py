@@ -1,6 +1,6 @@
 """Section 6: Delta t_safe is a lower bound of the critical velocity-Verlet step.
 
-Measured on the critical-step map (`reference_impl.dtcrit_map.dt_crit_map`):
+Measured on the critical-step map (`reference_impl.studies.dtcrit_map.dt_crit_map`):
 for every case and scene the smallest failing step is searched and compared
 with Delta t_safe. Every map row carries the engine's ``failure_kind``; a
 failure at or below the bound is counted by kind:
@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from ._base import Measurement, g
+from reference_impl.claims._base import Measurement, g
 
 ID = "sec6-dt-safe-bound"
 SECTION = "6"
@@ -52,7 +52,7 @@ _MAPS: dict = {}
 def the_map(quick: bool = False):
     """The critical-step map of `coverage(quick)`, computed once per process."""
     if quick not in _MAPS:
-        from ..dtcrit_map import dt_crit_map
+        from reference_impl.studies.dtcrit_map import dt_crit_map
 
         _MAPS[quick] = dt_crit_map(quick=quick)
     return _MAPS[quick]

@@ -6,12 +6,12 @@ import functools
 
 import numpy as np
 
-from ..damping import UniversalDamping, tsuji_coefficient
-from ..harmonic_map import HarmonicMap
-from ..potentials import PowerLaw
-from ._base import Measurement, g
-from ._cases import MASS
-from ._tolerances import ROUNDOFF_TOL, SLOPE_TOL
+from reference_impl.theory.damping import UniversalDamping, tsuji_coefficient
+from reference_impl.theory.harmonic_map import HarmonicMap
+from reference_impl.potentials import PowerLaw
+from reference_impl.claims._base import Measurement, g
+from reference_impl.claims._cases import MASS
+from reference_impl.claims._tolerances import ROUNDOFF_TOL, SLOPE_TOL
 
 ID = "sec9-power-law"
 SECTION = "9"

@@ -1,6 +1,6 @@
 """Independent reference integrators (Verlet lanes, scipy solve_ivp, mpmath Taylor)."""
 
-from .ivp import IVPImpact, integrate_impact
-from .taylor import TaylorImpact, taylor_impact
+from reference_impl.integrators.ivp import IVPImpact, integrate_impact
+from reference_impl.integrators.taylor import TaylorImpact, taylor_impact
 
 __all__ = ["IVPImpact", "TaylorImpact", "integrate_impact", "taylor_impact"]

@@ -46,10 +46,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..errors import HCVInputError
-from ..harmonic_map import HarmonicMap
-from ..potentials._checks import positive
-from ..potentials.base import Potential
+from reference_impl.errors import HCVInputError
+from reference_impl.theory.harmonic_map import HarmonicMap
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
 
 __all__ = ["IVPImpact", "ImpactSolution", "integrate_impact"]
 

@@ -31,9 +31,9 @@ from numbers import Real
 
 import mpmath
 
-from ..errors import HCVInputError
-from ..potentials.base import Potential, SumPotential
-from ..potentials.power import PowerLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential, SumPotential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["TaylorImpact", "taylor_impact", "taylor_zero_crossings"]
 

@@ -3,7 +3,7 @@
 Each *lane* is one run of velocity Verlet (central difference) of one particle
 of mass m against one or two contacts. The engine integrates many lanes in
 one call and stops a lane as soon as it has blown up or finished; the
-critical-step searches of `reference_impl.dtcrit` are built on it.
+critical-step searches of `reference_impl.stability.search` are built on it.
 
 Conventions (decided here, used everywhere in the package)
 -----------------------------------------------------------
@@ -51,10 +51,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import HCVInputError
-from ..potentials.base import Potential
-from .verlet_expression import _expression_kernel, _worth_compiling
-from .verlet_kernel import (
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential
+from reference_impl.integrators.verlet_expression import _expression_kernel, _worth_compiling
+from reference_impl.integrators.verlet_kernel import (
     _BLOCK,
     _CHUNK_LANE_STEPS,
     _N_PAR,
@@ -74,7 +74,7 @@ from .verlet_kernel import (
     _kernel,
     kernel_terms,
 )
-from .verlet_kernel import _force_energy as _force_energy  # re-export (adapters, report)
+from reference_impl.integrators.verlet_kernel import _force_energy as _force_energy  # re-export (adapters, report)
 
 __all__ = [
     "SCENE_IMPACT",

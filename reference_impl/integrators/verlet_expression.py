@@ -14,8 +14,8 @@ import numba
 import numpy as np
 import sympy as sp
 
-from ..potentials.base import Potential
-from .verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
+from reference_impl.potentials.base import Potential
+from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
 
 # Compiled kernels of user expressions, keyed by the sympy form of (U', U):
 # compiling costs a few seconds, so each distinct expression is compiled once per
@@ -50,7 +50,7 @@ def _expression_kernel(pot: Potential):
     `_force_energy`. No user text is evaluated: only what sympy prints from the
     parsed, whitelisted tree, as for the numpy engine.
     """
-    from ..potentials.expression import Expression
+    from reference_impl.potentials.expression import Expression
 
     if type(pot) is not Expression:  # exact type: a subclass may change the law
         return None

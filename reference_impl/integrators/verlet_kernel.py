@@ -14,10 +14,10 @@ import math
 import numba
 import numpy as np
 
-from ..errors import HCVInputError
-from ..potentials.base import Potential, SumPotential
-from ..potentials.power import PowerLaw
-from ..potentials.volumetric import Ellipsoid, Sphere
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential, SumPotential
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["SCENE_IMPACT", "SCENE_WALLS", "STATUS_NAMES", "SaturatingForce", "kernel_terms"]
 

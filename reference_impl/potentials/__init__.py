@@ -1,8 +1,8 @@
 """Potential families: power laws, volumetric caps, user expressions, sums."""
 
-from .base import Potential, SumPotential, is_mp
-from .expression import Expression
-from .power import PowerLaw
-from .volumetric import Ellipsoid, Sphere
+from reference_impl.potentials.base import Potential, SumPotential, is_mp
+from reference_impl.potentials.expression import Expression
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["Potential", "SumPotential", "PowerLaw", "Ellipsoid", "Sphere", "Expression", "is_mp"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["positive", "finite"]
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..errors import ExpressionError
+from reference_impl.errors import ExpressionError
 
 # Longest accepted source: a contact law is a line of algebra; the cap keeps
 # parsing and sympy's work bounded on hostile or accidental input.

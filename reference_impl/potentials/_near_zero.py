@@ -28,8 +28,8 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from ..errors import ExpressionError
-from ._expr_parse import _Q, _short
+from reference_impl.errors import ExpressionError
+from reference_impl.potentials._expr_parse import _Q, _short
 
 __all__ = [
     "QPOS",

@@ -14,7 +14,7 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..errors import DomainError, HCVInputError, NonMonotoneError, NoTurningPointError
+from reference_impl.errors import DomainError, HCVInputError, NonMonotoneError, NoTurningPointError
 
 __all__ = ["Potential", "SumPotential", "is_mp"]
 
@@ -50,9 +50,9 @@ class Potential(ABC):
        decided exactly (from the family's formula, or by sympy for an
        `Expression`; never from a float evaluation near 0), and
        ``leading_coefficient``: that c (J/m**n) as a float, or None when the
-       family does not know it. The quadratures of `reference_impl.impact`
+       family does not know it. The quadratures of `reference_impl.exact.solve`
        substitute with n to remove the endpoint singularity of dq/dx;
-       `reference_impl.stability` takes the limit of U'/sqrt(2U) at 0 from
+       `reference_impl.stability.bound` takes the limit of U'/sqrt(2U) at 0 from
        (n, c). These two names are a stable interface.
     3. Set ``q_sup`` (metres) when U is defined only on ``[0, q_sup]``; the
        public methods raise `DomainError` outside it.

@@ -26,9 +26,9 @@ import numpy as np
 import sympy as sp
 from scipy.optimize import elementwise
 
-from ..errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
-from ._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
-from ._near_zero import (
+from reference_impl.errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
+from reference_impl.potentials._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
+from reference_impl.potentials._near_zero import (
     FLOAT_RTOL,
     PowerSeries,
     SeriesTimeout,
@@ -37,7 +37,7 @@ from ._near_zero import (
     strip_abs,
     time_limit,
 )
-from .base import Potential, is_mp
+from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Expression"]
 

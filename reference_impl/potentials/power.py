@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import positive
-from .base import Potential
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
 
 __all__ = ["PowerLaw"]
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ._checks import positive
-from .base import Potential
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
 
 __all__ = ["Ellipsoid", "Sphere"]
 

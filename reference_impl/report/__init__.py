@@ -11,7 +11,7 @@ scenes, and writes into ``out_dir``:
 * ``figures/*.png``.
 
 Every number in the output is computed by the run that writes it; the only
-numbers typed in are the paper's own (`reference_impl.paper`) and the
+numbers typed in are the paper's own (`reference_impl.studies.paper`) and the
 tolerances of the verdict rules (stated next to each verdict). Each claim's
 verdict is its module's ``measure()`` (`reference_impl.claims`): the report
 loops over the registry and the tests assert on the same measurements.
@@ -31,19 +31,19 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from ..claims import CLAIMS, VERDICTS
-from ..dtcrit_map import coverage
-from ._common import claim_tests, jsonable, records
-from ._files import swap_in, validate_report_args
+from reference_impl.claims import CLAIMS, VERDICTS
+from reference_impl.studies.dtcrit_map import coverage
+from reference_impl.report._common import claim_tests, jsonable, records
+from reference_impl.report._files import swap_in, validate_report_args
 
 __all__ = ["build_report", "quick_drops", "validate_report_args"]
 
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
-    from ..workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
-    from ._common import g
-    from ._hardcases import _cases
+    from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
+    from reference_impl.report._common import g
+    from reference_impl.report._hardcases import _cases
 
     def cov(quick):
         return {c.label: c.velocities for c in coverage(quick)}
@@ -57,7 +57,7 @@ def quick_drops() -> list[str]:
     ]
     kept_rtols = set(IVP_RTOLS[::2])
     kept_steps = set(VERLET_STEPS[::2])
-    from ._wp import QUICK_SKIP
+    from reference_impl.report._wp import QUICK_SKIP
 
     return [
         f"work-precision: scene {', '.join(QUICK_SKIP)} dropped; solve_ivp methods {', '.join(m for m in IVP_METHODS if m not in ('DOP853', 'RK45'))} "
@@ -71,7 +71,7 @@ def quick_drops() -> list[str]:
 
 
 def _scene_info() -> dict:
-    from ..workprecision import default_scenes
+    from reference_impl.studies.workprecision import default_scenes
 
     out = {}
     for sc in default_scenes():
@@ -85,7 +85,7 @@ def _start_map(quick: bool):
     import os
     from concurrent.futures import ProcessPoolExecutor
 
-    from ._dtmap import run_map
+    from reference_impl.report._dtmap import run_map
 
     if (os.cpu_count() or 1) < 2 or "fork" not in mp.get_all_start_methods():
         return None
@@ -106,8 +106,8 @@ def _finish_map(background):
 
 def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
     """Run `hcv bench` on one adapter; its JSON goes to out/bench/, its plot to figures/."""
-    from ..bench.report import plot_speed_error, result_to_dict
-    from ..bench.runner import run_bench
+    from reference_impl.bench.report import plot_speed_error, result_to_dict
+    from reference_impl.bench.runner import run_bench
 
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(spec))[:60]
     (out / "bench").mkdir(parents=True, exist_ok=True)
@@ -164,15 +164,15 @@ def build_report(
     """
     out, adapters = validate_report_args(out_dir, adapters)
     readme_path = _readme_for(out, readme)
-    from ..claims import sec6_dt_safe_bound, thm2_harmonic
-    from ._environment import environment
+    from reference_impl.claims import sec6_dt_safe_bound, thm2_harmonic
+    from reference_impl.report._environment import environment
 
     # Provenance first: the temporary directory must not make the checkout look dirty.
     env = environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
     with swap_in(out) as tmp:
         results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound, workers)
     if readme_path is not None:
-        from .readme_table import rewrite_readme
+        from reference_impl.report.readme_table import rewrite_readme
 
         # The speed block follows the committed benchmark (nox -s bench), when present.
         bench_json = Path(out) / "bench" / "exact.json"
@@ -183,8 +183,8 @@ def build_report(
 
 def _readme_for(out: Path, readme) -> Path | None:
     """The README to update (checked before anything runs), or None."""
-    from ..errors import HCVInputError
-    from .readme_table import ROOT, readme_block
+    from reference_impl.errors import HCVInputError
+    from reference_impl.report.readme_table import ROOT, readme_block
 
     if readme is None:
         return None
@@ -209,9 +209,9 @@ def _readme_for(out: Path, readme) -> Path | None:
 
 def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers: int = 0) -> dict:
     """Run everything and write the report into ``out`` (a fresh, empty directory)."""
-    from ..claims import fig1 as fig1_claim
-    from ..claims import sec10_stiffening_domain, table1
-    from . import _dtmap, _fig1, _hardcases, _render, _wp
+    from reference_impl.claims import fig1 as fig1_claim
+    from reference_impl.claims import sec10_stiffening_domain, table1
+    from reference_impl.report import _dtmap, _fig1, _hardcases, _render, _wp
 
     def say(text: str) -> None:
         if progress is not None:

@@ -6,7 +6,7 @@ HTML; section builders return lists of them.
 
 from __future__ import annotations
 
-from ._common import g
+from reference_impl.report._common import g
 
 
 # ----------------------------------------------------------------------------------

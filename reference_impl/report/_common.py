@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims import _scan
-from ..claims._base import g
-from ..claims._scan import SUITE_DIR
+from reference_impl.claims import _scan
+from reference_impl.claims._base import g
+from reference_impl.claims._scan import SUITE_DIR
 
 __all__ = ["SUITE_DIR", "claim_tests", "g", "jsonable", "records"]
 

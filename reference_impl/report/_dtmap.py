@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..claims.sec6_dt_safe_bound import confirm_horizon_needed, kind_counts
-from ..dtcrit import KINDS
+from reference_impl.claims.sec6_dt_safe_bound import confirm_horizon_needed, kind_counts
+from reference_impl.stability.search import KINDS
 
 SCENE_COLOURS = {"impact": "#1f77b4", "two-sided": "#d62728", "two-walls": "#2ca02c"}
 SCENE_MARKERS = {"impact": "o", "two-sided": "s", "two-walls": "^"}
@@ -20,14 +20,14 @@ def run_map(quick: bool, progress=None, workers: int = 0) -> pd.DataFrame:
     Parameters
     ----------
     quick : bool
-        The smaller coverage of `reference_impl.dtcrit_map.coverage`.
+        The smaller coverage of `reference_impl.studies.dtcrit_map.coverage`.
     progress : callable, optional
         Called with a short text after each search.
     workers : int
         0 runs the searches one after another in this process; N > 0 spreads them over
         a local Dask cluster of N processes (`reference_impl.sweep`). Same table either way.
     """
-    from ..sweep import dt_crit_map_on_cluster
+    from reference_impl.sweep import dt_crit_map_on_cluster
 
     def tick(done, total):
         if progress:
@@ -175,7 +175,7 @@ def map_table(df: pd.DataFrame) -> list[dict]:
 
 def describe_recommendation() -> str:
     """One line on the corrected bound (measured margins are in the table)."""
-    from ..dtcrit_map import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
+    from reference_impl.studies.dtcrit_map import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
 
     f = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR.items())
     fs = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR_SINGULAR.items())
@@ -214,10 +214,10 @@ _SENS_HORIZON_CASES = (
 def run_sensitivity(quick: bool) -> pd.DataFrame:
     """`criterion_sensitivity`: factor and N for Hertz and the linear spring, tolerance of
     the Hertz impact, and the confirmation horizon for the slow runaways (full run only)."""
-    from ..dtcrit import EnergyGrowth
-    from ..dtcrit_map import criterion_sensitivity
-    from ..integrators.verlet import SaturatingForce
-    from ..potentials import PowerLaw
+    from reference_impl.stability.search import EnergyGrowth
+    from reference_impl.studies.dtcrit_map import criterion_sensitivity
+    from reference_impl.integrators.verlet import SaturatingForce
+    from reference_impl.potentials import PowerLaw
 
     steps = _SENS_STEPS_QUICK if quick else _SENS_STEPS_FULL
     frames = []

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from ..provenance import machine_info
+from reference_impl.provenance import machine_info
 
 PACKAGES = (
     "numpy",

@@ -13,7 +13,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["REPORT_ENTRIES", "swap_in", "validate_report_args"]
 
@@ -46,7 +46,7 @@ def validate_report_args(out_dir, adapters=()) -> tuple[Path, list[str]]:
         One line naming the offending value: an unknown or malformed adapter, an
         output path that is a file, or a directory that cannot be written.
     """
-    from ..adapters.registry import parse_spec, resolve_class
+    from reference_impl.adapters.registry import parse_spec, resolve_class
 
     if out_dir is None or not str(out_dir).strip():
         raise HCVInputError(f"report directory must be a non-empty path, got {out_dir!r}")

@@ -11,10 +11,10 @@ import base64
 import html
 from pathlib import Path
 
-from ._blocks import DETAILS, IMG, UL, H, P, T, _num
-from ._common import g
-from ._render_adapters import _adapters
-from ._render_sec6 import _dtmap
+from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
+from reference_impl.report._common import g
+from reference_impl.report._render_adapters import _adapters
+from reference_impl.report._render_sec6 import _dtmap
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -249,7 +249,7 @@ def _wp(r) -> list:
         ),
         UL([f"{k}: {v}" for k, v in scenes.items()]),
     ]
-    from ._wp import SUMMARY_RTOL, family_summary
+    from reference_impl.report._wp import SUMMARY_RTOL, family_summary
 
     fam = family_summary(r["work_precision"])
     blocks.append(

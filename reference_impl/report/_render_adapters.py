@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._blocks import IMG, H, P, T
+from reference_impl.report._blocks import IMG, H, P, T
 
 # Column headers of each code's own table (`_adapter_rows`).
 _CODE_COLUMNS = [
@@ -25,10 +25,10 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     ``measured`` / ``expected`` are the compared quantities (with their unit), ``error``
     what the tolerance bounds (`reference_impl.bench.report.metric_columns`).
     """
-    from ..bench.report import UNITS as _UNITS
-    from ..bench.report import format_value as _fmt
-    from ..bench.report import format_with_unit as _fmt_v
-    from ..bench.report import json_number as _bench_num
+    from reference_impl.bench.report import UNITS as _UNITS
+    from reference_impl.bench.report import format_value as _fmt
+    from reference_impl.bench.report import format_with_unit as _fmt_v
+    from reference_impl.bench.report import json_number as _bench_num
 
     rows, flags = [], []
     for m in d.get("metrics", []):
@@ -73,7 +73,7 @@ def _scenes_no_code_ran(docs) -> dict[str, str]:
 def _adapters(r) -> list:
     """Scorecards of the contact codes given with ``hcv report --adapter``: first all codes
     side by side (`reference_impl.bench.report.side_by_side`), then each code's own table."""
-    from ..bench.report import side_by_side
+    from reference_impl.bench.report import side_by_side
 
     docs = r.get("adapters") or []
     if not docs:

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from ._blocks import DETAILS, IMG, H, P, T, _num
+from reference_impl.report._blocks import DETAILS, IMG, H, P, T, _num
 
 
 def _dtmap(r) -> list:
-    from ..claims.sec6_dt_safe_bound import kinds_below
-    from ._dtmap import describe_recommendation
+    from reference_impl.claims.sec6_dt_safe_bound import kinds_below
+    from reference_impl.report._dtmap import describe_recommendation
 
     rows = r["dt_crit_map"]
     by_scene = {}
@@ -129,7 +129,7 @@ def _dtmap(r) -> list:
 
 
 def _res() -> float:
-    from ..dtcrit import SearchGrid
+    from reference_impl.stability.search import SearchGrid
 
     return SearchGrid().resolution
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS, default_scenes, work_precision
-from ._common import g
-from ._verlet import verlet_row
+from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS, default_scenes, work_precision
+from reference_impl.report._common import g
+from reference_impl.integrators.verlet_path import verlet_row
 
 METRICS = (
     ("err_contact_time", "contact time t_c"),

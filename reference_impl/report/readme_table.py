@@ -17,7 +17,7 @@ import json
 import sys
 from pathlib import Path
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "START",

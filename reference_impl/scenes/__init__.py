@@ -4,7 +4,7 @@ Embedded scenes ship as ``*.toml`` files in this package; list them with
 `embedded_scenes` and load one by name with `load_scene`.
 """
 
-from ._scene import (
+from reference_impl.scenes._scene import (
     Scene,
     embedded_scenes,
     load_scene,

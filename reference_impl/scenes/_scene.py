@@ -35,9 +35,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..damping import zeta_from_restitution
-from ..errors import HCVInputError, SceneError
-from ..potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.errors import HCVInputError, SceneError
+from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
 

@@ -7,9 +7,9 @@ processes or an existing Dask scheduler (`run_sweep`, `run_cases`). Dask is the
 ``sweep`` extra; `run_cases` falls back to serial in-process runs without it.
 """
 
-from ._map import dt_crit_map_on_cluster
-from ._runner import CaseFailed, Outcome, dask_available, iter_outcomes, open_client, run_cases
-from ._spec import (
+from reference_impl.sweep._map import dt_crit_map_on_cluster
+from reference_impl.sweep._runner import CaseFailed, Outcome, dask_available, iter_outcomes, open_client, run_cases
+from reference_impl.sweep._spec import (
     DEFAULT_TIMEOUT,
     MAX_CASES,
     Case,
@@ -19,8 +19,8 @@ from ._spec import (
     parse_spec,
     spec_from_dict,
 )
-from ._tasks import CaseTimeout, check_deadline, run_case
-from .command import add_parser, run, run_sweep
+from reference_impl.sweep._tasks import CaseTimeout, check_deadline, run_case
+from reference_impl.cli.sweep import add_parser, run, run_sweep
 
 __all__ = [
     "DEFAULT_TIMEOUT",

@@ -1,7 +1,7 @@
 """The report's critical-step map through the sweep engine (local processes or a cluster).
 
 `dt_crit_map_on_cluster` returns the same table as
-`reference_impl.dtcrit_map.dt_crit_map` (same rows, same order, same columns:
+`reference_impl.studies.dtcrit_map.dt_crit_map` (same rows, same order, same columns:
 each (case, scene kind) search is one sweep case built by the map module's own
 row function), with the searches spread over worker processes by `run_cases`.
 Without Dask, or with ``workers=0``, it runs them serially in this process.
@@ -13,8 +13,8 @@ from collections.abc import Callable, Sequence
 
 import pandas as pd
 
-from ..dtcrit import KINDS, SearchGrid, default_criterion
-from ._runner import run_cases
+from reference_impl.stability.search import KINDS, SearchGrid, default_criterion
+from reference_impl.sweep._runner import run_cases
 
 __all__ = ["dt_crit_map_on_cluster"]
 
@@ -24,7 +24,7 @@ _DEFAULT_GRID = SearchGrid()
 
 def _map_case(item) -> list[dict]:
     """One (case, kind) search of the map: its rows, as `dt_crit_map` builds them."""
-    from ..dtcrit_map import map_case_rows
+    from reference_impl.studies.dtcrit_map import map_case_rows
 
     case, kind, criterion, grid = item
     return map_case_rows(case, kind, criterion, grid)
@@ -46,7 +46,7 @@ def dt_crit_map_on_cluster(
     Parameters
     ----------
     cases, kinds, quick, criteria, grid, progress
-        As `reference_impl.dtcrit_map.dt_crit_map` (progress: ``(done, total)``
+        As `reference_impl.studies.dtcrit_map.dt_crit_map` (progress: ``(done, total)``
         after each finished search, in completion order).
     workers : int, optional
         Local worker processes (default: the CPU count); 0 runs serially here.
@@ -58,7 +58,7 @@ def dt_crit_map_on_cluster(
     pandas.DataFrame
         The rows of `dt_crit_map`, in its order.
     """
-    from ..dtcrit_map import coverage
+    from reference_impl.studies.dtcrit_map import coverage
 
     cases = coverage(quick) if cases is None else list(cases)
     criteria = criteria or {}

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["CaseFailed", "Outcome", "dask_available", "iter_outcomes", "open_client", "run_cases"]
 

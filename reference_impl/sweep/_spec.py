@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = [
     "MAX_CASES",
@@ -208,7 +208,7 @@ def _key(task: str, criterion: str | None, scene: dict) -> str:
 
 
 def _criterion_table(src: str, task: str, value) -> dict:
-    from ..dtcrit import KINDS
+    from reference_impl.stability.search import KINDS
 
     if value is None:
         return {}
@@ -262,8 +262,8 @@ def spec_from_dict(data: dict, source: str = "<dict>", text: str | None = None) 
     SweepSpecError
         Any spec-level problem, or when every case's scene is invalid.
     """
-    from ..dtcrit import parse_criterion
-    from ..scenes import scene_from_dict
+    from reference_impl.stability.search import parse_criterion
+    from reference_impl.scenes import scene_from_dict
 
     src = source
     if not isinstance(data, dict):

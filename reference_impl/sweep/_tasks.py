@@ -20,7 +20,7 @@ import threading
 import time
 from dataclasses import replace
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["CaseTimeout", "bench_status", "check_deadline", "deadline", "run_case"]
 
@@ -79,7 +79,7 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
     """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
-    from ..dtcrit import search_loaded_scene
+    from reference_impl.stability.search import search_loaded_scene
 
     # An empty criterion text in a spec means the default, as an absent one.
     results = search_loaded_scene(scene, criterion or None, check_deadline)
@@ -88,7 +88,7 @@ def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
 
 def _solve_rows(scene) -> list[dict]:
     """As ``hcv solve --json``: one row per speed of `reference_impl.cli.solve_scene`."""
-    from ..cli import solve_scene
+    from reference_impl.cli import solve_scene
 
     rows = []
     for v0 in scene.velocities:
@@ -115,7 +115,7 @@ def _bench_rows(scene, adapter: str) -> list[dict]:
     Each row carries the case's scorecard (metric counts, failed metric names,
     status) and the per-speed record of the JSON report, flattened.
     """
-    from ..bench.runner import run_bench
+    from reference_impl.bench.runner import run_bench
 
     result = run_bench(adapter, scenes=[scene], progress=check_deadline)
     d = result.to_dict()
@@ -152,7 +152,7 @@ def run_case(payload: dict) -> list[dict]:
 
     Pure: the result depends on the payload only (its ``key`` hashes it).
     """
-    from ..scenes import scene_from_dict
+    from reference_impl.scenes import scene_from_dict
 
     scene = scene_from_dict(payload["scene"], f"case {payload['key']}")
     task = payload["task"]

@@ -27,7 +27,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["add_bench_parser", "cmd_bench", "main"]
 
@@ -87,7 +87,7 @@ class _Lines:
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object."""
-    from ..adapters.registry import adapter_help
+    from reference_impl.adapters.registry import adapter_help
 
     b = subparsers.add_parser(
         "bench",
@@ -136,8 +136,8 @@ def cmd_bench(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
-    from .report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
-    from .runner import run_bench
+    from reference_impl.bench.report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
+    from reference_impl.bench.runner import run_bench
 
     scenes = _scene_args(args.scenes)
     for option in ("json", "junit", "plot", "markdown"):
@@ -204,6 +204,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     add_bench_parser(sub)
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
-    from ..cli import run_command
+    from reference_impl.cli import run_command
 
     return run_command(args)

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import mpmath
 
-from .potentials import Ellipsoid
+from reference_impl.potentials import Ellipsoid
 
 __all__ = [
     "PAPER_ELLIPSOID",

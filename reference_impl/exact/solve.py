@@ -30,16 +30,16 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.optimize import elementwise
 
-from ._branches import branch_integrals, compiled_nodes, dq_dx
-from ._fused import fused_impact
-from ._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
-from ._quadrature import integrate_left_singular
-from ._truth import solve_impact_mp
-from .damping import _check_zeta
-from .errors import HCVInputError
-from .potentials._checks import positive
-from .potentials.base import Potential
-from .potentials.power import PowerLaw
+from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
+from reference_impl.exact._one_call import fused_impact
+from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
+from reference_impl.exact._quadrature import integrate_left_singular
+from reference_impl.exact._truth import solve_impact_mp
+from reference_impl.theory.damping import _check_zeta
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "ImpactSolution",
@@ -280,7 +280,7 @@ def solve_impact(
     zeta : float
         Damping ratio of the universal law, 0 <= zeta <= ZETA_MAX, except for the
         narrow band just below 1 where the theory's end of contact leaves float64
-        range (see `reference_impl._oscillator.S_END_MAX`); 0 is conservative.
+        range (see `reference_impl.exact._oscillator.S_END_MAX`); 0 is conservative.
     level : int, optional
         Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
         (power laws, and compiled families whose exponents have small

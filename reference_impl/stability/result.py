@@ -1,7 +1,7 @@
 """The outcome of one critical-step search (`DtCritResult`) and its JSON form.
 
-Built by `reference_impl.dtcrit.search_scene` (which re-exports it); the failure
-kinds are described in `reference_impl.dtcrit`.
+Built by `reference_impl.stability.search.search_scene` (which re-exports it); the failure
+kinds are described in `reference_impl.stability.search`.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ class DtCritResult:
     dt_tangent : float
         2 sqrt(m / max_[0, q_max] U'') (s), the linearised limit at the stiffest point.
     recommended_dt : float
-        The recommended step (s), `reference_impl.dtcrit_map.recommended_step`.
+        The recommended step (s), `reference_impl.studies.dtcrit_map.recommended_step`.
     lane_steps : int
         Verlet steps integrated by the whole `search_scene` call (all lanes).
     engine : str

@@ -6,7 +6,7 @@ text), `SearchGrid` (scan and refinement), and the upper bounds of every
 user-controlled size (`MAX_N_STEPS`, `MAX_CONFIRM_STEPS`, `MAX_FACTOR`,
 `MAX_TOL`, `MAX_N_PHASES`, `MAX_SPEEDS`, `MAX_SCAN_POINTS`,
 `MAX_REFINE_POINTS`, `MAX_LANES_PER_CALL`), checked before any work. The
-search itself is `reference_impl.dtcrit.search_scene`, which re-exports these.
+search itself is `reference_impl.stability.search.search_scene`, which re-exports these.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import HCVInputError
-from .potentials.base import Potential
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential
 
 __all__ = [
     "KINDS",

@@ -1,7 +1,7 @@
 """Speed against error: work-precision data for the exact solver and ODE integrators.
 
 Each method solves the same impact; its results are compared with a 30-digit
-mpmath ground truth (`reference_impl.impact.solve_impact_mp`, validated against
+mpmath ground truth (`reference_impl.exact.solve.solve_impact_mp`, validated against
 the Taylor ODE solver and direct physical quadratures in the suite) and its
 wall time is the median of repeats in the same process. Errors reported:
 
@@ -23,11 +23,11 @@ import mpmath
 import numpy as np
 import pandas as pd
 
-from .impact import solve_impact
-from .integrators.ivp import integrate_impact
-from .paper import PAPER_MASS, paper_ellipsoid
-from .potentials import PowerLaw
-from .potentials.base import Potential
+from reference_impl.exact.solve import solve_impact
+from reference_impl.integrators.ivp import integrate_impact
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.potentials import PowerLaw
+from reference_impl.potentials.base import Potential
 
 __all__ = [
     "FAMILY_ZETA",
@@ -86,7 +86,7 @@ def family_scenes() -> list[WPScene]:
     the Hertz row are read from the one scene catalogue (``hcv scenes --show
     sphere-damped``), so the names in the README's speed table work in every command.
     """
-    from .scenes import load_scene
+    from reference_impl.scenes import load_scene
 
     z, fam = FAMILY_ZETA, FAMILY_IVP_METHODS
 
@@ -193,7 +193,7 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
     key = (repr(sc.potential), sc.m, sc.v0, sc.zeta, dps)
     if key in _TRUTH_CACHE:
         return _TRUTH_CACHE[key]
-    from .impact import solve_impact_mp
+    from reference_impl.exact.solve import solve_impact_mp
 
     ref = solve_impact_mp(sc.potential, sc.m, sc.v0, sc.zeta, dps=dps)
     pot, m = sc.potential, sc.m

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from .errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["VirtualOscillator", "ZETA_MAX", "S_END_MAX"]
 

@@ -1,6 +1,6 @@
 """The map of measured Delta t_crit / Delta t_safe (report data) and the recommended step.
 
-`dt_crit_map` runs `reference_impl.dtcrit.search_scene` over power laws
+`dt_crit_map` runs `reference_impl.stability.search.search_scene` over power laws
 p in [0.5, 5], the paper's ellipsoid at the three Table 1 speeds, a sphere and
 a potential whose supremum of U'/sqrt(2U) is interior (`SaturatingForce`), for
 each scene kind, and returns one row per (case, speed, scene).
@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from .dtcrit import (
+from reference_impl.stability.search import (
     KINDS,
     Criterion,
     EnergyGrowth,
@@ -31,9 +31,9 @@ from .dtcrit import (
     search_scene,
     tangent_step,
 )
-from .errors import HCVInputError
-from .integrators.verlet import SaturatingForce
-from .potentials import Ellipsoid, Potential, PowerLaw, Sphere
+from reference_impl.errors import HCVInputError
+from reference_impl.integrators.verlet import SaturatingForce
+from reference_impl.potentials import Ellipsoid, Potential, PowerLaw, Sphere
 
 __all__ = [
     "MapCase",
@@ -148,7 +148,7 @@ def recommended_step(potential: Potential, m: float, v0: float, kind: str) -> fl
     there is no recommendation (NaN), never an error. The factors
     c_kind (`RECOMMEND_FACTOR`, `RECOMMEND_FACTOR_SINGULAR`) are the smallest
     measured dt_crit / (2 sqrt(m / k_t)) divided by 1.3 to 1.7;
-    `reference_impl.dtcrit_map.dt_crit_map` reports the margin dt_crit / dt_rec
+    `reference_impl.studies.dtcrit_map.dt_crit_map` reports the margin dt_crit / dt_rec
     of every case (column recommended_ratio).
 
     Returns
@@ -277,7 +277,7 @@ def dt_crit_map(
         impacts), q_max (m), geometry, dt_safe, dt_shortcut, dt_tangent,
         dt_crit, dt_stable, dt_crit_onset (s), ratio = dt_crit / dt_safe,
         holds (False only for a runaway below dt_safe), failure_kind
-        ("runaway", "bounded", "accuracy" or None, see `reference_impl.dtcrit`),
+        ("runaway", "bounded", "accuracy" or None, see `reference_impl.stability.search`),
         runaway_evidence ("confirmed" or "domain"), dt_bounded (s) and
         bounded_ratio = dt_bounded / dt_safe with bounded_E_max_over_E0 (the
         smallest bounded excursion below dt_crit), dt_accuracy (s) and

@@ -44,9 +44,9 @@ import numba
 import numpy as np
 import sympy as sp
 
-from .potentials.base import Potential, SumPotential
-from .potentials.power import PowerLaw
-from .potentials.volumetric import Ellipsoid, Sphere
+from reference_impl.potentials.base import Potential, SumPotential
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["NodeKernel", "node_function", "node_kernel", "expression_sympy", "substitution_order"]
 

@@ -45,7 +45,7 @@ q_max = (n E / k)^(1/n):
     int_0^q_max sqrt(E - U) dq   = q_max sqrt(E)   * B(1/n, 3/2) / n
 
 (substitute q = q_max y^(1/n) to get Euler's Beta integral); they live in
-`reference_impl.action_closed`.
+`reference_impl.theory.action_closed`.
 """
 
 from __future__ import annotations
@@ -56,9 +56,9 @@ from numbers import Real
 import mpmath
 import numpy as np
 
-from .errors import HCVInputError
-from .potentials.base import Potential
-from .potentials.power import PowerLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "action",

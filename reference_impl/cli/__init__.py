@@ -17,7 +17,7 @@ import sys
 import time
 from collections.abc import Sequence
 
-from .errors import HCVInputError, UnsupportedError
+from reference_impl.errors import HCVInputError, UnsupportedError
 
 __all__ = ["main", "run_command", "solve_scene"]
 
@@ -55,9 +55,9 @@ def solve_scene(scene) -> list[dict]:
     the total force vanishes, as in codes that forbid tension), action J(E) and
     period T(E) with the paper's definitions (section 4) at E = m v0^2 / 2.
     """
-    from .action import action, period
-    from .impact import solve_impact
-    from .stability import dt_safe
+    from reference_impl.theory.action import action, period
+    from reference_impl.exact.solve import solve_impact
+    from reference_impl.stability.bound import dt_safe
 
     zeta = scene.zeta or 0.0
     rows = []
@@ -135,7 +135,7 @@ def _fmt(v) -> str:
 
 
 def _cmd_solve(args) -> int:
-    from .scenes import load_scene
+    from reference_impl.scenes import load_scene
 
     scene = load_scene(args.scene)
     if scene.kind != "impact":
@@ -243,7 +243,7 @@ _MAX_REPORT_WORKERS = 256
 def _cmd_report(args) -> int:
     from rich.console import Console
 
-    from .report import build_report
+    from reference_impl.report import build_report
 
     _check_out_dir(args.out)
     if not 0 <= args.workers <= _MAX_REPORT_WORKERS:
@@ -295,7 +295,7 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from .scenes import embedded_scenes, load_scene, scene_toml
+    from reference_impl.scenes import embedded_scenes, load_scene, scene_toml
 
     if args.show:
         print(scene_toml(args.show), end="")
@@ -311,8 +311,8 @@ def _cmd_scenes(args) -> int:
 
 
 def _cmd_dt_crit(args) -> int:
-    from .dtcrit import search_loaded_scene
-    from .scenes import load_scene
+    from reference_impl.stability.search import search_loaded_scene
+    from reference_impl.scenes import load_scene
 
     scene = load_scene(args.scene)
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
@@ -429,10 +429,10 @@ def _parser() -> argparse.ArgumentParser:
         "--show", metavar="NAME", help="print this scene's TOML (a catalogue name or a file)"
     )
     ls.set_defaults(func=_cmd_scenes)
-    from .bench.command import add_bench_parser
+    from reference_impl.cli.bench import add_bench_parser
 
     add_bench_parser(sub)
-    from .sweep.command import add_parser as add_sweep_parser
+    from reference_impl.cli.sweep import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
     return p

@@ -55,7 +55,7 @@ scan step below the first failing grid point can be missed; in chaotic regimes
 (e.g. q^2/(1+q^2) at high speed) the outcome of a lane can change with the
 last bits of Delta t, so Delta t_crit there is known only to that extent.
 
-Beyond the paper, `reference_impl.dtcrit_map.recommended_step` gives a step
+Beyond the paper, `reference_impl.studies.dtcrit_map.recommended_step` gives a step
 that the same searches found safe on every case measured.
 """
 
@@ -68,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .dtcrit_criteria import (
+from reference_impl.stability.criteria import (
     FAILURE_KINDS,
     KINDS,
     MAX_CONFIRM_STEPS,
@@ -88,16 +88,16 @@ from .dtcrit_criteria import (
     default_criterion,
     parse_criterion,
 )
-from .dtcrit_result import DtCritResult
-from .integrators.verlet import (
+from reference_impl.stability.result import DtCritResult
+from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
     SCENE_WALLS,
     STATUS_NAMES,
     LaneBatch,
     run_lanes,
 )
-from .potentials.base import Potential
-from .stability import dt_safe as _dt_safe
+from reference_impl.potentials.base import Potential
+from reference_impl.stability.bound import dt_safe as _dt_safe
 
 __all__ = [
     "KINDS",
@@ -492,7 +492,7 @@ def search_scene(
         Lane engine (auto: numba for known families).
     recommend : callable, None or "default"
         ``recommend(potential, m, v0, kind) -> float`` filling ``recommended_dt``;
-        "default" is `reference_impl.dtcrit_map.recommended_step`, None leaves NaN.
+        "default" is `reference_impl.studies.dtcrit_map.recommended_step`, None leaves NaN.
 
     Returns
     -------
@@ -501,7 +501,7 @@ def search_scene(
     """
     vs, z, crit = _validated(potential, m, velocities, kind, gap, zeta, criterion)
     if isinstance(recommend, str):
-        from .dtcrit_map import recommended_step as recommend  # the map module imports this one
+        from reference_impl.studies.dtcrit_map import recommended_step as recommend  # the map module imports this one
     info, searches, main_of = [], [], []
     for v0 in vs:
         ss = _dt_safe(potential, m, v0)

@@ -18,7 +18,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import HCVInputError
+from reference_impl.errors import HCVInputError
 
 __all__ = ["add_parser", "run", "run_sweep"]
 
@@ -146,9 +146,9 @@ def run_sweep(
     ``interrupted`` (True after Ctrl-C; the results so far are written, the
     cluster closed). Raises `HCVInputError` for bad options (nothing run).
     """
-    from ._output import CaseStore, consolidate, write_parquet, write_summary
-    from ._runner import dask_available, iter_outcomes, open_client
-    from ._tasks import run_case
+    from reference_impl.sweep._output import CaseStore, consolidate, write_parquet, write_summary
+    from reference_impl.sweep._runner import dask_available, iter_outcomes, open_client
+    from reference_impl.sweep._tasks import run_case
 
     if workers is not None and workers < 1:
         raise HCVInputError(f"--workers must be >= 1, got {workers}")
@@ -248,7 +248,7 @@ def run_sweep(
 
 def run(args) -> int:
     """``hcv sweep`` for parsed arguments; returns the exit status."""
-    from ._spec import load_spec
+    from reference_impl.sweep._spec import load_spec
 
     try:
         spec = load_spec(args.spec)

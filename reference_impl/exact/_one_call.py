@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ._branches import (
+from reference_impl.exact._branches import (
     _EPS,
     _GJ_BETA_MIN,
     _GJ_RTOL,
@@ -47,7 +47,7 @@ from ._branches import (
     level_up,
     per_potential,
 )
-from ._kernels import (
+from reference_impl.exact._nodes import (
     _TERM_POWER,
     NodeKernel,
     _terms_eval,
@@ -56,9 +56,9 @@ from ._kernels import (
     specialise,
     substitution_order,
 )
-from ._oscillator import VirtualOscillator
-from ._quadrature import rule
-from .potentials.base import Potential
+from reference_impl.exact._oscillator import VirtualOscillator
+from reference_impl.exact._quadrature import rule
+from reference_impl.potentials.base import Potential
 
 __all__ = ["fused_impact", "gauss_jacobi_impact"]
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .potentials.base import Potential
+from reference_impl.potentials.base import Potential
 
 __all__ = [
     "SafeStep",

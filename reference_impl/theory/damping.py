@@ -12,10 +12,10 @@ import math
 
 import numpy as np
 
-from .errors import HCVInputError
-from .harmonic_map import HarmonicMap
-from .potentials._checks import finite
-from .potentials.power import PowerLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.theory.harmonic_map import HarmonicMap
+from reference_impl.potentials._checks import finite
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "UniversalDamping",

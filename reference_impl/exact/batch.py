@@ -16,7 +16,7 @@ import math
 import numba
 import numpy as np
 
-from ._branches import (
+from reference_impl.exact._branches import (
     _EPS,
     _GJ_BETA_MIN,
     _GJ_RTOL,
@@ -28,12 +28,12 @@ from ._branches import (
     _jacobi_pair,
     _pow_split,
 )
-from .damping import _check_zeta
-from .errors import HCVInputError
-from .impact import ImpactSolution, _check_exponent, _validated_top, solve_impact
-from .potentials._checks import positive
-from .potentials.base import Potential
-from .potentials.power import PowerLaw
+from reference_impl.theory.damping import _check_zeta
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import ImpactSolution, _check_exponent, _validated_top, solve_impact
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["solve_impacts", "BATCH_MAX"]
 

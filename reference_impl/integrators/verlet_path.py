@@ -23,8 +23,8 @@ import numba
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
-from ..integrators.verlet import _force_energy, kernel_terms
-from ..workprecision import _median_time
+from reference_impl.integrators.verlet import _force_energy, kernel_terms
+from reference_impl.studies.workprecision import _median_time
 
 __all__ = ["VerletPath", "verlet_impact", "verlet_row"]
 
@@ -139,7 +139,7 @@ def _rel(a: float, b: float) -> float:
 def verlet_row(sc, truth, steps_per_contact: int) -> dict:
     """Work-precision row of velocity Verlet with dt = t_contact / steps_per_contact.
 
-    The callback `reference_impl.workprecision.work_precision` expects: errors
+    The callback `reference_impl.studies.workprecision.work_precision` expects: errors
     against the mpmath ``truth`` and the median wall time of a whole impact.
     """
     dt = truth.contact_time / steps_per_contact

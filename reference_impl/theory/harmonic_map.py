@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from .errors import HCVInputError
-from .potentials._checks import positive
-from .potentials.base import Potential, is_mp
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials._checks import positive
+from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["HarmonicMap"]
 

@@ -1,0 +1,1 @@
+"""Section 6: the safe step, the critical-step search, its criteria and results."""

@@ -1,0 +1,1 @@
+"""The paper's theory: the harmonic map, the action, the universal damping law."""
