@@ -44,7 +44,7 @@ EXAMPLE_C = ROOT / "docs" / "examples" / "power_verlet.c"
 MARGIN = 1.5
 # Its convergence order must fall this far below the limit (orders are not ratios).
 ORDER_MARGIN = 0.2
-_FEW = settings(max_examples=8, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+_FEW = settings(max_examples=6, suppress_health_check=[HealthCheck.too_slow], deadline=None)
 
 
 def _potential(draw, family: str, p) -> dict:
@@ -153,7 +153,7 @@ def _assert_fails_on(result, metric: str, scene, *, order: bool = False):
         )
 
 
-@settings(max_examples=5, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@settings(max_examples=4, suppress_health_check=[HealthCheck.too_slow], deadline=None)
 @given(data=st.data())
 @pytest.mark.parametrize(
     "code", ["constant-dashpot", "flipped-sign", "lagged-force", "first-order"]

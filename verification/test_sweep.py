@@ -322,10 +322,13 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
     summary = (out / "summary.md").read_text(encoding="utf-8")
     assert_true(
         "| potential.p | mass |" in summary
+        and "dt_crit [s]" in summary
+        and "failure_kind" in summary
+        and "- failure kinds: " in summary
         and (out / "summary.png").stat().st_size > 0
         and (out / "spec.toml").read_text(encoding="utf-8") == _SPEC,
         got=summary[:300],
-        should="a table, a figure and the spec",
+        should="a table with units and failure kinds, a figure and the spec",
         claim="sweep",
         call="summary.md",
     )
