@@ -46,3 +46,18 @@ def report(session: nox.Session) -> None:
     session.run(
         "python", "-m", "pytest", "verification/test_report.py", env={"HYPOTHESIS_PROFILE": "ci"}
     )
+
+
+@nox.session(python="3.11", name="committed-report")
+def committed_report(session: nox.Session) -> None:
+    """The report committed in reports/: from a clean commit, with LAMMPS and Kratos side by
+    side, so that its provenance names HEAD without "uncommitted changes" (issue 17).
+
+    Refuses to run on a dirty work tree; commit (or stash) first, then commit what it
+    rewrites (reports/ and the README's generated blocks).
+    """
+    dirty = session.run("git", "status", "--porcelain", silent=True, external=True)
+    if dirty and dirty.strip():
+        session.error("the work tree has uncommitted changes; commit or stash them first")
+    session.install("-e", ".[report,test,lammps,kratos]")
+    session.run("hcv", "report", "--adapter", "lammps", "--adapter", "kratos")

@@ -33,7 +33,8 @@ def pytest_addoption(parser):
         default=None,
         metavar="SPEC",
         help="adapter to benchmark: package.module:Class, a registered name "
-        "(reference, lammps) or cmd:COMMAND",
+        "(kratos, lammps, reference, subprocess; variants as kratos[hertz,verlet] or "
+        "lammps[tsuji]) or cmd:COMMAND",
     )
     group.addoption(
         "--contact-scenes",

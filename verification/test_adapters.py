@@ -402,7 +402,7 @@ def test_python_adapter_isolated_in_a_worker(cls, message):
 
 def test_tolerances_override_and_validation(tmp_path):
     tol = load_tolerances({"restitution_exact": {"rtol": 1e-9}})
-    assert tol["restitution_exact"]["rtol"] == 1e-9 and tol["contact_time"]["rtol"] == 5e-3
+    assert tol["restitution_exact"]["rtol"] == 1e-9 and tol["contact_time"]["rtol"] == 1e-3
     bad = tmp_path / "bad.toml"
     for text, message in (
         ("[restitution_exakt]\nrtol = 1", "did you mean 'restitution_exact'"),
@@ -451,7 +451,10 @@ def test_gate_exit_statuses(tmp_path):
     fast = tmp_path / "fast.toml"
     fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
     strict = tmp_path / "strict.toml"
-    strict.write_text(fast.read_text() + "[restitution_exact]\nrtol = 1e-9\n")
+    # the limit is base + factor x textbook Verlet's error: both made strict
+    strict.write_text(
+        fast.read_text() + "[restitution_exact]\nrtol = 1e-9\n[allowance]\ntextbook_verlet = 1e-9\n"
+    )
     base = [*_bench_command(), cmd(), "--scenes", str(tmp_path / "s.toml"), "--gate"]
     ok = _run([*base, "--tolerances", str(fast), "--junit", str(tmp_path / "ok.xml")], tmp_path)
     assert ok.returncode == 0, ok.stdout + ok.stderr
@@ -477,7 +480,7 @@ def test_pytest_plugin_makes_one_test_per_scene_and_metric(tmp_path):
     strict = tmp_path / "strict.toml"
     strict.write_text(
         "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
-        "[restitution_exact]\nrtol = 1e-9\n"
+        "[restitution_exact]\nrtol = 1e-9\n[allowance]\ntextbook_verlet = 1e-9\n"
     )
     # The plugin arrives through its pytest11 entry point (pyproject), as in a user's CI.
     r = _run(

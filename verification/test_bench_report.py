@@ -101,10 +101,10 @@ def test_columns_measured_reference_error_tolerance():
     res = _result()
     lines = scorecard_text(res).splitlines()
     header = next(line for line in lines if line.startswith("adapter"))
-    assert header.split() == ["adapter", "scene", "metric", "measured", "reference", "error",
-                              "tolerance", "result"]  # fmt: skip
+    assert header.split() == ["adapter", "scene", "metric", "v0", "measured", "reference",
+                              "error", "tolerance", "result"]  # fmt: skip
     row = next(line for line in lines if "restitution_asked" in line and "FAIL" in line[-4:])
-    assert row.split()[3:6] == ["0.7", "0.7292", "0.04"]
+    assert row.split()[3:7] == ["5", "0.7", "0.7292", "0.04"]
     cols = metric_columns(res, res.metrics[0])
     assert (cols["measured"], cols["reference"], cols["v0"]) == (0.70, 0.7292, 5.0)
     md = scorecard_markdown(res)

@@ -174,3 +174,26 @@ def test_report_workers_out_of_range_is_refused_before_work(tmp_path):
         "naming --workers -1 [cli, hcv report --workers -1]"
     )
     assert not out.exists(), f"got {out} written, should be untouched [cli, hcv report]"
+
+
+def test_the_readme_examples_leave_no_untracked_files():
+    """The C example's binary, its JSON and the sweep example's output are ignored (issue 17)."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    if shutil.which("git") is None or not (root / ".git").exists():
+        pytest.skip("not a git work tree")
+    paths = ["pv", "power_verlet", "c.json", "out/results.parquet", "sweep-hertz-map/summary.md"]
+    r = subprocess.run(["git", "check-ignore", *paths], cwd=root, capture_output=True, text=True)
+    assert r.stdout.split() == paths, f"got ignored {r.stdout.split()}, should be {paths}"
+
+
+def test_the_readme_cites_the_paper_by_its_arxiv_identifier():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    assert "arXiv:2604.02533" in text and "../shared" not in text, (
+        "got a path a clone does not have, should cite arXiv 2604.02533 [README]"
+    )

@@ -439,9 +439,13 @@ def _ctx(quantity: str, value: float, exact: float) -> SceneContext:
                 exact=dict(ex),
                 measured=dict(meas),
                 dt_crit={"ratio": 1.0, "verlet_ratio": 1.0, "dt_crit": 1.0},
+                textbook=dict.fromkeys(
+                    ("restitution", "contact_time", "max_penetration", "energy_ratio", "tensile"),
+                    0.0,
+                ),
             )
         )
-    ctx.order = 2.0
+    ctx.order = ctx.textbook_order = 2.0
     return ctx
 
 

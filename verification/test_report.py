@@ -413,3 +413,46 @@ def test_report_with_adapter_has_scorecard(tmp_path):
     assert "Contact codes benchmarked" in md and "| reference" in md
     assert "### Side by side" in md and "| measured | expected | error | tolerance |" in md
     assert (tmp_path / "bench").is_dir() and any((tmp_path / "bench").glob("*.json"))
+
+
+def test_progress_names_every_stage_with_its_count(report):
+    """Off a terminal ``hcv report`` prints these lines (issue 17, first hour item 4)."""
+    import re
+
+    _, _, messages = report
+    stages = [re.search(r"\(stage (\d+) of (\d+)\)", m) for m in messages]
+    counts = [(int(s.group(1)), int(s.group(2))) for s in stages if s]
+    assert counts, f"got {messages[:5]}, should name stages with counts [{CALL}]"
+    n = counts[0][1]
+    assert [k for k, _ in counts] == list(range(1, n + 1)), (
+        f"got stages {counts}, should be 1..{n} in order [{CALL}]"
+    )
+
+
+def test_a_run_without_adapters_keeps_another_runs_figures(tmp_path):
+    from reference_impl.report._files import swap_in
+
+    out = tmp_path / "reports"
+    (out / "figures").mkdir(parents=True)
+    (out / "figures" / "bench_kratos.png").write_bytes(b"kratos")
+    (out / "figures" / "fig1.png").write_bytes(b"old")
+    with swap_in(out) as new:
+        (new / "figures").mkdir()
+        (new / "figures" / "fig1.png").write_bytes(b"new")
+    assert (out / "figures" / "bench_kratos.png").read_bytes() == b"kratos"
+    assert (out / "figures" / "fig1.png").read_bytes() == b"new"
+
+
+def test_report_into_an_uncreatable_directory_is_one_line_exit_2(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "report", "--out", "/proc/x", "--quick"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=120,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "/proc/x" in r.stderr, r.stderr

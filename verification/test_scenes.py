@@ -465,3 +465,51 @@ def test_source_in_message_is_the_path(tmp_path):
     path.write_text(_BASE.replace("mass", "mas"))
     with pytest.raises(SceneError, match=str(Path(path)).replace("\\", "\\\\")):
         load_scene(path)
+
+
+# -- one catalogue (issue 17, first hour item 2) -------------------------------------------
+def test_every_scene_name_the_speed_table_and_report_show_is_in_the_catalogue():
+    """The work-precision study and the README's speed table name their scenes; each name
+    loads in every command (``load_scene``), and the four family rows are read from it."""
+    import math
+
+    from reference_impl.studies.workprecision import default_scenes, family_scenes
+
+    names = embedded_scenes()
+    for wp in [*family_scenes(), *default_scenes()]:
+        assert wp.name in names, (
+            f"got {wp.name!r} missing, should be in {names} [one catalogue, load_scene]"
+        )
+    sphere = load_scene("sphere-damped")
+    want = 7800.0 * 4.0 / 3.0 * math.pi * 0.01**3
+    assert abs(sphere.mass - want) <= 1e-15 * want, (
+        f"got {sphere.mass!r}, should be {want!r} [sphere-damped mass, steel R = 10 mm]"
+    )
+
+
+def test_scenes_show_prints_a_scene_toml_that_loads_back(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "scenes", "--show", "power-sum-damped"],
+        cwd=root, capture_output=True, text=True, timeout=120,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    back = parse_scene(r.stdout, "shown")
+    want = load_scene("power-sum-damped").to_dict()
+    got = back.to_dict()
+    assert (got["potential"], got["mass"], got["damping"]) == (
+        want["potential"],
+        want["mass"],
+        want["damping"],
+    ), f"got {got}, should be {want} [hcv scenes --show]"
+    bad = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "scenes", "--show", "no-such-scene"],
+        cwd=root, capture_output=True, text=True, timeout=120,
+        env={"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin"},
+    )  # fmt: skip
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr

@@ -277,7 +277,7 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
     out = tmp_path / "out"
     code, stdout, err = _cli(["sweep", str(spec_path), "--workers", "2", "--out", str(out)], capsys)
     assert_true(
-        code == 1 and "6 cases ok, 2 failed" in stdout,
+        code == 1 and "6 cases ran, 2 failed to run" in stdout,
         got=f"exit {code}: {stdout}{err}",
         should="exit 1 (some cases failed), 6 ok, 2 failed",
         claim="sweep",
@@ -322,10 +322,13 @@ def test_sweep_end_to_end_with_failing_cases_and_resume(tmp_path, capsys):
     summary = (out / "summary.md").read_text(encoding="utf-8")
     assert_true(
         "| potential.p | mass |" in summary
+        and "dt_crit [s]" in summary
+        and "failure_kind" in summary
+        and "- failure kinds: " in summary
         and (out / "summary.png").stat().st_size > 0
         and (out / "spec.toml").read_text(encoding="utf-8") == _SPEC,
         got=summary[:300],
-        should="a table, a figure and the spec",
+        should="a table with units and failure kinds, a figure and the spec",
         claim="sweep",
         call="summary.md",
     )
@@ -796,3 +799,82 @@ def test_spec_with_options_composes_adapter_specs():
     assert spec_with_options("lammps", {}) == "lammps"
     with pytest.raises(SweepSpecError.__mro__[1]):  # HCVInputError
         spec_with_options("lammps", {"damping": "a,b"})
+
+
+@needs_dask
+def test_a_bench_sweep_whose_metrics_fail_says_so_and_exits_1(tmp_path, capsys):
+    """Runs that all break (a flipped sign) are cases that ran but failed their
+    scorecard: not "2 cases ok" and exit 0 (issue 17)."""
+    spec = tmp_path / "bench.toml"
+    spec.write_text(
+        textwrap.dedent(
+            """
+            task = "bench:verification._wrong_codes:FlippedSign"
+            [scene]
+            name = "s"
+            mass = 0.01
+            velocities = [1.0]
+            kind = "impact"
+            [scene.potential]
+            family = "power"
+            k = 1e6
+            p = 1.0
+            [sweep]
+            "potential.p" = [1.0, 1.5]
+            """
+        ),
+        encoding="utf-8",
+    )
+    out = tmp_path / "out"
+    code, stdout, err = _cli(["sweep", str(spec), "--workers", "1", "--out", str(out)], capsys)
+    assert_true(
+        code == 1 and "2 of 2 benchmarked cases did not pass" in stdout,
+        got=f"exit {code}: {stdout}{err}",
+        should="exit 1, both scorecards failed",
+        claim="sweep",
+        call="hcv sweep bench:FlippedSign",
+    )
+    summary = (out / "summary.md").read_text()
+    assert_true(
+        "scorecards: 0 of 2 (case, variant) passed; 2 fail" in summary,
+        got=summary[:600],
+        should="the summary counts the failed scorecards",
+        claim="sweep",
+        call="summary.md",
+    )
+
+
+
+@needs_dask
+def test_ctrl_c_on_a_sweep_prints_one_line(tmp_path):
+    """Ctrl-C reaches the whole process group; the workers must not print tracebacks."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    p = subprocess.Popen(
+        [sys.executable, "-m", "reference_impl.cli", "sweep",
+         str(root / "docs" / "examples" / "sweep-hertz-map.toml"), "--workers", "2",
+         "--out", str(tmp_path / "out")],
+        cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )  # fmt: skip
+    while True:  # the cluster is up once progress is printed
+        line = p.stderr.readline()
+        if line.startswith("sweep:") or not line:
+            break
+    time.sleep(0.5)
+    os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
+    _, err = p.communicate(timeout=120)
+    rest = [x for x in err.splitlines() if not x.startswith("sweep:")]
+    assert_true(
+        p.returncode == 130 and rest == ["interrupted"],
+        got=f"exit {p.returncode}, stderr {err[-800:]!r}",
+        should="exit 130 and the one line 'interrupted'",
+        claim="sweep",
+        call="Ctrl-C on hcv sweep",
+    )

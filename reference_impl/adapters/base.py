@@ -554,6 +554,10 @@ class ContactAdapter:
     Class attributes
     ----------------
     name : str
+    # Constructor arguments a spec may give by value alone (``kratos[hertz,verlet]``):
+    # key -> accepted values; a ``True`` flag key is given by its own name
+    # (``lammps[tsuji,limit_damping]``). Listed by ``hcv bench --help``.
+    spec_values: dict = {}
         Registry-style name of the code ("lammps", "reference", ...).
     isolate : bool
         Run this adapter in a worker process (crash and hang isolation). True by

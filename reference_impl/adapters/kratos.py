@@ -186,6 +186,7 @@ class KratosAdapter(ContactAdapter):
 
     name = "kratos"
     isolate = True
+    spec_values = {"law": tuple(LAWS), "scheme": tuple(SCHEMES), "geometry": GEOMETRIES}
 
     def __init__(
         self,

@@ -188,6 +188,7 @@ class LammpsAdapter(ContactAdapter):
 
     name = "lammps"
     isolate = True
+    spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
 
     def __init__(
         self,

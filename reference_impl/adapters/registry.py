@@ -21,7 +21,10 @@ pytest does with its rootdir), so ``my_adapter:MyCode`` finds ``./my_adapter.py`
 
 A name or an import path may end with constructor arguments in brackets,
 ``lammps[damping=tsuji,geometry=pair]``; values are read as int, float, true/
-false, none, else as strings. Every problem raises `HCVInputError` with one line
+false, none, else as strings. A value an adapter lists in ``spec_values`` may be
+given alone, as the scorecard prints its labels: ``kratos[hertz,verlet]`` is
+``kratos[law=hertz,scheme=verlet]``, ``lammps[tsuji,limit_damping]`` is
+``lammps[damping=tsuji,limit_damping=true]`` (`adapter_help` lists them). Every problem raises `HCVInputError` with one line
 (the CLI exits with status 2).
 """
 
@@ -39,6 +42,7 @@ from reference_impl.adapters.base import ContactAdapter
 
 __all__ = [
     "ENTRY_POINT_GROUP",
+    "adapter_help",
     "get_adapter",
     "parse_spec",
     "register",
@@ -133,15 +137,23 @@ def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
             f"adapter spec {spec!r} is malformed; use NAME, NAME[key=value,...], "
             "package.module:Class or cmd:COMMAND"
         )
-    return m.group("target").strip(), _kwargs(m.group("args") or "", spec)
+    return m.group("target").strip(), _kwargs(m.group("args") or "", spec, bare_ok=True)
 
 
-def _kwargs(text: str, spec: str) -> dict[str, Any]:
-    """``key=value,...`` as keyword arguments (a repeated key is refused)."""
+# Key under which `parse_spec` hands bare values (no "=") to `get_adapter`.
+_BARE = "__bare__"
+
+
+def _kwargs(text: str, spec: str, bare_ok: bool = False) -> dict[str, Any]:
+    """``key=value,...`` as keyword arguments (a repeated key is refused); with
+    ``bare_ok`` values without a key are kept under `_BARE` for `get_adapter`."""
     kwargs: dict[str, Any] = {}
     for part in filter(None, (p.strip() for p in text.split(","))):
         key, sep, val = part.partition("=")
         key = key.strip()
+        if not sep and bare_ok and key:
+            kwargs.setdefault(_BARE, []).append(key)
+            continue
         if not sep or not key.isidentifier():
             raise HCVInputError(f"adapter argument {part!r} in {spec!r} must be key=value")
         if key in kwargs:
@@ -196,6 +208,7 @@ def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
         return spec
     target, kwargs = parse_spec(spec)
     cls = resolve_class(target)
+    _resolve_bare(cls, kwargs, spec)
     missing = _missing_arguments(cls, kwargs)
     if missing:
         hint = (
@@ -210,6 +223,47 @@ def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
         raise
     except TypeError as exc:
         raise HCVInputError(f"adapter {spec!r}: bad arguments ({exc})") from None
+
+
+def _resolve_bare(cls: type, kwargs: dict, spec: str) -> None:
+    """Map values given alone (``kratos[hertz,verlet]``) to their keys (``spec_values``)."""
+    values = getattr(cls, "spec_values", {}) or {}
+    for v in kwargs.pop(_BARE, []):
+        keys = [
+            k
+            for k, allowed in values.items()
+            if (allowed is True and v == k) or (allowed is not True and v in allowed)
+        ]
+        if len(keys) != 1:
+            known = "; ".join(_values_text(k, a) for k, a in values.items())
+            raise HCVInputError(
+                f"adapter argument {v!r} in {spec!r} must be key=value"
+                + (f" or one of the values {known}" if known else "")
+                + (f" ({v!r} is a value of several keys)" if len(keys) > 1 else "")
+            )
+        key = keys[0]
+        if key in kwargs:
+            raise HCVInputError(f"adapter argument {key!r} repeats in {spec!r}")
+        kwargs[key] = True if values[key] is True else v
+
+
+def _values_text(key: str, allowed) -> str:
+    return f"{key} (flag)" if allowed is True else f"{key} = {' | '.join(map(str, allowed))}"
+
+
+def adapter_help() -> str:
+    """One line per registered adapter: its keys and the values they take (``--help``)."""
+    lines = []
+    for name in registered():
+        try:
+            cls = resolve_class(name)
+        except HCVInputError:
+            continue
+        values = getattr(cls, "spec_values", {}) or {}
+        keys = "; ".join(_values_text(k, a) for k, a in values.items())
+        lines.append(f"  {name}: {keys}" if keys else f"  {name}")
+    lines.append("  cmd[sustained=true,timeout=S,label=NAME,cwd=DIR]:COMMAND")
+    return "\n".join(lines)
 
 
 def _missing_arguments(cls: type, kwargs: dict) -> list[str]:

@@ -13,7 +13,7 @@ __all__: list[str] = []  # private to the bench package
 # How the status "error" is shown: it is ours (the reference's), not the code's.
 _OURS = "ERROR (ours)"
 _PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS}
-_UNITS = {"max_penetration": " m", "contact_time": " s"}
+_UNITS = {"max_penetration": " m", "contact_time": " s", "dt_crit": " dt_safe"}
 
 
 def _fmt(v) -> str:

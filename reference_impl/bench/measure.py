@@ -18,7 +18,15 @@ import numpy as np
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
 from reference_impl.potentials.power import PowerLaw
 
-__all__ = ["check_conventions", "exact_reference", "measure", "universal_zeta"]
+__all__ = [
+    "check_declared_law",
+    "check_conventions",
+    "contact_sample_times",
+    "exact_reference",
+    "exact_tensile_on_samples",
+    "measure",
+    "universal_zeta",
+]
 
 # Samples of the damped ODE on which the exact tensile peak is located.
 _TENSILE_SAMPLES = 4001
@@ -128,6 +136,79 @@ def _restitution_zero_force(q, v, f, end: int, v0: float) -> float:
     return float(-(v[i - 1] + fa / (fa - fb) * (v[i] - v[i - 1])) / v0)
 
 
+def contact_sample_times(tr: Trajectory, meas: dict) -> np.ndarray:
+    """Times of a trajectory's in-contact samples, counted back from its end of contact (s).
+
+    ``end - t[n]`` for every sample 1 <= n < end with q > 0, where ``end`` is the
+    measured (interpolated) contact time; counted from the onset (``-t[n]``) when
+    the run did not separate. `exact_tensile_on_samples` evaluates the exact law
+    at the same instants, so the tensile peak of a code and of the exact solution
+    are read off the same sampling (see `AttractiveForce`).
+    """
+    q, t = tr.q, tr.t
+    n_end = int(meas.get("steps", q.size - 1))
+    idx = np.nonzero(q[1:n_end] > 0)[0] + 1
+    if "contact_time" in meas:
+        return float(meas["contact_time"]) - t[idx]
+    return -t[idx]
+
+
+# ----------------------------------------------------------------------------
+# the declared law
+# ----------------------------------------------------------------------------
+# Bound of a declared damping, as an effective damping ratio C(q_max) / (2 sqrt(m k_eff))
+# with k_eff = U'(q_max) / q_max: the exact solver's own bound on zeta (beyond it the body
+# creeps back over ~zeta contact times and an ODE reference cannot finish).
+_MAX_DECLARED_ZETA = 1000.0
+
+
+def check_declared_law(law: ImplementedLaw, v0: float) -> None:
+    """Refuse a declared law no reference can be computed for, naming the field.
+
+    Raises
+    ------
+    HCVInputError
+        ``implemented_law.mass``, ``.damping.zeta``, ``.damping.c`` / ``.exponent``
+        or ``.potential`` out of range (e.g. no turning point at v0): a configuration
+        error of the code that declared it (``hcv bench`` exit status 2), not a failed
+        metric and not an error of ours.
+    """
+    from reference_impl.errors import HCVInputError
+
+    m = law.mass
+    if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
+        raise HCVInputError(f"implemented_law.mass must be a finite number > 0, got {m!r}")
+    if law.C is None and not (0.0 <= float(law.zeta or 0.0) <= _MAX_DECLARED_ZETA):
+        raise HCVInputError(
+            f"implemented_law.damping.zeta must be in [0, {_MAX_DECLARED_ZETA:g}], got {law.zeta!r}"
+        )
+    if isinstance(law.C, PowerDamping):
+        c, a = law.C.c, law.C.exponent
+        if not (math.isfinite(c) and c >= 0):
+            raise HCVInputError(f"implemented_law.damping.c must be finite and >= 0, got {c!r}")
+        if not (math.isfinite(a) and 0.0 <= a <= 20.0):
+            raise HCVInputError(f"implemented_law.damping.exponent must be in [0, 20], got {a!r}")
+    try:
+        q_max = law.potential.turning_point(0.5 * m * v0 * v0)
+    except HCVInputError as exc:
+        raise HCVInputError(f"implemented_law.potential at v0 = {v0:g} m/s: {exc}") from None
+    if law.C is not None:
+        try:
+            c_max = float(np.max(np.asarray(law.C(np.array([q_max])), dtype=float)))
+        except Exception as exc:
+            raise HCVInputError(
+                f"implemented_law.damping: C(q) fails at q = {q_max:.3g} m ({exc})"
+            ) from None
+        k_eff = float(law.potential._dU(np.array([q_max]))[0]) / q_max
+        zeta_eff = c_max / (2.0 * math.sqrt(m * k_eff)) if k_eff > 0 else math.inf
+        if not (math.isfinite(c_max) and c_max >= 0 and zeta_eff <= _MAX_DECLARED_ZETA):
+            raise HCVInputError(
+                f"implemented_law.damping: C(q_max) = {c_max:.3g} kg/s at v0 = {v0:g} m/s "
+                f"is an effective damping ratio {zeta_eff:.3g} > {_MAX_DECLARED_ZETA:g} "
+                "(the body would creep back over that many contact times)"
+            )
+
+
 # ----------------------------------------------------------------------------
 # exact references
 # ----------------------------------------------------------------------------
@@ -168,6 +249,36 @@ def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
         rtol=1e-10,
         t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES),
     )
+    q, v = res.q, res.v
+    inside = q > 0
+    if not np.any(inside):
+        return math.nan
+    F = law.potential._dU(q[inside]) + C(q[inside]) * v[inside]
+    return float(max(0.0, -np.min(F)) / np.max(F))
+
+
+def exact_tensile_on_samples(
+    law: ImplementedLaw, v0: float, t_end: float, back: np.ndarray
+) -> float:
+    """Exact tensile peak / peak force, sampled at the instants a code sampled (see below).
+
+    ``back`` are `contact_sample_times` of the code's trajectory: the exact
+    solution is evaluated at ``t_end - back`` (``-back`` when the code did not
+    separate), i.e. the code's sampling laid over the exact contact with the two
+    ends of contact aligned. A sampled peak at the end of contact (a linear
+    dashpot pulls hardest at q = 0) misses the continuous one by up to
+    |dF/dt| dt (0.011 of the peak force for Hooke, zeta = 0.1, at t_c/200): the
+    same sampling on both sides leaves only the integrator's own error.
+    """
+    from reference_impl.integrators.ivp import integrate_impact
+
+    if law.clips_tension:
+        return 0.0
+    if not (math.isfinite(t_end) and back.size):
+        return math.nan
+    ts = np.unique(np.clip(np.where(back >= 0, t_end - back, -back), 0.0, t_end))
+    C = law.damping_coefficient
+    res = integrate_impact(law.potential, law.mass, v0, C=C, rtol=1e-10, t_eval=ts)
     q, v = res.q, res.v
     inside = q > 0
     if not np.any(inside):

@@ -142,6 +142,7 @@ def _metric_dict(result, m) -> dict:
     d = m.to_dict()
     c = metric_columns(result, m)
     d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])
+    d["unit"] = c["unit"].strip()
     return d
 
 
@@ -306,7 +307,13 @@ def metric_columns(result, m) -> dict:
         "tolerance": tol,
         "v0": None,
         "unit": _UNITS.get(m.metric, ""),
+        "limit": getattr(m, "limit", None),
+        "rule": getattr(m, "rule", ""),
     }
+    if getattr(m, "rule", "") and m.status in ("pass", "fail"):
+        # the metric says what it compared, at which speed, and the bound it applied
+        out.update(measured=m.measured, reference=m.expected, error=m.error, v0=m.at_v0)
+        return out
     if getattr(m, "measured", None) is not None:
         out["measured"] = m.measured
         out["reference"] = getattr(m, "expected", None)
@@ -376,20 +383,53 @@ def _summary_lines(result) -> list[str]:
     return lines
 
 
-_COLUMNS = ("adapter", "scene", "metric", "measured", "reference", "error", "tolerance", "result")
+_COLUMNS = (
+    "adapter", "scene", "metric", "v0", "measured", "reference", "error", "tolerance", "result"
+)  # fmt: skip
+_RIGHT = {3, 4, 5, 6}
+
+
+def _common_speeds(result) -> dict:
+    """(scene, metric) -> the speed every code's row shows: the worst over the codes.
+
+    Per code, a metric reports its own worst speed; with several codes (variants) on
+    one scene, every row of a metric is read at one speed so that they compare side by
+    side (each code's own worst speed is in its FAIL line).
+    """
+    worst: dict = {}
+    for m in result.metrics:
+        if len({x.variant for x in result.metrics}) < 2:
+            return {}
+        if m.status not in ("pass", "fail") or not getattr(m, "per_v0", None):
+            continue
+        for r in m.per_v0:
+            lim, err = r.get("limit"), r.get("error")
+            score = err / lim if isinstance(err, float) and lim else math.inf
+            key = (m.scene, m.metric)
+            if key not in worst or score > worst[key][0]:
+                worst[key] = (score, r["v0"])
+    return {k: v[1] for k, v in worst.items()}
 
 
 def _rows(result, show_skipped: bool) -> list[list[str]]:
     rows = []
+    common = _common_speeds(result)
     for m in result.metrics:
         if m.status == "skip" and not show_skipped:
             continue
         c = metric_columns(result, m)
+        v0 = common.get((m.scene, m.metric))
+        if v0 is not None and v0 != c["v0"]:
+            at = next((r for r in m.per_v0 if r["v0"] == v0), None)
+            if at is not None:
+                c.update(measured=at["measured"], reference=at["expected"], error=at["error"])
+                c["v0"] = v0
         rows.append(
             [
                 m.variant,
                 m.scene,
                 m.metric,
+                f"{c['v0']:g}" if c["v0"] is not None else "all",
                 _fmt_v(c["measured"], c["unit"]),
                 _fmt_v(c["reference"], c["unit"]),
                 _fmt(c["error"]),
@@ -400,13 +440,32 @@ def _rows(result, show_skipped: bool) -> list[list[str]]:
     return rows
 
 
+def _legend_lines(result, show_skipped: bool) -> list[str]:
+    """The rule of every metric shown (what is compared with what), then skip reasons."""
+    lines, seen = [], set()
+    for m in result.metrics:
+        if m.status in ("pass", "fail") and getattr(m, "rule", "") and m.metric not in seen:
+            seen.add(m.metric)
+            lines.append(f"  {m.metric}: {m.rule}")
+    if lines:
+        lines = [
+            "rules (v0 in m/s; error is what the limit bounds; tolerance = base + factor x "
+            "textbook Verlet's error at the same step):"
+        ] + lines
+    if show_skipped:
+        for m in result.metrics:
+            if m.status == "skip":
+                lines.append(f"skip {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+    return lines
+
+
 def scorecard_text(result, show_skipped: bool = False) -> str:
     """The scorecard as full-width plain text: summary first, then the details table,
     then one line per failure (what ``hcv bench`` prints when stdout is not a terminal)."""
     lines = _summary_lines(result) + [""]
     rows = [list(_COLUMNS)] + [[*r[:-1], _PLAIN_STATUS[r[-1]]] for r in _rows(result, show_skipped)]
     widths = [max(len(r[i]) for r in rows) for i in range(len(_COLUMNS))]
-    right = {3, 4, 5}
+    right = _RIGHT
     for j, r in enumerate(rows):
         cells = [
             r[i].rjust(widths[i]) if i in right else r[i].ljust(widths[i]) for i in range(len(r))
@@ -414,6 +473,7 @@ def scorecard_text(result, show_skipped: bool = False) -> str:
         lines.append("  ".join(cells).rstrip())
         if j == 0:
             lines.append("  ".join("-" * w for w in widths))
+    lines += _legend_lines(result, show_skipped)
     for m in result.failures:
         lines.append(f"FAIL {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
     if result.interrupted:
@@ -444,12 +504,14 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
         table.add_column(
             col,
             justify="right"
-            if col in ("measured", "reference", "error")
+            if col in ("v0", "measured", "reference", "error")
             else ("center" if col == "result" else "left"),
         )
     for r in _rows(result, show_skipped):
         table.add_row(*(escape(x) for x in r[:-1]), _STATUS[r[-1]])
     console.print(table)
+    for line in _legend_lines(result, show_skipped):
+        console.print(escape(line), highlight=False, soft_wrap=True)
     for m in result.failures:
         console.print(
             f"[bold red]FAIL[/] {escape(m.variant)} / {escape(m.scene)} / {m.metric}: "
@@ -526,8 +588,8 @@ def scorecard_markdown(result) -> str:
             else ""
         ),
         "",
-        "| adapter | scene | metric | measured | reference | error | tolerance | result | why |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| adapter | scene | metric | v0 (m/s) | measured | reference | error | tolerance | result | why |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for m in result.metrics:
         if m.status == "skip":
@@ -536,6 +598,7 @@ def scorecard_markdown(result) -> str:
         c = metric_columns(result, m)
         out.append(
             f"| {m.variant} | {m.scene} | {m.metric} | "
+            f"{_fmt(c['v0']) if c['v0'] is not None else 'all'} | "
             f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
             f"{_fmt(c['error'])} | {m.tolerance} | {_OURS if m.status == 'error' else m.status} | "
             f"{why} |"

@@ -33,15 +33,15 @@ from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.scenes import Scene, load_scene
 from reference_impl.stability.bound import dt_safe as _dt_safe
-from reference_impl.bench.metrics import (
-    METRICS,
-    MetricResult,
-    SceneContext,
-    SpeedRecord,
+from reference_impl.bench.measure import (
     check_conventions,
+    check_declared_law,
+    contact_sample_times,
     exact_reference,
+    exact_tensile_on_samples,
     measure,
 )
+from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 
@@ -165,12 +165,18 @@ class BenchResult:
         """Metrics not decided because the suite's own reference failed (never the code's fault)."""
         return [m for m in self.metrics if m.status == "error"]
 
+    @property
+    def measured_nothing(self) -> bool:
+        """No metric was decided (every one skipped: declined scenes, no reference)."""
+        return not any(m.status in ("pass", "fail", "error") for m in self.metrics)
+
     def exit_status(self, gate: bool) -> int:
-        """0; with ``gate`` 1 when a metric failed (or the run was interrupted), else
-        `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
+        """0; with ``gate`` 1 when a metric failed, nothing was measured (every metric
+        skipped: a gate that measured nothing does not pass) or the run was interrupted,
+        else `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
         if not gate:
             return 0
-        if self.failures or self.interrupted:
+        if self.failures or self.interrupted or self.measured_nothing:
             return 1
         return EXIT_INTERNAL if self.internal_errors else 0
 
@@ -189,6 +195,11 @@ class _Declined(Exception):
 
 class _Ours(Exception):
     """The suite's own reference failed: an internal error, never the code's failure."""
+
+
+class DeclaredLawError(HCVInputError):
+    """A code declared an implemented law no reference can be computed for (its
+    configuration error): ``hcv bench`` stops with exit status 2, naming the field."""
 
 
 class _SceneRun:
@@ -259,13 +270,100 @@ class _SceneRun:
             )
             return rec
         rec.law = law.value
+        self.check_law(rec.law, v0)
         try:
             rec.exact = exact_reference(rec.law, v0)
+            rec.exact["tensile_sampled"] = exact_tensile_on_samples(
+                rec.law,
+                v0,
+                rec.exact["contact_time"],
+                contact_sample_times(out.value, rec.measured),
+            )
+        except HCVInputError as exc:
+            if self.is_scene_law(rec.law):  # the scene's own law, validated: ours
+                rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
+                return rec
+            # the solver refuses the law the code declares (e.g. a power law p = 25,
+            # beyond the quadrature's leading exponent 21): its configuration error
+            raise DeclaredLawError(
+                f"adapter {self.ctx.variant!r} on scene {self.scene.name!r}: "
+                f"implemented_law at v0 = {v0:g} m/s is refused by the exact solver: "
+                f"{exc} (fix the law the adapter declares)"
+            ) from None
         except Exception as exc:  # our solver on the declared law: never the code's failure
             rec.internal = f"exact solution of the implemented law failed: {_one_line(exc)}"
             return rec
+        rec.textbook = self.textbook(rec.law, ascene, rec.exact)
         rec.dt_crit = self.dt_crit(ascene, rec.law)
         return rec
+
+    def is_scene_law(self, law: ImplementedLaw) -> bool:
+        """The declared law is the scene's own (what was asked), not one the code chose."""
+        from reference_impl.scenes import potential_to_dict
+
+        try:
+            same_pot = potential_to_dict(law.potential) == potential_to_dict(self.scene.potential)
+        except Exception:
+            return False
+        return (
+            same_pot
+            and law.C is None
+            and law.mass == self.scene.mass
+            and float(law.zeta or 0.0) == float(self.scene.zeta or 0.0)
+        )
+
+    def check_law(self, law: ImplementedLaw, v0: float) -> None:
+        """`DeclaredLawError` when the code declares a law we cannot accept (not ours)."""
+        try:
+            check_declared_law(law, v0)
+        except HCVInputError as exc:
+            raise DeclaredLawError(
+                f"adapter {self.ctx.variant!r} on scene {self.scene.name!r}: {exc} "
+                "(fix the law the adapter declares)"
+            ) from None
+
+    def textbook(self, law: ImplementedLaw, ascene: AdapterScene, exact: dict) -> dict:
+        """Errors of textbook velocity Verlet with the implemented law, at the run's own step.
+
+        The error a correct code makes at the step the suite gives it (tolerances.toml,
+        [allowance]): relative errors of restitution, contact time and max penetration
+        against ``exact``, |E_out/E_in - 1|, and the tensile peak against the exact law
+        sampled at Verlet's own instants. ``{"error": reason}`` when the reference
+        Verlet cannot run the declared damping (a callable C(q)); ``{"internal": ...}``
+        when it failed (ours).
+        """
+        from reference_impl.adapters.reference import law_trajectory
+
+        v0 = ascene.v0
+        try:
+            t, q, v, f = law_trajectory(law, v0, ascene.dt, ascene.n_steps)
+        except TypeError as exc:  # a damping the reference Verlet cannot run
+            return {"error": f"textbook Verlet cannot run the declared law ({_one_line(exc)})"}
+        except Exception as exc:  # ours
+            return {
+                "internal": f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
+            }
+        tr = Trajectory(t, q, v, f)
+        m = measure(tr, v0)
+        out: dict = {"restitution_value": m.get("restitution", math.nan)}
+        for k in ("restitution", "contact_time", "max_penetration"):
+            got, want = m.get(k, math.nan), exact[k]
+            out[k] = abs(got - want) / abs(want) if want else math.inf
+        out["energy_ratio"] = abs(m.get("energy_ratio", math.nan) - 1.0)
+        try:
+            ref = exact_tensile_on_samples(
+                law, v0, exact["contact_time"], contact_sample_times(tr, m)
+            )
+        except Exception as exc:  # ours
+            return {
+                "internal": f"exact tensile peak on textbook Verlet's samples: {_one_line(exc)}"
+            }
+        out["tensile"] = abs(m.get("tensile", math.nan) - ref)
+        for k, x in list(out.items()):
+            if not math.isfinite(x):
+                # a correct scheme at this step did not measure it: no allowance can be derived
+                return {"internal": f"textbook Verlet at dt = {ascene.dt:.4g} s gave no finite {k}"}
+        return out
 
     def _stable(self, ascene: AdapterScene, dt: float, q_max: float) -> tuple[bool, str]:
         v0 = ascene.v0
@@ -315,8 +413,8 @@ class _SceneRun:
         try:
             verlet = _search(lambda f: self._verlet_stable(law, v0, f * ref, q_max), res)
             out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
-        except TypeError as exc:  # a damping the reference Verlet cannot run
-            out["verlet_error"] = str(exc)
+        except TypeError as exc:  # a damping the reference Verlet cannot run: no baseline
+            out["verlet_error"] = f"textbook Verlet cannot run the declared law ({_one_line(exc)})"
         except Exception as exc:  # ours, not the code's
             out["internal"] = f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
         return out
@@ -330,7 +428,10 @@ class _SceneRun:
             if ours:
                 ctx.order_internal = ours
             else:
-                ctx.order_error = "no speed with a successful run and exact reference"
+                first = next((r for r in ctx.speeds if r.error), None)
+                ctx.order_error = "no speed with a successful run and exact reference" + (
+                    f" (v0 = {first.v0:g} m/s: {first.error})" if first is not None else ""
+                )
             return
         rec = recs[len(recs) // 2]
         try:
@@ -355,6 +456,7 @@ class _SceneRun:
         )
         t_c = ex["contact_time"]
         pts = []
+        self.textbook_order(rec, ex, t_c)
         for n in self.tol["run"]["speed_error_steps"]:
             dt = t_c / n
             ascene = AdapterScene.from_scene(sc, rec.v0, dt, self.budget(dt, t_c))
@@ -402,6 +504,40 @@ class _SceneRun:
                 f"table failed: {failed[0]['failure']}"
             )
 
+    def textbook_order(self, rec: SpeedRecord, ex: dict, t_c: float) -> None:
+        """Convergence order of textbook Verlet with the implemented law on the same table.
+
+        The order a correct code shows on this scene at these steps (velocity Verlet is
+        second order, first order once a velocity-dependent dashpot is evaluated
+        explicitly; heavily damped scenes are pre-asymptotic at 25-800 steps). Sets
+        ``ctx.textbook_order``, or ``ctx.textbook_order_error`` when it cannot be run.
+        """
+        from reference_impl.adapters.reference import law_trajectory
+
+        pts = []
+        for n in self.tol["run"]["speed_error_steps"]:
+            dt = t_c / n
+            try:
+                t, q, v, f = law_trajectory(rec.law, rec.v0, dt, self.budget(dt, t_c))
+            except TypeError as exc:
+                self.ctx.textbook_order_error = (
+                    f"textbook Verlet cannot run the declared law ({_one_line(exc)})"
+                )
+                return
+            meas = measure(Trajectory(t, q, v, f), rec.v0)
+            errs = [
+                abs(meas.get(k, math.nan) - ex[k]) / abs(ex[k])
+                for k in ("restitution", "contact_time", "max_penetration")
+            ]
+            worst = max(errs)
+            if math.isfinite(worst) and worst > _ORDER_FLOOR:
+                pts.append((dt, worst))
+        if len(pts) >= 3:
+            x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            self.ctx.textbook_order = float(np.polyfit(x, y, 1)[0])
+        else:
+            self.ctx.textbook_order = math.inf  # at round-off: nothing left to converge
+
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
         v0 = sc.velocities[0]
@@ -426,11 +562,35 @@ class _SceneRun:
         impacts = int(np.sum((tr.q[1:] > 0) & (tr.q[:-1] <= 0)))
         ctx.sustained = {
             "drift": drift,
+            "textbook_drift": self.textbook_drift(v0, dt, n),
             "steps": int(tr.t.size - 1),
             "impacts": impacts,
             "dt": dt,
             "seconds": out.seconds,
         }
+
+    def textbook_drift(self, v0: float, dt: float, n: int) -> float:
+        """Energy drift of textbook Verlet on the same two-walls run (the allowance's scale)."""
+        from reference_impl.adapters.reference import verlet_trajectory
+
+        sc = self.scene
+        try:
+            t, q, v, f = verlet_trajectory(
+                sc.potential,
+                sc.mass,
+                v0,
+                dt,
+                n,
+                zeta=sc.zeta or 0.0,
+                kind="two-walls",
+                gap=float(sc.gap or 0.0),
+            )
+            with np.errstate(all="ignore"):
+                E = 0.5 * sc.mass * v**2 + sc.potential._U(np.clip(q, 0.0, None))
+        except Exception as exc:  # ours
+            raise _Ours(f"textbook Verlet on the two-walls scene: {_one_line(exc)}") from None
+        E0 = 0.5 * sc.mass * v0 * v0
+        return float(np.max(np.abs(E / E0 - 1.0))) if np.all(np.isfinite(E)) else math.inf
 
     def run(self, rows: list[dict]) -> SceneContext:
         ctx = self.ctx

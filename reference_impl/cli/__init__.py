@@ -15,6 +15,7 @@ import json
 import math
 import os
 import sys
+import time
 from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
@@ -188,12 +189,27 @@ def _check_out_dir(path: str) -> None:
             raise HCVInputError(f"--out {path}: exists and is not a directory")
         if not os.access(p, os.W_OK | os.X_OK):
             raise HCVInputError(f"--out {path}: directory is not writable")
+        _probe(p.parent if p.parent != p else p, path)  # the report is swapped in beside it
         return
     parent = p.parent
     if not parent.is_dir():
         raise HCVInputError(f"--out {path}: parent directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise HCVInputError(f"--out {path}: parent directory {str(parent)!r} is not writable")
+    _probe(parent, path)
+
+
+def _probe(directory, path: str) -> None:
+    """Create and remove a directory in ``directory``: permission bits do not tell that a
+    file system refuses new entries (/proc, /sys, a read-only mount, root's access())."""
+    import tempfile
+
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".hcv-probe-", dir=directory))
+    except OSError as exc:
+        raise HCVInputError(
+            f"--out {path}: cannot create anything in {str(directory)!r} ({exc.strerror})"
+        ) from None
 
 
 # More local workers than this is a typo, not a machine (each is a process).
@@ -219,11 +235,29 @@ def _cmd_report(args) -> int:
                 "(or leave --workers out)"
             ) from None
 
-    with Console(stderr=True).status("hcv report: starting") as status:
+    if sys.stderr.isatty():
+        with Console(stderr=True).status("hcv report: starting") as status:
+            results = build_report(
+                args.out,
+                quick=args.quick,
+                progress=lambda text: status.update(f"hcv report: {text}"),
+                adapters=args.adapter or (),
+                workers=args.workers,
+            )
+    else:  # CI logs, pipes: one plain line per stage, as bench and sweep print
+        t0 = time.perf_counter()
+
+        def line(text: str) -> None:
+            print(
+                f"hcv report: {text} ({time.perf_counter() - t0:.0f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
+
         results = build_report(
             args.out,
             quick=args.quick,
-            progress=lambda text: status.update(f"hcv report: {text}"),
+            progress=line,
             adapters=args.adapter or (),
             workers=args.workers,
             force=args.force,
@@ -238,10 +272,18 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from reference_impl.scenes import embedded_scenes
+    from reference_impl.scenes import embedded_scenes, load_scene, scene_toml
 
+    if args.show:
+        print(scene_toml(args.show), end="")
+        return EXIT_OK
     for name in embedded_scenes():
-        print(name)
+        sc = load_scene(name)
+        law = f"{sc.damping_law}" + (f" zeta={sc.zeta:.4g}" if sc.zeta else "")
+        print(
+            f"{name:24s} {sc.kind:10s} {sc.potential.__class__.__name__:14s} "
+            f"m={sc.mass:.4g} kg  v0={list(sc.velocities)} m/s  damping {law}"
+        )
     return EXIT_OK
 
 
@@ -361,7 +403,14 @@ def _parser() -> argparse.ArgumentParser:
         "(sweep extra); 0 (default) runs it in one second process",
     )
     rp.set_defaults(func=_cmd_report)
-    ls = sub.add_parser("scenes", help="list the embedded scenes")
+    ls = sub.add_parser(
+        "scenes",
+        help="list the scene catalogue (the same names work in every command); "
+        "--show NAME prints one as TOML",
+    )
+    ls.add_argument(
+        "--show", metavar="NAME", help="print this scene's TOML (a catalogue name or a file)"
+    )
     ls.set_defaults(func=_cmd_scenes)
     from reference_impl.cli.bench import add_bench_parser
 

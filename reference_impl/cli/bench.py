@@ -3,13 +3,13 @@
     hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE] [--gate]
                       [--json FILE] [--junit FILE] [--plot FILE] [--markdown FILE]
 
-ADAPTER is a registered name (``reference``, ``lammps``, ``subprocess``), an
+ADAPTER is a registered name (``kratos``, ``lammps``, ``reference``, ``subprocess``), an
 import path ``package.module:Class``, or ``cmd:COMMAND`` (a program speaking the
 JSON protocol of docs/adapter-protocol.md); names and import paths take
 constructor arguments as ``NAME[key=value,...]``.
 
-Exit status: 0; with ``--gate`` 0 when every metric passes, 1 when any fails,
-3 when none fails but the suite's own reference could not decide one (an
+Exit status: 0; with ``--gate`` 0 when every metric passes, 1 when any fails or
+nothing was measured (every metric skipped), 3 when none fails but the suite's own reference could not decide one (an
 internal error, never counted against the code); 2 for usage or configuration
 errors (unknown adapter, bad scene or tolerances file, an output path that
 cannot be written, an adapter that supports none of the scenes); 130 on Ctrl-C
@@ -107,13 +107,20 @@ class _Lines:
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object."""
+    from reference_impl.adapters.registry import adapter_help
+
     b = subparsers.add_parser(
         "bench",
         help="benchmark a contact code against the exact solution (CI gate)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
-        epilog="exit status: 0 pass (or no --gate); 1 a metric failed; 2 usage or "
-        "configuration error; 3 no metric failed but our reference could not decide one; "
+        epilog="adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
+        "kratos[hertz,verlet] or lammps[tsuji], names its key):\n"
+        + adapter_help()
+        + "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
+        "measured (every metric skipped); 2 usage or configuration error (also a law "
+        "the adapter declares that no reference can be computed for); 3 no metric failed but our reference could not decide one; "
         "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C).",
     )
     from reference_impl.adapters.registry import registered
@@ -200,10 +207,16 @@ def cmd_bench(args) -> int:
     if args.gate:
         c = result.counts()
         verdict = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
-        print(
-            f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} metrics "
-            f"failed, {c['error']} undecided by our reference)"
-        )
+        if result.measured_nothing:
+            print(
+                f"gate: FAIL (nothing measured: all {c['skip']} metrics skipped; "
+                "--show-skipped lists why; a gate that measured nothing does not pass)"
+            )
+        else:
+            print(
+                f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} "
+                f"metrics failed, {c['error']} undecided by our reference)"
+            )
     return status
 
 

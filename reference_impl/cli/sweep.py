@@ -5,7 +5,8 @@ the valid cases on a local cluster of ``--workers`` processes (default: the CPU
 count) or on the Dask scheduler named by ``--scheduler``; stores each finished
 case at once (DIR/cases.jsonl) and writes DIR/results.parquet, DIR/spec.toml and
 DIR/summary.md (+ summary.png) at the end. Exit status: 0 when every case
-succeeded, 1 when some failed (their rows hold the errors), 2 for a bad spec
+succeeded, 1 when some failed (their rows hold the errors) or, for ``bench:``
+tasks, when a case's scorecard did not pass (a metric failed), 2 for a bad spec
 or bad options (nothing run), 130 on Ctrl-C (cluster closed, results so far
 written).
 """
@@ -310,6 +311,15 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, 
         "cases": len(spec.cases),
         "ok": len(finished) - failed,
         "failed": failed,
+        # bench: cases that ran but whose scorecard is not a pass (a metric failed, our
+        # reference could not decide one, or nothing was measured)
+        "not_passed": sum(
+            1
+            for r in finished
+            if r["ok"] and any(row.get("status", "pass") != "pass" for row in r.get("rows") or [])
+        )
+        if spec.task.startswith("bench:")
+        else 0,
         "rows": len(df),
         "seconds": seconds,
         "interrupted": interrupted,
@@ -386,8 +396,15 @@ def run(args) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERRUPTED  # the CLI makes it 143 after SIGTERM
-    print(
-        f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ok, "
-        f"{res['failed']} failed), {out / 'summary.md'} in {res['seconds']:.1f} s on {res['where']}"
+    gate = (
+        f"; {res['not_passed']} of {res['ok']} benchmarked cases did not pass their "
+        "scorecard (a metric failed, was undecided, or nothing was measured)"
+        if res.get("not_passed")
+        else ""
     )
-    return EXIT_FAIL if res["failed"] else EXIT_OK
+    print(
+        f"wrote {out / 'results.parquet'} ({res['rows']} rows; {res['ok']} cases ran, "
+        f"{res['failed']} failed to run{gate}), {out / 'summary.md'} in "
+        f"{res['seconds']:.1f} s on {res['where']}"
+    )
+    return EXIT_FAIL if res["failed"] or res.get("not_passed") else EXIT_OK

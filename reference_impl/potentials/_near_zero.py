@@ -109,6 +109,11 @@ def time_limit(seconds: float):
         raise SeriesTimeout("no way to bound sympy's series here")
 
     def _expire(signum, frame):
+        if _in_finalizer(frame):
+            # An exception raised in a gc callback or a __del__ is not propagated: Python
+            # prints it as "Exception ignored in ..." (a traceback warning in the test log)
+            # and the series runs on. The timer re-fires in _REARM_SECONDS: raise then.
+            return
         raise SeriesTimeout(f"sympy's series took more than {seconds} s")
 
     previous = signal.signal(signal.SIGALRM, _expire)
@@ -120,6 +125,24 @@ def time_limit(seconds: float):
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+
+
+def _in_finalizer(frame) -> bool:
+    """The signal arrived inside a gc callback, a ``__del__`` or a weakref finalizer."""
+    import gc
+
+    callbacks = {getattr(cb, "__code__", None) for cb in gc.callbacks}
+    f = frame
+    while f is not None:
+        code = f.f_code
+        if (
+            code in callbacks
+            or code.co_name in ("__del__", "_remove_dead_weakref")
+            or (code.co_name == "__call__" and code.co_filename.endswith("weakref.py"))
+        ):
+            return True
+        f = f.f_back
+    return False
 
 
 def strip_abs(expr: sp.Expr, source: str) -> sp.Expr:

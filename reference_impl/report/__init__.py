@@ -230,8 +230,15 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
 
+    # The stages `timed` announces, so that a log shows "stage k of n" (claims but
+    # section 6, Fig. 1, hard cases, sweeps, their figure, the map, its figure, the
+    # criterion study, speed against error and its figures, one per adapter).
+    n_stages = len(CLAIMS) - 1 + 9 + len(adapters)
+    stage = [0]
+
     def timed(name: str, fn, *args, **kw):
-        say(name)
+        stage[0] += 1
+        say(f"{name} (stage {min(stage[0], n_stages)} of {n_stages})")
         t0 = time.perf_counter()
         res = fn(*args, **kw)
         timings[name] = time.perf_counter() - t0

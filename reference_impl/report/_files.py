@@ -212,15 +212,26 @@ def _move_in(tmp: Path, out: Path) -> None:
         if target.is_dir() and not target.is_symlink():
             shutil.rmtree(target)  # only with --force: a directory where a file goes
         _move(tmp / rel, target)
-    for rel in sorted(old - set(new)):
+    # Another run's scorecards (``hcv report --adapter lammps`` writes figures/bench_lammps.png
+    # and bench/lammps.json): a run without that adapter keeps them, still owned (issue 17).
+    kept = {rel for rel in old - set(new) if _other_runs(rel) and (out / rel).is_file()}
+    for rel in sorted(old - set(new) - kept):
         with contextlib.suppress(FileNotFoundError, IsADirectoryError, NotADirectoryError):
             (out / rel).unlink()
         _prune(out, (out / rel).parent)
-    data = {"written_by": "hcv report", "files": new}
+    data = {"written_by": "hcv report", "files": sorted(set(new) | kept)}
     tmp_manifest = out / (MANIFEST + ".tmp")
     tmp_manifest.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     os.chmod(tmp_manifest, 0o666 & ~umask)
     os.replace(tmp_manifest, out / MANIFEST)
+
+
+def _other_runs(rel: str) -> bool:
+    """A file one adapter's report run writes: figures/bench_*.png, bench/*.json."""
+    parts = Path(rel).parts
+    return len(parts) == 2 and (
+        (parts[0] == "figures" and parts[1].startswith("bench_")) or parts[0] == "bench"
+    )
 
 
 def _move(src: Path, dst: Path) -> None:

@@ -11,6 +11,7 @@ from reference_impl.scenes._scene import (
     parse_scene,
     potential_to_dict,
     scene_from_dict,
+    scene_toml,
 )
 
 __all__ = [
@@ -20,4 +21,5 @@ __all__ = [
     "parse_scene",
     "potential_to_dict",
     "scene_from_dict",
+    "scene_toml",
 ]

@@ -42,7 +42,7 @@ from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
 from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 
-__all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
+__all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
 
 # A scene is a few lines; refusing anything larger keeps a wrong path (a log,
 # a binary) from being read whole into memory.
@@ -520,3 +520,16 @@ def load_scene(path_or_name: str | os.PathLike) -> Scene:
     except OSError as exc:
         raise SceneError(f"scene file {text_arg}: cannot be read ({exc.strerror})") from None
     return parse_scene(text, text_arg)
+
+
+def scene_toml(path_or_name: str | os.PathLike) -> str:
+    """The TOML text of a catalogue scene (with its comments), or of a scene file.
+
+    The scene is loaded first (`load_scene`), so an unknown name or an invalid file
+    raises `SceneError` with one line.
+    """
+    load_scene(path_or_name)
+    text_arg = os.fspath(path_or_name)
+    if text_arg in embedded_scenes() and not Path(text_arg).is_file():
+        return (resources.files(__package__) / f"{text_arg}.toml").read_text(encoding="utf-8")
+    return Path(text_arg).read_text(encoding="utf-8")

@@ -34,10 +34,27 @@ _Y = {
 }
 # Task fields shown in the summary table beside the swept parameters.
 _SHOWN = {
-    "dt-crit": ("v0", "dt_safe", "dt_crit", "ratio", "holds"),
+    "dt-crit": ("v0", "dt_safe", "dt_crit", "ratio", "failure_kind", "holds"),
     "solve": ("v0", "dt_safe", "contact_time", "restitution", "max_penetration"),
     "bench": ("variant", "v0", "status", "metrics_fail", "failed_metrics"),
     "calibrate": ("param", "target", "steps_per_contact", "found", "value", "achieved"),
+}
+# Units of the task fields, shown in the summary table's header.
+_UNITS = {
+    "v0": "m/s",
+    "dt_safe": "s",
+    "dt_crit": "s",
+    "ratio": "dt_crit / dt_safe",
+    "contact_time": "s",
+    "max_penetration": "m",
+    "case_seconds": "s",
+}
+# Markers of the critical-step figure: an instability is not an accuracy limit.
+_KIND_MARKERS = {
+    "runaway": ("x", "tab:red", "runaway (instability)"),
+    "bounded": ("s", "tab:orange", "bounded excursion"),
+    "accuracy": ("o", "tab:blue", "accuracy limit"),
+    "null": ("^", "tab:green", "nothing failed in range"),
 }
 
 
@@ -160,7 +177,7 @@ def _fmt(v) -> str:
 
 
 def _markdown_table(df: pd.DataFrame) -> str:
-    head = "| " + " | ".join(df.columns) + " |"
+    head = "| " + " | ".join(f"{c} [{_UNITS[c]}]" if c in _UNITS else c for c in df.columns) + " |"
     sep = "|" + "|".join("---" for _ in df.columns) + "|"
     body = ["| " + " | ".join(_fmt(v) for v in row) + " |" for row in df.itertuples(index=False)]
     return "\n".join([head, sep, *body])
@@ -211,6 +228,19 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
         name = name if isinstance(name, tuple) else (name,)
         label = ", ".join(f"{k} = {_fmt(v)}" for k, v in zip(groups, name, strict=True)) or ycol
         ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", lw=1.4, label=label)
+    if fam == "dt-crit" and "failure_kind" in ok.columns:
+        # one marker per failure kind over the lines: runaways apart from accuracy limits
+        for kind, (marker, color, label) in _KIND_MARKERS.items():
+            g = ok[ok["failure_kind"].astype(str) == kind]
+            if not len(g):
+                continue
+            xv = g[x].tolist()
+            xp = xv if numeric else [pos.get(_key_of(v), math.nan) for v in xv]
+            ax.scatter(
+                xp, pd.to_numeric(g[ycol], errors="coerce"), marker=marker, color=color,
+                s=46, zorder=3, label=label,
+            )  # fmt: skip
+        groups = groups or ["failure_kind"]  # the legend names the kinds
     if fam == "dt-crit":
         ax.axhline(1.0, color="k", lw=1.2)
         ax.text(
@@ -257,11 +287,29 @@ def write_summary(
         "",
         f"- task: `{spec.task}`" + _criterion_text(spec.criterion),
         "- swept: " + ", ".join(f"`{k}` ({len(v)} values)" for k, v in spec.sweep.items()),
-        f"- cases: {n_cases}; finished {len(errors)} ({len(errors) - len(failed)} ok, "
-        f"{len(failed)} failed); {len(df)} rows in results.parquet",
+        f"- cases: {n_cases}; finished {len(errors)} ({len(errors) - len(failed)} ran, "
+        f"{len(failed)} failed to run); {len(df)} rows in results.parquet",
         f"- ran on {where} in {seconds:.1f} s" + (" (interrupted)" if interrupted else ""),
-        "",
     ]
+    if fam == "bench" and "status" in df.columns and len(df):
+        ran = df[df["error"].isna()].drop_duplicates(["case_key", "variant"])
+        bad = ran[ran["status"] != "pass"]
+        lines.append(
+            f"- scorecards: {len(ran) - len(bad)} of {len(ran)} (case, variant) passed; "
+            + (
+                ", ".join(f"{n} {s}" for s, n in bad["status"].value_counts().items())
+                if len(bad)
+                else "none failed"
+            )
+            + " (exit status 1 when any did not pass)"
+        )
+    if fam == "dt-crit" and "failure_kind" in df.columns and len(df):
+        kinds = df["failure_kind"].astype(str).value_counts()
+        lines.append(
+            "- failure kinds: " + ", ".join(f"{n} {k}" for k, n in kinds.items())
+            + " (runaway: an instability; accuracy: a tolerance limit that moves with tol)"
+        )  # fmt: skip
+    lines.append("")
     drawn = False
     if len(df):
         try:

@@ -253,7 +253,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                 ) from None
         else:
             n = workers or os.cpu_count() or 1
-            with dask.config.set(_LOCAL_CONFIG):
+            with dask.config.set(_LOCAL_CONFIG), _workers_ignore_ctrl_c():
                 cluster = LocalCluster(
                     n_workers=n,
                     threads_per_worker=1,
@@ -269,6 +269,29 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                 client.close()
             if cluster is not None:
                 cluster.close()
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start the local cluster's processes with SIGINT ignored (issue 17).
+
+    Ctrl-C goes to the whole foreground process group: each worker and nanny would
+    print its own KeyboardInterrupt traceback (some 30 lines) before the client's one
+    line. A signal ignored at exec stays ignored (Python installs its SIGINT handler
+    only when it is not), so the spawned processes leave Ctrl-C to this process,
+    which closes the cluster and says "interrupted".
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def iter_outcomes(

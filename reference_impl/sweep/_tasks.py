@@ -22,7 +22,7 @@ from dataclasses import replace
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["CaseTimeout", "check_deadline", "deadline", "run_case"]
+__all__ = ["CaseTimeout", "bench_status", "check_deadline", "deadline", "run_case"]
 
 _local = threading.local()
 _NONFINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
@@ -97,6 +97,18 @@ def _solve_rows(scene) -> list[dict]:
     return rows
 
 
+def bench_status(statuses) -> str:
+    """A scorecard's verdict: "fail", "error" (ours), "nothing measured" or "pass"."""
+    statuses = list(statuses)
+    if "fail" in statuses:
+        return "fail"
+    if "error" in statuses:
+        return "error"
+    if "pass" not in statuses:
+        return "nothing measured"
+    return "pass"
+
+
 def _errors(speed: dict) -> dict:
     """Relative errors of one speed record: measured against the declared law's exact
     values, and the restitution against the one asked (columns ``rel_error.*``)."""
@@ -133,10 +145,13 @@ def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
         mine = [m for m in d["metrics"] if m["variant"] == ctx["variant"]]
         head = {
             "variant": ctx["variant"],
-            # this variant's verdict (the JSON's top-level status covers all variants)
-            "status": "fail" if any(m["status"] == "fail" for m in mine) else "pass",
+            # this variant's verdict (the JSON's top-level status covers all variants), as
+            # the gate decides it: a failed metric, then one our reference could not
+            # decide, then nothing measured at all, are not a pass
+            "status": bench_status([m["status"] for m in mine]),
             "metrics_pass": sum(m["status"] == "pass" for m in mine),
             "metrics_fail": sum(m["status"] == "fail" for m in mine),
+            "metrics_error": sum(m["status"] == "error" for m in mine),
             "metrics_skip": sum(m["status"] == "skip" for m in mine),
             "failed_metrics": ",".join(m["metric"] for m in mine if m["status"] == "fail"),
             "convergence_order": ctx["convergence_order"],
