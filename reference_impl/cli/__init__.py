@@ -18,9 +18,19 @@ from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, run_command
-from reference_impl.tasks import solve_scene
 
 __all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
+
+
+# Parsing arguments and refusing bad ones imports nothing numerical (issue 20): what a
+# command runs (tasks, report, bench, sweep) is imported inside its command function, and
+# the re-exported `solve_scene` on first use.
+def __getattr__(name: str):
+    if name == "solve_scene":
+        from reference_impl.tasks import solve_scene
+
+        return solve_scene
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
@@ -84,6 +94,7 @@ def _fmt(v) -> str:
 
 def _cmd_solve(args) -> int:
     from reference_impl.scenes import load_scene
+    from reference_impl.tasks import solve_scene
 
     scene = load_scene(args.scene)
     if scene.kind != "impact":
@@ -210,7 +221,7 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from reference_impl.scenes import embedded_scenes
+    from reference_impl.scenes._catalogue import embedded_scenes
 
     for name in embedded_scenes():
         print(name)
@@ -285,12 +296,26 @@ class _progress:
         return False
 
 
+class _Version(argparse.Action):
+    """``--version``: reads the installed version only when asked (importlib.metadata is slow)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from reference_impl._version import version
+
+        print(f"{parser.prog} {version()}")
+        parser.exit()
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="hcv",
         description="Verification, exact reference and benchmark gate for the hidden-harmonic "
         "theory of contact dynamics.",
     )
+    p.add_argument("--version", action=_Version, help="print the installed version and exit")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("solve", help="exact impact solution for each velocity of a scene")
     s.add_argument("scene", help="scene TOML file, or the name of an embedded scene (hcv scenes)")
