@@ -11,7 +11,12 @@ from __future__ import annotations
 import importlib
 import importlib.util
 
+from reference_impl._cache import configure_numba_cache
 from reference_impl._version import __version__, version
+
+# Before anything imports numba: its disk cache goes to the per-user cache directory
+# (reference_impl._cache; a user's NUMBA_CACHE_DIR wins).
+configure_numba_cache()
 
 # Public name -> the module that defines it. Read by __getattr__; the modules are imported
 # only when one of their names is first asked for.
