@@ -90,8 +90,9 @@ def max_bytes() -> int:
     return int(mb * 2**20)
 
 
-def _unusable(path: Path, min_free: int = MIN_FREE_BYTES) -> str | None:
+def _unusable(path: Path, min_free: int | None = None) -> str | None:
     """Why ``path`` cannot hold the cache (None when it can): not creatable, not writable, full."""
+    min_free = MIN_FREE_BYTES if min_free is None else min_free
     try:
         path.mkdir(parents=True, exist_ok=True)
         # A real write, not os.access: the latter says yes to root on a read-only mount.
