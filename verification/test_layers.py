@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parent.parent / PKG
 LAYERS: tuple[frozenset[str], ...] = tuple(
     frozenset(x)
     for x in (
-        {"errors", "provenance", "_format", "_jit", "_version", "_cache"},
+        {"_version"},
+        {"errors", "provenance", "_format", "_jit", "_cache"},
         {"potentials"},
         {"theory"},
         {"integrators"},

@@ -143,3 +143,29 @@ def test_scenes_package_names_resolve():
         claim="tool",
         call="reference_impl.scenes.__all__",
     )
+
+
+def test_readme_startup_block_is_the_committed_benchmark():
+    """The README's start-up figures are rendered from reports/bench/startup.json, never typed."""
+    from pathlib import Path
+
+    from reference_impl.report.readme_table import STARTUP_END, STARTUP_START, readme_block, startup_table
+
+    root = Path(__file__).resolve().parent.parent
+    bench_json = root / "reports" / "bench" / "startup.json"
+    assert_true(
+        bench_json.is_file(),
+        got=f"no {bench_json.relative_to(root)}",
+        should="the benchmark JSON behind the README's start-up block (nox -s bench)",
+        claim="report",
+        call="readme_table",
+    )
+    want = startup_table(json.loads(bench_json.read_text()))
+    got = readme_block((root / "README.md").read_text(), STARTUP_START, STARTUP_END)
+    assert_true(
+        got == want,
+        got="README start-up block differs from reports/bench/startup.json",
+        should="identical (run python -m reference_impl.report.readme_table)",
+        claim="report",
+        call="readme_table",
+    )

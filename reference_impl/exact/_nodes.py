@@ -35,13 +35,18 @@ then). `node_kernel(pot)` gives the compiled pieces the whole-impact kernels of
 from __future__ import annotations
 
 import math
+import sys
 from fractions import Fraction
 from functools import lru_cache
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
-import sympy as sp
+
+if TYPE_CHECKING:
+    import sympy as sp
+# sympy itself is imported where an expression is handled: a potential of another family
+# solves without it (issue 20: start-up).
 
 from reference_impl._jit import specialise
 from reference_impl.potentials.base import Potential, SumPotential
@@ -278,6 +283,8 @@ def _expression_power_rows(pot):
     sym = expression_sympy(pot)
     if sym is None or not getattr(pot, "float_formula_accurate", True):
         return None
+    import sympy as sp
+
     expr, _, q = sym
     rows = []
     for term in sp.Add.make_args(sp.expand(expr)):
@@ -298,6 +305,9 @@ def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
     provides it, else the documented ``expr``/``dexpr`` attributes): the one
     accessor to switch when that interface changes.
     """
+    sp = sys.modules.get("sympy")
+    if sp is None:
+        return None  # sympy not loaded: no sympy expression exists in this process
     expr = getattr(pot, "sympy_U", None)
     if expr is None:
         expr = getattr(pot, "expr", None)
@@ -317,6 +327,8 @@ def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
 def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
     """Compiled node loop for U, U', U'' of an expression (cached by the sympy
     expressions, which carry the parameter values as exact numbers)."""
+    import sympy as sp
+
     d2expr = sp.diff(dexpr, q)
     d3expr = sp.diff(d2expr, q)
     cached = _disk_cached_expression((expr, dexpr, d2expr, d3expr), q)
@@ -355,6 +367,8 @@ def _disk_cached_expression(exprs, q):
     None when the compile cache is unusable or sympy prints something the module
     cannot reproduce; the caller then compiles in memory.
     """
+    import sympy as sp
+
     from reference_impl._cache import expression_module, printed_function, record_files
 
     funcs = [printed_function(q, e, f"u{i}") for i, e in enumerate(exprs)]

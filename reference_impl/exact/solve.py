@@ -28,7 +28,6 @@ import weakref
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.optimize import elementwise
 
 from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
 from reference_impl.exact._one_call import fused_impact
@@ -203,6 +202,8 @@ class ImpactSolution:
         idx = np.clip(np.searchsorted(table, targets), 1, _STATE_TABLE - 1)
         lo, hi = grid[idx - 1], grid[idx]
         exact_lo = targets <= table[0]
+        from scipy.optimize import elementwise  # here: scipy.optimize costs 0.2 s to import
+
         res = elementwise.find_root(
             lambda y, tg: T(y) - tg,
             (lo, hi),

@@ -38,7 +38,10 @@ from typing import Any
 from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.scenes._catalogue import embedded_scenes
-from reference_impl.potentials import Ellipsoid, Expression, Potential, PowerLaw, Sphere, SumPotential
+from reference_impl.potentials import Ellipsoid, Potential, PowerLaw, Sphere, SumPotential
+
+# `Expression` (sympy) is imported where an expression is parsed or written back, so that
+# a scene of another family loads without sympy (issue 20: start-up).
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes"]
 
@@ -133,8 +136,12 @@ def potential_to_dict(pot: Potential) -> dict[str, Any]:
     """A potential as a ``[potential]`` table of the scene schema."""
     if isinstance(pot, SumPotential):
         return {"family": "sum", "terms": [potential_to_dict(t) for t in pot.terms]}
-    family = {PowerLaw: "power", Ellipsoid: "ellipsoid", Sphere: "sphere", Expression: "expression"}
-    return {"family": family.get(type(pot), type(pot).__name__), **pot.params()}
+    family = {PowerLaw: "power", Ellipsoid: "ellipsoid", Sphere: "sphere"}.get(type(pot))
+    if family is None:
+        from reference_impl.potentials.expression import Expression  # loaded if pot is one
+
+        family = "expression" if type(pot) is Expression else type(pot).__name__
+    return {"family": family, **pot.params()}
 
 
 class _Where:
@@ -226,6 +233,8 @@ def _potential(err: _Where, table, path: str, depth: int = 0) -> Potential:
         if len(params) > _MAX_PARAMS:
             raise err(f"{path}.params has {len(params)} entries; at most {_MAX_PARAMS}")
         values = {k: _number(err, v, f"{path}.params.{k}") for k, v in params.items()}
+        from reference_impl.potentials.expression import Expression
+
         return _construct(err, path, Expression, source, **values)
     if family == "sum":
         terms = table["terms"]
