@@ -12,7 +12,8 @@ import importlib
 import importlib.util
 
 from reference_impl._cache import configure_numba_cache
-from reference_impl._version import __version__, version
+from reference_impl._version import __version__ as __version__
+from reference_impl._version import version as version
 
 # Before anything imports numba: its disk cache goes to the per-user cache directory
 # (reference_impl._cache; a user's NUMBA_CACHE_DIR wins).

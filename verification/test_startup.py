@@ -149,7 +149,12 @@ def test_readme_startup_block_is_the_committed_benchmark():
     """The README's start-up figures are rendered from reports/bench/startup.json, never typed."""
     from pathlib import Path
 
-    from reference_impl.report.readme_table import STARTUP_END, STARTUP_START, readme_block, startup_table
+    from reference_impl.report.readme_table import (
+        STARTUP_END,
+        STARTUP_START,
+        readme_block,
+        startup_table,
+    )
 
     root = Path(__file__).resolve().parent.parent
     bench_json = root / "reports" / "bench" / "startup.json"
