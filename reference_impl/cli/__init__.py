@@ -331,11 +331,20 @@ def _parser() -> argparse.ArgumentParser:
         "'tol=0.01,n_phases=16' for a single impact (accuracy: rebound energy gain)",
     )
     d.set_defaults(func=_cmd_dt_crit)
-    rp = sub.add_parser(
-        "report", help="run every verification; write HTML, Markdown, JSON and figures"
+    report_help = (
+        "run every verification; write HTML, Markdown, JSON and figures (the full run was "
+        "measured at 145 s wall on 2 cores: reports/results.json of 2026-11-22)"
     )
+    rp = sub.add_parser("report", help=report_help, description=report_help)
     rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
-    rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
+    rp.add_argument(
+        "--quick",
+        action="store_true",
+        # Measured (issue 20) with `time hcv report --quick`, compile cache warm; the CPU time
+        # (user + system, the second process's included) is what a quiet machine shows.
+        help="smaller study (measured on 2 shared cores at load 10-15, 2026-11-23: 60 s CPU, "
+        "400 s wall; 63-69 s wall on a quieter day)",
+    )
     rp.add_argument(
         "--adapter",
         action="append",
