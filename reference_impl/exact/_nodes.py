@@ -23,8 +23,10 @@ Families read the potential's public attributes:
   on disk;
 * other user expressions: `sympy.lambdify` prints the validated sympy forms of
   U, U', U'' (parameters substituted as exact numbers) as ``math``-module code,
-  which numba compiles; cached by the sympy expressions. The user's text itself
-  is never evaluated.
+  which numba compiles; cached by the sympy expressions in the process, and on disk
+  (`reference_impl._cache`: the printed code as a module keyed by its canonical form,
+  so numba's disk cache keeps it between processes). The user's text itself is
+  never evaluated.
 
 `node_function(pot)` returns a callable (x array, m, q_max) -> (dq/dx, q)
 arrays, or None when the family has no compiled form (the numpy path is used

@@ -19,8 +19,9 @@ from reference_impl.potentials.base import Potential
 from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
 
 # Compiled kernels of user expressions, keyed by the sympy form of (U', U):
-# compiling costs a few seconds, so each distinct expression is compiled once per
-# process; None records a form numba cannot compile (the numpy engine runs it).
+# compiling costs a few seconds, so each distinct expression is compiled once (and kept
+# on disk between processes, `reference_impl._cache`); None records a form numba cannot
+# compile (the numpy engine runs it).
 _EXPR_KERNELS: dict = {}
 # Distinct expressions kept compiled at once (each kernel holds ~1 MB of code).
 _EXPR_KERNELS_MAX = 16
