@@ -342,8 +342,8 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         # Measured (issue 20) with `time hcv report --quick`, compile cache warm; the CPU time
         # (user + system, the second process's included) is what a quiet machine shows.
-        help="smaller study (measured on 2 shared cores at load 10-15, 2026-11-23: 60 s CPU, "
-        "400 s wall; 63-69 s wall on a quieter day)",
+        help="smaller study (measured on 2 shared cores, 2026-11-23: 58 s CPU; 166 s wall at "
+        "load 5-6, 400 s at load 10-15)",
     )
     rp.add_argument(
         "--adapter",
