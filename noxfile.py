@@ -36,6 +36,7 @@ def bench(session: nox.Session) -> None:
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
     session.run("python", "-m", "benchmarks.bench_sweep", "--json", "reports/bench/sweep.json")
+    session.run("python", "-m", "benchmarks.bench_startup", "--json", "reports/bench/startup.json")
 
 
 @nox.session(python="3.11")

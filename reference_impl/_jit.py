@@ -48,7 +48,7 @@ def binding_name(func, bound: dict) -> str:
     return f"{func.__qualname__}__{digest}"
 
 
-def specialise(func, cache: bool, **bound):
+def specialise(func, cache: bool, *, error_model: str = "numpy", **bound):
     """A numba-compiled copy of the plain function ``func`` with globals ``bound`` rebound.
 
     Parameters
@@ -59,6 +59,8 @@ def specialise(func, cache: bool, **bound):
         Cache the compiled copy on disk. Allowed only when every bound value has a stable
         module-qualified name, which then becomes part of the copy's qualified name (so two
         bindings never share a cache entry).
+    error_model : str
+        numba's error model of the copy ("numpy": inf/nan; "python": exceptions).
     **bound
         Global names of ``func`` and the compiled functions they stand for in this copy.
 
@@ -80,4 +82,4 @@ def specialise(func, cache: bool, **bound):
     f = types.FunctionType(func.__code__, glb, func.__name__, func.__defaults__)
     f.__qualname__ = binding_name(func, bound)
     f.__module__, f.__doc__ = func.__module__, func.__doc__
-    return numba.njit(cache=cache, error_model="numpy")(f)
+    return numba.njit(cache=cache, error_model=error_model)(f)

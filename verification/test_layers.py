@@ -23,8 +23,9 @@ ROOT = Path(__file__).resolve().parent.parent / PKG
 LAYERS: tuple[frozenset[str], ...] = tuple(
     frozenset(x)
     for x in (
+        {"_version"},
         {"errors"},
-        {"provenance", "_format", "_jit", "_procs", "_userfiles"},
+        {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
         {"potentials"},
         {"theory"},
         {"integrators"},

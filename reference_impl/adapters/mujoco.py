@@ -220,6 +220,14 @@ class MujocoAdapter(ContactAdapter):
     """
 
     name = "mujoco"
+    # Values that name their key in a variant label (mujoco[direct,constant,Euler] is what
+    # the scorecard prints and what hcv bench accepts back).
+    spec_values = {
+        "solref": SOLREF_FORMS,
+        "impedance": IMPEDANCES,
+        "integrator": INTEGRATORS,
+        "end": END,
+    }
     isolate = True
 
     def __init__(

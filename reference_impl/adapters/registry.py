@@ -38,7 +38,13 @@ import sys
 from typing import Any
 
 from reference_impl.errors import HCVInputError
-from reference_impl.adapters.base import ContactAdapter
+
+
+def _base():
+    """`ContactAdapter`, imported on use: naming the adapters (``hcv --help``) imports none."""
+    from reference_impl.adapters.base import ContactAdapter
+
+    return ContactAdapter
 
 __all__ = [
     "ENTRY_POINT_GROUP",
@@ -69,7 +75,7 @@ def register(name: str, target: str | type) -> None:
     """Register an adapter class (or its ``package.module:Class`` path) under ``name``."""
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise HCVInputError(f"adapter name must be letters, digits, '-' or '_', got {name!r}")
-    if isinstance(target, type) and not issubclass(target, ContactAdapter):
+    if isinstance(target, type) and not issubclass(target, _base()):
         raise HCVInputError(f"{target!r} is not a ContactAdapter subclass")
     _REGISTRY[name] = target
 
@@ -178,7 +184,7 @@ def _import(path: str) -> type:
     cls = getattr(module, cls_name, None)
     if cls is None:
         raise HCVInputError(f"adapter {path!r}: module {mod_name!r} has no attribute {cls_name!r}")
-    if not (isinstance(cls, type) and issubclass(cls, ContactAdapter)):
+    if not (isinstance(cls, type) and issubclass(cls, _base())):
         raise HCVInputError(
             f"adapter {path!r} is not a ContactAdapter subclass "
             "(see reference_impl.adapters.base for the contract)"
@@ -202,9 +208,9 @@ def resolve_class(target: str) -> type:
     )
 
 
-def get_adapter(spec: str | ContactAdapter) -> ContactAdapter:
+def get_adapter(spec):
     """Build the adapter for a spec (or return an adapter instance unchanged)."""
-    if isinstance(spec, ContactAdapter):
+    if isinstance(spec, _base()):
         return spec
     target, kwargs = parse_spec(spec)
     cls = resolve_class(target)

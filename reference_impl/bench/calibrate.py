@@ -41,6 +41,7 @@ from scipy.optimize import brentq
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw
 from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
 from reference_impl.errors import HCVInputError
+from reference_impl.theory.damping import RESTITUTION_ENDS
 
 __all__ = [
     "ENDS",
@@ -50,7 +51,7 @@ __all__ = [
     "spec_with_options",
 ]
 
-ENDS = ("overlap", "zero-force")
+ENDS = RESTITUTION_ENDS
 QUANTITIES = ("restitution",)
 EXIT_OK, EXIT_UNREACHABLE, EXIT_USAGE = 0, 1, 2
 # Points of the bracketing scan over the range (log-spaced when the range is positive):

@@ -20,9 +20,19 @@ from collections.abc import Sequence
 
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, interrupted, run_command
-from reference_impl.tasks import restitution_spread, solve_scene
 
 __all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
+
+
+# Parsing arguments and refusing bad ones imports nothing numerical (issue 20): what a
+# command runs (tasks, report, bench, sweep) is imported inside its command function, and
+# the re-exported `solve_scene` on first use.
+def __getattr__(name: str):
+    if name == "solve_scene":
+        from reference_impl.tasks import solve_scene
+
+        return solve_scene
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 _SOLVE_ROWS = (
     ("max_penetration", "max penetration q_max [m]"),
@@ -87,6 +97,7 @@ def _fmt(v) -> str:
 
 def _cmd_solve(args) -> int:
     from reference_impl.scenes import load_scene
+    from reference_impl.tasks import restitution_spread, solve_scene
 
     scene = load_scene(args.scene)
     if scene.kind != "impact":
@@ -272,17 +283,19 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from reference_impl.scenes import embedded_scenes, load_scene, scene_toml
+    from reference_impl.scenes._catalogue import catalogue_rows
 
     if args.show:
+        from reference_impl.scenes import scene_toml
+
         print(scene_toml(args.show), end="")
         return EXIT_OK
-    for name in embedded_scenes():
-        sc = load_scene(name)
-        law = f"{sc.damping_law}" + (f" zeta={sc.zeta:.4g}" if sc.zeta else "")
+    for r in catalogue_rows():
+        params = " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                          for k, v in r["damping_params"].items())  # fmt: skip
         print(
-            f"{name:24s} {sc.kind:10s} {sc.potential.__class__.__name__:14s} "
-            f"m={sc.mass:.4g} kg  v0={list(sc.velocities)} m/s  damping {law}"
+            f"{r['name']:24s} {r['kind']:10s} {r['family']:11s} m={r['mass']:.4g} kg  "
+            f"v0={r['velocities']} m/s  damping {r['damping']}" + (f" {params}" if params else "")
         )
     return EXIT_OK
 
@@ -355,12 +368,26 @@ class _progress:
         return False
 
 
+class _Version(argparse.Action):
+    """``--version``: reads the installed version only when asked (importlib.metadata is slow)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from reference_impl._version import version
+
+        print(f"{parser.prog} {version()}")
+        parser.exit()
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="hcv",
         description="Verification, exact reference and benchmark gate for the hidden-harmonic "
         "theory of contact dynamics.",
     )
+    p.add_argument("--version", action=_Version, help="print the installed version and exit")
     sub = p.add_subparsers(dest="command", required=True)
     s = sub.add_parser("solve", help="exact impact solution for each velocity of a scene")
     s.add_argument("scene", help="scene TOML file, or the name of an embedded scene (hcv scenes)")
@@ -376,11 +403,20 @@ def _parser() -> argparse.ArgumentParser:
         "'tol=0.01,n_phases=16' for a single impact (accuracy: rebound energy gain)",
     )
     d.set_defaults(func=_cmd_dt_crit)
-    rp = sub.add_parser(
-        "report", help="run every verification; write HTML, Markdown, JSON and figures"
+    report_help = (
+        "run every verification; write HTML, Markdown, JSON and figures (the full run was "
+        "measured at 145 s wall on 2 cores: reports/results.json of 2026-11-22)"
     )
+    rp = sub.add_parser("report", help=report_help, description=report_help)
     rp.add_argument("--out", default="reports", help="output directory (default: reports/)")
-    rp.add_argument("--quick", action="store_true", help="smaller study (about 20-30 s)")
+    rp.add_argument(
+        "--quick",
+        action="store_true",
+        # Measured (issue 20) with `time hcv report --quick`, compile cache warm; the CPU time
+        # (user + system, the second process's included) is what a quiet machine shows.
+        help="smaller study (measured on 2 shared cores, 2026-11-23: 58 s CPU; 166 s wall at "
+        "load 5-6, 400 s at load 10-15)",
+    )
     rp.add_argument(
         "--force",
         action="store_true",

@@ -105,24 +105,39 @@ class _Lines:
         )
 
 
-def add_bench_parser(subparsers) -> argparse.ArgumentParser:
-    """Add the ``bench`` subcommand to an argparse subparsers object."""
-    from reference_impl.adapters.registry import adapter_help
+_EPILOG = (
+    "adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
+    "kratos[hertz,verlet] or lammps[tsuji], names its key):\n{adapters}"
+    "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
+    "measured (every metric skipped); 2 usage or configuration error (also a law "
+    "the adapter declares that no reference can be computed for); 3 no metric failed but "
+    "our reference could not decide one; "
+    "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C)."
+)
 
+
+def add_bench_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``bench`` subcommand to an argparse subparsers object.
+
+    The epilog lists each adapter's keys, read from the adapter classes: it is written
+    when the help is printed, so that parsing (and refusing) arguments imports no adapter.
+    """
     b = subparsers.add_parser(
         "bench",
         help="benchmark a contact code against the exact solution (CI gate)",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
-        epilog="adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
-        "kratos[hertz,verlet] or lammps[tsuji], names its key):\n"
-        + adapter_help()
-        + "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
-        "measured (every metric skipped); 2 usage or configuration error (also a law "
-        "the adapter declares that no reference can be computed for); 3 no metric failed but our reference could not decide one; "
-        "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C).",
     )
+    plain_format_help = b.format_help
+
+    def format_help() -> str:
+        from reference_impl.adapters.registry import adapter_help
+
+        b.epilog = _EPILOG.format(adapters=adapter_help())
+        return plain_format_help()
+
+    b.format_help = format_help
     from reference_impl.adapters.registry import registered
 
     b.add_argument(

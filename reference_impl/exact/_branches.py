@@ -36,7 +36,6 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from scipy import integrate
 from scipy.special import roots_jacobi
 
 from reference_impl.exact._nodes import node_function
@@ -418,6 +417,8 @@ def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float) -> tuple[float, 
         if x >= x_a:
             return float(g_of(np.array([x]))[0])
         return g_a * (x / x_a) ** beta if x > 0 else 0.0
+
+    from scipy import integrate  # here: the overdamped tail only; 0.2 s to import
 
     val, err = integrate.quad(
         integrand, osc.s_zero_force, np.inf, epsabs=0.0, epsrel=_TAIL_RTOL, limit=400

@@ -181,11 +181,16 @@ def _tanh_sinh(prm, P, d, w, w_diff, beta, round_ulps, out):  # pragma: no cover
     out[8] = _OK
 
 
-def _kernels_for(nodes, cache: bool):
-    """(gauss_jacobi, tanh_sinh) compiled around the node loop ``nodes``."""
+def _kernels_for(nodes, cache: bool, entry: str | None = None):
+    """(gauss_jacobi, tanh_sinh) compiled around the node loop ``nodes``; their disk-cache
+    files are noted under the compile-cache ``entry`` when given (for its eviction)."""
     peak = specialise(_peak, cache, _NODES=nodes)
     gauss_jacobi = specialise(_gauss_jacobi, cache, _NODES=nodes, _PEAK=peak)
     tanh_sinh = specialise(_tanh_sinh, cache, _NODES=nodes, _PEAK=peak)
+    if entry is not None:
+        from reference_impl._cache import record_files
+
+        record_files(entry, [peak, gauss_jacobi, tanh_sinh])
     return gauss_jacobi, tanh_sinh
 
 
@@ -223,8 +228,11 @@ _TERMS_KERNELS = _kernels_for(_terms_nodes, cache=True)
 
 @lru_cache(maxsize=64)
 def _expression_kernels(nodes):
-    # One expression's node loop (itself cached by the sympy form); not disk-cached.
-    return _kernels_for(nodes, cache=False)
+    # One expression's node loop (itself cached by the sympy form). Disk-cached when the
+    # loop came from the compile cache's module (reference_impl._cache), whose name
+    # `specialise` spells into these copies' names; else compiled in memory.
+    entry = getattr(nodes, "_hcv_entry", None)
+    return _kernels_for(nodes, cache=entry is not None, entry=entry)
 
 
 class _Plan(NamedTuple):

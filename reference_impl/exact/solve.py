@@ -27,7 +27,6 @@ import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.optimize import elementwise
 
 from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
 from reference_impl.exact._one_call import curvature, fused_impact, gauss_jacobi_impact
@@ -244,6 +243,8 @@ class ImpactSolution:
         idx = np.clip(np.searchsorted(table, targets), 1, _STATE_TABLE - 1)
         lo, hi = grid[idx - 1], grid[idx]
         exact_lo = targets <= table[0]
+        from scipy.optimize import elementwise  # here: scipy.optimize costs 0.2 s to import
+
         res = elementwise.find_root(
             lambda y, tg: T(y) - tg,
             (lo, hi),

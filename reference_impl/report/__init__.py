@@ -185,7 +185,9 @@ def build_report(
         # The speed block follows the committed benchmark (nox -s bench), when present.
         bench_json = Path(out) / "bench" / "exact.json"
         bench = json.loads(bench_json.read_text()) if bench_json.is_file() else None
-        readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench))
+        startup_json = Path(out) / "bench" / "startup.json"
+        startup = json.loads(startup_json.read_text()) if startup_json.is_file() else None
+        readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup))
     return results
 
 

@@ -6,7 +6,9 @@
 row per claim of results.json (id, section, verdict, headline), and, when
 ``reports/bench/exact.json`` exists (``nox -s bench``), the block between
 ``<!-- speed:start -->`` and ``<!-- speed:end -->`` with the exact solver's speed
-and error per potential family as that benchmark measured them. ``--check``
+and error per potential family as that benchmark measured them, and, when
+``reports/bench/startup.json`` exists, the block between ``<!-- startup:start -->`` and
+``<!-- startup:end -->`` with the start-up times of `benchmarks.bench_startup`. ``--check``
 writes nothing and exits 1 when a block differs from what the JSON files give.
 """
 
@@ -26,6 +28,9 @@ __all__ = [
     "SPEED_END",
     "verdict_table",
     "speed_table",
+    "STARTUP_START",
+    "STARTUP_END",
+    "startup_table",
     "readme_block",
     "rewrite_readme",
 ]
@@ -34,6 +39,8 @@ START = "<!-- verdicts:start -->"
 END = "<!-- verdicts:end -->"
 SPEED_START = "<!-- speed:start -->"
 SPEED_END = "<!-- speed:end -->"
+STARTUP_START = "<!-- startup:start -->"
+STARTUP_END = "<!-- startup:end -->"
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -127,6 +134,41 @@ def speed_table(bench: dict) -> str:
     return "\n".join(lines)
 
 
+def _seconds(x) -> str:
+    return f"{x:.2f} s" if x < 10 else f"{x:.0f} s"
+
+
+def startup_table(bench: dict) -> str:
+    """Markdown table of `benchmarks.bench_startup`'s JSON: one row per command."""
+    lines = [
+        "| command (new process) | first run, empty cache | then (median) | its CPU time | goal |",
+        "|---|---|---|---|---|",
+    ]
+    for r in bench["cases"]:
+        goal = r["goal_s"]
+        verdict = "—" if goal is None else (
+            f"≤ {goal:g} s: {'met' if r['goal_met'] else '**not met**'}"
+        )
+        lines.append(
+            f"| `{_cell(r['name'])}` | {_seconds(r['cold_wall_s'])} | {_seconds(r['warm_wall_s'])} "
+            f"| {_seconds(r['warm_cpu_s'])} | {verdict} |"
+        )
+    e = bench["expression_over_power"]
+    load = bench.get("load_average_1min", {})
+    mi = bench.get("machine", {})
+    lines += [
+        "",
+        f"- `hcv dt-crit`, expression over the same power law (then): {e['wall_ratio']:.2f}× wall, "
+        f"{e['cpu_ratio']:.2f}× CPU (goal ≤ {e['goal']:g}×: {'met' if e['goal_met'] else '**not met**'})",
+        "",
+        f"Wall seconds from outside each new process; CPU = its user + system seconds. "
+        f"Measured by `python -m benchmarks.bench_startup` ({mi.get('cpu_count', '?')} cpus, "
+        f"load {load.get('before', float('nan')):.1f} before, {load.get('after', float('nan')):.1f} after; "
+        f"commit {str(mi.get('commit', '?'))[:12]}); `reports/bench/startup.json`.",
+    ]
+    return "\n".join(lines)
+
+
 def _load(bench: dict) -> str:
     load = bench.get("load_average_1min")
     return f"{load:.2f}" if isinstance(load, int | float) else "?"
@@ -150,11 +192,16 @@ def _replace(text: str, start: str, end: str, body: str) -> str:
     return text[:i] + "\n" + body + "\n" + text[j:]
 
 
-def rewrite_readme(results: dict, readme_text: str, bench: dict | None = None) -> str:
-    """The README with only its verdict block (and, given ``bench``, its speed block) replaced."""
+def rewrite_readme(
+    results: dict, readme_text: str, bench: dict | None = None, startup: dict | None = None
+) -> str:
+    """The README with only its verdict block (and, given ``bench``, its speed block; given
+    ``startup``, its start-up block) replaced."""
     new = _replace(readme_text, START, END, verdict_table(results))
     if bench is not None:
         new = _replace(new, SPEED_START, SPEED_END, speed_table(bench))
+    if startup is not None:
+        new = _replace(new, STARTUP_START, STARTUP_END, startup_table(startup))
     return new
 
 
@@ -165,6 +212,7 @@ def main(argv=None) -> int:
     ap.add_argument("--results", default=str(ROOT / "reports" / "results.json"))
     ap.add_argument("--readme", default=str(ROOT / "README.md"))
     ap.add_argument("--bench", default=str(ROOT / "reports" / "bench" / "exact.json"))
+    ap.add_argument("--startup", default=str(ROOT / "reports" / "bench" / "startup.json"))
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
     args = ap.parse_args(argv)
     try:
@@ -172,14 +220,17 @@ def main(argv=None) -> int:
         readme = Path(args.readme).read_text()
         bench_path = Path(args.bench)
         bench = json.loads(bench_path.read_text()) if bench_path.is_file() else None
-        new = rewrite_readme(results, readme, bench)
+        startup_path = Path(args.startup)
+        startup = json.loads(startup_path.read_text()) if startup_path.is_file() else None
+        new = rewrite_readme(results, readme, bench, startup)
     except (OSError, ValueError, KeyError, HCVInputError) as exc:
         print(f"readme_table: error: {exc}", file=sys.stderr)
         return 2
     if args.check:
         if new != readme:
             print(
-                f"readme_table: {args.readme} differs from {args.results} / {args.bench}",
+                f"readme_table: {args.readme} differs from {args.results} / {args.bench} / "
+                f"{args.startup}",
                 file=sys.stderr,
             )
             return 1

@@ -4,14 +4,17 @@ Embedded scenes ship as ``*.toml`` files in this package; list them with
 `embedded_scenes` and load one by name with `load_scene`.
 """
 
-from reference_impl.scenes._scene import (
-    Scene,
-    embedded_scenes,
-    load_scene,
-    parse_scene,
-    potential_to_dict,
-    scene_from_dict,
-    scene_toml,
+from reference_impl.scenes._catalogue import embedded_scenes
+
+# The scene parser imports the potentials (sympy); it loads on first use of its names
+# (PEP 562), so listing the catalogue (`hcv scenes`) imports nothing numerical.
+_FROM_SCENE = (
+    "Scene",
+    "load_scene",
+    "parse_scene",
+    "potential_to_dict",
+    "scene_from_dict",
+    "scene_toml",
 )
 
 __all__ = [
@@ -23,3 +26,15 @@ __all__ = [
     "scene_from_dict",
     "scene_toml",
 ]
+
+
+def __getattr__(name: str):
+    if name in _FROM_SCENE:
+        from reference_impl.scenes import _scene
+
+        return getattr(_scene, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -40,6 +40,7 @@ from typing import Any
 from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
+from reference_impl.scenes._catalogue import embedded_scenes
 from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
@@ -460,12 +461,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     except RecursionError:  # arrays or tables nested thousands deep
         raise SceneError(f"scene {source}: nested too deeply to be a scene") from None
     return scene_from_dict(data, source)
-
-
-def embedded_scenes() -> list[str]:
-    """Names of the scenes shipped with the package (``load_scene(name)`` loads one)."""
-    root = resources.files(__package__)
-    return sorted(p.name[: -len(".toml")] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
 def load_scene(path_or_name: str | os.PathLike) -> Scene:

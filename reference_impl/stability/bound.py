@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials._checks import positive, show
@@ -173,6 +172,8 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
         # Refine the maximum between its grid neighbours (at the last point the
         # bracket is [previous point, q_max], so an interior maximum just below
         # q_max is not mistaken for the endpoint).
+        from scipy.optimize import minimize_scalar  # here: 0.2 s to import, rarely needed
+
         res = minimize_scalar(
             lambda q: -float(_ratio(pot, np.array([q]))[0]),
             bounds=(grid[i - 1], grid[min(i + 1, len(grid) - 1)]),

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
@@ -36,6 +35,8 @@ def tangent_step(pot: Potential, m: float, q_max: float) -> float:
     if not math.isfinite(kmax) or kmax <= 0:
         return 0.0
     if 0 < i < q.size - 1:  # interior maximum: refine between the grid neighbours
+        from scipy.optimize import minimize_scalar  # here: 0.2 s to import, rarely needed
+
         res = minimize_scalar(
             lambda x: -float(pot._d2U(np.array([x]))[0]),
             bounds=(q[i - 1], q[i + 1]),

@@ -1,0 +1,189 @@
+"""Start-up of the commands a user types first, each in a new process, cold and warm.
+
+Every command runs as the user runs it: a new Python process (``python -m
+reference_impl.cli ...``), timed from outside from its start to its exit (wall seconds;
+user + system seconds of the child beside them). "Cold" is the first run with an empty
+compile cache (a fresh ``HCV_CACHE_DIR``, ``NUMBA_CACHE_DIR`` unset so that numba's cache
+goes there too): the one-time compile cost after a fresh install. "Warm" is the median of
+``--repeats`` further runs on that cache.
+
+Goals (issue 20): ``hcv --help``, ``hcv --version``, ``hcv scenes`` <= 0.3 s;
+``import reference_impl`` <= 0.5 s; ``hcv solve hertz-damped`` <= 1 s warm;
+``hcv dt-crit`` on the expression ``q**2.5/2.5`` <= 2x the same law as ``family = "power"``
+(warm, each in a new process); ``hcv report --quick`` <= 30 s (only with ``--report``: it
+takes minutes on a loaded machine).
+
+Run: ``python -m benchmarks.bench_startup [--json FILE] [--repeats N] [--report]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from ._machine import machine_info
+
+ROOT = Path(__file__).resolve().parents[1]
+
+GOAL_INSTANT_S = 0.3
+GOAL_IMPORT_S = 0.5
+GOAL_SOLVE_S = 1.0
+GOAL_EXPRESSION_RATIO = 2.0
+GOAL_REPORT_QUICK_S = 30.0
+
+# The issue's expression scene and the same law as a power law (U = q^2.5 / 2.5: k = 1,
+# exponent p = 1.5 of the force), both two-sided so that the Verlet lanes run compiled.
+_EXPRESSION_SCENE = """name = "startup-expression"
+mass = 1.0
+velocities = [1.0]
+kind = "two-sided"
+[potential]
+family = "expression"
+U = "q**2.5/2.5"
+"""
+_POWER_SCENE = """name = "startup-power"
+mass = 1.0
+velocities = [1.0]
+kind = "two-sided"
+[potential]
+family = "power"
+k = 1.0
+p = 1.5
+"""
+
+
+def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
+    hcv = [sys.executable, "-m", "reference_impl.cli"]
+    cases = [
+        {"name": "hcv --help", "argv": [*hcv, "--help"], "goal_s": GOAL_INSTANT_S},
+        {"name": "hcv --version", "argv": [*hcv, "--version"], "goal_s": GOAL_INSTANT_S},
+        {"name": "hcv scenes", "argv": [*hcv, "scenes"], "goal_s": GOAL_INSTANT_S},
+        {
+            "name": "import reference_impl",
+            "argv": [sys.executable, "-c", "import reference_impl"],
+            "goal_s": GOAL_IMPORT_S,
+        },
+        {
+            "name": "hcv solve hertz-damped",
+            "argv": [*hcv, "solve", "hertz-damped"],
+            "goal_s": GOAL_SOLVE_S,
+        },
+        {
+            "name": "hcv dt-crit (power q^2.5/2.5)",
+            "argv": [*hcv, "dt-crit", str(scenes / "power.toml"), "--json"],
+            "goal_s": None,
+        },
+        {
+            "name": "hcv dt-crit (expression q**2.5/2.5)",
+            "argv": [*hcv, "dt-crit", str(scenes / "expression.toml"), "--json"],
+            "goal_s": None,
+        },
+    ]
+    if report_out is not None:
+        cases.append(
+            {
+                "name": "hcv report --quick",
+                "argv": [*hcv, "report", "--quick", "--out", str(report_out)],
+                "goal_s": GOAL_REPORT_QUICK_S,
+            }
+        )
+    return cases
+
+
+def _run(argv: list[str], env: dict) -> dict:
+    """Wall and CPU seconds of one new process (``RUSAGE_CHILDREN``: its own accounting)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    r = subprocess.run(argv, env=env, cwd=ROOT, capture_output=True, text=True, timeout=3600)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(argv)} exited {r.returncode}: {r.stderr.strip()[-500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"wall_s": wall, "cpu_s": cpu}
+
+
+def run(repeats: int = 3, report: bool = False) -> dict:
+    with tempfile.TemporaryDirectory(prefix="hcv-bench-startup-") as tmp:
+        tmp = Path(tmp)
+        scenes = tmp / "scenes"
+        scenes.mkdir()
+        (scenes / "expression.toml").write_text(_EXPRESSION_SCENE)
+        (scenes / "power.toml").write_text(_POWER_SCENE)
+        cache = tmp / "cache"
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+        env.update(HCV_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
+        load_before = os.getloadavg()[0]
+        rows = []
+        for case in _cases(scenes, tmp / "report" if report else None):
+            cold = _run(case["argv"], env)  # the first run fills the (empty) cache
+            warm = [_run(case["argv"], env) for _ in range(repeats)]
+            wall = statistics.median(w["wall_s"] for w in warm)
+            cpu = statistics.median(w["cpu_s"] for w in warm)
+            goal = case["goal_s"]
+            rows.append(
+                {
+                    "name": case["name"],
+                    "command": " ".join(a if a != sys.executable else "python" for a in case["argv"]),
+                    "cold_wall_s": cold["wall_s"],
+                    "cold_cpu_s": cold["cpu_s"],
+                    "warm_wall_s": wall,
+                    "warm_cpu_s": cpu,
+                    "warm_runs": warm,
+                    "goal_s": goal,
+                    "goal_met": None if goal is None else wall <= goal,
+                }
+            )
+            print(
+                f"{case['name']:40s} cold {cold['wall_s']:7.2f} s  warm {wall:6.2f} s wall "
+                f"({cpu:5.2f} s cpu)  goal {goal if goal is not None else '-'}",
+                flush=True,
+            )
+        by_name = {r["name"]: r for r in rows}
+        expr = by_name["hcv dt-crit (expression q**2.5/2.5)"]
+        power = by_name["hcv dt-crit (power q^2.5/2.5)"]
+        ratio = expr["warm_wall_s"] / power["warm_wall_s"]
+        ratio_cpu = expr["warm_cpu_s"] / power["warm_cpu_s"]
+        load_after = os.getloadavg()[0]
+    return {
+        "benchmark": "startup",
+        "repeats": repeats,
+        "cases": rows,
+        "expression_over_power": {
+            "wall_ratio": ratio,
+            "cpu_ratio": ratio_cpu,
+            "goal": GOAL_EXPRESSION_RATIO,
+            "goal_met": ratio <= GOAL_EXPRESSION_RATIO,
+        },
+        "load_average_1min": {"before": load_before, "after": load_after},
+        "machine": machine_info(),
+        "generated_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_startup", description=__doc__.splitlines()[0])
+    ap.add_argument("--json", help="also write the result to this JSON file")
+    ap.add_argument("--repeats", type=int, default=3, help="warm runs per command (median)")
+    ap.add_argument("--report", action="store_true", help="also time hcv report --quick")
+    args = ap.parse_args(argv)
+    res = run(args.repeats, args.report)
+    e = res["expression_over_power"]
+    print(f"dt-crit expression / power, warm: {e['wall_ratio']:.2f} (goal <= {e['goal']})")
+    if args.json:
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        with open(args.json, "w") as fh:
+            json.dump(res, fh, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,370 @@
+"""Where compiled code is kept between processes, and the user expressions' compiled modules.
+
+**Location.** ``$HCV_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/hidden-harmonic-verification``,
+else ``~/.cache/hidden-harmonic-verification``. numba's own disk cache goes to its
+``numba/`` sub-directory (``NUMBA_CACHE_DIR`` is set there when the user did not set it;
+a user's ``NUMBA_CACHE_DIR`` is left alone), the user expressions' generated modules to
+``expressions/``.
+
+**Degrading.** A cache directory that cannot be created or written, or whose file system
+has less than `MIN_FREE_BYTES` free, is not an error: numba then compiles into a private
+temporary directory removed at exit (nothing is kept between processes), and one
+`CacheWarning` says so, once per process.
+
+**User expressions.** numba cannot cache a function that was made at run time (a
+lambdified expression has no source file). `expression_module` therefore writes the
+expression's code, as sympy prints it from the validated tree (never the user's text), into
+a small module file named by a key, and imports it; its functions carry
+``cache=True``, so numba's disk cache applies to them and to every kernel specialised
+around them (`reference_impl._jit.specialise` names each copy after the module function
+it binds). The key is a digest of the canonical form (``sympy.srepr`` of the substituted
+forms) and of everything the compiled code depends on: this package's version, the
+versions of numba, sympy, numpy and Python, and the source of the modules whose generic
+kernels are specialised around it. Files are written to a temporary name and renamed
+(atomic on POSIX), so two processes writing one entry both leave a whole file. The entries
+are bounded: beyond `max_bytes` (``HCV_CACHE_MAX_MB``, default 256 MB) the least recently
+used ones are deleted with their numba files.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import math
+import os
+import sys
+import warnings
+from functools import lru_cache
+from pathlib import Path
+
+__all__ = [
+    "CacheWarning",
+    "MIN_FREE_BYTES",
+    "cache_dir",
+    "configure_numba_cache",
+    "expression_module",
+    "expressions_dir",
+    "max_bytes",
+    "printed_function",
+    "record_files",
+]
+
+_APP = "hidden-harmonic-verification"
+# Below this free space the cache counts as full: one expression's kernels take 1-5 MB,
+# and numba's writes fail mid-file (an error, not a miss) when the disk fills.
+MIN_FREE_BYTES = 64 * 2**20
+# Default bound of the expression entries (module files and their numba files).
+_DEFAULT_MAX_MB = 256
+
+
+class CacheWarning(UserWarning):
+    """The compile cache cannot be used; code is compiled for this process only."""
+
+
+_state: dict = {"usable": None, "warned": False, "tmp": None}
+
+
+def cache_dir() -> Path:
+    """The per-user cache directory (``HCV_CACHE_DIR`` overrides it)."""
+    env = os.environ.get("HCV_CACHE_DIR")
+    if env:
+        return Path(env).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    return base / _APP
+
+
+def expressions_dir() -> Path:
+    return cache_dir() / "expressions"
+
+
+def max_bytes() -> int:
+    """Bound of the expression entries in bytes (``HCV_CACHE_MAX_MB``, default 256)."""
+    try:
+        mb = float(os.environ.get("HCV_CACHE_MAX_MB", _DEFAULT_MAX_MB))
+    except ValueError:
+        mb = _DEFAULT_MAX_MB
+    if not math.isfinite(mb) or mb <= 0:
+        mb = _DEFAULT_MAX_MB
+    return int(mb * 2**20)
+
+
+def _unusable(path: Path, min_free: int | None = None) -> str | None:
+    """Why ``path`` cannot hold the cache (None when it can): not creatable, not writable, full."""
+    min_free = MIN_FREE_BYTES if min_free is None else min_free
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        # A real write, not os.access: the latter says yes to root on a read-only mount.
+        probe = path / f".probe-{os.getpid()}"
+        os.close(os.open(probe, os.O_CREAT | os.O_WRONLY | os.O_TRUNC, 0o600))
+        os.unlink(probe)
+        st = os.statvfs(path)
+        free = st.f_bavail * st.f_frsize
+    except OSError as exc:
+        return f"cannot be written ({exc.strerror or type(exc).__name__})"
+    if free < min_free:
+        return f"is full ({free / 2**20:.0f} MB free, {min_free / 2**20:.0f} MB needed)"
+    return None
+
+
+def _warn_once(text: str) -> None:
+    if not _state["warned"]:
+        _state["warned"] = True
+        warnings.warn(text, CacheWarning, stacklevel=3)
+
+
+def _private_tmp() -> str | None:
+    import atexit
+    import shutil
+    import tempfile
+
+    if _state["tmp"] is None:
+        try:
+            _state["tmp"] = tempfile.mkdtemp(prefix="hcv-numba-")
+        except OSError:
+            return None
+        atexit.register(shutil.rmtree, _state["tmp"], True)
+    return _state["tmp"]
+
+
+def configure_numba_cache() -> bool:
+    """Point numba's disk cache at the per-user directory; True when it is usable.
+
+    Called once when the package is imported (before numba is), and cheap: one directory
+    check. When the directory is unusable, numba compiles into a private temporary
+    directory removed at exit, and one `CacheWarning` names the directory and the reason.
+    """
+    if _state["usable"] is not None:
+        return _state["usable"]
+    root = cache_dir()
+    reason = _unusable(root)
+    _state["usable"] = reason is None
+    if "NUMBA_CACHE_DIR" not in os.environ:
+        target = str(root / "numba") if reason is None else _private_tmp()
+        if target is not None:
+            os.environ["NUMBA_CACHE_DIR"] = target
+            numba_config = sys.modules.get("numba.core.config")
+            if numba_config is not None:  # numba was imported first: tell it too
+                numba_config.CACHE_DIR = target
+    if reason is not None:
+        _warn_once(
+            f"hcv: the compile cache {root} {reason}; compiling for this process only "
+            "(set HCV_CACHE_DIR to a writable directory to keep compiled code between runs)"
+        )
+    return _state["usable"]
+
+
+# --------------------------------------------------------------------------- expressions
+
+# The modules whose generic kernels are specialised around an expression's functions:
+# their source is part of every key (a changed kernel never meets an old entry).
+_KERNEL_SOURCES = (
+    "reference_impl.exact._nodes",
+    "reference_impl.exact._one_call",
+    "reference_impl.integrators.verlet_kernel",
+    "reference_impl.integrators.verlet_expression",
+    "reference_impl._jit",
+    "reference_impl._cache",
+)
+
+
+@lru_cache(maxsize=1)
+def _dependencies() -> str:
+    """Versions and kernel sources every compiled expression depends on, as one string."""
+    import numba
+    import numpy
+    import sympy
+
+    from reference_impl._version import version
+
+    parts = [
+        f"hcv={version()}",
+        f"numba={numba.__version__}",
+        f"sympy={sympy.__version__}",
+        f"numpy={numpy.__version__}",
+        f"python={sys.version}",
+    ]
+    for name in _KERNEL_SOURCES:
+        spec = importlib.util.find_spec(name)
+        origin = spec.origin if spec else None
+        digest = hashlib.sha256(Path(origin).read_bytes()).hexdigest() if origin else "none"
+        parts.append(f"{name}={digest}")
+    return "\n".join(parts)
+
+
+def _key(kind: str, canonical: str) -> str:
+    text = f"{kind}\n{canonical}\n{_dependencies()}"
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a unique temporary name and a rename."""
+    import tempfile
+
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def _import_file(name: str, path: Path):
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(name, None)
+        raise
+    return module
+
+
+def expression_module(kind: str, canonical: str, source: str):
+    """The module of ``source`` (generated code), stored in the cache under its key; or None.
+
+    Parameters
+    ----------
+    kind : str
+        What the module holds (e.g. ``"nodes"``, ``"verlet"``): part of the key.
+    canonical : str
+        The canonical form of the expression (``sympy.srepr``): part of the key.
+    source : str
+        Python source of the module, generated from the validated sympy tree.
+
+    Returns
+    -------
+    module or None
+        None when the cache is unusable (the caller compiles in memory).
+    """
+    if not configure_numba_cache():
+        return None
+    key = _key(kind, canonical + "\n" + source)
+    name = f"hcv_expr_{kind}_{key}"
+    folder = expressions_dir()
+    path = folder / f"{name}.py"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        if not path.is_file() or path.read_text() != source:
+            _write_atomic(path, source)
+            _evict(folder, keep=name)
+        else:
+            os.utime(path)  # recently used: last to be evicted
+        return _import_file(name, path)
+    except OSError as exc:
+        _warn_once(
+            f"hcv: the compile cache {folder} cannot be written ({exc.strerror or exc}); "
+            "compiling for this process only"
+        )
+        return None
+
+
+def printed_function(q, expr, name: str) -> str | None:
+    """``def name(q): return ...``: sympy's math-module print of ``expr``, or None.
+
+    The text is what ``sympy.lambdify(q, expr, modules="math")`` compiles, renamed; None
+    when it calls anything that ``from math import *`` and the builtins do not provide
+    as the same object (the module could not reproduce it), or names a dummy symbol
+    (a name that changes between processes would defeat the cache).
+    """
+    import builtins
+    import inspect
+
+    import sympy as sp
+
+    f = sp.lambdify(q, expr, modules="math")
+    text = inspect.getsource(f)
+    head = "def _lambdifygenerated("
+    if not text.startswith(head) or "Dummy" in text:
+        return None
+    for used in f.__code__.co_names:
+        ours = getattr(math, used, getattr(builtins, used, None))
+        theirs = f.__globals__.get(used, getattr(builtins, used, None))
+        same = ours is theirs or (isinstance(ours, float) and ours == theirs)
+        if ours is None or not same:
+            return None
+    return f"def {name}(" + text[len(head):]
+
+
+def record_files(module_name: str, dispatchers) -> None:
+    """Note which numba cache files belong to the entry ``module_name`` (for eviction)."""
+    rows = []
+    for d in dispatchers:
+        cache = getattr(d, "_cache", None)
+        path = getattr(cache, "_cache_path", None)
+        py = getattr(d, "py_func", None)
+        if path is None or py is None:
+            continue
+        stem = Path(py.__code__.co_filename).stem
+        rows.append([str(path), f"{stem}.{py.__qualname__}-"])
+    manifest = expressions_dir() / f"{module_name}.files"
+    try:
+        old = json.loads(manifest.read_text()) if manifest.is_file() else []
+        merged = sorted({tuple(r) for r in old} | {tuple(r) for r in rows})
+        _write_atomic(manifest, json.dumps(merged))
+    except (OSError, ValueError):
+        pass  # eviction then leaves that entry's numba files (bounded by numba's own index)
+
+
+def _entry_files(folder: Path, name: str) -> list[Path]:
+    """The module file, its manifest and the numba files of one entry."""
+    files = [folder / f"{name}.py", folder / f"{name}.files"]
+    rows = []
+    try:
+        rows = json.loads((folder / f"{name}.files").read_text())
+    except (OSError, ValueError):
+        pass
+    rows.append([str(_numba_dir_of(folder)), f"{name}."])
+    for cache_path, prefix in rows:
+        p = Path(cache_path)
+        if p.is_dir():
+            files.extend(f for f in p.iterdir() if f.name.startswith(prefix))
+    return [f for f in files if f.exists()]
+
+
+def _numba_dir_of(folder: Path) -> Path:
+    """numba's cache directory for modules in ``folder`` (its UserProvidedCacheLocator rule)."""
+    sub = os.path.abspath(folder)
+    return Path(os.environ.get("NUMBA_CACHE_DIR", "")) / (
+        os.path.split(sub)[-1] + "_" + hashlib.sha1(sub.encode()).hexdigest()
+    )
+
+
+def _evict(folder: Path, keep: str) -> None:
+    """Delete the least recently used entries until the rest fit in `max_bytes`."""
+    entries = []
+    for module in folder.glob("hcv_expr_*.py"):
+        name = module.stem
+        if name == keep:
+            continue
+        files = _entry_files(folder, name)
+        try:
+            used = module.stat().st_mtime
+            size = sum(f.stat().st_size for f in files)
+        except OSError:
+            continue  # another process is evicting it
+        entries.append((used, size, files))
+    total = sum(size for _, size, _ in entries)
+    for f in _entry_files(folder, keep):
+        try:
+            total += f.stat().st_size
+        except OSError:
+            pass
+    for _, size, files in sorted(entries, key=lambda e: e[0]):
+        if total <= max_bytes():
+            break
+        for f in files:
+            try:
+                f.unlink()
+            except OSError:
+                pass
+        total -= size

@@ -1,0 +1,205 @@
+"""Start-up (issue 20): what a new process imports, and the lazy public names.
+
+Times are measured by ``benchmarks/bench_startup.py``, never here; these tests check the
+cause of a slow start instead: which modules a command imports before it has work to do.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from verification.assertions import assert_true
+
+# Numerical libraries whose import costs 0.3-2 s each; none may load while parsing arguments.
+HEAVY = ("numba", "sympy", "scipy", "numpy", "mpmath", "pandas", "matplotlib", "rich")
+
+_PROBE = """
+import json, sys, runpy
+sys.argv = ["hcv", *json.loads(sys.argv[1])]
+code = 0
+try:
+    runpy.run_module("reference_impl.cli", run_name="__main__")
+except SystemExit as exc:
+    code = exc.code
+heavy = json.loads({heavy!r})
+print(json.dumps({{"code": code, "loaded": sorted(m for m in heavy if m in sys.modules)}}), file=sys.stderr)
+"""
+
+
+def _probe(*args: str) -> tuple[int, list[str]]:
+    """Run ``hcv ARGS`` in a new process; its exit status and the heavy modules it loaded."""
+    script = _PROBE.format(heavy=json.dumps(HEAVY))
+    r = subprocess.run(
+        [sys.executable, "-c", script, json.dumps(list(args))],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    last = r.stderr.strip().splitlines()[-1]
+    out = json.loads(last)
+    return out["code"], out["loaded"]
+
+
+@pytest.mark.parametrize(
+    "args, status",
+    [
+        (("--help",), 0),
+        (("--version",), 0),
+        (("scenes",), 0),
+        (("solve", "--help"), 0),
+        # `hcv bench --help` is left out: its page lists every adapter's keys and values
+        # (issue 17), read from the adapter classes (see the test below); parsing and
+        # refusing bench arguments stay light:
+        (("bench", "reference", "--no-such-option"), 2),
+        (("sweep", "--help"), 0),
+        (("report", "--help"), 0),
+        (("no-such-command",), 2),
+        (("solve",), 2),
+        (("dt-crit", "hertz", "--no-such-option"), 2),
+    ],
+)
+def test_parsing_and_refusing_import_nothing_numerical(args, status):
+    code, loaded = _probe(*args)
+    assert_true(
+        code == status and not loaded,
+        got=f"exit {code}, loaded {loaded}",
+        should=f"exit {status}, none of {HEAVY} loaded",
+        claim="tool",
+        call=f"hcv {' '.join(args)}",
+    )
+
+
+def test_version_is_the_package_version():
+    from reference_impl._version import version
+
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "--version"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert_true(
+        r.returncode == 0 and r.stdout.strip() == f"hcv {version()}",
+        got=f"exit {r.returncode}, {r.stdout!r}",
+        should=f"exit 0, 'hcv {version()}'",
+        claim="tool",
+        call="hcv --version",
+    )
+
+
+def test_import_reference_impl_loads_no_numerical_library():
+    script = (
+        "import json, sys, reference_impl; "
+        f"print(json.dumps(sorted(m for m in {HEAVY!r} if m in sys.modules)))"
+    )
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    loaded = json.loads(r.stdout)
+    assert_true(
+        not loaded,
+        got=f"loaded {loaded}",
+        should="none loaded",
+        claim="tool",
+        call="import reference_impl",
+    )
+
+
+def test_every_public_name_resolves_and_is_listed():
+    import reference_impl
+
+    unresolved = [n for n in reference_impl.__all__ if getattr(reference_impl, n, None) is None]
+    unlisted = sorted(set(reference_impl.__all__) - set(dir(reference_impl)))
+    assert_true(
+        not unresolved and not unlisted,
+        got=f"unresolved {unresolved}, not in dir() {unlisted}",
+        should="every name of __all__ resolved and listed",
+        claim="tool",
+        call="reference_impl.__all__",
+    )
+    from reference_impl import solve_impact
+    from reference_impl.exact.solve import solve_impact as defined
+
+    assert_true(
+        solve_impact is defined,
+        got=repr(solve_impact),
+        should=repr(defined),
+        claim="tool",
+        call="from reference_impl import solve_impact",
+    )
+    with pytest.raises(AttributeError):
+        reference_impl.no_such_name  # noqa: B018
+
+
+def test_scenes_package_names_resolve():
+    import reference_impl.scenes as scenes
+    from reference_impl.scenes._scene import load_scene
+
+    unresolved = [n for n in scenes.__all__ if getattr(scenes, n, None) is None]
+    assert_true(
+        not unresolved and scenes.load_scene is load_scene,
+        got=f"unresolved {unresolved}",
+        should="every name of reference_impl.scenes.__all__ resolved",
+        claim="tool",
+        call="reference_impl.scenes.__all__",
+    )
+
+
+def test_readme_startup_block_is_the_committed_benchmark():
+    """The README's start-up figures are rendered from reports/bench/startup.json, never typed."""
+    from pathlib import Path
+
+    from reference_impl.report.readme_table import (
+        STARTUP_END,
+        STARTUP_START,
+        readme_block,
+        startup_table,
+    )
+
+    root = Path(__file__).resolve().parent.parent
+    bench_json = root / "reports" / "bench" / "startup.json"
+    assert_true(
+        bench_json.is_file(),
+        got=f"no {bench_json.relative_to(root)}",
+        should="the benchmark JSON behind the README's start-up block (nox -s bench)",
+        claim="report",
+        call="readme_table",
+    )
+    want = startup_table(json.loads(bench_json.read_text()))
+    got = readme_block((root / "README.md").read_text(), STARTUP_START, STARTUP_END)
+    assert_true(
+        got == want,
+        got="README start-up block differs from reports/bench/startup.json",
+        should="identical (run python -m reference_impl.report.readme_table)",
+        claim="report",
+        call="readme_table",
+    )
+
+
+def test_calibrate_parser_names_the_restitution_ends_of_the_theory():
+    """cli.calibrate keeps its own copy of the end names (parsing imports nothing numerical)."""
+    from reference_impl.cli.calibrate import _ENDS
+    from reference_impl.theory.damping import RESTITUTION_ENDS
+
+    assert _ENDS == RESTITUTION_ENDS, f"got {_ENDS}, should be {RESTITUTION_ENDS}"
+
+
+def test_bench_help_lists_each_adapters_keys():
+    """The one help page that reads the adapter classes: each adapter's keys and values."""
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "bench", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    for needle in ("kratos: law = hertz | linear", "lammps: damping =", "mujoco: solref = "):
+        assert_true(
+            r.returncode == 0 and needle in r.stdout,
+            got=r.stdout[-600:],
+            should=f"a line {needle!r}",
+            claim="tool",
+            call="hcv bench --help",
+        )
