@@ -33,13 +33,13 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact._nodes import expression_sympy
 from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact.solve import solve_impact_mp
 from reference_impl.studies.laws import calibrated_laws, hertz
-from reference_impl.theory.laws import law_from_dict
 from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
+from reference_impl.theory.laws import law_from_dict
 
 from ._machine import machine_info
 

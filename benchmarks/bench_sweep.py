@@ -70,8 +70,8 @@ def _noop(x):
 def _warm(dask_worker=None) -> float:
     """Load the package and the numba kernels in a worker (time in s)."""
     t = time.perf_counter()
-    from reference_impl.stability.search import search_scene
     from reference_impl.potentials import PowerLaw
+    from reference_impl.stability.search import search_scene
 
     search_scene(PowerLaw(1.0, 1.5), 1.0, [1.0], "impact")
     return time.perf_counter() - t

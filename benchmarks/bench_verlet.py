@@ -26,10 +26,10 @@ import time  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
-from reference_impl.stability.search import search_scene  # noqa: E402
 from reference_impl.integrators.verlet import SCENE_WALLS, LaneBatch, run_lanes  # noqa: E402
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw  # noqa: E402
 from reference_impl.provenance import machine_info  # noqa: E402
+from reference_impl.stability.search import search_scene  # noqa: E402
 
 # A generic (non-integer, non-special) exponent, so no fast path of pow applies.
 _P_GENERIC = 1.37

@@ -32,10 +32,10 @@ def solve_scene(scene) -> list[dict]:
     (quadrature_error, s). The universal law and ``none`` are solved by the exact
     quadrature, the other laws by `reference_impl.exact.general_law`.
     """
-    from reference_impl.theory.action import action, period
     from reference_impl.exact.general_law import solve_law_impact
     from reference_impl.exact.solve import solve_impact
     from reference_impl.stability.bound import dt_safe
+    from reference_impl.theory.action import action, period
 
     law = scene.law
     exact = law.name in ("none", "universal")

@@ -37,11 +37,11 @@ from reference_impl.adapters.registry import parse_spec
 from reference_impl.adapters.subprocess import SubprocessAdapter
 from reference_impl.bench import load_tolerances, metric_names, run_bench
 from reference_impl.bench.metrics import exact_reference, measure
-from reference_impl.theory.damping import restitution_from_zeta
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.verlet import SCENE_IMPACT, LaneBatch, run_lanes
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes import parse_scene
+from reference_impl.theory.damping import restitution_from_zeta
 
 from .assertions import assert_close, assert_true
 

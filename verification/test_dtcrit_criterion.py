@@ -22,6 +22,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from reference_impl.claims.sec6_dt_safe_bound import kind_counts, verdict_from_map
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials import Expression, PowerLaw
+from reference_impl.stability.recommend import recommended_step
 from reference_impl.stability.search import (
     FAILURE_KINDS,
     MAX_LANES_PER_CALL,
@@ -36,10 +39,7 @@ from reference_impl.stability.search import (
     parse_criterion,
     search_scene,
 )
-from reference_impl.stability.recommend import recommended_step
 from reference_impl.studies.dtcrit_map import MapCase, dt_crit_map
-from reference_impl.errors import HCVInputError
-from reference_impl.potentials import Expression, PowerLaw
 from verification.assertions import assert_true
 
 HERTZ = PowerLaw(1.0, 1.5)

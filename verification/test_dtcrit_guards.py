@@ -11,8 +11,8 @@ from __future__ import annotations
 import pytest
 
 from reference_impl import HCVInputError, ImpactGain, PowerLaw, SearchGrid
-from reference_impl.stability.search import search_scene
 from reference_impl.stability.criteria import MIN_TOL, parse_criterion
+from reference_impl.stability.search import search_scene
 
 HERTZ_K, HERTZ_M = 1.0879e10, 4.1103e-3  # the hertz-walls scene
 

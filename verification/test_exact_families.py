@@ -17,9 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from reference_impl import Expression, PowerLaw, UnsupportedError, solve_impacts
+from reference_impl.errors import HCVInputError, NoTurningPointError
 from reference_impl.exact._branches import compiled_nodes, dq_dx
 from reference_impl.exact._nodes import _compiled_expression, expression_sympy
-from reference_impl.errors import HCVInputError, NoTurningPointError
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less

@@ -17,16 +17,16 @@ from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
+from reference_impl.errors import HCVInputError
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.potentials import Expression, SumPotential
 from reference_impl.theory.damping import (
     restitution_zero_force_from_zeta,
     tsuji_coefficient,
     zeta_from_restitution,
 )
-from reference_impl.errors import HCVInputError
-from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
-from reference_impl.potentials import Expression, SumPotential
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less, assert_true
 

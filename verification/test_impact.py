@@ -16,10 +16,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.special import beta as beta_fn
 
-from reference_impl.theory.damping import restitution_from_zeta
 from reference_impl.errors import HCVInputError, NonMonotoneError, NoTurningPointError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials import Ellipsoid, PowerLaw, Sphere
+from reference_impl.theory.damping import restitution_from_zeta
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_true
 

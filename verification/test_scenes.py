@@ -13,7 +13,6 @@ from pathlib import Path
 
 import pytest
 
-from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
 from reference_impl.errors import (
     ExpressionError,
     HCVInputError,
@@ -29,6 +28,7 @@ from reference_impl.scenes import (
     parse_scene,
     scene_from_dict,
 )
+from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
 from verification.assertions import assert_close, assert_true
 
 _REQUIRED_EMBEDDED = (

@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given
 
 from reference_impl.claims import fig1, sec10_stiffening_domain, table1
-from reference_impl.theory.damping import restitution_from_zeta
+from reference_impl.potentials import Ellipsoid
+from reference_impl.stability.bound import dt_safe, geometry_class, stiffening_indicator
 from reference_impl.studies.paper import (
     FIG1,
     PAPER_MASS,
@@ -17,8 +18,7 @@ from reference_impl.studies.paper import (
     TABLE1_PRINTED,
     paper_ellipsoid,
 )
-from reference_impl.potentials import Ellipsoid
-from reference_impl.stability.bound import dt_safe, geometry_class, stiffening_indicator
+from reference_impl.theory.damping import restitution_from_zeta
 from verification import strategies as hs
 from verification.assertions import assert_close, assert_less, assert_true, check_measurement
 

@@ -22,11 +22,11 @@ import pytest
 from hypothesis import given
 from scipy.integrate import solve_ivp
 
-from reference_impl.theory import action as act
 from reference_impl.claims import thm1_period
 from reference_impl.integrators.taylor import taylor_impact, taylor_zero_crossings
-from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 from reference_impl.potentials import PowerLaw
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.theory import action as act
 from verification.assertions import assert_true, check_measurement
 from verification.strategies import (
     masses,

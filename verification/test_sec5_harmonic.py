@@ -38,8 +38,8 @@ from reference_impl.claims import km_cancellation, thm2_harmonic
 from reference_impl.claims._cases import KM_PAIRS
 from reference_impl.claims._tolerances import ODE_RTOL, ROUNDOFF_TOL, SINUSOID_TOL, TAU_EVENT_RTOL
 from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.studies.paper import FIG1, PAPER_ELLIPSOID, PAPER_MASS
 from reference_impl.potentials import Ellipsoid
+from reference_impl.studies.paper import FIG1, PAPER_ELLIPSOID, PAPER_MASS
 from verification.assertions import (
     assert_close,
     assert_less,

@@ -16,6 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from reference_impl.claims import sec6_dt_safe_bound as sec6
+from reference_impl.potentials import PowerLaw
 from reference_impl.stability.search import (
     KINDS,
     EnergyGrowth,
@@ -23,7 +24,6 @@ from reference_impl.stability.search import (
     search_scene,
 )
 from reference_impl.studies.dtcrit_map import coverage
-from reference_impl.potentials import PowerLaw
 from verification.assertions import assert_close, assert_true, check_measurement
 from verification.strategies import impacts
 

@@ -16,6 +16,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from reference_impl.cli import main as hcv_main
+from reference_impl.cli.sweep import run_sweep
 from reference_impl.sweep import (
     MAX_CASES,
     CaseTimeout,
@@ -25,7 +26,6 @@ from reference_impl.sweep import (
     run_cases,
     spec_from_dict,
 )
-from reference_impl.cli.sweep import run_sweep
 from reference_impl.sweep._runner import dask_available
 from verification.assertions import assert_true
 

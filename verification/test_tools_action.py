@@ -12,11 +12,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from reference_impl.theory import action as act
-from reference_impl.theory import action_closed as closed
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.taylor import taylor_impact
 from reference_impl.potentials import PowerLaw, Sphere, SumPotential
+from reference_impl.theory import action as act
+from reference_impl.theory import action_closed as closed
 from verification.assertions import assert_close
 from verification.strategies import (
     ellipsoids,

@@ -15,17 +15,6 @@ import math
 import numpy as np
 import pytest
 
-from reference_impl.theory.damping import restitution_from_zeta
-from reference_impl.stability.search import (
-    EnergyGrowth,
-    ImpactGain,
-    SearchGrid,
-    _next_dts,
-    _Search,
-    parse_criterion,
-    search_scene,
-)
-from reference_impl.studies.dtcrit_map import criterion_sensitivity
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
@@ -36,6 +25,17 @@ from reference_impl.integrators.verlet import (
 )
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw
 from reference_impl.stability.bound import dt_safe
+from reference_impl.stability.search import (
+    EnergyGrowth,
+    ImpactGain,
+    SearchGrid,
+    _next_dts,
+    _Search,
+    parse_criterion,
+    search_scene,
+)
+from reference_impl.studies.dtcrit_map import criterion_sensitivity
+from reference_impl.theory.damping import restitution_from_zeta
 from verification.assertions import assert_close, assert_true
 from verification.test_sec6_dtcrit import HERTZ, RES, TWO_BRACKETS  # noqa: E402
 

@@ -100,10 +100,10 @@ from typing import Any
 
 import numpy as np
 
-from reference_impl.theory.damping import restitution_from_zeta
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
 from reference_impl.scenes import potential_to_dict
+from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "AdapterDeclined",

@@ -67,9 +67,9 @@ from importlib import metadata
 
 import numpy as np
 
+from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 
 __all__ = ["GEOMETRIES", "LAWS", "SCHEMES", "KratosAdapter", "kratos_available", "load_kratos"]
 

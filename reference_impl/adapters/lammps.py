@@ -69,9 +69,15 @@ from importlib import metadata
 import numpy as np
 from scipy.optimize import brentq
 
+from reference_impl.adapters.base import (
+    AdapterScene,
+    ContactAdapter,
+    ImplementedLaw,
+    PowerDamping,
+    Trajectory,
+)
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, PowerDamping, Trajectory
 
 __all__ = [
     "DAMPING_MODELS",
@@ -520,8 +526,8 @@ _CALIBRATIONS: dict[tuple, float] = {}
 
 def _calibrate(pot: PowerLaw, m: float, e: float, v_ref: float, exponent: float) -> float:
     """c such that C = c q^exponent gives restitution e at v_ref (damped ODE, DOP853)."""
-    from reference_impl.theory.damping import zeta_from_restitution
     from reference_impl.integrators.ivp import integrate_impact
+    from reference_impl.theory.damping import zeta_from_restitution
 
     key = (pot.k, pot.p, m, e, v_ref, exponent)
     if key in _CALIBRATIONS:

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_impl.theory.laws import DampingLaw, law_C, law_from_dict
-from reference_impl.potentials.base import Potential
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping
+from reference_impl.potentials.base import Potential
+from reference_impl.theory.laws import DampingLaw, law_C, law_from_dict
 
 __all__ = ["LawDamping", "implemented_law_from_table"]
 

@@ -90,17 +90,23 @@ from importlib import metadata
 
 import numpy as np
 
-from reference_impl.errors import HCVInputError
-from reference_impl.potentials.base import SumPotential
-from reference_impl.potentials.power import PowerLaw
 from reference_impl.adapters._mujoco_support import (
     _badqacc_index,
     _diag,
     restitution_zero_force_linear,
     zeta_zero_force,
 )
-from reference_impl.adapters.base import AdapterDeclined, AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
+from reference_impl.adapters.base import (
+    AdapterDeclined,
+    AdapterScene,
+    ContactAdapter,
+    ImplementedLaw,
+    Trajectory,
+)
 from reference_impl.adapters.law_damping import LawDamping
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.base import SumPotential
+from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.laws import DampingLaw
 
 __all__ = [

@@ -15,8 +15,14 @@ import math
 import numba
 import numpy as np
 
+from reference_impl.adapters.base import (
+    AdapterScene,
+    ContactAdapter,
+    ImplementedLaw,
+    PowerDamping,
+    Trajectory,
+)
 from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, _force_energy, kernel_terms
-from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, PowerDamping, Trajectory
 
 __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
 

@@ -85,8 +85,6 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
-from reference_impl.errors import HCVInputError
-from reference_impl.scenes._scene import _potential, _Where
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterOutputError,
@@ -96,6 +94,8 @@ from reference_impl.adapters.base import (
     ImplementedLaw,
     trajectory_from_mapping,
 )
+from reference_impl.errors import HCVInputError
+from reference_impl.scenes._scene import _potential, _Where
 
 __all__ = [
     "PROTOCOL",

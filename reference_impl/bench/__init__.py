@@ -21,7 +21,13 @@ from reference_impl.bench.report import (
     write_junit,
     write_markdown,
 )
-from reference_impl.bench.runner import DEFAULT_SCENES, BenchResult, bench_scene_names, resolve_scenes, run_bench
+from reference_impl.bench.runner import (
+    DEFAULT_SCENES,
+    BenchResult,
+    bench_scene_names,
+    resolve_scenes,
+    run_bench,
+)
 from reference_impl.bench.tolerances import default_tolerances, load_tolerances
 
 __all__ = [

@@ -216,8 +216,8 @@ def _quantity(meas: dict, end: str) -> float:
 
 def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
     """Measured quantities at the calibrated value, against the declared law and the scene."""
-    from reference_impl.exact.solve import solve_impact
     from reference_impl.bench.measure import exact_reference, measure
+    from reference_impl.exact.solve import solve_impact
 
     meas = measure(tr, v0)
     keys = ("restitution", "restitution_zero_force", "contact_time", "max_penetration")
@@ -311,9 +311,9 @@ def calibrate(
         Bad input: unknown option, quantity or end, target outside (0, 1], a
         steps-per-contact out of bounds, a non-impact scene, a declined scene.
     """
+    from reference_impl.bench.measure import measure
     from reference_impl.exact.solve import solve_impact
     from reference_impl.scenes import Scene, load_scene
-    from reference_impl.bench.measure import measure
 
     if quantity not in QUANTITIES:
         raise HCVInputError(f"--target {quantity}=...: quantity must be one of {QUANTITIES}")
@@ -433,9 +433,9 @@ def delivered(
 
     Same scene, speed and dt = t_c / N as `calibrate`; NaN when the run gives none.
     """
+    from reference_impl.bench.measure import measure
     from reference_impl.exact.solve import solve_impact
     from reference_impl.scenes import Scene, load_scene
-    from reference_impl.bench.measure import measure
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if v0 is None:

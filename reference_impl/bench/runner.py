@@ -29,10 +29,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory
-from reference_impl.errors import HCVInputError
-from reference_impl.exact.solve import solve_impact
-from reference_impl.scenes import Scene, load_scene
-from reference_impl.stability.bound import dt_safe as _dt_safe
 from reference_impl.bench.measure import (
     check_conventions,
     check_declared_law,
@@ -44,6 +40,10 @@ from reference_impl.bench.measure import (
 from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
+from reference_impl.scenes import Scene, load_scene
+from reference_impl.stability.bound import dt_safe as _dt_safe
 
 __all__ = ["DEFAULT_SCENES", "BenchResult", "bench_scene_names", "resolve_scenes", "run_bench"]
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from reference_impl.studies.paper import PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
 from reference_impl.potentials import PowerLaw
+from reference_impl.studies.paper import PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
 
 # Hertz contact of the theory checks: k = 1e6, p = 1.5, on a 50 g body.
 HERTZ = PowerLaw(1e6, 1.5)

@@ -13,11 +13,11 @@ import math
 
 import numpy as np
 
-from reference_impl.theory.damping import UniversalDamping, restitution_from_zeta
-from reference_impl.theory.harmonic_map import HarmonicMap
+from reference_impl.claims._base import Measurement, g
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.studies.paper import FIG1, PAPER_MASS, paper_ellipsoid
-from reference_impl.claims._base import Measurement, g
+from reference_impl.theory.damping import UniversalDamping, restitution_from_zeta
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "fig1"
 SECTION = "10 (Fig. 1)"

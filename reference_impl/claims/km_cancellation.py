@@ -12,13 +12,13 @@ import math
 
 import numpy as np
 
-from reference_impl.theory.damping import UniversalDamping
-from reference_impl.theory.harmonic_map import HarmonicMap
-from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.studies.paper import FIG1, PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
 from reference_impl.claims._base import Measurement, g
 from reference_impl.claims._cases import KM_PAIRS, theory_cases
 from reference_impl.claims._tolerances import MEASURABLE, ODE_RTOL, ROUNDOFF_TOL
+from reference_impl.integrators.ivp import integrate_impact
+from reference_impl.studies.paper import FIG1, PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
+from reference_impl.theory.damping import UniversalDamping
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "km-cancellation"
 SECTION = "5 (Remark), 6, 8"

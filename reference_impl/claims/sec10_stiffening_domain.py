@@ -8,9 +8,9 @@ import math
 import mpmath
 import numpy as np
 
-from reference_impl.studies.paper import STIFFENING_LIMIT_PRINTED, paper_ellipsoid
-from reference_impl.stability.bound import stiffening_indicator
 from reference_impl.claims._base import Measurement, g
+from reference_impl.stability.bound import stiffening_indicator
+from reference_impl.studies.paper import STIFFENING_LIMIT_PRINTED, paper_ellipsoid
 
 ID = "sec10-stiffening-domain"
 SECTION = "10"

@@ -7,12 +7,12 @@ import math
 
 import numpy as np
 
-from reference_impl.theory.harmonic_map import HarmonicMap
-from reference_impl.studies.paper import paper_ellipsoid
-from reference_impl.potentials import PowerLaw
 from reference_impl.claims._base import Measurement, g
 from reference_impl.claims._cases import MASS
 from reference_impl.claims._tolerances import SLOPE_TOL
+from reference_impl.potentials import PowerLaw
+from reference_impl.studies.paper import paper_ellipsoid
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "sec7-effective-mass"
 SECTION = "7"

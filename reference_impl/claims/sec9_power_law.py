@@ -6,12 +6,12 @@ import functools
 
 import numpy as np
 
-from reference_impl.theory.damping import UniversalDamping, tsuji_coefficient
-from reference_impl.theory.harmonic_map import HarmonicMap
-from reference_impl.potentials import PowerLaw
 from reference_impl.claims._base import Measurement, g
 from reference_impl.claims._cases import MASS
 from reference_impl.claims._tolerances import ROUNDOFF_TOL, SLOPE_TOL
+from reference_impl.potentials import PowerLaw
+from reference_impl.theory.damping import UniversalDamping, tsuji_coefficient
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "sec9-power-law"
 SECTION = "9"

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import functools
 
-from reference_impl.studies.paper import TABLE1_PRINTED, table1_cells
 from reference_impl.claims._base import Measurement
+from reference_impl.studies.paper import TABLE1_PRINTED, table1_cells
 
 ID = "table1"
 SECTION = "10 (Table 1)"

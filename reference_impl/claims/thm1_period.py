@@ -11,10 +11,10 @@ import functools
 
 import mpmath
 
-from reference_impl.theory import action as act
-from reference_impl.studies.paper import PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
-from reference_impl.potentials import PowerLaw
 from reference_impl.claims._base import Measurement, g
+from reference_impl.potentials import PowerLaw
+from reference_impl.studies.paper import PAPER_MASS, PAPER_V0_MIDDLE, paper_ellipsoid
+from reference_impl.theory import action as act
 
 ID = "thm1-period"
 SECTION = "4 (Theorem 1)"

@@ -14,13 +14,13 @@ import math
 import mpmath
 import numpy as np
 
-from reference_impl.theory import action as act
-from reference_impl.theory.harmonic_map import HarmonicMap
-from reference_impl.exact.solve import solve_impact
-from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.claims._base import Measurement, g
 from reference_impl.claims._cases import theory_cases
 from reference_impl.claims._tolerances import EXACT_RTOL, ODE_RTOL, SINUSOID_TOL
+from reference_impl.exact.solve import solve_impact
+from reference_impl.integrators.ivp import integrate_impact
+from reference_impl.theory import action as act
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "thm2-harmonic"
 SECTION = "5 (Theorem 2)"

@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import functools
 
-from reference_impl.theory.damping import UniversalDamping, restitution_from_zeta
-from reference_impl.theory.harmonic_map import HarmonicMap
-from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 from reference_impl.claims._base import Measurement, g
 from reference_impl.claims._cases import HERTZ, MASS
 from reference_impl.claims._tolerances import E_TOL, ODE_RTOL
+from reference_impl.integrators.ivp import integrate_impact
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.theory.damping import UniversalDamping, restitution_from_zeta
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 ID = "thm3-damping-iff"
 SECTION = "8 (Theorem 3)"

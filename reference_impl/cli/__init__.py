@@ -18,8 +18,8 @@ import sys
 import time
 from collections.abc import Sequence
 
-from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.cli._run import EXIT_INTERRUPTED, EXIT_OK, interrupted, run_command
+from reference_impl.errors import HCVInputError, UnsupportedError
 
 __all__ = ["main", "run_command", "solve_scene"]  # solve_scene: re-exported from tasks
 

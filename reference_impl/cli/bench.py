@@ -175,7 +175,12 @@ def cmd_bench(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
-    from reference_impl.bench.report import plot_speed_error, render_scorecard, render_speed_error, write_markdown
+    from reference_impl.bench.report import (
+        plot_speed_error,
+        render_scorecard,
+        render_speed_error,
+        write_markdown,
+    )
     from reference_impl.bench.runner import run_bench
 
     scenes = _scene_args(args.scenes)

@@ -38,10 +38,10 @@ import numba
 import numpy as np
 from scipy.special import roots_jacobi
 
+from reference_impl.errors import HCVInputError
 from reference_impl.exact._nodes import node_function
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
-from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
 

@@ -31,9 +31,9 @@ from fractions import Fraction
 import mpmath
 
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.laws import law_from_dict
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.laws import law_from_dict
 
 __all__ = ["solve_law_impact_mp"]
 

@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from reference_impl._jit import specialise
 from reference_impl.exact._branches import (
     _EPS,
     _GJ_BETA_MIN,
@@ -55,7 +56,6 @@ from reference_impl.exact._nodes import (
     node_kernel,
     substitution_order,
 )
-from reference_impl._jit import specialise
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import rule
 from reference_impl.potentials.base import Potential

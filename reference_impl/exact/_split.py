@@ -34,6 +34,7 @@ import weakref
 
 import numpy as np
 
+from reference_impl.errors import UnsupportedError
 from reference_impl.exact._branches import (
     _EPS,
     _NODE_ULPS,
@@ -45,11 +46,10 @@ from reference_impl.exact._branches import (
     level_up,
     per_potential,
 )
-from reference_impl.exact._one_call import _term_ratio
 from reference_impl.exact._nodes import _TERM_POWER, _term_rows, _terms_eval
+from reference_impl.exact._one_call import _term_ratio
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import pairwise_ulps, rule, sums_from_values
-from reference_impl.errors import UnsupportedError
 from reference_impl.potentials.base import Potential
 
 __all__ = ["SPLIT_SHARE", "SPLIT_ZETA_MAX", "higher_share", "needs_split", "split_impact"]

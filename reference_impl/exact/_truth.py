@@ -23,10 +23,10 @@ import math
 import mpmath
 import numpy as np
 
-from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX
-from reference_impl.theory.damping import _check_zeta
 from reference_impl.errors import HCVInputError
+from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX
 from reference_impl.potentials.base import Potential
+from reference_impl.theory.damping import _check_zeta
 
 __all__ = ["solve_impact_mp"]
 

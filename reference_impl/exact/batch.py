@@ -16,6 +16,7 @@ import math
 import numba
 import numpy as np
 
+from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._branches import (
     _EPS,
     _GJ_BETA_MIN,
@@ -28,13 +29,12 @@ from reference_impl.exact._branches import (
     _jacobi_pair,
     _pow_split,
 )
-from reference_impl.theory.damping import _check_zeta
-from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.solve import ImpactSolution, solve_impact
 from reference_impl.potentials._checks import positive, real_array
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import _check_zeta
 
 __all__ = ["solve_impacts", "BATCH_MAX"]
 

@@ -19,13 +19,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
 from reference_impl.exact._general_kernel import solve as _compiled_solve
-from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.theory.laws import DampingLaw, law_from_dict
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.laws import DampingLaw, law_from_dict
 
 __all__ = ["LawImpactSolution", "solve_law_impact", "ERROR_SAFETY"]
 

@@ -28,18 +28,18 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
 from reference_impl.exact._one_call import curvature, fused_impact, gauss_jacobi_impact
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
 from reference_impl.exact._split import needs_split, split_impact
-from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.exact._truth import solve_impact_mp
-from reference_impl.theory.damping import _check_zeta
-from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import _check_zeta
 
 __all__ = [
     "ImpactSolution",

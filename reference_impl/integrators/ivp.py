@@ -47,9 +47,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.harmonic_map import HarmonicMap
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 __all__ = ["IVPImpact", "ImpactSolution", "integrate_impact"]
 

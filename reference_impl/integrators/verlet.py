@@ -52,7 +52,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.base import Potential
 from reference_impl.integrators.verlet_expression import _expression_kernel, _worth_compiling
 from reference_impl.integrators.verlet_kernel import (
     _BLOCK,
@@ -74,7 +73,10 @@ from reference_impl.integrators.verlet_kernel import (
     _kernel,
     kernel_terms,
 )
-from reference_impl.integrators.verlet_kernel import _force_energy as _force_energy  # re-export (adapters, report)
+from reference_impl.integrators.verlet_kernel import (
+    _force_energy as _force_energy,  # re-export (adapters, report)
+)
+from reference_impl.potentials.base import Potential
 
 __all__ = [
     "SCENE_IMPACT",

@@ -15,8 +15,8 @@ import numpy as np
 import sympy as sp
 
 from reference_impl._jit import specialise
-from reference_impl.potentials.base import Potential
 from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
+from reference_impl.potentials.base import Potential
 
 # Compiled kernels of user expressions, keyed by the sympy form of (U', U):
 # compiling costs a few seconds, so each distinct expression is compiled once (and kept

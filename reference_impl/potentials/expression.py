@@ -26,8 +26,21 @@ import numpy as np
 import sympy as sp
 from scipy.optimize import elementwise
 
-from reference_impl.errors import ExpressionError, HCVInputError, NonMonotoneError, NoTurningPointError
-from reference_impl.potentials._expr_parse import _Q, _as_float, _check_expr, _check_inputs, _parse, _short
+from reference_impl.errors import (
+    ExpressionError,
+    HCVInputError,
+    NonMonotoneError,
+    NoTurningPointError,
+)
+from reference_impl.potentials._expr_parse import (
+    _Q,
+    _as_float,
+    _check_expr,
+    _check_inputs,
+    _parse,
+    _short,
+)
+from reference_impl.potentials._families import register_family
 from reference_impl.potentials._near_zero import (
     FLOAT_RTOL,
     PowerSeries,
@@ -37,7 +50,6 @@ from reference_impl.potentials._near_zero import (
     strip_abs,
     time_limit,
 )
-from reference_impl.potentials._families import register_family
 from reference_impl.potentials._rising import on_first_branch, rising_top
 from reference_impl.potentials.base import Potential, is_mp
 

@@ -33,19 +33,19 @@ from collections.abc import Callable
 from pathlib import Path
 
 from reference_impl.claims import CLAIMS, VERDICTS
-from reference_impl.studies.dtcrit_map import coverage
 from reference_impl.report._common import claim_tests, jsonable, records
 from reference_impl.report._files import swap_in, validate_report_args
 from reference_impl.report._steps import resolution_study
+from reference_impl.studies.dtcrit_map import coverage
 
 __all__ = ["build_report", "quick_drops", "validate_report_args"]
 
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
-    from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
     from reference_impl.report._common import g
     from reference_impl.report._hardcases import _cases
+    from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
 
     def cov(quick):
         return {c.label: c.velocities for c in coverage(quick)}

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from reference_impl.claims import _scan
 from reference_impl._format import g, jsonable
+from reference_impl.claims import _scan
 from reference_impl.claims._scan import SUITE_DIR
 
 __all__ = ["SUITE_DIR", "claim_tests", "g", "jsonable", "records"]

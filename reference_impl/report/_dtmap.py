@@ -214,10 +214,10 @@ _SENS_HORIZON_CASES = (
 def run_sensitivity(quick: bool) -> pd.DataFrame:
     """`criterion_sensitivity`: factor and N for Hertz and the linear spring, tolerance of
     the Hertz impact, and the confirmation horizon for the slow runaways (full run only)."""
-    from reference_impl.stability.search import EnergyGrowth
-    from reference_impl.studies.dtcrit_map import criterion_sensitivity
     from reference_impl.integrators.verlet import SaturatingForce
     from reference_impl.potentials import PowerLaw
+    from reference_impl.stability.search import EnergyGrowth
+    from reference_impl.studies.dtcrit_map import criterion_sensitivity
 
     steps = _SENS_STEPS_QUICK if quick else _SENS_STEPS_FULL
     frames = []

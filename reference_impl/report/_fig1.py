@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from reference_impl.claims import fig1 as fig1_claim
-from reference_impl.studies.paper import FIG1
 from reference_impl.report._common import g
+from reference_impl.studies.paper import FIG1
 
 # MATLAB's default colour order, as in the paper's figure: blue, red, yellow.
 COLOURS = ("#0072BD", "#D95319", "#EDB120")

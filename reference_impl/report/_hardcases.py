@@ -16,16 +16,16 @@ import time
 
 import numpy as np
 
-from reference_impl.theory import action as act
-from reference_impl.stability.search import search_scene
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
-from reference_impl.potentials import Ellipsoid, PowerLaw
-from reference_impl.stability.bound import dt_safe
-from reference_impl.report._common import g
 from reference_impl.integrators.verlet_path import verlet_impact
+from reference_impl.potentials import Ellipsoid, PowerLaw
+from reference_impl.report._common import g
+from reference_impl.stability.bound import dt_safe
+from reference_impl.stability.search import search_scene
+from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
+from reference_impl.theory import action as act
 
 _MP_DPS = 25
 _ODE_RTOL = 1e-12

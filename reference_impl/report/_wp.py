@@ -7,8 +7,14 @@ import math
 import numpy as np
 import pandas as pd
 
-from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS, default_scenes, work_precision
 from reference_impl.report._common import g
+from reference_impl.studies.workprecision import (
+    IVP_METHODS,
+    IVP_RTOLS,
+    VERLET_STEPS,
+    default_scenes,
+    work_precision,
+)
 
 METRICS = (
     ("err_contact_time", "contact time t_c"),

@@ -37,10 +37,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
 from reference_impl.scenes._catalogue import embedded_scenes
+from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]

@@ -67,6 +67,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.integrators.verlet import (
+    SCENE_IMPACT,
+    SCENE_WALLS,
+    STATUS_NAMES,
+    LaneBatch,
+    run_lanes,
+)
+from reference_impl.potentials.base import Potential
+from reference_impl.stability.bound import dt_safe as _dt_safe
 from reference_impl.stability.criteria import (
     FAILURE_KINDS,
     KINDS,
@@ -89,16 +99,6 @@ from reference_impl.stability.criteria import (
 )
 from reference_impl.stability.recommend import tangent_step
 from reference_impl.stability.result import DtCritResult
-from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.integrators.verlet import (
-    SCENE_IMPACT,
-    SCENE_WALLS,
-    STATUS_NAMES,
-    LaneBatch,
-    run_lanes,
-)
-from reference_impl.potentials.base import Potential
-from reference_impl.stability.bound import dt_safe as _dt_safe
 
 __all__ = [
     "KINDS",

@@ -21,6 +21,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from reference_impl.errors import HCVInputError
+from reference_impl.integrators.verlet import SaturatingForce
+from reference_impl.potentials import Ellipsoid, Potential, PowerLaw, Sphere
+from reference_impl.stability.recommend import (  # re-exported: the map measures its margins
+    RECOMMEND_FACTOR,
+    RECOMMEND_FACTOR_SINGULAR,
+    recommended_step,
+)
 from reference_impl.stability.search import (
     KINDS,
     Criterion,
@@ -30,14 +38,6 @@ from reference_impl.stability.search import (
     default_criterion,
     search_scene,
 )
-from reference_impl.errors import HCVInputError
-from reference_impl.stability.recommend import (  # re-exported: the map measures its margins
-    RECOMMEND_FACTOR,
-    RECOMMEND_FACTOR_SINGULAR,
-    recommended_step,
-)
-from reference_impl.integrators.verlet import SaturatingForce
-from reference_impl.potentials import Ellipsoid, Potential, PowerLaw, Sphere
 
 __all__ = [
     "MapCase",

@@ -20,10 +20,10 @@ from functools import cache
 import numpy as np
 from scipy.optimize import brentq
 
-from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import zeta_from_restitution
 
 __all__ = [
     "E_CAL",

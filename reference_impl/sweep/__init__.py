@@ -9,7 +9,14 @@ runs a whole spec). Dask is the
 """
 
 from reference_impl.sweep._map import dt_crit_map_on_cluster
-from reference_impl.sweep._runner import CaseFailed, Outcome, dask_available, iter_outcomes, open_client, run_cases
+from reference_impl.sweep._runner import (
+    CaseFailed,
+    Outcome,
+    dask_available,
+    iter_outcomes,
+    open_client,
+    run_cases,
+)
 from reference_impl.sweep._spec import (
     DEFAULT_TIMEOUT,
     MAX_CASES,

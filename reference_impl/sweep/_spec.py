@@ -50,7 +50,13 @@ from pathlib import Path
 from typing import Any
 
 from reference_impl.errors import HCVInputError
-from reference_impl.sweep._code import _CALIBRATE_KEYS, _CODE_PREFIXES, SweepSpecError, _check_code, _code_key  # noqa: F401
+from reference_impl.sweep._code import (  # noqa: F401
+    _CALIBRATE_KEYS,
+    _CODE_PREFIXES,
+    SweepSpecError,
+    _check_code,
+    _code_key,
+)
 
 __all__ = [
     "MAX_CASES",
@@ -442,8 +448,8 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     from 0), so the turning-point search runs about once per potential instead of
     once per case (issue 22: 1e5 cases of one expression took ~40 min).
     """
-    from reference_impl.stability.search import parse_criterion
     from reference_impl.scenes import scene_from_dict
+    from reference_impl.stability.search import parse_criterion
 
     potentials: dict = {}
     errors = [""] * len(expanded)

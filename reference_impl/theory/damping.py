@@ -13,9 +13,9 @@ import math
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.harmonic_map import HarmonicMap
 from reference_impl.potentials._checks import finite
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.harmonic_map import HarmonicMap
 
 __all__ = [
     "UniversalDamping",
