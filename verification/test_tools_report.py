@@ -470,3 +470,34 @@ def test_readme_speed_block_is_the_committed_benchmark():
         claim="report",
         call="readme_table",
     )
+
+
+def test_committed_report_files_are_in_its_manifest():
+    """The main job refuses to overwrite report-named files its manifest does not list, so a
+    committed report file missing from reports/.hcv-report-manifest.json breaks ``hcv report``
+    on a fresh clone. Files written by other commands are named here with their writer."""
+    import json
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    tracked = subprocess.run(
+        ["git", "ls-files", "reports"], cwd=root, capture_output=True, text=True
+    ).stdout.split()
+    if not tracked:
+        pytest.skip("not a git checkout")
+    owned = set(json.loads((root / "reports" / ".hcv-report-manifest.json").read_text())["files"])
+    others = {
+        ".hcv-report-manifest.json",  # the manifest itself
+        "bench/exact.json",  # python -m benchmarks.bench_exact
+        "bench/sweep.json",  # python -m benchmarks.bench_sweep
+        "bench/verlet.json",  # python -m benchmarks.bench_verlet
+        "bench/startup.json",  # python -m benchmarks.bench_startup
+        "bench/mujoco_calibrate.json",  # python -m reference_impl.report.mujoco_table
+    }
+    stray = [
+        f
+        for f in (t[len("reports/") :] for t in tracked)
+        if f not in owned and f not in others and not f.startswith("repro/")
+    ]
+    assert not stray, f"got committed report files {stray} outside the manifest, should be none"
