@@ -365,7 +365,7 @@ _EV_SOURCE = "def ev(qv, P):\n    return u0(qv), u1(qv), u2(qv), u3(qv)\n"
 
 
 def _disk_cached_expression(exprs, q):
-    """The node loop of U, U', U'', U''' compiled from a cached module, or None.
+    """(node loop, evaluator) of U, U', U'', U''' compiled from a cached module, or None.
 
     None when the compile cache is unusable or sympy prints something the module
     cannot reproduce; the caller then compiles in memory.
@@ -384,7 +384,7 @@ def _disk_cached_expression(exprs, q):
     nodes = specialise(_newton_loop, cache=True, _EV=module.ev)
     nodes._hcv_entry = module.__name__  # the cache entry its specialised kernels belong to
     record_files(module.__name__, [module.u0, module.u1, module.u2, module.u3, module.ev, nodes])
-    return nodes
+    return nodes, module.ev
 
 
 class NodeKernel(NamedTuple):

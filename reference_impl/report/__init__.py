@@ -235,7 +235,8 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     # The stages `timed` announces, so that a log shows "stage k of n" (claims but
     # section 6, Fig. 1, hard cases, sweeps, their figure, the map, its figure, the
     # criterion study, speed against error and its figures, one per adapter).
-    n_stages = len(CLAIMS) - 1 + 9 + len(adapters)
+    # 9 fixed stages, 2 of the damping-law study, one per adapter and the steps study
+    n_stages = len(CLAIMS) - 1 + 9 + 2 + len(adapters) + (1 if adapters else 0)
     stage = [0]
 
     def timed(name: str, fn, *args, **kw):

@@ -179,6 +179,15 @@ def law_from_dict(table: dict, *, where: str = "damping") -> DampingLaw:
     if not isinstance(name, str):
         raise HCVInputError(f"{where}.law must be a string, got {name!r}")
     params = {k: v for k, v in table.items() if k != "law"}
+    want = _PARAMS.get(name)
+    extra = sorted(set(params) - set(want)) if want is not None else []
+    if extra:
+        # Named by its full path ('implemented_law.damping.c'), as every scene and protocol
+        # error names the offending key.
+        raise HCVInputError(
+            f"unknown key '{where}.{extra[0]}' for damping law {name!r} "
+            f"(it takes {', '.join(want) or 'no parameters'})"
+        )
     try:
         return DampingLaw(name, params)
     except HCVInputError as exc:
