@@ -51,8 +51,8 @@ def report(session: nox.Session) -> None:
 
 @nox.session(python="3.11", name="committed-report")
 def committed_report(session: nox.Session) -> None:
-    """The report committed in reports/: from a clean commit, with LAMMPS and Kratos side by
-    side, so that its provenance names HEAD without "uncommitted changes" (issue 17).
+    """The report committed in reports/: from a clean commit, with LAMMPS, Kratos and MuJoCo
+    side by side, so that its provenance names HEAD without "uncommitted changes" (issue 17).
 
     Refuses to run on a dirty work tree; commit (or stash) first, then commit what it
     rewrites (reports/ and the README's generated blocks).
@@ -60,5 +60,7 @@ def committed_report(session: nox.Session) -> None:
     dirty = session.run("git", "status", "--porcelain", silent=True, external=True)
     if dirty and dirty.strip():
         session.error("the work tree has uncommitted changes; commit or stash them first")
-    session.install("-e", ".[report,test,lammps,kratos]")
-    session.run("hcv", "report", "--adapter", "lammps", "--adapter", "kratos")
+    session.install("-e", ".[report,test,lammps,kratos,mujoco]")
+    session.run(
+        "hcv", "report", "--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"
+    )
