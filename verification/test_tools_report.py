@@ -501,3 +501,21 @@ def test_committed_report_files_are_in_its_manifest():
         if f not in owned and f not in others and not f.startswith("repro/")
     ]
     assert not stray, f"got committed report files {stray} outside the manifest, should be none"
+
+
+def test_committed_report_was_made_from_a_clean_commit():
+    """Issue 17 point 3: the committed report names the commit it came from, with no
+    uncommitted changes (``nox -s committed-report`` refuses a dirty tree)."""
+    import json
+    from pathlib import Path
+
+    env = json.loads(
+        (Path(__file__).resolve().parents[1] / "reports" / "results.json").read_text()
+    )["environment"]
+    assert_true(
+        env.get("git_dirty") is False and len(str(env.get("git_commit", ""))) == 40,
+        got=f"git_commit {env.get('git_commit')!r}, git_dirty {env.get('git_dirty')!r}",
+        should="a 40-hex commit and git_dirty False",
+        claim="report",
+        call="reports/results.json environment",
+    )

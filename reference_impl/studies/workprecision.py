@@ -91,9 +91,9 @@ def family_scenes() -> list[WPScene]:
 
     Hertz, the paper's ellipsoid, a sphere (R = 0.01 m, Kn = 1e8, alpha = 0.5,
     steel mass), a sum of two power laws and a user expression; shared with
-    ``benchmarks/bench_exact.py``. Only DOP853 and RK45 are run on them. All but
-    the Hertz row are read from the one scene catalogue (``hcv scenes --show
-    sphere-damped``), so the names in the README's speed table work in every command.
+    ``benchmarks/bench_exact.py``. Only DOP853 and RK45 are run on them. Every row is
+    read from the one scene catalogue (``hcv scenes --show sphere-damped``), so the
+    names in the README's speed table work in every command and mean the same scene.
     """
     from reference_impl.scenes import load_scene
 
@@ -106,7 +106,7 @@ def family_scenes() -> list[WPScene]:
         return WPScene(name, sc.potential, sc.mass, v0, z, fam, False)
 
     return [
-        WPScene("hertz-damped", PowerLaw(1.0e9, 1.5), 0.0041, 1.0, z, fam, False),
+        catalogue("hertz-k1e9-damped", 1.0),
         catalogue("ellipsoid-damped", 0.99),
         catalogue("sphere-damped", 1.0),
         catalogue("power-sum-damped", 0.3),
@@ -115,17 +115,20 @@ def family_scenes() -> list[WPScene]:
 
 
 # The family scenes already in the study's three original ones (by name).
-_ORIGINAL = ("hertz-damped",)
+_ORIGINAL = ("hertz-k1e9-damped",)
 
 
 def default_scenes() -> list[WPScene]:
     """Hertz undamped and damped (e ~ 0.53), the paper's ellipsoid (v0 = 0.99), and
     the damped sphere, sum of power laws and user expression of `family_scenes`."""
-    hertz = PowerLaw(1.0e9, 1.5)  # ~5 mm steel sphere on a wall, k = 4/3 E* sqrt(R)
+    from reference_impl.scenes import load_scene
+
+    # ~5 mm steel sphere on a wall, k = 4/3 E* sqrt(R) = 1e9 (catalogue: hertz-k1e9)
+    hertz = load_scene("hertz-k1e9").potential
     added = [s for s in family_scenes() if s.name not in _ORIGINAL and s.name != "ellipsoid-damped"]
     return [
-        WPScene("hertz", hertz, 0.0041, 1.0, 0.0),
-        WPScene("hertz-damped", hertz, 0.0041, 1.0, FAMILY_ZETA),
+        WPScene("hertz-k1e9", hertz, 0.0041, 1.0, 0.0),
+        WPScene("hertz-k1e9-damped", hertz, 0.0041, 1.0, FAMILY_ZETA),
         WPScene("paper-ellipsoid", paper_ellipsoid(), PAPER_MASS, 0.99, 0.0),
         *added,
     ]
