@@ -299,3 +299,30 @@ def test_bench_output_on_a_file_system_nobody_can_write_is_refused_first(capsys,
     _one_line_exit_2(
         capsys, ["bench", "reference", option, "/sys/hcv-issue-22.out"], "not writable"
     )
+
+
+def test_a_run_without_adapters_keeps_other_runs_figures(tmp_path):
+    """Issue 17 point 3: ``hcv report`` (no --adapter) keeps the scorecards, figures and
+    steps figures another run wrote with ``--adapter``, and still owns them; a stale figure
+    of its own is deleted."""
+    import json
+
+    from reference_impl.report._files import MANIFEST, _move_in
+
+    out = tmp_path / "reports"
+    (out / "figures").mkdir(parents=True)
+    (out / "bench").mkdir()
+    old = ["index.html", "figures/bench_lammps.png", "figures/steps_lammps.png",
+           "bench/lammps.json", "figures/gone.png"]  # fmt: skip
+    for rel in old:
+        (out / rel).write_text("old")
+    (out / MANIFEST).write_text(json.dumps({"written_by": "hcv report", "files": old}))
+    new = tmp_path / "new"
+    new.mkdir()
+    (new / "index.html").write_text("new")
+    _move_in(new, out)
+    kept = {"figures/bench_lammps.png", "figures/steps_lammps.png", "bench/lammps.json"}
+    owned = set(json.loads((out / MANIFEST).read_text())["files"])
+    assert all((out / rel).read_text() == "old" for rel in kept), sorted(kept)
+    assert not (out / "figures" / "gone.png").exists(), "a stale figure of the report stays"
+    assert owned == kept | {"index.html"}, f"got manifest {sorted(owned)}"

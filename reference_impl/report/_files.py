@@ -227,10 +227,10 @@ def _move_in(tmp: Path, out: Path) -> None:
 
 
 def _other_runs(rel: str) -> bool:
-    """A file one adapter's report run writes: figures/bench_*.png, bench/*.json."""
+    """A file an adapter's report run writes: figures/bench_*.png and steps_*.png, bench/*.json."""
     parts = Path(rel).parts
     return len(parts) == 2 and (
-        (parts[0] == "figures" and parts[1].startswith("bench_")) or parts[0] == "bench"
+        (parts[0] == "figures" and parts[1].startswith(("bench_", "steps_"))) or parts[0] == "bench"
     )
 
 
