@@ -38,6 +38,8 @@ import warnings
 from functools import lru_cache
 from pathlib import Path
 
+from reference_impl._atomic import atomic_write
+
 __all__ = [
     "CacheWarning",
     "MIN_FREE_BYTES",
@@ -198,23 +200,6 @@ def _key(kind: str, canonical: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a unique temporary name and a rename."""
-    import tempfile
-
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
 def _import_file(name: str, path: Path):
     if name in sys.modules:
         return sys.modules[name]
@@ -255,7 +240,7 @@ def expression_module(kind: str, canonical: str, source: str):
     try:
         folder.mkdir(parents=True, exist_ok=True)
         if not path.is_file() or path.read_text() != source:
-            _write_atomic(path, source)
+            atomic_write(path, source)
             _evict(folder, keep=name)
         else:
             os.utime(path)  # recently used: last to be evicted
@@ -310,7 +295,7 @@ def record_files(module_name: str, dispatchers) -> None:
     try:
         old = json.loads(manifest.read_text()) if manifest.is_file() else []
         merged = sorted({tuple(r) for r in old} | {tuple(r) for r in rows})
-        _write_atomic(manifest, json.dumps(merged))
+        atomic_write(manifest, json.dumps(merged))
     except (OSError, ValueError):
         pass  # eviction then leaves that entry's numba files (bounded by numba's own index)
 

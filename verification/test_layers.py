@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent / PKG
 LAYERS: tuple[frozenset[str], ...] = tuple(
     frozenset(x)
     for x in (
-        {"_version"},
+        {"_version", "_atomic"},
         {"errors"},
         {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
         {"potentials"},

@@ -23,11 +23,9 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
+from reference_impl._atomic import atomic_write
 from reference_impl.bench._cells import _OURS, _PLAIN_STATUS, _UNITS, _fmt, _fmt_v
 from reference_impl.provenance import machine_info as _machine_info
 
@@ -146,35 +144,9 @@ def _metric_dict(result, m) -> dict:
     return d
 
 
-def _new_file_mode() -> int:
-    """Mode of a new file under the current umask (0644 under umask 022)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
-def _atomic_write(path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temporary file, then rename), with the
-    mode of a new file (`_new_file_mode`) rather than mkstemp's 0600."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        os.fchmod(fd, _new_file_mode())
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
 def write_json(result, path) -> None:
     """Write the JSON report (atomically)."""
-    _atomic_write(path, json.dumps(result_to_dict(result), indent=2) + "\n")
+    atomic_write(path, json.dumps(result_to_dict(result), indent=2) + "\n")
 
 
 def _details(result, m) -> str:
@@ -250,7 +222,7 @@ def write_junit(result, path) -> None:
     tree = junit_tree(result)
     ET.indent(tree)
     text = ET.tostring(tree.getroot(), encoding="unicode", xml_declaration=True)
-    _atomic_write(path, text + "\n")
+    atomic_write(path, text + "\n")
 
 
 _STATUS = {
@@ -621,7 +593,7 @@ def scorecard_markdown(result) -> str:
 
 def write_markdown(result, path) -> None:
     """Write `scorecard_markdown` (atomically, mode of a new file)."""
-    _atomic_write(path, scorecard_markdown(result))
+    atomic_write(path, scorecard_markdown(result))
 
 
 # Kept importable from here (their home is `reference_impl.bench.compare`).

@@ -27,7 +27,6 @@ from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.integrators.verlet_path import verlet_impact
-from reference_impl.potentials import PowerLaw
 from reference_impl.potentials.base import Potential
 from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 
