@@ -1,7 +1,9 @@
 """What one benchmark run records: per impact speed (`SpeedRecord`), per adapter variant
-and scene (`SceneContext`), and each metric's outcome (`MetricResult`).
+and scene (`SceneContext`), each metric's outcome (`MetricResult`), and the whole run
+(`BenchResult`, with its gate exit status).
 
-Importable from `reference_impl.bench.metrics` as well.
+The first three are importable from `reference_impl.bench.metrics`, `BenchResult` and
+`EXIT_INTERNAL` from `reference_impl.bench.runner`.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from dataclasses import asdict, dataclass, field
 
 from reference_impl.adapters.base import ImplementedLaw
 
-__all__ = ["MetricResult", "SceneContext", "SpeedRecord"]
+__all__ = ["EXIT_INTERNAL", "BenchResult", "MetricResult", "SceneContext", "SpeedRecord"]
 
 
 @dataclass
@@ -72,7 +74,7 @@ class SpeedRecord:
     dt_crit: dict | None = None
     internal: str = ""  # the suite's own reference failed at this speed
     # errors of textbook velocity Verlet with the implemented law at the same dt
-    # (the error a correct code makes at this step; `_SceneRun.textbook`)
+    # (the error a correct code makes at this step; `_textbook.textbook_errors`)
     textbook: dict | None = None
 
     def to_dict(self) -> dict:
@@ -110,3 +112,82 @@ class SceneContext:
     order_internal: str = ""  # ... on the speed table only
     textbook_order: float | None = None  # textbook Verlet's order on the same table
     textbook_order_error: str = ""
+
+
+# Gate exit status when no metric failed but the suite's own reference could not decide one.
+EXIT_INTERNAL = 3
+
+
+@dataclass
+class BenchResult:
+    """Everything one `run_bench` call measured (see `reference_impl.bench.report` for output).
+
+    Attributes
+    ----------
+    adapter : str
+        The adapter spec.
+    variants : list of dict
+        ``describe()`` of each variant.
+    scenes : list of str
+        Scene names, in run order.
+    metrics : list of MetricResult
+        The scorecard: one entry per variant, scene and metric.
+    contexts : list of SceneContext
+        Raw per-speed records (runs, exact references, critical steps).
+    speed_error : list of dict
+        Speed-against-error rows (workprecision style).
+    tolerances : dict
+        The tolerances used.
+    machine : dict
+        Machine and commit information.
+    interrupted : bool
+        The run was interrupted; the results are those computed so far.
+    """
+
+    adapter: str
+    variants: list[dict] = field(default_factory=list)
+    scenes: list[str] = field(default_factory=list)
+    metrics: list[MetricResult] = field(default_factory=list)
+    contexts: list[SceneContext] = field(default_factory=list)
+    speed_error: list[dict] = field(default_factory=list)
+    tolerances: dict = field(default_factory=dict)
+    machine: dict = field(default_factory=dict)
+    started: float = 0.0
+    seconds: float = 0.0
+    interrupted: bool = False
+
+    def counts(self) -> dict[str, int]:
+        """Metrics per status: pass, fail, skip, and error (our reference failed)."""
+        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0}
+        for m in self.metrics:
+            c[m.status] += 1
+        return c
+
+    @property
+    def failures(self) -> list[MetricResult]:
+        return [m for m in self.metrics if m.status == "fail"]
+
+    @property
+    def internal_errors(self) -> list[MetricResult]:
+        """Metrics not decided because the suite's own reference failed (never the code's fault)."""
+        return [m for m in self.metrics if m.status == "error"]
+
+    @property
+    def measured_nothing(self) -> bool:
+        """No metric was decided (every one skipped: declined scenes, no reference)."""
+        return not any(m.status in ("pass", "fail", "error") for m in self.metrics)
+
+    def exit_status(self, gate: bool) -> int:
+        """0; with ``gate`` 1 when a metric failed, nothing was measured (every metric
+        skipped: a gate that measured nothing does not pass) or the run was interrupted,
+        else `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
+        if not gate:
+            return 0
+        if self.failures or self.interrupted or self.measured_nothing:
+            return 1
+        return EXIT_INTERNAL if self.internal_errors else 0
+
+    def to_dict(self) -> dict:
+        from reference_impl.bench.report import result_to_dict
+
+        return result_to_dict(self)
