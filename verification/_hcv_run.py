@@ -1,6 +1,7 @@
 """hcv run as a user runs it, in a new process, and the processes a test leaves behind.
 
-Shared by the hostile-input tests of ``hcv bench`` (`verification/test_hostile_bench*.py`).
+Shared by the hostile-input tests of ``hcv bench`` (`verification/test_hostile_bench*.py`)
+and the sweep's signal test (`verification/test_sweep_cluster.py`).
 """
 
 from __future__ import annotations

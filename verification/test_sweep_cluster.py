@@ -15,6 +15,7 @@ import pytest
 
 from reference_impl.cli.sweep import run_sweep
 from reference_impl.sweep import parse_spec, run_cases
+from verification._hcv_run import processes_with
 from verification._sweeps import SPEC, cli, needs_dask
 from verification.assertions import assert_true
 
@@ -298,16 +299,7 @@ def test_sigterm_to_a_bench_sweep_leaves_no_adapter_running(tmp_path):
     )
 
     def running() -> list[int]:
-        pids = []
-        for entry in Path("/proc").iterdir():
-            if entry.name.isdigit():
-                try:
-                    line = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
-                except OSError:
-                    continue
-                if line.startswith(f"sleep {marker}"):
-                    pids.append(int(entry.name))
-        return pids
+        return processes_with(f"sleep {marker}")
 
     root = Path(__file__).resolve().parents[1]
     proc = subprocess.Popen(
