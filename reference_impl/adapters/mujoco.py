@@ -90,6 +90,7 @@ from importlib import metadata
 
 import numpy as np
 
+from reference_impl.adapters._mujoco_model import asked_zeta, mjcf, scene_mapping
 from reference_impl.adapters._mujoco_support import (
     _badqacc_index,
     _diag,
@@ -103,11 +104,8 @@ from reference_impl.adapters.base import (
     ImplementedLaw,
     Trajectory,
 )
-from reference_impl.adapters.law_damping import LawDamping
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.base import SumPotential
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.laws import DampingLaw
 
 __all__ = [
     "END",
@@ -124,13 +122,7 @@ SOLREF_FORMS = ("direct", "timeconst")
 IMPEDANCES = ("constant", "default")
 INTEGRATORS = ("Euler", "RK4", "implicit")
 END = ("overlap", "zero-force")
-# MuJoCo's impedance clamp (mjMINIMP, mjMAXIMP) and default solimp / solref.
-_MINIMP, _MAXIMP = 1e-4, 0.9999
-_DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 _CONSTANT_IMP = 0.9  # MuJoCo's default dmin, used as the constant impedance
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %): the
-# radius does not enter the sphere-plane distance law, only the picture.
-_RADIUS_OVER_QMAX = 100.0
 
 _MUJOCO = None
 
@@ -163,10 +155,6 @@ def load_mujoco():
 
 def _warning_to_stderr(message) -> None:
     print(f"MuJoCo warning: {message}", file=sys.stderr)
-
-
-def _clamp_imp(x: float) -> float:
-    return min(_MAXIMP, max(_MINIMP, float(x)))
 
 
 def _split(what: str, value, allowed: tuple) -> tuple:
@@ -326,8 +314,7 @@ class MujocoAdapter(ContactAdapter):
                 for e in self.ends
             ]
         return [
-            MujocoAdapter(solref=f, impedance=i, integrator=g, end=e, **kw)
-            for f, i, g, e in combos
+            MujocoAdapter(solref=f, impedance=i, integrator=g, end=e, **kw) for f, i, g, e in combos
         ]
 
     def describe(self) -> dict:
@@ -368,122 +355,26 @@ class MujocoAdapter(ContactAdapter):
                 return mp["declined"]
         return None
 
-    # -- the mapping ------------------------------------------------------------
+    # -- the mapping (reference_impl.adapters._mujoco_model) -----------------------
     def _zeta(self, scene: AdapterScene) -> float:
         """Damping ratio asked of MuJoCo at full impedance."""
-        if self.dampratio is not None:
-            return self.dampratio
-        if self.damping is not None:
-            return self.damping / (2.0 * math.sqrt(scene.mass * scene.potential.k))
-        if scene.damping != "universal" or not scene.zeta:
-            return 0.0
-        if self.ends[0] == "zero-force":
-            return zeta_zero_force(scene.restitution)
-        return float(scene.zeta)
+        return asked_zeta(scene, self.ends[0], self.dampratio, self.damping)
 
     def _mapping(self, scene: AdapterScene, rho: float = 1.0) -> dict:
-        """MuJoCo parameters and the law it integrates for one scene.
+        """MuJoCo parameters and the law it integrates for one scene (`scene_mapping`).
 
         ``rho`` = m efc_diagA (1 for this model in every version measured; the
         run reads the real value and re-declares with it).
         """
-        pot, m = scene.potential, scene.mass
-        k = float(pot.k)
-        w0 = math.sqrt(k / m)
-        zeta = self._zeta(scene)
-        c = 2.0 * zeta * math.sqrt(m * k)
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = float(pot.turning_point(0.5 * m * vmax * vmax))
-        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
-        if self.imps[0] == "constant":
-            d = _clamp_imp(self.imp)
-            solimp = (d, d, _DEFAULT_SOLIMP[2], _DEFAULT_SOLIMP[3], _DEFAULT_SOLIMP[4])
-        else:
-            w = self.width if self.width is not None else _DEFAULT_SOLIMP[2]
-            solimp = (
-                _clamp_imp(_DEFAULT_SOLIMP[0]),
-                _clamp_imp(_DEFAULT_SOLIMP[1]),
-                w,
-                _clamp_imp(_DEFAULT_SOLIMP[3]),
-                max(1.0, _DEFAULT_SOLIMP[4]),
-            )
-        dw = solimp[1]
-        out: dict = {"R": R, "solimp": solimp, "zeta_asked": zeta, "clamped": False}
-        if self.forms[0] == "direct":
-            S, D = k / m, c / m
-            out["solref"] = (-S, -D)
-            K, B = S / dw**2, D / dw
-        else:
-            tc, dr = 1.0 / (w0 * zeta) if zeta > 0 else math.inf, zeta
-            tc_used = max(tc, 2.0 * scene.dt)  # MuJoCo's refsafe clamp (positive form only)
-            out["clamped"] = tc_used > tc
-            out["solref"] = (tc_used, dr)
-            if zeta > 0:
-                K, B = 1.0 / (dw**2 * tc_used**2 * dr**2), 2.0 / (dw * tc_used)
-            else:  # declined in supports(); keep the mapping defined
-                K, B = k / m / dw**2, 0.0
-        out["K"], out["B"] = K, B
-        how = (
-            f"dampratio {self.dampratio!r} given"
-            if self.dampratio is not None
-            else f"damping {self.damping!r} N s/m given"
-            if self.damping is not None
-            else f"calibrated at the {self.ends[0]} end"
+        return scene_mapping(
+            scene,
+            rho,
+            form=self.forms[0],
+            impedance=self.imps[0],
+            integrator=self.integrators[0],
+            end=self.ends[0],
+            **self._options(),
         )
-        head = (
-            f"MuJoCo solref {self.forms[0]} {out['solref'][0]!r} {out['solref'][1]!r}"
-            + (" (timeconst clamped to 2 timestep)" if out["clamped"] else "")
-            + f", {self.integrators[0]}, zeta asked {zeta:.6g} ({how})"
-        )
-        if self.imps[0] == "constant":
-            d = solimp[0]
-            g = d / (d + rho * (1.0 - d))
-            k_eff, c_eff = m * g * K * d, m * g * B
-            z_eff = c_eff / (2.0 * math.sqrt(m * k_eff))
-            out["law"] = ImplementedLaw(
-                PowerLaw(k_eff, 1.0),
-                m,
-                zeta=z_eff,
-                clips_tension=True,
-                description=f"{head}; constant impedance {d:g}: linear spring k = {k_eff:.7g} "
-                f"N/m, dashpot c = {c_eff:.7g} N s/m (universal law zeta = {z_eff:.6g}), "
-                "tension clipped",
-            )
-            return out
-        dmin, dmax, w, mid, power = solimp
-        if rho != 1.0:
-            out["declined"] = (
-                f"default impedance with m efc_diagA = {rho!r} != 1: MuJoCo's law is not a "
-                "sum of powers the suite can declare"
-            )
-            return out
-        if power != 2.0:  # pragma: no cover - the default solimp has power 2
-            out["declined"] = "default impedance declared for solimp power 2 only"
-            return out
-        # I(q) = dmin + (dmax - dmin) q^2 / (mid w^2) for q <= mid w (power 2).
-        a0, a2 = dmin, (dmax - dmin) / (mid * w * w)
-        terms = [(m * K * a0 * a0, 1.0), (2.0 * m * K * a0 * a2, 3.0), (m * K * a2 * a2, 5.0)]
-        elastic = SumPotential(*(PowerLaw(kk, pp) for kk, pp in terms))
-        q_law = float(elastic.turning_point(0.5 * m * vmax * vmax))
-        if q_law > mid * w:
-            out["declined"] = (
-                f"default impedance: the overlap reaches {q_law:.4g} m at v0 = {vmax:g} m/s, "
-                f"past solimp's midpoint x width = {mid * w:.4g} m where MuJoCo's impedance "
-                f"switches to its second polynomial piece; give width >= {q_law / mid:.3g}"
-            )
-            return out
-        coeffs = [m * B * a0, 0.0, m * B * a2]
-        damp = LawDamping(DampingLaw("polynomial", {"c": coeffs}), elastic, m)
-        out["law"] = ImplementedLaw(
-            elastic,
-            m,
-            C=damp,
-            clips_tension=True,
-            description=f"{head}; default impedance solimp {solimp}: U' = "
-            + " + ".join(f"{kk:.6g} q^{pp:g}" for kk, pp in terms)
-            + f", C = {coeffs[0]:.6g} + {coeffs[2]:.6g} q^2 (polynomial), tension clipped",
-        )
-        return out
 
     def _rho(self, scene: AdapterScene) -> float:
         """m efc_diagA measured on the compiled model (constant for a slide joint)."""
@@ -524,32 +415,6 @@ class MujocoAdapter(ContactAdapter):
         )
 
     # -- running MuJoCo -----------------------------------------------------------
-    def _xml(self, mp: dict, scene: AdapterScene) -> str:
-        def num(x) -> str:
-            return repr(float(x))
-
-        solref = f"{num(mp['solref'][0])} {num(mp['solref'][1])}"
-        solimp = " ".join(num(x) for x in mp["solimp"])
-        R = mp["R"]
-        size = num(10.0 * R)
-        contact = f'condim="1" solref="{solref}" solimp="{solimp}" margin="0" gap="0"'
-        inertia = num(0.4 * scene.mass * R * R)
-        return (
-            "<mujoco>\n"
-            f'  <option timestep="{num(scene.dt)}" gravity="0 0 0" '
-            f'integrator="{self.integrators[0]}"/>\n'
-            "  <worldbody>\n"
-            f'    <geom name="plane" type="plane" size="{size} {size} {size}" {contact}/>\n'
-            f'    <body name="ball" pos="0 0 {num(R)}">\n'
-            '      <joint name="z" type="slide" axis="0 0 1"/>\n'
-            f'      <inertial pos="0 0 0" mass="{num(scene.mass)}" '
-            f'diaginertia="{inertia} {inertia} {inertia}"/>\n'
-            f'      <geom name="ball" type="sphere" size="{num(R)}" mass="0" {contact}/>\n'
-            "    </body>\n"
-            "  </worldbody>\n"
-            "</mujoco>\n"
-        )
-
     def build(self, scene: AdapterScene, autoreset: bool = False):
         """The compiled (MjModel, MjData, mapping) of one scene, autoreset disabled.
 
@@ -559,7 +424,7 @@ class MujocoAdapter(ContactAdapter):
         mp = self._mapping(scene)
         if "declined" in mp:
             raise AdapterDeclined(mp["declined"])
-        model = mj.MjModel.from_xml_string(self._xml(mp, scene))
+        model = mj.MjModel.from_xml_string(mjcf(mp, scene, self.integrators[0]))
         bit = getattr(mj.mjtDisableBit, "mjDSBL_AUTORESET", None)
         if bit is not None and not autoreset:
             model.opt.disableflags |= int(bit)

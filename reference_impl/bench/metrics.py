@@ -14,16 +14,28 @@ damped ODE by DOP853 at rtol 1e-12 (`reference_impl.integrators.ivp`). A code
 that clips tensile force ends its contact when the total force vanishes; its
 references are taken at that end (restitution_zero_force), then free flight to
 q = 0.
+
+The rule every metric follows (limit = base + factor x allowance, read at the worst
+speed) is `reference_impl.bench._rules.Metric`; the records they read
+(`SpeedRecord`, `SceneContext`) and write (`MetricResult`) are in
+`reference_impl.bench._records`, importable from here.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from reference_impl.adapters.base import ImplementedLaw
+from reference_impl.bench._records import MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench._rules import (
+    Metric,
+    _allowance,
+    _Internal,
+    _Missing,
+    _need,
+    _Skip,
+)
 from reference_impl.bench.measure import check_conventions, exact_reference, measure
 
 __all__ = [
@@ -38,271 +50,12 @@ __all__ = [
 ]
 
 
-@dataclass
-class MetricResult:
-    """Outcome of one metric for one adapter variant and one scene."""
-
-    variant: str
-    scene: str
-    metric: str
-    status: str  # "pass" | "fail" | "skip" | "error" (our reference failed, not the code)
-    value: float | None = None
-    reference: float | None = None
-    tolerance: str = ""
-    explanation: str = ""
-    description: str = ""
-    error: float | None = None  # what the limit bounds (relative error, spread, |diff|, ...)
-    limit: float | None = None  # the bound applied: base + allowance (tolerances.toml)
-    at_v0: float | None = None  # the impact speed the row reports (m/s)
-    measured: float | None = None  # the code's value of the compared quantity
-    expected: float | None = None  # what it is compared with
-    rule: str = ""  # in words: what is compared, and the pass rule
-    # per speed: {"v0", "measured", "expected", "error", "limit"} (metrics read per speed)
-    per_v0: list = field(default_factory=list)
-
-    def with_tolerance(self, text: str) -> MetricResult:
-        self.tolerance = text
-        return self
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["per_v0"] = [
-            {
-                k: (v if not isinstance(v, float) or math.isfinite(v) else str(v))
-                for k, v in r.items()
-            }
-            for r in self.per_v0
-        ]
-        for k in ("value", "reference", "error", "limit", "measured", "expected"):
-            v = d[k]
-            if isinstance(v, float) and not math.isfinite(v):
-                d[k] = None if math.isnan(v) else ("inf" if v > 0 else "-inf")
-        return d
-
-
-@dataclass
-class SpeedRecord:
-    """Everything measured at one impact speed of one scene."""
-
-    v0: float
-    dt: float = math.nan
-    asked_e: float = 1.0
-    law: ImplementedLaw | None = None
-    exact: dict | None = None
-    measured: dict | None = None
-    error: str = ""
-    stderr: str = ""
-    seconds: float = 0.0
-    dt_crit: dict | None = None
-    internal: str = ""  # the suite's own reference failed at this speed
-    # errors of textbook velocity Verlet with the implemented law at the same dt
-    # (the error a correct code makes at this step; `_SceneRun.textbook`)
-    textbook: dict | None = None
-
-    def to_dict(self) -> dict:
-        return {
-            "v0": self.v0,
-            "dt": self.dt,
-            "asked_restitution": self.asked_e,
-            "implemented_law": self.law.to_json() if self.law is not None else None,
-            "exact": self.exact,
-            "measured": self.measured,
-            "error": self.error,
-            "internal_error": self.internal,
-            "stderr": self.stderr,
-            "seconds": self.seconds,
-            "dt_crit": self.dt_crit,
-            "textbook_verlet": self.textbook,
-        }
-
-
-@dataclass
-class SceneContext:
-    """One adapter variant on one scene: the per-speed records and the speed table."""
-
-    variant: str
-    scene: str
-    kind: str
-    damped: bool
-    skipped: str = ""
-    speeds: list[SpeedRecord] = field(default_factory=list)
-    speed_rows: list[dict] = field(default_factory=list)
-    order: float | None = None
-    order_error: str = ""
-    sustained: dict | None = None
-    internal: str = ""  # the suite's own reference failed on this scene
-    order_internal: str = ""  # ... on the speed table only
-    textbook_order: float | None = None  # textbook Verlet's order on the same table
-    textbook_order_error: str = ""
-
-
 # ----------------------------------------------------------------------------
 # metrics
 # ----------------------------------------------------------------------------
 # Nominal convergence order of velocity Verlet (the speed table's order is compared
 # with min(textbook Verlet's measured order, this) - order_slack).
 _NOMINAL_ORDER = 2.0
-
-
-class Metric:
-    """Base of the scorecard metrics (see the module docstring).
-
-    Every limit is ``base + factor x allowance``: ``base`` is the metric's key in
-    tolerances.toml, ``factor`` is ``[allowance] textbook_verlet`` and the
-    allowance is the error textbook velocity Verlet with the implemented law makes
-    on the same quantity at the same step (`SpeedRecord.textbook`), i.e. the error
-    a correct code makes at the step the suite gives it. ``rule`` says in words
-    what is compared with what.
-    """
-
-    name = ""
-    key = ""
-    field = ""
-    description = ""
-    rule = ""
-    unit = ""  # unit of the measured and expected values ("" for ratios)
-    impact_only = True
-    magnitude = True  # the value is a size (>= 0) compared with the limit from below
-
-    def applies(self, ctx: SceneContext) -> str | None:
-        if self.impact_only and ctx.kind != "impact":
-            return f"impact metric; scene kind is {ctx.kind}"
-        return None
-
-    def _result(
-        self, ctx, status, value=None, reference=None, tol=None, explanation="", **cols
-    ) -> MetricResult:
-        return MetricResult(
-            ctx.variant,
-            ctx.scene,
-            self.name,
-            status,
-            value,
-            reference,
-            f"{self.field} {tol:g}" if tol is not None else "",
-            explanation,
-            self.description,
-            **cols,
-        )
-
-    def evaluate(self, ctx: SceneContext, tol: dict) -> MetricResult:
-        if ctx.skipped:
-            return self._result(ctx, "skip", explanation=ctx.skipped)
-        reason = self.applies(ctx)
-        if reason:
-            return self._result(ctx, "skip", explanation=reason)
-        limit = float(tol[self.key][self.field])
-        factor = float(tol["allowance"]["textbook_verlet"])
-        if ctx.internal:
-            return self._result(ctx, "error", tol=limit, explanation=_ours(ctx.internal))
-        try:
-            res = self._evaluate(ctx, limit, factor)
-        except _Missing as miss:
-            return self._result(ctx, "fail", tol=limit, explanation=str(miss))
-        except _Internal as exc:
-            return self._result(ctx, "error", tol=limit, explanation=_ours(str(exc)))
-        except _Skip as exc:
-            return self._result(ctx, "skip", tol=limit, explanation=str(exc))
-        if (
-            res.status == "pass"
-            and self.magnitude
-            and not (isinstance(res.error, float) and res.error >= 0)
-        ):
-            # every magnitude metric compares a value >= 0 with its limit; anything else
-            # (negative, NaN) is a sign or measurement error and never passes
-            res.status = "fail"
-            res.explanation = f"{self.name} = {res.error!r} is not a magnitude >= 0"
-        return res
-
-    def _evaluate(self, ctx: SceneContext, base: float, factor: float) -> MetricResult:
-        raise NotImplementedError  # pragma: no cover
-
-    def _tolerance_text(self, base: float, factor: float, allowance: float) -> str:
-        return f"{self.field} {base:g} + {factor:g} x {allowance:.2g}"
-
-    def _worst(self, ctx, rows, base, factor, why):
-        """Verdict over per-speed rows (rec, measured, expected, error, allowance).
-
-        The row reported is the speed where error / limit is largest (the first
-        failing speed decides the explanation ``why(row, limit)``).
-        """
-        worst = None
-        for rec, got, want, err, allow in rows:
-            lim = base + factor * allow
-            if not math.isfinite(err):
-                err = math.inf
-            score = err / lim if lim > 0 else math.inf
-            if worst is None or score > worst[0]:
-                worst = (score, rec, got, want, err, lim, allow)
-        _, rec, got, want, err, lim, allow = worst
-        ok = err <= lim
-        per_v0 = [
-            {"v0": r.v0, "measured": g, "expected": w, "error": e, "limit": base + factor * a}
-            for r, g, w, e, a in rows
-        ]
-        return self._result(
-            ctx,
-            "pass" if ok else "fail",
-            err,
-            0.0,
-            None,
-            "" if ok else why(rec, got, want, err, lim),
-            error=err,
-            limit=lim,
-            at_v0=rec.v0,
-            measured=got,
-            expected=want,
-            rule=self.rule,
-            per_v0=per_v0,
-        ).with_tolerance(self._tolerance_text(base, factor, allow))
-
-
-class _Missing(Exception):
-    """A run this metric needs failed or did not produce the quantity."""
-
-
-class _Internal(Exception):
-    """The suite's own reference failed for this metric (not the code under test)."""
-
-
-class _Skip(Exception):
-    """The reference this metric needs cannot be run for the declared law: a skip, with why."""
-
-
-def _ours(text: str) -> str:
-    return f"internal error of the reference (ours, not the code's): {text}"
-
-
-def _need(rec: SpeedRecord, *keys: str, exact: bool = True) -> tuple[dict, dict]:
-    if rec.error:
-        raise _Missing(f"run failed at v0 = {rec.v0:g} m/s: {rec.error}")
-    if exact and rec.internal:
-        raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal}")
-    meas = rec.measured or {}
-    for k in keys:
-        if not isinstance(meas.get(k), float) or not math.isfinite(meas[k]):
-            why = meas.get("reason", f"no {k} measured")
-            raise _Missing(f"no {k.replace('_', ' ')} at v0 = {rec.v0:g} m/s: {why}")
-    if exact and rec.exact is None:
-        raise _Missing(f"no exact reference at v0 = {rec.v0:g} m/s")
-    return meas, rec.exact or {}
-
-
-def _allowance(rec: SpeedRecord, quantity: str) -> float:
-    """Textbook Verlet's error of ``quantity`` at this speed and step (never a default)."""
-    if rec.internal:
-        raise _Internal(f"v0 = {rec.v0:g} m/s: {rec.internal}")
-    tb = rec.textbook
-    if tb is None:
-        raise _Internal(f"v0 = {rec.v0:g} m/s: textbook Verlet was not run")
-    if "internal" in tb:
-        raise _Internal(f"v0 = {rec.v0:g} m/s: {tb['internal']}")
-    if "error" in tb:
-        raise _Skip(
-            f"{tb['error']}: the error a correct code makes at this step is unknown, "
-            "so no tolerance can be derived"
-        )
-    return float(tb[quantity])
 
 
 class _RelativeToExact(Metric):

