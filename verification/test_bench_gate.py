@@ -32,6 +32,7 @@ from reference_impl.adapters.reference import ReferenceAdapter
 from reference_impl.bench.runner import run_bench
 from reference_impl.scenes import scene_from_dict
 
+from .assertions import assert_true
 from .strategies import log_uniform
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -94,8 +95,29 @@ def gate_scenes(draw, families=("power", "sphere", "ellipsoid", "sum"), kinds=("
     if kind == "two-walls":
         q_max = probe.potential.turning_point(0.5 * mass * speeds[0] ** 2)
         data["gap"] = 10.0 * q_max
-        data["damping"]["zeta"] = 0.0 if draw(st.booleans()) else data["damping"]["zeta"]
+        # Undamped only: the one two-walls metric (energy drift) skips a damped scene, and a
+        # run that measured nothing is exit 1 by design (test below), not a pass.
+        data["damping"]["zeta"] = 0.0
     return scene_from_dict(data)
+
+
+def test_a_damped_two_walls_scene_measures_nothing_and_is_not_a_pass():
+    """Found by a generated scene: every metric skips a damped two-walls scene (energy drift
+    needs an undamped one), so the gate says "measured nothing" (exit 1), never a pass."""
+    scene = scene_from_dict(
+        {"name": "damped-walls", "mass": 0.01, "velocities": [0.5], "kind": "two-walls",
+         "potential": {"family": "power", "k": 1e6, "p": 1.5}, "gap": 0.01,
+         "damping": {"law": "universal", "zeta": 0.5}}
+    )  # fmt: skip
+    result = run_bench(ReferenceAdapter(), [scene])
+    statuses = {m.metric: m.status for m in result.metrics}
+    assert_true(
+        set(statuses.values()) == {"skip"} and result.exit_status(gate=True) == 1,
+        got=f"{statuses}, exit {result.exit_status(gate=True)}",
+        should="every metric skipped and exit 1",
+        claim="bench",
+        call="run_bench(reference, damped two-walls)",
+    )
 
 
 def _verdicts(result) -> dict:
