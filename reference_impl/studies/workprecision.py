@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from reference_impl.errors import HCVInputError
+from reference_impl.exact._truth import MpInverse
 from reference_impl.exact.solve import solve_impact
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.integrators.verlet_path import verlet_impact
@@ -142,56 +143,8 @@ class GroundTruth:
     q_samples: np.ndarray
 
 
-# Seed table of the trajectory truth's inverse q(U): this many energies, geometric
-# from U_max * _SEED_SPAN to U_max (one vectorised float inverse for all nodes).
-_SEED_POINTS = 400
-_SEED_SPAN = 1e-40
-# Newton steps allowed per inverse at raised precision (quadratic from a float seed: ~3).
-_NEWTON_MAX = 60
 # Ground truths computed in this process, by scene (repr of potential, m, v0, zeta, dps).
 _TRUTH_CACHE: dict[tuple, GroundTruth] = {}
-
-
-def _seeded_inverse(pot: Potential, u_max: float) -> Callable:
-    """q(u) at the working mpmath precision: a float seed (table + float Newton on
-    log U), then Newton on log U against log q in mpmath."""
-    u_tab = u_max * np.geomspace(_SEED_SPAN, 1.0, _SEED_POINTS)
-    with np.errstate(all="ignore"):
-        q_tab = np.asarray(pot._inverse(u_tab), dtype=float)
-    ok = np.isfinite(q_tab) & (q_tab > 0)
-    lu_tab, lq_tab = np.log(u_tab[ok]), np.log(q_tab[ok])
-    n_lead = float(pot.leading_exponent)
-
-    def seed(uf: float) -> float:
-        lu = math.log(uf)
-        if lu < lu_tab[0]:  # below the table: the leading power law U ~ c q^n
-            lq = lq_tab[0] + (lu - lu_tab[0]) / n_lead
-        else:
-            lq = float(np.interp(lu, lu_tab, lq_tab))
-        q = math.exp(lq)
-        for _ in range(3):  # float Newton on log U: the seed to ~1e-15
-            uq = float(pot._U(q))
-            if not (uq > 0 and math.isfinite(uq)):
-                break
-            q *= math.exp(-(math.log(uq) - lu) * uq / (q * float(pot._dU(q))))
-        return q
-
-    def inverse(u):
-        uf = float(u)
-        if not (1e-300 < uf < 1e300):
-            raise ValueError(f"ground_truth: energy U = {uf!r} J outside the float range")
-        q = mpmath.mpf(seed(uf))
-        lu = mpmath.log(u)
-        tol = mpmath.mpf(2) ** (-mpmath.mp.prec + 8) * max(1, abs(lu))
-        for _ in range(_NEWTON_MAX):
-            uq = pot._U(q)
-            step = (mpmath.log(uq) - lu) * uq / (q * pot._dU(q))
-            q = q * mpmath.exp(-step)
-            if abs(step) < tol:
-                return q
-        raise ValueError(f"ground_truth: Newton for U(q) = {uf!r} J did not converge")
-
-    return inverse
 
 
 def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
@@ -217,7 +170,8 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
         def x(s):
             return v0 / wd * mpmath.exp(-z * s) * mpmath.sin(wd * s)
 
-        inverse = _seeded_inverse(pot, float(mpmath.mpf(m) * x(s_peak) ** 2 / 2))
+        # seeded from a table up to the peak energy: one float inverse for all nodes
+        inverse = MpInverse(pot, float(mpmath.mpf(m) * x(s_peak) ** 2 / 2))
 
         def q_of_x(xv):
             return inverse(mpmath.mpf(m) * xv * xv / 2)
