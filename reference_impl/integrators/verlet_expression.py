@@ -3,7 +3,9 @@
 `_expression_kernel` builds the same kernel as
 `reference_impl.integrators.verlet_kernel._kernel` with the expression's force
 in place of `_force_energy`; `_worth_compiling` decides when a batch repays
-the compile. Used by `reference_impl.integrators.verlet.run_lanes`.
+the compile. Used by `reference_impl.integrators.verlet.run_lanes` for the
+expressions without a term table: one that is a sum of constants times powers
+of q has one (`reference_impl.potentials._terms`) and runs in `_kernel` itself.
 """
 
 from __future__ import annotations
