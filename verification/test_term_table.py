@@ -18,6 +18,7 @@ import pytest
 import sympy as sp
 
 from reference_impl.errors import HCVInputError
+from reference_impl.exact._nodes import _term_exponents
 from reference_impl.exact._nodes import _term_rows as exact_rows
 from reference_impl.integrators.verlet import (
     SCENE_IMPACT,
@@ -99,6 +100,31 @@ def _old_kernel_terms(pot):
         else:
             return None
     return fam, par
+
+
+def _old_term_exponents(pot):
+    if type(pot) in (PowerLaw, Ellipsoid, Sphere):
+        return [pot.leading_exponent]
+    terms = getattr(pot, "terms", None)
+    if terms is not None:
+        out = []
+        for t in terms:
+            sub = _old_term_exponents(t)
+            if sub is None:
+                return None
+            out += sub
+        return out
+    expr = getattr(pot, "sympy_U", None)
+    if not isinstance(expr, sp.Expr):
+        return None
+    (q,) = expr.free_symbols
+    out = []
+    for term in expr.as_ordered_terms():
+        coeff, e = term.as_coeff_exponent(q)
+        if coeff.has(q) or not e.is_number:
+            return None
+        out.append(float(e))
+    return out
 
 
 # ----------------------------------------------------------------------------
@@ -223,6 +249,21 @@ def test_expression_exact_rows_are_unchanged():
             should=repr(old),
             claim="tool",
             call=f"exact _term_rows({pot!r})",
+        )
+
+
+def test_substitution_exponents_are_unchanged():
+    """The exact solver's exponents for its Gauss-Jacobi substitution now come from the
+    table for non-expression families: the same numbers as the old family checks."""
+    pots = FAMILY_POTENTIALS + _expressions() + [PowerLaw(1.0, 1.5) + Expression("q**3")]
+    for pot in pots:
+        old, new = _old_term_exponents(pot), _term_exponents(pot)
+        assert_true(
+            _same(old, new),
+            got=repr(new),
+            should=repr(old),
+            claim="tool",
+            call=f"_term_exponents({pot!r})",
         )
 
 

@@ -53,8 +53,6 @@ if TYPE_CHECKING:
 from reference_impl._jit import specialise
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, term_rows
 from reference_impl.potentials.base import Potential
-from reference_impl.potentials.power import PowerLaw
-from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["NodeKernel", "node_function", "node_kernel", "expression_sympy", "substitution_order"]
 
@@ -457,10 +455,12 @@ def substitution_order(pot: Potential, max_order: int) -> int | None:
 
 
 def _term_exponents(pot):
-    """Exponents n_i of the terms q^n_i (times functions analytic in q), or None."""
-    if type(pot) in (PowerLaw, Ellipsoid, Sphere):
-        # q^n, or the cap C q^n (1 - q / 3a)^(alpha + 1): analytic factor, one exponent.
-        return [pot.leading_exponent]
+    """Exponents n_i of the terms q^n_i (times functions analytic in q), or None.
+
+    Sums term by term, expressions from their sympy form (any constant times q**p,
+    whether or not it has a table), every other family from its term table: q^n, or
+    the cap C q^n (1 - q / 3a)^(alpha + 1) (analytic factor, n = 2 (alpha + 1)).
+    """
     terms = getattr(pot, "terms", None)
     if terms is not None:
         out = []
@@ -472,7 +472,10 @@ def _term_exponents(pot):
         return out
     sym = expression_sympy(pot)
     if sym is None:
-        return None
+        rows = _term_rows(pot)
+        if rows is None:
+            return None
+        return [r[2] if r[0] == _TERM_POWER else 2.0 * (r[2] + 1.0) for r in rows]
     expr, _, q = sym
     out = []
     for term in expr.as_ordered_terms():

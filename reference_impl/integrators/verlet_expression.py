@@ -131,7 +131,9 @@ def _disk_cached_kernel(key: str, q, pot: Potential):
     if module is None:
         return None
     # error_model="python", as `_kernel` itself is compiled.
-    kern = specialise(_kernel.py_func, True, error_model="python", _force_energy=module.force_energy)
+    kern = specialise(
+        _kernel.py_func, True, error_model="python", _force_energy=module.force_energy
+    )
     record_files(module.__name__, [module.dU_U, module.force_energy, kern])
     return kern
 
