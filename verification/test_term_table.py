@@ -181,6 +181,7 @@ def _expressions():
         Expression("pi*q**2 + 0.1*q**3.37"),
         Expression("sqrt(q)"),
         Expression("q**2*(1 + q)**3"),
+        Expression("q**2 - q**3/10"),
         Expression("q - atan(q)"),  # cancels in float64: no table
         Expression("exp(q) - 1 - q"),  # cancels
         Expression("q**2*exp(q)"),  # not a sum of powers
@@ -312,6 +313,38 @@ def test_cancelling_expression_has_no_table():
         claim="tool",
         call="sum with a cancelling term",
     )
+
+
+def test_expanded_terms_of_both_signs_get_no_table():
+    """The table sums the expanded terms, not the formula float_formula_accurate checked:
+    an expansion with terms of both signs may cancel, so it gets no table; positive
+    expanded terms, and mixed signs the user wrote as the sum, keep theirs."""
+    pot = Expression("q**2 + q**2*(1-q)**40")
+    rows = _old_expression_power_rows(pot)  # what the exact side used to read
+    u_rows = sum(k * 1.5**n / n for _, k, n, _, _ in rows)
+    assert_true(
+        pot.float_formula_accurate and abs(u_rows - pot.U(1.5)) > 0.1 * pot.U(1.5),
+        got=f"U(1.5) from the expanded rows {u_rows!r}, formula {pot.U(1.5)!r}",
+        should="an expansion that cancels (else this test shows nothing)",
+        claim="tool",
+        call="expanded rows of q**2 + q**2*(1-q)**40",
+    )
+    for p in (pot, PowerLaw(1.0, 1.0) + pot):
+        assert_true(
+            term_rows(p) is None and kernel_terms(p) is None and exact_rows(p) is None,
+            got=repr(term_rows(p)),
+            should="None",
+            claim="tool",
+            call=f"term_rows({p!r})",
+        )
+    for source in ("q**2*(1 + q)**3", "q**2 - q**3/10"):
+        assert_true(
+            term_rows(Expression(source)) is not None,
+            got="None",
+            should="a table",
+            claim="tool",
+            call=f"term_rows({source})",
+        )
 
 
 def test_subclasses_inherit_no_table_unless_they_opt_in():

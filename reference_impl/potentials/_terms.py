@@ -153,6 +153,13 @@ def sympy_power_rows(expr, q) -> list[Row] | None:
     exponent). A term that is not a finite non-zero constant times a positive power
     of ``q`` (exp(q), q**2 log(q), a constant) gives None.
 
+    The table evaluates the expanded sum, which is not the formula the caller checked
+    in float64 (``float_formula_accurate`` vouches for U as written). Where expanding
+    changed the sum and its terms have both signs, they can cancel: q**2 + q**2*(1-q)**40
+    expands into terms of size 1e15 at q = 1.5 whose sum is 2.25, so its rows gave U =
+    1.125 there. Such a form gets None (its sympy form is compiled as written instead);
+    a sum of positive terms cannot cancel, and a sum the user wrote is the formula checked.
+
     Parameters
     ----------
     expr : sympy.Expr
@@ -163,7 +170,8 @@ def sympy_power_rows(expr, q) -> list[Row] | None:
     import sympy as sp  # only an expression's potential reaches here: sympy is loaded
 
     rows = []
-    for term in sp.Add.make_args(sp.expand(expr)):
+    terms = sp.Add.make_args(sp.expand(expr))
+    for term in terms:
         coeff, e = term.as_coeff_exponent(q)
         if coeff.has(q) or not (coeff.is_number and e.is_number and e.is_positive):
             return None
@@ -171,4 +179,6 @@ def sympy_power_rows(expr, q) -> list[Row] | None:
         if not (math.isfinite(c) and math.isfinite(c * n) and c != 0.0):
             return None
         rows.append(power_row(c * n, n, float(e - 1)))
+    if any(r[1] < 0.0 for r in rows) and set(terms) != set(sp.Add.make_args(expr)):
+        return None  # expanded, with terms of both signs: may cancel (see above)
     return rows or None
