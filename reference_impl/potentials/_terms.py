@@ -6,7 +6,8 @@ derivatives from a small table of terms, one row per term, instead of calling th
 potential. Each family describes its own rows (contract item 8 of `Potential`: the hook
 ``_term_rows()``); `term_rows` asks it and checks the answer. The kernels' layouts are
 adapters of this one table (the exact side adds the half-power flag of a power term, the
-Verlet side 1 / (p + 1)), so a family tabled here runs compiled in both.
+Verlet side 1 / (p + 1)), so a family tabled here runs compiled in both (the exact solver
+has kernels for power and cap rows; a saturating row sends it to its numpy path).
 
 Row layout: five float64 numbers ``(code, c1, c2, c3, c4)``; U summed over the rows.
 

@@ -449,7 +449,8 @@ class Expression(Potential):
     def _term_rows(self):
         """Power rows when U is a sum of constants times q**e (e > 0), else None.
 
-        Read exactly from the expanded sympy form (`sympy_power_rows`), and only when
+        Read exactly from the expanded sympy form (`sympy_power_rows`, which also
+        refuses an expansion whose terms have both signs), and only when
         `float_formula_accurate`: a formula that cancels in float64 (q - atan(q)) must
         not be compiled from its terms, so it has no table. The rows are those of the
         same law written as `PowerLaw` terms: ``q**2.5/2.5`` is ``PowerLaw(1, 1.5)``.
