@@ -102,6 +102,17 @@ def test_expression_vs_truth(pot, m, v0, zeta):
     _check(pot, m, v0, zeta)
 
 
+@pytest.mark.mpmath
+@pytest.mark.parametrize("v0", [0.5, 1.2])
+def test_expression_whose_expanded_terms_cancel_vs_truth(v0):
+    """q**2 + q**2*(1-q)**40 expands into terms of both signs up to 1e15 (at q = 1.5) that
+    sum to ~2: it has no term table, and the solver meets its bound against the truth.
+    Read into the table, as before the table was shared, it gave at v0 = 0.5 a contact
+    time 7.8e-13 off (zero-force contact time 1.7e-12 s off, above its own bound
+    6.4e-13 s) and a NaN node (refused) at 1.2."""
+    _check(Expression("q**2 + q**2*(1-q)**40"), 1.0, v0, 0.0)
+
+
 @settings(max_examples=10)
 @given(case=hs.impacts(st.one_of(hs.ellipsoids(), hs.spheres(), hs.sums(), expressions())))
 def test_compiled_kernel_matches_numpy_path(case):

@@ -19,6 +19,7 @@ from reference_impl.potentials import (
     register_family,
     unregister_family,
 )
+from reference_impl.potentials._terms import power_row
 from reference_impl.scenes import parse_scene, scene_from_dict
 from reference_impl.scenes._scene import potential_to_dict
 from reference_impl.tasks import solve_scene
@@ -80,10 +81,20 @@ def test_a_family_defined_in_a_test_is_a_scene_family(quartic):
         ref = solve_impact(PowerLaw(3.0, 3.0), 0.1, row["v0"], 0.2)
         # Same law by two routes (general quadrature path vs the power-law path): both are
         # accurate to ~1e-15 relative; 1e-12 leaves room for the general path's bound.
-        assert_close(row["contact_time"], ref.contact_time, rtol=1e-12, claim="tool",
-                     call=f"solve_scene(test-quartic, v0={row['v0']})")
-        assert_close(row["restitution"], ref.restitution, rtol=1e-12, claim="tool",
-                     call=f"solve_scene(test-quartic, v0={row['v0']})")
+        assert_close(
+            row["contact_time"],
+            ref.contact_time,
+            rtol=1e-12,
+            claim="tool",
+            call=f"solve_scene(test-quartic, v0={row['v0']})",
+        )
+        assert_close(
+            row["restitution"],
+            ref.restitution,
+            rtol=1e-12,
+            claim="tool",
+            call=f"solve_scene(test-quartic, v0={row['v0']})",
+        )
 
 
 def test_an_unregistered_family_is_refused_naming_the_known_ones():
@@ -113,5 +124,70 @@ def test_every_family_round_trips_through_its_scene_table(pot):
     )
     q = np.array([1e-4, 1e-3])
     assert_close(scene.potential.U(q), pot.U(q), rtol=0.0, claim="tool", call=f"round trip {table}")
-    assert_true(potential_to_dict(scene.potential) == table, got=potential_to_dict(scene.potential),
-                should=table, claim="tool", call="potential_to_dict round trip")
+    assert_true(
+        potential_to_dict(scene.potential) == table,
+        got=potential_to_dict(scene.potential),
+        should=table,
+        claim="tool",
+        call="potential_to_dict round trip",
+    )
+
+
+class QuarticTable(QuarticWell):
+    """QuarticWell with its term table (contract item 8): one row, k q^4 / 4."""
+
+    def _term_rows(self):
+        return [power_row(self.k, 4.0, 3.0)]
+
+
+def test_a_family_with_a_term_table_runs_in_both_compiled_kernels():
+    """The term-table hook is the one place for compiled speed: with it a family defined
+    here gets the exact solver's table kernels and the Verlet lane kernel, with no line
+    in exact/ or integrators/; without it (QuarticWell) neither."""
+    from reference_impl.exact._nodes import node_kernel, substitution_order
+    from reference_impl.integrators.verlet import SCENE_WALLS, LaneBatch, kernel_terms, run_lanes
+
+    plain, tabled, law = QuarticWell(3.0), QuarticTable(3.0), PowerLaw(3.0, 3.0)
+    assert_true(
+        kernel_terms(plain) is None and node_kernel(plain) is None,
+        got="a compiled kernel",
+        should="none without a table",
+        claim="tool",
+        call="QuarticWell",
+    )
+    k = node_kernel(tabled)
+    assert_true(
+        k is not None and k.terms and substitution_order(tabled, 8) == substitution_order(law, 8),
+        got=repr(k),
+        should="the table kernels, with the power law's substitution order",
+        claim="tool",
+        call="node_kernel(QuarticTable)",
+    )
+    dt = np.array([0.1, 0.5, 1.0, 2.0])
+    b = LaneBatch(dt=dt, y0=0.0, v0=1.0, gap=0.0, e_limit=50.0, max_steps=3_000)
+    a, t = run_lanes(law, 1.0, SCENE_WALLS, b), run_lanes(tabled, 1.0, SCENE_WALLS, b)
+    assert_true(
+        t.engine == "numba" and np.array_equal(a.e_max, t.e_max, equal_nan=True),
+        got=f"{t.engine} {t.e_max}",
+        should=f"numba {a.e_max} (the same table as PowerLaw(3, 3))",
+        claim="tool",
+        call="run_lanes(QuarticTable)",
+    )
+    for v0 in (0.5, 2.0):
+        got, ref = solve_impact(tabled, 0.1, v0, 0.2), solve_impact(law, 0.1, v0, 0.2)
+        # The same compiled rules and node loop; only the inverse of U at the turning
+        # point (numeric here, closed form for PowerLaw) and the warm start differ.
+        assert_close(
+            got.contact_time,
+            ref.contact_time,
+            rtol=1e-14,
+            claim="tool",
+            call=f"solve_impact(QuarticTable, v0={v0})",
+        )
+        assert_close(
+            got.restitution,
+            ref.restitution,
+            rtol=1e-14,
+            claim="tool",
+            call=f"solve_impact(QuarticTable, v0={v0})",
+        )

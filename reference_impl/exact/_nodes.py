@@ -17,10 +17,10 @@ Here one compiled call does every node of a branch:
 
 Families read the potential's public attributes:
 
-* power laws, caps, sums of them, and user expressions that are sums of
-  constants times powers of q (read exactly from the sympy form): a table of terms
-  (`_TERM_*` codes) evaluated by one compiled function, compiled once and cached
-  on disk;
+* every family with a term table (`reference_impl.potentials._terms`: power laws,
+  caps, sums of them, and user expressions that are sums of constants times powers
+  of q, read exactly from the sympy form): those rows (`_TERM_*` codes, `_term_rows`)
+  evaluated by one compiled function, compiled once and cached on disk;
 * other user expressions: `sympy.lambdify` prints the validated sympy forms of
   U, U', U'' (parameters substituted as exact numbers) as ``math``-module code,
   which numba compiles; cached by the sympy expressions in the process, and on disk
@@ -51,17 +51,16 @@ if TYPE_CHECKING:
 # solves without it (issue 20: start-up).
 
 from reference_impl._jit import specialise
-from reference_impl.potentials.base import Potential, SumPotential
-from reference_impl.potentials.power import PowerLaw
-from reference_impl.potentials.volumetric import Ellipsoid, Sphere
+from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, term_rows
+from reference_impl.potentials.base import Potential
 
 __all__ = ["NodeKernel", "node_function", "node_kernel", "expression_sympy", "substitution_order"]
 
-# Term codes of the table form (column 0 of P): U = k q^n / n (columns k, n), and
-# the volumetric cap U = Kn / (alpha + 1) V^(alpha + 1), V = c0 (a q^2 - q^3 / 3)
-# (columns Kn, alpha, a, c0).
-_TERM_POWER = 0.0
-_TERM_CAP = 1.0
+# Term codes of the table form (column 0 of P), those of the potentials' term table:
+# U = k q^n / n (columns k, n, h: the half-power flag), and the volumetric cap
+# U = Kn / (alpha + 1) V^(alpha + 1), V = c0 (a q^2 - q^3 / 3) (columns Kn, alpha, a, c0).
+_TERM_POWER = TERM_POWER
+_TERM_CAP = TERM_CAP
 _EPS = float(np.finfo(float).eps)
 # Relative step below which the Halley iteration stops and takes the root one step on,
 # with U' there from its Taylor series to U''' step^2 / 2. With r = step/q <= 3e-7, the
@@ -252,21 +251,26 @@ def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - 
 
 
 def _term_rows(pot: Potential):
-    """(code, 4 params) rows of the table form, or None for other families."""
-    if type(pot) is PowerLaw:
-        return [_power_row(pot.k, pot.leading_exponent)]
-    if type(pot) in (Ellipsoid, Sphere):
-        c0 = math.pi * pot._bc / pot._a**2
-        return [(_TERM_CAP, pot.Kn, pot.alpha, pot._a, c0)]
-    if type(pot) is SumPotential:
-        rows = []
-        for t in pot.terms:
-            sub = _term_rows(t)
-            if sub is None:
-                return None
-            rows += sub
-        return rows
-    return _expression_power_rows(pot)
+    """(code, 4 params) rows of this module's table form, or None.
+
+    An adapter of the potentials' one term table (`term_rows`): a power row
+    (k, n, p) becomes (k, n, h) with h the half-power flag of U' = k q^(n-1)
+    (`_power_row`), a cap row is taken as it is (Kn, alpha, a, c0). A potential
+    without a table, or with a term that has no kernel here (the saturating
+    force), gives None.
+    """
+    rows = term_rows(pot)
+    if rows is None:
+        return None
+    out = []
+    for code, c1, c2, c3, c4 in rows:
+        if code == TERM_POWER:
+            out.append(_power_row(c1, c2))
+        elif code == TERM_CAP:
+            out.append((_TERM_CAP, c1, c2, c3, c4))
+        else:
+            return None
+    return out
 
 
 def _power_row(k: float, n: float) -> tuple:
@@ -274,30 +278,6 @@ def _power_row(k: float, n: float) -> tuple:
     h2 = 2.0 * (n - 1.0)
     h = int(h2) if h2 == int(h2) and abs(h2) <= _HALF_POWER_MAX else _NOT_HALF
     return (_TERM_POWER, k, n, float(h), 0.0)
-
-
-def _expression_power_rows(pot):
-    """Rows for an expression that is a sum of constants times q**e (e > 0), else None.
-
-    Read exactly from the sympy form; c q^e is the table's k q^n / n with n = e,
-    k = c e. Only when the float formula is accurate (no cancelling forms).
-    """
-    sym = expression_sympy(pot)
-    if sym is None or not getattr(pot, "float_formula_accurate", True):
-        return None
-    import sympy as sp
-
-    expr, _, q = sym
-    rows = []
-    for term in sp.Add.make_args(sp.expand(expr)):
-        coeff, e = term.as_coeff_exponent(q)
-        if coeff.has(q) or not (coeff.is_number and e.is_number and e.is_positive):
-            return None
-        c, n = float(coeff), float(e)
-        if not (math.isfinite(c) and math.isfinite(c * n) and c != 0.0):
-            return None
-        rows.append(_power_row(c * n, n))
-    return rows or None
 
 
 def expression_sympy(pot) -> tuple[sp.Expr, sp.Expr, sp.Symbol] | None:
@@ -475,10 +455,12 @@ def substitution_order(pot: Potential, max_order: int) -> int | None:
 
 
 def _term_exponents(pot):
-    """Exponents n_i of the terms q^n_i (times functions analytic in q), or None."""
-    if type(pot) in (PowerLaw, Ellipsoid, Sphere):
-        # q^n, or the cap C q^n (1 - q / 3a)^(alpha + 1): analytic factor, one exponent.
-        return [pot.leading_exponent]
+    """Exponents n_i of the terms q^n_i (times functions analytic in q), or None.
+
+    Sums term by term, expressions from their sympy form (any constant times q**p,
+    whether or not it has a table), every other family from its term table: q^n, or
+    the cap C q^n (1 - q / 3a)^(alpha + 1) (analytic factor, n = 2 (alpha + 1)).
+    """
     terms = getattr(pot, "terms", None)
     if terms is not None:
         out = []
@@ -490,7 +472,10 @@ def _term_exponents(pot):
         return out
     sym = expression_sympy(pot)
     if sym is None:
-        return None
+        rows = _term_rows(pot)
+        if rows is None:
+            return None
+        return [r[2] if r[0] == _TERM_POWER else 2.0 * (r[2] + 1.0) for r in rows]
     expr, _, q = sym
     out = []
     for term in expr.as_ordered_terms():

@@ -35,13 +35,15 @@ Conventions (decided here, used everywhere in the package)
   is resumed from saved per-lane state, so Ctrl-C (KeyboardInterrupt) gets
   through within a fraction of a second even for lanes of 1e8 steps.
 
-Potentials of the known families (PowerLaw, Ellipsoid, Sphere,
-`SaturatingForce`, and sums of them) run in one numba kernel that receives the
-family parameters as arrays. A user `Expression` runs in the same kernel with
-its sympy U', U compiled in (`_expression_kernel`, once per distinct expression
-and process) when the batch is long enough to repay the compile; any other
-`Potential`, or a short batch, runs in a numpy fallback that advances all lanes
-together, one step per vectorised call of ``Potential._dU``/``_U``.
+Potentials with a term table (`reference_impl.potentials._terms`: PowerLaw,
+Ellipsoid, Sphere, `SaturatingForce`, a user `Expression` that is a sum of
+constants times powers of q, and sums of them) run in one numba kernel that
+receives the terms' parameters as arrays (`kernel_terms`). Any other
+`Expression` runs in the same kernel with its sympy U', U compiled in
+(`_expression_kernel`, once per distinct expression and process) when the batch
+is long enough to repay the compile; any other `Potential`, or such an expression
+in a short batch, runs in a numpy fallback that advances all lanes together, one
+step per vectorised call of ``Potential._dU``/``_U``.
 """
 
 from __future__ import annotations
@@ -242,9 +244,10 @@ def run_lanes(
         Process lanes by increasing dt within each group and skip those at or
         above a dt that already failed (searches need only the first failure).
     engine : {"auto", "numba", "numpy"}
-        "auto" uses numba for known families, and for an `Expression` when the
-        batch is long enough to repay compiling its kernel; numpy otherwise.
-        "numba" compiles an Expression's kernel whatever the batch.
+        "auto" uses numba for a potential with a term table, and for another
+        `Expression` when the batch is long enough to repay compiling its
+        kernel; numpy otherwise. "numba" compiles such an Expression's kernel
+        whatever the batch.
     block : int
         Lanes the numba kernel advances in lockstep (results do not depend on it).
 

@@ -3,7 +3,9 @@
 `_expression_kernel` builds the same kernel as
 `reference_impl.integrators.verlet_kernel._kernel` with the expression's force
 in place of `_force_energy`; `_worth_compiling` decides when a batch repays
-the compile. Used by `reference_impl.integrators.verlet.run_lanes`.
+the compile. Used by `reference_impl.integrators.verlet.run_lanes` for the
+expressions without a term table: one that is a sum of constants times powers
+of q has one (`reference_impl.potentials._terms`) and runs in `_kernel` itself.
 """
 
 from __future__ import annotations
@@ -129,7 +131,9 @@ def _disk_cached_kernel(key: str, q, pot: Potential):
     if module is None:
         return None
     # error_model="python", as `_kernel` itself is compiled.
-    kern = specialise(_kernel.py_func, True, error_model="python", _force_energy=module.force_energy)
+    kern = specialise(
+        _kernel.py_func, True, error_model="python", _force_energy=module.force_energy
+    )
     record_files(module.__name__, [module.dU_U, module.force_energy, kern])
     return kern
 

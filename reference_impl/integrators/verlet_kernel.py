@@ -1,9 +1,10 @@
-"""The compiled velocity-Verlet lane kernel and the potential families it knows.
+"""The compiled velocity-Verlet lane kernel and the term kinds it evaluates.
 
-`_kernel` (numba) advances many lanes of one scene; the force of the known
-families (PowerLaw, Ellipsoid, Sphere, `SaturatingForce`, sums of them) is
+`_kernel` (numba) advances many lanes of one scene; the force of a potential with
+a term table (`reference_impl.potentials._terms`: PowerLaw, Ellipsoid, Sphere,
+`SaturatingForce`, expressions that are sums of powers, sums of them) is
 `_force_energy`, selected by the family codes and parameter arrays of
-`kernel_terms`. Conventions, statuses and the lane driver are in
+`kernel_terms`, the adapter from that table. Conventions, statuses and the lane driver are in
 `reference_impl.integrators.verlet`, which re-exports the public names.
 """
 
@@ -14,10 +15,9 @@ import math
 import numba
 import numpy as np
 
-from reference_impl.potentials.base import Potential, SumPotential
-from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, TERM_SATURATING, term_rows
+from reference_impl.potentials.base import Potential
 from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce
-from reference_impl.potentials.volumetric import Ellipsoid, Sphere
 
 __all__ = ["SCENE_IMPACT", "SCENE_WALLS", "STATUS_NAMES", "SaturatingForce", "kernel_terms"]
 
@@ -54,24 +54,29 @@ _N_PAR = 4
 def kernel_terms(pot: Potential) -> tuple[np.ndarray, np.ndarray] | None:
     """Family codes and parameter rows of ``pot`` for the numba kernel.
 
+    An adapter of the potentials' one term table (`term_rows`): a power row
+    (k, n, p) becomes (k, p, 1 / (p + 1)), a cap row (Kn, alpha, a, c0) becomes
+    (c0, a, Kn, alpha), a saturating row (F0, q_s) stays (F0, q_s).
+
     Returns
     -------
     (fam, par) or None
-        ``fam`` int64 (n_terms,), ``par`` float64 (n_terms, 4); None when some
-        term is not of a known family (the numpy fallback is then used).
+        ``fam`` int64 (n_terms,), ``par`` float64 (n_terms, 4); None when the
+        potential has no term table (the numpy fallback is then used).
     """
-    terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
-    fam = np.zeros(len(terms), dtype=np.int64)
-    par = np.zeros((len(terms), _N_PAR))
-    for i, t in enumerate(terms):
-        if type(t) is PowerLaw:
-            fam[i], par[i, :3] = _FAM_POWER, (t.k, t.p, 1.0 / (t.p + 1.0))
-        elif type(t) in (Ellipsoid, Sphere):  # exact types: a subclass may change the law
-            fam[i] = _FAM_CAP
-            par[i] = (math.pi * t._bc / t._a**2, t._a, t.Kn, t.alpha)
-        elif type(t) is SaturatingForce:
-            fam[i], par[i, :2] = _FAM_SATURATING, (t.F0, t.q_s)
-        else:
+    rows = term_rows(pot)
+    if rows is None:
+        return None
+    fam = np.zeros(len(rows), dtype=np.int64)
+    par = np.zeros((len(rows), _N_PAR))
+    for i, (code, c1, c2, c3, c4) in enumerate(rows):
+        if code == TERM_POWER:
+            fam[i], par[i, :3] = _FAM_POWER, (c1, c3, 1.0 / (c3 + 1.0))
+        elif code == TERM_CAP:
+            fam[i], par[i] = _FAM_CAP, (c4, c3, c1, c2)
+        elif code == TERM_SATURATING:
+            fam[i], par[i, :2] = _FAM_SATURATING, (c1, c2)
+        else:  # a code this kernel does not know: the numpy fallback
             return None
     return fam, par
 

@@ -15,6 +15,7 @@ import mpmath
 import numpy as np
 
 from reference_impl.errors import DomainError, HCVInputError, NonMonotoneError, NoTurningPointError
+from reference_impl.potentials._terms import term_rows
 
 __all__ = ["Potential", "SumPotential", "is_mp"]
 
@@ -68,6 +69,15 @@ class Potential(ABC):
        passes each key, read as a positive finite number, to the constructor by
        name; ``scene_params`` (default ``params()``) is the table it writes back.
        Override both when the table holds other kinds of value.
+    8. For compiled speed, implement ``_term_rows()``: the family's rows of the term
+       table (`reference_impl.potentials._terms`: powers k q^n / n, volumetric caps,
+       the saturating force), or None when U is not such a sum (the default). It is
+       the one place the compiled kernels learn a family from: the exact solver's
+       node loops and the velocity-Verlet lanes both read the table through
+       `reference_impl.potentials._terms.term_rows`. Only a hook defined in the
+       class's own body counts: a subclass inherits no table (it may change the
+       law) unless its body opts in, ``_term_rows = Parent._term_rows``. Without
+       a table the family runs on the numpy paths.
 
     The public methods ``U``, ``dU``, ``d2U`` validate the input (NaN, q < 0,
     q > q_sup) and then call the hooks. The float64 hooks must be accurate to
@@ -109,6 +119,10 @@ class Potential(ABC):
 
     def _inverse(self, u: np.ndarray) -> np.ndarray:
         return self._numeric_inverse(u)
+
+    def _term_rows(self) -> list[tuple[float, ...]] | None:
+        """Rows of the term table (contract item 8), or None: no table form."""
+        return None
 
     # -- scene family (contract item 7) -------------------------------------
     @classmethod
@@ -386,6 +400,16 @@ class SumPotential(Potential):
     def _d2U(self, q):
         return sum(t._d2U(q) for t in self.terms)
 
+    def _term_rows(self):
+        # The terms' rows one after another; no table when some term has none.
+        rows = []
+        for t in self.terms:
+            sub = term_rows(t)
+            if sub is None:
+                return None
+            rows += sub
+        return rows
+
     def params(self) -> dict[str, Any]:
         return {"terms": [dict(family=type(t).__name__, **t.params()) for t in self.terms]}
 
@@ -395,7 +419,9 @@ class SumPotential(Potential):
 
     def scene_params(self) -> dict[str, Any]:
         return {
-            "terms": [{"family": t.family or type(t).__name__, **t.scene_params()} for t in self.terms]
+            "terms": [
+                {"family": t.family or type(t).__name__, **t.scene_params()} for t in self.terms
+            ]
         }
 
     def __repr__(self) -> str:

@@ -19,19 +19,14 @@ float by < 1 ulp for non-dyadic numbers.
 from __future__ import annotations
 
 import math
+from functools import cached_property
 from typing import Any
 
 import mpmath
 import numpy as np
 import sympy as sp
-from scipy.optimize import elementwise
 
-from reference_impl.errors import (
-    ExpressionError,
-    HCVInputError,
-    NonMonotoneError,
-    NoTurningPointError,
-)
+from reference_impl.errors import ExpressionError, HCVInputError, NonMonotoneError
 from reference_impl.potentials._expr_parse import (
     _Q,
     _as_float,
@@ -40,6 +35,7 @@ from reference_impl.potentials._expr_parse import (
     _parse,
     _short,
 )
+from reference_impl.potentials._expr_turning import check_rising, rising_inverse
 from reference_impl.potentials._families import register_family
 from reference_impl.potentials._near_zero import (
     FLOAT_RTOL,
@@ -50,7 +46,7 @@ from reference_impl.potentials._near_zero import (
     strip_abs,
     time_limit,
 )
-from reference_impl.potentials._rising import on_first_branch, rising_top
+from reference_impl.potentials._terms import sympy_power_rows
 from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Expression"]
@@ -60,17 +56,6 @@ __all__ = ["Expression"]
 _N_DPS = 60
 _N_PROBES = ("1e-30", "1e-45")
 _N_RTOL = 1e-9
-# Bracket steps of the inverse: 1100 doublings span float64.
-_MAX_BRACKET_STEPS = 1100
-# Smallest overlap (m) the downward bracket search tries (the smallest positive
-# float64): U above the energy even there means U does not rise from U(0) = 0.
-_TINY_Q = 5e-324
-# Root tolerance of the inverse of U: a few ulps of q, as in the base class.
-_INVERSE_XRTOL = 4.0 * np.finfo(float).eps
-# Grid that locates where U' <= 0 once U was seen to decrease: log points
-# resolve q -> 0, linear ones the rest (the sizes of Potential.check_monotone).
-_SCAN_LOG_POINTS = 600
-_SCAN_LIN_POINTS = 2000
 # Series orders (beyond the leading exponent) tried for the branch near 0; each
 # try is checked against the raised-precision reference before it is used.
 _SERIES_EXTRA_ORDERS = (24, 48, 96)
@@ -451,146 +436,34 @@ class Expression(Potential):
         return self._eval(2, q)
 
     def check_monotone(self, q_max: float) -> None:
-        """U' > 0 on a dense grid of (0, q_max], each float failure re-decided at raised precision.
+        """U' > 0 on a dense grid of (0, q_max], each float failure re-decided at raised
+        precision (`reference_impl.potentials._expr_turning.check_rising`)."""
+        check_rising(self, q_max)
 
-        U(0) = 0 and U ~ c q^n with c > 0 were decided exactly at construction.
-        A grid point where the float64 U' is not > 0 (an underflow, as for
-        q**32 at 1e-12 m) counts as a violation only if the mpmath value, at a
-        precision raised until it settles, confirms it.
-        """
-        grid = q_max * np.concatenate(
-            [np.logspace(-12, 0, _SCAN_LOG_POINTS), np.linspace(0, 1, _SCAN_LIN_POINTS)[1:]]
-        )
-        grid = np.unique(grid[grid > 0])
-        with np.errstate(all="ignore"):
-            f = self._dU(grid)
-        for i in np.flatnonzero(~(np.isfinite(f) & (f > 0))):
-            ref = mp_accurate(self._mp_funcs[1], float(grid[i]), self.leading_exponent)
-            if not (mpmath.isfinite(ref) and ref > 0):
-                shown = mpmath.nstr(ref, 6) if mpmath.isfinite(ref) else f"{f[i]:.6g}"
-                raise NonMonotoneError(
-                    f"U'(q) = {shown} N at q = {grid[i]:.6g} m is not > 0: the potential is "
-                    f"not monotone on (0, q_max = {q_max:.6g} m] (assumption 3 of section 3)"
-                )
-
-    # -- inverse ----------------------------------------------------------------
     def _inverse(self, u: np.ndarray) -> np.ndarray:
-        """Overlap q with U(q) = u: a checked geometric bracket, then Chandrupatla.
+        """Overlap q with U(q) = u by a bracket that climbs from below the root
+        (`reference_impl.potentials._expr_turning.rising_inverse`)."""
+        return rising_inverse(self, u)
 
-        The base class brackets from ``q_scale`` upwards, which presumes U is
-        monotone and finite everywhere. A formula may be increasing or defined
-        only up to some overlap, so this bracket climbs from below the root and
-        stops with a message naming where U decreases, levels off or stops
-        being a finite number.
+    # -- term table (contract item 8) ---------------------------------------------
+    def _term_rows(self):
+        """Power rows when U is a sum of constants times q**e (e > 0), else None.
+
+        Read exactly from the expanded sympy form (`sympy_power_rows`, which also
+        refuses an expansion whose terms have both signs), and only when
+        `float_formula_accurate`: a formula that cancels in float64 (q - atan(q)) must
+        not be compiled from its terms, so it has no table. The rows are those of the
+        same law written as `PowerLaw` terms: ``q**2.5/2.5`` is ``PowerLaw(1, 1.5)``.
         """
-        u = np.asarray(u, dtype=float)
-        out = np.zeros_like(u)
-        pos = u > 0
-        if not np.any(pos):
-            return out
-        target = u[pos]
-        lo, hi = self._bracket(target)
-        res = elementwise.find_root(
-            lambda q, t: self._U(q) - t,
-            (lo, hi),
-            args=(target,),
-            tolerances=dict(xatol=0.0, xrtol=_INVERSE_XRTOL, fatol=0.0, frtol=0.0),
-        )
-        out[pos] = np.where(self._U(hi) == target, hi, res.x)
-        return out
+        if not self.float_formula_accurate:
+            return None
+        return self._power_rows
 
-    def _bracket(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) with U(lo) < t <= U(hi), U increasing at the doubling points.
-
-        The search starts at half the leading-term estimate (t / c)^(1/n), which
-        is within a small factor of the root for small energies at any scale
-        (1e300 q^2 at t = 1e-300 has its root at 1e-300 m). U(lo) = 0 is an
-        accepted lower end: U > 0 near 0 was decided exactly (c > 0) at
-        construction, so a zero is an underflow of a value below t.
-        """
-        with np.errstate(all="ignore"):
-            guess = np.exp((np.log(t) - math.log(self.leading_coefficient)) / self.leading_exponent)
-        guess = np.where(np.isfinite(guess) & (guess > 0), guess, self.q_scale)
-        lo = np.maximum(0.5 * guess, _TINY_Q)
-        # Start on the branch of U that rises from 0 (the guess may lie past a pole).
-        lo = np.minimum(lo, on_first_branch(self, float(lo.max())))
-        for _ in range(_MAX_BRACKET_STEPS):
-            u_lo = self._U(lo)
-            bad = ~(u_lo < t)
-            if not np.any(bad):
-                break
-            lo = np.where(bad, np.maximum(lo / 4, _TINY_Q), lo)
-            if np.any(bad & (lo <= _TINY_Q) & ~(self._U(lo) < t)):
-                i = int(np.argmax(bad & (lo <= _TINY_Q)))
-                raise NonMonotoneError(
-                    f"Expression: U(q) >= {t[i]:.6g} J already at q = {lo[i]:.3g} m, but U must "
-                    f"rise from U(0) = 0 (assumption 3 of section 3); check U = {_short(self.source)}"
-                )
-        top = rising_top(self, float(t.max()), float(lo.max()))
-        hi, u_hi = lo.copy(), u_lo
-        for _ in range(_MAX_BRACKET_STEPS):
-            need = u_hi < t
-            if not np.any(need):
-                return lo, hi
-            # Doubling is capped at `top`: past it U may have a pole or turn down, and
-            # a root there belongs to another branch (tan(q) at 4.49 m for 4.5 J).
-            with np.errstate(over="ignore"):
-                new = np.where(need, np.minimum(2 * hi, top), hi)
-            u_new = self._U(new)
-            self._check_step(need, hi, u_hi, new, u_new, t)
-            lo, hi, u_hi = np.where(need, hi, lo), new, u_new
-        raise AssertionError("unreachable: 1100 doublings overflow float64")
-
-    def _check_step(self, need, q0, u0, q1, u1, t) -> None:
-        """Raise when U, stepping from q0 to q1 = 2 q0 while below the energy t, misbehaves."""
-        src = _short(self.source)
-        tail = "no turning point (assumption 4 of section 3); lower the impact speed"
-        endless = need & ~np.isfinite(q1)
-        if np.any(endless):
-            i = int(np.argmax(endless))
-            raise NoTurningPointError(
-                f"Expression: U = {src} stays below the energy {t[i]:.6g} J for every float64 "
-                f"overlap (U = {u0[i]:.6g} J at q = {q0[i]:.3g} m): {tail}"
-            )
-        broken = need & ~np.isfinite(u1)
-        if np.any(broken):
-            i = int(np.argmax(broken))
-            raise NoTurningPointError(
-                f"Expression: U(q) = {u1[i]:.6g} J is not a finite number at q = {q1[i]:.6g} m, "
-                f"reached before U = {src} gets to the energy {t[i]:.6g} J: {tail}"
-            )
-        if np.any(need & (u1 < u0)):
-            i = int(np.argmax(need & (u1 < u0)))
-            raise self._not_monotone(q1[i], t[i])
-        # Equal zeros are an underflow of two values below t, not a plateau.
-        flat = need & (u1 == u0) & (u0 != 0)
-        if np.any(flat):
-            i = int(np.argmax(flat))
-            raise NoTurningPointError(
-                f"Expression: U = {src} levels off at {u0[i]:.6g} J (equal at q = {q0[i]:.6g} m "
-                f"and {q1[i]:.6g} m) below the energy {t[i]:.6g} J: {tail}"
-            )
-
-    def _not_monotone(self, q_end: float, energy: float) -> NonMonotoneError:
-        """The error for U decreasing on (0, q_end], naming the first q with U' <= 0."""
-        grid = q_end * np.concatenate(
-            [np.logspace(-12, 0, _SCAN_LOG_POINTS), np.linspace(0, 1, _SCAN_LIN_POINTS)[1:]]
-        )
-        grid = np.unique(grid)
-        f = self._dU(grid)
-        bad = ~(np.isfinite(f) & (f > 0))
-        i = int(np.argmax(bad)) if np.any(bad) else len(grid) - 1
-        u_top = float(np.nanmax(self._U(grid[: i + 1])))
-        where = (
-            f"U'(q) = {f[i]:.6g} N at q = {grid[i]:.6g} m is not > 0"
-            if bad[i]
-            else f"U decreases before q = {q_end:.6g} m"
-        )
-        return NonMonotoneError(
-            f"Expression: {where}: U = {_short(self.source)} turns down at {u_top:.6g} J before "
-            f"reaching the energy {energy:.6g} J (assumption 3 of section 3); lower the impact "
-            "speed or fix U"
-        )
+    @cached_property
+    def _power_rows(self):
+        # Read once (sp.expand of a long sum is not free): the kernels ask per call.
+        rows = sympy_power_rows(self.expr, _Q)
+        return None if rows is None else tuple(rows)
 
     # -- description ------------------------------------------------------------
     def params(self) -> dict[str, Any]:

@@ -13,6 +13,7 @@ import numpy as np
 
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials._families import register_family
+from reference_impl.potentials._terms import power_row
 from reference_impl.potentials.base import Potential
 
 __all__ = ["PowerLaw"]
@@ -63,6 +64,11 @@ class PowerLaw(Potential):
     def check_monotone(self, q_max: float) -> None:
         # U' = k q^p > 0 for every q > 0 whenever k > 0, which __init__ enforces.
         return None
+
+    def _term_rows(self):
+        # n = leading_exponent (p + 1.0) and p itself: the exact solver reads n, the
+        # Verlet force p, each as this class computes it.
+        return [power_row(self.k, self.leading_exponent, self.p)]
 
     def params(self) -> dict[str, Any]:
         return {"k": self.k, "p": self.p}

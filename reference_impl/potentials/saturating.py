@@ -12,6 +12,7 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials._families import register_family
+from reference_impl.potentials._terms import saturating_row
 from reference_impl.potentials.base import Potential
 
 __all__ = ["SaturatingForce"]
@@ -69,6 +70,9 @@ class SaturatingForce(Potential):
     def _d2U(self, q):
         x = q / self.q_s
         return self.F0 / self.q_s * 2 * x / (1 + x**2) ** 2
+
+    def _term_rows(self):
+        return [saturating_row(self.F0, self.q_s)]
 
     def params(self) -> dict:
         return {"F0": self.F0, "q_s": self.q_s}

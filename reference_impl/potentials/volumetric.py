@@ -19,6 +19,7 @@ from typing import Any
 
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials._families import register_family
+from reference_impl.potentials._terms import cap_row
 from reference_impl.potentials.base import Potential
 
 __all__ = ["Ellipsoid", "Sphere"]
@@ -40,6 +41,11 @@ class _VolumetricCap(Potential):
         self.leading_coefficient = (
             self.Kn / (self.alpha + 1.0) * (math.pi * bc / a) ** (self.alpha + 1.0)
         )
+
+    def _term_rows(self):
+        # Shared by Ellipsoid and Sphere, each of which opts in below (a table counts only
+        # from the class's own body: `reference_impl.potentials._terms`).
+        return [cap_row(self.Kn, self.alpha, self._a, math.pi * self._bc / self._a**2)]
 
     def _c0(self, q):
         return self._ns(q).pi * self._bc / self._a**2
@@ -89,6 +95,7 @@ class Ellipsoid(_VolumetricCap):
     family = "ellipsoid"
     scene_keys = (("a", "b", "c", "Kn"), ("alpha",))
     label = "volumetric ellipsoid cap U = Kn V^(alpha+1) / (alpha+1) (a, b, c in m)"
+    _term_rows = _VolumetricCap._term_rows
 
     def __init__(self, a: float, b: float, c: float, Kn: float, alpha: float = 0.5):
         self.a = positive("a", a, "Ellipsoid")
@@ -120,6 +127,7 @@ class Sphere(_VolumetricCap):
     family = "sphere"
     scene_keys = (("R", "Kn"), ("alpha",))
     label = "volumetric sphere cap U = Kn V^(alpha+1) / (alpha+1) (R in m; not a Hertz sphere)"
+    _term_rows = _VolumetricCap._term_rows
 
     def __init__(self, R: float, Kn: float, alpha: float = 0.5):
         self.R = positive("R", R, "Sphere")
