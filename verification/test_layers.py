@@ -26,6 +26,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         {"_version", "_atomic"},
         {"errors"},
         {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
+        {"_stored"},
         {"potentials"},
         {"theory"},
         {"integrators"},

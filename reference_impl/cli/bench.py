@@ -116,6 +116,13 @@ _EPILOG = (
 )
 
 
+_ADAPTER_HELP = (
+    "registered name ({names}; installed packages add theirs through the hcv.adapters "
+    "entry-point group), package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND "
+    "for two-walls); NAME[key=value,...] passes arguments"
+)
+
+
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object.
 
@@ -132,22 +139,16 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     plain_format_help = b.format_help
 
     def format_help() -> str:
-        from reference_impl.adapters.registry import adapter_help
+        from reference_impl.adapters.registry import adapter_help, registered
 
+        # Filled in at print time: listing the names reads every installed package's
+        # entry points (20 ms), which no other command should pay (issue 20).
+        adapter.help = _ADAPTER_HELP.format(names=", ".join(registered()))
         b.epilog = _EPILOG.format(adapters=adapter_help())
         return plain_format_help()
 
     b.format_help = format_help
-    from reference_impl.adapters.registry import registered
-
-    b.add_argument(
-        "adapter",
-        help=f"registered name ({', '.join(registered())}; installed packages add theirs "
-        "through the hcv.adapters entry-point group), "
-        "package.module:Class or cmd:COMMAND (cmd[sustained=true]:COMMAND for two-walls); "
-        "NAME[key=value,...] "
-        "passes arguments",
-    )
+    adapter = b.add_argument("adapter", help=_ADAPTER_HELP.format(names="see hcv bench --help"))
     b.add_argument(
         "--scenes",
         nargs="+",

@@ -36,8 +36,8 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from scipy.special import roots_jacobi
 
+from reference_impl._stored import stored_floats
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._nodes import node_function
 from reference_impl.exact._oscillator import VirtualOscillator
@@ -455,20 +455,42 @@ def _fill_rows(zeta, sp, s_end, lz, rows):  # pragma: no cover - compiled
     return 3
 
 
+def _jacobi_rules(beta: float, sizes: tuple[int, ...]) -> list[float]:
+    """Nodes u in (0, 1) of the Gauss-Jacobi rules of each size for int_0^1 f(u) u^beta du,
+    then their weights, as one flat list (what `stored_floats` keeps)."""
+    from scipy.special import roots_jacobi  # here: 0.1 s to import; the rules are stored
+
+    us, ws = [], []
+    for size in sizes:
+        y, w = roots_jacobi(size, 0.0, beta)
+        us.append((1.0 + y) / 2.0)
+        ws.append(w / 2.0 ** (beta + 1.0))
+    return [*np.concatenate(us), *np.concatenate(ws)]
+
+
 @lru_cache(maxsize=32)
 def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
     """Nodes u in (0, 1) of the Gauss-Jacobi rules of two sizes (default _GJ_SIZES) for
     int_0^1 f(u) u^beta du, concatenated, and a (nodes, 2) weight matrix whose
-    columns give the two rules (zeros on the other rule's nodes)."""
-    us, cols = [], []
-    for size in sizes:
-        y, w = roots_jacobi(size, 0.0, beta)
-        us.append((1.0 + y) / 2.0)
-        cols.append(w / 2.0 ** (beta + 1.0))
-    u = np.concatenate(us)
-    W = np.zeros((u.size, len(sizes)))
-    W[: sizes[0], 0] = cols[0]
-    W[sizes[0] :, 1] = cols[1]
+    columns give the two rules (zeros on the other rule's nodes).
+
+    Computed by scipy once per machine and read back from the table store
+    (`reference_impl._stored`, bit for bit) in later processes.
+    """
+    n = sum(sizes)
+    flat = np.array(
+        stored_floats(
+            "gauss-jacobi",
+            (float(beta), tuple(int(s) for s in sizes)),
+            _jacobi_rules,
+            2 * n,
+            files=(("scipy", "version.py"),),
+        )
+    )
+    u, w = flat[:n], flat[n:]
+    W = np.zeros((n, len(sizes)))
+    W[: sizes[0], 0] = w[: sizes[0]]
+    W[sizes[0] :, 1] = w[sizes[0] :]
     return u, W
 
 

@@ -34,7 +34,6 @@ from reference_impl.exact._one_call import curvature, fused_impact, gauss_jacobi
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
 from reference_impl.exact._split import needs_split, split_impact
-from reference_impl.exact._truth import solve_impact_mp
 from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
@@ -49,8 +48,18 @@ __all__ = [
     "ZETA_MAX",
     "VirtualOscillator",
     "solve_impact",
-    "solve_impact_mp",
+    "solve_impact_mp",  # noqa: F822 - module __getattr__
 ]
+
+
+def __getattr__(name: str):
+    # The mpmath truth loads on first use: a float solve never imports mpmath (issue 20).
+    if name == "solve_impact_mp":
+        from reference_impl.exact._truth import solve_impact_mp
+
+        return solve_impact_mp
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 # Stated accuracy of the float solver: every reported time's error bound
 # (`ImpactSolution.quadrature_error`) must be at most this fraction of the time.
@@ -279,7 +288,9 @@ def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tup
     return q_max, float(pot._dU(np.array([q_max]))[0])
 
 
-def _conditioning(pot: Potential, m: float, osc: VirtualOscillator, q_max: float, f_max: float) -> float:
+def _conditioning(
+    pot: Potential, m: float, osc: VirtualOscillator, q_max: float, f_max: float
+) -> float:
     """Relative error of the times from the rounding of U, amplified by the problem.
 
     A node value dq/dx = m x / U'(q) at q = U^-1(m x^2 / 2) moves by a relative

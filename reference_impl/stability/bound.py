@@ -168,11 +168,17 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
     r = _ratio(pot, grid)
     i = int(np.argmax(r))
     q_star, r_star = float(grid[i]), float(r[i])
-    if math.isfinite(r_star) and 0 < i:
+    geometry = geometry_class(pot, q_max)
+    # Where the ratio rises to q_max (stiffening or linear on the whole grid: section 6,
+    # U'/sqrt(2U) grows where 2UU'' - U'^2 > 0) its supremum is the endpoint the grid
+    # holds; the refinement could only land inside [grid[-2], q_max], below it. Skipping
+    # it saves importing scipy.optimize (0.1 s) in every new process (issue 20).
+    at_end = i == len(grid) - 1 and geometry in ("stiffening", "linear")
+    if math.isfinite(r_star) and 0 < i and not at_end:
         # Refine the maximum between its grid neighbours (at the last point the
         # bracket is [previous point, q_max], so an interior maximum just below
         # q_max is not mistaken for the endpoint).
-        from scipy.optimize import minimize_scalar  # here: 0.2 s to import, rarely needed
+        from scipy.optimize import minimize_scalar  # here: 0.1 s to import; mixed geometry only
 
         res = minimize_scalar(
             lambda q: -float(_ratio(pot, np.array([q]))[0]),
@@ -188,6 +194,6 @@ def dt_safe(pot: Potential, m: float, v0: float) -> SafeStep:
         dt_safe=dt,
         q_star=q_star,
         dt_shortcut=dt_safe_shortcut(pot, m, v0, q_max),
-        geometry=geometry_class(pot, q_max),
+        geometry=geometry,
         interior=interior,
     )

@@ -15,7 +15,12 @@ import mpmath
 from scipy.special import beta as _beta
 
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.action import _GUARD_DPS, _check_dps, _check_positive, _check_powerlaw
+from reference_impl.theory._action_common import (
+    _GUARD_DPS,
+    _check_dps,
+    _check_positive,
+    _check_powerlaw,
+)
 
 __all__ = [
     "powerlaw_action_closed",
