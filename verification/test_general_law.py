@@ -185,7 +185,9 @@ def test_universal_through_power_and_polynomial_forms(p, k, m, v0, zeta):
             assert_close(
                 getattr(sol, key),
                 getattr(ex, key),
-                rtol=UNIVERSAL_RTOL,
+                # max_force = k q_max^p carries p times q_max's relative error (found by
+                # a generated case: p = 2, 1.69e-13 from a q_max within 8.5e-14)
+                rtol=UNIVERSAL_RTOL * (p if key == "max_force" else 1.0),
                 # a restitution is -w/v0 and w is integrated to round-off of v0, not of
                 # itself: e = 1.6e-3 (zeta = 0.9) carries ~2e-16 absolute, 1.5e-13 relative
                 atol=UNIVERSAL_RTOL if key.startswith("restitution") else 0.0,
