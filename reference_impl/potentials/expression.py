@@ -385,10 +385,10 @@ class Expression(Potential):
             out = np.asarray(self._np_funcs[i](q), dtype=float)
         # A formula constant in q (U'' of a quadratic) comes back as a scalar.
         out = np.array(np.broadcast_to(out, q.shape), dtype=float)
-        near = q < self._branches[i]
+        near = np.asarray(q < self._branches[i])  # an array also for 0-d q
         if np.any(near) and self._series is not None:
             out[near] = self._series[i].eval_float(q[near])
-            near[:] = False
+            near[...] = False
         slow = near | (q >= self._ceilings[i])
         if np.any(slow):
             with mpmath.workdps(20):
