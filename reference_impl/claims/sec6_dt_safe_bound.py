@@ -59,7 +59,7 @@ def the_map(quick: bool = False):
 
 
 def use_map(quick: bool, df) -> None:
-    """Adopt a map measured elsewhere (the report runs it in a second process)."""
+    """Adopt a map measured elsewhere (the report runs it in background processes)."""
     _MAPS[quick] = df
     measure.cache_clear()
 

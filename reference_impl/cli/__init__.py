@@ -436,7 +436,7 @@ def _parser() -> argparse.ArgumentParser:
         default=0,
         metavar="N",
         help="run the critical-step map on a local Dask cluster of N processes "
-        "(sweep extra); 0 (default) runs it in one second process",
+        "(sweep extra); 0 (default) runs it in two background processes",
     )
     rp.set_defaults(func=_cmd_report)
     ls = sub.add_parser(

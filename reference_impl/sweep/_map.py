@@ -16,13 +16,13 @@ import pandas as pd
 from reference_impl.stability.search import KINDS, SearchGrid, default_criterion
 from reference_impl.sweep._runner import run_cases
 
-__all__ = ["dt_crit_map_on_cluster"]
+__all__ = ["dt_crit_map_on_cluster", "map_case", "map_frame", "map_items"]
 
 # The map module's default search settings (a frozen dataclass, safe to share).
 _DEFAULT_GRID = SearchGrid()
 
 
-def _map_case(item) -> list[dict]:
+def map_case(item) -> list[dict]:
     """One (case, kind) search of the map: its rows, as `dt_crit_map` builds them."""
     from reference_impl.studies.dtcrit_map import map_case_rows
 
@@ -58,14 +58,32 @@ def dt_crit_map_on_cluster(
     pandas.DataFrame
         The rows of `dt_crit_map`, in its order.
     """
+    items = map_items(cases, kinds, quick=quick, criteria=criteria, grid=grid)
+    parts = run_cases(items, map_case, workers=workers, scheduler=scheduler, progress=progress)
+    return map_frame(parts)
+
+
+def map_items(
+    cases: Sequence | None = None,
+    kinds: Sequence[str] = KINDS,
+    *,
+    quick: bool = False,
+    criteria: dict | None = None,
+    grid: SearchGrid = _DEFAULT_GRID,
+) -> list[tuple]:
+    """The map's searches, one item per (case, scene kind), in the map's order: each is
+    what `map_case` runs (arguments as `dt_crit_map_on_cluster`)."""
     from reference_impl.studies.dtcrit_map import coverage
 
     cases = coverage(quick) if cases is None else list(cases)
     criteria = criteria or {}
-    items = [
+    return [
         (case, kind, criteria.get(kind, default_criterion(kind)), grid)
         for case in cases
         for kind in kinds
     ]
-    parts = run_cases(items, _map_case, workers=workers, scheduler=scheduler, progress=progress)
+
+
+def map_frame(parts: Sequence[list[dict]]) -> pd.DataFrame:
+    """The map's table from the rows of its searches, given in `map_items` order."""
     return pd.DataFrame([row for part in parts for row in part])
