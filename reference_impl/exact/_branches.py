@@ -86,11 +86,6 @@ _TINY_BRANCH = 1e-250
 # between the two ends' power-law coefficients) added to the error bound.
 _NEGLIGIBLE_SHARE = 1e-17
 _SHARE_SAFETY = 4.0
-# Virtual displacement (relative to v0) below which the overdamped tail
-# uses the leading law of dq/dx: x^2 stays ~1e-200 above float64's underflow.
-_X_ASYMPTOTE = 1e-100
-# scipy.quad tolerance for the overdamped tail (zeta >= 1, n < 2), reported as its error.
-_TAIL_RTOL = 1e-13
 
 
 class _RoundUlps(dict):
@@ -294,7 +289,7 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
         return Branches(rise, e_rise, rise, e_rise, rise, e_rise)
     if z >= 1.0:
         mid, e_mid = _smooth(g_of, osc.x, sp, sp, r_0)
-        fall, e_fall = _overdamped_tail(g_of, osc, beta)
+        fall, e_fall = _overdamped_tail(g_of, osc, beta, pot, m)
         return Branches(rise, e_rise, mid, e_mid, mid + fall, e_mid + e_fall)
     lz = osc.zero_force_stretch
     share = (lz / sp) ** (1.0 + beta)
@@ -396,34 +391,15 @@ def _smooth(g_of, x_of_s, start: float, length: float, r) -> tuple[float, float]
     return float(np.sum(v)), float(np.sum(e))
 
 
-def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float) -> tuple[float, float]:
-    """Physical time from the zero-force instant to q = 0 when zeta >= 1.
+def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float, pot, m) -> tuple[float, float]:
+    """Physical time from the zero-force instant to q = 0 when zeta >= 1 (`_tail`).
 
     x -> 0 only as s -> inf, exponentially, and dq/dx ~ x^beta: the time is finite
     only for beta > 0 (softening contacts, n < 2), infinite otherwise.
     """
-    if beta <= 0:
-        return math.inf, 0.0
-    # Far out, x^2 m / 2 leaves float range before the tail has decayed (x^beta with
-    # small beta decays slowly): below x_a, dq/dx follows its leading law
-    # g(x_a) (x / x_a)^beta. The law's relative error there, ~ (q_a / q_scale)^(n2 - n)
-    # for a next exponent n2, weighs only on that part of the tail, a fraction
-    # ~ (x_a / v0)^beta of it: far below round-off together.
-    x_a = _X_ASYMPTOTE * osc.v0
-    g_a = float(g_of(np.array([x_a]))[0])
+    from reference_impl.exact._tail import overdamped_tail  # the overdamped case only
 
-    def integrand(s):
-        x = float(osc.x(s))
-        if x >= x_a:
-            return float(g_of(np.array([x]))[0])
-        return g_a * (x / x_a) ** beta if x > 0 else 0.0
-
-    from scipy import integrate  # here: the overdamped tail only; 0.2 s to import
-
-    val, err = integrate.quad(
-        integrand, osc.s_zero_force, np.inf, epsabs=0.0, epsrel=_TAIL_RTOL, limit=400
-    )
-    return val, max(err, _TAIL_RTOL * abs(val))
+    return overdamped_tail(g_of, osc, beta, pot, m, _NODE_ULPS)
 
 
 def _branch_rows(osc: VirtualOscillator):
