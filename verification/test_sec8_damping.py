@@ -26,7 +26,7 @@ import math
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from reference_impl import HarmonicMap, PowerLaw, UniversalDamping, restitution_from_zeta
@@ -294,10 +294,25 @@ _STUCK_SPEED = 1e-3
 _PERTURBED_HORIZON = 50.0
 
 
+# A creeping run still above the stuck speed at the horizon is run again with the horizon
+# times _HORIZON_GROWTH, at most _HORIZON_RETRIES times: its speed decays algebraically
+# (q' ~ -U'/C; found: PowerLaw(100, 4), zeta 0.75, eps 1 creeps at 1.35e-3 v0 at 50 q_max/v0
+# whatever m and v0), so a longer look decides it; a run that still creeps then fails.
+_HORIZON_GROWTH = 4.0
+_HORIZON_RETRIES = 2
+
+
 def _perturbed_run(pot, m: float, v0: float, C):
-    """integrate_impact with the shorter horizon for non-universal laws."""
+    """integrate_impact with the shorter horizon for non-universal laws (longer when the
+    body still creeps faster than the stuck speed at its end)."""
     q_max = pot.turning_point(0.5 * m * v0 * v0)
-    return integrate_impact(pot, m, v0, C=C, rtol=_ODE_RTOL, t_max=_PERTURBED_HORIZON * q_max / v0)
+    horizon = _PERTURBED_HORIZON
+    for _ in range(_HORIZON_RETRIES + 1):
+        res = integrate_impact(pot, m, v0, C=C, rtol=_ODE_RTOL, t_max=horizon * q_max / v0)
+        if res.returned or abs(float(res.v[-1])) < _STUCK_SPEED * v0:
+            break
+        horizon *= _HORIZON_GROWTH
+    return res
 
 
 def _restitution_or_stuck(res) -> float:
@@ -377,6 +392,10 @@ def test_random_linear_perturbation_makes_restitution_speed_dependent(case, zeta
     )
     e_hi = _restitution_or_stuck(_perturbed_run(pot, m, v0, C))
     e_lo = _restitution_or_stuck(_perturbed_run(pot, m, 0.1 * v0, C))
+    # Stuck at both speeds (found: PowerLaw(100, 3), zeta 0.875, eps 1): both restitutions
+    # are below 1e-3, where the stuck proxy e = 0 cannot tell them apart; undecided within
+    # the horizon, not a counterexample. Discarded (too many discards fail the test).
+    assume(e_hi > 0.0 or e_lo > 0.0)
     bound = _measurable_e(max(e_hi, e_lo))
     assert_true(
         abs(e_hi - e_lo) > bound,
