@@ -3,9 +3,9 @@
 Every command runs as the user runs it: a new Python process (``python -m
 reference_impl.cli ...``), timed from outside from its start to its exit (wall seconds;
 user + system seconds of the child beside them). "Cold" is the first run with an empty
-compile cache (a fresh ``HCV_CACHE_DIR``, ``NUMBA_CACHE_DIR`` unset so that numba's cache
-goes there too): the one-time compile cost after a fresh install. "Warm" is the median of
-``--repeats`` further runs on that cache.
+compile cache (a fresh ``HCV_CACHE_DIR`` for each command, ``NUMBA_CACHE_DIR`` unset so
+that numba's cache goes there too): the one-time compile cost after a fresh install. "Warm"
+is the median of ``--repeats`` further runs on that cache.
 
 Goals (issue 20): ``hcv --help``, ``hcv --version``, ``hcv scenes`` <= 0.3 s;
 ``import reference_impl`` <= 0.5 s; ``hcv solve hertz-damped`` <= 1 s warm;
@@ -135,13 +135,15 @@ def run(repeats: int = 3, report: bool = False) -> dict:
         (scenes / "expression.toml").write_text(_EXPRESSION_SCENE)
         (scenes / "power.toml").write_text(_POWER_SCENE)
         (scenes / "compiled.toml").write_text(_EXPRESSION_COMPILED_SCENE)
-        cache = tmp / "cache"
-        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-        env.update(HCV_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
+        base_env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+        base_env.update(PYTHONPATH=str(ROOT))
         load_before = os.getloadavg()[0]
         rows = []
-        for case in _cases(scenes, tmp / "report" if report else None):
-            cold = _run(case["argv"], env)  # the first run fills the (empty) cache
+        for i, case in enumerate(_cases(scenes, tmp / "report" if report else None)):
+            # Each command has its own cache, empty for its first run: a cold figure is
+            # never helped by what an earlier command compiled.
+            env = {**base_env, "HCV_CACHE_DIR": str(tmp / f"cache-{i}")}
+            cold = _run(case["argv"], env)  # the first run fills its (empty) cache
             warm = [_run(case["argv"], env) for _ in range(repeats)]
             wall = statistics.median(w["wall_s"] for w in warm)
             cpu = statistics.median(w["cpu_s"] for w in warm)
