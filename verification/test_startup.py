@@ -243,3 +243,32 @@ def test_a_float_solve_loads_no_truth_or_optimiser_library(tmp_path):
         claim="tool",
         call="hcv solve hertz-damped (warm cache)",
     )
+
+
+def test_quick_report_help_states_the_benchmarked_time():
+    """`hcv report --quick`'s help states the time of reports/bench/startup.json (rounded
+    to the second), not a typed guess: re-run the benchmark, then update the help."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    bench = json.loads((root / "reports" / "bench" / "startup.json").read_text())
+    (row,) = [c for c in bench["cases"] if c["name"] == "hcv report --quick"]
+    r = subprocess.run(
+        [sys.executable, "-m", "reference_impl.cli", "report", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    text = " ".join(r.stdout.split())
+    want = (
+        f"{row['warm_wall_s']:.0f} s wall and {row['warm_cpu_s']:.0f} s CPU once compiled, "
+        f"{row['cold_wall_s']:.0f} s wall the first time"
+    )
+    assert_true(
+        want in text and re.search(r"--quick", text) is not None,
+        got=text[text.find("--quick") :][:200],
+        should=f"the benchmark's figures: {want!r}",
+        claim="tool",
+        call="hcv report --help",
+    )

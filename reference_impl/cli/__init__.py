@@ -412,10 +412,10 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument(
         "--quick",
         action="store_true",
-        # Measured (issue 20) with `time hcv report --quick`, compile cache warm; the CPU time
-        # (user + system, the second process's included) is what a quiet machine shows.
-        help="smaller study (measured on 2 shared cores, 2026-11-23: 58 s CPU; 166 s wall at "
-        "load 5-6, 400 s at load 10-15)",
+        # Measured (issue 20) by benchmarks/bench_startup.py --report, each in a new process
+        # on a quiet 2-core machine (reports/bench/startup.json): wall, CPU of every process.
+        help="smaller study (measured on 2 quiet cores, 2026-11-24: 35 s wall and 52 s CPU "
+        "once compiled, 50 s wall the first time after installing)",
     )
     rp.add_argument(
         "--force",
