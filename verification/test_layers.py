@@ -227,3 +227,22 @@ def test_planted_cycle_is_caught(tmp_path):
     _write(root, "b.py", "def f():\n    from .a import x\n")
     problems = violations(root, "pkg", (frozenset({"a", "b"}),))
     assert any(p.startswith("module cycle") for p in problems), f"got {problems}"
+
+
+def test_no_module_lists_a_public_name_twice():
+    """``__all__`` names each public name once (read with the AST, nothing imported)."""
+    twice = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.Assign | ast.AugAssign)
+                and isinstance(getattr(node, "target", None) or node.targets[0], ast.Name)
+                and (getattr(node, "target", None) or node.targets[0]).id == "__all__"
+                and isinstance(node.value, ast.List | ast.Tuple)
+            ):
+                names = [e.value for e in node.value.elts if isinstance(e, ast.Constant)]
+                dup = sorted({n for n in names if names.count(n) > 1})
+                if dup:
+                    twice[str(path.relative_to(ROOT))] = dup
+    assert not twice, f"got {twice}, should be every name once [tool, __all__]"

@@ -23,8 +23,6 @@ __all__ = [
     "LawDamping",
     "implemented_law_from_table",
     "Trajectory",
-    "LawDamping",
-    "implemented_law_from_table",
     "get_adapter",
     "register",
     "registered",
