@@ -45,8 +45,8 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.potentials.base import Potential, SumPotential
-from reference_impl.potentials.power import PowerLaw
+from reference_impl.potentials._terms import TERM_POWER, term_rows
+from reference_impl.potentials.base import Potential
 
 __all__ = ["overdamped_tail"]
 
@@ -218,18 +218,12 @@ def _beta_split(n: float) -> tuple[float, float]:
 
 
 def _power_terms(pot: Potential):
-    """[(k, p), ...] of a power law or a (nested) sum of power laws, else None."""
-    if type(pot) is PowerLaw:
-        return [(pot.k, pot.p)]
-    if type(pot) is SumPotential:
-        out = []
-        for t in pot.terms:
-            sub = _power_terms(t)
-            if sub is None:
-                return None
-            out += sub
-        return out
-    return None
+    """[(k, p), ...] (U' = sum k q^p) when the potential's term table holds only power
+    terms (a power law, a sum of them, a user expression that is one), else None."""
+    rows = term_rows(pot)
+    if rows is None or any(r[0] != TERM_POWER for r in rows):
+        return None
+    return [(r[1], r[3]) for r in rows]
 
 
 def _power_sum_correction(pot: Potential, m: float):
