@@ -22,7 +22,7 @@ from reference_impl.exact._branches import compiled_nodes, dq_dx
 from reference_impl.exact._nodes import _compiled_expression, expression_sympy
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification import strategies as hs
-from verification.assertions import assert_close, assert_less
+from verification.assertions import assert_close, assert_less, assert_true
 
 # Digits of the truth: far beyond the float results' ~1e-14 and fast enough.
 TRUTH_DPS = 20
@@ -246,3 +246,28 @@ def test_compiled_gauss_jacobi_path_taken_and_bounded(zeta):
         br = gauss_jacobi_impact(pot, m, osc, q_top)
         assert br is not None, f"Gauss-Jacobi path refused for {name}, zeta = {zeta}"
         _check(pot, m, v0, zeta)
+
+
+@pytest.mark.parametrize(
+    "pot",
+    [PowerLaw(1.0, 0.25) + PowerLaw(1.0, 0.75), Expression("q**1.25/1.25 + q**1.75/1.75")],
+    ids=["sum", "expression"],
+)
+def test_compiled_nodes_far_below_the_float_comfort_zone(pot):
+    """Found by the overdamped tail: at x <= 1e-110 the node loop's Taylor step met an
+    overflowed U''' and returned dq/dx = -0.0; each node is now m x / U'(q) at its root."""
+    from reference_impl.exact._nodes import node_function
+
+    x = np.geomspace(1e-150, 1e-90, 13)
+    g, q = node_function(pot)(x, 1.0, 1.0)
+    want = x / pot._dU(q)  # m = 1 kg
+    # U' from its own formula at the returned root: a few ulps of each (the node's bound
+    # charges 16 ulps, _NODE_ULPS in exact/_branches.py).
+    rel = np.abs(g - want) / want
+    assert_true(
+        bool(np.all(g > 0) and np.all(rel < 16 * np.finfo(float).eps)),
+        got=f"dq/dx {g[:3]}..., worst relative difference {rel.max():.2g}",
+        should="positive, m x / U'(q) to 16 ulps",
+        claim="impl",
+        call=f"node_function({pot!r}) at x = 1e-150..1e-90",
+    )

@@ -175,9 +175,16 @@ def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - 
             if abs(h) < 0.5:
                 step = step / (1.0 - h)
             if abs(step) <= _TAYLOR_RTOL * q:
-                du = du - step * (d2u - 0.5 * step * d3u)
-                d2u = d2u - step * d3u
+                du_t = du - step * (d2u - 0.5 * step * d3u)
                 q = q - step
+                if du_t > 0.0 and du_t < np.inf:
+                    du = du_t
+                    d2u = d2u - step * d3u
+                else:
+                    # The third derivative overflowed (q^(n-4) leaves float range near
+                    # q ~ 1e-100), and the series with it: U' evaluated at the root. It
+                    # gave dq/dx = -0.0 for U' = q^0.25 + q^0.75 at x <= 1e-110.
+                    _, du, d2u, _ = _EV(q, P)
                 break
             qn = q - step
             if not (qn > lo and qn < hi):
