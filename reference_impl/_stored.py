@@ -74,9 +74,19 @@ def _key(kind: str, args: tuple, compute: Callable, files: Sequence[tuple[str, s
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
 
+# Longest text an entry of n values can be: '"-0x1.fffffffffffffp+1023", ' is 28 characters.
+_BYTES_PER_VALUE = 28
+
+
 def _read(path: Path, count: int) -> list[float] | None:
     try:
-        values = [float.fromhex(v) for v in json.loads(path.read_text(encoding="utf-8"))]
+        with path.open("rb") as fh:
+            # Read no more than such an entry can hold: a large file planted in the cache
+            # is not ours and must not cost its size in memory.
+            raw = fh.read(_BYTES_PER_VALUE * count + 2 + 1)
+        if len(raw) > _BYTES_PER_VALUE * count + 2:
+            return None
+        values = [float.fromhex(v) for v in json.loads(raw.decode("utf-8"))]
     except (OSError, ValueError, TypeError):
         return None  # absent, half-copied by hand, or not ours: computed afresh
     if len(values) != count or not all(math.isfinite(v) for v in values):

@@ -65,6 +65,21 @@ def test_a_damaged_or_foreign_entry_is_computed_afresh(store, content):
     )
 
 
+def test_a_planted_large_entry_is_not_read_whole(store):
+    _stored.stored_floats("t", (0.1, 9), _table, 9)
+    (entry,) = store.iterdir()
+    with entry.open("w") as fh:  # 50 MB of valid-looking JSON where 9 values belong
+        fh.write("[" + ", ".join(['"0x1p+0"'] * 5_000_000) + "]")
+    got = _stored.stored_floats("t", (0.1, 9), _table, 9)
+    assert_true(
+        got == _table(0.1, 9) and len(CALLS) == 3,
+        got=f"{got[:2]}..., {len(CALLS) - 1} computations",
+        should="the table computed afresh (the entry is too long to be ours)",
+        claim="tool",
+        call="stored_floats over a 50 MB entry",
+    )
+
+
 def test_an_unwritable_store_still_returns_the_table(store):
     store.parent.mkdir(exist_ok=True)
     store.write_text("a file where the directory should be")

@@ -112,9 +112,14 @@ def _finish_map(background):
 
     pool, futures = background
     try:
-        return map_frame([f.result() for f in futures])
-    finally:
-        pool.shutdown()
+        frame = map_frame([f.result() for f in futures])
+    except BaseException:
+        # Ctrl-C, SIGTERM or a broken worker: the searches not yet started are dropped and
+        # no running one is waited for (shutdown() would wait up to a search's length).
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return frame
 
 
 def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
