@@ -196,3 +196,15 @@ def test_taylor_refuses_non_analytic_laws(pot, c_exponent):
 def test_action_rejects_bad_input(call):
     with pytest.raises(HCVInputError):
         call()
+
+
+def test_the_mpmath_route_is_served_under_its_own_names():
+    """`action` lists and serves exactly the names `action_mp` exports (one list each side)."""
+    from reference_impl.theory import action_mp
+
+    assert set(act._MP_NAMES) == set(action_mp.__all__), (
+        f"got {sorted(act._MP_NAMES)}, should be {sorted(action_mp.__all__)} "
+        "[tool, theory.action.__getattr__]"
+    )
+    for name in action_mp.__all__:
+        assert getattr(act, name) is getattr(action_mp, name), f"{name} [tool, action]"

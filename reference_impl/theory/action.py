@@ -58,18 +58,17 @@ from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
 from reference_impl.theory._action_common import _SPLIT, _check_all
 
-__all__ = [
-    "action",
-    "period",
-    "contact_duration",
-    "dJ_dE",
-    "turning_point_mp",  # noqa: F822 - module __getattr__
-    "action_mp",  # noqa: F822 - module __getattr__
-    "period_mp",  # noqa: F822 - module __getattr__
-    "contact_duration_mp",  # noqa: F822 - module __getattr__
-    "dJ_dE_mp",  # noqa: F822 - module __getattr__
-    "dJ_dE_identity_mp",  # noqa: F822 - module __getattr__
-]
+# The mpmath route's names (`reference_impl.theory.action_mp`), served by the module
+# __getattr__ below so that the float route never imports mpmath.
+_MP_NAMES = (
+    "turning_point_mp",
+    "action_mp",
+    "period_mp",
+    "contact_duration_mp",
+    "dJ_dE_mp",
+    "dJ_dE_identity_mp",
+)
+__all__ = ["action", "period", "contact_duration", "dJ_dE", *_MP_NAMES]
 
 # --- float64 quadrature -------------------------------------------------------
 # Upper limit of w for the upper piece: q_max (1 - w^2) = _SPLIT q_max.
@@ -238,18 +237,6 @@ def dJ_dE(pot: Potential, m: float, E: float) -> float:
     """
     m, E, q_max = _float_setup(pot, m, E)
     return math.sqrt(2.0 * m) / (2.0 * math.pi) * _integrals(pot, E, q_max)[0]
-
-
-_MP_NAMES = frozenset(
-    {
-        "turning_point_mp",
-        "action_mp",
-        "period_mp",
-        "contact_duration_mp",
-        "dJ_dE_mp",
-        "dJ_dE_identity_mp",
-    }
-)
 
 
 def __getattr__(name: str):
