@@ -199,7 +199,10 @@ def test_an_adapter_that_daemonises_leaves_nothing_running(tmp_path, how):
         "[dt_crit]\nresolution = 0.25\n[run]\nspeed_error_steps = [50, 100, 200]\n"
     )
     marker = "96.4417" if how == "completes" else "96.4418"
-    adapter = f"cmd:{sys.executable} {SCRIPT} --daemon {marker}"
+    # For SIGTERM the adapter also hangs after daemonising, so that the signal finds hcv
+    # still running: a one-scene run that completes can end first (seen in CI, exit 0).
+    hang = " --mode hang" if how == "sigterm" else ""
+    adapter = f"cmd:{sys.executable} {SCRIPT}{hang} --daemon {marker}"
     proc = _start_hcv(
         ["bench", adapter, "--scenes", "s.toml", "--tolerances", "tol.toml"], tmp_path
     )
