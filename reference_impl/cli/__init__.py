@@ -37,7 +37,7 @@ COMMANDS: tuple[tuple[str, str, str], ...] = (
     ("bench", "reference_impl.cli.bench",
      "benchmark a contact code against the exact solution (CI gate)"),
     ("sweep", "reference_impl.cli.sweep",
-     "run a parameter sweep (dt-crit, solve or bench) on a Dask cluster"),
+     "run a parameter sweep (dt-crit, solve, bench or calibrate) on a Dask cluster"),
     ("calibrate", "reference_impl.cli.calibrate",
      "find the value of a code's option that delivers a target restitution"),
 )  # fmt: skip
