@@ -223,23 +223,24 @@ def test_claims_without_measurements_compare_nothing(outcomes):
      ([1.0], "UNUSABLE", "[1.0]"), (True, "UNUSABLE", "True")],
 )
 def test_a_bad_value_in_results_is_one_line(outcomes, results, value, verdict, named):
-    """0 where a relative number is compared, or a non-number: one row naming the entry, no
-    traceback; a non-number makes the file unusable (exit 2, the last line names it)."""
+    """0 where a relative number is compared (a ZeroDivisionError before), or a non-number:
+    one row naming the entry, no traceback; a non-number makes the file unusable (exit 2,
+    the last line names it)."""
     import copy
 
     bad = copy.deepcopy(results)
-    thm1 = next(c for c in bad["claims"] if c["id"] == "thm1-period")
-    thm1["measured"]["Hertz"]["T_over_2pi_dJdE"] = value
-    rows = run_all.check(bad, {"thm1-period": outcomes["thm1-period"]})
-    row = next(r for r in rows if r["name"] == "T/(2 pi dJ/dE), Hertz")
+    number = next(n for n in outcomes["table1"][0] if n["mode"] == "rel")
+    run_all.resolve(bad, number["ours"][:-1])[number["ours"][-1]] = value
+    rows = run_all.check(bad, {"table1": outcomes["table1"]})
+    row = next(r for r in rows if r["name"] == number["name"])
     status, line = run_all.outcome(rows)
     assert_true(row["verdict"] == verdict and named in (row["diff"] + str(row["ours"])),
                 got=f"{row['verdict']}: {row['diff']}", should=f"{verdict} naming {named}",
                 claim="meta", call="run_all.check")
     if verdict == "UNUSABLE":
-        assert_true(status == 2 and "claims[id=thm1-period].measured.Hertz.T_over_2pi_dJdE" in line,
-                    got=f"exit {status}: {line}", should="exit 2 naming the entry", claim="meta",
-                    call="run_all.outcome")
+        where = run_all.path_text(number["ours"])
+        assert_true(status == 2 and where in line, got=f"exit {status}: {line}",
+                    should=f"exit 2 naming {where}", claim="meta", call="run_all.outcome")
 
 
 def test_side_mode_and_max_path_can_fail():
