@@ -101,7 +101,7 @@ def test_committed_erratum_is_generated_from_committed_results(results):
     committed = ROOT / "reports" / "erratum.md"
     # As `python -m reference_impl.report._erratum reports/results.json -o reports/erratum.md`
     # writes it: the scripts beside it are linked.
-    expected = _erratum.markdown({"repro_scripts": scripts_href(committed.parent), **results})
+    expected = _erratum.markdown({**results, "repro_scripts": scripts_href(committed.parent)})
     assert_true(committed.is_file() and committed.read_text() == expected,
                 got="reports/erratum.md differs from the generator's output",
                 should="python -m reference_impl.report._erratum reports/results.json "

@@ -354,7 +354,6 @@ def _build(
         "Stability Bounds in Nonlinear Contact Dynamics (Y. T. Feng)",
         "generated_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "mode": "quick" if quick else "full",
-        "repro_scripts": repro,
         "quick_drops": quick_drops() if quick else [],
         "claims": claims,
         "table1": measured[table1.ID].figures["rows"],
@@ -393,7 +392,10 @@ def _build(
     (out / "results.json").write_text(
         json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
     )
-    (out / "index.md").write_text(_render.markdown(results))
-    (out / "erratum.md").write_text(_erratum.markdown(results))
-    (out / "index.html").write_text(_render.html_page(results, fig_dir))
+    # Where the referee's scripts lie depends on the final directory, not on the results:
+    # the pages get it, results.json does not (copied elsewhere, it would link wrongly).
+    pages = {**results, "repro_scripts": repro}
+    (out / "index.md").write_text(_render.markdown(pages))
+    (out / "erratum.md").write_text(_erratum.markdown(pages))
+    (out / "index.html").write_text(_render.html_page(pages, fig_dir))
     return results

@@ -68,8 +68,9 @@ def script_path(claim_id: str) -> str:
 
 
 def _commands(c: dict, repro: str | None = None) -> str:
-    """How to reproduce a claim; the script is linked only where ``repro`` says it lies (the
-    report's ``repro_scripts``: a report written elsewhere links to no missing file)."""
+    """How to reproduce a claim; the script is linked only where ``repro`` says it lies
+    (``repro_scripts`` of the dict being rendered, set by the writer from the directory the
+    pages go to: a report written elsewhere links to no missing file)."""
     files = sorted({t.split("::")[0] for t in c.get("tests", [])})
     name = Path(script_path(c["id"])).name
     link = f", [{name}]({repro}/{name})" if repro else ""
@@ -209,7 +210,7 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--out", help="output file (default: stdout)")
     a = ap.parse_args(argv)
     results = json.loads(Path(a.results).read_text())
-    if a.out and "repro_scripts" not in results:  # a results.json of before the key
+    if a.out:  # the scripts are linked only when they lie beside the file written
         from reference_impl.report._files import scripts_href
 
         results["repro_scripts"] = scripts_href(Path(a.out).absolute().parent)
