@@ -79,6 +79,8 @@ def cmd_calibrate(args) -> int:
     print(res.message)
     if not res.found:
         return EXIT_UNREACHABLE
+    for note in res.notes:  # runs without rebound (counted as 0), declined or failed values
+        print(f"  note: {note}")
     m = res.metrics
     print(f"  adapter {res.adapter}, scene {res.scene}, dt = {res.dt:.6g} s")
     if "declared_law" in m:
