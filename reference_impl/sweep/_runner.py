@@ -42,6 +42,11 @@ _WINDOW_PER_THREAD = 4
 # an isolated bench adapter); one queued case per worker thread, so a worker
 # that dies takes down only the case it was running, not an innocent neighbour.
 _LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
+# Where the local scheduler's HTTP server listens. Distributed starts one even without a
+# dashboard, on port 8787 unless told otherwise, and warns "Port 8787 is already in use"
+# (three lines) when another cluster or service holds it (issue 26). A port the system
+# picks (0) on the loopback interface: nothing to warn about, nothing exposed.
+_LOCAL_HTTP_ADDRESS = "127.0.0.1:0"
 # Seconds to wait for an existing scheduler to answer (connection and handshake: a
 # scheduler answers its identity in milliseconds; a slow network gets 1000 times that).
 _CONNECT_TIMEOUT = 10
@@ -259,6 +264,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
+                    scheduler_kwargs={"dashboard_address": _LOCAL_HTTP_ADDRESS},
                     silence_logs=logging.CRITICAL,
                 )
             client = Client(cluster)
