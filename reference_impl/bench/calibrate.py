@@ -444,6 +444,9 @@ def calibrate(
             x = exc.args[0]
             jumps.append(f"none in [{xa:g}, {xb:g}]: the run at {x:.6g} {seen[x][1]}")
             continue
+        except RuntimeError:  # brentq did not converge within _MAXITER steps
+            jumps.append(f"none in [{xa:g}, {xb:g}]: no convergence in {_MAXITER} steps")
+            continue
         if not any(abs(root - r) <= _XRTOL * max(abs(root), abs(r)) for r in roots):
             roots.append(root)
     notes = _notes(param, seen, why, n, jumps)
