@@ -14,6 +14,7 @@ _ENDS = ("overlap", "zero-force")
 
 __all__ = ["add_calibrate_parser", "cmd_calibrate", "main"]
 
+
 def _target(text: str) -> tuple[str, float]:
     name, sep, val = str(text).partition("=")
     if not sep:
@@ -89,10 +90,12 @@ def cmd_calibrate(args) -> int:
     for k in ("restitution", "restitution_zero_force", "contact_time", "max_penetration"):
         rows.append(
             (
-                {"restitution": "restitution (q = 0 end)",
-                 "restitution_zero_force": "restitution (zero-force end)",
-                 "contact_time": "contact time, s",
-                 "max_penetration": "max penetration, m"}[k],  # fmt: skip
+                {
+                    "restitution": "restitution (q = 0 end)",
+                    "restitution_zero_force": "restitution (zero-force end)",
+                    "contact_time": "contact time, s",
+                    "max_penetration": "max penetration, m",
+                }[k],  # fmt: skip
                 _fmt(m["measured"].get(k)),
                 _fmt(m.get("declared_law", {}).get(k)),
                 _fmt(m.get("error_vs_declared_law", {}).get(k)),
