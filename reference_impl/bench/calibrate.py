@@ -20,9 +20,12 @@ chosen end equals the target:
 It prints the value, the achieved restitution, and at that value the code's
 contact time, maximum penetration and both restitutions with their errors against
 the exact solution of the law the code declares (its integration error) and
-against the scene as asked (what the user gets). A target outside what the option
-delivers over its range is said so, with the range of values it delivers there
-(exit status 1). Bad input: one line, exit status 2.
+against the scene as asked (what the user gets). A run in which the body does not
+come back out within its budget (4 contact times) counts as restitution 0, and
+scan points the adapter declines are skipped (see `calibrate`); both are noted. A
+target outside what the option delivers over its range is said so, with the span
+of every restitution measured (exit status 1). Bad input (`check_settings`, shared
+with ``hcv sweep``): one line, exit status 2.
 
 Evaluations run in-process (``--isolate``: each in a worker process, as ``hcv
 bench`` runs isolated adapters, with the per-run timeout). ``calibrate`` is also a task of ``hcv sweep``
