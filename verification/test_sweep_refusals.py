@@ -159,3 +159,38 @@ def test_a_bad_adapter_option_refuses_the_spec(tmp_path, monkeypatch, capsys, te
 def test_sweeping_the_calibrated_option_refuses_the_spec(tmp_path, monkeypatch, capsys):
     text = _CALIBRATE.format(calibrate=_GOOD_CAL, sweep='"adapter.gain" = [0.1, 0.2]')
     _refused(tmp_path, monkeypatch, capsys, text, "adapter.gain is the option being calibrated")
+
+
+def test_a_refused_spec_never_imports_dask(tmp_path):
+    """In a fresh process: the refusal comes before Dask is imported at all."""
+    import os
+    import subprocess
+    import sys
+
+    from verification._hcv_run import ROOT
+
+    spec = tmp_path / "bad.toml"
+    spec.write_text(
+        _CALIBRATE.format(calibrate=_GOOD_CAL, sweep='"run.steps_per_contact" = [10, 0]'),
+        encoding="utf-8",
+    )
+    code = (
+        "import sys; from reference_impl.cli import main; "
+        f"rc = main(['sweep', {str(spec)!r}, '--out', {str(tmp_path / 'out')!r}]); "
+        "print(rc, sorted(m for m in ('dask', 'distributed') if m in sys.modules))"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert_true(
+        proc.stdout.strip() == "2 []" and "got 0" in proc.stderr,
+        got=f"{proc.stdout.strip()!r}, stderr {proc.stderr.strip()[-300:]!r}",
+        should="'2 []': exit 2, neither dask nor distributed imported",
+        claim=CLAIM,
+        call="hcv sweep (run.steps_per_contact = 0) in a new process",
+    )
