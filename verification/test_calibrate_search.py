@@ -117,3 +117,24 @@ def test_a_declined_end_of_the_range_is_skipped():
         claim=CLAIM,
         call=call,
     )
+
+
+def test_the_zero_force_end_is_read_where_the_body_never_comes_out():
+    """The unclipped linear dashpot's force vanishes before q = 0 even when overdamped,
+    so the zero-force end is measured there, never counted as 0; the answer is within
+    1 % of the closed form 2 zeta_zf(e), zeta_zf the inverse of exp(-2 zeta arccos zeta
+    / sqrt(1 - zeta^2)) (Verlet's half-step dashpot: first order, 0.5 % at N = 200)."""
+    from reference_impl.adapters.mujoco import zeta_zero_force
+
+    res = calibrate(_CODE, _SCENE, param="gain", target=0.5, end="zero-force",
+                    bracket=(0.0, 40.0))  # fmt: skip
+    call = f"calibrate({_CODE}, zero-force end, gain in [0, 40]): {res.message}"
+    assert_true(res.found, got=res.message, should="found", claim=CLAIM, call=call)
+    assert_close(res.value, 2.0 * zeta_zero_force(0.5), rtol=1e-2, claim=CLAIM, call=call)
+    assert_true(
+        res.delivered[0] > 0.0 and not any("counted as restitution 0" in n for n in res.notes),
+        got=f"delivered {res.delivered}, notes {res.notes}",
+        should="every run read at its zero-force point: none counted as 0",
+        claim=CLAIM,
+        call=call,
+    )

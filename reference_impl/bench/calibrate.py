@@ -194,7 +194,8 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
 
 
 def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
-    """(restitution at ``end``, rebound): NaN for a run that blew up or never touched.
+    """(restitution at ``end``, read): NaN for a run that blew up or never touched;
+    ``read`` is False for a run without rebound counted as 0.
 
     A run that stays finite and in contact for its whole budget (the body has not come
     back out after `_BUDGET` contact times: overdamped, or a rebound so late that its
@@ -216,7 +217,7 @@ def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
         last = q.size - 1
         peak = int(np.argmax(q))
         if last > peak and np.all(np.isfinite(f[peak:last])) and np.any(f[peak:last] <= 0):
-            return _restitution_zero_force(q, tr.v, f, last, v0), False
+            return _restitution_zero_force(q, tr.v, f, last, v0), True
     return 0.0, False
 
 
@@ -389,8 +390,8 @@ def calibrate(
             if tr is None:
                 seen[x], why[x] = (math.nan, _FAILED), err
             else:
-                got, rebound = _quantity(tr, v0, end)
-                seen[x] = (got, _MEASURED if rebound else _NO_REBOUND)
+                got, read = _quantity(tr, v0, end)
+                seen[x] = (got, _MEASURED if read else _NO_REBOUND)
                 if not math.isfinite(got):
                     seen[x], why[x] = (got, _FAILED), "no restitution measured"
         return seen[x][0]
