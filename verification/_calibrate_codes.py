@@ -17,7 +17,7 @@ from reference_impl.adapters import AdapterScene, ContactAdapter, Trajectory
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping
 from reference_impl.adapters.reference import verlet_trajectory
 
-__all__ = ["DeclinesEvery", "LinearDashpot", "gain_for"]
+__all__ = ["DeclinesEvery", "FailsNearTheRoot", "LinearDashpot", "gain_for"]
 
 
 def gain_for(e: float) -> float:
@@ -56,3 +56,14 @@ class DeclinesEvery(LinearDashpot):
 
     def supports(self, scene: AdapterScene) -> str | None:
         return "no model for this scene"
+
+
+class FailsNearTheRoot(LinearDashpot):
+    """`LinearDashpot` whose runs raise for 0.3 < gain < 0.6 (around gain_for(0.5))."""
+
+    name = "fails-near-the-root"
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        if 0.3 < self.gain < 0.6:
+            raise RuntimeError(f"no run at gain {self.gain}")
+        return super()._impact_impl(scene)

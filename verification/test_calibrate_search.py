@@ -138,3 +138,19 @@ def test_the_zero_force_end_is_read_where_the_body_never_comes_out():
         claim=CLAIM,
         call=call,
     )
+
+
+def test_a_bracket_whose_search_hits_a_failed_run_is_named():
+    """The target's only crossing lies where every run fails: out of reach (exit 1), with
+    the bracket and the failed run named, not a traceback."""
+    res = calibrate("verification._calibrate_codes:FailsNearTheRoot", _SCENE, param="gain",
+                    target=0.5, bracket=(0.0, 40.0))  # fmt: skip
+    assert_true(
+        not res.found and "out of reach" in res.message
+        and "no root found in gain = [0, 5] (the run at" in res.message
+        and "failed" in res.message,
+        got=res.message,
+        should="out of reach, naming the bracket [0, 5] and the failed run",
+        claim=CLAIM,
+        call="calibrate(FailsNearTheRoot)",
+    )  # fmt: skip

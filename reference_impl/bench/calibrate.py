@@ -429,7 +429,8 @@ def calibrate(
         return v - target
 
     roots: list[float] = []
-    jumps: list[str] = []
+    jumps: list[str] = []  # brackets where the response jumps across the target
+    lost: list[str] = []  # brackets whose search hit a failed or declined run
     for xa, xb in brackets:
         try:
             fa, fb = f(xa), f(xb)
@@ -446,14 +447,14 @@ def calibrate(
                     continue
         except _Unusable as exc:
             x = exc.args[0]
-            jumps.append(f"none in [{xa:g}, {xb:g}]: the run at {x:.6g} {seen[x][1]}")
+            lost.append(f"[{xa:g}, {xb:g}] (the run at {x:.6g} {seen[x][1]})")
             continue
         except RuntimeError:  # brentq did not converge within _MAXITER steps
-            jumps.append(f"none in [{xa:g}, {xb:g}]: no convergence in {_MAXITER} steps")
+            lost.append(f"[{xa:g}, {xb:g}] (no convergence in {_MAXITER} steps)")
             continue
         if not any(abs(root - r) <= _XRTOL * max(abs(root), abs(r)) for r in roots):
             roots.append(root)
-    notes = _notes(param, seen, why, n, jumps)
+    notes = _notes(param, seen, why, n, jumps, lost)
     res.notes = notes
     measured = [v for v, what in seen.values() if what in (_MEASURED, _NO_REBOUND)]
     if measured:
@@ -489,7 +490,7 @@ def calibrate(
     return res
 
 
-def _notes(param: str, seen: dict, why: dict, n_steps: int, jumps: list[str]) -> list[str]:
+def _notes(param: str, seen: dict, why: dict, n_steps: int, jumps: list, lost: list) -> list:
     """One line per kind of run that did not measure a restitution, and per lost bracket."""
     notes = []
     by_kind: dict[str, list[float]] = {}
@@ -506,6 +507,8 @@ def _notes(param: str, seen: dict, why: dict, n_steps: int, jumps: list[str]) ->
             notes.append(f"{verb} at {param} = {_values_text(xs)} ({why[xs[0]]})")
     if jumps:
         notes.append(f"the response jumps across the target at {param} = {'; '.join(jumps)}")
+    if lost:
+        notes.append(f"no root found in {param} = {'; '.join(lost)}")
     return notes
 
 
