@@ -4,30 +4,12 @@ grouped per Dask task, and a group whose worker dies rerun case by case.
 
 from __future__ import annotations
 
-import os
-
 from reference_impl.sweep._runner import _MAX_CHUNK, _chunk_size, iter_outcomes, open_client
+from verification._light_cases import square_or_fail, threads
 from verification._sweeps import needs_dask
 from verification.assertions import assert_true
 
 CLAIM = "sweep"  # the sweep machinery, not a paper claim
-
-
-def _threads(dask_worker=None) -> dict:
-    import numba
-
-    return {
-        "numba": numba.config.NUMBA_NUM_THREADS,
-        **{k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")},
-    }
-
-
-def _square_or_fail(x):
-    if x == 3:
-        raise ValueError("three is not allowed")
-    if x == 5:
-        os._exit(7)  # a crash: the worker process dies
-    return x * x
 
 
 def test_cases_per_task():
@@ -49,14 +31,14 @@ def test_grouped_cases_one_thread_each_and_a_dead_worker_fails_one_case():
     # One death is enough to give up on a task (the default retries it on 3 workers).
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         with open_client(workers=2) as client:
-            threads = list(client.run(_threads).values())
+            per_worker = list(client.run(threads).values())
             outs = sorted(
-                iter_outcomes(client, _square_or_fail, list(range(12)), chunk=4),
+                iter_outcomes(client, square_or_fail, list(range(12)), chunk=4),
                 key=lambda o: o.index,
             )
     assert_true(
-        threads == [{"numba": 1, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}] * 2,
-        got=str(threads),
+        per_worker == [{"numba": 1, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}] * 2,
+        got=str(per_worker),
         should="one numba and one BLAS thread in each of the 2 workers",
         claim=CLAIM,
         call="open_client(workers=2).run",
