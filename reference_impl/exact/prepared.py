@@ -39,10 +39,11 @@ from reference_impl.exact._branches import (
     _gj_sums,
     _jacobi_pair,
     _pow_split,
+    per_potential,
 )
-from reference_impl.exact._one_call import fused_impact
+from reference_impl.exact._one_call import _OK, _OUT, _params, _plan, _result, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.exact._split import needs_split
+from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.solve import (
     _TINY,
@@ -121,7 +122,7 @@ class PreparedImpact:
     Calling it with (v0, zeta) returns `solve_impact(potential, m, v0, zeta)`.
     """
 
-    __slots__ = ("potential", "m", "_power", "_out")
+    __slots__ = ("potential", "m", "_power", "_out", "_plan", "_split")
 
     def __init__(self, potential: Potential, m: float):
         if not isinstance(potential, Potential):
@@ -131,6 +132,10 @@ class PreparedImpact:
         _check_exponent(potential)
         self._power = None
         self._out = np.empty(_P_OUT)
+        # The other compiled families: their plan of `_one_call` (None: no compiled form),
+        # and whether a sum's terms can hand over inside a contact (`_split`).
+        self._plan = None if type(potential) is PowerLaw else _plan(potential)
+        self._split = per_potential(_INFO, _split_info, potential) is not None
         n = potential.leading_exponent
         beta = 2.0 / n - 1.0
         if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN:
@@ -200,12 +205,22 @@ class PreparedImpact:
                 _osc=osc,
                 _t_peak=rise,
             )
-        if type(pot) is PowerLaw or needs_split(
-            pot, lambda: _turning_point(pot, m, v0, q_top), q_top
+        if self._plan is None or (
+            self._split and needs_split(pot, lambda: _turning_point(pot, m, v0, q_top), q_top)
         ):
             return solve_impact(pot, m, v0, zeta)
         osc = VirtualOscillator(v0, zeta)
-        fast = fused_impact(pot, m, osc, q_top)
+        plan = self._plan
+        fast = None
+        if plan.gj is not None:
+            # Gauss-Jacobi first, as `fused_impact`; on a refusal it runs the whole ladder.
+            k = plan.kernel
+            out = np.empty(_OUT)
+            plan.gauss_jacobi(_params(osc, m, q_top, k), k.P, *plan.gj, out)
+            if out[8] == _OK:
+                fast = _result(out)
+        if fast is None:
+            fast = fused_impact(pot, m, osc, q_top)
         if fast is None:
             return solve_impact(pot, m, v0, zeta)
         br, q_max, max_force = fast
