@@ -290,7 +290,7 @@ def _power_law_fill(
         wd = math.sqrt((1.0 - zz) * (1.0 + zz))
         sp = math.atan2(wd, zz) / wd
         x_pk = vi * math.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
-        # Factored as in `solve._peak` (no intermediate underflow for tiny m or v0).
+        # Factored as in `_strategies.peak` (no intermediate underflow for tiny m or v0).
         q_max = q_scale * x_pk**two_n
         f_max = k * q_max**p
         out[0, i] = q_max

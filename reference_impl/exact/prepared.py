@@ -44,6 +44,7 @@ from reference_impl.exact._branches import (
 from reference_impl.exact._one_call import _OK, _OUT, _params, _plan, _result, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._split import _INFO, _split_info, needs_split
+from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.solve import (
     _TINY,
@@ -51,7 +52,6 @@ from reference_impl.exact.solve import (
     ImpactSolution,
     _check_bound,
     _conditioning,
-    _turning_point,
     solve_impact,
 )
 from reference_impl.potentials._checks import positive
@@ -73,7 +73,7 @@ def _power_impact(v0, zeta, c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, two
     The oscillator (`VirtualOscillator`), the branch rows (`_fill_rows`), the scale
     c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums
     (`_gj_sums`), their agreement test and bounds (`_gauss_jacobi_power_law`), the
-    peak (`solve._peak`), the bound and range checks (`solve._check_bound`,
+    peak (`_strategies.peak`), the bound and range checks (`solve._check_bound`,
     `_check_normal`): out[13] = 0 when any of them refuses.
     """  # pragma: no cover - compiled
     out[13] = 0.0
@@ -206,7 +206,7 @@ class PreparedImpact:
                 _t_peak=rise,
             )
         if self._plan is None or (
-            self._split and needs_split(pot, lambda: _turning_point(pot, m, v0, q_top), q_top)
+            self._split and needs_split(pot, lambda: turning_point(pot, m, v0, q_top), q_top)
         ):
             return solve_impact(pot, m, v0, zeta)
         osc = VirtualOscillator(v0, zeta)
