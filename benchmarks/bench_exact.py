@@ -287,6 +287,7 @@ def _batch_rows(blocks, peer_us):
     z = rng.uniform(0.0, BATCH_ZETA_MAX, BATCH_N)
     zg = np.repeat(np.linspace(0.0, BATCH_ZETA_MAX, GRID_ZETAS), GRID_SPEEDS)
     vg = np.tile(np.logspace(-1.0, 1.0, GRID_SPEEDS), GRID_ZETAS)
+    # Every core numba may use (NUMBA_NUM_THREADS, the machine's count by default).
     cores = numba.config.NUMBA_NUM_THREADS
     rows = []
     for label, vs, zs in (
@@ -294,6 +295,7 @@ def _batch_rows(blocks, peer_us):
         (f"Hertz, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0", vg, zg),
     ):
         per = {1: [], cores: []}
+        cpu1 = []
         res = {}
         for threads in (1, cores):
             numba.set_num_threads(threads)
@@ -301,9 +303,11 @@ def _batch_rows(blocks, peer_us):
         for _ in range(blocks):
             for threads in (1, cores):
                 numba.set_num_threads(threads)
-                t0 = time.perf_counter()
+                c0, t0 = time.process_time(), time.perf_counter()
                 solve_impacts(pot, m, vs, zs)
                 per[threads].append(time.perf_counter() - t0)
+                if threads == 1:
+                    cpu1.append(time.process_time() - c0)
         numba.set_num_threads(cores)
         t1, tn = statistics.median(per[1]), statistics.median(per[cores])
         identical = all(np.array_equal(res[1][k], res[cores][k], equal_nan=True) for k in res[1])
@@ -312,6 +316,7 @@ def _batch_rows(blocks, peer_us):
                 "workload": label,
                 "threads": cores,
                 "us_per_impact_1_thread": t1 / vs.size * 1e6,
+                "cpu_us_per_impact_1_thread": statistics.median(cpu1) / vs.size * 1e6,
                 "us_per_impact_all_threads": tn / vs.size * 1e6,
                 "impacts_per_s": vs.size / tn,
                 "parallel_speedup": t1 / tn,
@@ -387,7 +392,8 @@ def _print(res: dict) -> None:
     for b in res["batch"]:
         print(
             f"solve_impacts, {b['workload']}: {b['us_per_impact_1_thread']:.2f} us/impact on 1"
-            f" thread, {b['us_per_impact_all_threads']:.2f} on {b['threads']}"
+            f" thread (CPU {b['cpu_us_per_impact_1_thread']:.2f}),"
+            f" {b['us_per_impact_all_threads']:.2f} on {b['threads']}"
             f" ({b['parallel_speedup']:.2f}x, identical: {b['bit_identical_to_1_thread']})"
             f"  {b['goal']}: {'met' if b['goal_met'] else 'NOT met'}"
         )

@@ -109,7 +109,8 @@ def speed_table(bench: dict) -> str:
     for b in bench.get("batch", []):
         lines.append(
             f"- `solve_impacts`, {_cell(b['workload'])}: {b['us_per_impact_1_thread']:.2f} µs per "
-            f"impact on 1 thread, {b['us_per_impact_all_threads']:.2f} µs on {b['threads']} "
+            f"impact on 1 thread (CPU {b.get('cpu_us_per_impact_1_thread', float('nan')):.2f} µs), "
+            f"{b['us_per_impact_all_threads']:.2f} µs on {b['threads']} "
             f"({b['parallel_speedup']:.2f}×, bit-identical: "
             f"{'yes' if b['bit_identical_to_1_thread'] else '**no**'}; goal {_cell(b['goal'])}: "
             f"{'met' if b['goal_met'] else '**not met**'})"
