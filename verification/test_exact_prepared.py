@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from reference_impl import HCVInputError, PowerLaw, prepare, solve_impact
@@ -53,6 +54,25 @@ def test_prepare_is_solve_impact_bit_for_bit(name, pot, m, v_scene):
                 claim="prepare",
                 call=call,
             )
+
+
+def test_prepare_takes_numpy_scalars_and_ints_as_solve_impact_does(monkeypatch):
+    from reference_impl.exact import prepared
+
+    pot = PowerLaw(1.0e9, 1.5)
+    solver = prepare(pot, 0.0041)
+    for v0, zeta in ((np.float64(1.3), np.float64(0.2)), (2, 0), (np.float32(0.7), 0.5)):
+        want = _fields(solve_impact(pot, 0.0041, v0, zeta))
+        with monkeypatch.context() as mp:  # the compiled path itself, not the hand-over
+            mp.setattr(prepared, "solve_impact", None)
+            got = _fields(solver(v0, zeta))
+        assert_true(
+            got == want and type(got["v0"]) is float,
+            got=f"{got}",
+            should=f"{want}, v0 a float",
+            claim="prepare",
+            call=f"prepare(hertz, 0.0041)({v0!r}, {zeta!r})",
+        )
 
 
 def test_prepare_refuses_what_solve_impact_refuses():

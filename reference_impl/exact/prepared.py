@@ -54,7 +54,7 @@ from reference_impl.exact.solve import (
     _conditioning,
     solve_impact,
 )
-from reference_impl.potentials._checks import positive
+from reference_impl.potentials._checks import is_real_number, positive
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
 
@@ -153,6 +153,14 @@ class PreparedImpact:
     def __call__(self, v0: float, zeta: float = 0.0) -> ImpactSolution:
         """The impact at speed v0 (m/s) and damping ratio zeta, as `solve_impact`."""
         pot, m = self.potential, self.m
+        if (type(v0) is not float or type(zeta) is not float) and (
+            is_real_number(v0) and is_real_number(zeta)
+        ):
+            # numpy scalars and ints as `solve_impact`'s checks take them (float(value)).
+            try:
+                v0, zeta = float(v0), float(zeta)
+            except OverflowError:
+                return solve_impact(pot, m, v0, zeta)
         if not (
             type(v0) is float
             and type(zeta) is float
