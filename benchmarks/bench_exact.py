@@ -132,6 +132,8 @@ def _peer_ladder(call, v0, truth: dict, keys, target: float) -> dict:
         got = _peer_outputs(out, v0)
         err = max(_rel(got[k], truth[k]) for k in keys)
         rungs.append({"rtol": rtol, "max_rel_error": err, "nfev": int(out[7])})
+    if not rungs:
+        raise RuntimeError("the compiled DOP853 peer reached no end of contact on any rung")
     ok = [r for r in rungs if r["max_rel_error"] <= target]
     if ok:
         pick = min(ok, key=lambda r: r["nfev"])

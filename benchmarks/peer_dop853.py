@@ -12,7 +12,9 @@ in compiled code and returns every output the exact solvers report:
 * the overlap end (q back to 0: time and restitution; the integration stops there),
 * the zero-force end (U' + C q' falls through 0: time and restitution),
 * q_max (q' falls through 0) and U'(q_max),
-* the peak total force max_t (U' + C q') (dF/dt falls through 0, and F at contact onset).
+* the peak total force max_t (U' + C q') (dF/dt falls through 0, and F at contact onset),
+  for the laws of the damping table (the universal law's rows report U'(q_max), as
+  `solve_impact` does).
 
 The model is two small tables, so that one compiled kernel serves every row of the
 benchmark: elastic terms (a power term U' += a q^b, or a volumetric cap
@@ -239,7 +241,7 @@ def solve_dop853(m, v0, zeta, EL, DA, rtol, atol_q, atol_v, t_bound, h_first, ou
     f_old, df_old, _du = _force(_Q_ONSET, v, m, zeta, EL, DA)
     out[6] = f_old
     # F / U' at onset: +inf (the force pushes from the start for every law here).
-    g_old = np.array([q, v, np.inf, df_old])
+    g_old = np.array([q, v, np.inf, df_old if zeta == 0.0 else -1.0])
     g_new = np.empty(4)
     found_zf = False
     found_qmax = False
@@ -293,7 +295,10 @@ def solve_dop853(m, v0, zeta, EL, DA, rtol, atol_q, atol_v, t_bound, h_first, ou
         rejected = False
         # Accepted: events on this step.
         f_new, df_new, du_new = _force(qn, vn, m, zeta, EL, DA)
-        g_new[0], g_new[1], g_new[2], g_new[3] = qn, vn, f_new / du_new, df_new
+        g_new[0], g_new[1], g_new[2] = qn, vn, f_new / du_new
+        # dF/dt is the table laws' only (the universal law's rows report U'(q_max), as
+        # solve_impact does): -1 never falls through 0, so no event is sought there.
+        g_new[3] = df_new if zeta == 0.0 else -1.0
         hit = False
         for kind in range(4):
             if g_old[kind] > 0.0 and g_new[kind] <= 0.0:
@@ -334,7 +339,7 @@ def solve_dop853(m, v0, zeta, EL, DA, rtol, atol_q, atol_v, t_bound, h_first, ou
                 x_hi = x_end * (1.0 - 1e-8)
                 qe, ve = _dense(Fq, Fv, q, v, x_hi)
                 if qe > 0.0:
-                    for kind in range(1, 4):
+                    for kind in range(1, 4 if zeta == 0.0 else 3):
                         g_new[kind] = _event_value(kind, qe, ve, m, zeta, EL, DA)
                 else:
                     g_new[1], g_new[2], g_new[3] = ve, 1.0, 1.0
