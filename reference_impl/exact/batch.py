@@ -6,7 +6,7 @@ carrying m, k and v0), so one compiled loop evaluates the Gauss-Jacobi branch
 sums of every distinct damping ratio at once (a sweep over speeds at a few
 damping ratios costs a few sums plus array arithmetic); the impacts where that rule does not apply (zeta
 >= 0.9, n > 4, or the two rule sizes disagree) and every other family go
-through `solve_impact` one by one. Results agree with `solve_impact` to round-off.
+through `prepare(potential, m)` (`solve_impact` bit for bit) one by one. Results agree with `solve_impact` to round-off.
 """
 
 from __future__ import annotations
@@ -30,7 +30,8 @@ from reference_impl.exact._branches import (
     _pow_split,
 )
 from reference_impl.exact._validate import _check_exponent, _validated_top
-from reference_impl.exact.solve import ImpactSolution, solve_impact
+from reference_impl.exact.prepared import prepare
+from reference_impl.exact.solve import ImpactSolution
 from reference_impl.potentials._checks import positive, real_array
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -198,8 +199,11 @@ def solve_impacts(
     if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN and v.size:
         _validated_top(potential, 0.5 * m * float(v.max()) ** 2)
         _power_law_batch(potential, m, v, z, beta, out, todo)
-    for i in np.flatnonzero(todo):
-        sol: ImpactSolution = solve_impact(potential, m, float(v[i]), float(z[i]))
+    rest = np.flatnonzero(todo)
+    # One impact at a time, checked and planned once (`prepare`: bit for bit solve_impact).
+    solver = prepare(potential, m) if rest.size else None
+    for i in rest:
+        sol: ImpactSolution = solver(float(v[i]), float(z[i]))
         for j, key in enumerate(_FIELDS):
             out[j, i] = getattr(sol, key)
     return {key: out[j].reshape(shape) for j, key in enumerate(_FIELDS)}
