@@ -363,7 +363,10 @@ def _numbalsoda_note() -> str:
     try:
         import numbalsoda  # noqa: F401
     except ImportError:
-        return "not installed: 0.3.4 has no wheel for this Python (source only, C++ build)"
+        return (
+            "not installed: 0.3.4 has no wheel for Python 3.11 and its source build needs a "
+            "Fortran compiler (none here)"
+        )
     return "installed but not benchmarked"
 
 
