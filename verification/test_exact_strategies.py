@@ -30,7 +30,8 @@ def _job(pot, m, v0, zeta, level=None):
 def _cases():
     sc = _SCENES
     return [
-        ("hertz", sc["hertz-k1e9-damped"], 0.2, None, "general"),
+        ("hertz", sc["hertz-k1e9-damped"], 0.2, None, "power_law"),
+        ("hertz, zeta 0.95", sc["hertz-k1e9-damped"], 0.95, None, "general"),
         ("ellipsoid", sc["ellipsoid-damped"], 0.2, None, "fused"),
         ("sphere, level 5", sc["sphere-damped"], 0.2, 5, "general"),
         ("sphere, overdamped", sc["sphere-damped"], 2.5, None, "general"),

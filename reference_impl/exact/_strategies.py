@@ -13,7 +13,8 @@ Each strategy is a function ``plan(job) -> Answer | None`` with one contract:
 4. `solve_impact` tries `STRATEGIES` in order and takes the first answer; the last,
    `general`, answers every job (or raises its own one-line error).
 
-The order is the solver's preference: the split quadrature (Gauss-Jacobi first) where a
+The order is the solver's preference: a power law's Gauss-Jacobi rule in one compiled
+call, the split quadrature (Gauss-Jacobi first) where a
 sum's terms hand over inside the contact, else the fused compiled kernel of `_one_call`,
 else the general path of `_branches` (power laws' Gauss-Jacobi, tanh-sinh level by level,
 the overdamped tail).
@@ -26,9 +27,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from reference_impl.exact._branches import Branches, branch_integrals, compiled_nodes
+from reference_impl.exact._branches import (
+    _GJ_ZETA_MAX,
+    Branches,
+    branch_integrals,
+    compiled_nodes,
+)
 from reference_impl.exact._one_call import fused_impact, gauss_jacobi_impact
 from reference_impl.exact._oscillator import VirtualOscillator
+from reference_impl.exact._power_kernel import OUT_SIZE, power_constants, power_impact
 from reference_impl.exact._split import needs_split, split_impact
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -95,6 +102,24 @@ def peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tupl
     return q_max, float(pot._dU(np.array([q_max]))[0])
 
 
+def power_law(job: Job) -> Answer | None:
+    """A power law by Gauss-Jacobi in one compiled call (`_power_kernel`): the numbers of
+    `general`'s power-law path bit for bit, without its Python around the sums."""
+    pot, osc = job.potential, job.osc
+    if job.level is not None or type(pot) is not PowerLaw or osc.zeta >= _GJ_ZETA_MAX:
+        return None
+    consts = power_constants(pot, job.m)
+    if consts is None:
+        return None
+    out = np.empty(OUT_SIZE)
+    # inf and 0: no bound or range refusal here; solve_impact checks (and names) them.
+    power_impact(job.v0, osc.zeta, *consts, math.inf, 0.0, out)
+    if out[13] != 1.0:
+        return None
+    v = out.tolist()
+    return Answer(Branches(*v[:6]), v[6], v[7])
+
+
 def split_gauss_jacobi(job: Job) -> Answer | None:
     """Terms hand over inside the contact: Gauss-Jacobi in t = d^(1/b) when its two rule
     sizes agree (`_one_call.gauss_jacobi_impact`)."""
@@ -127,7 +152,7 @@ def general(job: Job) -> Answer:
     return Answer(br, *peak(pot, m, osc, q_top))
 
 
-STRATEGIES = (split_gauss_jacobi, split_quadrature, fused, general)
+STRATEGIES = (power_law, split_gauss_jacobi, split_quadrature, fused, general)
 
 
 def choose(job: Job) -> tuple[str, Answer]:

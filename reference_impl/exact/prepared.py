@@ -5,7 +5,7 @@ result in Python around ~5-10 us of compiled work, on every call. A prepared
 solver does the checks and the planning once; each call then
 
 * for a power law (the Gauss-Jacobi path of `_branches`), makes one compiled call
-  (`_power_impact`) that computes the oscillator, the branch sums (`_gj_sums`,
+  (`_power_kernel.power_impact`) that computes the oscillator, the branch sums (`_gj_sums`,
   the same compiled loop), the peak and the checks of `solve_impact`, and builds
   the `ImpactSolution` from its output;
 * for the other compiled families, calls the fused kernel of `_one_call` directly
@@ -22,27 +22,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.exact._branches import (
-    _EPS,
-    _GJ_BETA_MIN,
-    _GJ_RTOL,
-    _GJ_SIZES,
-    _GJ_ZETA_MAX,
-    _NODE_ULPS,
-    _SUM_ULPS_PER_NODE,
-    _exponent_splits,
-    _fill_rows,
-    _gj_sums,
-    _jacobi_pair,
-    _pow_split,
-    per_potential,
-)
+from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
 from reference_impl.exact._one_call import _OK, _OUT, _params, _plan, _result, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
+from reference_impl.exact._power_kernel import OUT_SIZE, power_constants, power_impact
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -61,59 +47,6 @@ from reference_impl.potentials.power import PowerLaw
 __all__ = ["PreparedImpact", "prepare"]
 
 _INF = math.inf
-# Output of `_power_impact`: the six Branches fields, q_max, U'(q_max), restitution,
-# restitution at zero force, wd, s_peak, s_end, ok (1.0) or not (0.0).
-_P_OUT = 14
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _power_impact(v0, zeta, c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, two_n, k, p, out):
-    """One power-law impact by Gauss-Jacobi, as `solve_impact` computes it (pragma: compiled).
-
-    The oscillator (`VirtualOscillator`), the branch rows (`_fill_rows`), the scale
-    c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums
-    (`_gj_sums`), their agreement test and bounds (`_gauss_jacobi_power_law`), the
-    peak (`_strategies.peak`), the bound and range checks (`solve._check_bound`,
-    `_check_normal`): out[13] = 0 when any of them refuses.
-    """  # pragma: no cover - compiled
-    out[13] = 0.0
-    wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
-    sp = math.atan2(wd, zeta) / wd
-    s_end = math.pi / wd
-    lz = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
-    rows = np.empty((3, 5))
-    nr = _fill_rows(zeta, sp, s_end, lz, rows)
-    for i in range(nr):
-        if not rows[i, 4] > 0.0:
-            return
-    c_pl = c_m * (v0**b_hi * math.exp(b_lo * math.log(v0)))
-    sums = _gj_sums(rows[:nr], u, W, zeta, wd, beta, c_pl)
-    err = np.empty(nr)
-    for i in range(nr):
-        coarse, fine = sums[i, 0], sums[i, 1]
-        err[i] = abs(fine - coarse) + round_rel * fine
-        if not abs(fine - coarse) <= _GJ_RTOL * abs(fine):
-            return
-    rise, e_rise = sums[0, 1], err[0]
-    if zeta == 0.0:
-        mid, e_mid, fall, e_fall = rise, e_rise, rise, e_rise
-    else:
-        fall, e_fall = sums[1, 1], err[1]
-        mid, e_mid = fall - sums[2, 1], e_fall + err[2]
-    x_peak = v0 * math.exp(-zeta * sp)
-    q_max = q_scale * x_peak**two_n
-    f_max = k * q_max**p
-    for t, e in ((rise + fall, e_rise + e_fall), (rise + mid, e_rise + e_mid)):
-        if math.isfinite(t) and not e <= RTOL_STATED * t:
-            return
-    if not (q_max >= _TINY and f_max >= _TINY and rise + fall >= _TINY):
-        return
-    out[0], out[1], out[2], out[3], out[4], out[5] = rise, e_rise, mid, e_mid, fall, e_fall
-    out[6], out[7] = q_max, f_max
-    out[8] = math.exp(-math.pi * zeta / wd)
-    out[9] = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
-    out[10], out[11], out[12] = wd, sp, s_end
-    out[13] = 1.0
 
 
 class PreparedImpact:
@@ -131,21 +64,13 @@ class PreparedImpact:
         self.m = positive("m", m, "prepare")
         _check_exponent(potential)
         self._power = None
-        self._out = np.empty(_P_OUT)
+        self._out = np.empty(OUT_SIZE)
         # The other compiled families: their plan of `_one_call` (None: no compiled form),
         # and whether a sum's terms can hand over inside a contact (`_split`).
         self._plan = None if type(potential) is PowerLaw else _plan(potential)
         self._split = per_potential(_INFO, _split_info, potential) is not None
-        n = potential.leading_exponent
-        beta = 2.0 / n - 1.0
-        if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN:
-            k, m_ = potential.k, self.m
-            a_hi, a_lo, b_hi, b_lo = _exponent_splits(potential.p, n)
-            c_m = (m_ / k) * _pow_split(0.5 * n * m_ / k, a_hi, a_lo)
-            u, W = _jacobi_pair(beta)
-            round_rel = (_SUM_ULPS_PER_NODE * _GJ_SIZES[1] + _NODE_ULPS) * _EPS
-            q_scale = (0.5 * n * m_ / k) ** (1.0 / n)
-            self._power = (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, potential.p)
+        if type(potential) is PowerLaw:
+            self._power = power_constants(potential, self.m)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -174,7 +99,7 @@ class PreparedImpact:
         q_top = _validated_top(pot, E)
         if self._power is not None:
             out = self._out
-            _power_impact(v0, zeta, *self._power, out)
+            power_impact(v0, zeta, *self._power, RTOL_STATED, _TINY, out)
             if out[13] != 1.0:
                 return solve_impact(pot, m, v0, zeta)
             (
