@@ -61,6 +61,7 @@ _REGISTRY: dict[str, str | type] = {
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
+    "liggghts": "reference_impl.adapters.liggghts:LiggghtsAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
