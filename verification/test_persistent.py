@@ -114,6 +114,8 @@ def test_options_reach_the_program_in_the_request():
         per.close()
     with pytest.raises(Exception, match="must be a finite number"):
         SubprocessAdapter(SCRIPT, zeta_scale=float("nan"))
+    with pytest.raises(Exception, match="looks like a misspelt 'sustained'"):
+        get_adapter(f"cmd[sustaned=true]:{SCRIPT}")
 
 
 def test_calibrate_a_cmd_program_through_an_option():

@@ -90,6 +90,7 @@ propagates.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -135,6 +136,10 @@ _MAX_STDOUT = 32 << 20
 _CHUNK = 1 << 16
 # Seconds the selector waits before it rechecks the deadline.
 _POLL = 0.5
+
+
+# The adapter's own cmd[...] arguments (every other key is an option of the code).
+_OWN_ARGUMENTS = ("command", "timeout", "cwd", "label", "sustained", "persistent")
 
 
 def response_limit(n_steps: int) -> int:
@@ -287,6 +292,12 @@ class SubprocessAdapter(ContactAdapter):
                 f"subprocess adapter: persistent must be true or false, got {persistent!r}"
             )
         for key, val in options.items():
+            near = difflib.get_close_matches(key, _OWN_ARGUMENTS, n=1, cutoff=0.8)
+            if near:  # a typo of an argument of ours would silently become a code option
+                raise HCVInputError(
+                    f"subprocess adapter: {key!r} looks like a misspelt {near[0]!r}; "
+                    "options of the code must not resemble the adapter's own arguments"
+                )
             if isinstance(val, bool) or isinstance(val, str) or val is None:
                 continue
             if not (isinstance(val, (int, float)) and math.isfinite(val)):
