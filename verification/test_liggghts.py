@@ -211,3 +211,23 @@ def resolve_scenes_at(name: str) -> AdapterScene:
 def test_bench_liggghts_hertz_passes_the_gate():
     res = run_bench("liggghts[hertz,wall]", scenes=["hertz-damped"], tolerances=FAST)
     assert res.exit_status(gate=True) == 0, [m.explanation for m in res.failures]
+
+
+def test_restitution_option_and_the_reach_of_limitforce():
+    """The option hcv calibrate searches replaces the scene's e; with limitForce on even
+    LIGGGHTS' smallest coefficientRestitution (just above 0.05) leaves above 0.2: out of
+    reach, as the issue found (0.216 at 200 steps per contact)."""
+    adapter = get_adapter("liggghts[model=hertz,geometry=wall,limit_force=true,restitution=0.0501]")
+    s = issue_scene(0.2, 1.0)
+    assert "coefficientRestitution peratomtypepair 1 0.0501" in adapter.script(s)
+    assert adapter.calibration_range("restitution", s) == pytest.approx((0.05, 1.0))
+    e = measure(adapter.impact(s), 1.0)["restitution"]
+    assert_true(
+        0.2 < e < 0.22,
+        got=f"e = {e:.4f}",
+        should="in (0.2, 0.22): the floor of coefficientRestitution cannot reach 0.2",
+        claim=CLAIM,
+        call=adapter.label,
+    )
+    with pytest.raises(Exception, match=r"restitution must be in \(0.05, 1\]"):
+        get_adapter("liggghts[hertz,wall,restitution=0.05]")

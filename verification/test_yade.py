@@ -217,3 +217,16 @@ def test_one_process_serves_a_benchmark_and_a_killed_one_fails_one_run():
         assert en.impact(s).q.size > 2 and adapter.server.starts == 3
     finally:
         adapter.close()
+
+
+def test_damping_options_for_calibration():
+    """en / betan / cn replace the mapped input (what hcv calibrate searches); an option the
+    input does not use is refused."""
+    s = scene_at("hertz-damped", 1.0)
+    law = YadeAdapter(input="en", geometry="wall", en=0.3).implemented_law(s)
+    assert_close(law.zeta, thornton_betan(0.3) * 1.2**0.5, rtol=1e-15, claim=CLAIM, call="en=0.3")
+    law = YadeAdapter(input="betan", geometry="wall", betan=0.25).implemented_law(s)
+    assert_close(law.zeta, 0.25 * 1.2**0.5, rtol=1e-15, claim=CLAIM, call="betan=0.25")
+    with pytest.raises(Exception, match="'betan' is not used by input 'en'"):
+        YadeAdapter(input="en", geometry="wall", betan=0.2)
+    assert YadeAdapter.calibration_range("en", s) == (1e-3, 1.0)

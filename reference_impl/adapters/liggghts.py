@@ -142,6 +142,9 @@ class LiggghtsAdapter(ContactAdapter):
         variants with it off and on when no option is given.
     radius : float, optional
         Sphere radius R (m); default 100 q_max at the scene's largest speed.
+    restitution : float, optional
+        ``coefficientRestitution`` written instead of the scene's e (0.05 < e <= 1):
+        what ``hcv calibrate liggghts[...] --param restitution`` searches.
 
     Without options the variants are hertz and hooke on the wall with
     ``limitForce`` off and on, and hertz between two spheres.
@@ -157,6 +160,7 @@ class LiggghtsAdapter(ContactAdapter):
         geometry: str | None = None,
         limit_force: bool | None = None,
         radius: float | None = None,
+        restitution: float | None = None,
     ):
         reason = liggghts_available()
         if reason:
@@ -182,6 +186,16 @@ class LiggghtsAdapter(ContactAdapter):
         ):
             raise HCVInputError(f"adapter liggghts: radius must be a number > 0, got {radius!r}")
         self.radius = None if radius is None else float(radius)
+        if restitution is not None and not (
+            isinstance(restitution, (int, float))
+            and not isinstance(restitution, bool)
+            and _E_MIN < restitution <= 1.0
+        ):
+            raise HCVInputError(
+                f"adapter liggghts: restitution must be in ({_E_MIN:g}, 1] (LIGGGHTS refuses "
+                f"others), got {restitution!r}"
+            )
+        self.restitution = None if restitution is None else float(restitution)
         self._version: str | None = None
 
     # -- configuration ----------------------------------------------------------
@@ -194,7 +208,14 @@ class LiggghtsAdapter(ContactAdapter):
         if not self.single:
             return "liggghts"
         extra = ",limit_force" if self.limits[0] else ""
+        if self.restitution is not None:
+            extra += f",restitution={self.restitution!r}"
         return f"liggghts[{self.models[0]},{self.geoms[0]}{extra}]"
+
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Search range of ``hcv calibrate``: coefficientRestitution over all LIGGGHTS takes."""
+        return (_E_MIN * (1.0 + 1e-9), 1.0) if param == "restitution" else None
 
     def variants(self) -> list[ContactAdapter]:
         if self.single:
@@ -203,7 +224,13 @@ class LiggghtsAdapter(ContactAdapter):
         if self._default_set:
             combos.append(("hertz", "pair", False))
         return [
-            LiggghtsAdapter(model=m, geometry=g, limit_force=lim, radius=self.radius)
+            LiggghtsAdapter(
+                model=m,
+                geometry=g,
+                limit_force=lim,
+                radius=self.radius,
+                restitution=self.restitution,
+            )
             for m, g, lim in combos
         ]
 
@@ -242,7 +269,7 @@ class LiggghtsAdapter(ContactAdapter):
                 f"LIGGGHTS model {self.models[0]} is U' = k q^{want:g}; scene potential "
                 f"{pot!r} has no equivalent in it"
             )
-        if scene.restitution <= _E_MIN:
+        if self.restitution is None and scene.restitution <= _E_MIN:
             return (
                 f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} "
                 f"(asked e = {scene.restitution:.6g}); out of its reach"
@@ -270,7 +297,9 @@ class LiggghtsAdapter(ContactAdapter):
             "atom_mass": float(m if geom == "wall" else 2.0 * m),
             "youngsModulus": float(2.0 * y_eff),  # Yeff = Y/2: same material, nu = 0
             "poissonsRatio": 0.0,
-            "coefficientRestitution": float(scene.restitution),
+            "coefficientRestitution": float(
+                scene.restitution if self.restitution is None else self.restitution
+            ),
             "characteristicVelocity": _CHAR_VEL,
             "limitForce": "on" if self.limits[0] else "off",
         }

@@ -154,6 +154,11 @@ class YadeAdapter(ContactAdapter):
     persistent : bool
         Keep one YADE process for every run (default). False starts a YADE per
         run (~3 s each), as a one-shot ``cmd:`` adapter does: for comparison.
+    en, betan, cn : float, optional
+        The damping input written instead of the one mapped from the scene: ``en``
+        for inputs en and tc (tc stays the one of the asked e), ``betan`` for input
+        betan, ``cn`` (per material, N s/m) for input kn. What ``hcv calibrate
+        yade[...] --param en|betan|cn`` searches.
 
     Without options the variants are every input on the wall, and en and tc
     between two spheres.
@@ -172,6 +177,9 @@ class YadeAdapter(ContactAdapter):
         radius: float | None = None,
         timeout: float | None = None,
         persistent: bool = True,
+        en: float | None = None,
+        betan: float | None = None,
+        cn: float | None = None,
     ):
         reason = yade_available()
         if reason:
@@ -195,6 +203,29 @@ class YadeAdapter(ContactAdapter):
                 f"adapter yade: persistent must be true or false, got {persistent!r}"
             )
         self.persistent = persistent
+        self.given = {}
+        for key, val, ok in (
+            ("en", en, lambda x: 0.0 < x <= 1.0),
+            ("betan", betan, lambda x: x >= 0.0),
+            ("cn", cn, lambda x: x >= 0.0),
+        ):
+            if val is None:
+                continue
+            if isinstance(val, bool) or not isinstance(val, (int, float)) or not ok(val):
+                raise HCVInputError(f"adapter yade: {key} out of range, got {val!r}")
+            self.given[key] = float(val)
+        if self.given and len(self.inputs) > 1:
+            raise HCVInputError(
+                "adapter yade: en, betan and cn need one input (e.g. yade[en,wall,en=0.5])"
+            )
+        if self.given:
+            used = {"en": {"en"}, "tc": {"en"}, "betan": {"betan"}, "kn": {"cn"}}[self.inputs[0]]
+            unused = sorted(set(self.given) - used)
+            if unused:
+                raise HCVInputError(
+                    f"adapter yade: option {unused[0]!r} is not used by input {self.inputs[0]!r} "
+                    f"(it takes {', '.join(sorted(used))})"
+                )
         self._server: PersistentProcess | None = None
 
     # -- configuration ----------------------------------------------------------
@@ -206,7 +237,19 @@ class YadeAdapter(ContactAdapter):
     def label(self) -> str:
         if not self.single:
             return "yade"
-        return f"yade[{self.inputs[0]},{self.geoms[0]}]"
+        extra = "".join(f",{k}={v!r}" for k, v in self.given.items())
+        return f"yade[{self.inputs[0]},{self.geoms[0]}{extra}]"
+
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Search range of ``hcv calibrate`` for the options en, betan and cn."""
+        if param == "en":
+            return (1e-3, 1.0)
+        if param == "betan":
+            return (0.0, 2.0)
+        if param == "cn":
+            return (0.0, 2.0 * 2.0 * 2.0 * math.sqrt(scene.mass * scene.potential.k))
+        return None
 
     def variants(self) -> list[ContactAdapter]:
         if self.single:
@@ -222,6 +265,7 @@ class YadeAdapter(ContactAdapter):
                 radius=self.radius,
                 timeout=self.timeout,
                 persistent=self.persistent,
+                **self.given,
             )
             v.timeout_given = self.timeout_given
             v._server = self.server  # one YADE process serves every variant
@@ -264,8 +308,9 @@ class YadeAdapter(ContactAdapter):
     # -- the mapping ------------------------------------------------------------
     def mapping(self, scene: AdapterScene) -> dict:
         """YADE inputs for one scene and the law they give (see the module docstring)."""
-        pot, m, e = scene.potential, scene.mass, scene.restitution
+        pot, m, e_asked = scene.potential, scene.mass, scene.restitution
         inp, geom = self.inputs[0], self.geoms[0]
+        e = self.given.get("en", e_asked)
         vmax = max(scene.velocities or (scene.v0,))
         R = self.radius or _RADIUS_OVER_QMAX * float(pot.turning_point(0.5 * m * vmax * vmax))
         body_mass = m if geom == "wall" else 2.0 * m
@@ -275,14 +320,19 @@ class YadeAdapter(ContactAdapter):
         if _LAW[inp] == "mindlin":
             # E* = Y/2 (same material, nu = 0), R* = R/2 on a wall and for two spheres
             sc.update(law="mindlin", young=float(2.0 * 0.75 * pot.k / math.sqrt(0.5 * R)))
-            betan = thornton_betan(e) if inp == "en" else zeta_asked / math.sqrt(1.2)
+            betan = (
+                thornton_betan(e)
+                if inp == "en"
+                else self.given.get("betan", zeta_asked / math.sqrt(1.2))
+            )
             sc["ip2"] = ["en", float(e)] if inp == "en" else ["betan", float(betan)]
             zeta = betan * math.sqrt(1.2)
             src = f"Thornton 2013 B6-B7 of en = {e:.6g}" if inp == "en" else "given"
             how = f"betan = {betan:.6g} ({src})"
         elif inp == "tc":
+            la = math.log(e_asked) if e_asked > 0 else 0.0
+            tc = math.sqrt((math.pi**2 + la * la) * m / pot.k)  # the user's tc for k
             le = math.log(e)
-            tc = math.sqrt((math.pi**2 + le * le) * m / pot.k)
             sc.update(law="viscel", material={"tc": tc, "en": float(e), "et": float(e)})
             mass_r = m / 2.0 if geom == "wall" else m  # the wall's 0 mass -> the sphere's
             k_law = (math.pi**2 + le * le) * mass_r / tc**2
@@ -290,7 +340,12 @@ class YadeAdapter(ContactAdapter):
             zeta = c / (2.0 * math.sqrt(m * k_law))
             how = f"tc = {tc:.6g} s, en = {e:.6g}: massR = {mass_r / m:g} m, kn = {k_law:.6g}"
         else:
-            c = 2.0 * zeta_asked * math.sqrt(m * pot.k)
+            c = (
+                self.given["cn"] / 2.0
+                if "cn" in self.given
+                else 2.0 * zeta_asked * math.sqrt(m * pot.k)
+            )
+            zeta_asked = c / (2.0 * math.sqrt(m * pot.k))
             sc.update(
                 law="viscel",
                 material={"kn": 2.0 * pot.k, "cn": 2.0 * c, "ks": 0.0, "cs": 0.0},
