@@ -134,3 +134,42 @@ def test_calibrate_a_cmd_program_through_an_option():
     )
     assert res.found, res.message
     assert_close(res.value, 1.0, rtol=3e-3, claim=CLAIM, call=res.message)
+
+
+def test_the_server_dies_with_a_killed_suite():
+    """PR_SET_PDEATHSIG: a server busy with a request dies when the suite's process is
+    SIGKILLed (Linux), so no server outlives a killed benchmark."""
+    import os
+    import signal
+    import subprocess
+    import time
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("PR_SET_PDEATHSIG is Linux only")
+    code = (
+        "import sys, shlex\n"
+        "from reference_impl.adapters._persistent import PersistentProcess\n"
+        f"pp = PersistentProcess(shlex.split({SCRIPT + ' --hang-above 0'!r}), 'hang')\n"
+        "pp._start()\nprint(pp._proc.pid, flush=True)\n"
+        "pp.request({'scene': {'v0': 1.0}}, timeout=3600, limit=1 << 20)\n"
+    )
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    server = int(parent.stdout.readline())
+    time.sleep(0.5)  # the request is on its way: the server sleeps in it
+    parent.send_signal(signal.SIGKILL)
+    parent.wait(timeout=10)
+
+    def alive(pid: int) -> bool:
+        try:
+            with open(f"/proc/{pid}/status") as fh:
+                return "\nState:\tZ" not in fh.read()
+        except FileNotFoundError:
+            return False
+
+    deadline = time.monotonic() + 10
+    while alive(server) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    survived = alive(server)
+    if survived:
+        os.kill(server, signal.SIGKILL)  # leave nothing behind, then report
+    assert not survived, "the server outlived the killed suite process by 10 s"

@@ -20,9 +20,10 @@ The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
   one over the size limit fails the request and the process is replaced. In
   every case the next request starts a fresh process: the rest go on.
 * stdin closing is the signal to exit (``close``): the process gets
-  `_EXIT_GRACE` s to do so, then it is killed. On Linux the process is also
-  killed if the suite's process dies (``PR_SET_PDEATHSIG``), so no server is
-  left behind by a killed benchmark.
+  `_EXIT_GRACE` s to do so, then it is killed. On Linux, when the suite's
+  process has one thread, the server is also killed if that process dies
+  (``PR_SET_PDEATHSIG``), so no server outlives a killed benchmark even while
+  it computes; otherwise the EOF on its stdin is what ends it.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Sequence
 
@@ -117,7 +119,13 @@ class PersistentProcess:
                 stderr=self._err,
                 cwd=self.cwd,
                 start_new_session=True,
-                preexec_fn=_die_with_parent if sys.platform.startswith("linux") else None,
+                # a preexec_fn in a threaded process may deadlock the child (dlopen locks):
+                # only when this is the only thread; else stdin's EOF still ends the server
+                preexec_fn=(
+                    _die_with_parent
+                    if sys.platform.startswith("linux") and threading.active_count() == 1
+                    else None
+                ),
             )
         except OSError as exc:
             self._err.close()
