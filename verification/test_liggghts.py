@@ -231,3 +231,26 @@ def test_restitution_option_and_the_reach_of_limitforce():
     )
     with pytest.raises(Exception, match=r"restitution must be in \(0.05, 1\]"):
         get_adapter("liggghts[hertz,wall,restitution=0.05]")
+
+
+def test_one_liggghts_process_gives_the_one_shot_results_and_survives_an_error():
+    """Persistent mode (scripts separated by clear) = a process per run, bit for bit; a
+    LIGGGHTS ERROR fails that run quoting the error, and the next run starts afresh."""
+    per = get_adapter("liggghts[hertz,wall]")
+    one = get_adapter("liggghts[hertz,wall,persistent=false]")
+    assert per.persistent and not one.persistent
+    try:
+        for v0 in (0.1, 5.0):
+            s = scene_at("hertz-damped", v0, steps_per_contact=50)
+            a, b = per.impact(s), one.impact(s)
+            assert_close(a.q, b.q, rtol=0, atol=0, claim=CLAIM, call=f"persistent q at {v0}")
+            assert_close(a.v, b.v, rtol=0, atol=0, claim=CLAIM, call=f"persistent v at {v0}")
+        assert per._server.starts == 1
+        with pytest.raises(AdapterRunError, match="its last output: 'ERROR") as info:
+            per._run("units nonsense\n")
+        assert "\n" not in str(info.value)
+        s = scene_at("hertz-damped", 1.0, steps_per_contact=50)
+        assert_close(per.impact(s).q, one.impact(s).q, rtol=0, atol=0, claim=CLAIM, call="after")
+        assert per._server.starts == 2
+    finally:
+        per.close()

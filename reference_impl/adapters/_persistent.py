@@ -217,24 +217,9 @@ class PersistentProcess:
             The answer is not one JSON object with the request's id, or is over
             ``limit`` bytes.
         """
-        budget = float(timeout)
-        if not self.alive:
-            if self._proc is not None:  # died since the last answer: say so, then restart
-                raise self._died("between requests")
-            self._start()
-            budget += self.startup_timeout
-        self._next_id += 1
-        rid = self._next_id
+        rid = self._next_id + 1
         line = (json.dumps({**obj, "id": rid}) + "\n").encode()
-        deadline = time.monotonic() + budget
-        try:
-            self._write(line, deadline, budget)
-            raw = self._read_line(deadline, budget, limit)
-        except (AdapterRunError, AdapterOutputError):
-            raise  # the process was already replaced where it had to be
-        except BaseException:
-            self._kill()  # Ctrl-C or any surprise: no process left mid-request
-            raise
+        raw = self.exchange(line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False)[-1]
         try:
             data = json.loads(raw)
         except (json.JSONDecodeError, RecursionError, UnicodeDecodeError):
@@ -249,6 +234,32 @@ class PersistentProcess:
                 f"{self.label}: answer to request {rid} carries id {got!r}; the process is replaced"
             )
         return data
+
+    def exchange(
+        self, payload: bytes, is_end, timeout: float, limit: int, keep: bool = True
+    ) -> list[bytes]:
+        """The raw form of `request`: write ``payload``, read stdout lines up to the first
+        for which ``is_end(line)`` holds (a code that reads a script on stdin and prints an
+        end marker, e.g. LIGGGHTS). Returns the lines read, the end line last (with
+        ``keep=False`` only the end line; the others are skipped, `_MAX_NOISE` bytes at
+        most). Bounded like `request`; when the process dies, the message quotes its last
+        line of output that names an error, else its last line (a code's own message)."""
+        budget = float(timeout)
+        if not self.alive:
+            if self._proc is not None:  # died since the last answer: say so, then restart
+                raise self._died("between requests")
+            self._start()
+            budget += self.startup_timeout
+        self._next_id += 1
+        deadline = time.monotonic() + budget
+        try:
+            self._write(payload, deadline, budget)
+            return self._read_until(is_end, deadline, budget, limit, keep)
+        except (AdapterRunError, AdapterOutputError):
+            raise  # the process was already replaced where it had to be
+        except BaseException:
+            self._kill()  # Ctrl-C or any surprise: no process left mid-request
+            raise
 
     def _write(self, line: bytes, deadline: float, budget: float) -> None:
         proc = self._proc
@@ -270,9 +281,11 @@ class PersistentProcess:
                 except BrokenPipeError:
                     raise self._died("before reading the request") from None
 
-    def _read_line(self, deadline: float, budget: float, limit: int) -> bytes:
+    def _read_until(self, is_end, deadline: float, budget: float, limit: int, keep: bool):
         proc = self._proc
-        noise = 0
+        lines: list[bytes] = []
+        size = 0
+        last = b""
         with selectors.DefaultSelector() as sel:
             sel.register(proc.stdout, selectors.EVENT_READ)
             while True:
@@ -280,14 +293,20 @@ class PersistentProcess:
                 while nl >= 0:
                     line = bytes(self._buf[:nl]).strip()
                     del self._buf[: nl + 1]
-                    if line.startswith(b"{"):
-                        return line
-                    noise += len(line) + 1
-                    if noise > _MAX_NOISE:
+                    if is_end(line):
+                        lines.append(line)
+                        return lines
+                    size += len(line) + 1
+                    if line and (b"error" in line.lower() or b"error" not in last.lower()):
+                        last = line  # the last line naming an error, else the last line
+                    if keep:
+                        lines.append(line)
+                    if size > (limit if keep else _MAX_NOISE):
                         self._kill()
+                        what = "of output" if keep else "on stdout that are not a JSON answer"
                         raise AdapterOutputError(
-                            f"{self.label}: more than {_MAX_NOISE} bytes on stdout that are "
-                            "not a JSON answer; the process is replaced"
+                            f"{self.label}: more than {limit if keep else _MAX_NOISE} bytes "
+                            f"{what}; the process is replaced"
                         )
                     nl = self._buf.find(b"\n")
                 if len(self._buf) > limit:
@@ -303,7 +322,12 @@ class PersistentProcess:
                     continue
                 data = os.read(proc.stdout.fileno(), _CHUNK)
                 if not data:
-                    raise self._died("before answering")
+                    err = self._died("before answering")
+                    if last:
+                        err.args = (
+                            f"{err.args[0]}; its last output: {last[:200].decode(errors='replace')!r}",
+                        )
+                    raise err
                 self._buf += data
 
 

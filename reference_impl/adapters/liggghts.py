@@ -1,9 +1,15 @@
 """LIGGGHTS adapter: ``pair_style gran`` / ``fix wall/gran`` of the Debian ``liggghts`` program.
 
 Install with ``apt-get install -y liggghts`` (Debian 12: LIGGGHTS-PUBLIC 3.8.0).
-Every run is one ``liggghts`` process reading its input script on stdin (about
-0.6 s to start, so no persistent mode is needed); the trajectory comes back on
-stdout as lines ``HCV q v f`` written by ``fix print`` after every step.
+LIGGGHTS reads its input script on stdin; the trajectory comes back on stdout as
+lines ``HCV q v f`` written by ``fix print`` after every step. One process serves
+every run and variant (the persistent mode, `reference_impl.adapters._persistent`):
+each run's script ends with ``print "HCVEND n"`` and ``clear`` (which resets the
+whole simulation), and the adapter reads up to that marker. LIGGGHTS must then
+flush its output per line: it runs under ``stdbuf -oL`` (its stdout is a pipe,
+fully buffered otherwise, so the marker would never come). A LIGGGHTS ``ERROR``
+ends the process; that run fails quoting the error line and the next run starts
+a fresh process. ``persistent=false`` starts one process per run (~0.6 s each).
 
 Scene -> LIGGGHTS (exact mapping, from the 3.8.0 sources)
 ---------------------------------------------------------
@@ -103,6 +109,8 @@ _E_MIN = 0.05
 # (the bench's worker has its own per-run timeout).
 _TIMEOUT = 600.0
 _ARGS = ("-echo", "none", "-log", "none")
+# Output bound of one run in the persistent mode (bytes): ~70 per step of fix print.
+_MAX_OUTPUT = 64 << 20
 
 
 def liggghts_available() -> str | None:
@@ -147,6 +155,8 @@ class LiggghtsAdapter(ContactAdapter):
     restitution : float, optional
         ``coefficientRestitution`` written instead of the scene's e (0.05 < e <= 1):
         what ``hcv calibrate liggghts[...] --param restitution`` searches.
+    persistent : bool
+        One LIGGGHTS process for every run (default); False: one per run.
 
     Without options the variants are hertz and hooke on the wall with
     ``limitForce`` off and on, and hertz between two spheres.
@@ -163,6 +173,7 @@ class LiggghtsAdapter(ContactAdapter):
         limit_force: bool | None = None,
         radius: float | None = None,
         restitution: float | None = None,
+        persistent: bool = True,
     ):
         reason = liggghts_available()
         if reason:
@@ -199,6 +210,13 @@ class LiggghtsAdapter(ContactAdapter):
             )
         self.restitution = None if restitution is None else float(restitution)
         self._version: str | None = None
+        if not isinstance(persistent, bool):
+            raise HCVInputError(
+                f"adapter liggghts: persistent must be true or false, got {persistent!r}"
+            )
+        # stdbuf (coreutils) makes LIGGGHTS flush per line; without it: one process per run
+        self.persistent = persistent and shutil.which("stdbuf") is not None
+        self._server = None
 
     # -- configuration ----------------------------------------------------------
     @property
@@ -225,16 +243,49 @@ class LiggghtsAdapter(ContactAdapter):
         combos = [(m, g, lim) for g in self.geoms for m in self.models for lim in self.limits]
         if self._default_set:
             combos.append(("hertz", "pair", False))
-        return [
+        out = [
             LiggghtsAdapter(
                 model=m,
                 geometry=g,
                 limit_force=lim,
                 radius=self.radius,
                 restitution=self.restitution,
+                persistent=self.persistent,
             )
             for m, g, lim in combos
         ]
+        for v in out:
+            v._server = self._shared_server()  # one LIGGGHTS process for every variant
+        return out
+
+    def _shared_server(self):
+        from reference_impl.adapters._persistent import PersistentProcess
+
+        if self._server is None:
+            self._server = PersistentProcess(
+                ["stdbuf", "-oL", "liggghts", *_ARGS], label="liggghts", startup_timeout=60.0
+            )
+        return self._server
+
+    def _run(self, script: str) -> str:
+        """stdout of ``script`` run by LIGGGHTS (the shared process, or a fresh one)."""
+        if not self.persistent:
+            return _run_liggghts(script)
+        server = self._shared_server()
+        marker = f"HCVEND {server._next_id + 1}"  # the exchange's own number: unique
+        payload = f'{script}print "{marker}"\nclear\n'.encode()
+        lines = server.exchange(
+            payload, lambda ln: ln == marker.encode(), timeout=_TIMEOUT, limit=_MAX_OUTPUT
+        )
+        out = "\n".join(ln.decode(errors="replace") for ln in lines[:-1])
+        err = next((ln for ln in out.splitlines() if ln.startswith("ERROR")), None)
+        if err:  # pragma: no cover - LIGGGHTS exits on ERROR (caught by exchange)
+            raise AdapterRunError(f"liggghts: {err}", out[-4000:])
+        return out
+
+    def close(self) -> None:
+        if self._server is not None:
+            self._server.close()
 
     @property
     def version(self) -> str:
@@ -388,7 +439,7 @@ class LiggghtsAdapter(ContactAdapter):
         reason = self.supports(scene)
         if reason:
             raise AdapterDeclined(reason)
-        rows = _hcv_rows(_run_liggghts(self.script(scene, steps=int(scene.n_steps))))
+        rows = _hcv_rows(self._run(self.script(scene, steps=int(scene.n_steps))))
         # the onset sample (q = 0, v0, no force at deltan = 0), then one row per step
         data = np.vstack([[0.0, scene.v0, 0.0], rows])
         q, v, f = data[:, 0], data[:, 1], data[:, 2]
@@ -432,7 +483,7 @@ class LiggghtsAdapter(ContactAdapter):
             lines.append('run 0\nprint "HCV ${q} ${v} ${f}"\n')
         script = self.script(scene, delta0=states[0][0], rate=states[0][1])
         script = script[: script.rindex("run 0")] + "".join(lines)
-        rows = _hcv_rows(_run_liggghts(script))
+        rows = _hcv_rows(self._run(script))
         if rows.shape[0] != len(states):
             raise AdapterRunError(
                 f"liggghts printed {rows.shape[0]} forces for {len(states)} states"
