@@ -45,3 +45,31 @@ def test_codes_table_rows_and_missing_codes():
         assert_close(a, b, rtol=1e-9, claim=CLAIM, call=f"e at {SPEEDS} m/s, N = {n}")
     missing = [r for r in rows if r.code == "nowhere"]
     assert all("unknown adapter 'nocode'" in r.error and math.isnan(r.delivered) for r in missing)
+
+
+def test_calibration_table_finds_the_input_or_says_out_of_reach():
+    """A cmd: program whose option scales the damping it integrates: the option that
+    delivers the asked e is 1 (to the step's first-order error, 3e-3 at 200 steps per
+    contact); over a range of at least twice the damping the target is out of reach, with
+    the span delivered (below it); a missing code is a row saying why."""
+    import sys
+    from pathlib import Path
+
+    from reference_impl.bench.codes import calibration_table
+
+    script = f"{sys.executable} {Path(__file__).resolve().parent / '_persistent_script.py'}"
+    spec = f"cmd[persistent=true]:{script}"
+    rows = calibration_table(
+        codes=[
+            ("script", spec, 1.5, "zeta_scale", (0.2, 3.0)),
+            ("narrow", spec, 1.5, "zeta_scale", (2.0, 3.0)),  # twice the damping at least
+            ("nowhere", "nocode", 1.5, "x"),
+        ],
+        asked=(0.5,),
+    )
+    by = {(r["code"], r["asked"]): r for r in rows}
+    assert by[("script", 0.5)]["found"], by[("script", 0.5)]
+    assert_close(by[("script", 0.5)]["value"], 1.0, rtol=3e-3, claim=CLAIM, call="zeta_scale")
+    out = by[("narrow", 0.5)]
+    assert not out["found"] and "out of reach" in out["message"] and out["delivered"][1] < 0.5
+    assert "unknown adapter" in by[("nowhere", 0.5)]["error"]

@@ -31,7 +31,7 @@ from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.damping import zeta_from_restitution
 
-__all__ = ["ASKED", "CODES", "CodeRow", "codes_table"]
+__all__ = ["ASKED", "CALIBRATED", "CODES", "CodeRow", "calibration_table", "codes_table"]
 
 MASS = 4.1103e-3  # kg: 10 mm steel sphere
 HERTZ_K = 1.0879e10  # N/m^1.5: on a steel wall (E* = 115.4 GPa, R = 5 mm)
@@ -53,6 +53,14 @@ CODES = (
     ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0),
 )
 _TIMEOUT = 120.0  # s per run
+# (code, adapter spec with its keys, p, option searched): the input that delivers e.
+CALIBRATED = (
+    ("LIGGGHTS", "liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
+    ("Kratos DEM", "kratos[law=hertz,scheme=verlet]", 1.5, "restitution"),
+    ("YADE", "yade[input=en,geometry=wall]", 1.5, "en"),
+    ("YADE", "yade[input=tc,geometry=wall]", 1.0, "en"),
+    ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0, "dampratio"),
+)
 
 
 @dataclass
@@ -147,4 +155,43 @@ def codes_table(codes=CODES, asked=ASKED, steps=STEPS_PER_CONTACT, speeds=SPEEDS
             ex.close()
         if progress is not None:
             progress(i + 1, len(codes))
+    return rows
+
+
+def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 200, v0=1.0):
+    """The input that delivers each asked e (`reference_impl.bench.calibrate`), per code.
+
+    ``codes`` items are (code, adapter spec, p, option[, (lo, hi)]): the range is the
+    adapter's ``calibration_range`` unless given. Returns dicts with the code,
+    variant, option, asked e, and either the value found
+    (``found``, ``value``) or the span the code delivers over the option's range
+    (``delivered``: "out of reach"), and the calibration's one-line ``message``.
+    """
+    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.scenes import scene_from_dict
+
+    rows = []
+    for code, spec, p, param, *bracket in codes:  # an optional 5th item: the option's range
+        k = HERTZ_K if p == 1.5 else HOOKE_K
+        for e in asked:
+            scene = scene_from_dict(
+                {
+                    "name": f"issue-28-{'hertz' if p == 1.5 else 'hooke'}",
+                    "mass": MASS,
+                    "velocities": [v0],
+                    "kind": "impact",
+                    "potential": {"family": "power", "k": k, "p": p},
+                    "damping": {"law": "universal", "restitution": e},
+                }
+            )
+            row = {"code": code, "variant": spec, "option": param, "asked": e}
+            try:
+                res = calibrate(spec, scene, param=param, target=e, bracket=bracket[0] if bracket else None,
+                                steps_per_contact=steps_per_contact, timeout=_TIMEOUT)  # fmt: skip
+            except HCVInputError as exc:  # not installed, or declined
+                row.update(found=False, error=str(exc))
+            else:
+                row.update(found=res.found, value=res.value, delivered=list(res.delivered),
+                           message=res.message)  # fmt: skip
+            rows.append(row)
     return rows
