@@ -109,6 +109,8 @@ _E_MIN = 0.05
 # (the bench's worker has its own per-run timeout).
 _TIMEOUT = 600.0
 _ARGS = ("-echo", "none", "-log", "none")
+# What `liggghts -h` said, once per process (the version line).
+_PROGRAM: dict = {}
 # Output bound of one run in the persistent mode (bytes): ~70 per step of fix print.
 _MAX_OUTPUT = 64 << 20
 
@@ -291,9 +293,11 @@ class LiggghtsAdapter(ContactAdapter):
     def version(self) -> str:
         """The program's version line, e.g. "LIGGGHTS-PUBLIC 3.8.0"."""
         if self._version is None:
-            out = _run_liggghts("", timeout=60.0, args=("-h",))
-            head = next((ln for ln in out.splitlines() if "Version" in ln), "")
-            self._version = head.split("Version", 1)[-1].split(",")[0].strip() or "unknown"
+            if "version" not in _PROGRAM:  # one `liggghts -h` per process, not per variant
+                out = _run_liggghts("", timeout=60.0, args=("-h",))
+                head = next((ln for ln in out.splitlines() if "Version" in ln), "")
+                _PROGRAM["version"] = head.split("Version", 1)[-1].split(",")[0].strip()
+            self._version = _PROGRAM["version"] or "unknown"
         return self._version
 
     def describe(self) -> dict:
