@@ -515,7 +515,9 @@ def _run_liggghts(script: str, timeout: float = _TIMEOUT, args: tuple = _ARGS) -
             ["liggghts", *args],
             input=script,
             capture_output=True,
-            text=True,
+            # LIGGGHTS' error messages can carry stray bytes (uninitialised memory): replace
+            encoding="utf-8",
+            errors="replace",
             timeout=timeout,
             start_new_session=True,
         )
