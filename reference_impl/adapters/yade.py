@@ -8,7 +8,10 @@ run only and the next run starts a fresh YADE. The script it runs is
 `reference_impl.adapters._yade_server` (which also lists the traps it avoids).
 
 Scene -> YADE (from the sources, ``pkg/dem/HertzMindlin.cpp`` and
-``pkg/dem/ViscoelasticPM.cpp`` of YADE 2023)
+``pkg/dem/ViscoelasticPM.cpp`` of YADE 2023; the places are named by function and
+by the source's own section comments, not by line: the 2023.02a tree itself was
+not at hand, the copies read were later ones, and every formula below is checked
+by measurement against the Debian 2023.02a build in ``verification/test_yade.py``)
 --------------------------------------------------------------------------
 Geometry "wall": a sphere of radius R and mass m on ``utils.wall`` (z = 0, fixed,
 mass 0); "pair": two spheres of radius R and mass 2m head-on (reduced mass m).
