@@ -1,6 +1,7 @@
 """``hcv bench``: the command line of the benchmark and CI gate.
 
-    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE] [--gate]
+    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE]
+                      [--gate [{both,implementation,delivery}]]
                       [--json FILE] [--junit FILE] [--plot FILE] [--markdown FILE]
 
 ADAPTER is a registered name (``kratos``, ``lammps``, ``reference``, ``subprocess``), an
@@ -161,7 +162,13 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
     )
     b.add_argument(
-        "--gate", action="store_true", help="exit 1 when any metric fails (0 when all pass)"
+        "--gate",
+        nargs="?",
+        const="both",
+        choices=("both", "implementation", "delivery"),
+        help="exit 1 when a metric of the verdict(s) named fails (0 when all pass); "
+        "plain --gate = both: implementation (against the declared law's exact solution) "
+        "and delivery (against what the scene asks)",
     )
     b.add_argument("--json", metavar="FILE", help="write the JSON report here")
     b.add_argument("--junit", metavar="FILE", help="write JUnit XML here")
@@ -226,18 +233,9 @@ def cmd_bench(args) -> int:
         raise KeyboardInterrupt
     status = result.exit_status(args.gate)
     if args.gate:
-        c = result.counts()
-        verdict = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
-        if result.measured_nothing:
-            print(
-                f"gate: FAIL (nothing measured: all {c['skip']} metrics skipped; "
-                "--show-skipped lists why; a gate that measured nothing does not pass)"
-            )
-        else:
-            print(
-                f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} "
-                f"metrics failed, {c['error']} undecided by our reference)"
-            )
+        from reference_impl.bench.report import gate_lines
+
+        print("\n".join(gate_lines(result, args.gate)))
     return status
 
 

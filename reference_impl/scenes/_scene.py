@@ -75,6 +75,8 @@ _DAMPING_KEYS = (
     "A",
     "alpha",
 )
+
+
 @dataclass(frozen=True)
 class Scene:
     """One validated scene.
@@ -106,6 +108,10 @@ class Scene:
     source : str
         Where the scene came from (a path, ``<embedded>/name.toml`` or the
         label given to `parse_scene`).
+    restitution_end : str
+        Where the scene's restitution is read: ``"overlap"`` (q back to 0) or
+        ``"zero-force"`` (``damping.restitution_end``); what ``hcv bench``'s delivery
+        metric compares with the asked restitution.
     """
 
     name: str
@@ -118,6 +124,7 @@ class Scene:
     zeta: float | None
     source: str
     law: DampingLaw | None = None
+    restitution_end: str = "overlap"
 
     def __post_init__(self):
         if self.law is None:  # built positionally by older callers: derive it
@@ -254,8 +261,7 @@ class _Reader:
         items = self._table[key]
         if not isinstance(items, list) or not 2 <= len(items) <= _MAX_TERMS:
             raise self._err(
-                f"{name} must be an array of at least two (at most {_MAX_TERMS}) "
-                "potential tables"
+                f"{name} must be an array of at least two (at most {_MAX_TERMS}) potential tables"
             )
         return [
             _potential(self._err, item, f"{name}[{i}]", self._depth + 1)
@@ -433,7 +439,13 @@ def scene_from_dict(
             raise _with_context(exc, prefix) from exc
         if key is not None:
             checked = potentials[("energy", key)] = energy
-    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source, dlaw)
+    end = _string(
+        err,
+        data.get("damping", {}).get("restitution_end", "overlap"),
+        "damping.restitution_end",
+        _ENDS,
+    )
+    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source, dlaw, end)
 
 
 def parse_scene(text: str, source: str = "<string>") -> Scene:
