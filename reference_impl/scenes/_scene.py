@@ -221,7 +221,12 @@ def _string(err: _Where, value, name: str, choices=None, max_chars: int = _MAX_N
     if len(value) > max_chars:
         raise err(f"{name} has {len(value)} characters; at most {max_chars}")
     if choices is not None and value not in choices:
-        raise err(f"{name} = {_short(value)} is not one of {', '.join(repr(c) for c in choices)}")
+        # 'hunt_crossley' for 'hunt-crossley', 'zero_force' for 'zero-force': name the one meant
+        near = difflib.get_close_matches(value.replace("_", "-"), list(choices), n=1, cutoff=0.75)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise err(
+            f"{name} = {_short(value)} is not one of {', '.join(repr(c) for c in choices)}{hint}"
+        )
     return value
 
 
@@ -425,6 +430,13 @@ def scene_from_dict(
         raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
     law, zeta, dlaw = _damping(err, data.get("damping", {}))
     potential, key = _cached_potential(err, data["potential"], potentials)
+    if dlaw.A and float(potential.leading_exponent) < 2.0:
+        # checked here, not first at solve time, so the message names the scene file
+        raise err(
+            "damping law 'viscoelastic' needs U'' finite at contact (leading exponent "
+            "n >= 2, force exponent p >= 1); got n = "
+            f"{float(potential.leading_exponent):.6g}, where C = A U'' is infinite at q = 0"
+        )
     # A potential with a turning point at energy E has one at every lower energy (U rises
     # continuously from 0): with a cache, energies up to the largest one checked are known.
     checked = potentials.get(("energy", key), 0.0) if key is not None else 0.0
