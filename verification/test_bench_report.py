@@ -425,3 +425,40 @@ def test_metrics_that_do_not_apply_are_na_not_skipped():
         claim=CLAIM,
         call="Metric.evaluate(impact scene, one speed)",
     )
+
+
+def test_a_failed_row_names_the_same_v0_as_its_fail_line():
+    """Issue 26: with two codes the table reads rows at a common speed (the worst over the
+    codes: B's 0.5 m/s here), but a failed row keeps its own worst speed (A's 5 m/s), the
+    one its FAIL line names."""
+    rows = {
+        "A": [(0.5, 0.70, 0.0101), (5.0, 0.65, 0.11)],  # fails, worst at 5 m/s
+        "B": [(0.5, 0.60, 0.18), (5.0, 0.729, 0.0003)],  # fails worse, at 0.5 m/s
+    }
+    metrics, ctxs = [], []
+    for code, per in rows.items():
+        worst = max(per, key=lambda r: r[2])
+        status = "fail" if worst[2] > 0.1 else "pass"
+        metrics.append(
+            MetricResult(
+                code, "s", "restitution_asked", status, value=worst[2], tolerance="rtol 0.02",
+                explanation="off" if status == "fail" else "", error=worst[2], limit=0.1,
+                at_v0=worst[0], measured=worst[1], expected=0.7292, rule="rule",
+                per_v0=[{"v0": v, "measured": g, "expected": 0.7292, "error": e, "limit": 0.1}
+                        for v, g, e in per],
+            )
+        )  # fmt: skip
+        ctxs.append(SceneContext(code, "s", "impact", True))
+    text = scorecard_text(BenchResult(adapter="x", metrics=metrics, contexts=ctxs))
+    fail_line = next(
+        line for line in text.splitlines() if line.strip().startswith("FAIL s / restitution_asked")
+        and "0.65" in line
+    )  # fmt: skip
+    row = next(line for line in text.splitlines() if line.startswith("A ") and "FAIL" in line)
+    assert_true(
+        "at v0 = 5 m/s" in fail_line and row.split()[4] == "5",
+        got=f"{fail_line!r} / {row!r}",
+        should="both at v0 = 5",
+        claim=CLAIM,
+        call="scorecard_text(two codes)",
+    )

@@ -184,8 +184,9 @@ def _common_speeds(result) -> dict:
     """(scene, metric) -> the speed every code's row shows: the worst over the codes.
 
     Per code, a metric reports its own worst speed; with several codes (variants) on
-    one scene, every row of a metric is read at one speed so that they compare side by
-    side (each code's own worst speed is in its FAIL line).
+    one scene, every passing row of a metric is read at one speed so that they compare
+    side by side (a failed row keeps the code's own worst speed, the one its FAIL line
+    names).
     """
     worst: dict = {}
     for m in result.metrics:
@@ -210,7 +211,8 @@ def _rows(result, show_skipped: bool) -> list[list[str]]:
             continue
         c = metric_columns(result, m)
         v0 = common.get((m.scene, m.metric))
-        if v0 is not None and v0 != c["v0"]:
+        # a failed metric keeps its own worst speed: its row and its FAIL line name one v0
+        if v0 is not None and v0 != c["v0"] and m.status != "fail":
             at = next((r for r in m.per_v0 if r["v0"] == v0), None)
             if at is not None:
                 c.update(measured=at["measured"], reference=at["expected"], error=at["error"])
