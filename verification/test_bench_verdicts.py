@@ -26,6 +26,7 @@ from reference_impl.adapters.reference import ReferenceAdapter
 from reference_impl.bench.runner import run_bench
 from reference_impl.scenes import scene_from_dict
 
+from ._sweeps import cli, needs_dask
 from .assertions import assert_true
 from .strategies import bench_scenes
 
@@ -171,3 +172,30 @@ def test_gate_selects_a_verdict_on_the_command_line():
         claim=CLAIM,
         call="hcv bench MisCalibrated --gate [implementation|delivery]",
     )
+
+
+@needs_dask
+def test_a_bench_sweeps_summary_shows_measured_expected_and_error(tmp_path, capsys):
+    """summary.md of a bench: sweep shows the delivered restitution, the asked one and the
+    error between them (issue 26: not only pass / fail)."""
+    spec = tmp_path / "bench.toml"
+    spec.write_text(
+        'task = "bench:verification._wrong_codes:MisCalibrated"\n'
+        '[scene]\nname = "s"\nmass = 0.01\nvelocities = [1.0]\nkind = "impact"\n'
+        '[scene.potential]\nfamily = "power"\nk = 1e6\np = 1.0\n'
+        '[scene.damping]\nlaw = "universal"\nrestitution = 0.5\n'
+        '[sweep]\n"potential.p" = [1.5]\n'
+    )
+    out = tmp_path / "out"
+    code, stdout, err = cli(["sweep", str(spec), "--workers", "1", "--out", str(out)], capsys)
+    summary = (out / "summary.md").read_text()
+    header = next((line for line in summary.splitlines() if "failed_metrics" in line), "")
+    assert_true(
+        code == 1
+        and all(c in header for c in ("measured.restitution", "asked_restitution",
+                                      "rel_error.restitution_asked")),
+        got=f"exit {code}; header {header!r}",
+        should="exit 1 and the measured, asked and error columns of the restitution",
+        claim=CLAIM,
+        call="hcv sweep bench:MisCalibrated",
+    )  # fmt: skip
