@@ -77,8 +77,10 @@ def test_without_a_speed_the_law_is_refused_saying_why(law):
         parse_scene(text, "my.toml")
     msg = str(info.value)
     assert_true(
-        msg.startswith("scene my.toml: damping.restitution") and "restitution_speed" in msg
-        and "depends on the impact speed" in msg and "\n" not in msg,
+        msg.startswith("scene my.toml: damping.restitution")
+        and "restitution_speed" in msg
+        and "depends on the impact speed" in msg
+        and "\n" not in msg,
         got=msg,
         should="one line: needs damping.restitution_speed, its e depends on the speed",
         claim=CLAIM,
