@@ -110,7 +110,8 @@ class _Lines:
 _EPILOG = (
     "adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
     "kratos[hertz,verlet] or lammps[tsuji], names its key):\n{adapters}"
-    "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
+    "\n\nexit status: 0 pass (or no --gate); 1 a metric failed (of the verdict --gate "
+    "names: both by default, or implementation / delivery), or nothing was "
     "measured (every metric skipped); 2 usage or configuration error (also a law "
     "the adapter declares that no reference can be computed for); 3 no metric failed but "
     "our reference could not decide one; "
