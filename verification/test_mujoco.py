@@ -339,13 +339,17 @@ def test_hcv_bench_mujoco_gate(tmp_path):
     expect = sorted([*labels[:4], labels[5]])
     assert failed == [(lab, "restitution_asked") for lab in expect], failed
     zf = [m for m in mine if m["variant"] == labels[4]]
-    assert zf and all(m["status"] in ("pass", "skip") for m in zf), zf
+    assert zf and all(m["status"] in ("pass", "skip", "n/a") for m in zf), zf
     assert sum(m["status"] == "pass" for m in zf) >= 7  # every impact metric
     default = [m for m in mine if m["variant"] == labels[5]]
     # It runs (polynomial damping is a law the references run): measured, and apart from
     # the asked restitution it delivers its declared law.
     assert sum(m["status"] == "pass" for m in default) >= 5, default
-    assert all(m["status"] in ("pass", "skip") for m in default if m["metric"] != "restitution_asked")
+    assert all(
+        m["status"] in ("pass", "skip", "n/a")
+        for m in default
+        if m["metric"] != "restitution_asked"
+    )
     assert sorted(os.listdir(tmp_path)) == ["fast.toml", "m.json"]  # nothing left
 
 

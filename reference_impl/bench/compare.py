@@ -42,7 +42,7 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
             v = m.get("variant", "")
             if v not in variants:
                 variants.append(v)
-            if m.get("status") == "skip":
+            if m.get("status") in ("skip", "n/a"):
                 continue
             key = (m.get("scene", ""), m.get("metric", ""))
             measured = m.get("measured", m.get("value"))

@@ -33,7 +33,7 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     rows, flags = [], []
     for m in d.get("metrics", []):
         status = m.get("status", "")
-        if status == "skip":
+        if status in ("skip", "n/a"):  # n/a: the metric does not apply
             continue
         unit = _UNITS.get(m.get("metric", ""), "")
         at = _bench_num(m.get("at_v0"))
@@ -63,7 +63,7 @@ def _scenes_no_code_ran(docs) -> dict[str, str]:
     for d in docs:
         for m in d.get("metrics", []):
             scene = m.get("scene", "")
-            if m.get("status") == "skip":
+            if m.get("status") in ("skip", "n/a"):
                 seen.setdefault(scene, m.get("explanation", ""))
             else:
                 ran.add(scene)
