@@ -23,7 +23,13 @@ h^2; order 14, with the order-12 entry as the error estimate):
    sigma from 1 to 0, unknowns (w, t), to q = 0 exactly.
 
 A return along the slow manifold of an overdamped law (w -> 0 with q: the kinetic
-energy never dominates again) is reported as no return: see `_NO_RETURN_Q`.
+energy never dominates again) is reported as no return: see `_NO_RETURN_Q` (the field
+"stop" says which test stopped it; the caller refuses where that cannot be right).
+
+A pure Hunt-Crossley law (sc[6] = 1) has F = U'(q) (1 + alpha w) with
+1 + alpha w = (1 + alpha v0) exp(-(alpha/m) int U' dt) > 0: the force never vanishes
+before q = 0, so no zero-force event is searched (the round-off of U' + C w, ~1e-16 U',
+exceeds U' (1 + alpha w) once alpha v0 >~ 30 and made spurious ones; issue 29).
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import types
 import numba
 import numpy as np
 
-__all__ = ["OUT_FIELDS", "solve", "python_solver"]
+__all__ = ["OUT_FIELDS", "STOP_CREEP", "STOP_NO_RETURN_Q", "solve", "python_solver"]
 
 # GBS columns: n_j = 2 j, j = 1..7 (order 14; measured fewest right-hand sides at 1e-14).
 KCOL = 7
@@ -73,7 +79,12 @@ OUT_FIELDS = (
     "err_w",
     "n_steps",
     "status",
+    "stop",
 )
+# Why a run without return stopped (field "stop"): the overlap fell below _NO_RETURN_Q q_max,
+# or the creep test held (see `solve`); 0 when the body returned.
+STOP_NO_RETURN_Q = 1.0
+STOP_CREEP = 2.0
 
 
 # ---- force function of sums of power laws (the compiled path) -------------------
@@ -293,6 +304,11 @@ def locate(kind, mode, qs, s, a, b, h, g0, g1, ea, eb, ks, ps, cs, es, sc, Ta, T
             if side == 1:
                 glo *= 0.5
             side = 1
+        # Converged: stop before a new tau, so that (tau, ra, rb) stay one state (the
+        # old order returned the next tau with this state: in sigma, q(tau) then missed
+        # w, and the peak force was 2e-12 off for viscoelastic A = 30 s on Hertz).
+        if abs(hi - lo) <= tol:
+            break
         dg = event_dg(kind, mode, qs, s + tau, q, w, ks, ps, cs, es, sc)
         if dg == dg and dg != 0.0:
             step = -g / dg
@@ -305,8 +321,6 @@ def locate(kind, mode, qs, s, a, b, h, g0, g1, ea, eb, ks, ps, cs, es, sc, Ta, T
             tau += step
         else:
             tau = (lo * ghi - hi * glo) / (ghi - glo)
-        if abs(hi - lo) <= tol:
-            break
     return tau, ra, rb
 
 
@@ -392,7 +406,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
             tau, ra, rb = locate(2, 0, 0.0, t, q, w, h, dF, ndF, nq, nw, ks, ps, cs, es, sc, Ta, Tb)
             Fp, _, _, _ = forces(ra, rb, ks, ps, cs, es, sc)
             peak = max(peak, Fp)
-        if past_peak and not zf_found and F > 0 and nF <= 0:
+        if past_peak and not zf_found and sc[6] == 0.0 and F > 0 and nF <= 0:
             tau, ra, rb = locate(1, 0, 0.0, t, q, w, h, F, nF, nq, nw, ks, ps, cs, es, sc, Ta, Tb)
             out[4] = t + tau
             out[5] = rb
@@ -406,6 +420,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
                 exit_now = True
                 break
             if q <= _NO_RETURN_Q * q_max:
+                out[13] = STOP_NO_RETURN_Q
                 break
             # Creeping on the slow manifold w ~ -U'/C (inertia negligible: the drag stops the
             # body within m |w| / C << q, and U' q > m w^2), where the time to reach q = 0,
@@ -415,6 +430,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
             Cq = (nF - ndU) / w * q
             if sc[4] == 1.0 and zf_found and q <= Q_OUT_FRAC * q_max:
                 if nUq > m * w * w and Cq > _CREEP_RATIO * m * abs(w):
+                    out[13] = STOP_CREEP
                     break
             # the next step must not jump past q = 0 (and be refused as NaN forever)
             h = min(h, 0.9 * q / abs(w))
@@ -456,7 +472,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
             tau, ra, rb = locate(2, 1, qs, s, a, b, hs, dF, ndF, na, nb, ks, ps, cs, es, sc, Ta, Tb)
             Fp, _, _, _ = forces(qs * (s + tau) ** KSUB, ra, ks, ps, cs, es, sc)
             peak = max(peak, Fp)
-        if not zf_found and F > 0 and nF < 0:
+        if not zf_found and sc[6] == 0.0 and F > 0 and nF < 0:
             tau, ra, rb = locate(1, 1, qs, s, a, b, hs, F, nF, na, nb, ks, ps, cs, es, sc, Ta, Tb)
             out[4] = rb
             out[5] = ra
@@ -497,6 +513,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
     out[10] = errsum
     out[11] = nsteps
     out[12] = 0.0
+    out[13] = 0.0
     return out
 
 
