@@ -148,11 +148,13 @@ def hunt_crossley_contact_time(k, p, m, alpha, v0, dps: int = 30):
             return y / alpha
 
         def leg(branch):
+            # dimensionless integrand (v0 / |v|): mpmath.quad's error test is absolute, and
+            # stopped early on the raw one at k = 1e300 (times ~1e-122 s)
             def f(u):
                 if u == 0:
                     return mpmath.mpf(0)
-                return 2 * q_max * u / abs(speed(u, branch))
+                return 2 * u * v0 / abs(speed(u, branch))
 
             return mpmath.quad(f, [0, mpmath.mpf(1) / 2, 1])
 
-        return +(leg(-1) + leg(0))
+        return +((leg(-1) + leg(0)) * q_max / v0)

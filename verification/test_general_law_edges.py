@@ -224,3 +224,31 @@ def test_viscoelastic_creep_on_hertz_returns():
         ("restitution", "restitution_zero_force"),
         ("max_penetration", "max_force", "peak_force"),
     )
+
+
+@pytest.mark.parametrize(
+    "k, p, m, v0, x",
+    [
+        (1.0, 1.5, 1.0, 1.0, 1e6),
+        (1e-300, 1.5, 1.0, 1.0, 1e6),
+        (1e300, 1.0, 1e-4, 1e-6, 1e6),
+        (1.0, 3.0, 1.0, 1.0, 1e5),
+    ],
+)
+def test_hunt_crossley_strong_damping_is_solved(k, p, m, v0, x):
+    """alpha v0 = 1e6 was refused ("did not finish within 20000 steps": the return at
+    1 + alpha q' -> 0 is stiff in (q, q')); e = 1.0e-6 and q_max from U(q_max) = G(v0), and
+    the contact time by quadrature of the first integral, each within the reported bound."""
+    pot, law = PowerLaw(k, p), {"law": "hunt-crossley", "alpha": x / v0}
+    sol = solve_law_impact(pot, m, v0, law)
+    call = _call(pot, m, v0, law)
+    _check_fields(
+        sol,
+        hunt_crossley(k, p, m, x / v0, v0),
+        call,
+        (),
+        ("restitution", "restitution_zero_force"),
+        ("max_penetration", "max_force"),
+    )
+    want = hunt_crossley_contact_time(k, p, m, x / v0, v0)
+    assert_less(abs(sol.contact_time - want), sol.error_time, claim=CLAIM, call=call, what="t_c")
