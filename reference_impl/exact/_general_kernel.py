@@ -14,7 +14,9 @@ h^2; order 14, with the order-12 entry as the error estimate):
    singularity of q(t) at contact (q ~ v0 t + c t^(n)) is gone and the high order is
    kept. The phase stops early if the damping has halved w (a turning point must
    not come near: dw/dq ~ 1/w).
-2. middle: physical time, unknowns (q, w), smooth while q > 0. Events (located by
+2. middle: physical time, unknowns (q, w), smooth while q > 0 (pure Hunt-Crossley with
+   alpha v0 > HC_LOG_X: (q, l = log(1 + alpha w)), since l' = -alpha U'(q)/m is not stiff
+   where 1 + alpha w -> 0 on the return). Events (located by
    the Illinois method on re-integrated sub-steps): w = 0 (maximum penetration),
    total force F = U' + C w = 0 after it (the zero-force end), dF/dt = 0 with F
    falling (a peak of the contact force).
