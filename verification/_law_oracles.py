@@ -30,8 +30,11 @@ __all__ = ["linear_oscillator", "hunt_crossley", "hunt_crossley_contact_time"]
 _DPS = 60
 
 
-def linear_oscillator(k, m, c, v0) -> dict:
+def linear_oscillator(k, m, c, v0, zeta=None) -> dict:
     """Every field of one impact of m q'' + c q' + k q = 0 (SI units), as mpmath numbers.
+
+    ``zeta`` (the universal law's float) replaces c = 2 zeta sqrt(m k), which no finite
+    precision holds exactly: at zeta = 1 it would leave omega^2 - beta^2 a rounding off 0.
 
     Returns
     -------
@@ -41,10 +44,17 @@ def linear_oscillator(k, m, c, v0) -> dict:
         max_penetration, max_force, peak_force.
     """
     with mpmath.workdps(_DPS):
-        k, m, c, v0 = (mpmath.mpf(x) for x in (k, m, c, v0))
-        beta = c / (2 * m)
+        k, m, v0 = (mpmath.mpf(x) for x in (k, m, v0))
         om2 = k / m
-        d = om2 - beta * beta
+        if zeta is None:
+            c = mpmath.mpf(c)
+            beta = c / (2 * m)
+            d = om2 - beta * beta
+        else:
+            z = mpmath.mpf(zeta)
+            beta = z * mpmath.sqrt(om2)
+            c = 2 * m * beta
+            d = om2 * (1 - z * z)
         if d > 0:
             wd = mpmath.sqrt(d)
 

@@ -59,8 +59,6 @@ def _oracle_c(k, m, law):
     with mpmath.workdps(60):
         if law["law"] == "viscoelastic":
             return mpmath.mpf(law["A"]) * mpmath.mpf(k)
-        if law["law"] == "universal":
-            return 2 * mpmath.mpf(law["zeta"]) * mpmath.sqrt(mpmath.mpf(m) * mpmath.mpf(k))
         c = law["c"]
         return mpmath.mpf(c[0] if isinstance(c, list) else c)
 
@@ -86,7 +84,10 @@ def _check_linear(k, m, v0, law):
     sol = _solve_or_refusal(pot, m, v0, law)
     if sol is None:
         return
-    tr = linear_oscillator(k, m, _oracle_c(k, m, law), v0)
+    if law["law"] == "universal":
+        tr = linear_oscillator(k, m, None, v0, zeta=law["zeta"])
+    else:
+        tr = linear_oscillator(k, m, _oracle_c(k, m, law), v0)
     call = _call(pot, m, v0, law)
     assert_true(
         sol.returns_to_q0 == tr["returns_to_q0"],
