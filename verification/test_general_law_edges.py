@@ -253,3 +253,29 @@ def test_hunt_crossley_strong_damping_is_solved(k, p, m, v0, x):
     )
     want = hunt_crossley_contact_time(k, p, m, x / v0, v0)
     assert_less(abs(sol.contact_time - want), sol.error_time, claim=CLAIM, call=call, what="t_c")
+
+
+@pytest.mark.mpmath
+@pytest.mark.parametrize(
+    "pot, law",
+    [
+        (PowerLaw(1.0, 1.5), {"law": "linear", "c": 50.0}),
+        (SumPotential(PowerLaw(1.0, 1.0), PowerLaw(1.0, 1.5)), {"law": "linear", "c": 100.0}),
+    ],
+)
+def test_heavily_damped_zero_force_end_within_bound(pot, law):
+    """Beyond the linear oscillator (m = v0 = 1): the body creeps and never returns, and
+    the zero-force instant, where |C| / |dF/dt| is large, was 1.5 and 2.3 times its bound
+    off. Truth: the Taylor-series solver at 20 digits, stopped at the zero-force end."""
+    from reference_impl.exact._general_law_mp import solve_law_impact_mp
+
+    sol = solve_law_impact(pot, 1.0, 1.0, law)
+    tr = solve_law_impact_mp(pot, 1.0, 1.0, law, dps=20, zero_force_only=True)
+    _check_fields(
+        sol,
+        tr,
+        _call(pot, 1.0, 1.0, law),
+        ("contact_time_zero_force", "time_of_max_penetration"),
+        ("restitution_zero_force",),
+        ("max_penetration",),
+    )

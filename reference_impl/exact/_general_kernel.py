@@ -85,6 +85,7 @@ OUT_FIELDS = (
     "n_steps",
     "status",
     "stop",
+    "err_zf",
 )
 # Why a run without return stopped (field "stop"): the overlap fell below _NO_RETURN_Q q_max,
 # or the creep test held (see `solve`); 0 when the body returned.
@@ -394,6 +395,7 @@ def solve(v0, qE, ks, ps, cs, es, sc):
     mode2, al = 0, 0.0
     b2 = w
     sq, sw = 0.0, sw1  # mode 2: summed local errors of q (m) and w (m/s)
+    mq, mw = 0.0, 0.0  # recent local errors of q and w (see the zero-force event)
     if sc[6] == 1.0 and sc[1] * v0 > HC_LOG_X:
         mode2, al = 2, sc[1]
         b2 = math.log1p(al * w)
@@ -452,8 +454,19 @@ def solve(v0, qE, ks, ps, cs, es, sc):
             out[4] = t + tau
             out[5] = rb
             zf_found = True
+            # The zero-force time moves by dF / |dF/dt| with dF = |C| dw + |dF/dq| dq for
+            # state errors (dq, dw): heavily damped, |C| / |dF/dt| is large (a constant
+            # dashpot 50 on Hertz: 1.5 times the step-error bound). Damping makes the state
+            # forget old errors at rate C/m, so the recent local errors (mq, mw, halved per
+            # step) stand for (dq, dw); the caller adds this in seconds.
+            Fz, dFz, dUz, _u = forces(ra, rb, ks, ps, cs, es, sc)
+            if rb != 0.0 and dFz != 0.0:
+                Cz = (Fz - dUz) / rb
+                Fqz = (dFz + Cz * Fz / m) / rb
+                out[14] = (abs(Cz) * max(mw, ew) + abs(Fqz) * max(mq, eq)) / abs(dFz)
         errsum += err
         errsum_t += err
+        mq, mw = max(eq, 0.5 * mq), max(ew, 0.5 * mw)
         t, q, w, b2 = t + h, nq, nw, nb2
         F, dF = nF, ndF
         h *= min(4.0, 0.9 * (TOL / max(err, 1e-300)) ** (1.0 / (2 * KCOL - 3)))

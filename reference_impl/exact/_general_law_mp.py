@@ -240,7 +240,9 @@ def _maxima(Gc, h, best):
     return best
 
 
-def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
+def solve_law_impact_mp(
+    pot: Potential, m, v0, law, *, dps: int = 30, zero_force_only: bool = False
+) -> dict:
     """High-precision reference for one impact under a damping law (power-law potentials).
 
     Parameters
@@ -253,6 +255,10 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
         Any law of the table; ``universal`` for a single power law only.
     dps : int
         Decimal digits.
+    zero_force_only : bool
+        Stop at the zero-force end and return only time_of_max_penetration,
+        max_penetration, contact_time_zero_force and restitution_zero_force: a truth for
+        the bodies that never return (heavy damping), whose zero-force end is still reached.
 
     Returns
     -------
@@ -332,6 +338,14 @@ def solve_law_impact_mp(pot: Potential, m, v0, law, *, dps: int = 30) -> dict:
                 br = _first_crossing(Gs, h) or (0, h)
                 x = _root(Gs, *br)
                 t_zf, V_zf = t + x, _horner(Vs, x)
+                if zero_force_only:
+                    tau = L / mpmath.mpf(v0)
+                    return {
+                        "time_of_max_penetration": +(s_max * tau),
+                        "max_penetration": +(Qm * L),
+                        "contact_time_zero_force": +(t_zf * tau),
+                        "restitution_zero_force": +(-V_zf),
+                    }
             t, Q, V = t + h, Qn, Vn
             if s_max is not None and V < 0:
                 F, _ = model.FC_at(Q)

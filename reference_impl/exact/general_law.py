@@ -418,6 +418,8 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     err_t = ERROR_SAFETY * r["err_t"] * t_scale + 100 * nst * _EPS * (
         t_end if returns else r["t_zf"] if math.isfinite(r["t_zf"]) else t_scale
     )
+    if r["err_zf"] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
+        err_t += ERROR_SAFETY * r["err_zf"]
     err_w = ERROR_SAFETY * r["err_w"] + 100 * nst * _EPS
     return LawImpactSolution(
         v0=v0,
