@@ -279,3 +279,21 @@ def test_heavily_damped_zero_force_end_within_bound(pot, law):
         ("restitution_zero_force",),
         ("max_penetration",),
     )
+
+
+@pytest.mark.mpmath
+def test_truth_hunt_crossley_ends_coincide():
+    """The Taylor-series truth too: at alpha v0 = 160 on Hooke's spring 1 + alpha q' falls
+    to ~1e-70 before q = 0, below its 20 digits, and it found a zero force there (3.7e11
+    times the solver's bound off); U' (1 + alpha q') > 0 until q = 0."""
+    from reference_impl.exact._general_law_mp import solve_law_impact_mp
+
+    law = {"law": "hunt-crossley", "alpha": 160.34305973757628}
+    tr = solve_law_impact_mp(PowerLaw(1.0, 1.0), 1.0, 1.0, law, dps=20)
+    assert_true(
+        tr["contact_time_zero_force"] == tr["contact_time"],
+        got=f"t_zf = {tr['contact_time_zero_force']}, t_c = {tr['contact_time']}",
+        should="equal",
+        claim=CLAIM,
+        call=f"solve_law_impact_mp(PowerLaw(1, 1), 1, 1, {law})",
+    )
