@@ -132,13 +132,14 @@ class LawImpactSolution:
         -q'/v0 at that instant.
     returns_to_q0 : bool
         False when the body creeps back along the slow manifold of an overdamped
-        law and never reaches q = 0 (see `reference_impl.exact._general_kernel`).
+        law and never reaches q = 0 (see `reference_impl.exact._general_kernel`);
+        only where that creep provably never ends (`_creeps_for_ever`).
     error_time : float
         Bound on the absolute error of the contact times and of the time of q_max (s).
     error_restitution : float
         Bound on the absolute error of both restitutions.
     n_steps : int
-        Integration steps taken.
+        Integration steps taken (0 for the linear oscillator, solved in closed form).
     """
 
     v0: float
@@ -380,7 +381,9 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     ------
     HCVInputError
         Invalid numbers or law, a potential violating the paper's assumptions, or
-        an integration that did not finish within its step budget.
+        (`UnsupportedError`) an integration that did not finish within its step budget,
+        or a body that returns only after its overlap fell below 1e-10 of q_max (a
+        near-critical tail of a nonlinear spring), out of the integrator's reach.
     """
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
