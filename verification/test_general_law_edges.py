@@ -298,3 +298,27 @@ def test_truth_hunt_crossley_ends_coincide():
         claim=CLAIM,
         call=f"solve_law_impact_mp(PowerLaw(1, 1), 1, 1, {law})",
     )
+
+
+@pytest.mark.mpmath
+def test_drag_that_catches_the_body_in_the_exit_phase_is_no_return():
+    """A constant dashpot on U' ~ q^3 (C ~ q^0 with 0 < (n - 2)/2 = 1: a creep that never
+    ends) whose drag catches the body after the exit phase began: it crept there in sigma
+    until "did not finish within 20000 steps"; now no return after ~50 steps, the
+    zero-force end within its bound of the truth (20 digits, stopped there)."""
+    from reference_impl.exact._general_law_mp import solve_law_impact_mp
+
+    pot, m, v0 = PowerLaw(59826513.011308976, 3.0), 0.2177876415371217, 6.036908690633875
+    law = {"law": "linear", "c": 51.23681398922103}
+    sol = solve_law_impact(pot, m, v0, law)
+    call = _call(pot, m, v0, law)
+    assert_true(not sol.returns_to_q0, got="a return", should="no return", claim=CLAIM, call=call)
+    tr = solve_law_impact_mp(pot, m, v0, law, dps=20, zero_force_only=True)
+    _check_fields(
+        sol,
+        tr,
+        call,
+        ("contact_time_zero_force", "time_of_max_penetration"),
+        ("restitution_zero_force",),
+        ("max_penetration",),
+    )

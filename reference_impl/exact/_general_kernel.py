@@ -567,6 +567,21 @@ def solve(v0, qE, ks, ps, cs, es, sc):
         s, a, b = s + hs, na, nb
         F, dF = nF, ndF
         h = hs * min(4.0, 0.9 * (TOL / max(err, 1e-300)) ** (1.0 / (2 * KCOL - 3)))
+        # The drag can still catch the body after the exit began (a constant dashpot on
+        # U' ~ q^3: it then crept in sigma until the step budget ran out): the creep test
+        # of phase 2, where the creep never ends (sc[4] = 1), stops it here too.
+        if sc[4] == 1.0 and zf_found and na < 0.0:
+            if nUq > m * na * na and (nF - ndU) / na * qn > _CREEP_RATIO * m * abs(na):
+                out[8] = 0.0
+                out[6] = np.inf
+                out[7] = 0.0
+                out[9] = errsum_t
+                out[10] = errsum
+                out[11] = nsteps
+                out[12] = 0.0
+                out[3] = peak
+                out[13] = STOP_CREEP
+                return out
     if not zf_found:  # the force never pulls: the two ends coincide
         out[4] = b
         out[5] = a
