@@ -41,7 +41,8 @@ autodoc_typehints = "none"  # the numpydoc Parameters section already gives type
 
 html_theme = "furo"
 html_title = "hidden-harmonic-verification"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["tables.css"]
 html_show_sourcelink = False
 
 
