@@ -93,18 +93,24 @@ def test_docs_build_without_warnings(site):
 
 
 @pytest.fixture(scope="module")
-def defects(site):
-    """Each page's defects: the committed report and every page of the built site."""
+def report_defects() -> dict:
+    """The committed report's defects (needs no site: the report is checked on its own)."""
     _browser_or_skip()
-    pages = [REPORT] + sorted(site.glob("*.html"))
-    return inspect_pages(pages), site
+    return {"reports/index.html": inspect_pages([REPORT])[REPORT]}
 
 
-def _targets(defects, target):
-    found, site = defects
-    if target == "report":
-        return {"reports/index.html": found[REPORT]}
-    return {str(p.relative_to(site)): d for p, d in found.items() if p != REPORT}
+@pytest.fixture(scope="module")
+def site_defects(site) -> dict:
+    """Each page's defects, over every page of the built site."""
+    _browser_or_skip()
+    found = inspect_pages(sorted(site.glob("*.html")))
+    return {str(p.relative_to(site)): d for p, d in found.items()}
+
+
+@pytest.fixture
+def defects(request, target) -> dict:
+    """The defects of the pages of ``target`` ("report" or "site"), by page."""
+    return request.getfixturevalue(f"{target}_defects")
 
 
 class RawMarkdownErratum(AssertionError):
@@ -129,7 +135,7 @@ TARGETS = ["report", "site"]
 
 @pytest.mark.parametrize("target", TARGETS)
 def test_every_image_decodes(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         assert not d.broken_images, (
             f"got images with natural width 0 {d.broken_images}, should decode [{page}]"
         )
@@ -137,7 +143,7 @@ def test_every_image_decodes(defects, target):
 
 @pytest.mark.parametrize("target", [pytest.param("report", marks=_RAW_MARKDOWN_ERRATUM), "site"])
 def test_no_raw_markdown_in_rendered_text(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         if d.raw_markdown and all(_ERRATUM_LINK.search(t) for t in d.raw_markdown):
             raise RawMarkdownErratum(
                 f"got the erratum's raw Markdown links {d.raw_markdown}, should be "
@@ -151,7 +157,7 @@ def test_no_raw_markdown_in_rendered_text(defects, target):
 
 @pytest.mark.parametrize("target", TARGETS)
 def test_every_internal_link_resolves(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         assert not d.dead_links, (
             f"got links to no file or id {d.dead_links[:10]}, should all resolve [{page}]"
         )
@@ -159,7 +165,7 @@ def test_every_internal_link_resolves(defects, target):
 
 @pytest.mark.parametrize("target", TARGETS)
 def test_no_horizontal_scroll(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         assert d.overflow_px <= 0, (
             f"got a horizontal scroll of {d.overflow_px} px at {VIEWPORT_WIDTH} px, "
             f"should be 0 [{page}]"
@@ -168,7 +174,7 @@ def test_no_horizontal_scroll(defects, target):
 
 @pytest.mark.parametrize("target", TARGETS)
 def test_console_error_log_is_empty(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         assert not d.console_errors, (
             f"got console errors {d.console_errors[:5]}, should be none [{page}]"
         )
@@ -176,7 +182,7 @@ def test_console_error_log_is_empty(defects, target):
 
 @pytest.mark.parametrize("target", TARGETS)
 def test_print_to_pdf(defects, target):
-    for page, d in _targets(defects, target).items():
+    for page, d in defects.items():
         assert d.pdf_bytes > 1000, (
             f"got a PDF of {d.pdf_bytes} bytes, should print to a PDF [{page}]"
         )
