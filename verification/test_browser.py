@@ -83,6 +83,7 @@ def test_docs_build_without_warnings(site):
         "performance.html",
         "verdicts.html",
         "contributing.html",
+        "sweeps.html",
     }
     assert expected <= pages, (
         f"got pages {sorted(pages)}, should include {sorted(expected - pages)} [docs build]"
