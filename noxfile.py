@@ -35,6 +35,7 @@ def lint(session: nox.Session) -> None:
         "reports/repro",
         "noxfile.py",
         "conftest.py",
+        "docs/conf.py",
     )
 
 

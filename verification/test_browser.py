@@ -189,32 +189,45 @@ def test_print_to_pdf(defects, target):
         )
 
 
+# Each defect planted in its own copy of a clean page: (the PageDefects field that must
+# report it, the HTML planted before </body>).
+_PLANTS = {
+    "broken image": ("broken_images", '<img src="_static/no-such-figure.png" alt="planted">'),
+    "raw Markdown link": ("raw_markdown", "<p>See [the erratum](erratum.md) for it.</p>"),
+    "raw Markdown bold": ("raw_markdown", "<p>The claim is **refuted** as printed.</p>"),
+    "dead anchor": ("dead_links", '<p><a href="#no-such-section">planted</a></p>'),
+    "dead page": ("dead_links", '<p><a href="no-such-page.html">planted</a></p>'),
+    "dead anchor on another page": ("dead_links", '<p><a href="scenes.html#nowhere">x</a></p>'),
+    "wide block": ("overflow_px", '<div style="width:3000px">planted</div>'),
+    "console error": ("console_errors", '<script>console.error("planted")</script>'),
+}
+
+
 def test_checks_fail_on_planted_defects(site, tmp_path):
-    """A broken image, a raw Markdown link and a dead anchor, each planted in a copy of a
-    clean page of the site, are each found."""
+    """A broken image, raw Markdown, dead links, a wide block and a console error, each
+    planted in a copy of a clean page of the site, are each found; the clean page has none."""
     _browser_or_skip()
     copy = tmp_path / "site"
     shutil.copytree(site, copy, ignore=shutil.ignore_patterns("report"))
     clean = (copy / "index.html").read_text(encoding="utf-8")
-    plants = {
-        "broken_images": '<img src="_static/no-such-figure.png" alt="planted">',
-        "raw_markdown": "<p>See [the erratum](erratum.md) for the corrections.</p>",
-        "raw_markdown_bold": "<p>The claim is **refuted** as printed.</p>",
-        "dead_links": '<p><a href="#no-such-section">planted</a></p>',
-    }
+    assert "</body>" in clean, "got no </body> in the site's index.html [planting]"
     pages = {}
-    for kind, snippet in plants.items():
-        page = copy / f"planted-{kind}.html"
-        assert "</body>" in clean, "got no </body> in the site's index.html [planting]"
-        page.write_text(clean.replace("</body>", snippet + "</body>", 1), encoding="utf-8")
-        pages[kind] = page
+    for i, (name, (_, snippet)) in enumerate(_PLANTS.items()):
+        pages[name] = copy / f"planted-{i}.html"
+        pages[name].write_text(clean.replace("</body>", snippet + "</body>", 1), encoding="utf-8")
     found = inspect_pages([copy / "index.html", *pages.values()])
+    base = found[copy / "index.html"]
     assert not (
-        found[copy / "index.html"].broken_images
-        or found[copy / "index.html"].raw_markdown
-        or found[copy / "index.html"].dead_links
-    ), f"got defects {found[copy / 'index.html']} on the clean copy, should be none"
-    for kind, page in pages.items():
-        assert getattr(found[page], kind.removesuffix("_bold")), (
-            f"got no {kind} on a page with {plants[kind]!r} planted, should find it [inspect_pages]"
+        base.broken_images
+        or base.raw_markdown
+        or base.dead_links
+        or base.overflow_px > 0
+        or base.console_errors
+    ), f"got defects {base} on the clean copy of index.html, should be none [inspect_pages]"
+    for name, page in pages.items():
+        field, snippet = _PLANTS[name]
+        value = getattr(found[page], field)
+        assert value and value != getattr(base, field), (
+            f"got {field} = {value!r} on a page with a planted {name} ({snippet!r}), "
+            f"should report it [inspect_pages]"
         )
