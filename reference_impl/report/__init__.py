@@ -302,8 +302,7 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
             dmap = None
     if dmap is None:
         dmap = timed("critical-step map", _dtmap.run_map, quick, say, workers)
-    sec6.use_map(quick, dmap)
-    measured[sec6.ID] = sec6.measure(quick)
+    measured[sec6.ID] = sec6.verdict_from_map(dmap)
     timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")
     sens = timed("critical step against the criterion", _dtmap.run_sensitivity, quick)
 
