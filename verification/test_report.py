@@ -21,8 +21,8 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
+from reference_impl.campaign import build_report  # noqa: E402
 from reference_impl.claims import VERDICTS  # noqa: E402
-from reference_impl.report import build_report  # noqa: E402
 from reference_impl.studies.paper import TABLE1_PRINTED, table1_cells  # noqa: E402
 from verification.assertions import assert_true  # noqa: E402
 

@@ -230,7 +230,7 @@ _MAX_REPORT_WORKERS = 256
 def _cmd_report(args) -> int:
     from rich.console import Console
 
-    from reference_impl.report import build_report
+    from reference_impl.campaign import build_report
 
     _check_out_dir(args.out)
     if not 0 <= args.workers <= _MAX_REPORT_WORKERS:
