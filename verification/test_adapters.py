@@ -438,7 +438,7 @@ def _bench_command() -> list[str]:
         cli._parser().parse_args(["bench", "reference"])
         return [sys.executable, "-m", "reference_impl.cli", "bench"]
     except SystemExit:
-        return [sys.executable, "-m", "reference_impl.bench"]
+        return [sys.executable, "-m", "reference_impl.cli.bench"]
 
 
 def _run(args, cwd, extra_env=None, timeout=120):

@@ -197,3 +197,23 @@ def test_the_readme_cites_the_paper_by_its_arxiv_identifier():
     assert "arXiv:2604.02533" in text and "../shared" not in text, (
         "got a path a clone does not have, should cite arXiv 2604.02533 [README]"
     )
+
+
+def test_help_lists_every_sweep_task():
+    """`hcv --help`'s line for sweep names each task a sweep spec accepts (issue 26 item 7:
+    `calibrate:` was missing)."""
+    import re
+
+    from reference_impl.sweep._spec import TASKS
+
+    r = _hcv("--help")
+    line = re.search(r"^ +sweep +(.*?)\n {4}\S", r.stdout, re.M | re.S)
+    text = " ".join(line.group(1).split()) if line else ""
+    missing = [t.split(":")[0] for t in TASKS if t.split(":")[0] not in text]
+    assert_true(
+        r.returncode == 0 and text and not missing,
+        got=f"exit {r.returncode}, sweep line {text!r}, {missing} not named",
+        should=f"exit 0, every task of {TASKS} named",
+        claim="tool",
+        call="hcv --help",
+    )

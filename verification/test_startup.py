@@ -275,3 +275,59 @@ def test_quick_report_help_states_the_benchmarked_time():
         claim="tool",
         call="hcv report --help",
     )
+
+
+_COMMANDS_PROBE = """
+import json, sys, runpy
+sys.argv = ["hcv", *json.loads(sys.argv[1])]
+try:
+    runpy.run_module("reference_impl.cli", run_name="__main__")
+except SystemExit:
+    pass
+from reference_impl.cli import COMMANDS
+print(json.dumps(sorted(m for _, m, _ in COMMANDS if m in sys.modules)), file=sys.stderr)
+"""
+
+
+@pytest.mark.parametrize(
+    "args, modules",
+    [
+        (("--help",), []),
+        (("no-such-command",), []),
+        (("solve", "--help"), ["reference_impl.cli.solve"]),
+        (("--help", "sweep"), ["reference_impl.cli.sweep"]),
+        (("calibrate", "--no-such-option"), ["reference_impl.cli.calibrate"]),
+    ],
+)
+def test_only_the_chosen_commands_module_is_imported(args, modules):
+    """`hcv ARGS` imports the module of the command it names and no other command's."""
+    r = subprocess.run(
+        [sys.executable, "-c", _COMMANDS_PROBE, json.dumps(list(args))],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    loaded = json.loads(r.stderr.strip().splitlines()[-1])
+    assert_true(
+        loaded == modules,
+        got=f"imported {loaded}",
+        should=f"imported {modules}",
+        claim="tool",
+        call=f"hcv {' '.join(args)}",
+    )
+
+
+def test_the_command_table_gives_each_commands_own_help():
+    """`hcv --help` reads the help of the commands from `cli.COMMANDS` (no module imported):
+    the same page as when every command module builds its own sub-parser."""
+    from reference_impl import cli
+
+    listed = cli._parser(()).format_help()
+    built = cli._parser().format_help()
+    assert_true(
+        listed == built,
+        got=listed,
+        should=built,
+        claim="tool",
+        call="hcv --help (cli.COMMANDS against each command's add_parser)",
+    )

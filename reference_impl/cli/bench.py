@@ -14,8 +14,8 @@ internal error, never counted against the code); 2 for usage or configuration
 errors (unknown adapter, bad scene or tolerances file, an output path that
 cannot be written, an adapter that supports none of the scenes); 130 on Ctrl-C
 (the scorecard so far is printed and the files written, then "interrupted").
-`add_bench_parser` adds the subcommand to the ``hcv`` parser;
-``python -m reference_impl.bench`` runs it stand-alone.
+`add_parser` adds the subcommand to the ``hcv`` parser and `run` runs it;
+``python -m reference_impl.cli.bench`` runs it stand-alone.
 """
 
 from __future__ import annotations
@@ -28,9 +28,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from reference_impl._userfiles import check_path, check_writable_dir, refuse_output_onto_input
+from reference_impl.cli._run import run_command
 from reference_impl.errors import HCVInputError
 
-__all__ = ["add_bench_parser", "cmd_bench", "main"]
+__all__ = ["add_parser", "main", "run"]
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
@@ -123,7 +124,7 @@ _ADAPTER_HELP = (
 )
 
 
-def add_bench_parser(subparsers) -> argparse.ArgumentParser:
+def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``bench`` subcommand to an argparse subparsers object.
 
     The epilog lists each adapter's keys, read from the adapter classes: it is written
@@ -168,11 +169,11 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     b.add_argument("--plot", metavar="FILE", help="write the speed-against-error plot (PNG)")
     b.add_argument("--markdown", metavar="FILE", help="write the scorecard as markdown")
     b.add_argument("--show-skipped", action="store_true", help="list skipped metrics too")
-    b.set_defaults(func=cmd_bench)
+    b.set_defaults(func=run)
     return b
 
 
-def cmd_bench(args) -> int:
+def run(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
@@ -242,11 +243,13 @@ def cmd_bench(args) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m reference_impl.bench ADAPTER ...`` (same options as ``hcv bench``)."""
+    """``python -m reference_impl.cli.bench ADAPTER ...`` (same options as ``hcv bench``)."""
     parser = argparse.ArgumentParser(prog="hcv")
     sub = parser.add_subparsers(dest="command", required=True)
-    add_bench_parser(sub)
+    add_parser(sub)
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
-    from reference_impl.cli._run import run_command
-
     return run_command(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

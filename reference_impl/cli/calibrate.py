@@ -6,13 +6,14 @@ import argparse
 import json
 import sys
 
+from reference_impl.cli._run import run_command
 from reference_impl.errors import HCVInputError
 
 # The names of `reference_impl.theory.damping.RESTITUTION_ENDS`, not imported from there so
 # that parsing imports nothing numerical (verification/test_startup.py checks they agree).
 _ENDS = ("overlap", "zero-force")
 
-__all__ = ["add_calibrate_parser", "cmd_calibrate", "main"]
+__all__ = ["add_parser", "main", "run"]
 
 def _target(text: str) -> tuple[str, float]:
     name, sep, val = str(text).partition("=")
@@ -25,7 +26,7 @@ def _target(text: str) -> tuple[str, float]:
     return name.strip(), num
 
 
-def add_calibrate_parser(subparsers) -> argparse.ArgumentParser:
+def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``calibrate`` subcommand to an argparse subparsers object."""
     p = subparsers.add_parser(
         "calibrate",
@@ -48,7 +49,7 @@ def add_calibrate_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--isolate", action="store_true",
                    help="run each evaluation in a worker process (slower, crash-safe)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.set_defaults(func=cmd_calibrate)
+    p.set_defaults(func=run)
     return p
 
 
@@ -56,7 +57,7 @@ def _fmt(x) -> str:
     return f"{x:.6g}" if isinstance(x, float) else str(x)
 
 
-def cmd_calibrate(args) -> int:
+def run(args) -> int:
     """Run ``hcv calibrate``; exit 0 found, 1 out of reach, 2 bad input."""
     from reference_impl.bench.calibrate import EXIT_OK, EXIT_UNREACHABLE, calibrate
 
@@ -106,8 +107,6 @@ def cmd_calibrate(args) -> int:
 
 
 def main(argv=None) -> int:  # pragma: no cover - thin wrapper
-    from reference_impl.cli._run import run_command
-
     p = argparse.ArgumentParser(prog="hcv")
-    add_calibrate_parser(p.add_subparsers(dest="command", required=True))
+    add_parser(p.add_subparsers(dest="command", required=True))
     return run_command(p.parse_args(["calibrate", *(sys.argv[1:] if argv is None else argv)]))

@@ -38,7 +38,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``sweep`` subcommand to an argparse subparsers object."""
     p = subparsers.add_parser(
         "sweep",
-        help="run a parameter sweep (dt-crit, solve or bench) on a Dask cluster",
+        help="run a parameter sweep (dt-crit, solve, bench or calibrate) on a Dask cluster",
         description="Run the Cartesian product of a spec's [sweep] lists over its [scene], "
         "one case per task, on local worker processes or an existing Dask cluster.",
     )

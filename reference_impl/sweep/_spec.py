@@ -2,7 +2,7 @@
 
 A spec is a TOML document::
 
-    task = "dt-crit"                 # "dt-crit" | "solve" | "bench:ADAPTER"
+    task = "dt-crit"                 # "dt-crit" | "solve" | "bench:ADAPTER" | "calibrate:ADAPTER"
     criterion = "tol=0.5"            # dt-crit only; or a table {impact = "...", two-sided = "..."}
     timeout = 600                    # s per case (optional)
     [scene]                          # the usual scene table (see reference_impl.scenes)
@@ -99,7 +99,7 @@ class Case:
     scene : dict
         The full scene table of the case (TOML schema).
     task : str
-        "dt-crit", "solve" or "bench:ADAPTER".
+        "dt-crit", "solve", "bench:ADAPTER" or "calibrate:ADAPTER".
     criterion : str or None
         The dt-crit criterion text for this case's kind (None: the default).
     timeout : float
@@ -140,7 +140,7 @@ class SweepSpec:
     Attributes
     ----------
     task : str
-        "dt-crit", "solve" or "bench:ADAPTER".
+        "dt-crit", "solve", "bench:ADAPTER" or "calibrate:ADAPTER".
     criterion : dict
         Scene kind -> criterion text (dt-crit); empty for the defaults.
     timeout : float

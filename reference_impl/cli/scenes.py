@@ -1,0 +1,39 @@
+"""``hcv scenes [--show NAME]``: the scene catalogue, or one scene as TOML."""
+
+from __future__ import annotations
+
+from reference_impl.cli._run import EXIT_OK
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers) -> None:
+    """Add the ``scenes`` subcommand to an argparse subparsers object."""
+    ls = subparsers.add_parser(
+        "scenes",
+        help="list the scene catalogue (the same names work in every command); "
+        "--show NAME prints one as TOML",
+    )
+    ls.add_argument(
+        "--show", metavar="NAME", help="print this scene's TOML (a catalogue name or a file)"
+    )
+    ls.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Print the catalogue, one scene a line, or with ``--show`` one scene's TOML."""
+    from reference_impl.scenes._catalogue import catalogue_rows
+
+    if args.show:
+        from reference_impl.scenes import scene_toml
+
+        print(scene_toml(args.show), end="")
+        return EXIT_OK
+    for r in catalogue_rows():
+        params = " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                          for k, v in r["damping_params"].items())  # fmt: skip
+        print(
+            f"{r['name']:24s} {r['kind']:10s} {r['family']:11s} m={r['mass']:.4g} kg  "
+            f"v0={r['velocities']} m/s  damping {r['damping']}" + (f" {params}" if params else "")
+        )
+    return EXIT_OK
