@@ -22,6 +22,7 @@ import pytest
 pytest.importorskip("matplotlib")
 
 import pandas as pd  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from reference_impl.claims import fig1 as fig1_claim  # noqa: E402
@@ -113,8 +114,8 @@ def _legends(fig: Figure) -> list:
 @pytest.mark.parametrize("name", FIGURES)
 def test_legends_are_readable_and_off_the_data(name, results, tmp_path, monkeypatch):
     for fig in _draw(name, results, tmp_path, monkeypatch):
+        FigureCanvasAgg(fig).draw()  # the layout runs, legends take their place
         renderer = fig.canvas.get_renderer()
-        fig.draw(renderer)
         title = fig.get_suptitle()[:50]
         for leg in _legends(fig):
             sizes = [t.get_fontsize() for t in leg.get_texts()]

@@ -160,7 +160,13 @@ def test_a_missing_figure_is_refused_before_writing(committed, tmp_path):
 def _previous_report(d: Path, committed) -> None:
     """A copy of the committed report (its results, figures and manifest)."""
     d.mkdir()
-    for name in ("results.json", ".hcv-report-manifest.json", "index.md", "index.html", "erratum.md"):
+    for name in (
+        "results.json",
+        ".hcv-report-manifest.json",
+        "index.md",
+        "index.html",
+        "erratum.md",
+    ):
         shutil.copyfile(REPORTS / name, d / name)
     shutil.copytree(REPORTS / "figures", d / "figures")
     shutil.copytree(REPORTS / "bench", d / "bench")
