@@ -459,3 +459,18 @@ def test_report_into_an_uncreatable_directory_is_one_line_exit_2(tmp_path):
     )  # fmt: skip
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "/proc/x" in r.stderr, r.stderr
+
+
+def test_results_json_is_of_the_documented_schema(report):
+    """results.json names its schema and reads back through the renderer's check (issue 30)."""
+    from reference_impl.report import SCHEMA, read_results
+
+    out, results, _ = report
+    back = read_results(out / "results.json")
+    assert_true(
+        back["schema"] == SCHEMA and back == json.loads(json.dumps(results)),
+        got=f"schema {back.get('schema')!r}",
+        should=f"{SCHEMA!r}, identical to the returned dict",
+        claim="report",
+        call=CALL,
+    )
