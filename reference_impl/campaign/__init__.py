@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from reference_impl._format import jsonable
+from reference_impl._format import g, jsonable
 from reference_impl.bench.report import plot_speed_error, result_to_dict
 from reference_impl.bench.runner import run_bench
 from reference_impl.campaign import _environment, _map, _steps
@@ -81,8 +81,6 @@ CARRIED = ("adapters", "steps_per_contact", "steps_per_contact_settings")
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
-    from reference_impl._format import g
-
     def cov(quick):
         return {c.label: c.velocities for c in coverage(quick)}
 
