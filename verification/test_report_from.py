@@ -58,14 +58,28 @@ def test_committed_results_carry_the_schema_and_every_documented_field(committed
     )
 
 
+# The erratum's link to a claim's script, written only where the scripts lie (`scripts_href`).
+_SCRIPT_LINK = re.compile(
+    r", \[\w+\.py\]\(repro/\w+\.py\)|, <a href=\"repro/\w+\.py\">\w+\.py</a>"
+)
+
+
 def test_render_from_reproduces_the_committed_pages(committed, tmp_path):
+    """Into a directory holding the referee's scripts (as reports/ does): byte for byte;
+    anywhere else: the same but for the links to those scripts, which are not there."""
     out = tmp_path / "x"
-    render_from(REPORTS / "results.json", out)
-    for name in ("index.md", "erratum.md", "results.json"):
+    shutil.copytree(REPORTS / "repro", out / "repro")
+    render_from(REPORTS / "results.json", out, force=True)  # beside repro/, not its own
+    bare = tmp_path / "bare"
+    render_from(REPORTS / "results.json", bare)
+    for name in ("index.md", "index.html", "erratum.md", "results.json"):
+        want = (REPORTS / name).read_text()
+        unlinked = _SCRIPT_LINK.sub("", want)
         assert_true(
-            (out / name).read_bytes() == (REPORTS / name).read_bytes(),
+            (out / name).read_text() == want and (bare / name).read_text() == unlinked,
             got=f"{name} differs from the committed one",
-            should="identical (the pages are rendered from results.json alone)",
+            should="identical (the pages are rendered from results.json alone; without "
+            "repro/ beside them, without the links to it)",
             claim="report",
             call=CALL,
         )
@@ -179,7 +193,7 @@ def test_a_run_without_codes_carries_their_sections_marked(committed, tmp_path, 
     _previous_report(out, committed)
     seen = {}
 
-    def fake_build(tmp, quick, progress, adapters, env, workers=0, carried=None):
+    def fake_build(tmp, quick, progress, adapters, env, workers=0, carried=None, repro=None):
         """The measurements replaced: the committed results with the carried fields."""
         seen["carried"] = carried
         r = copy.deepcopy(committed)

@@ -52,7 +52,7 @@ def _snapshot(d: Path) -> dict[str, bytes]:
 # ----------------------------------------------------------------------------
 # hcv report --out DIR
 # ----------------------------------------------------------------------------
-def _fake_build(out, quick, progress, adapters, env, workers=0, carried=None):
+def _fake_build(out, quick, progress, adapters, env, workers=0, carried=None, repro=None):
     """Stand-in for the measurements: the report's files, two figures."""
     (out / "figures").mkdir()
     for name in ("fig1.png", "dt_crit_map.png"):

@@ -59,7 +59,7 @@ from reference_impl.report import (
     read_results,
     write_pages,
 )
-from reference_impl.report._files import swap_in, validate_report_args
+from reference_impl.report._files import scripts_href, swap_in, validate_report_args
 from reference_impl.report.readme_table import ROOT, readme_block, rewrite_readme
 from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
 from reference_impl.stability.search import SearchGrid
@@ -81,6 +81,7 @@ CARRIED = ("adapters", "steps_per_contact", "steps_per_contact_settings")
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
+
     def cov(quick):
         return {c.label: c.velocities for c in coverage(quick)}
 
@@ -235,7 +236,7 @@ def build_report(
             (tmp / "figures").mkdir()
             for rel in carried["figures"]:
                 shutil.copyfile(out / rel, tmp / rel)
-        results = _build(tmp, quick, progress, adapters, env, workers, carried)
+        results = _build(tmp, quick, progress, adapters, env, workers, carried, scripts_href(out))
     if readme_path is not None:
         # The speed block follows the committed benchmark (nox -s bench), when present.
         bench_json = Path(out) / "bench" / "exact.json"
@@ -270,9 +271,20 @@ def _readme_for(out: Path, readme) -> Path | None:
 
 
 def _build(
-    out: Path, quick: bool, progress, adapters, env: dict, workers: int = 0, carried=None
+    out: Path,
+    quick: bool,
+    progress,
+    adapters,
+    env: dict,
+    workers: int = 0,
+    carried=None,
+    repro=None,
 ) -> dict:
-    """Run everything and write the report into ``out`` (a fresh directory)."""
+    """Run everything and write the report into ``out`` (a fresh directory).
+
+    ``carried`` holds the previous report's code sections (`_carry`); ``repro`` is the link
+    from the final directory to the referee's scripts (None: not there, named unlinked).
+    """
     sec6 = sec6_dt_safe_bound
 
     def say(text: str) -> None:
@@ -454,5 +466,5 @@ def _build(
     (out / "results.json").write_text(
         json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
     )
-    write_pages(results, out, fig_dir)
+    write_pages(results, out, fig_dir, repro)
     return results

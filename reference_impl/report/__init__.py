@@ -23,7 +23,12 @@ from pathlib import Path
 
 from reference_impl.errors import HCVInputError
 from reference_impl.report import _erratum, _render
-from reference_impl.report._files import _adapter_json, swap_in, validate_report_args
+from reference_impl.report._files import (
+    _adapter_json,
+    scripts_href,
+    swap_in,
+    validate_report_args,
+)
 from reference_impl.report._schema import SCHEMA, check_results, read_results
 
 __all__ = [
@@ -42,7 +47,7 @@ def bench_json_name(spec: str) -> str:
     return _adapter_json(spec)
 
 
-def write_pages(results: dict, out: Path, fig_dir: Path) -> None:
+def write_pages(results: dict, out: Path, fig_dir: Path, repro: str | None = None) -> None:
     """Write index.md, erratum.md and index.html of ``results`` into ``out``.
 
     Parameters
@@ -53,11 +58,18 @@ def write_pages(results: dict, out: Path, fig_dir: Path) -> None:
         Directory written.
     fig_dir : Path
         Where the figures named in ``results["figures"]`` are (embedded in index.html).
+    repro : str, optional
+        The link from the final report directory to the referee's scripts
+        (`reference_impl.report._files.scripts_href`); None: they are not there, and the
+        pages name them without a link.
     """
     out = Path(out)
-    (out / "index.md").write_text(_render.markdown(results))
-    (out / "erratum.md").write_text(_erratum.markdown(results))
-    (out / "index.html").write_text(_render.html_page(results, Path(fig_dir)))
+    # Where the scripts lie depends on the final directory, not on the results: the pages
+    # get it, results.json does not (copied elsewhere, it would link wrongly).
+    pages = {**results, "repro_scripts": repro}
+    (out / "index.md").write_text(_render.markdown(pages))
+    (out / "erratum.md").write_text(_erratum.markdown(pages))
+    (out / "index.html").write_text(_render.html_page(pages, Path(fig_dir)))
 
 
 def render_from(results_path, out_dir="reports", force: bool = False) -> dict:
@@ -71,6 +83,8 @@ def render_from(results_path, out_dir="reports", force: bool = False) -> dict:
     out_dir : str or Path
         Where the report is written (as ``hcv report --out``: the manifest rules of
         `reference_impl.report._files` apply, and the files move in only when complete).
+        The pages link the referee's scripts only where ``out_dir`` holds them
+        (``repro/``: the checkout's reports/).
     force : bool
         Write into a directory holding files the report did not write.
 
@@ -104,5 +118,5 @@ def render_from(results_path, out_dir="reports", force: bool = False) -> dict:
             if (base / rel).is_file():
                 (tmp / "bench").mkdir(exist_ok=True)
                 shutil.copyfile(base / rel, tmp / rel)
-        write_pages(results, tmp, tmp / "figures")
+        write_pages(results, tmp, tmp / "figures", scripts_href(out))
     return results
