@@ -54,6 +54,7 @@ __all__ = [
     "register",
     "registered",
     "resolve_class",
+    "resolved_spec",
 ]
 
 _REGISTRY: dict[str, str | type] = {
@@ -61,6 +62,8 @@ _REGISTRY: dict[str, str | type] = {
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
+    "liggghts": "reference_impl.adapters.liggghts:LiggghtsAdapter",
+    "yade": "reference_impl.adapters.yade:YadeAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
@@ -208,6 +211,15 @@ def resolve_class(target: str) -> type:
     )
 
 
+def resolved_spec(spec: str) -> tuple[str, dict[str, Any]]:
+    """``(target, kwargs)`` of a spec with its bare values mapped to their keys
+    (``mujoco[timeconst,Euler]`` -> ``{"solref": "timeconst", "integrator": "Euler"}``)."""
+    target, kwargs = parse_spec(spec)
+    if _BARE in kwargs:
+        _resolve_bare(resolve_class(target), kwargs, spec)
+    return target, kwargs
+
+
 def get_adapter(spec):
     """Build the adapter for a spec (or return an adapter instance unchanged)."""
     if isinstance(spec, _base()):
@@ -268,7 +280,7 @@ def adapter_help() -> str:
         values = getattr(cls, "spec_values", {}) or {}
         keys = "; ".join(_values_text(k, a) for k, a in values.items())
         lines.append(f"  {name}: {keys}" if keys else f"  {name}")
-    lines.append("  cmd[sustained=true,timeout=S,label=NAME,cwd=DIR]:COMMAND")
+    lines.append("  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,OPTION=V]:COMMAND")
     return "\n".join(lines)
 
 
