@@ -5,8 +5,8 @@ under it), and every axis that carries data is labelled with its unit in bracket
 (``[-]`` for a dimensionless quantity). Read from matplotlib's objects, not from pixels:
 each figure function of the report is run on the committed ``reports/results.json`` (the
 Fig. 1 runs are recomputed, about 2 s) with ``Figure.savefig`` caught, and the figure is
-drawn once so that legends have their place. The codes' speed-against-error figures
-(``bench_*.png``, `reference_impl.bench.compare`) are not checked here.
+drawn once so that legends have their place; the codes' speed-against-error figures
+(``bench_*.png``, `reference_impl.bench.compare.plot_speed_error`) included.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import pandas as pd  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
+from reference_impl.bench.compare import plot_speed_error  # noqa: E402
 from reference_impl.claims import fig1 as fig1_claim  # noqa: E402
 from reference_impl.report import _dtmap, _fig1, _hardcases, _laws, _steps, _wp  # noqa: E402
 from reference_impl.studies.paper import FIG1  # noqa: E402
@@ -36,7 +37,7 @@ MIN_PT = 8.0
 UNIT = re.compile(r"\[[^\]]+\]")
 # Points drawn between two data points of a line (a legend must not cover a segment).
 _PER_SEGMENT = 16
-FIGURES = ("fig1", "dt_crit_map", "hard_cases", "damping_laws", "work_precision", "steps")
+FIGURES = ("fig1", "dt_crit_map", "hard_cases", "damping_laws", "work_precision", "steps", "bench")
 
 
 def _finite(x):
@@ -79,6 +80,11 @@ def _draw(name: str, r: dict, tmp: Path, monkeypatch) -> list[Figure]:
             pytest.skip("the committed report has no contact codes")
         for code in r["steps_per_contact"]:
             _steps.plot_steps(code, tmp / "x.png", r["steps_per_contact_settings"]["scenes"])
+    elif name == "bench":
+        if not r["adapters"]:
+            pytest.skip("the committed report has no contact codes")
+        for doc in r["adapters"]:
+            plot_speed_error(doc["speed_error"], tmp / "x.png")
     assert figs, f"got no figure drawn for {name}, should be at least one"
     return figs
 
@@ -153,8 +159,15 @@ def test_every_axis_is_labelled_with_its_unit(name, results, tmp_path, monkeypat
         for ax in fig.axes:
             if not ax.get_visible() or not (ax.get_lines() or ax.collections):
                 continue
-            for axis in (ax.xaxis, ax.yaxis):
-                label = axis.get_label()
+            for axis, shared in (
+                (ax.xaxis, ax.get_shared_x_axes()),
+                (ax.yaxis, ax.get_shared_y_axes()),
+            ):
+                # A shared axis is labelled once (on the first panel of the row or column).
+                labels = [
+                    getattr(s, f"{axis.axis_name}axis").get_label() for s in shared.get_siblings(ax)
+                ]
+                label = next((lab for lab in labels if lab.get_text()), axis.get_label())
                 text = label.get_text()
                 assert_true(
                     bool(UNIT.search(text)) and label.get_fontsize() >= MIN_PT,
