@@ -23,8 +23,8 @@ _MAX_REPORT_WORKERS = 256
 
 _HELP = (
     "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-    "measured at 141 s wall on 2 quiet cores with --adapter lammps, kratos and mujoco: "
-    "reports/results.json of 2026-11-24)"
+    "measured at 317 s wall on 2 cores at load 6-8 with --adapter lammps, kratos and mujoco: "
+    "reports/results.json of 2026-11-26)"
 )
 
 
