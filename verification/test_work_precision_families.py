@@ -13,14 +13,14 @@ import math
 
 import pytest
 
-from reference_impl.report._wp import (
+from reference_impl.report._wp import wp_overview_figure
+from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
+from reference_impl.studies.wp_summary import (
     FAMILY_NAMES,
     QUICK_SKIP,
     family_summary,
     scene_families,
-    wp_overview_figure,
 )
-from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
 from verification.assertions import assert_less, assert_true
 
 CALL = "work_precision(quick=True)"
@@ -104,7 +104,7 @@ def test_family_summary_and_overview(study, tmp_path):
         call="family_summary",
     )
     pytest.importorskip("matplotlib")
-    name, caption = wp_overview_figure(study, tmp_path)
+    name, caption = wp_overview_figure(study, tmp_path, scene_families())
     assert_true(
         (tmp_path / name).stat().st_size > 10_000 and "per potential family" in caption,
         got=f"{name} ({(tmp_path / name).stat().st_size} bytes)",
@@ -126,8 +126,7 @@ def test_a_users_ode_solver_joins_the_study_by_class(study):
     ref = study[(study.scene == sc.name) & (study.method == "RK45")]
     got = mine[mine.method == "MyRK45"]
     assert_true(
-        len(got) == len(ref) > 0
-        and list(got.err_contact_time) == list(ref.err_contact_time),
+        len(got) == len(ref) > 0 and list(got.err_contact_time) == list(ref.err_contact_time),
         got=list(got.err_contact_time),
         should=list(ref.err_contact_time),
         claim=CLAIM,
