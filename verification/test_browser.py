@@ -10,7 +10,6 @@ that each check can fail.
 from __future__ import annotations
 
 import importlib.util
-import re
 import shutil
 import subprocess
 import sys
@@ -114,23 +113,6 @@ def defects(request, target) -> dict:
     return request.getfixturevalue(f"{target}_defects")
 
 
-class RawMarkdownErratum(AssertionError):
-    """The raw Markdown found is exactly the committed report's erratum links."""
-
-
-# The committed report's HTML erratum shows its Markdown links to the referee's scripts
-# raw ("(independent, [fig1.py](repro/fig1.py))", 5 places). Only that finding is the
-# expected failure (``raises``): any other raw Markdown fails the test outright.
-_ERRATUM_LINK = re.compile(r"\(independent, \[(\w+)\.py\]\(repro/\1\.py\)\)")
-_RAW_MARKDOWN_ERRATUM = pytest.mark.xfail(
-    strict=True,
-    raises=RawMarkdownErratum,
-    reason=(
-        "the committed report's HTML erratum shows its Markdown links to reports/repro/ "
-        "raw (5 places); helper 'report' fixes the renderer and regenerates the report: "
-        "remove this mark then"
-    ),
-)
 TARGETS = ["report", "site"]
 
 
@@ -142,14 +124,9 @@ def test_every_image_decodes(defects, target):
         )
 
 
-@pytest.mark.parametrize("target", [pytest.param("report", marks=_RAW_MARKDOWN_ERRATUM), "site"])
+@pytest.mark.parametrize("target", TARGETS)
 def test_no_raw_markdown_in_rendered_text(defects, target):
     for page, d in defects.items():
-        if d.raw_markdown and all(_ERRATUM_LINK.search(t) for t in d.raw_markdown):
-            raise RawMarkdownErratum(
-                f"got the erratum's raw Markdown links {d.raw_markdown}, should be "
-                f"rendered as links [{page}]"
-            )
         assert not d.raw_markdown, (
             f"got raw Markdown in the rendered text {d.raw_markdown[:5]}, should be "
             f"none outside code [{page}]"
