@@ -15,6 +15,7 @@ from pathlib import Path
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._blocks import markdown_lines as _md
 from reference_impl.report._common import g
+from reference_impl.report._codes import codes_blocks
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._laws import laws_blocks
@@ -418,6 +419,7 @@ def _sections(r) -> list:
         + laws_blocks(r)
         + _hard(r)
         + _adapters(r)
+        + codes_blocks(r)
         + resolution_blocks(r)
         + _env(r)
     )
