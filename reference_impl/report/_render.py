@@ -523,6 +523,7 @@ def html_page(r: dict, fig_dir: Path) -> str:
                 ("wp", "Speed vs error"),
                 ("hard", "Hard cases"),
                 *([("adapters", "Contact codes")] if r.get("adapters") else []),
+                *([("codes", "Codes side by side")] if r.get("codes_side_by_side") else []),
                 ("env", "Environment"),
             )
         )
