@@ -210,3 +210,30 @@ def test_the_campaign_measures_the_section_with_the_reference_adapter(committed)
         claim=CLAIM,
         call="codes_side_by_side(['reference'])",
     )  # fmt: skip
+
+
+def test_a_variant_and_its_calibration_are_one_entry_and_one_asked_e(monkeypatch):
+    """The calibrated spec of a variant (``liggghts[model=hertz,...]``) is the variant run
+    as ``liggghts[hertz,...]``: its cost is under that spec; the search is for one asked e."""
+    from reference_impl.bench import codes as bc
+
+    asked_seen = []
+    monkeypatch.setattr(bc, "codes_table", lambda codes: [])
+
+    def calib(codes, asked, steps_per_contact, v0):
+        asked_seen.append(tuple(asked))
+        return [{"code": codes[0][0], "variant": codes[0][1], "option": codes[0][3],
+                 "asked": a, "found": True, "value": 1.0} for a in asked]  # fmt: skip
+
+    monkeypatch.setattr(bc, "calibration_table", calib)
+    sec = codes_side_by_side(["liggghts[hertz,wall,limit_force=true]"])
+    assert_true(
+        list(sec["seconds"]) == ["liggghts[hertz,wall,limit_force=true]"]
+        and asked_seen == [(0.5,)]
+        and [c["match"] for c in sec["calibration"]] == ["liggghts[hertz,limit_force=True,wall]"],
+        got=f"cost entries {list(sec['seconds'])}, asked {asked_seen}, calibration "
+        f"{sec['calibration']}",
+        should="one entry, under the spec the table ran with; one asked e (0.5)",
+        claim=CLAIM,
+        call="codes_side_by_side(['liggghts[hertz,wall,limit_force=true]'])",
+    )

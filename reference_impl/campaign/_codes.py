@@ -102,8 +102,10 @@ def codes_side_by_side(adapters, progress=None) -> dict | None:
         t0 = time.perf_counter()
         got = _bc.calibration_table(codes=[(code, spec, p, param, *rng)], asked=CALIBRATION_ASKED,
                                    steps_per_contact=CALIBRATION_STEPS, v0=CALIBRATION_V0)  # fmt: skip
-        seconds.setdefault(spec, {"table": 0.0, "calibration": 0.0})
-        seconds[spec]["calibration"] += time.perf_counter() - t0
+        # the cost is the variant's: under the spec its table ran with, when it ran
+        run = next((s for _, s, _ in runs if _key(s) == _key(spec)), spec)
+        seconds.setdefault(run, {"table": 0.0, "calibration": 0.0})
+        seconds[run]["calibration"] += time.perf_counter() - t0
         cal += [{**r, "spec": spec, "p": p, "match": _key(spec)} for r in got]
     for r in rows:
         r["match"] = _key(r["spec"])
