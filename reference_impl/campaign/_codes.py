@@ -8,9 +8,10 @@ the linear one), are run by `reference_impl.bench.codes.codes_table`: each asked
 restitution at 20 and 200 steps per contact and at two speeds four decades apart.
 The input that delivers the asked e is searched by
 `reference_impl.bench.codes.calibration_table` for the variants of
-`reference_impl.bench.codes.CALIBRATED`, for `CALIBRATION_ASKED` only: a search costs
-10 to 30 runs per asked e, which for LIGGGHTS and YADE is minutes per variant
-(measured, see the section), so one asked e keeps the report's cost bounded.
+`reference_impl.bench.codes.CALIBRATED`, for `CALIBRATION_ASKED` only: one asked e
+costs 36 to 41 s per YADE variant, 9 s for LIGGGHTS, 5 s for Kratos, 0.5 s for MuJoCo,
+~90 s for the five codes, against ~45 s for their whole table (measured 2026-11-26 on
+2 cores at load 6-7); the three asked e would add ~3 minutes to a ~5-minute report.
 
 The result is the results dict's ``codes_side_by_side`` (schema in
 `reference_impl.report._schema`), rendered by `reference_impl.report._codes`.
@@ -24,8 +25,8 @@ from reference_impl.bench import codes as _bc
 
 __all__ = ["CALIBRATION_ASKED", "codes_side_by_side", "select"]
 
-# One asked e for the calibration (the middle of `reference_impl.bench.codes.ASKED`):
-# the search is 10 to 30 runs per asked e and per variant (see the module docstring).
+# One asked e for the calibration (the middle of `reference_impl.bench.codes.ASKED`): the
+# search's cost per asked e is twice the table's (see the module docstring).
 CALIBRATION_ASKED = (0.5,)
 CALIBRATION_STEPS = 200  # steps per contact of the search (the fine resolution of the table)
 CALIBRATION_V0 = 1.0  # m/s: between the table's two speeds (Theorem 3: e does not depend on it)

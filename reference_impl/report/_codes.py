@@ -120,16 +120,16 @@ def codes_blocks(r: dict) -> list:
             "that e) and run at dt = t_c / N (t_c: the exact contact time). Each cell is the "
             f"restitution delivered at q = 0 with N = {fine} / N = {coarse} steps per contact, "
             f"at v0 = {lo:g} m/s; † marks a cell where the other speed delivers an e differing "
-            f"by more than {st['speed_tolerance']:g} (values below); a cell in bold has a "
-            f"delivered e more than {100 * st['asked_tolerance']:g} % from the asked one. "
+            f"by more than {st['speed_tolerance']:g} (values below); bold: either delivered e "
+            f"more than {100 * st['asked_tolerance']:g} % from the asked one. "
             "The largest pull is the largest tensile force during contact (at its end for an "
             "unclipped law), as a percentage of the peak compressive force; 0 for a code that "
             "clips tension. The calibration searches the code's input that delivers the asked "
             f"e at N = {st['calibration_steps_per_contact']} and v0 = "
             f"{st['calibration_v0']:g} m/s (`hcv calibrate`), for asked e = "
-            f"{', '.join(f'{e:g}' for e in st['calibration_asked'])} only: a search runs the "
-            "code 10 to 30 times per asked e, minutes for LIGGGHTS and YADE (cost below); "
-            '"-" where the variant has no calibrated input.'
+            f"{', '.join(f'{e:g}' for e in st['calibration_asked'])} only, to bound the "
+            "report's cost (a search runs the code many times per asked e; its wall time is "
+            'below); "-" where the variant has no calibrated input.'
         ),
     ]
     for hi in speeds[1:]:
