@@ -246,3 +246,22 @@ def test_no_module_lists_a_public_name_twice():
                 if dup:
                     twice[str(path.relative_to(ROOT))] = dup
     assert not twice, f"got {twice}, should be every name once [tool, __all__]"
+
+
+def test_no_test_module_imports_another():
+    """Test modules share constants and helpers through helper modules (``verification/_*.py``),
+    never by importing another test module (which runs its module body, and ties a tool test
+    to a claim module's internals)."""
+    here = Path(__file__).resolve().parent
+    found = []
+    for path in sorted(here.glob("test_*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                names = [node.module or ""] + [f"{node.module or ''}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            if any(n.rsplit(".", 1)[-1].startswith("test_") for n in names):
+                found.append(f"{path.name}:{node.lineno}")
+    assert not found, f"got test modules importing test modules at {found}, should be none"
