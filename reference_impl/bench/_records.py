@@ -104,7 +104,6 @@ class SceneContext:
     damped: bool
     skipped: str = ""
     speeds: list[SpeedRecord] = field(default_factory=list)
-    speed_rows: list[dict] = field(default_factory=list)
     order: float | None = None
     order_error: str = ""
     sustained: dict | None = None

@@ -14,7 +14,6 @@ STATEMENT = (
     "0.99, 1.50 m/s: delta_max, U'(delta_max) and Delta t_safe are as printed in Table 1."
 )
 
-COLUMNS = ("delta_max", "max_force", "dt_safe")
 NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
 # A cell matches when the 50-digit value rounds to the printed digits (half a unit of the
 # last printed digit): the recomputation itself is exact to far more digits.

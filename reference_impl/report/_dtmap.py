@@ -149,30 +149,6 @@ def map_figure(df: pd.DataFrame, path) -> None:
     fig.savefig(path)
 
 
-def map_table(df: pd.DataFrame) -> list[dict]:
-    """Compact rows for the rendered table."""
-    out = []
-    for _, r in df.iterrows():
-        out.append(
-            {
-                "case": r["case"],
-                "v0 [m/s]": r.v0,
-                "scene": r.scene,
-                "geometry": r.geometry,
-                "Δt_safe [s]": r.dt_safe,
-                "Δt_crit [s]": r.dt_crit,
-                "Δt_crit/Δt_safe": r.ratio,
-                "holds": "yes" if r.holds else "NO",
-                "kind": r.failure_kind or "",
-                "bounded from /Δt_safe": r.bounded_ratio,
-                "Δt_rec [s]": r.recommended_dt,
-                "Δt_crit/Δt_rec": r.recommended_ratio,
-                "failure": r.counterexample_status or "",
-            }
-        )
-    return out
-
-
 def describe_recommendation() -> str:
     """One line on the corrected bound (measured margins are in the table)."""
     from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR

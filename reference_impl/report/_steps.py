@@ -192,7 +192,6 @@ def resolution_blocks(r: dict) -> list:
         for var in code["variants"]:
             if "skipped" in var:
                 continue  # skipped scenes are listed below the table
-                continue
             by = {x["steps_per_contact"]: x for x in var["rows"]}
             fails = [f"N = {n}: {x['failure']}" for n, x in by.items() if "failure" in x]
             rows.append(

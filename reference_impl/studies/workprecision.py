@@ -62,8 +62,6 @@ IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 VERLET_STEPS = (10, 30, 100, 300, 1000, 3000, 10000)
 # Damping ratio of the per-family scenes (universal law): a typical e ~ 0.5 impact.
 FAMILY_ZETA = 0.2
-# Density of steel (kg/m^3), for the sphere scene's mass.
-STEEL_DENSITY = 7800.0
 # Solvers run on the added family scenes: the two explicit Runge-Kutta pairs only
 # (Radau/LSODA and Verlet on them would cost minutes for no new information).
 FAMILY_IVP_METHODS = ("DOP853", "RK45")
