@@ -15,9 +15,11 @@ import pytest
 
 from reference_impl.report._wp import (
     FAMILY_NAMES,
+    METRICS,
     QUICK_SKIP,
     family_summary,
     scene_families,
+    wp_figures,
     wp_overview_figure,
 )
 from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
@@ -154,3 +156,20 @@ def test_every_study_scene_is_the_catalogue_scene_of_its_name():
             claim=CLAIM,
             call=f"load_scene({sc.name!r})",
         )
+
+
+def test_a_method_without_a_style_fails_the_plots(tmp_path):
+    """A study row of a method the plots have no style for is an error, never a curve
+    silently left out (a user's solver joins the study by class, see above)."""
+    pytest.importorskip("matplotlib")
+    import pandas as pd
+
+    row = {"scene": "hertz-k1e9", "method": "MyRK45", "setting": "rtol=1e-06", "seconds": 1e-3}
+    df = pd.DataFrame([{**row, **{col: 1e-6 for col, _ in METRICS}}])
+    for name, plot in (
+        ("wp_overview_figure", lambda: wp_overview_figure(df, tmp_path)),
+        ("wp_figures", lambda: wp_figures(df, tmp_path, {"hertz-k1e9": "hertz-k1e9"})),
+    ):
+        with pytest.raises(ValueError, match="MyRK45"):
+            plot()
+            pytest.fail(f"got a figure, should be ValueError naming MyRK45 [tool, {name}]")
