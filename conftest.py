@@ -1,6 +1,11 @@
 """Root pytest configuration: hypothesis profiles and the claim marker.
 
 Select a profile with HYPOTHESIS_PROFILE=ci|dev|thorough (default: dev; CI sets ci).
+
+``pytest -m smoke`` is the first try on a new machine (issue 26: <= 2 min on 2 cores): for each
+registered claim, the first collected test that checks it and is not marked slow, plus the
+end-to-end command tests named in ``_SMOKE_EXTRA``. The selection is made here, at collection
+time, so a new claim's first test joins it without an edit.
 """
 
 from __future__ import annotations
@@ -27,11 +32,22 @@ settings.register_profile(
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "dev"))
 
 
+# Tests besides one per claim that a first try should run: the main commands end to end.
+_SMOKE_EXTRA = (
+    "verification/test_cli.py::test_solve_json_embedded_paper_scene",
+    "verification/test_cli.py::test_dt_crit_json_reports_each_velocity",
+    "verification/test_cli.py::test_bad_input_exit_2_one_line",
+)
+
+
 def pytest_collection_modifyitems(config, items):
-    """Reject a claim marker that names an unregistered claim, at collection time."""
+    """Reject a claim marker that names an unregistered claim; choose the smoke tests."""
+    import pytest
+
     from verification.claims import claim_ids
 
     known = set(claim_ids())
+    smoked: set[str] = set()
     for item in items:
         for mark in item.iter_markers("claim"):
             if not mark.args or mark.args[0] not in known:
@@ -39,3 +55,19 @@ def pytest_collection_modifyitems(config, items):
                     f"{item.nodeid}: claim marker {mark.args!r} names no registered claim "
                     f"(see verification/claims.py)"
                 )
+            claim = mark.args[0]
+            if claim not in smoked and item.get_closest_marker("slow") is None:
+                smoked.add(claim)
+                item.add_marker(pytest.mark.smoke)
+        if item.nodeid.split("[")[0] in _SMOKE_EXTRA:
+            item.add_marker(pytest.mark.smoke)
+    # A renamed test must not leave the smoke run silently smaller: every extra whose module
+    # was collected must name a function of that module.
+    modules = {item.nodeid.split("::")[0]: item.module for item in items if hasattr(item, "module")}
+    lost = [
+        t
+        for t in _SMOKE_EXTRA
+        if t.split("::")[0] in modules and not hasattr(modules[t.split("::")[0]], t.split("::")[1])
+    ]
+    if lost:
+        raise ValueError(f"conftest._SMOKE_EXTRA names tests that do not exist: {lost}")

@@ -45,10 +45,17 @@ def tests_latest(session: nox.Session) -> None:
 
 @nox.session(python="3.11")
 def lint(session: nox.Session) -> None:
-    """ruff over the package, the suite and the benchmarks."""
+    """ruff over the package, the suite, the benchmarks and the referee's scripts."""
     session.install("ruff")
     session.run(
-        "ruff", "check", "reference_impl", "verification", "benchmarks", "noxfile.py", "conftest.py"
+        "ruff",
+        "check",
+        "reference_impl",
+        "verification",
+        "benchmarks",
+        "reports/repro",
+        "noxfile.py",
+        "conftest.py",
     )
 
 

@@ -11,6 +11,20 @@ has less than `MIN_FREE_BYTES` free, is not an error: numba then compiles into a
 temporary directory removed at exit (nothing is kept between processes), and one
 `CacheWarning` says so, once per process.
 
+**Who may write it (issue 29).** numba's cache files are pickles, and unpickling runs code:
+whoever can write the cache can run code in every later hcv process. The directory is
+therefore created 0700, and one that is owned by another user, or writable by group or
+others (itself or its ``numba/``, ``tables/``, ``expressions/``), is refused like an
+unusable one: one `CacheWarning`, a private temporary cache. A ``NUMBA_CACHE_DIR`` the user
+set is the user's choice and is not checked.
+
+**Damaged files.** A numba file that cannot be loaded (a truncated ``.nbc``, a garbage
+``.nbi``) is removed and the function compiled afresh, with one `CacheWarning` per process,
+instead of raising on every later run: `_guard_numba_loader` wraps numba's loader the
+moment ``numba.core.caching`` is imported (an import hook: importing this module does not
+import numba). A file that loads but was written by someone else is not detected: that is
+what the ownership rule is for.
+
 **User expressions.** numba cannot cache a function that was made at run time (a
 lambdified expression has no source file). `expression_module` therefore writes the
 expression's code, as sympy prints it from the validated tree (never the user's text), into
@@ -33,6 +47,7 @@ import importlib.util
 import json
 import math
 import os
+import stat
 import sys
 import warnings
 from functools import lru_cache
@@ -92,11 +107,43 @@ def max_bytes() -> int:
     return int(mb * 2**20)
 
 
+# Sub-directories whose files later runs load (pickles, modules, tables).
+_SUBDIRS = ("numba", "tables", "expressions")
+
+
+def _untrusted(path: Path) -> str | None:
+    """Why others could have written ``path`` or its sub-directories (None when they cannot).
+
+    Owned by another user, or writable by group or others: numba's files are pickles, so
+    such a cache could run another user's code in this process.
+    """
+    me = os.geteuid()
+    for p in (path, *(path / s for s in _SUBDIRS)):
+        try:
+            st = os.stat(p)  # a link is judged by its target
+        except FileNotFoundError:
+            continue
+        if st.st_uid != me:
+            return f"{p} is owned by another user (uid {st.st_uid})"
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return (
+                f"{p} is writable by group or others (mode {oct(stat.S_IMODE(st.st_mode))}); "
+                "its pickled code would run here. chmod 700 it after checking its content, "
+                "or remove it"
+            )
+    return None
+
+
 def _unusable(path: Path, min_free: int | None = None) -> str | None:
-    """Why ``path`` cannot hold the cache (None when it can): not creatable, not writable, full."""
+    """Why ``path`` cannot hold the cache (None when it can): not creatable, not writable,
+    writable by others (`_untrusted`), full."""
     min_free = MIN_FREE_BYTES if min_free is None else min_free
     try:
-        path.mkdir(parents=True, exist_ok=True)
+        # 0700: only this user may write what later runs load (the parents as any directory).
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+        why = _untrusted(path)
+        if why is not None:
+            return why
         # A real write, not os.access: the latter says yes to root on a read-only mount.
         probe = path / f".probe-{os.getpid()}"
         os.close(os.open(probe, os.O_CREAT | os.O_WRONLY | os.O_TRUNC, 0o600))
@@ -154,7 +201,92 @@ def configure_numba_cache() -> bool:
             f"hcv: the compile cache {root} {reason}; compiling for this process only "
             "(set HCV_CACHE_DIR to a writable directory to keep compiled code between runs)"
         )
+    _guard_numba_loader()
     return _state["usable"]
+
+
+# --------------------------------------------------------------------------- damaged files
+
+
+def _guard_numba_loader() -> None:
+    """Wrap numba's cache loader (now if imported, else when ``numba.core.caching`` is)."""
+    if _state.get("guarded"):
+        return
+    _state["guarded"] = True
+    module = sys.modules.get("numba.core.caching")
+    if module is not None:
+        _wrap_loader(module)
+    else:
+        sys.meta_path.insert(0, _PatchOnImport())
+
+
+class _PatchOnImport:
+    """Import hook: once ``numba.core.caching`` is executed, wrap its loader (one shot)."""
+
+    def find_spec(self, fullname, path, target=None):
+        if fullname != "numba.core.caching":
+            return None
+        sys.meta_path.remove(self)
+        from importlib.machinery import PathFinder
+
+        spec = PathFinder.find_spec(fullname, path)
+        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        execute = spec.loader.exec_module
+
+        def exec_module(module):
+            execute(module)
+            _wrap_loader(module)
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+
+def _damaged(path: str, exc: BaseException) -> None:
+    """Remove a numba file that cannot be loaded; warn once per process."""
+    try:
+        os.unlink(path)
+    except OSError:
+        pass  # read-only or already gone: numba overwrites it when it saves
+    if not _state.get("warned_damaged"):
+        _state["warned_damaged"] = True
+        warnings.warn(
+            f"hcv: the compile cache file {path} is damaged ({type(exc).__name__}: "
+            f"{str(exc)[:80]}); it was removed and the function is compiled afresh",
+            CacheWarning,
+            stacklevel=2,
+        )
+
+
+def _wrap_loader(caching) -> None:
+    """Make numba's index and data loads treat a damaged file as a miss (removed, warned).
+
+    numba raises on a truncated or garbage pickle, on every later run; a miss compiles the
+    function and numba's next save rewrites the entry whole (it writes to a temporary name).
+    """
+    files = caching.IndexDataCacheFile
+    if getattr(files, "_hcv_guarded", False):
+        return
+    load_index, load_data = files._load_index, files._load_data
+
+    def _load_index(self):
+        try:
+            return load_index(self)
+        except Exception as exc:  # any failure to unpickle is a damaged file
+            _damaged(self._index_path, exc)
+            return {}
+
+    def _load_data(self, name):
+        try:
+            return load_data(self, name)
+        except OSError:
+            raise  # numba's own handling: a data file removed under its index is a miss
+        except Exception as exc:  # likewise
+            _damaged(self._data_path(name), exc)
+            return None
+
+    files._load_index, files._load_data = _load_index, _load_data
+    files._hcv_guarded = True
 
 
 # --------------------------------------------------------------------------- expressions

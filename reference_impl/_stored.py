@@ -13,9 +13,15 @@ computes it (a changed formula never meets an old entry), and the digest of ever
 the caller names inside an installed package (e.g. scipy's ``version.py``: a scipy upgrade
 computes afresh), read without importing the package.
 
+**Checked.** The cache is input: an entry carries the sha256 of its name and values, and
+one whose values do not match it (edited by hand, damaged, truncated, of the wrong length)
+is never used: the table is computed afresh, rewritten, and one `CacheWarning` names the
+file (issue 29: Gauss-Jacobi weights scaled by 1.001 moved t_c by 1e-3 under a reported
+error of 5e-19). The checksum catches accidents and edits, not an adversary who can write
+the cache (who could recompute it; see the cache's ownership rules in `reference_impl._cache`).
+
 **Degrading.** An unusable cache directory (`reference_impl._cache.configure_numba_cache`
-decides, and warns once), or an entry that cannot be read or does not hold the expected
-number of finite floats, means the table is computed in this process; an entry that
+decides, and warns once) means the table is computed in this process; an entry that
 cannot be written is simply not kept. Nothing here raises for the cache's sake.
 
 **Bounded.** At most `MAX_ENTRIES` tables (a few kB each) are kept; beyond that the least
@@ -29,12 +35,13 @@ import importlib.util
 import json
 import math
 import os
+import warnings
 from collections.abc import Callable, Sequence
 from functools import lru_cache
 from pathlib import Path
 
 from reference_impl._atomic import atomic_write
-from reference_impl._cache import cache_dir, configure_numba_cache
+from reference_impl._cache import CacheWarning, cache_dir, configure_numba_cache
 
 __all__ = ["MAX_ENTRIES", "stored_floats", "tables_dir"]
 
@@ -74,24 +81,57 @@ def _key(kind: str, args: tuple, compute: Callable, files: Sequence[tuple[str, s
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
 
-# Longest text an entry of n values can be: '"-0x1.fffffffffffffp+1023", ' is 28 characters.
+# Longest text an entry of n values can be: '"-0x1.fffffffffffffp+1023", ' is 28 characters,
+# plus the keys and the 64-digit checksum.
 _BYTES_PER_VALUE = 28
+_ENTRY_OVERHEAD = 128
+# Entries already warned about in this process (one warning per damaged entry).
+_warned: set[str] = set()
+
+
+def _checksum(path: Path, hexes: list[str]) -> str:
+    """sha256 of the entry's name and values: an entry moved or edited no longer matches."""
+    return hashlib.sha256((path.name + "\n" + json.dumps(hexes)).encode()).hexdigest()
 
 
 def _read(path: Path, count: int) -> list[float] | None:
+    """The entry's values; None (computed afresh) when absent, damaged or edited."""
+    limit = _BYTES_PER_VALUE * count + _ENTRY_OVERHEAD
     try:
         with path.open("rb") as fh:
             # Read no more than such an entry can hold: a large file planted in the cache
             # is not ours and must not cost its size in memory.
-            raw = fh.read(_BYTES_PER_VALUE * count + 2 + 1)
-        if len(raw) > _BYTES_PER_VALUE * count + 2:
-            return None
-        values = [float.fromhex(v) for v in json.loads(raw.decode("utf-8"))]
-    except (OSError, ValueError, TypeError):
-        return None  # absent, half-copied by hand, or not ours: computed afresh
+            raw = fh.read(limit + 1)
+    except OSError:
+        return None  # absent, or the store cannot be read (not a directory, no permission)
+    try:
+        if len(raw) > limit:
+            raise ValueError("longer than such an entry")
+        data = json.loads(raw.decode("utf-8"))
+        if isinstance(data, list):
+            return None  # an entry of the format before checksums: rewritten, no warning
+        hexes = data["v"]
+        if not isinstance(hexes, list) or data.get("sha256") != _checksum(path, hexes):
+            raise ValueError("its values do not match its checksum")
+        values = [float.fromhex(v) for v in hexes]
+    except (ValueError, TypeError, KeyError, AttributeError) as exc:
+        return _bad(path, str(exc)[:80] or type(exc).__name__)
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        return None
+        return _bad(path, f"it does not hold {count} finite values")
     return values
+
+
+def _bad(path: Path, why: str) -> None:
+    """One `CacheWarning` per damaged entry and process; the caller computes afresh."""
+    if str(path) not in _warned:
+        _warned.add(str(path))
+        warnings.warn(
+            f"hcv: the stored table {path} is damaged or was edited ({why}); "
+            "it is computed afresh and rewritten",
+            CacheWarning,
+            stacklevel=4,
+        )
+    return None
 
 
 def _evict(folder: Path, keep: Path) -> None:
@@ -156,7 +196,8 @@ def stored_floats(
         raise ValueError(f"{kind}{args!r}: expected {count} finite values, got {values!r}")
     if path is not None:
         try:
-            atomic_write(path, json.dumps([v.hex() for v in values]))
+            hexes = [v.hex() for v in values]
+            atomic_write(path, json.dumps({"v": hexes, "sha256": _checksum(path, hexes)}))
             _evict(path.parent, keep=path)
         except OSError:
             pass  # read-only or full: the table is used for this process only

@@ -377,6 +377,22 @@ def test_html_is_well_formed_and_self_contained(report):
     )
 
 
+def test_report_links_only_files_that_are_there(report):
+    """Every relative link of index.md, erratum.md and index.html names a file in the output
+    directory: a report written outside the checkout's reports/ does not link to the
+    referee's repro/*.py (issue 26 item 6), which are not there."""
+    import re
+
+    out, _, _ = report
+    for name, pattern in (("index.md", r"\]\(([^)\s]+)\)"), ("erratum.md", r"\]\(([^)\s]+)\)"),
+                          ("index.html", r'(?:href|src)="([^"]+)"')):
+        links = re.findall(pattern, (out / name).read_text())
+        local = [t for t in links if not t.startswith(("#", "http:", "https:", "data:", "mailto:"))]
+        missing = sorted({t for t in local if not (out / t.split("#")[0]).exists()})
+        assert_true(not missing, got=f"links to missing {missing[:5]}", should="only existing files",
+                    claim="report", call=f"{CALL}: {name}")
+
+
 def test_markdown_links_existing_figures(report):
     out, results, _ = report
     md = (out / "index.md").read_text()

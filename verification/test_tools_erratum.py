@@ -76,9 +76,33 @@ def test_numbers_come_from_the_measurement(results):
                     claim="erratum", call="_erratum.markdown(modified results)")
 
 
+def test_scripts_are_linked_only_where_they_are(results, tmp_path):
+    """The erratum links repro/<claim>.py only when the report's directory holds them
+    (`scripts_href`): the checkout's reports/, not a report written elsewhere."""
+    from reference_impl.report._files import scripts_href
+
+    assert_true(scripts_href(tmp_path) is None and scripts_href(ROOT / "reports") == "repro",
+                got=f"{scripts_href(tmp_path)!r}, {scripts_href(ROOT / 'reports')!r}",
+                should="None for an empty directory, 'repro' for reports/", claim="erratum",
+                call="scripts_href")
+    elsewhere = _erratum.markdown({**results, "repro_scripts": None})
+    here = _erratum.markdown({**results, "repro_scripts": "repro"})
+    link = re.compile(r"\]\((repro/[^)]+)\)")
+    targets, stray = link.findall(here), link.findall(elsewhere)
+    assert_true(not stray and targets and all((ROOT / "reports" / t).is_file() for t in targets),
+                got=f"links elsewhere: {stray[:3]}; here: {targets[:3]}",
+                should="no repro link elsewhere; existing scripts in reports/", claim="erratum",
+                call="_erratum.markdown")
+
+
 def test_committed_erratum_is_generated_from_committed_results(results):
+    from reference_impl.report._files import scripts_href
+
     committed = ROOT / "reports" / "erratum.md"
-    assert_true(committed.is_file() and committed.read_text() == _erratum.markdown(results),
+    # As `python -m reference_impl.report._erratum reports/results.json -o reports/erratum.md`
+    # writes it: the scripts beside it are linked.
+    expected = _erratum.markdown({**results, "repro_scripts": scripts_href(committed.parent)})
+    assert_true(committed.is_file() and committed.read_text() == expected,
                 got="reports/erratum.md differs from the generator's output",
                 should="python -m reference_impl.report._erratum reports/results.json "
                 "-o reports/erratum.md", claim="erratum", call="reports/erratum.md")

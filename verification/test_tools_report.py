@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CALL = "build_report"
 
 
-def _fake_build(out, quick, progress, adapters, env, sec6, workers=0):
+def _fake_build(out, quick, progress, adapters, env, sec6, workers=0, repro=None):
     """Stand-in for the measurements: writes the report's files into ``out``."""
     (out / "figures").mkdir()
     (out / "figures" / "fig1.png").write_bytes(b"new")

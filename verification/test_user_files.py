@@ -53,7 +53,7 @@ def _snapshot(d: Path) -> dict[str, bytes]:
 # ----------------------------------------------------------------------------
 # hcv report --out DIR
 # ----------------------------------------------------------------------------
-def _fake_build(out, quick, progress, adapters, env, sec6, workers=0):
+def _fake_build(out, quick, progress, adapters, env, sec6, workers=0, repro=None):
     """Stand-in for the measurements: the report's files, two figures."""
     (out / "figures").mkdir()
     for name in ("fig1.png", "dt_crit_map.png"):

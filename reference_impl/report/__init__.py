@@ -34,7 +34,7 @@ from pathlib import Path
 
 from reference_impl.claims import CLAIMS, VERDICTS
 from reference_impl.report._common import claim_tests, jsonable, records
-from reference_impl.report._files import swap_in, validate_report_args
+from reference_impl.report._files import scripts_href, swap_in, validate_report_args
 from reference_impl.report._steps import resolution_study
 from reference_impl.studies.dtcrit_map import coverage
 
@@ -194,7 +194,9 @@ def build_report(
     # Provenance first: the temporary directory must not make the checkout look dirty.
     env = environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
     with swap_in(out) as tmp:
-        results = _build(tmp, quick, progress, adapters, env, sec6_dt_safe_bound, workers)
+        results = _build(
+            tmp, quick, progress, adapters, env, sec6_dt_safe_bound, workers, scripts_href(out)
+        )
     if readme_path is not None:
         from reference_impl.report.readme_table import rewrite_readme
 
@@ -233,8 +235,14 @@ def _readme_for(out: Path, readme) -> Path | None:
     return path
 
 
-def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers: int = 0) -> dict:
-    """Run everything and write the report into ``out`` (a fresh, empty directory)."""
+def _build(
+    out: Path, quick: bool, progress, adapters, env: dict, sec6, workers: int = 0, repro=None
+) -> dict:
+    """Run everything and write the report into ``out`` (a fresh, empty directory).
+
+    ``repro`` is the link from the final directory to the referee's scripts (None: they are
+    not there, and the report names them without a link).
+    """
     from reference_impl.claims import fig1 as fig1_claim
     from reference_impl.claims import sec10_stiffening_domain, table1
     from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _laws, _render, _wp
@@ -384,7 +392,10 @@ def _build(out: Path, quick: bool, progress, adapters, env: dict, sec6, workers:
     (out / "results.json").write_text(
         json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
     )
-    (out / "index.md").write_text(_render.markdown(results))
-    (out / "erratum.md").write_text(_erratum.markdown(results))
-    (out / "index.html").write_text(_render.html_page(results, fig_dir))
+    # Where the referee's scripts lie depends on the final directory, not on the results:
+    # the pages get it, results.json does not (copied elsewhere, it would link wrongly).
+    pages = {**results, "repro_scripts": repro}
+    (out / "index.md").write_text(_render.markdown(pages))
+    (out / "erratum.md").write_text(_erratum.markdown(pages))
+    (out / "index.html").write_text(_render.html_page(pages, fig_dir))
     return results

@@ -67,10 +67,14 @@ def script_path(claim_id: str) -> str:
     return f"reports/repro/{claim_id.replace('-', '_')}.py"
 
 
-def _commands(c: dict) -> str:
+def _commands(c: dict, repro: str | None = None) -> str:
+    """How to reproduce a claim; the script is linked only where ``repro`` says it lies
+    (``repro_scripts`` of the dict being rendered, set by the writer from the directory the
+    pages go to: a report written elsewhere links to no missing file)."""
     files = sorted({t.split("::")[0] for t in c.get("tests", [])})
-    return (f"`python {script_path(c['id'])}` (independent, [{Path(script_path(c['id'])).name}]"
-            f"(repro/{Path(script_path(c['id'])).name})); `python reports/repro/run_all.py` "
+    name = Path(script_path(c["id"])).name
+    link = f", [{name}]({repro}/{name})" if repro else ""
+    return (f"`python {script_path(c['id'])}` (independent{link}); `python reports/repro/run_all.py` "
             f"(compares with results.json); measurement: `hcv report`"
             + (f", `pytest {' '.join('verification/' + f for f in files)}`" if files else ""))
 
@@ -157,7 +161,7 @@ def entries(results: dict) -> list[dict]:
     out = []
     for c in results["claims"]:
         e = {"id": c["id"], "verdict": c["verdict"], "section": c["section"],
-             "script": script_path(c["id"]), "commands": _commands(c), "headline": c["headline"]}
+             "script": script_path(c["id"]), "commands": _commands(c, results.get("repro_scripts")), "headline": c["headline"]}
         if c["verdict"] != "verified":
             where, eq, tex = PRINTED.get(c["id"], (c["section"], None, c["statement"]))
             e["printed"] = f"{where}{f', Eq. ({eq})' if eq else ''}: “{plain(tex)}”"
@@ -205,7 +209,12 @@ def main(argv=None) -> int:
     ap.add_argument("results", nargs="?", default="reports/results.json")
     ap.add_argument("-o", "--out", help="output file (default: stdout)")
     a = ap.parse_args(argv)
-    text = markdown(json.loads(Path(a.results).read_text()))
+    results = json.loads(Path(a.results).read_text())
+    if a.out:  # the scripts are linked only when they lie beside the file written
+        from reference_impl.report._files import scripts_href
+
+        results["repro_scripts"] = scripts_href(Path(a.out).absolute().parent)
+    text = markdown(results)
     if a.out:
         Path(a.out).write_text(text)
     else:

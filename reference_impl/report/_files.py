@@ -14,7 +14,19 @@ wrote, listed in its manifest (`MANIFEST`, one relative path per entry):
   would overwrite that is not in the manifest, is refused before anything runs,
   unless ``force`` (``hcv report --force``);
 * the directory itself is never replaced: its mode, owner and any symlink to it
-  stay (a symlinked ``--out`` is followed, and its target written).
+  stay (a symlinked ``--out`` is followed, and its target written);
+* nothing outside the directory is written or deleted (issue 29): a symbolic link
+  inside it is never followed out (a report sub-directory such as ``figures`` that
+  links outside is refused; a stale file is deleted only when its directory resolves
+  inside the directory, and a link is removed, never followed), and a manifest entry
+  that leaves the directory (absolute, ``..``, through a link), holds a NUL byte or a
+  name the file system cannot hold is refused in one line before anything runs, with
+  or without ``force``. The move-in checks again, so a link planted during the run is
+  refused before any file moves.
+
+Not guaranteed: another process of the same user changing the directory while the
+files move in (a fraction of a second, after the last check) can still redirect a
+write; the report is not a sandbox against its own user.
 """
 
 from __future__ import annotations
@@ -25,6 +37,7 @@ import json
 import os
 import shutil
 import signal
+import stat
 import tempfile
 import threading
 from pathlib import Path
@@ -32,7 +45,7 @@ from pathlib import Path
 from reference_impl._userfiles import check_path
 from reference_impl.errors import HCVInputError
 
-__all__ = ["MANIFEST", "REPORT_ENTRIES", "swap_in", "validate_report_args"]
+__all__ = ["MANIFEST", "REPORT_ENTRIES", "scripts_href", "swap_in", "validate_report_args"]
 
 # The report's top-level files and directories (the names a run writes).
 REPORT_ENTRIES = ("index.html", "index.md", "erratum.md", "results.json", "figures", "bench")
@@ -42,32 +55,63 @@ MANIFEST = ".hcv-report-manifest.json"
 _SHOWN = 3
 # Files looked at when listing a directory's content (a report directory holds ~20).
 _MAX_LISTED = 100_000
+# A manifest lists ~30 paths (~1 kB); a larger file was planted, not written by a report.
+_MANIFEST_MAX_BYTES = 2**20
 
 
 def read_manifest(out: Path) -> set[str] | None:
-    """The relative paths a previous report wrote into ``out``, or None without a manifest."""
+    """The relative paths a previous report wrote into ``out``, or None without a manifest.
+
+    Every entry is checked before anything is run (`HCVInputError`, one line naming it): a
+    NUL byte, a name the file system cannot hold, or a path that leaves ``out`` (absolute,
+    ``..``, or through a symbolic link inside ``out`` that points outside it) is refused.
+    The manifest is the report's own file: such an entry was not written by ``hcv report``.
+    """
     path = out / MANIFEST
     if not path.is_file():
         return None
     try:
+        if path.stat().st_size > _MANIFEST_MAX_BYTES:
+            raise ValueError("too large")
         data = json.loads(path.read_text(encoding="utf-8"))
         files = data["files"]
-        if not all(isinstance(f, str) for f in files):
+        if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
             raise TypeError
     except (OSError, ValueError, KeyError, TypeError):
         raise HCVInputError(
             f"report directory {str(out)!r}: its manifest {MANIFEST} is unreadable; "
             "remove it (and the report files) or choose another directory"
         ) from None
-    return {f for f in files if _inside(f)}
+    for rel in files:
+        why = _leaves(out, rel)
+        if why is not None:
+            raise HCVInputError(
+                f"report directory {str(out)!r}: its manifest {MANIFEST} lists {rel[:80]!r}, "
+                f"{why}; it was not written by hcv report: remove that entry (or the manifest)"
+            )
+    return set(files)
 
 
-def _inside(rel: str) -> bool:
-    """A manifest entry that stays inside the directory (no absolute path, no '..')."""
+def _leaves(out: Path, rel: str) -> str | None:
+    """Why the manifest entry ``rel`` is not a file inside ``out`` (None when it is).
+
+    The entry's directory is resolved (every symbolic link followed) and must lie inside
+    the resolved ``out``; the entry itself may be a link (deleting a link never follows it).
+    """
+    if not rel or "\0" in rel:
+        return "an empty name or one with a NUL byte"
+    try:
+        check_path(out / rel, "manifest entry")
+    except HCVInputError as exc:
+        return str(exc).split(": ", 1)[-1]
     p = Path(rel)
-    return bool(rel) and not p.is_absolute() and ".." not in p.parts
-
-
+    if p.is_absolute() or ".." in p.parts or p.name in ("", "."):
+        return "a path outside the directory"
+    root = os.path.realpath(out)
+    where = os.path.realpath(out / p.parent)
+    if os.path.commonpath([root, where]) != root:
+        return f"whose directory is {where!r} (through a symbolic link), outside the directory"
+    return None
 def _files(root: Path) -> list[str]:
     """Relative paths of the files and symlinks below ``root`` (not following links)."""
     out = []
@@ -85,11 +129,38 @@ def _adapter_json(spec: str) -> str:
     return f"bench/{safe}.json"
 
 
+def _check_links(out: Path) -> None:
+    """Refuse a report sub-directory (``figures``, ``bench``) that is a link out of ``out``.
+
+    The report writes only inside the directory it was given; a symbolic link there (git
+    stores them, so a cloned repository can carry one) is never followed out, even with
+    ``force``.
+    """
+    root = os.path.realpath(out)
+    for name in REPORT_ENTRIES:
+        p = out / name
+        if p.is_symlink():
+            target = os.path.realpath(p)
+            if os.path.commonpath([root, target]) != root:
+                raise HCVInputError(
+                    f"report directory {str(out)!r}: {name} is a symbolic link to {target!r}, "
+                    "outside the directory; the report writes only inside it: remove the link "
+                    "or choose another directory"
+                )
+
+
 def _check_owned(out: Path, adapters, force: bool) -> None:
-    """Refuse a directory holding files the report does not own (unless ``force``)."""
-    if force or not out.is_dir():
+    """Refuse a directory holding files the report does not own (unless ``force``).
+
+    The manifest and the links are checked whatever ``force`` says (`read_manifest`,
+    `_check_links`): they decide what a run deletes and where it writes.
+    """
+    if not out.is_dir():
         return
+    _check_links(out)
     owned = read_manifest(out)
+    if force:
+        return
     if owned is None:
         with os.scandir(out) as it:  # the first few entries tell: no need to walk it all
             present = [e.name for _, e in zip(range(_SHOWN + 1), it, strict=False)]
@@ -111,6 +182,15 @@ def _check_owned(out: Path, adapters, force: bool) -> None:
             "would be overwritten but was not written by hcv report; move it away, "
             "choose another directory, or give --force"
         )
+
+
+def scripts_href(out: Path) -> str | None:
+    """The link from the report directory ``out`` to the referee's scripts, or None.
+
+    The checkout's ``reports/`` holds them in ``repro/`` (``repro/run_all.py`` and one
+    script per claim); a report written anywhere else names them without a link.
+    """
+    return "repro" if (Path(out) / "repro" / "run_all.py").is_file() else None
 
 
 def _nearest_existing(path: Path) -> Path:
@@ -197,13 +277,23 @@ def _signals_held():
 
 
 def _move_in(tmp: Path, out: Path) -> None:
-    """Move the new report's files into ``out``; delete the stale ones; write the manifest."""
+    """Move the new report's files into ``out``; delete the stale ones; write the manifest.
+
+    Nothing is moved before every path is checked (a link planted since the arguments
+    were checked is refused here, before any file moves); a stale file is deleted only
+    when it is a file or link whose directory lies inside ``out`` (`_leaves`).
+    """
     if out.exists():
+        _check_links(out)
         old = read_manifest(out) or set()
     else:
         out.mkdir()  # mode from the umask, as any new directory
         old = set()
     new = sorted(_files(tmp))
+    for rel in new:
+        why = _leaves(out, rel)
+        if why is not None:
+            raise HCVInputError(f"report directory {str(out)!r}: {rel!r} is {why}; nothing was moved in")
     umask = os.umask(0)
     os.umask(umask)
     for rel in new:
@@ -216,9 +306,13 @@ def _move_in(tmp: Path, out: Path) -> None:
     # and bench/lammps.json): a run without that adapter keeps them, still owned (issue 17).
     kept = {rel for rel in old - set(new) if _other_runs(rel) and (out / rel).is_file()}
     for rel in sorted(old - set(new) - kept):
-        with contextlib.suppress(FileNotFoundError, IsADirectoryError, NotADirectoryError):
-            (out / rel).unlink()
-        _prune(out, (out / rel).parent)
+        if _leaves(out, rel) is not None:
+            continue  # changed since it was checked: never delete outside ``out``
+        path = out / rel
+        with contextlib.suppress(OSError):
+            if not stat.S_ISDIR(path.lstat().st_mode):
+                path.unlink()  # a link is removed, never followed
+        _prune(out, path.parent)
     data = {"written_by": "hcv report", "files": sorted(set(new) | kept)}
     tmp_manifest = out / (MANIFEST + ".tmp")
     tmp_manifest.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
@@ -249,6 +343,8 @@ def _move(src: Path, dst: Path) -> None:
 def _prune(out: Path, d: Path) -> None:
     """Remove directories the deletion of stale files left empty (up to ``out``)."""
     while d != out and out in d.parents:
+        if d.is_symlink():
+            return  # a link is not a directory the deletion emptied
         try:
             d.rmdir()
         except OSError:

@@ -65,7 +65,7 @@ for case, v0, scene, pot, m, q_sup in [("p=1.5", 1.0, "two-sided", power(1.5), 1
                                        ("ellipsoid", 0.99, "two-walls", ell, 0.05, 2 * a),
                                        ("p=4.75", 1.0, "two-walls", power(4.75), 1.0, np.inf)]:
     U, dU = (lambda q, pot=pot: pot(q)[0]), (lambda q, pot=pot: pot(q)[1])
-    qmax = brentq(lambda q: U(q) - 0.5 * m * v0 * v0, 1e-9, min(10.0, 0.99 * q_sup), xtol=1e-300, rtol=1e-15)
+    qmax = brentq(lambda q, U=U, m=m, v0=v0: U(q) - 0.5 * m * v0 * v0, 1e-9, min(10.0, 0.99 * q_sup), xtol=1e-300, rtol=1e-15)
     qq = qmax * np.linspace(1e-9, 1, 200_001)
     dts = 2 * np.sqrt(m) / np.max(dU(qq) / np.sqrt(2 * U(qq)))  # Eq. 7
     gap, sel = 5 * qmax if scene == "two-walls" else 0.0, ["dt_crit_map", {"case": case, "v0": v0, "scene": scene}]

@@ -25,7 +25,7 @@ POTS = {f"p={p:g}": (lambda q, p=p: 1e6 * q ** (p + 1) / (p + 1), lambda q, p=p:
 POTS["paper ellipsoid"] = (lambda d: 1e8 / 1.5 * V(d) ** 1.5, lambda d: 1e8 * V(d) ** 0.5 * g0 * (2 * a0 * d - d**2), None)
 path = ["claims", {"id": "sec7-effective-mass"}, "measured", "rows"]
 for label, (U, dU, p) in POTS.items():
-    qmax = brentq(lambda q: U(q) - 0.5 * m, 1e-12, 0.029, xtol=1e-300, rtol=1e-15)
+    qmax = brentq(lambda q, U=U: U(q) - 0.5 * m, 1e-12, 0.029, xtol=1e-300, rtol=1e-15)
     q = qmax * np.logspace(-3, 0, 60)
     x = np.sqrt(2 * U(q) / K)
     meff = 2 * m * K * U(q) / dU(q) ** 2  # Eq. 10

@@ -27,7 +27,7 @@ path = ["claims", {"id": "table1"}, "measured"]
 bad = 0
 for v_str, printed in PRINTED.items():
     v0 = mp.mpf(v_str)
-    d = mp.findroot(lambda q: U(q) - m * v0**2 / 2, (mp.mpf("0.001"), mp.mpf("0.02")), solver="anderson")
+    d = mp.findroot(lambda q, v0=v0: U(q) - m * v0**2 / 2, (mp.mpf("0.001"), mp.mpf("0.02")), solver="anderson")
     F = dU(d)
     dt8 = 2 * m * v0 / F
     ratio_max = max(dU(d * k / 400) / mp.sqrt(2 * U(d * k / 400)) for k in range(1, 401))

@@ -41,12 +41,16 @@ def restitution(U, dU, C, v0, qs):
 
 e_th = float(np.exp(-np.pi * ZETA / np.sqrt(1 - ZETA**2)))
 path = ["claims", {"id": "thm3-damping-iff"}, "measured", "rows"]
-for case, (U, dU), speeds in SETUPS:
+
+
+def laws_case(case, U, dU, speeds):
+    """The restitution of the three laws at each speed of one case; prints them."""
     qmax = lambda v: brentq(lambda q: U(q) - m * v * v / 2, 1e-12, 0.029)  # noqa: E731
     q_ref = qmax(speeds[len(speeds) // 2])
     uni = lambda q: 2 * ZETA * np.sqrt(m) * dU(q) / np.sqrt(2 * U(q))  # noqa: E731
+    c_ref = uni(q_ref)
     laws = {"universal": uni, "perturbed C(q)(1+q/q_ref)": lambda q: uni(q) * (1 + q / q_ref),
-            "constant C": lambda q, c=uni(q_ref): c}
+            "constant C": lambda q: c_ref}
     for law, C in laws.items():
         es = [restitution(U, dU, C, v, qmax(v)) for v in speeds]
         sel = path + [{"case": case, "law": law}]
@@ -58,3 +62,7 @@ for case, (U, dU), speeds in SETUPS:
                 "ODE error; the rule's E_TOL")
             out(f"max |e - exp(-pi zeta/sqrt(1-zeta^2))|, {case}", max(abs(e - e_th) for e in es),
                 sel + ["max_dev_from_theory"], 1e-8, "below", "ODE error; the rule's E_TOL")
+
+
+for case, (U, dU), speeds in SETUPS:
+    laws_case(case, U, dU, speeds)
