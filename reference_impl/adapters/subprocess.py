@@ -94,8 +94,10 @@ from reference_impl.adapters.base import (
     ImplementedLaw,
     trajectory_from_mapping,
 )
+from reference_impl.adapters.law_damping import implemented_law_from_table
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes._scene import _potential, _Where
+from reference_impl.theory.laws import LAWS
 
 __all__ = [
     "PROTOCOL",
@@ -179,8 +181,6 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(description, str):
         raise AdapterOutputError(f"{who}: 'implemented_law.description' must be a string")
     kw = dict(clips_tension=clips, description=description)
-    from reference_impl.adapters.law_damping import implemented_law_from_table
-    from reference_impl.theory.laws import LAWS
 
     if law not in LAWS:
         raise AdapterOutputError(
