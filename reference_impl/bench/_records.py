@@ -12,6 +12,7 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from reference_impl.adapters.base import ImplementedLaw
+from reference_impl.bench.report import result_to_dict
 
 __all__ = ["EXIT_INTERNAL", "BenchResult", "MetricResult", "SceneContext", "SpeedRecord"]
 
@@ -187,6 +188,4 @@ class BenchResult:
         return EXIT_INTERNAL if self.internal_errors else 0
 
     def to_dict(self) -> dict:
-        from reference_impl.bench.report import result_to_dict
-
         return result_to_dict(self)

@@ -40,7 +40,11 @@ from scipy.optimize import brentq
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw
 from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
+from reference_impl.bench.measure import exact_reference, measure
+from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
+from reference_impl.scenes import Scene, load_scene
 from reference_impl.theory.damping import RESTITUTION_ENDS
 
 __all__ = [
@@ -185,7 +189,6 @@ def _range(cls: type, param: str, scene, given) -> tuple[float, float]:
 
 def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
     """One run: (trajectory, implemented law, error); HCVInputError when declined."""
-    from reference_impl.bench.worker import make_executor
 
     executor = make_executor(spec, isolate=isolate)
     try:
@@ -216,8 +219,6 @@ def _quantity(meas: dict, end: str) -> float:
 
 def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
     """Measured quantities at the calibrated value, against the declared law and the scene."""
-    from reference_impl.bench.measure import exact_reference, measure
-    from reference_impl.exact.solve import solve_impact
 
     meas = measure(tr, v0)
     keys = ("restitution", "restitution_zero_force", "contact_time", "max_penetration")
@@ -311,9 +312,6 @@ def calibrate(
         Bad input: unknown option, quantity or end, target outside (0, 1], a
         steps-per-contact out of bounds, a non-impact scene, a declined scene.
     """
-    from reference_impl.bench.measure import measure
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.scenes import Scene, load_scene
 
     if quantity not in QUANTITIES:
         raise HCVInputError(f"--target {quantity}=...: quantity must be one of {QUANTITIES}")
@@ -433,9 +431,6 @@ def delivered(
 
     Same scene, speed and dt = t_c / N as `calibrate`; NaN when the run gives none.
     """
-    from reference_impl.bench.measure import measure
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.scenes import Scene, load_scene
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if v0 is None:
