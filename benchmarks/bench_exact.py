@@ -1,436 +1,440 @@
-"""Exact harmonic-map solver against scipy DOP853, every potential family, and the batch API.
+"""The exact solvers against the strongest compiled peer, at equal error (issue 27).
 
-Each row is one damped impact (universal law, zeta = 0.2): the exact solver and
-DOP853 (rtol 1e-12, lean scalar right-hand side with the same damping law) are
-timed in the same process (median of repeats) and scored against the mpmath
-ground truth (`solve_impact_mp`, 30 digits). The batch rows time
-`solve_impacts` on many Hertz impacts. The first-call time of each family
-(numba compilation or on-disk cache load) is reported separately.
+Each row is one impact scored against its 30-digit mpmath truth. The peer is the
+compiled DOP853 of `benchmarks.peer_dop853` (numba, the published Dormand-Prince
+8(5,3) tableau, events on its dense output, every output ours has: both ends,
+q_max, U'(q_max) or the peak force). It is run over a ladder of tolerances, and the
+row reports the cheapest rung whose largest relative error over the outputs is at
+most max(ours, 1e-14) ("equal error"), or, when no rung gets there, the rung with
+the smallest error, marked ``best``. scipy's `solve_ivp` DOP853 (rtol 1e-12, Python
+per step) stays as a second column only: no claim rests on it.
 
-Goals (issue 9): every family <= 60 us per impact at <= 1e-13 relative error in
-contact time and restitution and >= 300x DOP853; batch >= 1e5 Hertz impacts/s.
+Rows: the universal law on every potential family (`solve_impact`, and the
+`prepare(potential, m)` call when present), Hertz with each general damping law
+(`solve_law_impact`), and `solve_impacts` on 1e5 Hertz impacts with one thread and
+with every core.
 
-Law rows (issue 18): Hertz with each damping law of `reference_impl.theory.laws` (the
-calibrated laws of `reference_impl.studies.laws`, e = 0.8 at 1 m/s), solved by
-`reference_impl.exact.general_law` and by DOP853 (rtol 1e-12) with the same C(q), both
-scored against the 30-digit Taylor truth (`solve_law_impact_mp`). Goal: <= 200 us
-per impact at <= 1e-12 relative error (both ends, peak force) and >= 50x DOP853.
+Timing: CPU time (`time.process_time`) per call, the contestants of a row
+interleaved block by block (each block ~10 ms per contestant), median of the
+blocks; the batch rows use wall time, since their point is the use of several
+cores. The JSON records the load average before and after, and the commit.
 
-Run: ``python -m benchmarks.bench_exact [--json FILE] [--repeats N]``.
+Goals (issue 27): universal law <= 8 us per impact from Python (prepared call) and
+>= 20x the compiled DOP853 at <= 1e-14; general laws >= 3x; `solve_impacts` with
+every core >= 1.8x one thread on 2 cores.
+
+Run: ``python -m benchmarks.bench_exact [--json FILE] [--blocks N]`` (~2 minutes).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import statistics
+import sys
 import time
 
 import numpy as np
-import sympy as sp
-from scipy.integrate import solve_ivp
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
 from reference_impl.exact._general_law_mp import solve_law_impact_mp
-from reference_impl.exact._nodes import expression_sympy
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.solve import solve_impact_mp
 from reference_impl.studies.laws import calibrated_laws, hertz
 from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
-from reference_impl.theory.laws import law_from_dict
 
+from . import peer_dop853 as peer
 from ._machine import machine_info
+from ._scipy_peer import scipy_dop853
 
-ZETA = FAMILY_ZETA  # the damping of every family scene
-RTOL_ODE = 1e-12
-GOAL_US = 60.0
-GOAL_SPEEDUP = 300.0
-GOAL_ERROR = 1e-13
-GOAL_BATCH = 1e5  # Hertz impacts per second per core
 TRUTH_DPS = 30
-# Batch workloads: random (v0, zeta) pairs with every zeta distinct, and a sweep
-# grid of speeds at a few damping ratios (one oscillator sum per distinct zeta).
+# The peer's tolerance ladder: rtol = 10^(-k/2), 1e-6 .. 1e-16 (atol scaled alike).
+PEER_RTOLS = tuple(10.0 ** (-k / 2) for k in range(12, 33))
+EQUAL_ERROR_FLOOR = 1e-14  # "equal error" is <= max(ours, this)
+SCIPY_RTOL = 1e-12
+BLOCK_S = 0.01  # CPU seconds per contestant and block
+# Goals of issue 27.
+GOAL_US = 8.0  # universal law, per impact from Python (prepared call)
+GOAL_RATIO_UNIVERSAL = 20.0
+GOAL_RATIO_LAW = 3.0
+GOAL_PARALLEL = 1.8
+# Batch workload: Hertz, random (v0, zeta) with every zeta distinct.
 BATCH_N = 100_000
 BATCH_ZETA_MAX = 0.85
 GRID_ZETAS, GRID_SPEEDS = 50, 2000
-# Issue 18: general damping laws on Hertz.
-LAW_GOAL_US = 200.0
-LAW_GOAL_SPEEDUP = 50.0
-LAW_GOAL_ERROR = 1e-12
 LAW_V0 = 1.0
 
 
-def _scenes():
-    """(name, potential, m, v0) of every family: the study's `family_scenes` (one home)."""
-    return [(sc.name, sc.potential, sc.m, sc.v0) for sc in family_scenes()]
+def _load() -> float | None:
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else None
 
 
-def _scalar_funcs(pot):
-    """Lean scalar U and U' (math module) for the ODE right-hand side."""
-    sym = expression_sympy(pot)
-    if sym is not None:
-        expr, dexpr, q = sym
-        return sp.lambdify(q, expr, modules="math"), sp.lambdify(q, dexpr, modules="math")
-    if isinstance(pot, PowerLaw):
-        k, p = pot.k, pot.p
-        return (lambda q: k * q ** (p + 1) / (p + 1)), (lambda q: k * q**p)
-    if hasattr(pot, "terms"):
-        fs = [_scalar_funcs(t) for t in pot.terms]
-        return (lambda q: sum(f[0](q) for f in fs)), (lambda q: sum(f[1](q) for f in fs))
-    a, Kn, al = pot._a, pot.Kn, pot.alpha
-    c0 = math.pi * pot._bc / a**2
-
-    def U(q):
-        return Kn / (al + 1) * (c0 * (a * q * q - q**3 / 3)) ** (al + 1)
-
-    def dU(q):
-        return Kn * (c0 * (a * q * q - q**3 / 3)) ** al * c0 * (2 * a * q - q * q)
-
-    return U, dU
+def _interleaved(contestants: dict, blocks: int) -> dict:
+    """Median CPU seconds per call of each contestant, timed block by block in turn."""
+    inner = {}
+    for name, fn in contestants.items():
+        fn()  # compile / warm caches
+        t0 = time.process_time()
+        fn()
+        once = max(time.process_time() - t0, 1e-7)
+        inner[name] = max(1, int(BLOCK_S / once))
+    times = {name: [] for name in contestants}
+    for _ in range(blocks):
+        for name, fn in contestants.items():
+            n = inner[name]
+            t0 = time.process_time()
+            for _ in range(n):
+                fn()
+            times[name].append((time.process_time() - t0) / n)
+    return {name: statistics.median(ts) for name, ts in times.items()}
 
 
-def _dop853(pot, m, v0, zeta):
-    """Contact time and restitution by DOP853 with the universal law
-    C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q)) (K = M = m)."""
-    U, dU = _scalar_funcs(pot)
-    c = 2.0 * zeta * math.sqrt(m)
+def _rel(a, b) -> float:
+    b = float(b)
+    return abs(float(a) / b - 1.0) if b != 0 else abs(float(a))
 
-    def rhs(t, y):
-        q, v = y
-        if q <= 0.0:
-            return [v, 0.0]
-        f = dU(q)
-        return [v, -(f + c * f / math.sqrt(2.0 * U(q)) * v) / m]
 
-    def touch(t, y):
-        return y[0]
-
-    touch.terminal, touch.direction = True, -1
+def _peer_case(pot, m, v0, law):
+    """Arguments of `peer.solve_dop853` but the tolerances, and a call at one rtol."""
+    el = peer.elastic_table(pot)
+    da, zeta = peer.damping_table(pot, law)
     q_scale = pot.turning_point(0.5 * m * v0 * v0, check=False)
-    t_end = 50.0 * q_scale / v0
-    sol = solve_ivp(
-        rhs,
-        (0.0, t_end),
-        [0.0, v0],
-        method="DOP853",
-        rtol=RTOL_ODE,
-        atol=[RTOL_ODE * q_scale, RTOL_ODE * v0],
-        events=touch,
-    )
-    return float(sol.t_events[0][0]), -float(sol.y_events[0][0][1]) / v0, int(sol.nfev)
+    t_bound = 50.0 * q_scale / v0
+    out = np.empty(len(peer.OUT_FIELDS))
+
+    def call(rtol):
+        return peer.solve_dop853(
+            m, v0, zeta, el, da, rtol, rtol * q_scale, rtol * v0, t_bound, 0.0, out
+        )
+
+    return call
 
 
-def _median_time(fn, repeats: int, inner: int = 1) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        times.append((time.perf_counter() - t0) / inner)
-    return statistics.median(times)
+def _peer_outputs(out, v0) -> dict:
+    return {
+        "contact_time": out[0],
+        "restitution": -out[1] / v0,
+        "contact_time_zero_force": out[2],
+        "restitution_zero_force": -out[3] / v0,
+        "max_penetration": out[4],
+        "peak_force": out[6],
+    }
 
 
-def _family_row(name, pot, m, v0, repeats):
+def _peer_ladder(call, v0, truth: dict, keys, target: float) -> dict:
+    """Error of each rung; the cheapest rung at <= target (fewest evaluations), or the best."""
+    rungs = []
+    for rtol in PEER_RTOLS:
+        out = call(rtol)
+        if out[8] != 0.0:
+            continue
+        got = _peer_outputs(out, v0)
+        err = max(_rel(got[k], truth[k]) for k in keys)
+        rungs.append({"rtol": rtol, "max_rel_error": err, "nfev": int(out[7])})
+    if not rungs:
+        raise RuntimeError("the compiled DOP853 peer reached no end of contact on any rung")
+    ok = [r for r in rungs if r["max_rel_error"] <= target]
+    if ok:
+        pick = min(ok, key=lambda r: r["nfev"])
+        return {**pick, "at_equal_error": True, "ladder": rungs}
+    pick = min(rungs, key=lambda r: r["max_rel_error"])
+    return {**pick, "at_equal_error": False, "ladder": rungs}
+
+
+def _prepared(pot, m):
+    try:
+        from reference_impl import prepare
+    except ImportError:
+        return None
+    return prepare(pot, m)
+
+
+_UNIVERSAL_KEYS = (
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "max_penetration",
+)
+
+
+def _family_row(name, pot, m, v0, blocks):
+    zeta = FAMILY_ZETA
     t0 = time.perf_counter()
-    solve_impact(pot, m, v0, ZETA)
+    sol = solve_impact(pot, m, v0, zeta)
     first = time.perf_counter() - t0
-    truth = solve_impact_mp(pot, m, v0, ZETA, dps=TRUTH_DPS)
-    t_true, e_true = float(truth["contact_time"]), float(truth["restitution"])
-    sol = solve_impact(pot, m, v0, ZETA)
-    t_exact = _median_time(lambda: solve_impact(pot, m, v0, ZETA), repeats, inner=20)
-    tc, e, nfev = _dop853(pot, m, v0, ZETA)
-    t_ode = _median_time(lambda: _dop853(pot, m, v0, ZETA), max(3, repeats // 2))
-    err_t = abs(sol.contact_time / t_true - 1)
-    err_e = abs(sol.restitution / e_true - 1)
+    truth = solve_impact_mp(pot, m, v0, zeta, dps=TRUTH_DPS)
+    errs = {k: _rel(getattr(sol, k), truth[k]) for k in _UNIVERSAL_KEYS}
+    ours_err = max(errs.values())
+    target = max(ours_err, EQUAL_ERROR_FLOOR)
+    call = _peer_case(pot, m, v0, {"law": "universal", "zeta": zeta})
+    pk = _peer_ladder(call, v0, truth, _UNIVERSAL_KEYS, target)
+    contestants = {
+        "ours": lambda: solve_impact(pot, m, v0, zeta),
+        "peer": lambda: call(pk["rtol"]),
+        "scipy": lambda: scipy_dop853(pot, m, v0, zeta, SCIPY_RTOL),
+    }
+    prep = _prepared(pot, m)
+    if prep is not None:
+        contestants["prepared"] = lambda: prep(v0, zeta)
+        identical = prep(v0, zeta) == sol and all(
+            getattr(prep(v0, zeta), k) == getattr(sol, k) for k in _UNIVERSAL_KEYS
+        )
+    t = _interleaved(contestants, blocks)
     row = {
-        "family": name,
+        "scene": name,
         "potential": repr(pot),
         "m": m,
         "v0": v0,
-        "zeta": ZETA,
+        "zeta": zeta,
         "first_call_s": first,
-        "exact_us": t_exact * 1e6,
-        "exact_contact_time_rel_error": err_t,
-        "exact_restitution_rel_error": err_e,
-        "exact_reported_bound_rel": sol.quadrature_error / sol.contact_time,
-        "dop853_us": t_ode * 1e6,
-        "dop853_nfev": nfev,
-        "dop853_contact_time_rel_error": abs(tc / t_true - 1),
-        "dop853_restitution_rel_error": abs(e / e_true - 1),
-        "speedup": t_ode / t_exact,
+        "ours_us": t["ours"] * 1e6,
+        "ours_rel_errors": errs,
+        "ours_max_rel_error": ours_err,
+        "ours_reported_bound_rel": sol.quadrature_error / sol.contact_time,
+        "peer": "numba DOP853 (benchmarks.peer_dop853)",
+        "peer_us": t["peer"] * 1e6,
+        "peer_rtol": pk["rtol"],
+        "peer_max_rel_error": pk["max_rel_error"],
+        "peer_nfev": pk["nfev"],
+        "peer_at_equal_error": pk["at_equal_error"],
+        "peer_ladder": pk["ladder"],
+        "ratio": t["peer"] / t["ours"],
+        "scipy_us": t["scipy"] * 1e6,
+        "scipy_rtol": SCIPY_RTOL,
     }
+    if prep is not None:
+        row["prepared_us"] = t["prepared"] * 1e6
+        row["prepared_identical"] = bool(identical)
+        row["prepared_ratio"] = t["peer"] / t["prepared"]
+    fast_us = row.get("prepared_us", row["ours_us"])
+    ratio = row.get("prepared_ratio", row["ratio"])
+    row["goal"] = f"<= {GOAL_US:g} us and >= {GOAL_RATIO_UNIVERSAL:g}x at <= 1e-14"
     row["goal_met"] = bool(
-        row["exact_us"] <= GOAL_US
-        and row["speedup"] >= GOAL_SPEEDUP
-        and max(err_t, err_e) <= GOAL_ERROR
+        fast_us <= GOAL_US
+        and ratio >= GOAL_RATIO_UNIVERSAL
+        and ours_err <= EQUAL_ERROR_FLOOR
+        and pk["at_equal_error"]
     )
     return row
 
 
-def _dop853_law(pot, m, v0, law):
-    """DOP853 (rtol 1e-12) with C(q) of ``law`` (lean scalar right-hand side): contact time,
-    restitution (q = 0 end), zero-force end time and restitution, peak force, nfev."""
-    k, p = pot.k, pot.p
-    dl = law_from_dict(law)
-    terms = dl.terms()
-    alpha, A = dl.alpha, dl.A
-
-    def C(q):
-        c = sum(cj * q**ej for cj, ej in terms)
-        if alpha:
-            c += alpha * k * q**p
-        if A:
-            c += A * k * p * q ** (p - 1)
-        return c
-
-    def rhs(t, y):
-        q, v = y
-        if q <= 0.0:
-            return [v, 0.0]
-        return [v, -(k * q**p + C(q) * v) / m]
-
-    def touch(t, y):
-        return y[0]
-
-    def zero_force(t, y):
-        q, v = y
-        return k * max(q, 0.0) ** p + C(max(q, 0.0)) * v if t > 0 else 1.0
-
-    touch.terminal, touch.direction = True, -1
-    zero_force.direction = -1
-    q_scale = pot.turning_point(0.5 * m * v0 * v0, check=False)
-    sol = solve_ivp(
-        rhs,
-        (0.0, 50.0 * q_scale / v0),
-        [0.0, v0],
-        method="DOP853",
-        rtol=RTOL_ODE,
-        atol=[RTOL_ODE * q_scale, RTOL_ODE * v0],
-        events=(touch, zero_force),
-        dense_output=False,
-    )
-    tc, ec = float(sol.t_events[0][0]), -float(sol.y_events[0][0][1]) / v0
-    if len(sol.t_events[1]):
-        tz, ez = float(sol.t_events[1][0]), -float(sol.y_events[1][0][1]) / v0
-    else:  # the force never pulls (hunt-crossley): the two ends coincide
-        tz, ez = tc, ec
-    return tc, ec, tz, ez, int(sol.nfev)
+_LAW_KEYS = (*_UNIVERSAL_KEYS, "peak_force")
 
 
-def _law_row(name, law, repeats):
+def _law_row(name, law, blocks):
     pot, m = hertz()
     v0 = LAW_V0
     t0 = time.perf_counter()
     sol = solve_law_impact(pot, m, v0, law)
     first = time.perf_counter() - t0
     truth = solve_law_impact_mp(pot, m, v0, law, dps=TRUTH_DPS)
-    t_gen = _median_time(lambda: solve_law_impact(pot, m, v0, law), repeats, inner=5)
-    tc, ec, tz, ez, nfev = _dop853_law(pot, m, v0, law)
-    t_ode = _median_time(lambda: _dop853_law(pot, m, v0, law), max(3, repeats // 2))
-
-    def rel(a, b):
-        return abs(a / float(b) - 1)
-
-    errs = {
-        "contact_time": rel(sol.contact_time, truth["contact_time"]),
-        "restitution": rel(sol.restitution, truth["restitution"]),
-        "contact_time_zero_force": rel(
-            sol.contact_time_zero_force, truth["contact_time_zero_force"]
-        ),
-        "restitution_zero_force": rel(sol.restitution_zero_force, truth["restitution_zero_force"]),
-        "max_penetration": rel(sol.max_penetration, truth["max_penetration"]),
-        "peak_force": rel(sol.peak_force, truth["peak_force"]),
-    }
-    row = {
+    errs = {k: _rel(getattr(sol, k), truth[k]) for k in _LAW_KEYS}
+    ours_err = max(errs.values())
+    call = _peer_case(pot, m, v0, law)
+    pk = _peer_ladder(call, v0, truth, _LAW_KEYS, max(ours_err, EQUAL_ERROR_FLOOR))
+    t = _interleaved(
+        {
+            "ours": lambda: solve_law_impact(pot, m, v0, law),
+            "peer": lambda: call(pk["rtol"]),
+            "scipy": lambda: scipy_dop853(pot, m, v0, law, SCIPY_RTOL),
+        },
+        blocks,
+    )
+    ratio = t["peer"] / t["ours"]
+    return {
         "law": name,
         "damping": law,
         "potential": repr(pot),
         "m": m,
         "v0": v0,
         "first_call_s": first,
-        "exact_us": t_gen * 1e6,
-        "exact_rel_errors": errs,
-        "exact_max_rel_error": max(errs.values()),
-        "exact_reported_bound_rel": sol.error_time / sol.contact_time,
-        "dop853_us": t_ode * 1e6,
-        "dop853_nfev": nfev,
-        "dop853_contact_time_rel_error": rel(tc, truth["contact_time"]),
-        "dop853_restitution_rel_error": rel(ec, truth["restitution"]),
-        "dop853_zero_force_time_rel_error": rel(tz, truth["contact_time_zero_force"]),
-        "speedup": t_ode / t_gen,
+        "ours_us": t["ours"] * 1e6,
+        "ours_rel_errors": errs,
+        "ours_max_rel_error": ours_err,
+        "ours_reported_bound_rel": sol.error_time / sol.contact_time,
+        "peer": "numba DOP853 (benchmarks.peer_dop853)",
+        "peer_us": t["peer"] * 1e6,
+        "peer_rtol": pk["rtol"],
+        "peer_max_rel_error": pk["max_rel_error"],
+        "peer_nfev": pk["nfev"],
+        "peer_at_equal_error": pk["at_equal_error"],
+        "peer_ladder": pk["ladder"],
+        "ratio": ratio,
+        "scipy_us": t["scipy"] * 1e6,
+        "scipy_rtol": SCIPY_RTOL,
+        "goal": f">= {GOAL_RATIO_LAW:g}x at equal error",
+        "goal_met": bool(ratio >= GOAL_RATIO_LAW and pk["at_equal_error"]),
     }
-    row["goal_met"] = bool(
-        row["exact_us"] <= LAW_GOAL_US
-        and row["speedup"] >= LAW_GOAL_SPEEDUP
-        and row["exact_max_rel_error"] <= LAW_GOAL_ERROR
-    )
-    return row
 
 
-def _batch_rows(repeats, dop_us):
+def _wall_median(fn, blocks):
+    fn()
+    ts = []
+    for _ in range(blocks):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def _batch_rows(blocks, peer_us):
+    """`solve_impacts` on Hertz, one thread against every core (wall time, interleaved)."""
+    import numba
+
     pot, m = PowerLaw(1.0e9, 1.5), 0.0041
     rng = np.random.default_rng(12345)
     v = 10.0 ** rng.uniform(-1.0, 1.0, BATCH_N)
     z = rng.uniform(0.0, BATCH_ZETA_MAX, BATCH_N)
     zg = np.repeat(np.linspace(0.0, BATCH_ZETA_MAX, GRID_ZETAS), GRID_SPEEDS)
     vg = np.tile(np.logspace(-1.0, 1.0, GRID_SPEEDS), GRID_ZETAS)
+    # Every core numba may use (NUMBA_NUM_THREADS, the machine's count by default).
+    cores = numba.config.NUMBA_NUM_THREADS
     rows = []
     for label, vs, zs in (
-        (f"Hertz batch, {BATCH_N} distinct zeta in [0, {BATCH_ZETA_MAX}]", v, z),
-        (f"Hertz batch, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0", vg, zg),
+        (f"Hertz, {BATCH_N} impacts, distinct zeta in [0, {BATCH_ZETA_MAX}]", v, z),
+        (f"Hertz, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0", vg, zg),
     ):
-        t0 = time.perf_counter()
-        solve_impacts(pot, m, vs[:10], zs[:10])
-        first = time.perf_counter() - t0
-        dt = _median_time(lambda vs=vs, zs=zs: solve_impacts(pot, m, vs, zs), max(3, repeats // 2))
-        out = solve_impacts(pot, m, vs, zs)
-        # Spot check against the single-impact solver (same method, same round-off).
-        idx = rng.integers(0, vs.size, 20)
-        diff = max(
-            abs(out["contact_time"][i] / solve_impact(pot, m, vs[i], zs[i]).contact_time - 1)
-            for i in idx
-        )
-        per = dt / vs.size
+        per = {1: [], cores: []}
+        cpu1 = []
+        res = {}
+        for threads in (1, cores):
+            numba.set_num_threads(threads)
+            res[threads] = solve_impacts(pot, m, vs, zs)  # warm
+        for _ in range(blocks):
+            for threads in (1, cores):
+                numba.set_num_threads(threads)
+                c0, t0 = time.process_time(), time.perf_counter()
+                solve_impacts(pot, m, vs, zs)
+                per[threads].append(time.perf_counter() - t0)
+                if threads == 1:
+                    cpu1.append(time.process_time() - c0)
+        numba.set_num_threads(cores)
+        t1, tn = statistics.median(per[1]), statistics.median(per[cores])
+        identical = all(np.array_equal(res[1][k], res[cores][k], equal_nan=True) for k in res[1])
         rows.append(
             {
                 "workload": label,
-                "first_call_s": first,
-                "impacts_per_s": 1.0 / per,
-                "us_per_impact": per * 1e6,
-                "speedup_vs_dop853": dop_us / (per * 1e6),
-                "max_rel_diff_vs_solve_impact": diff,
-                "goal_met": bool(1.0 / per >= GOAL_BATCH),
+                "threads": cores,
+                "us_per_impact_1_thread": t1 / vs.size * 1e6,
+                "cpu_us_per_impact_1_thread": statistics.median(cpu1) / vs.size * 1e6,
+                "us_per_impact_all_threads": tn / vs.size * 1e6,
+                "impacts_per_s": vs.size / tn,
+                "parallel_speedup": t1 / tn,
+                "bit_identical_to_1_thread": bool(identical),
+                "ratio_vs_peer_single_impact": peer_us / (tn / vs.size * 1e6),
+                "goal": f">= {GOAL_PARALLEL:g}x one thread on 2 cores",
+                "goal_met": bool(identical and t1 / tn >= GOAL_PARALLEL),
             }
         )
     return rows
 
 
-def run(repeats: int = 7) -> dict:
-    rows = [_family_row(*scene, repeats) for scene in _scenes()]
-    batch = _batch_rows(repeats, rows[0]["dop853_us"])
+def run(blocks: int = 7) -> dict:
+    load_before = _load()
+    families = [_family_row(sc.name, sc.potential, sc.m, sc.v0, blocks) for sc in family_scenes()]
     laws = [
-        _law_row(name, law, repeats)
+        _law_row(name, law, blocks)
         for name, law in calibrated_laws().items()
         if name != "universal"
     ]
+    batch = _batch_rows(blocks, families[0]["peer_us"])
     return {
-        "families": rows,
-        "batch": batch,
+        "families": families,
         "laws": laws,
-        "law_goal": {
-            "us_per_impact": LAW_GOAL_US,
-            "speedup": LAW_GOAL_SPEEDUP,
-            "error": LAW_GOAL_ERROR,
-        },
-        "law_truth": f"solve_law_impact_mp, {TRUTH_DPS} digits",
-        "goal": {
-            "us_per_impact": GOAL_US,
-            "speedup": GOAL_SPEEDUP,
-            "error": GOAL_ERROR,
-            "batch_impacts_per_s": GOAL_BATCH,
-        },
-        "truth": f"solve_impact_mp, {TRUTH_DPS} digits",
-        "dop853_rtol": RTOL_ODE,
-        "load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+        "batch": batch,
+        "truth": f"solve_impact_mp / solve_law_impact_mp, {TRUTH_DPS} digits",
+        "peer_rtols": list(PEER_RTOLS),
+        "equal_error": f"peer's largest relative error <= max(ours, {EQUAL_ERROR_FLOOR:g})",
+        "numbalsoda": _numbalsoda_note(),
+        "timing": f"CPU time (process_time), {blocks} interleaved blocks, median; batch: wall",
+        "blocks": blocks,
+        "load_average_1min": load_before,
+        "load_average_1min_after": _load(),
         "machine": machine_info(),
-        "goal_met": all(r["goal_met"] for r in rows) and all(b["goal_met"] for b in batch),
+        "goal_met": all(r["goal_met"] for r in families),
         "law_goal_met": all(r["goal_met"] for r in laws),
+        "batch_goal_met": all(b["goal_met"] for b in batch),
     }
 
 
+def _numbalsoda_note() -> str:
+    try:
+        import numbalsoda  # noqa: F401
+    except ImportError:
+        return (
+            "not installed: 0.3.4 has no wheel for Python 3.11 and its source build needs a "
+            "Fortran compiler (none here)"
+        )
+    return "installed but not benchmarked"
+
+
 def _print(res: dict) -> None:
-    print(f"exact solver vs DOP853 (rtol {RTOL_ODE:g}), zeta = {ZETA}, truth: {res['truth']}")
-    head = (
-        f"{'family':36s} {'exact us':>9s} {'err t_c':>8s} {'err e':>8s} {'DOP853 us':>10s}"
-        f" {'err t_c':>8s} {'speed-up':>9s} {'1st call s':>10s} goal"
+    print(f"ours vs compiled DOP853 at equal error; truth: {res['truth']}; {res['timing']}")
+    print(
+        f"{'scene':22s} {'ours us':>8s} {'prep us':>8s} {'error':>8s} {'peer us':>8s}"
+        f" {'its err':>8s} {'rtol':>7s} {'ratio':>8s} {'scipy us':>9s}  goal"
     )
-    print(head)
     for r in res["families"]:
+        prep = f"{r['prepared_us']:8.1f}" if "prepared_us" in r else f"{'-':>8s}"
+        ratio = r.get("prepared_ratio", r["ratio"])
+        best = "" if r["peer_at_equal_error"] else " (peer's best)"
         print(
-            f"{r['family']:36s} {r['exact_us']:9.1f} {r['exact_contact_time_rel_error']:8.1e}"
-            f" {r['exact_restitution_rel_error']:8.1e} {r['dop853_us']:10.0f}"
-            f" {r['dop853_contact_time_rel_error']:8.1e} {r['speedup']:8.0f}x"
-            f" {r['first_call_s']:10.2f} {'met' if r['goal_met'] else 'NOT met'}"
+            f"{r['scene']:22s} {r['ours_us']:8.1f} {prep} {r['ours_max_rel_error']:8.1e}"
+            f" {r['peer_us']:8.1f} {r['peer_max_rel_error']:8.1e} {r['peer_rtol']:7.0e}"
+            f" {ratio:7.1f}x {r['scipy_us']:9.0f}  {r['goal']}: "
+            f"{'met' if r['goal_met'] else 'NOT met'}{best}"
+        )
+    for r in res["laws"]:
+        best = "" if r["peer_at_equal_error"] else " (peer's best)"
+        print(
+            f"{r['law']:22s} {r['ours_us']:8.1f} {'-':>8s} {r['ours_max_rel_error']:8.1e}"
+            f" {r['peer_us']:8.1f} {r['peer_max_rel_error']:8.1e} {r['peer_rtol']:7.0e}"
+            f" {r['ratio']:7.2f}x {r['scipy_us']:9.0f}  {r['goal']}: "
+            f"{'met' if r['goal_met'] else 'NOT met'}{best}"
         )
     for b in res["batch"]:
         print(
-            f"{b['workload']:52s} {b['impacts_per_s']:10.3g} impacts/s"
-            f" ({b['us_per_impact']:.2f} us, {b['speedup_vs_dop853']:.0f}x DOP853)"
-            f" {'met' if b['goal_met'] else 'NOT met'}"
-        )
-    print("Hertz with each damping law (e = 0.8 at 1 m/s), general solver vs DOP853:")
-    for r in res.get("laws", []):
-        print(
-            f"{r['law']:36s} {r['exact_us']:9.1f} {r['exact_max_rel_error']:8.1e}"
-            f" {'':8s} {r['dop853_us']:10.0f} {r['dop853_contact_time_rel_error']:8.1e}"
-            f" {r['speedup']:8.0f}x {r['first_call_s']:10.2f} {'met' if r['goal_met'] else 'NOT met'}"
+            f"solve_impacts, {b['workload']}: {b['us_per_impact_1_thread']:.2f} us/impact on 1"
+            f" thread (CPU {b['cpu_us_per_impact_1_thread']:.2f}),"
+            f" {b['us_per_impact_all_threads']:.2f} on {b['threads']}"
+            f" ({b['parallel_speedup']:.2f}x, identical: {b['bit_identical_to_1_thread']})"
+            f"  {b['goal']}: {'met' if b['goal_met'] else 'NOT met'}"
         )
     mi = res["machine"]
     print(
-        f"machine: {mi['platform']}, {mi['cpu_count']} cpus, load {res['load_average_1min']},"
-        f" commit {mi['commit']}"
+        f"machine: {mi['platform']}, {mi['cpu_count']} cpus, load {res['load_average_1min']}"
+        f" before, {res['load_average_1min_after']} after, commit {mi['commit']}"
+        f"; numbalsoda: {res['numbalsoda']}"
     )
-
-
-def _laws_only(args) -> dict:
-    """Law rows only, merged into the JSON file given (its other rows kept as measured)."""
-    res = {}
-    if args.json and os.path.exists(args.json):
-        with open(args.json) as fh:
-            res = json.load(fh)
-    laws = [
-        _law_row(name, law, args.repeats)
-        for name, law in calibrated_laws().items()
-        if name != "universal"
-    ]
-    res.update(
-        {
-            "laws": laws,
-            "law_goal": {
-                "us_per_impact": LAW_GOAL_US,
-                "speedup": LAW_GOAL_SPEEDUP,
-                "error": LAW_GOAL_ERROR,
-            },
-            "law_truth": f"solve_law_impact_mp, {TRUTH_DPS} digits",
-            "law_goal_met": all(r["goal_met"] for r in laws),
-            "laws_load_average_1min": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
-            "laws_machine": machine_info(),
-        }
-    )
-    res.setdefault("families", [])
-    res.setdefault("batch", [])
-    res.setdefault("truth", "?")
-    res.setdefault("load_average_1min", None)
-    res.setdefault("machine", machine_info())
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(res, fh, indent=2)
-    return res
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the result to this JSON file")
-    ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument(
-        "--laws-only",
-        action="store_true",
-        help="only the damping-law rows (merged into an existing --json file)",
-    )
+    ap.add_argument("--blocks", type=int, default=7, help="interleaved blocks (median; >= 5)")
     args = ap.parse_args(argv)
-    if args.laws_only:
-        res = _laws_only(args)
-        _print(res)
-        return 0
-    res = run(args.repeats)
+    if args.blocks < 5:
+        print(f"bench_exact: error: --blocks {args.blocks}: at least 5", file=sys.stderr)
+        return 2
+    res = run(args.blocks)
     _print(res)
     if args.json:
+        import json
+
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as fh:
-            json.dump(res, fh, indent=2)
+            json.dump(res, fh, indent=2, default=_json_default)
     return 0
+
+
+def _json_default(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    raise TypeError(f"not JSON: {x!r}")
 
 
 if __name__ == "__main__":

@@ -63,8 +63,7 @@ def _best(fn, repeats=_REPEATS):
 
 def ours(pot, m, vels, dt, n_steps):
     """(seconds, lane-steps, restitutions) of the lane engine on the batch."""
-    batch = LaneBatch(dt=np.full(vels.size, dt), y0=0.0, v0=vels, e_limit=np.inf,
-                      max_steps=n_steps)
+    batch = LaneBatch(dt=np.full(vels.size, dt), y0=0.0, v0=vels, e_limit=np.inf, max_steps=n_steps)
     run_lanes(pot, m, SCENE_IMPACT, batch, zeta=_ZETA)  # compile / warm up
     secs, res = _best(lambda: run_lanes(pot, m, SCENE_IMPACT, batch, zeta=_ZETA))
     e = np.sqrt(res.e_end / (0.5 * m * vels**2))
@@ -107,21 +106,33 @@ def lammps_batch(scene, vels, dt, n_steps):
     adapter = LammpsAdapter(damping="coeff_restitution", geometry="wall")
     lam = adapter._mapping(AdapterScene.from_scene(scene, vels[0], dt, n_steps))
     R = lam["R"]
-    coeffs = (f"hertz {lam['k_n']!r} {lam['coef']!r} tangential linear_nohistory 0.0 0.0 "
-              "damping coeff_restitution")
+    coeffs = (
+        f"hertz {lam['k_n']!r} {lam['coef']!r} tangential linear_nohistory 0.0 0.0 "
+        "damping coeff_restitution"
+    )
     n = vels.size
 
     def run():
         t0 = time.perf_counter()
         lmp = module.lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
-        lines = ["units si", "atom_style sphere", "atom_modify map array", "boundary m m m",
-                 f"region box block 0 {3.0 * R * n!r} {-2 * R!r} {2 * R!r} 0 {4 * R!r}",
-                 "create_box 1 box"]
+        lines = [
+            "units si",
+            "atom_style sphere",
+            "atom_modify map array",
+            "boundary m m m",
+            f"region box block 0 {3.0 * R * n!r} {-2 * R!r} {2 * R!r} 0 {4 * R!r}",
+            "create_box 1 box",
+        ]
         lines += [f"create_atoms 1 single {3.0 * R * i!r} 0.0 {R!r} units box" for i in range(n)]
         lines += [f"set type 1 diameter {2 * R!r}", f"set type 1 mass {lam['atom_mass']!r}"]
         lines += [f"set atom {i + 1} vz {-float(v)!r}" for i, v in enumerate(vels)]
-        lines += ["fix int all nve/sphere", f"fix wall all wall/gran granular {coeffs} zplane "
-                  "0.0 NULL", f"timestep {dt!r}", "thermo 0", "run 0"]
+        lines += [
+            "fix int all nve/sphere",
+            f"fix wall all wall/gran granular {coeffs} zplane 0.0 NULL",
+            f"timestep {dt!r}",
+            "thermo 0",
+            "run 0",
+        ]
         lmp.commands_string("\n".join(lines))
         t1 = time.perf_counter()
         lmp.command(f"run {n_steps} pre no post no")
@@ -145,7 +156,9 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="smaller batches")
     ap.add_argument("--json", help="write the results as JSON here")
     args = ap.parse_args(argv)
-    scene = load_scene("hertz-damped")  # zeta = 0.1: LAMMPS gets e = exp(-pi zeta / sqrt(1 - zeta^2))
+    scene = load_scene(
+        "hertz-damped"
+    )  # zeta = 0.1: LAMMPS gets e = exp(-pi zeta / sqrt(1 - zeta^2))
     pot, m = scene.potential, scene.mass
     n_batch = 200 if args.quick else 1000
     n_single = 20 if args.quick else 100
@@ -155,10 +168,14 @@ def main(argv=None) -> int:
     n_steps = int(math.ceil(1.2 * t_slow / dt)) + 8
 
     info = machine_info()
-    print(f"machine: {info['platform']}, {info['cpu_count']} cores, python {info['python']}, "
-          f"commit {info['commit']}")
-    print(f"collision: hertz k = {pot.k:g} N/m^1.5, m = {m:g} kg, universal damping zeta = "
-          f"{_ZETA} (LAMMPS coeff_restitution), dt = {dt:.4g} s, {n_batch} speeds in [0.1, 5] m/s")
+    print(
+        f"machine: {info['platform']}, {info['cpu_count']} cores, python {info['python']}, "
+        f"commit {info['commit']}"
+    )
+    print(
+        f"collision: hertz k = {pot.k:g} N/m^1.5, m = {m:g} kg, universal damping zeta = "
+        f"{_ZETA} (LAMMPS coeff_restitution), dt = {dt:.4g} s, {n_batch} speeds in [0.1, 5] m/s"
+    )
 
     s_ours, steps_ours, e_ours = ours(pot, m, vels, dt, n_steps)
     sub = vels[np.linspace(0, n_batch - 1, n_single).astype(int)]
@@ -169,8 +186,10 @@ def main(argv=None) -> int:
         "ours (lane engine)": (steps_ours / s_ours, n_batch / s_ours),
         "LAMMPS, one run per collision": (steps_one / s_one, n_single / s_one),
         "LAMMPS, batch (run only)": (steps_batch / s_batch, n_batch / s_batch),
-        "LAMMPS, batch (with setup)": (steps_batch / (s_batch + setup_b),
-                                       n_batch / (s_batch + setup_b)),
+        "LAMMPS, batch (with setup)": (
+            steps_batch / (s_batch + setup_b),
+            n_batch / (s_batch + setup_b),
+        ),
     }
     kratos = kratos_per_collision(scene, sub, dt, n_steps)
     if kratos is not None:
@@ -182,19 +201,29 @@ def main(argv=None) -> int:
     idx = np.linspace(0, n_batch - 1, n_single).astype(int)
     diff_one = float(np.max(np.abs(e_one - e_ours[idx])))
     diff_batch = float(np.max(np.abs(e_batch - e_ours)))
-    print(f"restitution: ours {e_ours.min():.12f} .. {e_ours.max():.12f}; max |LAMMPS - ours| "
-          f"= {diff_one:.2e} (per collision), {diff_batch:.2e} (batch)")
+    print(
+        f"restitution: ours {e_ours.min():.12f} .. {e_ours.max():.12f}; max |LAMMPS - ours| "
+        f"= {diff_one:.2e} (per collision), {diff_batch:.2e} (batch)"
+    )
     ratio_adapter = rows["ours (lane engine)"][1] / rows["LAMMPS, one run per collision"][1]
     ratio_batch = rows["ours (lane engine)"][1] / rows["LAMMPS, batch (run only)"][1]
-    print(f"goal ours >= 100 x LAMMPS collisions/s: {ratio_adapter:.0f} x per-collision LAMMPS "
-          f"({'met' if ratio_adapter >= 100 else 'NOT met'}), {ratio_batch:.1f} x batched LAMMPS "
-          f"({'met' if ratio_batch >= 100 else 'NOT met'})")
+    print(
+        f"goal ours >= 100 x LAMMPS collisions/s: {ratio_adapter:.0f} x per-collision LAMMPS "
+        f"({'met' if ratio_adapter >= 100 else 'NOT met'}), {ratio_batch:.1f} x batched LAMMPS "
+        f"({'met' if ratio_batch >= 100 else 'NOT met'})"
+    )
     if args.json:
-        out = {"machine": info, "dt": dt, "n_batch": n_batch, "n_single": n_single,
-               "n_steps": n_steps, "rates": {k: {"steps_per_s": a, "collisions_per_s": b}
-                                             for k, (a, b) in rows.items()},
-               "ratio_vs_per_collision": ratio_adapter, "ratio_vs_batch": ratio_batch,
-               "max_restitution_difference": max(diff_one, diff_batch)}
+        out = {
+            "machine": info,
+            "dt": dt,
+            "n_batch": n_batch,
+            "n_single": n_single,
+            "n_steps": n_steps,
+            "rates": {k: {"steps_per_s": a, "collisions_per_s": b} for k, (a, b) in rows.items()},
+            "ratio_vs_per_collision": ratio_adapter,
+            "ratio_vs_batch": ratio_batch,
+            "max_restitution_difference": max(diff_one, diff_batch),
+        }
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=2)

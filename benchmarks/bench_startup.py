@@ -151,7 +151,9 @@ def run(repeats: int = 3, report: bool = False) -> dict:
             rows.append(
                 {
                     "name": case["name"],
-                    "command": " ".join(a if a != sys.executable else "python" for a in case["argv"]),
+                    "command": " ".join(
+                        a if a != sys.executable else "python" for a in case["argv"]
+                    ),
                     "cold_wall_s": cold["wall_s"],
                     "cold_cpu_s": cold["cpu_s"],
                     "warm_wall_s": wall,
@@ -189,7 +191,9 @@ def run(repeats: int = 3, report: bool = False) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m benchmarks.bench_startup", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(
+        prog="python -m benchmarks.bench_startup", description=__doc__.splitlines()[0]
+    )
     ap.add_argument("--json", help="also write the result to this JSON file")
     ap.add_argument("--repeats", type=int, default=3, help="warm runs per command (median)")
     ap.add_argument("--report", action="store_true", help="also time hcv report --quick")

@@ -23,6 +23,11 @@ share of any shortfall) and how much slower each case ran on 2 workers than on 1
 (the machine's share). CPU seconds inside the cases are printed beside the wall
 times: equal CPU per case in this process and in a worker shows that the engine
 does not slow the cases down; wall above CPU is the cores being shared.
+
+Issue 27, goal 5: the no-op round trip is measured one case per task and grouped (the
+default, `reference_impl.sweep._runner._chunk_size`), the start and close of each
+local cluster are timed, and `_model` fits fixed + per worker + per case to them and
+predicts the 480-case map (``--masses 30`` runs that map itself) on N idle cores.
 """
 
 from __future__ import annotations
@@ -34,8 +39,10 @@ import os
 import time
 from pathlib import Path
 
-from reference_impl.provenance import machine_info
-from reference_impl.sweep import iter_outcomes, open_client, parse_spec, run_case
+# The package is imported inside the functions: the local cluster's processes are spawned
+# and import this module as their __main__, so a top-level import of reference_impl.sweep
+# (numba, scipy: ~3 s each under load) would be paid by every nanny and worker at start,
+# as it is not for ``hcv sweep`` (whose __main__ imports only the CLI's parsers).
 
 # 16 exponents x 4 masses = 64 sustained searches (default EnergyGrowth criterion).
 _SPEC = """
@@ -51,8 +58,15 @@ k = 1.0
 p = 1.5
 [sweep]
 "potential.p" = [1.2, 1.4, 1.6, 1.8, 2.0, 2.2, 2.4, 2.6, 2.8, 3.0, 3.2, 3.4, 3.6, 3.8, 4.0, 4.2]
-"mass" = [1.0, 2.0, 3.0, 4.0]
+"mass" = {masses}
 """
+# Masses per exponent: 4 gives the 64-case map, 30 the issue's 480-case one (--masses 30).
+_MASSES = 4
+# Goals of issue 27, goal 5: fixed start and stop of a local cluster (s), engine cost per
+# case (s), speed-up of 2 workers over 1 on the 480-case map.
+_GOAL_FIXED = 3.0
+_GOAL_PER_CASE = 0.005
+_GOAL_SPEEDUP_480 = 1.9
 # No-op cases timed for the per-case round trip on 1 worker.
 _NULL_CASES = 300
 # The case duration the overhead goal refers to (s) and the goals of the issue.
@@ -86,10 +100,13 @@ def _load() -> str:
 
 def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
     """64 cases on a fresh n-worker LocalCluster (warmed); wall, in-case time, start-up."""
+    from reference_impl.sweep import iter_outcomes, open_client, run_case
+
     t = time.perf_counter()
     with open_client(workers=n) as client:
         client.wait_for_workers(n)
         startup = time.perf_counter() - t
+        grouped_null = None
         warm = client.run(_warm)
         t0 = time.perf_counter()
         outs = sorted(
@@ -108,9 +125,22 @@ def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
                     _noop,
                     list(range(_NULL_CASES)),
                     keys=[f"null-{i}" for i in range(_NULL_CASES)],
+                    chunk=1,
                 )
             )
             null = (time.perf_counter() - t1) / _NULL_CASES
+            t1 = time.perf_counter()
+            list(
+                iter_outcomes(
+                    client,
+                    _noop,
+                    list(range(_NULL_CASES)),
+                    keys=[f"null-grouped-{i}" for i in range(_NULL_CASES)],
+                )
+            )
+            grouped_null = (time.perf_counter() - t1) / _NULL_CASES
+        t_close = time.perf_counter()
+    close = time.perf_counter() - t_close
     failed = [o.error for o in outs if not o.ok]
     assert not failed, f"benchmark cases failed: {failed[:2]}"
     inside = sum(o.seconds for o in outs)
@@ -124,6 +154,8 @@ def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
         "startup_s": startup,
         "warm_s": max(warm.values()),
         "null_case_s": null,
+        "null_case_grouped_s": grouped_null,
+        "close_s": close,
         "workers_used": len({o.worker for o in outs}),
         "load": _load(),
     }
@@ -132,13 +164,20 @@ def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the figures to this JSON file")
+    ap.add_argument(
+        "--masses", type=int, default=_MASSES, help="masses per exponent (30: 480 cases)"
+    )
     args = ap.parse_args(argv)
+    from reference_impl.provenance import machine_info
+    from reference_impl.sweep import parse_spec, run_case
+
     info = machine_info()
     print(
         f"machine: {info['cpu']}; {info['cpu_count']} logical cores; commit {info['commit']}; "
         f"load average {_load()}"
     )
-    spec = parse_spec(_SPEC, "bench-sweep")
+    masses = [float(m) for m in range(1, args.masses + 1)]
+    spec = parse_spec(_SPEC.format(masses=masses), "bench-sweep")
     payloads = [c.payload() for c in spec.cases]
     _warm()
     t, c = time.perf_counter(), time.process_time()
@@ -213,8 +252,10 @@ def main(argv=None) -> None:
         f"case 1 worker / 2 workers {cpu_ratio:.2f}): {expected:.2f}x; measured on this shared "
         f"machine: {speedup:.2f}x"
     )
+    model = _model(runs, n, speedup)
     if args.json:
         out = {
+            "model": model,
             "machine": info,
             "cases": n,
             "serial_s": serial,
@@ -235,6 +276,60 @@ def main(argv=None) -> None:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
         print(f"written: {args.json}")
+
+
+def _model(runs: dict, n: int, speedup: float) -> dict:
+    """Fixed + per case + per worker: fitted from the 1- and 2-worker runs, printed.
+
+    fixed(w) = start + close of a w-worker local cluster = base + per_worker w; a case
+    costs its CPU time (1-worker run) plus the engine's round trip, grouped (no-op
+    cases); N workers share the cases. T(N, C) = base + per_worker N + C (t + o) / N is
+    the time on N idle cores; the 2-worker measurement against it shows what the shared
+    machine took.
+    """
+    fixed = {w: r["startup_s"] + r["close_s"] for w, r in runs.items()}
+    per_worker = fixed[2] - fixed[1]
+    base = fixed[1] - per_worker
+    t_case = runs[1]["in_case_cpu_s"] / n
+    o = runs[1]["null_case_grouped_s"]
+
+    def predict(workers: int, cases: int) -> float:
+        return base + per_worker * workers + cases * (t_case + o) / workers
+
+    measured_2 = fixed[2] + runs[2]["wall_s"]
+    print(
+        f"model: fixed {base:.2f} s + {per_worker:.2f} s per worker (start + close of the "
+        f"local cluster: {fixed[1]:.2f} s with 1, {fixed[2]:.2f} s with 2; goal <= "
+        f"{_GOAL_FIXED:g} s), per case {t_case * 1e3:.0f} ms CPU + {o * 1e3:.2f} ms engine "
+        f"(grouped; {runs[1]['null_case_s'] * 1e3:.2f} ms one case per task; goal <= "
+        f"{_GOAL_PER_CASE * 1e3:.0f} ms)"
+    )
+    print(
+        f"model check: {n} cases on 2 workers predicted {predict(2, n):.1f} s on idle cores, "
+        f"measured {measured_2:.1f} s here (load {_load()}); 2 / 1 workers measured "
+        f"{speedup:.2f}x (goal >= {_GOAL_SPEEDUP_480} on the 480-case map)"
+    )
+    table = {w: predict(w, 480) for w in (1, 2, 4, 16)}
+    print(
+        "model: the 480-case map on N idle cores: "
+        + ", ".join(f"{w}: {t:.1f} s" for w, t in table.items())
+        + f"; 2 / 1 workers {table[1] / table[2]:.2f}x"
+    )
+    return {
+        "fixed_base_s": base,
+        "fixed_per_worker_s": per_worker,
+        "case_cpu_s": t_case,
+        "engine_per_case_grouped_s": o,
+        "engine_per_case_single_s": runs[1]["null_case_s"],
+        "predicted_2_workers_s": predict(2, n),
+        "measured_2_workers_s": measured_2,
+        "predicted_480_s": table,
+        "goals": {
+            "fixed_s": _GOAL_FIXED,
+            "per_case_s": _GOAL_PER_CASE,
+            "speedup_480": _GOAL_SPEEDUP_480,
+        },
+    }
 
 
 if __name__ == "__main__":

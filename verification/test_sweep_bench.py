@@ -81,11 +81,12 @@ def test_unknown_adapter_option_is_an_invalid_case():
     assert "nosuch" in str(info.value)
 
 
-def test_bad_steps_per_contact_is_an_invalid_case():
-    spec = parse_spec(_BENCH_SPEC.replace("[10, 40, 160]", "[1, 40, 2.5]"))
-    bad = [c for c in spec.cases if c.error]
-    assert [c.params["run.steps_per_contact"] for c in bad] == [1, 2.5]
-    assert all("steps_per_contact" in c.error for c in bad)
+def test_bad_steps_per_contact_refuses_the_spec():
+    """A step hcv bench refuses refuses the sweep (issue 29), not one failed row each."""
+    with pytest.raises(SweepSpecError) as info:
+        parse_spec(_BENCH_SPEC.replace("[10, 40, 160]", "[40, 1, 2.5]"))
+    msg = str(info.value)
+    assert "run.steps_per_contact = 1" in msg and "got 1" in msg and "\n" not in msg, msg
 
 
 def test_bench_task_sweeps_the_step_and_keeps_measured_columns():

@@ -20,9 +20,12 @@ chosen end equals the target:
 It prints the value, the achieved restitution, and at that value the code's
 contact time, maximum penetration and both restitutions with their errors against
 the exact solution of the law the code declares (its integration error) and
-against the scene as asked (what the user gets). A target outside what the option
-delivers over its range is said so, with the range of values it delivers there
-(exit status 1). Bad input: one line, exit status 2.
+against the scene as asked (what the user gets). A run in which the body does not
+come back out within its budget (4 contact times) counts as restitution 0, and
+scan points the adapter declines are skipped (see `calibrate`); both are noted. A
+target outside what the option delivers over its range is said so, with the span
+of every restitution measured (exit status 1). Bad input (`check_settings`, shared
+with ``hcv sweep``): one line, exit status 2.
 
 Evaluations run in-process (``--isolate``: each in a worker process, as ``hcv
 bench`` runs isolated adapters, with the per-run timeout). ``calibrate`` is also a task of ``hcv sweep``
@@ -31,7 +34,6 @@ bench`` runs isolated adapters, with the per-run timeout). ``calibrate`` is also
 
 from __future__ import annotations
 
-import inspect
 import math
 from dataclasses import asdict, dataclass, field
 
@@ -39,24 +41,28 @@ import numpy as np
 from scipy.optimize import brentq
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw
-from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
-from reference_impl.bench.measure import exact_reference, measure
+from reference_impl.bench._calibrate_options import (
+    ENDS,
+    check_option,
+    check_settings,
+    spec_with_options,
+)
+from reference_impl.bench.measure import _restitution_zero_force, exact_reference, measure
 from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.scenes import Scene, load_scene
-from reference_impl.theory.damping import RESTITUTION_ENDS
 
 __all__ = [
     "ENDS",
     "CalibrationResult",
     "calibrate",
+    "check_settings",
+    "check_option",
     "delivered",
     "spec_with_options",
 ]
 
-ENDS = RESTITUTION_ENDS
-QUANTITIES = ("restitution",)
 EXIT_OK, EXIT_UNREACHABLE, EXIT_USAGE = 0, 1, 2
 # Points of the bracketing scan over the range (log-spaced when the range is positive):
 # enough to find the sign change of a monotone response and to report its span.
@@ -65,9 +71,15 @@ _SCAN_POINTS = 9
 # step-to-step resolution at any N the bench uses.
 _XRTOL = 1e-9
 _MAXITER = 100
-# Bounds on user-controlled sizes.
-_MAX_STEPS_PER_CONTACT = 100_000
-_MIN_STEPS_PER_CONTACT = 2
+# |achieved - target| above which a brentq root is a jump of the response, not a root.
+# A continuous response meets the target to the root tolerance: 1e-9 relative in the
+# option times |x de/dx|, below 10 for every code calibrated here (MuJoCo's dampratio
+# about 0.3, LAMMPS' eta_n0 about 1), i.e. under 1e-8; a jump misses by its own size.
+_ACHIEVED_TOL = 1e-6
+# Where to probe from a declined end of the range toward the nearest scan point that ran,
+# as fractions of the way (in log space when both are positive): first close to the
+# declined value (the widest span), then further in.
+_INWARD = (1e-3, 1e-2, 1e-1, 0.5)
 # Step budget of a run: this many contact times plus a margin (as hcv bench).
 _BUDGET, _EXTRA_STEPS = 4.0, 64
 
@@ -95,7 +107,11 @@ class CalibrationResult:
     achieved : float
         The quantity the code delivers at ``value``.
     delivered : tuple of float
-        Smallest and largest value of the quantity seen over the range.
+        Smallest and largest value of the quantity measured (scan and search; a run
+        without rebound counts as 0).
+    values : list of float
+        Every value found that delivers the target, ascending (several when the
+        response is not monotone); ``value`` is the first.
     metrics : dict
         At ``value``: measured quantities, exact values of the declared law and of
         the scene as asked, relative errors (see `_metrics`).
@@ -103,6 +119,8 @@ class CalibrationResult:
         Adapter runs made.
     message : str
         One line: the answer, or why the target is out of reach.
+    notes : list of str
+        Runs without rebound (counted as 0), declined or failed values, lost brackets.
     """
 
     adapter: str
@@ -119,9 +137,11 @@ class CalibrationResult:
     value: float = math.nan
     achieved: float = math.nan
     delivered: tuple = (math.nan, math.nan)
+    values: list = field(default_factory=list)
     metrics: dict = field(default_factory=dict)
     evaluations: int = 0
     message: str = ""
+    notes: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -129,55 +149,9 @@ class CalibrationResult:
         return d
 
 
-def spec_with_options(spec: str, options: dict) -> str:
-    """``spec`` with constructor arguments added or replaced (``NAME[k=v,...]``, ``cmd[...]:``)."""
-    if not options:
-        return spec
-    target, kwargs = parse_spec(spec)
-    for key, val in options.items():
-        if not isinstance(key, str) or not key.isidentifier():
-            raise HCVInputError(f"adapter option {key!r} is not a name")
-        kwargs[key] = val
-    bad = [v for v in kwargs.values() if isinstance(v, str) and any(c in v for c in ",[]=")]
-    if bad:
-        raise HCVInputError(f"adapter option value {bad[0]!r} may not contain , [ ] =")
-
-    def text(v) -> str:
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if v is None:
-            return "none"
-        return repr(float(v)) if isinstance(v, float) else str(v)
-
-    if target == "subprocess":
-        command = kwargs.pop("command")
-        args = ",".join(f"{k}={text(v)}" for k, v in kwargs.items())
-        return f"cmd[{args}]:{command}"
-    return f"{target}[{','.join(f'{k}={text(v)}' for k, v in kwargs.items())}]"
-
-
-def check_option(spec: str, param: str) -> type:
-    """The adapter class of ``spec``; HCVInputError when it has no constructor option ``param``."""
-    target, _ = parse_spec(spec)
-    cls = resolve_class(target)
-    try:
-        params = inspect.signature(cls).parameters
-    except (TypeError, ValueError):
-        return cls
-    names = [n for n, p in params.items() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    if param not in names and not any(p.kind == p.VAR_KEYWORD for p in params.values()):
-        raise HCVInputError(
-            f"adapter {target!r} has no option {param!r}; its options: {', '.join(names)}"
-        )
-    return cls
-
-
 def _range(cls: type, param: str, scene, given) -> tuple[float, float]:
     if given is not None:
-        lo, hi = (float(x) for x in given)
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-            raise HCVInputError(f"--range {given[0]!r} {given[1]!r}: need finite LO < HI")
-        return lo, hi
+        return given
     fn = getattr(cls, "calibration_range", None)
     rng = fn(param, scene) if fn is not None else None
     if rng is None:
@@ -187,10 +161,21 @@ def _range(cls: type, param: str, scene, given) -> tuple[float, float]:
     return float(rng[0]), float(rng[1])
 
 
-def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
-    """One run: (trajectory, implemented law, error); HCVInputError when declined."""
+class _Declined(HCVInputError):
+    """The code refuses the option's value or declines the scene with it (one line)."""
 
-    executor = make_executor(spec, isolate=isolate)
+
+def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
+    """One run: (trajectory, implemented law, error).
+
+    Raises `_Declined` when the adapter refuses the spec's options or declines the
+    scene, HCVInputError when the spec has several variants.
+    """
+
+    try:
+        executor = make_executor(spec, isolate=isolate)
+    except HCVInputError as exc:
+        raise _Declined(str(exc)) from None
     try:
         if len(executor.variants) != 1:
             raise HCVInputError(
@@ -199,10 +184,10 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
             )
         reason = executor.variants[0].supports(ascene)
         if reason:
-            raise HCVInputError(f"adapter {spec!r} declines the scene: {reason}")
+            raise _Declined(f"adapter {spec!r} declines the scene: {reason}")
         out = executor.call(0, "impact", ascene, timeout=timeout)
         if out.declined:
-            raise HCVInputError(f"adapter {spec!r} declines the scene: {out.declined}")
+            raise _Declined(f"adapter {spec!r} declines the scene: {out.declined}")
         if not out.ok:
             return None, None, out.error
         law = executor.call(0, "implemented_law", ascene, timeout=timeout)
@@ -211,10 +196,31 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
         executor.close()
 
 
-def _quantity(meas: dict, end: str) -> float:
+def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
+    """(restitution at ``end``, read): NaN for a run that blew up or never touched;
+    ``read`` is False for a run without rebound counted as 0.
+
+    A run that stays finite and in contact for its whole budget (the body has not come
+    back out after `_BUDGET` contact times: overdamped, or a rebound so late that its
+    speed is negligible) did not rebound: its restitution counts as 0, at the overlap
+    end and, when the force never vanished after the deepest overlap, at the zero-force
+    end too (where it did, that end is read there as for any run).
+    """
+
+    meas = measure(tr, v0)
     key = "restitution" if end == "overlap" else "restitution_zero_force"
     val = meas.get(key)
-    return float(val) if isinstance(val, float) and math.isfinite(val) else math.nan
+    if isinstance(val, float) and math.isfinite(val):
+        return val, True
+    if meas.get("separated") or not meas.get("finite") or "max_penetration" not in meas:
+        return math.nan, True  # blown up, never in contact, or an unreadable force
+    if end == "zero-force":
+        q, f = tr.q, tr.force
+        last = q.size - 1
+        peak = int(np.argmax(q))
+        if last > peak and np.all(np.isfinite(f[peak:last])) and np.any(f[peak:last] <= 0):
+            return _restitution_zero_force(q, tr.v, f, last, v0), True
+    return 0.0, False
 
 
 def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
@@ -253,6 +259,27 @@ def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
     return out
 
 
+# What a scan point or search step gave: measured, no rebound (counted as 0), failed, declined.
+_MEASURED, _NO_REBOUND, _FAILED, _DECLINED = "measured", "no rebound", "failed", "declined"
+
+
+class _Unusable(Exception):
+    """A run inside a bracket failed or was declined: that bracket cannot be searched."""
+
+
+def _between(a: float, b: float, frac: float) -> float:
+    """The point ``frac`` of the way from ``a`` to ``b`` (geometric when both are > 0)."""
+    if a > 0 and b > 0:
+        return float(a * (b / a) ** frac)
+    return float(a + frac * (b - a))
+
+
+def _values_text(xs) -> str:
+    xs = sorted(xs)
+    shown = ", ".join(f"{x:g}" for x in xs[:4])
+    return shown + (f" and {len(xs) - 4} more" if len(xs) > 4 else "")
+
+
 def calibrate(
     adapter: str,
     scene,
@@ -269,6 +296,14 @@ def calibrate(
     isolate: bool = False,
 ) -> CalibrationResult:
     """Find the value of adapter option ``param`` at which the code delivers ``target``.
+
+    The range is scanned at `_SCAN_POINTS` values (log-spaced when LO > 0); every pair
+    of neighbouring scan points whose restitutions lie on both sides of the target is
+    searched with `scipy.optimize.brentq`, so a response that is not monotone (falling,
+    then rising where the scheme goes unstable) gives every crossing the scan sees; the
+    smallest value found is the answer. A run without rebound counts as restitution 0
+    (see `_quantity`); scan points the adapter declines (or whose value it refuses) are
+    skipped and said so; ``delivered`` spans every restitution measured.
 
     Parameters
     ----------
@@ -309,111 +344,170 @@ def calibrate(
     Raises
     ------
     HCVInputError
-        Bad input: unknown option, quantity or end, target outside (0, 1], a
-        steps-per-contact out of bounds, a non-impact scene, a declined scene.
+        Bad input (`check_settings`), an unknown option, a non-impact scene, an
+        adapter with several variants, or one that declines every scanned value.
     """
 
-    if quantity not in QUANTITIES:
-        raise HCVInputError(f"--target {quantity}=...: quantity must be one of {QUANTITIES}")
-    if end not in ENDS:
-        raise HCVInputError(f"--end {end!r} is not one of {', '.join(ENDS)}")
-    if not (isinstance(target, (int, float)) and math.isfinite(target) and 0 < target <= 1):
-        raise HCVInputError(f"target restitution must be in (0, 1], got {target!r}")
-    if (
-        isinstance(steps_per_contact, bool)
-        or not isinstance(steps_per_contact, int)
-        or not _MIN_STEPS_PER_CONTACT <= steps_per_contact <= _MAX_STEPS_PER_CONTACT
-    ):
-        raise HCVInputError(
-            f"--steps-per-contact must be an integer in [{_MIN_STEPS_PER_CONTACT}, "
-            f"{_MAX_STEPS_PER_CONTACT}], got {steps_per_contact!r}"
-        )
+    settings = check_settings(
+        target=target,
+        quantity=quantity,
+        end=end,
+        steps_per_contact=steps_per_contact,
+        v0=v0,
+        bracket=bracket,
+    )
+    target, v0, bracket = settings["target"], settings["v0"], settings["bracket"]
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if sc.kind != "impact":
         raise HCVInputError(f"scene {sc.name!r}: calibrate runs impact scenes, not {sc.kind!r}")
     if v0 is None:
         v0 = float(sorted(sc.velocities)[len(sc.velocities) // 2])
-    if not (isinstance(v0, (int, float)) and math.isfinite(v0) and v0 > 0):
-        raise HCVInputError(f"--v0 must be a speed > 0 (m/s), got {v0!r}")
     cls = check_option(adapter, param)
     lo, hi = _range(cls, param, sc, bracket)
-    get_adapter(spec_with_options(adapter, {param: lo})).close()  # options parse, one variant
     t_c = float(solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time)
     dt = t_c / steps_per_contact
     n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
     ascene = AdapterScene.from_scene(sc, v0, dt, n)
     res = CalibrationResult(
-        adapter, sc.name, param, end, quantity, float(target), steps_per_contact, v0, dt, (lo, hi)
+        adapter, sc.name, param, end, quantity, target, steps_per_contact, v0, dt, (lo, hi)
     )
-    seen: dict[float, float] = {}
-    errors: dict[float, str] = {}
+    seen: dict[float, tuple[float, str]] = {}  # value -> (restitution, what it was)
+    why: dict[float, str] = {}  # value -> the failure or the decline
 
     def value_at(x: float) -> float:
-        if x in seen:
-            return seen[x]
-        if progress is not None:
-            progress()
-        tr, _law, err = _run(spec_with_options(adapter, {param: x}), ascene, timeout, isolate)
-        res.evaluations += 1
-        got = _quantity(measure(tr, v0), end) if tr is not None else math.nan
-        if tr is None:
-            errors[x] = err
-        seen[x] = got
-        return got
+        if x not in seen:
+            if progress is not None:
+                progress()
+            try:
+                tr, _law, err = _run(spec_with_options(adapter, {param: x}), ascene, timeout,
+                                     isolate)  # fmt: skip
+            except _Declined as exc:
+                seen[x], why[x] = (math.nan, _DECLINED), str(exc)
+                return math.nan
+            res.evaluations += 1
+            if tr is None:
+                seen[x], why[x] = (math.nan, _FAILED), err
+            else:
+                got, read = _quantity(tr, v0, end)
+                seen[x] = (got, _MEASURED if read else _NO_REBOUND)
+                if not math.isfinite(got):
+                    seen[x], why[x] = (got, _FAILED), "no restitution measured"
+        return seen[x][0]
 
-    if lo > 0:
-        grid = np.geomspace(lo, hi, _SCAN_POINTS)
-    else:
-        grid = np.linspace(lo, hi, _SCAN_POINTS)
-    vals = [value_at(float(x)) for x in grid]
-    finite = [(float(x), v) for x, v in zip(grid, vals, strict=True) if math.isfinite(v)]
-    if finite:
-        res.delivered = (min(v for _, v in finite), max(v for _, v in finite))
-    bracket_pair = None
-    for (xa, va), (xb, vb) in zip(finite, finite[1:], strict=False):
-        if (va - target) * (vb - target) <= 0:
-            bracket_pair = (xa, xb)
-            break
-    if bracket_pair is None:
-        how = (
-            f"the code delivers {quantity} {res.delivered[0]:.6g} to {res.delivered[1]:.6g} "
-            f"there"
-            if finite
-            else "no run there returned a restitution"
+    grid = np.geomspace(lo, hi, _SCAN_POINTS) if lo > 0 else np.linspace(lo, hi, _SCAN_POINTS)
+    scan = [(float(x), value_at(float(x))) for x in grid]
+    usable = [(x, v) for x, v in scan if seen[x][1] != _DECLINED]
+    if not usable:
+        raise HCVInputError(
+            f"every {param} scanned in [{lo:g}, {hi:g}] was refused: {why[scan[0][0]]}"
         )
-        failed = [f"{x:g}: {e}" for x, e in errors.items()]
-        res.message = (
-            f"target {quantity} = {target:g} ({end} end) is out of reach for {param} in "
-            f"[{lo:g}, {hi:g}] at {steps_per_contact} steps per contact: {how}"
-            + (f"; failed runs at {'; '.join(failed[:2])}" if failed else "")
-        )
-        return res
-    xa, xb = bracket_pair
+    # A declined end (MuJoCo's timeconst form at dampratio 0) leaves the rest of the range
+    # open: probe from it toward the nearest scan point the code ran, so the search still
+    # reaches values next to the declined one.
+    for outer, inner in ((scan[0][0], usable[0][0]), (scan[-1][0], usable[-1][0])):
+        if outer != inner:
+            for frac in _INWARD:
+                x = _between(outer, inner, frac)
+                v = value_at(x)
+                if seen[x][1] != _DECLINED:
+                    usable = sorted([*usable, (x, v)])
+                    break
+    # Neighbours among the scan points the code ran (declined ones are skipped; a failed
+    # one ends a bracket: the response is unknown there).
+    brackets = [
+        (xa, xb)
+        for (xa, va), (xb, vb) in zip(usable, usable[1:], strict=False)
+        if math.isfinite(va) and math.isfinite(vb) and (va - target) * (vb - target) <= 0
+    ]
 
     def f(x: float) -> float:
         v = value_at(x)
         if not math.isfinite(v):
-            raise HCVInputError(
-                f"run at {param} = {x!r} returned no {quantity}: {errors.get(x, 'not measured')}"
-            )
+            raise _Unusable(x)
         return v - target
 
-    root = xa if f(xa) == 0 else xb if f(xb) == 0 else None
-    if root is None:
-        root = float(brentq(f, xa, xb, xtol=_XRTOL * max(abs(xa), abs(xb)), maxiter=_MAXITER))
+    roots: list[float] = []
+    jumps: list[str] = []  # brackets where the response jumps across the target
+    lost: list[str] = []  # brackets whose search hit a failed or declined run
+    for xa, xb in brackets:
+        try:
+            fa, fb = f(xa), f(xb)
+            if fa == 0 or fb == 0:
+                root = xa if fa == 0 else xb
+            else:
+                root = float(brentq(f, xa, xb, xtol=_XRTOL * max(abs(xa), abs(xb)),
+                                    maxiter=_MAXITER))  # fmt: skip
+                # A continuous response meets the target to the root tolerance; one that
+                # jumps across it (a late rebound cut by the run budget, an instability)
+                # leaves brentq at the jump, missing the target by the jump's size.
+                if abs(f(root)) > _ACHIEVED_TOL:
+                    jumps.append(f"{root:.6g} (from {xa:g} to {xb:g})")
+                    continue
+        except _Unusable as exc:
+            x = exc.args[0]
+            lost.append(f"[{xa:g}, {xb:g}] (the run at {x:.6g} {seen[x][1]})")
+            continue
+        except RuntimeError:  # brentq did not converge within _MAXITER steps
+            lost.append(f"[{xa:g}, {xb:g}] (no convergence in {_MAXITER} steps)")
+            continue
+        if not any(abs(root - r) <= _XRTOL * max(abs(root), abs(r)) for r in roots):
+            roots.append(root)
+    notes = _notes(param, seen, why, n, jumps, lost)
+    res.notes = notes
+    measured = [v for v, what in seen.values() if what in (_MEASURED, _NO_REBOUND)]
+    if measured:
+        res.delivered = (min(measured), max(measured))
+    if not roots:
+        how = (
+            f"the code delivers {quantity} {res.delivered[0]:.6g} to {res.delivered[1]:.6g} "
+            f"at the {len(measured)} values run"
+            if measured
+            else "no run there returned a restitution"
+        )
+        res.message = (
+            f"target {quantity} = {target:g} ({end} end) is out of reach for {param} in "
+            f"[{lo:g}, {hi:g}] at {steps_per_contact} steps per contact: {how}"
+            + (f" ({'; '.join(notes)})" if notes else "")
+        )
+        return res
+    root = min(roots)
     tr, law, err = _run(spec_with_options(adapter, {param: root}), ascene, timeout, isolate)
     res.evaluations += 1
     if tr is None:
         res.message = f"the run at the root {param} = {root!r} failed: {err}"
         return res
-    res.found, res.value = True, float(root)
+    res.found, res.value, res.values = True, float(root), sorted(roots)
     res.metrics = _metrics(tr, law, sc, v0)
-    res.achieved = _quantity(measure(tr, v0), end)
+    res.achieved = _quantity(tr, v0, end)[0]
+    also = [r for r in res.values if r != root]
     res.message = (
         f"{param} = {root:.8g} delivers {quantity} {res.achieved:.6g} ({end} end; target "
         f"{target:g}) at {steps_per_contact} steps per contact, v0 = {v0:g} m/s"
+        + (f"; so does {param} = {', '.join(f'{r:.8g}' for r in also)}" if also else "")
     )
     return res
+
+
+def _notes(param: str, seen: dict, why: dict, n_steps: int, jumps: list, lost: list) -> list:
+    """One line per kind of run that did not measure a restitution, and per lost bracket."""
+    notes = []
+    by_kind: dict[str, list[float]] = {}
+    for x, (_v, what) in seen.items():
+        by_kind.setdefault(what, []).append(x)
+    if _NO_REBOUND in by_kind:
+        notes.append(
+            f"no rebound within {n_steps} steps at {param} = {_values_text(by_kind[_NO_REBOUND])}"
+            ": counted as restitution 0"
+        )
+    for kind, verb in ((_DECLINED, "declined, skipped"), (_FAILED, "failed")):
+        if kind in by_kind:
+            xs = sorted(by_kind[kind])
+            notes.append(f"{verb} at {param} = {_values_text(xs)} ({why[xs[0]]})")
+    if jumps:
+        notes.append(f"the response jumps across the target at {param} = {'; '.join(jumps)}")
+    if lost:
+        notes.append(f"no root found in {param} = {'; '.join(lost)}")
+    return notes
 
 
 def delivered(
@@ -429,7 +523,8 @@ def delivered(
 ) -> float:
     """The restitution (at ``end``) the code delivers with option ``param = value``.
 
-    Same scene, speed and dt = t_c / N as `calibrate`; NaN when the run gives none.
+    Same scene, speed and dt = t_c / N as `calibrate`: 0 for a run without rebound,
+    NaN when the run gives none.
     """
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
@@ -439,7 +534,7 @@ def delivered(
     n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
     ascene = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, n)
     tr, _law, _err = _run(spec_with_options(adapter, {param: value}), ascene, 60.0, isolate)
-    return _quantity(measure(tr, v0), end) if tr is not None else math.nan
+    return _quantity(tr, v0, end)[0] if tr is not None else math.nan
 
 
 # ----------------------------------------------------------------------------

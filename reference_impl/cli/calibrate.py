@@ -15,6 +15,7 @@ _ENDS = ("overlap", "zero-force")
 
 __all__ = ["add_parser", "main", "run"]
 
+
 def _target(text: str) -> tuple[str, float]:
     name, sep, val = str(text).partition("=")
     if not sep:
@@ -80,6 +81,8 @@ def run(args) -> int:
     print(res.message)
     if not res.found:
         return EXIT_UNREACHABLE
+    for note in res.notes:  # runs without rebound (counted as 0), declined or failed values
+        print(f"  note: {note}")
     m = res.metrics
     print(f"  adapter {res.adapter}, scene {res.scene}, dt = {res.dt:.6g} s")
     if "declared_law" in m:
@@ -88,10 +91,12 @@ def run(args) -> int:
     for k in ("restitution", "restitution_zero_force", "contact_time", "max_penetration"):
         rows.append(
             (
-                {"restitution": "restitution (q = 0 end)",
-                 "restitution_zero_force": "restitution (zero-force end)",
-                 "contact_time": "contact time, s",
-                 "max_penetration": "max penetration, m"}[k],  # fmt: skip
+                {
+                    "restitution": "restitution (q = 0 end)",
+                    "restitution_zero_force": "restitution (zero-force end)",
+                    "contact_time": "contact time, s",
+                    "max_penetration": "max penetration, m",
+                }[k],  # fmt: skip
                 _fmt(m["measured"].get(k)),
                 _fmt(m.get("declared_law", {}).get(k)),
                 _fmt(m.get("error_vs_declared_law", {}).get(k)),

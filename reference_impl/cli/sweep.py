@@ -167,17 +167,18 @@ def run_sweep(
                 "--workers sizes a local cluster; with --scheduler the cluster's "
                 "own workers run the sweep (give one or the other)"
             )
+    if scheduler is None and spec.task.startswith("bench:"):
+        # The local workers build the adapter as this process would: a configuration
+        # error (a cmd: program that does not exist) is refused now, not once per case,
+        # and before Dask is imported. (On a remote cluster the program lives on the
+        # workers: checked there.)
+        from reference_impl.adapters.registry import get_adapter
+
+        get_adapter(spec.task[len("bench:") :]).close()
     if not dask_available():
         raise HCVInputError("hcv sweep needs dask.distributed: pip install -e '.[sweep]'")
     if scheduler is not None:
         scheduler = check_scheduler_address(scheduler)
-    elif spec.task.startswith("bench:"):
-        # The local workers build the adapter as this process would: a configuration
-        # error (a cmd: program that does not exist) is refused now, not once per case.
-        # (On a remote cluster the program lives on the workers: checked there.)
-        from reference_impl.adapters.registry import get_adapter
-
-        get_adapter(spec.task[len("bench:") :]).close()
     out = Path(out_dir)
     store = CaseStore(out)
     _check_out(out, store)

@@ -261,4 +261,8 @@ def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> di
             "contact_time_zero_force": t_rise + t_mid if z > 0 else t_end,
             "restitution_zero_force": mpmath.exp(-2 * z * s_peak),
         }
-    return {key: +val for key, val in out.items()}
+    # Rounded to dps digits here: outside the working precision `+val` would round to the
+    # caller's (mpmath's default 15 digits, i.e. a float: the truth agreed with a closed
+    # form only to 5e-17, issue 27).
+    with mpmath.workdps(dps):
+        return {key: +val for key, val in out.items()}

@@ -6,7 +6,7 @@ carrying m, k and v0), so one compiled loop evaluates the Gauss-Jacobi branch
 sums of every distinct damping ratio at once (a sweep over speeds at a few
 damping ratios costs a few sums plus array arithmetic); the impacts where that rule does not apply (zeta
 >= 0.9, n > 4, or the two rule sizes disagree) and every other family go
-through `solve_impact` one by one. Results agree with `solve_impact` to round-off.
+through `prepare(potential, m)` (`solve_impact` bit for bit) one by one. Results agree with `solve_impact` to round-off.
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ from reference_impl.exact._branches import (
 )
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact.solve import ImpactSolution, solve_impact
+from reference_impl.exact.prepared import prepare
+from reference_impl.exact.solve import ImpactSolution
 from reference_impl.potentials._checks import positive, real_array
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -58,18 +59,20 @@ _FIELDS = (
 )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
     """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok.
 
-    Same rows as `_branches._branch_rows` and the same sums as `_gj_sums`.
+    Same rows as `_branches._branch_rows` and the same sums as `_gj_sums`. Each zeta
+    is summed by one thread, in the same order whatever the thread count, so the
+    results do not depend on it (bit for bit; test).
     """
     nz = zetas.shape[0]
     out = np.zeros((nz, 6))
     ok = np.zeros(nz, dtype=np.bool_)
     nn = u.shape[0]
-    rows = np.zeros((3, 5))
-    for i in range(nz):
+    for i in numba.prange(nz):
+        rows = np.zeros((3, 5))
         z = zetas[i]
         if z >= zeta_max:
             continue
@@ -191,76 +194,125 @@ def solve_impacts(
     for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
         _check_zeta(zi)
     _check_exponent(potential)
-    out = {key: np.full(v.size, np.nan) for key in _FIELDS}
+    out = np.full((len(_FIELDS), v.size), np.nan)
     todo = np.ones(v.size, dtype=bool)
     beta = 2.0 / potential.leading_exponent - 1.0
     if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN and v.size:
         _validated_top(potential, 0.5 * m * float(v.max()) ** 2)
         _power_law_batch(potential, m, v, z, beta, out, todo)
-    for i in np.flatnonzero(todo):
-        sol: ImpactSolution = solve_impact(potential, m, float(v[i]), float(z[i]))
-        for key in _FIELDS:
-            out[key][i] = getattr(sol, key)
-    return {key: arr.reshape(shape) for key, arr in out.items()}
+    rest = np.flatnonzero(todo)
+    # One impact at a time, checked and planned once (`prepare`: bit for bit solve_impact).
+    solver = prepare(potential, m) if rest.size else None
+    for i in rest:
+        sol: ImpactSolution = solver(float(v[i]), float(z[i]))
+        for j, key in enumerate(_FIELDS):
+            out[j, i] = getattr(sol, key)
+    return {key: out[j].reshape(shape) for j, key in enumerate(_FIELDS)}
+
+
+def _grouped_unique(z: np.ndarray):
+    """``np.unique(z, return_inverse=True)``, through the runs of equal values first: a
+    sweep grid (each zeta repeated over the speeds) sorts its few runs, not every impact."""
+    if z.size < 2:
+        return np.unique(z, return_inverse=True)
+    starts = np.flatnonzero(np.concatenate(([True], z[1:] != z[:-1])))
+    zu, inv_runs = np.unique(z[starts], return_inverse=True)
+    lengths = np.diff(np.append(starts, z.size))
+    return zu, np.repeat(inv_runs.ravel(), lengths)
 
 
 def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
     """Fill ``out`` for the impacts the compiled Gauss-Jacobi loop accepts."""
     # The dimensionless sums depend on zeta only: one evaluation per distinct zeta.
-    zu, inv = np.unique(z, return_inverse=True)
+    zu, inv = _grouped_unique(z)
     sums_u, ok_u = _gj_batch(zu, *_jacobi_pair(beta), beta, _GJ_ZETA_MAX, _GJ_RTOL)
     # Damping ratios near 0.9 need larger rules (longer branches): a second pass.
+    nodes_u = np.full(zu.size, float(_GJ_SIZES[1]))
     again = np.flatnonzero(~ok_u & (zu < _GJ_ZETA_MAX))
     if again.size:
         s2, ok2 = _gj_batch(
             zu[again], *_jacobi_pair(beta, _GJ_SIZES_LARGE), beta, _GJ_ZETA_MAX, _GJ_RTOL
         )
         sums_u[again[ok2]], ok_u[again[ok2]] = s2[ok2], True
-        nodes_u = np.full(zu.size, _GJ_SIZES[1])
         nodes_u[again[ok2]] = _GJ_SIZES_LARGE[1]
-    else:
-        nodes_u = np.full(zu.size, _GJ_SIZES[1])
-    sums, ok, nodes = sums_u[inv], ok_u[inv], nodes_u[inv]
     n = pot.leading_exponent
     a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
     c0 = (m / pot.k) * _pow_split(0.5 * n * m / pot.k, a_hi, a_lo)
-    # c v0^beta with the exponent split as in `_branches.power_law_scale`.
-    c = c0 * v**b_hi * np.exp(b_lo * np.log(v))
-    roundoff = (_SUM_ULPS_PER_NODE * nodes + _NODE_ULPS) * _EPS
-    rise, fall, mid = (c * sums[:, i] for i in range(3))
-    e_rise, e_fall, e_mid = (c * sums[:, i] for i in range(3, 6))
-    e_rise = e_rise + roundoff * rise
-    e_fall = e_fall + roundoff * fall
-    e_mid = e_mid + roundoff * (np.abs(fall) + np.abs(fall - mid))
-    zz = np.where(ok, z, 0.0)
-    wd = np.sqrt((1.0 - zz) * (1.0 + zz))
-    sp = np.arctan2(wd, zz) / wd
-    x_pk = v * np.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
-    # Factored as in `impact._peak` (no intermediate underflow for tiny m or v0).
-    q_max = (0.5 * n * m / pot.k) ** (1.0 / n) * x_pk ** (2.0 / n)
-    vals = {
-        "max_penetration": q_max,
-        "max_force": pot.k * q_max**pot.p,
-        "contact_time": rise + fall,
-        "restitution": np.exp(-math.pi * zz / wd),
-        "contact_time_zero_force": rise + mid,
-        "restitution_zero_force": np.where(zz > 0, np.exp(-2.0 * zz * sp), 1.0),
-        "quadrature_error": e_rise + e_fall,
-        "quadrature_error_zero_force": e_rise + e_mid,
-    }
-    # As `solve_impact` (`impact._check_normal`): a result outside the normal float64
+    q_scale = (0.5 * n * m / pot.k) ** (1.0 / n)
+    # As `solve_impact` (`solve._check_normal`): a result outside the normal float64
     # range is refused, never returned as 0.0 or a subnormal number.
     tiny = float(np.finfo(float).tiny)
-    for key in ("max_penetration", "max_force", "contact_time"):
-        for i in np.flatnonzero(ok & ~(vals[key] >= tiny))[:1]:
+    bad = _power_law_fill(
+        v,
+        inv,
+        z,
+        sums_u,
+        ok_u,
+        nodes_u,
+        c0,
+        b_hi,
+        b_lo,
+        q_scale,
+        2.0 / n,
+        pot.k,
+        pot.p,
+        tiny,
+        out,
+        todo,
+    )
+    for j, key in enumerate(("max_penetration", "max_force", "contact_time")):
+        for i in np.flatnonzero(bad & (1 << j))[:1]:
+            val = out[_FIELDS.index(key), i]
             raise UnsupportedError(
-                f"solve_impacts: {key} = {float(vals[key][i])!r} is below the normal float64 "
-                f"range ({tiny:.3g}) for m = {m!r} kg, v0 = {float(v[i])!r} m/s: rescale the units "
-                "(e.g. mm, g, ms) so that it is a normal number"
+                f"solve_impacts: {key} = {float(val)!r} is below the normal float64 "
+                f"range ({tiny:.3g}) for m = {m!r} kg, v0 = {float(v[i])!r} m/s: rescale the "
+                "units (e.g. mm, g, ms) so that it is a normal number"
             )
-    for key, arr in vals.items():
-        out[key][ok] = arr[ok]
-    todo[ok] = False
+
+
+@numba.njit(cache=True, parallel=True)
+def _power_law_fill(
+    v, inv, z, sums_u, ok_u, nodes_u, c0, b_hi, b_lo, q_scale, two_n, k, p, tiny, out, todo
+):  # pragma: no cover - compiled
+    """Every field of the impacts whose zeta the Gauss-Jacobi sums accept, into the rows of
+    ``out`` (order of _FIELDS), ``todo`` cleared there; one impact per thread step, so
+    the results do not depend on the thread count. Returns per impact the bits j of its
+    fields (q_max, U'(q_max), contact time) below ``tiny``."""
+    nv = v.shape[0]
+    bad = np.zeros(nv, dtype=np.int8)
+    for i in numba.prange(nv):
+        iu = inv[i]
+        if not ok_u[iu]:
+            continue
+        vi, zz = v[i], z[i]
+        # c v0^beta with the exponent split as in `_branches.power_law_scale`.
+        c = c0 * vi**b_hi * math.exp(b_lo * math.log(vi))
+        roundoff = (_SUM_ULPS_PER_NODE * nodes_u[iu] + _NODE_ULPS) * _EPS
+        rise, fall, mid = c * sums_u[iu, 0], c * sums_u[iu, 1], c * sums_u[iu, 2]
+        e_rise = c * sums_u[iu, 3] + roundoff * rise
+        e_fall = c * sums_u[iu, 4] + roundoff * fall
+        e_mid = c * sums_u[iu, 5] + roundoff * (abs(fall) + abs(fall - mid))
+        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
+        sp = math.atan2(wd, zz) / wd
+        x_pk = vi * math.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
+        # Factored as in `_strategies.peak` (no intermediate underflow for tiny m or v0).
+        q_max = q_scale * x_pk**two_n
+        f_max = k * q_max**p
+        out[0, i] = q_max
+        out[1, i] = f_max
+        out[2, i] = rise + fall
+        out[3, i] = math.exp(-math.pi * zz / wd)
+        out[4, i] = rise + mid
+        out[5, i] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
+        out[6, i] = e_rise + e_fall
+        out[7, i] = e_rise + e_mid
+        todo[i] = False
+        bad[i] = (
+            (0 if q_max >= tiny else 1)
+            + (0 if f_max >= tiny else 2)
+            + (0 if rise + fall >= tiny else 4)
+        )
+    return bad
 
 
 _LAW_FIELDS = (

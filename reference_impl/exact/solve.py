@@ -29,11 +29,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.exact._branches import branch_integrals, compiled_nodes, dq_dx
-from reference_impl.exact._one_call import curvature, fused_impact, gauss_jacobi_impact
+from reference_impl.exact._branches import dq_dx
+from reference_impl.exact._one_call import curvature
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
-from reference_impl.exact._split import needs_split, split_impact
+from reference_impl.exact._strategies import Job, choose
 from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
@@ -263,31 +263,6 @@ class ImpactSolution:
         return np.where(exact_lo, grid[0], res.x)
 
 
-def _turning_point(pot: Potential, m: float, v0: float, q_top: float) -> float:
-    """q with U(q) = m v0^2 / 2 (compiled inverse inside (0, q_top] when available)."""
-    compiled = compiled_nodes(pot)
-    if compiled is not None:
-        return float(compiled(np.array([v0]), m, q_top)[1][0])
-    return float(pot._inverse(np.array([0.5 * m * v0 * v0]))[0])
-
-
-def _peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tuple[float, float]:
-    """q_max and U'(q_max): x(s_peak) = v0 exp(-zeta s_peak) (S(s_peak) = 1, see _oscillator)."""
-    x_peak = osc.v0 * math.exp(-osc.zeta * osc.s_peak)
-    if type(pot) is PowerLaw:
-        n = pot.leading_exponent
-        # Factored so that no intermediate leaves the normal range before the root
-        # (0.5 n m x^2 / k underflows for m = 1e-300 even when q_max is a normal number).
-        q_max = (0.5 * n * m / pot.k) ** (1.0 / n) * x_peak ** (2.0 / n)
-        return q_max, pot.k * q_max**pot.p
-    compiled = compiled_nodes(pot)
-    if compiled is not None:
-        g_pk, q_pk = compiled(np.array([x_peak]), m, q_top)
-        return float(q_pk[0]), m * x_peak / float(g_pk[0])
-    q_max = float(pot._inverse(np.array([0.5 * m * x_peak**2]))[0])
-    return q_max, float(pot._dU(np.array([q_max]))[0])
-
-
 def _conditioning(
     pot: Potential, m: float, osc: VirtualOscillator, q_max: float, f_max: float
 ) -> float:
@@ -421,24 +396,8 @@ def solve_impact(
     # Validates the turning point and monotonicity on (0, q(E)] (the damped
     # maximum penetration is smaller, so this covers every damped path too).
     q_top = _validated_top(potential, E)
-    fast = br = None
-    if level is None and type(potential) is not PowerLaw:
-        if zeta < 1.0 and needs_split(
-            potential, lambda: _turning_point(potential, m, v0, q_top), q_top
-        ):
-            # Terms hand over inside the contact: Gauss-Jacobi when its two rule sizes
-            # agree, else the quadrature split at the hand-over (`_split`).
-            fast = gauss_jacobi_impact(potential, m, osc, q_top)
-            if fast is None:
-                br = split_impact(potential, m, osc, q_top)
-        else:
-            fast = fused_impact(potential, m, osc, q_top)
-    if fast is not None:
-        br, q_max, max_force = fast
-    else:
-        if br is None:
-            br = branch_integrals(potential, m, osc, level, q_top)
-        q_max, max_force = _peak(potential, m, osc, q_top)
+    # The first strategy that answers integrates the impact (`_strategies`, one contract).
+    _, (br, q_max, max_force) = choose(Job(potential, m, v0, osc, q_top, level))
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
     cond = _conditioning(potential, m, osc, q_max, max_force)
     if cond > 0.0:

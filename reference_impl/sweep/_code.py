@@ -21,9 +21,6 @@ class SweepSpecError(HCVInputError):
 _CODE_PREFIXES = ("adapter.", "run.", "calibrate.")
 _RUN_KEYS = ("steps_per_contact",)
 _CALIBRATE_KEYS = ("param", "target", "end", "range", "v0", "steps_per_contact")
-# Bounds of a swept steps-per-contact: 2 samples are the least that show a contact;
-# above 1e5 a run of 4 contact times is 4e5 adapter steps (minutes for a Python loop).
-_SPC_RANGE = (2, 100_000)
 
 
 def _code_key(src: str, task: str, path: str) -> None:
@@ -42,29 +39,105 @@ def _code_key(src: str, task: str, path: str) -> None:
         raise SweepSpecError(f"spec {src}: sweep key {path!r}: {name!r} is not {hint}")
 
 
-def _check_code(code: dict, task: str = "") -> None:
-    """Validate one case's code settings (HCVInputError: the case is invalid).
+def _check_codes(src: str, task: str, cases) -> None:
+    """Check every distinct code setting of a spec's cases; `SweepSpecError` on the first bad one.
 
-    Adapter option names are checked against the adapter's constructor (its module is
-    imported, the code itself is not loaded).
+    ``cases`` yields (index, label, code). A value the single command refuses refuses
+    the whole spec (exit status 2, nothing run), as ``hcv bench`` / ``hcv calibrate``
+    refuse it: a bad step, target, end, range, speed or adapter option is no
+    combination's accident but a typo, the same in every case it reaches.
     """
-    spc = code.get("run", {}).get("steps_per_contact")
-    spc = code.get("calibrate", {}).get("steps_per_contact", spc)
-    if spc is not None and (
-        isinstance(spc, bool)
-        or not isinstance(spc, int)
-        or not _SPC_RANGE[0] <= spc <= _SPC_RANGE[1]
-    ):
-        raise HCVInputError(
-            f"steps_per_contact must be an integer in [{_SPC_RANGE[0]}, {_SPC_RANGE[1]}], "
-            f"got {spc!r}"
-        )
-    for key, val in code.get("adapter", {}).items():
+    import json
+
+    seen: set[str] = set()
+    built: dict = {}
+    for index, label, code in cases:
+        text = json.dumps(code, sort_keys=True, default=str)
+        if text in seen:
+            continue
+        seen.add(text)
+        try:
+            _check_code(code, task, built)
+        except HCVInputError as exc:
+            raise SweepSpecError(f"spec {src}: case {index} ({label}): {exc}") from None
+
+
+def _check_code(code: dict, task: str, built: dict | None = None) -> None:
+    """Validate one case's code settings with the single commands' rules (HCVInputError).
+
+    ``bench:`` run settings follow ``hcv bench``'s (`load_tolerances`: ``[run]`` of a
+    tolerances file), ``calibrate:`` settings ``hcv calibrate``'s (`check_settings`,
+    ``run.steps_per_contact`` standing for ``calibrate.steps_per_contact`` as the
+    case runs it), and adapter options the adapter's own: each distinct set is built as
+    ``hcv bench ADAPTER[options]`` builds it (the constructor checks its values; the
+    code is not loaded), when the adapter can be built on this machine at all (on a
+    remote cluster the code may live on the workers only: they check it there).
+    ``built`` caches the option sets already built (text -> error, '' when fine).
+    """
+    adapter = task.partition(":")[2]
+    options = code.get("adapter", {})
+    for key, val in options.items():
         if not (val is None or isinstance(val, (bool, int, float, str))):
             raise HCVInputError(f"adapter option {key} = {val!r} must be a number or a string")
-    adapter = task.partition(":")[2]
-    if adapter and code.get("adapter"):
-        from reference_impl.bench.calibrate import check_option
+    if task.startswith("bench:") and code.get("run"):
+        from reference_impl.bench.tolerances import load_tolerances
 
-        for key in code["adapter"]:
+        load_tolerances({"run": dict(code["run"])})
+    if task.startswith("calibrate:"):
+        _check_calibration(code, adapter)
+    if adapter and options:
+        from reference_impl.bench._calibrate_options import check_option
+
+        for key in options:
             check_option(adapter, key)
+        _build(adapter, options, {} if built is None else built)
+
+
+def _check_calibration(code: dict, adapter: str) -> None:
+    """A ``calibrate:`` case's settings, as ``hcv calibrate`` checks them."""
+    from reference_impl.bench._calibrate_options import check_option, check_settings
+
+    cal = dict(code.get("calibrate", {}))
+    param = cal.get("param")
+    if not (isinstance(param, str) and param.isidentifier()):
+        raise HCVInputError(f"calibrate.param must be an option name, got {param!r}")
+    check_option(adapter, param)
+    if param in code.get("adapter", {}):
+        raise HCVInputError(
+            f"adapter.{param} is the option being calibrated (calibrate.param = {param!r}): "
+            "the search sets it, so its swept values would be ignored; sweep another key"
+        )
+    spc = cal.get("steps_per_contact", code.get("run", {}).get("steps_per_contact", 200))
+    check_settings(
+        target=cal.get("target"),
+        end=cal.get("end", "overlap"),
+        steps_per_contact=spc,
+        v0=cal.get("v0"),
+        bracket=cal.get("range"),
+    )
+
+
+def _build(adapter: str, options: dict, built: dict) -> None:
+    """Build the adapter with ``options`` as ``hcv bench`` would (cached in ``built``)."""
+    import json
+
+    from reference_impl.adapters.registry import get_adapter
+    from reference_impl.bench._calibrate_options import spec_with_options
+
+    if "" not in built:  # can the code be built here at all? (the base spec, once)
+        try:
+            get_adapter(adapter).close()
+            built[""] = ""
+        except HCVInputError as exc:
+            built[""] = str(exc) or "not here"
+    if built[""]:
+        return
+    text = json.dumps(options, sort_keys=True)
+    if text not in built:
+        try:
+            get_adapter(spec_with_options(adapter, options)).close()
+            built[text] = ""
+        except HCVInputError as exc:
+            built[text] = str(exc)
+    if built[text]:
+        raise HCVInputError(built[text])

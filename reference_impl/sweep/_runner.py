@@ -35,13 +35,35 @@ __all__ = [
     "run_cases",
 ]
 
-# Cases in flight per worker thread: enough to keep every worker busy while the
+# Tasks in flight per worker thread: enough to keep every worker busy while the
 # client stores results, small enough that Ctrl-C or a kill loses little.
 _WINDOW_PER_THREAD = 4
 # Local cluster settings: non-daemonic workers (a case may start processes, e.g.
 # an isolated bench adapter); one queued case per worker thread, so a worker
 # that dies takes down only the case it was running, not an innocent neighbour.
 _LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
+# One compute thread per local worker process: numba's parallel loops and the BLAS would
+# otherwise each start a thread per core in every worker, N workers x N threads on N
+# cores (issue 27: each case took twice as long with 16 workers on 16 cores). Set before
+# the worker process starts (numba reads NUMBA_NUM_THREADS once, at import); Dask sets
+# the BLAS ones by default, repeated here so that a user's Dask config cannot lose them.
+_ONE_THREAD = {
+    "NUMBA_NUM_THREADS": "1",
+    "OMP_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+}
+# Cases per Dask task: about this many tasks per worker thread, so that the last tasks
+# leave the workers unevenly loaded by at most 1/8 of a worker's share; each task costs
+# the scheduler and client ~5 ms (README, measured), so grouping divides that per case.
+_TASKS_PER_THREAD = 8
+# At most this many cases per task: what a killed sweep or a dead worker's retry re-runs.
+_MAX_CHUNK = 16
+# Where the local scheduler's HTTP server listens. Distributed starts one even without a
+# dashboard, on port 8787 unless told otherwise, and warns "Port 8787 is already in use"
+# (three lines) when another cluster or service holds it (issue 26). A port the system
+# picks (0) on the loopback interface: nothing to warn about, nothing exposed.
+_LOCAL_HTTP_ADDRESS = "127.0.0.1:0"
 # Seconds to wait for an existing scheduler to answer (connection and handshake: a
 # scheduler answers its identity in milliseconds; a slow network gets 1000 times that).
 _CONNECT_TIMEOUT = 10
@@ -127,6 +149,16 @@ def _call(fn: Callable, item: Any) -> tuple[bool, Any, str, float, str, float]:
     except Exception as exc:  # a failing case is a result, not a lost sweep
         ok, value, error = False, None, _one_line(exc)
     return ok, value, error, time.perf_counter() - t, where, time.thread_time() - c
+
+
+def _call_many(fn: Callable, items: Sequence) -> list:
+    """`_call` for each item of a group of cases run as one task."""
+    return [_call(fn, item) for item in items]
+
+
+def _chunk_size(n_items: int, threads: int) -> int:
+    """Cases per task: `_TASKS_PER_THREAD` tasks per worker thread, 1 to `_MAX_CHUNK`."""
+    return max(1, min(_MAX_CHUNK, -(-n_items // (_TASKS_PER_THREAD * max(threads, 1)))))
 
 
 @contextlib.contextmanager
@@ -233,8 +265,9 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
         Address of an existing scheduler, e.g. ``tcp://host:8786``.
 
     The local cluster's workers are non-daemonic, so a case may start processes
-    of its own (isolated adapters of ``bench:``), and take one case at a time
-    (`_LOCAL_CONFIG`). Cluster and client are closed
+    of its own (isolated adapters of ``bench:``), take one task at a time
+    (`_LOCAL_CONFIG`) and run one compute thread each (`_ONE_THREAD`: numba and
+    BLAS threads). Cluster and client are closed
     on exit, also on KeyboardInterrupt.
     """
     import dask
@@ -253,12 +286,18 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                 ) from None
         else:
             n = workers or os.cpu_count() or 1
-            with dask.config.set(_LOCAL_CONFIG), _workers_ignore_ctrl_c():
+            environ = {
+                **(dask.config.get("distributed.nanny.pre-spawn-environ", None) or {}),
+                **_ONE_THREAD,
+            }
+            config = {**_LOCAL_CONFIG, "distributed.nanny.pre-spawn-environ": environ}
+            with dask.config.set(config), _workers_ignore_ctrl_c():
                 cluster = LocalCluster(
                     n_workers=n,
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
+                    scheduler_kwargs={"dashboard_address": _LOCAL_HTTP_ADDRESS},
                     silence_logs=logging.CRITICAL,
                 )
             client = Client(cluster)
@@ -300,8 +339,13 @@ def iter_outcomes(
     items: Sequence,
     keys: Sequence[str] | None = None,
     window: int | None = None,
+    chunk: int | None = None,
 ) -> Iterator[Outcome]:
     """Run ``fn(item)`` for every item on ``client``; yield each `Outcome` as it finishes.
+
+    Consecutive cases are grouped into tasks of ``chunk`` cases (one scheduler round trip
+    for the group); a group whose worker died is run again one case per task, so only
+    the case that kills its worker fails (a KilledWorker row), never its neighbours.
 
     Parameters
     ----------
@@ -313,7 +357,10 @@ def iter_outcomes(
     keys : sequence of str, optional
         Task keys (unique; default ``dask.base.tokenize(fn, item)``).
     window : int, optional
-        Cases in flight at once; default 4 per worker thread.
+        Tasks in flight at once; default 4 per worker thread.
+    chunk : int, optional
+        Cases per task; default `_chunk_size` (about 8 tasks per worker thread, at most
+        `_MAX_CHUNK` cases each; 1 for small sweeps).
     """
     from dask.base import tokenize
     from distributed import as_completed
@@ -323,40 +370,60 @@ def iter_outcomes(
         if keys is not None
         else [f"hcv-{getattr(fn, '__name__', 'case')}-{tokenize(fn, it)}" for it in items]
     )
+    threads = max(sum(client.nthreads().values()), 1)
     if window is None:
-        window = max(2, _WINDOW_PER_THREAD * max(sum(client.nthreads().values()), 1))
-    pending = iter(range(len(items)))
-    where: dict[str, int] = {}
+        window = max(2, _WINDOW_PER_THREAD * threads)
+    size = _chunk_size(len(items), threads) if chunk is None else max(1, int(chunk))
+    groups = [list(range(i, min(i + size, len(items)))) for i in range(0, len(items), size)]
+    pending = iter(groups)
+    retry: list[list[int]] = []  # groups of a dead worker, to run again one case each
+    where: dict[str, list[int]] = {}
     # Results are gathered in the background as they finish (no blocking round trip each).
     ac = as_completed(with_results=True, raise_errors=False)
 
     def submit() -> None:
-        i = next(pending, None)
-        if i is not None:
+        group = retry.pop() if retry else next(pending, None)
+        if group is None:
+            return
+        if len(group) == 1:
+            i = group[0]
             fut = client.submit(_call, fn, items[i], key=keys[i], pure=False)
-            where[fut.key] = i
-            ac.add(fut)
+        else:
+            key = f"{keys[group[0]]}-group-{len(group)}"
+            fut = client.submit(_call_many, fn, [items[i] for i in group], key=key, pure=False)
+        where[fut.key] = group
+        ac.add(fut)
 
-    for _ in range(min(window, len(items))):
+    for _ in range(min(window, len(groups))):
         submit()
     try:
         for fut, res in ac:
-            i = where.pop(fut.key)
+            group = where.pop(fut.key)
+            outs: list[Outcome] = []
             if fut.status == "error":
                 exc = res[1] if isinstance(res, tuple) else res
-                why = (
-                    "its worker died while running it"
-                    if type(exc).__name__ == "KilledWorker"
-                    else "the cluster could not run it"
-                )
-                out = Outcome(i, keys[i], False, error=f"{why} ({_one_line(exc)})")
+                died = type(exc).__name__ == "KilledWorker"
+                if died and len(group) > 1:
+                    retry.extend([i] for i in reversed(group))
+                else:
+                    why = (
+                        "its worker died while running it"
+                        if died
+                        else "the cluster could not run it"
+                    )
+                    outs = [
+                        Outcome(i, keys[i], False, error=f"{why} ({_one_line(exc)})") for i in group
+                    ]
             elif fut.status == "cancelled" or isinstance(res, BaseException):
-                out = Outcome(i, keys[i], False, error="cancelled by the cluster")
+                outs = [Outcome(i, keys[i], False, error="cancelled by the cluster") for i in group]
             else:
-                out = Outcome(i, keys[i], *res)
+                values = [res] if len(group) == 1 else res
+                outs = [Outcome(i, keys[i], *v) for i, v in zip(group, values, strict=True)]
             fut.release()
             submit()
-            yield out
+            while retry and len(ac.futures) < window:
+                submit()
+            yield from outs
     finally:
         for fut in list(ac.futures):
             fut.cancel()

@@ -30,8 +30,9 @@ needs a ``[calibrate]`` table: ``param`` (the option searched), ``target``
 The sweep is the Cartesian product of the ``[sweep]`` lists, in the order the
 keys are written (the last key varies fastest). Spec-level problems (syntax,
 unknown keys, a sweep value that is not a non-empty list, a task or criterion
-that does not parse, too many cases, every case invalid) raise `SweepSpecError`
-with one line. A case whose scene does not validate is kept as an *invalid
+that does not parse, too many cases, every case invalid, a code setting that ``hcv
+bench`` or ``hcv calibrate`` would refuse, see `_code._check_codes`) raise
+`SweepSpecError` with one line. A case whose scene does not validate is kept as an *invalid
 case* (its error becomes its row), so one bad combination does not lose the
 sweep.
 """
@@ -57,7 +58,7 @@ from reference_impl.sweep._code import (  # noqa: F401
     _CALIBRATE_KEYS,
     _CODE_PREFIXES,
     SweepSpecError,
-    _check_code,
+    _check_codes,
     _code_key,
 )
 
@@ -403,6 +404,8 @@ def spec_from_dict(
                     f"spec {src}: case {index} ({_label(params)}): {exc}"
                 ) from None
         expanded.append((params, case_scene, code))
+    if task.startswith(("bench:", "calibrate:")):  # the code's settings: before any scene
+        _check_codes(src, task, ((i, _label(p), c) for i, (p, _s, c) in enumerate(expanded)))
     ctexts = [_case_criterion(crit, cs) for _, cs, _code in expanded]
     errors = _validate_cases(src, task, expanded, ctexts, progress)
     keys: dict[str, int] = {}
@@ -456,7 +459,7 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     for done, index in enumerate(order):
         if progress is not None:
             progress(done, len(order))
-        params, case_scene, code = expanded[index]
+        params, case_scene, _code = expanded[index]
         ctext = ctexts[index]
         try:
             sc = scene_from_dict(
@@ -477,10 +480,6 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
                     f"case {index} ({_label(params)}): calibrate runs impact scenes, "
                     f"not {sc.kind!r}"
                 )
-            try:
-                _check_code(code, task)
-            except HCVInputError as exc:
-                raise HCVInputError(f"case {index} ({_label(params)}): {exc}") from None
         except HCVInputError as exc:
             errors[index] = str(exc)
         else:

@@ -1,0 +1,106 @@
+"""One power-law impact in one compiled call (issue 27, goal 2).
+
+For U = k q^n / n the Gauss-Jacobi path of `_branches` (`_gauss_jacobi_power_law`) is
+whole in `power_impact`: the oscillator, the branch rows, the sums of `_gj_sums` (the same
+compiled loop), their agreement test and bounds, and the peak, with the same operations
+in the same order, so the numbers are those of that path bit for bit (tests through
+`prepare` and `solve_impact`). `_strategies.power_law` and `prepared` call it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from reference_impl.exact._branches import (
+    _EPS,
+    _GJ_BETA_MIN,
+    _GJ_RTOL,
+    _GJ_SIZES,
+    _NODE_ULPS,
+    _SUM_ULPS_PER_NODE,
+    _exponent_splits,
+    _fill_rows,
+    _gj_sums,
+    _jacobi_pair,
+    _pow_split,
+)
+from reference_impl.potentials.power import PowerLaw
+
+__all__ = ["OUT_SIZE", "power_constants", "power_impact"]
+
+# Output of `power_impact`: the six Branches fields, q_max, U'(q_max), restitution,
+# restitution at zero force, wd, s_peak, s_end, ok (1.0) or not (0.0).
+OUT_SIZE = 14
+
+
+def power_constants(pot: PowerLaw, m: float) -> tuple | None:
+    """The arguments of `power_impact` after (v0, zeta) for ``pot`` and mass m, or None
+    when its Gauss-Jacobi rule does not apply (beta = 2/n - 1 < _GJ_BETA_MIN)."""
+    n = pot.leading_exponent
+    beta = 2.0 / n - 1.0
+    if beta < _GJ_BETA_MIN:
+        return None
+    k = pot.k
+    a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
+    # power_law_scale's (m/k) (n m / 2k)^(-p/n), the factor of v0^beta left for the kernel.
+    c_m = (m / k) * _pow_split(0.5 * n * m / k, a_hi, a_lo)
+    u, W = _jacobi_pair(beta)
+    round_rel = (_SUM_ULPS_PER_NODE * _GJ_SIZES[1] + _NODE_ULPS) * _EPS
+    q_scale = (0.5 * n * m / k) ** (1.0 / n)
+    return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def power_impact(
+    v0, zeta, c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, two_n, k, p, rtol_stated, tiny, out
+):
+    """One power-law impact by Gauss-Jacobi, as `solve_impact` computes it (pragma: compiled).
+
+    The oscillator (`VirtualOscillator`), the branch rows (`_fill_rows`), the scale
+    c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums
+    (`_gj_sums`), their agreement test and bounds (`_gauss_jacobi_power_law`), the
+    peak (`_strategies.peak`), and, given ``rtol_stated`` and ``tiny``, the bound and
+    range checks (`solve._check_bound`, `_check_normal`; inf and 0 skip them): out[13] = 0
+    when any of them refuses.
+    """  # pragma: no cover - compiled
+    out[13] = 0.0
+    wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
+    sp = math.atan2(wd, zeta) / wd
+    s_end = math.pi / wd
+    lz = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
+    rows = np.empty((3, 5))
+    nr = _fill_rows(zeta, sp, s_end, lz, rows)
+    for i in range(nr):
+        if not rows[i, 4] > 0.0:
+            return
+    c_pl = c_m * (v0**b_hi * math.exp(b_lo * math.log(v0)))
+    sums = _gj_sums(rows[:nr], u, W, zeta, wd, beta, c_pl)
+    err = np.empty(nr)
+    for i in range(nr):
+        coarse, fine = sums[i, 0], sums[i, 1]
+        err[i] = abs(fine - coarse) + round_rel * fine
+        if not abs(fine - coarse) <= _GJ_RTOL * abs(fine):
+            return
+    rise, e_rise = sums[0, 1], err[0]
+    if zeta == 0.0:
+        mid, e_mid, fall, e_fall = rise, e_rise, rise, e_rise
+    else:
+        fall, e_fall = sums[1, 1], err[1]
+        mid, e_mid = fall - sums[2, 1], e_fall + err[2]
+    x_peak = v0 * math.exp(-zeta * sp)
+    q_max = q_scale * x_peak**two_n
+    f_max = k * q_max**p
+    for t, e in ((rise + fall, e_rise + e_fall), (rise + mid, e_rise + e_mid)):
+        if math.isfinite(t) and not e <= rtol_stated * t:
+            return
+    if not (q_max >= tiny and f_max >= tiny and rise + fall >= tiny):
+        return
+    out[0], out[1], out[2], out[3], out[4], out[5] = rise, e_rise, mid, e_mid, fall, e_fall
+    out[6], out[7] = q_max, f_max
+    out[8] = math.exp(-math.pi * zeta / wd)
+    out[9] = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
+    out[10], out[11], out[12] = wd, sp, s_end
+    out[13] = 1.0

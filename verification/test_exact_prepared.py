@@ -1,0 +1,96 @@
+"""`prepare(potential, m)`: the repeated-impact solver equals `solve_impact` bit for bit (issue 27).
+
+Its fast paths (one compiled call for a power law; the fused kernel without the
+potential's checks for the other compiled families) and its hand-overs to
+`solve_impact` (zeta >= 0.9, overdamped, split sums, bad input) must all give the
+very numbers, errors and bounds of `solve_impact`. Speed: benchmarks/bench_exact.py.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from reference_impl import HCVInputError, PowerLaw, prepare, solve_impact
+from reference_impl.studies.workprecision import family_scenes
+from verification.assertions import assert_true
+
+# Speeds as fractions of each scene's (a cap's scene speed is near its largest), and
+# damping ratios: the Gauss-Jacobi range, its edge (0.9), the tanh-sinh and overdamped
+# hand-overs.
+SPEEDS = (0.05, 0.43, 1.0)
+ZETAS = (0.0, 0.2, 0.61, 0.8999, 0.9, 0.97, 1.0, 1.7)
+
+
+def _fields(sol) -> dict:
+    out = {f.name: getattr(sol, f.name) for f in dataclasses.fields(sol)}
+    out["_osc"] = dict(vars(out["_osc"]))
+    out["potential"] = id(out["potential"])
+    return out
+
+
+def _scenes():
+    scenes = [(sc.name, sc.potential, sc.m, sc.v0) for sc in family_scenes()]
+    scenes.append(("power-law p = 1 (Hooke)", PowerLaw(2.0e4, 1.0), 0.3, 2.0))
+    scenes.append(("power-law p = 3", PowerLaw(1.0e12, 3.0), 0.01, 4.0))
+    return scenes
+
+
+@pytest.mark.parametrize("name,pot,m,v_scene", _scenes(), ids=[s[0] for s in _scenes()])
+def test_prepare_is_solve_impact_bit_for_bit(name, pot, m, v_scene):
+    solver = prepare(pot, m)
+    for v0 in (f * v_scene for f in SPEEDS):
+        for zeta in ZETAS:
+            call = f"prepare({name}, m={m})({v0}, {zeta})"
+            want = _fields(solve_impact(pot, m, v0, zeta))
+            got = _fields(solver(v0, zeta))
+            diff = {k: (got[k], want[k]) for k in want if got[k] != want[k]}
+            assert_true(
+                not diff,
+                got=f"fields differ (prepared, solve_impact): {diff}",
+                should="every field identical to solve_impact's",
+                claim="prepare",
+                call=call,
+            )
+
+
+def test_prepare_takes_numpy_scalars_and_ints_as_solve_impact_does(monkeypatch):
+    from reference_impl.exact import prepared
+
+    pot = PowerLaw(1.0e9, 1.5)
+    solver = prepare(pot, 0.0041)
+    for v0, zeta in ((np.float64(1.3), np.float64(0.2)), (2, 0), (np.float32(0.7), 0.5)):
+        want = _fields(solve_impact(pot, 0.0041, v0, zeta))
+        with monkeypatch.context() as mp:  # the compiled path itself, not the hand-over
+            mp.setattr(prepared, "solve_impact", None)
+            got = _fields(solver(v0, zeta))
+        assert_true(
+            got == want and type(got["v0"]) is float,
+            got=f"{got}",
+            should=f"{want}, v0 a float",
+            claim="prepare",
+            call=f"prepare(hertz, 0.0041)({v0!r}, {zeta!r})",
+        )
+
+
+def test_prepare_refuses_what_solve_impact_refuses():
+    pot = PowerLaw(1.0e9, 1.5)
+    with pytest.raises(HCVInputError, match="m"):
+        prepare(pot, -1.0)
+    with pytest.raises(HCVInputError, match="potential"):
+        prepare("hertz", 1.0)
+    solver = prepare(pot, 0.01)
+    for v0, zeta in ((-1.0, 0.2), (float("nan"), 0.2), (1.0, -0.1), (1.0, float("inf"))):
+        with pytest.raises(HCVInputError) as want:
+            solve_impact(pot, 0.01, v0, zeta)
+        with pytest.raises(HCVInputError) as got:
+            solver(v0, zeta)
+        assert_true(
+            str(got.value) == str(want.value),
+            got=str(got.value),
+            should=str(want.value),
+            claim="prepare",
+            call=f"prepare(hertz, 0.01)({v0}, {zeta})",
+        )
