@@ -61,6 +61,8 @@ _REGISTRY: dict[str, str | type] = {
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
+    "liggghts": "reference_impl.adapters.liggghts:LiggghtsAdapter",
+    "yade": "reference_impl.adapters.yade:YadeAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
@@ -268,7 +270,7 @@ def adapter_help() -> str:
         values = getattr(cls, "spec_values", {}) or {}
         keys = "; ".join(_values_text(k, a) for k, a in values.items())
         lines.append(f"  {name}: {keys}" if keys else f"  {name}")
-    lines.append("  cmd[sustained=true,timeout=S,label=NAME,cwd=DIR]:COMMAND")
+    lines.append("  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,OPTION=V]:COMMAND")
     return "\n".join(lines)
 
 

@@ -62,7 +62,23 @@ force one step late; ``{"v": 0.5}``: half-step velocities), contract item 11 of
 
 Sustained (two-walls) scenes are sent only to commands declared with
 ``cmd[sustained=true]:COMMAND`` (other ``cmd[...]`` arguments: ``timeout``,
-``label``, ``cwd``).
+``label``, ``cwd``, ``persistent``).
+
+Options: any other ``cmd[key=value,...]`` argument is an *option of the code*,
+passed in every request as ``"options": {"key": value}`` (numbers, true/false or
+text). This is how ``hcv calibrate`` and ``hcv sweep`` set ``adapter.KEY`` of a
+``cmd:`` program: ``hcv calibrate "cmd:./mycode" --param dampratio --range 0.01 2``
+sends ``"options": {"dampratio": ...}``. A request without options has no
+``"options"`` key. A program that does not know an option should answer
+``{"error": "unknown option KEY"}`` (a typo then fails loudly).
+
+Persistent mode, ``cmd[persistent=true]:COMMAND``: the command is started once
+and serves every run: one request per line on stdin (the same object plus an
+integer ``"id"``), one answer per line on stdout (the same object as above, on
+one line, with the same ``"id"``); lines that do not start with ``{`` are
+skipped (a launcher's banner). Closing stdin asks it to exit. A request that
+outlives its timeout, or a process that dies, fails that run only (one line) and
+the next run starts a fresh process (`reference_impl.adapters._persistent`).
 
 Failures of one run (non-zero exit, timeout, output that is not JSON or breaks
 the rules) fail that run only; the benchmark goes on with the next one. Output is
@@ -74,6 +90,7 @@ propagates.
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
 import os
@@ -121,6 +138,10 @@ _MAX_STDOUT = 32 << 20
 _CHUNK = 1 << 16
 # Seconds the selector waits before it rechecks the deadline.
 _POLL = 0.5
+
+
+# The adapter's own cmd[...] arguments (every other key is an option of the code).
+_OWN_ARGUMENTS = ("command", "timeout", "cwd", "label", "sustained", "persistent")
 
 
 def response_limit(n_steps: int) -> int:
@@ -216,6 +237,12 @@ class SubprocessAdapter(ContactAdapter):
         Name in scorecards (default: the program's base name).
     sustained : bool
         The command also answers "sustained" requests (two-walls scenes).
+    persistent : bool
+        Start the command once and send it every run as a JSON line (persistent
+        mode, see the module docstring).
+    **options
+        Options of the code, sent in each request as ``"options"`` (numbers,
+        booleans or text): what ``hcv calibrate`` / ``hcv sweep`` vary.
     """
 
     name = "subprocess"
@@ -228,6 +255,8 @@ class SubprocessAdapter(ContactAdapter):
         cwd: str | None = None,
         label: str | None = None,
         sustained: bool = False,
+        persistent: bool = False,
+        **options,
     ):
         if isinstance(command, str):
             try:
@@ -258,7 +287,28 @@ class SubprocessAdapter(ContactAdapter):
             raise HCVInputError(f"subprocess adapter: label must be text, got {label!r}")
         if cwd is not None and not (isinstance(cwd, str) and os.path.isdir(cwd)):
             raise HCVInputError(f"subprocess adapter: cwd {cwd!r} is not a directory")
+        if not isinstance(persistent, bool):
+            raise HCVInputError(
+                f"subprocess adapter: persistent must be true or false, got {persistent!r}"
+            )
+        for key, val in options.items():
+            near = difflib.get_close_matches(key, _OWN_ARGUMENTS, n=1, cutoff=0.8)
+            if near:  # a typo of an argument of ours would silently become a code option
+                raise HCVInputError(
+                    f"subprocess adapter: {key!r} looks like a misspelt {near[0]!r}; "
+                    "options of the code must not resemble the adapter's own arguments"
+                )
+            if isinstance(val, bool) or isinstance(val, str) or val is None:
+                continue
+            if not (isinstance(val, (int, float)) and math.isfinite(val)):
+                raise HCVInputError(
+                    f"subprocess adapter: option {key}={val!r} must be a finite number, "
+                    "true/false or text"
+                )
         _check_program(argv[0], cwd)
+        self.persistent = persistent
+        self.options = dict(options)
+        self._server = None  # the PersistentProcess of persistent mode
         self.argv = argv
         self.timeout = float(timeout)
         self.cwd = cwd
@@ -266,6 +316,8 @@ class SubprocessAdapter(ContactAdapter):
         if os.path.basename(prog).startswith("python"):
             prog = next((a for a in argv[1:] if not a.startswith("-")), prog)
         self._label = label or os.path.basename(prog)
+        if self.options and label is None:  # calibration and sweep points are told apart
+            self._label += "[" + ",".join(f"{k}={v!r}" for k, v in self.options.items()) + "]"
         self.supports_sustained = bool(sustained)
         self._n_steps = 0
         self._laws: dict[tuple, ImplementedLaw] = {}
@@ -281,6 +333,8 @@ class SubprocessAdapter(ContactAdapter):
             "command": self.argv,
             "timeout": self.timeout,
             "protocol": PROTOCOL,
+            "persistent": self.persistent,
+            "options": dict(self.options),
         }
 
     def _exchange(self, payload: bytes, limit: int) -> tuple[int, bytes, str]:
@@ -362,9 +416,30 @@ class SubprocessAdapter(ContactAdapter):
                     pass
         return rc, bytes(out), _tail(err.decode(errors="replace"))
 
+    def _persistent_call(self, obj: dict, limit: int) -> dict:
+        """One request in persistent mode (the process is started on first use)."""
+        from reference_impl.adapters._persistent import PersistentProcess
+
+        if self._server is None:
+            self._server = PersistentProcess(
+                self.argv, self.label, cwd=self.cwd, startup_timeout=self.timeout
+            )
+        data = self._server.request(obj, timeout=self.timeout, limit=limit)
+        data.pop("id", None)
+        return data
+
+    def close(self) -> None:
+        if self._server is not None:
+            self._server.close()
+
     def _call(self, request: str, scene: AdapterScene) -> dict:
-        payload = json.dumps({"protocol": PROTOCOL, "request": request, "scene": scene.to_json()})
+        obj = {"protocol": PROTOCOL, "request": request, "scene": scene.to_json()}
+        if self.options:
+            obj["options"] = dict(self.options)
         self._n_steps = int(scene.n_steps)
+        if self.persistent:
+            return self._answer(self._persistent_call(obj, response_limit(scene.n_steps)), "")
+        payload = json.dumps(obj)
         rc, raw_bytes, stderr = self._exchange(payload.encode(), response_limit(scene.n_steps))
         if rc != 0:
             how = f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}"
@@ -384,6 +459,10 @@ class SubprocessAdapter(ContactAdapter):
             raise AdapterOutputError(
                 f"{self.label}: stdout must be a JSON object, got {type(data).__name__}"
             )
+        return self._answer(data, stderr)
+
+    def _answer(self, data: dict, stderr: str) -> dict:
+        """The response object, or the skip / failure it reports."""
         if "unsupported" in data:
             raise AdapterDeclined(str(data["unsupported"])[:300])
         if "error" in data:

@@ -1,0 +1,338 @@
+"""Persistent mode of the adapter protocol: one process serves many requests (issue 28).
+
+A code that starts slowly (YADE: about 3 s per process) is started once and
+kept: the suite writes one request per line on its stdin and reads one answer
+per line on its stdout (JSON lines). `PersistentProcess` is that channel, used
+by ``cmd[persistent=true]:COMMAND`` (`reference_impl.adapters.subprocess`) and by
+Python adapters that drive such a code (`reference_impl.adapters.yade`).
+
+The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
+
+* Each request is one line: a JSON object with an integer ``"id"``. The answer
+  is one line: a JSON object with the same ``"id"``. Requests are sent one at a
+  time: the next is written after the answer to the previous one.
+* Lines on stdout that do not start with ``{`` are ignored (a launcher's banner,
+  e.g. YADE's "Welcome to Yade"), at most `_MAX_NOISE` bytes of them per request.
+* Bounded: a request not answered within its timeout kills the process (and
+  everything it started: its own session) and fails with one line; a process
+  that has died (between requests or while answering) fails that one request
+  with its exit status; an answer with another id, an answer that is not JSON or
+  one over the size limit fails the request and the process is replaced. In
+  every case the next request starts a fresh process: the rest go on.
+* stdin closing is the signal to exit (``close``): the process gets
+  `_EXIT_GRACE` s to do so, then it is killed. On Linux, when the suite's
+  process has one thread, the server is also killed if that process dies
+  (``PR_SET_PDEATHSIG``), so no server outlives a killed benchmark even while
+  it computes; otherwise the EOF on its stdin is what ends it.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Sequence
+
+from reference_impl.adapters._records import AdapterOutputError, AdapterRunError
+
+__all__ = ["PersistentProcess", "PersistentTimeout"]
+
+# Bytes of non-JSON stdout (banners) skipped per request before the answer.
+_MAX_NOISE = 1 << 20
+# Characters of the process's stderr attached to a failure (the tail).
+_STDERR_TAIL = 4000
+# Seconds the process gets to exit after its stdin is closed.
+_EXIT_GRACE = 5.0
+# Seconds the selector waits before it rechecks the deadline.
+_POLL = 0.5
+_CHUNK = 1 << 16
+_PR_SET_PDEATHSIG = 1
+
+
+class PersistentTimeout(AdapterRunError):
+    """A request outlived its timeout; the process was killed."""
+
+    timed_out = True
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    """Linux: SIGKILL this child when the process that started it dies."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        pass
+
+
+class PersistentProcess:
+    """A long-lived program answering JSON-line requests (see the module docstring).
+
+    Parameters
+    ----------
+    argv : sequence of str
+        The command.
+    label : str
+        Name used in error messages.
+    cwd : str, optional
+        Working directory.
+    startup_timeout : float
+        Seconds added to the first request's timeout after a (re)start: the
+        program's own start-up (YADE: ~3 s), not the code under test.
+    """
+
+    def __init__(
+        self,
+        argv: Sequence[str],
+        label: str,
+        cwd: str | None = None,
+        startup_timeout: float = 60.0,
+    ):
+        self.argv = list(argv)
+        self.label = label
+        self.cwd = cwd
+        self.startup_timeout = float(startup_timeout)
+        self._proc: subprocess.Popen | None = None
+        self._err = None  # temporary file holding the process's stderr
+        self._buf = bytearray()
+        self._next_id = 0
+        self.starts = 0  # processes started so far (for tests and reports)
+
+    # -- process lifetime -------------------------------------------------------
+    @property
+    def alive(self) -> bool:
+        return self._proc is not None and self._proc.poll() is None
+
+    def _start(self) -> None:
+        self._err = tempfile.TemporaryFile(prefix="hcv-persistent-")
+        try:
+            self._proc = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=self._err,
+                cwd=self.cwd,
+                start_new_session=True,
+                # a preexec_fn in a threaded process may deadlock the child (dlopen locks):
+                # only when this is the only thread; else stdin's EOF still ends the server
+                preexec_fn=(
+                    _die_with_parent
+                    if sys.platform.startswith("linux") and threading.active_count() == 1
+                    else None
+                ),
+            )
+        except OSError as exc:
+            self._err.close()
+            self._err = None
+            raise AdapterRunError(
+                f"{self.label}: cannot start {self.argv[0]!r} ({exc.strerror})"
+            ) from None
+        self._buf = bytearray()
+        self.starts += 1
+
+    def _stderr_tail(self) -> str:
+        if self._err is None:
+            return ""
+        try:
+            self._err.seek(0, os.SEEK_END)
+            size = self._err.tell()
+            self._err.seek(max(0, size - 2 * _STDERR_TAIL))
+            text = self._err.read().decode(errors="replace").strip()
+            self._err.seek(0, os.SEEK_END)
+        except (OSError, ValueError):
+            return ""
+        return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
+
+    def _kill(self) -> str:
+        """Kill the process group and reap it; returns the stderr tail."""
+        proc, tail = self._proc, self._stderr_tail()
+        self._proc = None
+        if proc is not None:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                proc.kill()
+            try:
+                proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
+                pass
+            for f in (proc.stdin, proc.stdout):
+                try:
+                    f.close()
+                except OSError:
+                    pass
+        if self._err is not None:
+            self._err.close()
+            self._err = None
+        return tail
+
+    def _died(self, when: str) -> AdapterRunError:
+        proc, rc = self._proc, None
+        if proc is not None:
+            try:
+                rc = proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:  # stdout closed, process still running
+                pass
+        tail = self._kill()
+        how = (
+            f"killed by signal {-rc} ({_signame(-rc)})"
+            if rc is not None and rc < 0
+            else f"exit status {rc}"
+        )
+        return AdapterRunError(
+            f"{self.label}: the persistent process ended {when} ({how}); it is restarted "
+            "for the next request",
+            tail,
+        )
+
+    def close(self) -> None:
+        """Close stdin (the signal to exit), wait `_EXIT_GRACE` s, then kill."""
+        proc = self._proc
+        if proc is None:
+            return
+        try:
+            proc.stdin.close()
+            proc.wait(timeout=_EXIT_GRACE)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+        self._kill()
+
+    # -- one request ------------------------------------------------------------
+    def request(self, obj: dict, timeout: float, limit: int) -> dict:
+        """Send ``obj`` (an ``"id"`` is added) and return the answer object.
+
+        Raises
+        ------
+        PersistentTimeout
+            No answer within ``timeout`` s (plus `startup_timeout` after a start).
+        AdapterRunError
+            The process could not start or ended before answering.
+        AdapterOutputError
+            The answer is not one JSON object with the request's id, or is over
+            ``limit`` bytes.
+        """
+        rid = self._next_id + 1
+        line = (json.dumps({**obj, "id": rid}) + "\n").encode()
+        raw = self.exchange(line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False)[-1]
+        try:
+            data = json.loads(raw)
+        except (json.JSONDecodeError, RecursionError, UnicodeDecodeError):
+            self._kill()
+            raise AdapterOutputError(
+                f"{self.label}: answer line is not JSON (starts with {raw[:60]!r})"
+            ) from None
+        if not isinstance(data, dict) or data.get("id") != rid:
+            got = data.get("id") if isinstance(data, dict) else type(data).__name__
+            self._kill()
+            raise AdapterOutputError(
+                f"{self.label}: answer to request {rid} carries id {got!r}; the process is replaced"
+            )
+        return data
+
+    def exchange(
+        self, payload: bytes, is_end, timeout: float, limit: int, keep: bool = True
+    ) -> list[bytes]:
+        """The raw form of `request`: write ``payload``, read stdout lines up to the first
+        for which ``is_end(line)`` holds (a code that reads a script on stdin and prints an
+        end marker, e.g. LIGGGHTS). Returns the lines read, the end line last (with
+        ``keep=False`` only the end line; the others are skipped, `_MAX_NOISE` bytes at
+        most). Bounded like `request`; when the process dies, the message quotes its last
+        line of output that names an error, else its last line (a code's own message)."""
+        budget = float(timeout)
+        if not self.alive:
+            if self._proc is not None:  # died since the last answer: say so, then restart
+                raise self._died("between requests")
+            self._start()
+            budget += self.startup_timeout
+        self._next_id += 1
+        deadline = time.monotonic() + budget
+        try:
+            self._write(payload, deadline, budget)
+            return self._read_until(is_end, deadline, budget, limit, keep)
+        except (AdapterRunError, AdapterOutputError):
+            raise  # the process was already replaced where it had to be
+        except BaseException:
+            self._kill()  # Ctrl-C or any surprise: no process left mid-request
+            raise
+
+    def _write(self, line: bytes, deadline: float, budget: float) -> None:
+        proc = self._proc
+        os.set_blocking(proc.stdin.fileno(), False)
+        sent = 0
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stdin, selectors.EVENT_WRITE)
+            while sent < len(line):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    tail = self._kill()
+                    raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
+                if not sel.select(min(left, _POLL)):
+                    continue
+                try:
+                    sent += os.write(proc.stdin.fileno(), line[sent : sent + _CHUNK])
+                except BlockingIOError:
+                    continue
+                except BrokenPipeError:
+                    raise self._died("before reading the request") from None
+
+    def _read_until(self, is_end, deadline: float, budget: float, limit: int, keep: bool):
+        proc = self._proc
+        lines: list[bytes] = []
+        size = 0
+        last = b""
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stdout, selectors.EVENT_READ)
+            while True:
+                nl = self._buf.find(b"\n")
+                while nl >= 0:
+                    line = bytes(self._buf[:nl]).strip()
+                    del self._buf[: nl + 1]
+                    if is_end(line):
+                        lines.append(line)
+                        return lines
+                    size += len(line) + 1
+                    if line and (b"error" in line.lower() or b"error" not in last.lower()):
+                        last = line  # the last line naming an error, else the last line
+                    if keep:
+                        lines.append(line)
+                    if size > (limit if keep else _MAX_NOISE):
+                        self._kill()
+                        what = "of output" if keep else "on stdout that are not a JSON answer"
+                        raise AdapterOutputError(
+                            f"{self.label}: more than {limit if keep else _MAX_NOISE} bytes "
+                            f"{what}; the process is replaced"
+                        )
+                    nl = self._buf.find(b"\n")
+                if len(self._buf) > limit:
+                    self._kill()
+                    raise AdapterOutputError(
+                        f"{self.label}: answer over {limit} bytes; the process is replaced"
+                    )
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    tail = self._kill()
+                    raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
+                if not sel.select(min(left, _POLL)):
+                    continue
+                data = os.read(proc.stdout.fileno(), _CHUNK)
+                if not data:
+                    err = self._died("before answering")
+                    if last:
+                        err.args = (
+                            f"{err.args[0]}; its last output: {last[:200].decode(errors='replace')!r}",
+                        )
+                    raise err
+                self._buf += data
+
+
+def _signame(num: int) -> str:
+    try:
+        return signal.Signals(num).name
+    except ValueError:
+        return "unknown signal"

@@ -1,0 +1,176 @@
+"""The YADE side of the yade adapter: a script run by the ``yade`` launcher, never imported.
+
+``yade -n -x _yade_server.py`` runs it inside YADE's own Python (which has neither
+this package nor its dependencies, so it imports only the standard library and
+yade). It serves requests, one JSON object per line on stdin, one JSON answer
+per line on stdout, until stdin closes (the persistent mode of the adapter
+protocol, see `reference_impl.adapters._persistent`):
+
+* ``{"id": n, "op": "impact", "scene": {...}, "dt": s, "n_steps": N, "v0": m/s}``
+  -> ``{"id": n, "q": [...], "v": [...], "f": [...], "phys": {...}}``: the state
+  after each step (q from the positions, v = -dq/dt read from the bodies'
+  velocities, f the force of that step), stopping at the first sample back out
+  of contact; sample 0 is the onset (q = 0, v0, no force).
+* ``{"id": n, "op": "probe", "scene": {...}, "states": [[q, dq/dt], ...]}``
+  -> ``{"id": n, "f": [...], "phys": {...}}``: the force YADE computes with the
+  body placed at each state (one step from it).
+* anything that fails -> ``{"id": n, "error": "one line"}``; the server goes on.
+
+Traps this script avoids (found by maintainers wiring YADE by hand):
+
+* the launcher prints a banner (and the XML-RPC / TCP prompt lines) on stdout
+  before the script runs: the adapter skips stdout lines that are not JSON
+  objects, and this script answers on a duplicate of the original stdout while
+  file descriptor 1 goes to stderr (nothing YADE prints can corrupt an answer);
+* the launcher reads its own global ``opts`` when it exits: a script global of
+  that name makes the exit crash, so this script keeps everything in functions;
+* ``NewtonIntegrator`` applies a numerical damping of 0.2 unless told
+  ``damping=0``: it is set to 0 here.
+"""
+
+import json
+import math
+import os
+import sys
+
+
+def _build(sc, delta, rate):
+    """Reset YADE to one contact at overlap delta (m) and dq/dt = rate (m/s)."""
+    from yade import O, utils
+    from yade.wrapper import (
+        Bo1_Sphere_Aabb,
+        Bo1_Wall_Aabb,
+        ForceResetter,
+        FrictMat,
+        Ig2_Sphere_Sphere_ScGeom,
+        Ig2_Wall_Sphere_ScGeom,
+        InsertionSortCollider,
+        InteractionLoop,
+        Ip2_FrictMat_FrictMat_MindlinPhys,
+        Ip2_ViscElMat_ViscElMat_ViscElPhys,
+        Law2_ScGeom_MindlinPhys_Mindlin,
+        Law2_ScGeom_ViscElPhys_Basic,
+        MatchMaker,
+        NewtonIntegrator,
+        ViscElMat,
+    )
+
+    O.reset()
+    radius = float(sc["R"])
+    if sc["law"] == "mindlin":
+        mat = FrictMat(young=sc["young"], poisson=0.0, frictionAngle=0.0, density=1.0)
+        key, value = sc["ip2"]
+        ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(**{key: MatchMaker(matches=((0, 0, value),))})
+        law2 = Law2_ScGeom_MindlinPhys_Mindlin()
+    else:
+        mat = ViscElMat(frictionAngle=0.0, density=1.0, **sc["material"])
+        ip2 = Ip2_ViscElMat_ViscElMat_ViscElPhys()
+        law2 = Law2_ScGeom_ViscElPhys_Basic()
+    mid = O.materials.append(mat)
+    if sc["geometry"] == "wall":
+        O.bodies.append(utils.wall(0.0, axis=2, sense=0, material=mid))
+        sph = utils.sphere((0.0, 0.0, radius - delta), radius, material=mid)
+        O.bodies.append(sph)
+        sph.state.mass = float(sc["mass"])
+        sph.state.vel = (0.0, 0.0, -rate)
+    else:
+        a = utils.sphere((0.0, 0.0, -radius + 0.5 * delta), radius, material=mid)
+        b = utils.sphere((0.0, 0.0, radius - 0.5 * delta), radius, material=mid)
+        O.bodies.append([a, b])
+        for body, sign in ((a, 1.0), (b, -1.0)):
+            body.state.mass = float(sc["mass"])
+            body.state.vel = (0.0, 0.0, sign * 0.5 * rate)
+    O.engines = [
+        ForceResetter(),
+        InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()], verletDist=0.0),
+        InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()], [ip2], [law2]),
+        # damping=0: NewtonIntegrator's default 0.2 numerical damping would change the law
+        NewtonIntegrator(damping=0.0, gravity=(0.0, 0.0, 0.0)),
+    ]
+    return O, radius
+
+
+def _observe(O, sc, radius):
+    """(q, -dq/dt as stored, force on the body, + repulsive) of the current state."""
+    if sc["geometry"] == "wall":
+        st = O.bodies[1].state
+        return radius - st.pos[2], -st.vel[2], O.forces.f(1)[2]
+    a, b = O.bodies[0].state, O.bodies[1].state
+    return 2.0 * radius - (b.pos[2] - a.pos[2]), a.vel[2] - b.vel[2], O.forces.f(1)[2]
+
+
+def _phys(O):
+    out = {}
+    for inter in O.interactions:
+        for name in ("kn", "cn", "kno", "betan"):
+            if hasattr(inter.phys, name):
+                out[name] = float(getattr(inter.phys, name))
+    return out
+
+
+def _impact(req):
+    sc = req["scene"]
+    O, radius = _build(sc, 0.0, float(req["v0"]))
+    O.dt = float(req["dt"])
+    q, v, f = [0.0], [float(req["v0"])], [0.0]
+    phys = {}
+    touched = False
+    for _ in range(int(req["n_steps"])):
+        O.step()
+        qi, vi, fi = _observe(O, sc, radius)
+        q.append(qi)
+        v.append(vi)
+        f.append(fi)
+        if not phys:
+            phys = _phys(O)
+        if not (math.isfinite(qi) and math.isfinite(vi)):
+            break
+        touched = touched or qi > 0.0
+        if touched and qi <= 0.0:
+            break
+    return {"q": q, "v": v, "f": f, "phys": phys}
+
+
+def _probe(req):
+    sc = req["scene"]
+    forces, phys = [], {}
+    for delta, rate in req["states"]:
+        O, _radius = _build(sc, float(delta), float(rate))
+        O.dt = 1e-12  # one step computes the force at the placed state; the move is irrelevant
+        O.step()
+        forces.append(O.forces.f(1)[2])
+        phys = _phys(O)
+    return {"f": forces, "phys": phys}
+
+
+def _finite(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, list):
+        return [_finite(x) for x in obj]
+    if isinstance(obj, dict):
+        return {k: _finite(x) for k, x in obj.items()}
+    return obj
+
+
+def main():
+    out = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)  # whatever YADE prints from now on goes to stderr
+    handlers = {"impact": _impact, "probe": _probe}
+    for line in sys.stdin:
+        if not line.strip():
+            continue
+        rid = None
+        try:
+            req = json.loads(line)
+            rid = req.get("id")
+            ans = handlers[req["op"]](req)
+        except Exception as exc:  # one failed request, the server goes on
+            ans = {"error": f"{type(exc).__name__}: {exc}".splitlines()[0][:300]}
+        ans["id"] = rid
+        out.write(json.dumps(_finite(ans)) + "\n")
+        out.flush()
+
+
+if __name__ == "__main__":  # the yade launcher runs a script as __main__
+    main()
