@@ -102,6 +102,7 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
+from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterOutputError,
@@ -418,7 +419,6 @@ class SubprocessAdapter(ContactAdapter):
 
     def _persistent_call(self, obj: dict, limit: int) -> dict:
         """One request in persistent mode (the process is started on first use)."""
-        from reference_impl.adapters._persistent import PersistentProcess
 
         if self._server is None:
             self._server = PersistentProcess(
