@@ -32,20 +32,39 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from reference_impl.claims import CLAIMS, VERDICTS
-from reference_impl.report._common import claim_tests, jsonable, records
+from reference_impl.bench.report import plot_speed_error, result_to_dict
+from reference_impl.bench.runner import run_bench
+from reference_impl.claims import (
+    CLAIMS,
+    VERDICTS,
+    sec6_dt_safe_bound,
+    sec10_stiffening_domain,
+    table1,
+    thm2_harmonic,
+)
+from reference_impl.claims import fig1 as fig1_claim
+from reference_impl.errors import HCVInputError
+from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _laws, _render, _wp
+from reference_impl.report._common import claim_tests, g, jsonable, records
 from reference_impl.report._files import scripts_href, swap_in, validate_report_args
+from reference_impl.report._hardcases import _cases
 from reference_impl.report._steps import resolution_study
+from reference_impl.report._wp import QUICK_SKIP
+from reference_impl.report.readme_table import ROOT, readme_block
 from reference_impl.studies.dtcrit_map import coverage
+from reference_impl.studies.workprecision import (
+    IVP_METHODS,
+    IVP_RTOLS,
+    VERLET_STEPS,
+    default_scenes,
+)
+from reference_impl.sweep._map import map_case, map_frame, map_items
 
 __all__ = ["build_report", "quick_drops", "validate_report_args"]
 
 
 def quick_drops() -> list[str]:
     """What --quick leaves out, read from the settings of each study (shown in the report)."""
-    from reference_impl.report._common import g
-    from reference_impl.report._hardcases import _cases
-    from reference_impl.studies.workprecision import IVP_METHODS, IVP_RTOLS, VERLET_STEPS
 
     def cov(quick):
         return {c.label: c.velocities for c in coverage(quick)}
@@ -59,7 +78,6 @@ def quick_drops() -> list[str]:
     ]
     kept_rtols = set(IVP_RTOLS[::2])
     kept_steps = set(VERLET_STEPS[::2])
-    from reference_impl.report._wp import QUICK_SKIP
 
     return [
         f"work-precision: scene {', '.join(QUICK_SKIP)} dropped; solve_ivp methods {', '.join(m for m in IVP_METHODS if m not in ('DOP853', 'RK45'))} "
@@ -73,8 +91,6 @@ def quick_drops() -> list[str]:
 
 
 def _scene_info() -> dict:
-    from reference_impl.studies.workprecision import default_scenes
-
     out = {}
     for sc in default_scenes():
         out[sc.name] = f"{sc.potential!r}, m = {sc.m:g} kg, v0 = {sc.v0:g} m/s, ζ = {sc.zeta:g}"
@@ -95,8 +111,6 @@ def _start_map(quick: bool):
     import os
     from concurrent.futures import ProcessPoolExecutor
 
-    from reference_impl.sweep._map import map_case, map_items
-
     if (os.cpu_count() or 1) < 2 or "fork" not in mp.get_all_start_methods():
         return None
     try:
@@ -108,7 +122,6 @@ def _start_map(quick: bool):
 
 def _finish_map(background):
     """The map's table from the background searches (`dt_crit_map_on_cluster`'s table)."""
-    from reference_impl.sweep._map import map_frame
 
     pool, futures = background
     try:
@@ -124,8 +137,6 @@ def _finish_map(background):
 
 def _bench_adapter(spec: str, out: Path, fig_dir: Path) -> dict:
     """Run `hcv bench` on one adapter; its JSON goes to out/bench/, its plot to figures/."""
-    from reference_impl.bench.report import plot_speed_error, result_to_dict
-    from reference_impl.bench.runner import run_bench
 
     safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(spec))[:60]
     (out / "bench").mkdir(parents=True, exist_ok=True)
@@ -188,7 +199,6 @@ def build_report(
     """
     out, adapters = validate_report_args(out_dir, adapters, force=force)
     readme_path = _readme_for(out, readme)
-    from reference_impl.claims import sec6_dt_safe_bound, thm2_harmonic
     from reference_impl.report._environment import environment
 
     # Provenance first: the temporary directory must not make the checkout look dirty.
@@ -211,8 +221,6 @@ def build_report(
 
 def _readme_for(out: Path, readme) -> Path | None:
     """The README to update (checked before anything runs), or None."""
-    from reference_impl.errors import HCVInputError
-    from reference_impl.report.readme_table import ROOT, readme_block
 
     if readme is None:
         return None
@@ -243,9 +251,6 @@ def _build(
     ``repro`` is the link from the final directory to the referee's scripts (None: they are
     not there, and the report names them without a link).
     """
-    from reference_impl.claims import fig1 as fig1_claim
-    from reference_impl.claims import sec10_stiffening_domain, table1
-    from reference_impl.report import _dtmap, _erratum, _fig1, _hardcases, _laws, _render, _wp
 
     def say(text: str) -> None:
         if progress is not None:

@@ -6,7 +6,12 @@ import numpy as np
 import pandas as pd
 
 from reference_impl.claims.sec6_dt_safe_bound import confirm_horizon_needed, kind_counts
-from reference_impl.stability.search import KINDS
+from reference_impl.integrators.verlet import SaturatingForce
+from reference_impl.potentials import PowerLaw
+from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
+from reference_impl.stability.search import KINDS, EnergyGrowth
+from reference_impl.studies.dtcrit_map import criterion_sensitivity
+from reference_impl.sweep import dt_crit_map_on_cluster
 
 SCENE_COLOURS = {"impact": "#1f77b4", "two-sided": "#d62728", "two-walls": "#2ca02c"}
 SCENE_MARKERS = {"impact": "o", "two-sided": "s", "two-walls": "^"}
@@ -27,7 +32,6 @@ def run_map(quick: bool, progress=None, workers: int = 0) -> pd.DataFrame:
         0 runs the searches one after another in this process; N > 0 spreads them over
         a local Dask cluster of N processes (`reference_impl.sweep`). Same table either way.
     """
-    from reference_impl.sweep import dt_crit_map_on_cluster
 
     def tick(done, total):
         if progress:
@@ -151,7 +155,6 @@ def map_figure(df: pd.DataFrame, path) -> None:
 
 def describe_recommendation() -> str:
     """One line on the corrected bound (measured margins are in the table)."""
-    from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
 
     f = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR.items())
     fs = ", ".join(f"{k} {v:g}" for k, v in RECOMMEND_FACTOR_SINGULAR.items())
@@ -190,10 +193,6 @@ _SENS_HORIZON_CASES = (
 def run_sensitivity(quick: bool) -> pd.DataFrame:
     """`criterion_sensitivity`: factor and N for Hertz and the linear spring, tolerance of
     the Hertz impact, and the confirmation horizon for the slow runaways (full run only)."""
-    from reference_impl.integrators.verlet import SaturatingForce
-    from reference_impl.potentials import PowerLaw
-    from reference_impl.stability.search import EnergyGrowth
-    from reference_impl.studies.dtcrit_map import criterion_sensitivity
 
     steps = _SENS_STEPS_QUICK if quick else _SENS_STEPS_FULL
     frames = []

@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 from reference_impl.report._blocks import UL, H, P
+from reference_impl.report._blocks import markdown_lines as _md
 from reference_impl.report._common import g
 
 __all__ = ["PRINTED", "entries", "markdown", "blocks", "plain", "script_path"]
@@ -195,7 +196,6 @@ def blocks(results: dict, level: int = 2) -> list:
 
 def markdown(results: dict) -> str:
     """reports/erratum.md."""
-    from reference_impl.report._blocks import markdown_lines as _md
 
     out = ["# Erratum: " + results["title"].split(": ", 1)[-1] + "\n"]
     _md(blocks(results, level=2)[1:], out)

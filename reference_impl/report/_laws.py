@@ -10,7 +10,16 @@ import math
 
 import numpy as np
 
-from reference_impl.report._blocks import IMG, H, P, T, _num
+from reference_impl.report._blocks import IMG, UL, H, P, T, _num
+from reference_impl.studies.laws import (
+    E_CAL,
+    HERTZ,
+    SPEEDS,
+    V_CAL,
+    calibrated_laws,
+    restitution_curves,
+    schwager_poeschel,
+)
 
 __all__ = ["run_laws", "laws_figure", "laws_blocks", "FIGURE"]
 
@@ -19,15 +28,6 @@ FIGURE = "damping_laws.png"
 
 def run_laws(quick: bool = False) -> dict:
     """Curves at both ends, drift per law and the Schwager-Poeschel comparison (JSON-safe)."""
-    from reference_impl.studies.laws import (
-        E_CAL,
-        HERTZ,
-        SPEEDS,
-        V_CAL,
-        calibrated_laws,
-        restitution_curves,
-        schwager_poeschel,
-    )
 
     speeds = SPEEDS[::5] if quick else SPEEDS
     res = restitution_curves(speeds)
@@ -207,6 +207,4 @@ def laws_blocks(r) -> list:
 
 
 def UL_(items):
-    from reference_impl.report._blocks import UL
-
     return UL(items)

@@ -20,6 +20,7 @@ from reference_impl.report._laws import laws_blocks
 from reference_impl.report._render_adapters import _adapters
 from reference_impl.report._render_sec6 import _dtmap
 from reference_impl.report._steps import resolution_blocks
+from reference_impl.report._wp import SUMMARY_RTOL, family_summary
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -254,7 +255,6 @@ def _wp(r) -> list:
         ),
         UL([f"{k}: {v}" for k, v in scenes.items()]),
     ]
-    from reference_impl.report._wp import SUMMARY_RTOL, family_summary
 
     fam = family_summary(r["work_precision"])
     blocks.append(

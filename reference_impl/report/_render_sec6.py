@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
+from reference_impl.claims.sec6_dt_safe_bound import kinds_below
 from reference_impl.report._blocks import DETAILS, IMG, H, P, T, _num
+from reference_impl.report._dtmap import describe_recommendation
+from reference_impl.stability.search import SearchGrid
 
 
 def _dtmap(r) -> list:
-    from reference_impl.claims.sec6_dt_safe_bound import kinds_below
-    from reference_impl.report._dtmap import describe_recommendation
-
     rows = r["dt_crit_map"]
     by_scene = {}
     for x in rows:
@@ -129,8 +129,6 @@ def _dtmap(r) -> list:
 
 
 def _res() -> float:
-    from reference_impl.stability.search import SearchGrid
-
     return SearchGrid().resolution
 
 

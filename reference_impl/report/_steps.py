@@ -22,7 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw
+from reference_impl.bench.measure import exact_reference, measure
+from reference_impl.bench.worker import make_executor
+from reference_impl.exact.solve import solve_impact
 from reference_impl.report._blocks import IMG, H, P, T
+from reference_impl.scenes import load_scene
 
 __all__ = ["FIT_FROM", "SCENES", "STEPS", "resolution_blocks", "resolution_study"]
 
@@ -51,11 +56,6 @@ def _order(ns, errs) -> float | None:
 
 def _one_code(spec: str, timeout: float = 120.0) -> dict:
     """Every variant of ``spec`` on every scene of `SCENES` it runs, at every N of `STEPS`."""
-    from reference_impl.adapters.base import AdapterScene, ImplementedLaw
-    from reference_impl.bench.measure import exact_reference, measure
-    from reference_impl.bench.worker import make_executor
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.scenes import load_scene
 
     executor = make_executor(spec)
     out: dict = {"adapter": spec, "v0": V0, "variants": []}
