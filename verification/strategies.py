@@ -228,3 +228,99 @@ def far_apart_sum_terms(draw):
 
 
 __all__ += ["far_apart_sum_terms"]
+
+
+# -- bench scenes (the gate's two verdicts, verification/test_bench_verdicts.py) ------
+# Damping ratios of a scene whose asked restitution a correct code delivers within the
+# delivery tolerance (2 %) at fine steps: up to 0.45 (e >= 0.2); above, e falls to 0.004
+# at zeta = 0.87, where an absolute error of O((omega dt)^2) v0 is a large relative one.
+_DELIVERABLE_ZETA = 0.45
+
+
+@st.composite
+def bench_scenes(draw, zeta_max: float = _DELIVERABLE_ZETA):
+    """An impact scene of the power family (dict of the scene schema): k, p in [1, 3], a
+    mass, two speeds four decades apart, universal damping zeta = 0 or 0.01-zeta_max."""
+    v_lo = draw(log_uniform(1e-3, 1e-2))
+    zeta = draw(st.one_of(st.just(0.0), st.floats(0.01, zeta_max)))
+    return {
+        "name": "generated",
+        "mass": draw(log_uniform(1e-4, 1.0)),
+        "velocities": [v_lo, v_lo * 1e4],
+        "kind": "impact",
+        "potential": {
+            "family": "power",
+            "k": draw(log_uniform(1e4, 1e10)),
+            "p": draw(st.floats(1.0, 3.0)),
+        },  # fmt: skip
+        "damping": {"law": "universal", "zeta": zeta},
+    }
+
+
+__all__ += ["bench_scenes"]
+
+# -- general-law edges (issue 29): the declared domain of the laws with closed forms ------
+
+# Damping ratios of the linear oscillator: the whole declared range 1e-9..1000, with extra
+# weight on the band 0.99..0.999999 below critical (returns through overlaps far below any
+# float64 tolerance) and just above it.
+LAW_ZETA_RANGE = (1e-9, 1e3)
+
+
+def law_zetas() -> st.SearchStrategy[float]:
+    return st.one_of(
+        log_uniform(*LAW_ZETA_RANGE),
+        st.floats(0.99, 0.999999),
+        st.floats(1.0, 1.001),
+        st.floats(0.45, 0.55),  # the peak force moves off t = 0 at zeta = 1/2
+    )
+
+
+def law_stiffnesses() -> st.SearchStrategy[float]:
+    """Spring constants over the declared 1e-300..1e300 (N/m^p)."""
+    return log_uniform(1e-300, 1e300)
+
+
+def law_speeds() -> st.SearchStrategy[float]:
+    """Impact speeds over the declared 1e-6..1e3 m/s."""
+    return log_uniform(1e-6, 1e3)
+
+
+@st.composite
+def linear_oscillator_cases(draw):
+    """(k, m, v0, zeta, law table) of a constant C on Hooke's spring, C = 2 zeta sqrt(m k),
+    given as each law that reduces to it (linear, power of degree 0, polynomial [c0],
+    viscoelastic A = C / k, universal zeta)."""
+    import math
+
+    k, m, v0 = draw(law_stiffnesses()), draw(masses()), draw(law_speeds())
+    zeta = draw(law_zetas())
+    c = 2.0 * zeta * math.sqrt(m) * math.sqrt(k)
+    form = draw(st.sampled_from(["linear", "power", "polynomial", "viscoelastic", "universal"]))
+    law = {
+        "linear": {"law": "linear", "c": c},
+        "power": {"law": "power", "c": c, "exponent": 0.0},
+        "polynomial": {"law": "polynomial", "c": [c]},
+        "viscoelastic": {"law": "viscoelastic", "A": c / k},
+        "universal": {"law": "universal", "zeta": zeta},
+    }[form]
+    return k, m, v0, law
+
+
+@st.composite
+def hunt_crossley_cases(draw):
+    """(k, p, m, v0, alpha) with x = alpha v0 over the declared 1e-8..1e6."""
+    p = draw(st.sampled_from([1.0, 1.5, 2.0, 3.0]))
+    k, m, v0 = draw(law_stiffnesses()), draw(masses()), draw(law_speeds())
+    x = draw(log_uniform(1e-8, 1e6))
+    return k, p, m, v0, x / v0
+
+
+__all__ += [
+    "LAW_ZETA_RANGE",
+    "law_zetas",
+    "law_stiffnesses",
+    "law_speeds",
+    "linear_oscillator_cases",
+    "hunt_crossley_cases",
+]

@@ -5,9 +5,9 @@ tolerances (reference_impl/bench/tolerances.toml), so that widening a tolerance 
 a wrong code passes fails `test_wrong_codes_fail_on_their_fault`:
 
 * correct codes (the suite's reference adapter, a velocity Verlet, and the C example
-  docs/examples/power_verlet.c) pass every metric on every generated scene
-  (families, exponents 1-3, zeta 0-0.9, speeds four decades apart, impact and
-  two-walls);
+  docs/examples/power_verlet.c) pass every implementation metric on every generated
+  scene (families, exponents 1-3, zeta 0-0.9, speeds four decades apart, impact and
+  two-walls); delivery at fine steps: verification/test_bench_verdicts.py;
 * wrong codes (verification/_wrong_codes.py) fail on the metric that names their
   fault, by a margin.
 
@@ -102,8 +102,9 @@ def gate_scenes(draw, families=("power", "sphere", "ellipsoid", "sum"), kinds=("
 
 
 def test_a_damped_two_walls_scene_measures_nothing_and_is_not_a_pass():
-    """Found by a generated scene: every metric skips a damped two-walls scene (energy drift
-    needs an undamped one), so the gate says "measured nothing" (exit 1), never a pass."""
+    """Found by a generated scene: no metric applies to a damped two-walls scene (energy
+    drift needs an undamped one; every other metric is an impact's): all are "n/a" (issue
+    28: not "skipped"), so the gate says "measured nothing" (exit 1), never a pass."""
     scene = scene_from_dict(
         {"name": "damped-walls", "mass": 0.01, "velocities": [0.5], "kind": "two-walls",
          "potential": {"family": "power", "k": 1e6, "p": 1.5}, "gap": 0.01,
@@ -112,9 +113,9 @@ def test_a_damped_two_walls_scene_measures_nothing_and_is_not_a_pass():
     result = run_bench(ReferenceAdapter(), [scene])
     statuses = {m.metric: m.status for m in result.metrics}
     assert_true(
-        set(statuses.values()) == {"skip"} and result.exit_status(gate=True) == 1,
+        set(statuses.values()) == {"n/a"} and result.exit_status(gate=True) == 1,
         got=f"{statuses}, exit {result.exit_status(gate=True)}",
-        should="every metric skipped and exit 1",
+        should="every metric n/a and exit 1",
         claim="bench",
         call="run_bench(reference, damped two-walls)",
     )
@@ -124,14 +125,19 @@ def _verdicts(result) -> dict:
     return {m.metric: m for m in result.metrics}
 
 
-def _assert_gate_passes(result, scene):
-    bad = [m for m in result.metrics if m.status in ("fail", "error")]
-    measured = [m for m in result.metrics if m.status == "pass"]
+def _assert_gate_passes(result, scene, gate: str = "implementation"):
+    """No metric of ``gate`` fails. A correct code *implements* its law at every zeta up to
+    0.9 at the default step; whether it *delivers* the asked e within the user's fixed
+    tolerance there depends on the step (zeta = 0.87, e = 0.004: Verlet is 25 % off at
+    t_c/200), which verification/test_bench_verdicts.py checks at fine steps."""
+    mine = result.gated(gate)
+    bad = [m for m in mine if m.status in ("fail", "error")]
+    measured = [m for m in mine if m.status == "pass"]
     assert not bad and measured, (
         f"got {[(m.metric, m.status, m.explanation) for m in bad]}, should be no failure "
         f"[correct code {result.adapter}, scene {scene.to_dict()}]"
     )
-    assert result.exit_status(gate=True) == 0
+    assert result.exit_status(gate) == 0
 
 
 @_FEW
@@ -204,7 +210,7 @@ def test_wrong_codes_fail_on_their_fault(code, data):
         scene = data.draw(gate_scenes(families=("power",)))
         result = run_bench(wrong.FlippedSign(), [scene])
         for m in result.metrics:
-            if m.status != "skip":
+            if m.status not in ("skip", "n/a"):
                 assert m.status == "fail" and "sign convention" in m.explanation, (
                     f"got {m.status} ({m.explanation}), should be a sign-convention "
                     f"failure [{m.metric}]"

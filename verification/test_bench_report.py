@@ -89,9 +89,13 @@ def test_piped_scorecard_is_full_width_plain_text():
 def test_summary_first_with_failing_metrics_measured_against_expected():
     lines = _piped(_result()).splitlines()
     assert lines[0] == "hcv bench lammps: 1 pass, 1 fail, 1 skipped"
-    assert lines[1].strip() == f"{LONG}: 1 pass, 1 fail, 1 skipped"
+    assert lines[1].strip() == (
+        f"{LONG}: 1 pass, 1 fail, 1 skipped; implementation pass, delivery FAIL"
+    )
     fail = lines[2].strip()
-    assert fail.startswith("FAIL hertz-damped / restitution_asked: measured 0.7, expected 0.7292")
+    assert fail.startswith(
+        "FAIL hertz-damped / restitution_asked (delivery): measured 0.7, expected 0.7292"
+    )
     assert "at v0 = 5 m/s" in fail and "tolerance rtol 0.01" in fail
     header = next(i for i, line in enumerate(lines) if line.startswith("adapter"))
     assert header > 2  # the details come after the summary
@@ -101,15 +105,16 @@ def test_columns_measured_reference_error_tolerance():
     res = _result()
     lines = scorecard_text(res).splitlines()
     header = next(line for line in lines if line.startswith("adapter"))
-    assert header.split() == ["adapter", "scene", "metric", "v0", "measured", "reference",
-                              "error", "tolerance", "result"]  # fmt: skip
+    assert header.split() == ["adapter", "scene", "verdict", "metric", "v0", "measured",
+                              "expected", "error", "model", "err", "step", "err", "ratio",
+                              "order", "tolerance", "result"]  # fmt: skip
     row = next(line for line in lines if "restitution_asked" in line and "FAIL" in line[-4:])
-    assert row.split()[3:7] == ["5", "0.7", "0.7292", "0.04"]
+    assert row.split()[2:8] == ["delivery", "restitution_asked", "5", "0.7", "0.7292", "0.04"]
     cols = metric_columns(res, res.metrics[0])
     assert (cols["measured"], cols["reference"], cols["v0"]) == (0.70, 0.7292, 5.0)
     md = scorecard_markdown(res)
-    assert "| measured | reference | error | tolerance |" in md
-    assert "| 0.7 | 0.7292 | 0.04 | rtol 0.01 | fail |" in md
+    assert "| measured | expected | error | model err | step err | ratio | order |" in md
+    assert "| 0.7 | 0.7292 | 0.04 |  |  |  |  | rtol 0.01 | fail |" in md
 
 
 def test_terminal_scorecard_is_a_table_with_the_same_columns():
@@ -118,7 +123,7 @@ def test_terminal_scorecard_is_a_table_with_the_same_columns():
     buf = io.StringIO()
     render_scorecard(_result(), console=Console(file=buf, force_terminal=True, width=200))
     out = buf.getvalue()
-    for col in ("measured", "reference", "error", "tolerance"):
+    for col in ("verdict", "measured", "expected", "error", "tolerance"):
         assert col in out
     assert out.index("hcv bench lammps") < out.index("measured")
 
@@ -277,7 +282,9 @@ def test_error_status_in_every_scorecard_output():
     res = _result_with_error()
     lines = _piped(res).splitlines()
     assert lines[0] == "hcv bench lammps: 1 pass, 0 fail, 1 skipped, 1 ERROR (ours)"
-    assert lines[1].strip() == f"{LONG}: 1 pass, 0 fail, 1 skipped, 1 ERROR (ours)"
+    assert lines[1].strip() == (
+        f"{LONG}: 1 pass, 0 fail, 1 skipped, 1 ERROR (ours); implementation ERROR (ours)"
+    )
     assert lines[2].strip() == f"ERROR (ours) hertz-damped / restitution_exact: {OURS}"
     row = next(line for line in lines if "restitution_exact" in line and "rtol" in line)
     assert row.endswith("ERROR (ours)")
@@ -362,4 +369,96 @@ def test_protocol_documents_u_of_every_family_with_units():
     assert not no_units, (
         f"got rows without units for {no_units}, should give the keys' SI units "
         "[issue 10 point 3, docs/adapter-protocol.md]"
+    )
+
+
+# -- issue 28: a failed run's reason in its summary line, JUnit measured/expected, n/a -----
+def _run_failed() -> BenchResult:
+    """restitution_asked failed because the run failed: nothing was measured."""
+    rec = SpeedRecord(v0=0.5, dt=1e-7, error="adapter crashed (exit 139)")
+    ctx = SceneContext("code", "hertz-damped", "impact", True, speeds=[rec])
+    why = "run failed at v0 = 0.5 m/s: adapter crashed (exit 139)"
+    m = MetricResult("code", "hertz-damped", "restitution_asked", "fail", tolerance="rtol 0.02",
+                     explanation=why)  # fmt: skip
+    return BenchResult(adapter="code", metrics=[m], contexts=[ctx])
+
+
+def test_a_failed_runs_summary_line_says_why():
+    lines = _piped(_run_failed()).splitlines()
+    fail = next(line.strip() for line in lines if line.strip().startswith("FAIL hertz-damped"))
+    assert_true(
+        "adapter crashed (exit 139)" in fail and "measured -" not in fail,
+        got=fail,
+        should="the reason in the FAIL line, no 'measured -, expected -'",
+        claim=CLAIM,
+        call="scorecard_text(run failed)",
+    )
+
+
+def test_junit_failure_text_shows_measured_and_expected():
+    from reference_impl.bench.report import junit_tree
+
+    res = _result()
+    res.metrics[0].measured, res.metrics[0].expected, res.metrics[0].at_v0 = 0.70, 0.7292, 5.0
+    res.metrics[0].error, res.metrics[0].rule = 0.04004, "|e - asked| / asked <= rtol"
+    fail = junit_tree(res).getroot().find(".//failure")
+    assert_true(
+        "measured: 0.7, expected: 0.7292 at v0 = 5 m/s" in fail.text and "value: " not in fail.text,
+        got=fail.text,
+        should="measured and expected in the failure text (not the error against 0)",
+        claim=CLAIM,
+        call="junit_tree",
+    )
+
+
+def test_metrics_that_do_not_apply_are_na_not_skipped():
+    from reference_impl.bench.metrics import METRICS
+    from reference_impl.bench.tolerances import default_tolerances
+
+    ctx = SceneContext("code", "hertz", "impact", False, speeds=[SpeedRecord(v0=1.0)])
+    by = {m.name: m.evaluate(ctx, default_tolerances()) for m in METRICS}
+    got = {k: v.status for k, v in by.items() if k in ("energy_drift", "restitution_v0_spread")}
+    assert_true(
+        got == {"energy_drift": "n/a", "restitution_v0_spread": "n/a"},
+        got=got,
+        should="n/a (two-walls metric; needs two speeds)",
+        claim=CLAIM,
+        call="Metric.evaluate(impact scene, one speed)",
+    )
+
+
+def test_a_failed_row_names_the_same_v0_as_its_fail_line():
+    """Issue 26: with two codes the table reads rows at a common speed (the worst over the
+    codes: B's 0.5 m/s here), but a failed row keeps its own worst speed (A's 5 m/s), the
+    one its FAIL line names."""
+    rows = {
+        "A": [(0.5, 0.70, 0.0101), (5.0, 0.65, 0.11)],  # fails, worst at 5 m/s
+        "B": [(0.5, 0.60, 0.18), (5.0, 0.729, 0.0003)],  # fails worse, at 0.5 m/s
+    }
+    metrics, ctxs = [], []
+    for code, per in rows.items():
+        worst = max(per, key=lambda r: r[2])
+        status = "fail" if worst[2] > 0.1 else "pass"
+        metrics.append(
+            MetricResult(
+                code, "s", "restitution_asked", status, value=worst[2], tolerance="rtol 0.02",
+                explanation="off" if status == "fail" else "", error=worst[2], limit=0.1,
+                at_v0=worst[0], measured=worst[1], expected=0.7292, rule="rule",
+                per_v0=[{"v0": v, "measured": g, "expected": 0.7292, "error": e, "limit": 0.1}
+                        for v, g, e in per],
+            )
+        )  # fmt: skip
+        ctxs.append(SceneContext(code, "s", "impact", True))
+    text = scorecard_text(BenchResult(adapter="x", metrics=metrics, contexts=ctxs))
+    fail_line = next(
+        line for line in text.splitlines() if line.strip().startswith("FAIL s / restitution_asked")
+        and "0.65" in line
+    )  # fmt: skip
+    row = next(line for line in text.splitlines() if line.startswith("A ") and "FAIL" in line)
+    assert_true(
+        "at v0 = 5 m/s" in fail_line and row.split()[4] == "5",
+        got=f"{fail_line!r} / {row!r}",
+        should="both at v0 = 5",
+        claim=CLAIM,
+        call="scorecard_text(two codes)",
     )

@@ -154,3 +154,17 @@ def test_a_bracket_whose_search_hits_a_failed_run_is_named():
         claim=CLAIM,
         call="calibrate(FailsNearTheRoot)",
     )  # fmt: skip
+
+
+def test_a_spec_written_with_bare_values_takes_an_option():
+    """``mujoco[timeconst,constant,Euler]`` (as the scorecard prints a spec) gets the calibrated
+    option added with every value under its key (was: AttributeError in the registry)."""
+    pytest.importorskip("mujoco", reason="pip install -e '.[mujoco]'")
+    from reference_impl.adapters.registry import get_adapter
+    from reference_impl.bench._calibrate_options import spec_with_options
+
+    spec = spec_with_options("mujoco[timeconst,constant,Euler]", {"dampratio": 0.5})
+    for value in ("timeconst", "constant", "Euler", "dampratio=0.5"):
+        assert value in spec, f"got {spec!r}, should name {value!r} [calibrate, spec_with_options]"
+    adapter = get_adapter(spec)
+    assert adapter is not None

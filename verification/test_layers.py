@@ -40,8 +40,25 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         {"bench"},
         {"sweep"},
         {"report"},
+        {"campaign"},
         {"cli", "pytest_plugin"},
     )
+)
+
+
+# The report renders a results dict and computes nothing (issue 30): besides itself it may
+# import only these (the claims for their quotes, corrected texts and row classifiers,
+# the scorecard formatting of bench.report, the adapter-spec check of report._files, and
+# the bottom helpers). The studies, the solvers, the map and the codes run in `campaign`.
+RENDER_ONLY = (
+    "reference_impl.report",
+    "reference_impl.claims",
+    "reference_impl.bench.report",
+    "reference_impl.adapters.registry",
+    "reference_impl._format",
+    "reference_impl.errors",
+    "reference_impl._userfiles",
+    "reference_impl._atomic",
 )
 
 
@@ -172,7 +189,9 @@ def violations(root: Path, pkg: str = PKG, layers=LAYERS) -> list[str]:
     room_edges = [
         (_room(a, pkg), _room(b, pkg), 0)
         for a, b, _ in edges
-        if _room(a, pkg) and _room(b, pkg) and _room(a, pkg) != _room(b, pkg)
+        if _room(a, pkg)
+        and _room(b, pkg)
+        and _room(a, pkg) != _room(b, pkg)
         and not a.endswith(".__main__")
     ]
     for comp in _cycles(room_edges):
@@ -185,12 +204,46 @@ def test_every_room_has_a_layer():
     rooms = {r for r in rooms if r not in {"__init__", "__main__", "__pycache__"}}
     rooms = {r for r in rooms if (ROOT / r).is_dir() or (ROOT / f"{r}.py").is_file()}
     known = set().union(*LAYERS)
-    assert rooms <= known, f"got rooms {sorted(rooms - known)} outside every layer, should be in one"
+    assert rooms <= known, (
+        f"got rooms {sorted(rooms - known)} outside every layer, should be in one"
+    )
 
 
 def test_imports_run_only_downward_and_never_in_a_circle():
     problems = violations(ROOT)
     assert not problems, "got upward imports or cycles, should be none:\n" + "\n".join(problems)
+
+
+def render_violations(root: Path, pkg: str = PKG, room: str = "report", allowed=RENDER_ONLY):
+    """Imports of ``pkg.room`` (deferred ones too) into anything outside ``allowed``."""
+
+    def inside(name, prefixes):
+        return any(name == p or name.startswith(p + ".") for p in prefixes)
+
+    return [
+        f"{a}:{line} imports {b}"
+        for a, b, line in import_edges(root, pkg)
+        if inside(a, [f"{pkg}.{room}"]) and not inside(b, allowed)
+    ]
+
+
+def test_the_report_renders_and_imports_nothing_that_computes():
+    problems = render_violations(ROOT)
+    assert not problems, (
+        "got imports of computing modules from reference_impl/report, should be none "
+        "(move the computation to reference_impl/studies or reference_impl/campaign):\n"
+        + "\n".join(problems)
+    )
+
+
+def test_planted_computing_import_in_the_report_is_caught(tmp_path):
+    root = tmp_path / "pkg"
+    _write(root, "__init__.py", "")
+    _write(root, "report/__init__.py", "def f():\n    from pkg.exact import solve\n")
+    _write(root, "exact/__init__.py", "")
+    _write(root, "exact/solve.py", "")
+    problems = render_violations(root, "pkg", allowed=("pkg.report",))
+    assert problems == ["pkg.report:2 imports pkg.exact.solve"], f"got {problems}"
 
 
 def _write(root: Path, rel: str, text: str) -> None:

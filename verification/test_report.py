@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -21,8 +22,8 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
+from reference_impl.campaign import build_report  # noqa: E402
 from reference_impl.claims import VERDICTS  # noqa: E402
-from reference_impl.report import build_report  # noqa: E402
 from reference_impl.studies.paper import TABLE1_PRINTED, table1_cells  # noqa: E402
 from verification.assertions import assert_true  # noqa: E402
 
@@ -347,15 +348,21 @@ def test_html_is_well_formed_and_self_contained(report):
         claim="report",
         call="index.html",
     )
+    # What the page loads must be embedded; a hyperlink loads nothing: the erratum links each
+    # claim's independent script (repro/NAME.py beside the committed report), nothing else.
     external = [
         u
         for u in chk.urls
-        if not (u[2].startswith("data:image/png;base64,") or u[2].startswith("#"))
+        if not (
+            u[2].startswith("data:image/png;base64,")
+            or u[2].startswith("#")
+            or (u[:2] == ("a", "href") and re.fullmatch(r"repro/\w+\.py", u[2]))
+        )
     ]
     assert_true(
         not external,
         got=f"external resources {external[:5]}",
-        should="only data: URIs and in-page anchors",
+        should="only data: URIs, in-page anchors and links to the repro/ scripts",
         claim="report",
         call="index.html",
     )
@@ -475,3 +482,18 @@ def test_report_into_an_uncreatable_directory_is_one_line_exit_2(tmp_path):
     )  # fmt: skip
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "/proc/x" in r.stderr, r.stderr
+
+
+def test_results_json_is_of_the_documented_schema(report):
+    """results.json names its schema and reads back through the renderer's check (issue 30)."""
+    from reference_impl.report import SCHEMA, read_results
+
+    out, results, _ = report
+    back = read_results(out / "results.json")
+    assert_true(
+        back["schema"] == SCHEMA and back == json.loads(json.dumps(results)),
+        got=f"schema {back.get('schema')!r}",
+        should=f"{SCHEMA!r}, identical to the returned dict",
+        claim="report",
+        call=CALL,
+    )

@@ -20,16 +20,16 @@ from pathlib import Path
 
 import pytest
 
-import reference_impl.report as report
+import reference_impl.campaign as report
 from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
-from reference_impl.report import _environment, build_report
+from reference_impl.campaign import _environment, build_report
 from reference_impl.report._files import MANIFEST, _move_in
 
 CALL = "hcv report --out DIR"
 
 
-def _fake_build(out, quick, progress, adapters, env, sec6, workers=0, repro=None):
+def _fake_build(out, quick, progress, adapters, env, workers=0, carried=None, repro=None):
     """Stand-in for the measurements: the report's files, one figure."""
     (out / "figures").mkdir()
     (out / "figures" / "fig1.png").write_bytes(b"new")

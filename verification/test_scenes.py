@@ -351,11 +351,19 @@ def test_bad_top_level_and_potential_values(old, new, needle):
         ("zeta = 0.1", "damping.law is 'none'"),
         ("law = 'none'\nrestitution = 0.9", "damping.law is 'none'"),
         ("law = 'tsuji'", "damping.law = 'tsuji' is not one of"),
+        # issue 26 item 7: the underscore spelling is named, not just refused
+        ("law = 'hunt_crossley'\nalpha = 0.1", "(did you mean 'hunt-crossley'?)"),
         ("law = 'universal'\nzeta = 0.1\nzeta_ = 1", "unknown key 'damping.zeta_'"),
     ],
 )
 def test_bad_damping(damping, needle):
     _refused(_BASE + "[damping]\n" + damping + "\n", needle)
+
+
+def test_viscoelastic_on_a_force_exponent_below_1_names_the_scene():
+    """Issue 26 item 7: refused when the scene is read, with the "scene FILE:" prefix."""
+    text = _BASE.replace("p = 1.5", "p = 0.5") + "[damping]\nlaw = 'viscoelastic'\nA = 1e-5\n"
+    _refused(text, "damping law 'viscoelastic' needs U'' finite at contact")
 
 
 def test_damping_not_a_table():

@@ -26,8 +26,11 @@ def test_cases_per_task():
 
 @needs_dask
 def test_grouped_cases_one_thread_each_and_a_dead_worker_fails_one_case():
+    import os
+
     import dask
 
+    before = os.environ.get("NUMBA_NUM_THREADS")
     # One death is enough to give up on a task (the default retries it on 3 workers).
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         with open_client(workers=2) as client:
@@ -42,6 +45,17 @@ def test_grouped_cases_one_thread_each_and_a_dead_worker_fails_one_case():
         should="one numba and one BLAS thread in each of the 2 workers",
         claim=CLAIM,
         call="open_client(workers=2).run",
+    )
+    # The workers' one numba thread must not reach this process: numba re-reads its config
+    # on every compilation, and this process's parallel kernels, once launched with 1
+    # thread, then fail to compile anything (distributed writes its pre-spawn environment
+    # into the client's os.environ).
+    assert_true(
+        os.environ.get("NUMBA_NUM_THREADS") == before,
+        got=repr(os.environ.get("NUMBA_NUM_THREADS")),
+        should=f"{before!r}, as before the cluster started",
+        claim=CLAIM,
+        call="open_client(workers=2)",
     )
     values = [o.value for o in outs]
     want = [x * x if x not in (3, 5) else None for x in range(12)]

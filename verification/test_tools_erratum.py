@@ -31,20 +31,20 @@ def results():
     return json.loads(RESULTS.read_text())
 
 
-@pytest.mark.parametrize("cid", sorted(_erratum.PRINTED))
+@pytest.mark.parametrize("cid", sorted(_erratum.printed()))
 def test_quote_is_in_the_paper_with_its_equation_number(cid):
     if not PAPER.is_file():
         pytest.skip("the paper's .tex is not beside this checkout")
     tex = _norm(PAPER.read_text())
-    where, eq, quote = _erratum.PRINTED[cid]
+    where, eq, quote = _erratum.printed()[cid]
     pos = tex.find(_norm(quote))
     assert_true(pos >= 0, got=f"quote {quote!r} not found", should="verbatim in the .tex",
-                claim=cid, call="_erratum.PRINTED")
+                claim=cid, call="claims.<module>.PRINTED")
     if eq is not None:
         opened = tex[:pos].count(r"\begin{equation}")
         closed = tex[:pos].count(r"\end{equation}")
         assert_true(opened == eq and closed == eq - 1, got=f"inside equation {opened} (closed {closed})",
-                    should=f"inside equation ({eq})", claim=cid, call="_erratum.PRINTED")
+                    should=f"inside equation ({eq})", claim=cid, call="claims.<module>.PRINTED")
 
 
 def test_every_claim_has_an_entry_with_its_script(results):
@@ -106,3 +106,19 @@ def test_committed_erratum_is_generated_from_committed_results(results):
                 got="reports/erratum.md differs from the generator's output",
                 should="python -m reference_impl.report._erratum reports/results.json "
                 "-o reports/erratum.md", claim="erratum", call="reports/erratum.md")
+
+
+def test_each_claim_not_verified_holds_its_quote_and_correction(results):
+    """Issue 30: a claim's printed statement and corrected text live in its own module
+    (``PRINTED``, ``corrected()``); the erratum only formats them."""
+    from reference_impl.claims import get_claim
+
+    for c in results["claims"]:
+        if c["verdict"] == "verified":
+            continue
+        claim = get_claim(c["id"])
+        fixed = claim.corrected(c["measured"], results)
+        assert_true(claim.printed is not None and fixed is not None and all(fixed),
+                    got=f"PRINTED {claim.printed!r}, corrected() {fixed!r}",
+                    should="both defined in the claim's module", claim=c["id"],
+                    call=f"claims.{claim.module}.PRINTED / corrected()")

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-import reference_impl.report as report
+import reference_impl.campaign as report
 from reference_impl import cli
+from reference_impl.campaign import _environment, build_report
 from reference_impl.errors import HCVInputError
-from reference_impl.report import _environment, build_report
 from reference_impl.report._files import MANIFEST
 from reference_impl.report.readme_table import END, START, readme_block, rewrite_readme
 from verification.assertions import assert_true
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CALL = "build_report"
 
 
-def _fake_build(out, quick, progress, adapters, env, sec6, workers=0, repro=None):
+def _fake_build(out, quick, progress, adapters, env, workers=0, carried=None, repro=None):
     """Stand-in for the measurements: writes the report's files into ``out``."""
     (out / "figures").mkdir()
     (out / "figures" / "fig1.png").write_bytes(b"new")
@@ -493,7 +493,7 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/sweep.json",  # python -m benchmarks.bench_sweep
         "bench/verlet.json",  # python -m benchmarks.bench_verlet
         "bench/startup.json",  # python -m benchmarks.bench_startup
-        "bench/mujoco_calibrate.json",  # python -m reference_impl.report.mujoco_table
+        "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
     }
     stray = [
         f

@@ -25,10 +25,10 @@ from pathlib import Path
 
 import pytest
 
-import reference_impl.report as report
+import reference_impl.campaign as report
+from reference_impl.campaign import _environment, build_report
 from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
-from reference_impl.report import _environment, build_report
 from reference_impl.report._files import MANIFEST
 from verification._sweeps import needs_dask
 
@@ -53,7 +53,7 @@ def _snapshot(d: Path) -> dict[str, bytes]:
 # ----------------------------------------------------------------------------
 # hcv report --out DIR
 # ----------------------------------------------------------------------------
-def _fake_build(out, quick, progress, adapters, env, sec6, workers=0, repro=None):
+def _fake_build(out, quick, progress, adapters, env, workers=0, carried=None, repro=None):
     """Stand-in for the measurements: the report's files, two figures."""
     (out / "figures").mkdir()
     for name in ("fig1.png", "dt_crit_map.png"):

@@ -14,16 +14,14 @@ import math
 import pytest
 
 from reference_impl.potentials import FAMILIES
-from reference_impl.report._wp import (
+from reference_impl.report._wp import METRICS, wp_figures, wp_overview_figure
+from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
+from reference_impl.studies.wp_summary import (
     FAMILY_NAMES,
-    METRICS,
     QUICK_SKIP,
     family_summary,
     scene_families,
-    wp_figures,
-    wp_overview_figure,
 )
-from reference_impl.studies.workprecision import default_scenes, family_scenes, work_precision
 from verification.assertions import assert_less, assert_true
 
 CALL = "work_precision(quick=True)"
@@ -134,7 +132,7 @@ def test_family_summary_and_overview(study, tmp_path):
         call="family_summary",
     )
     pytest.importorskip("matplotlib")
-    name, caption = wp_overview_figure(study, tmp_path)
+    name, caption = wp_overview_figure(study, tmp_path, scene_families())
     assert_true(
         (tmp_path / name).stat().st_size > 10_000 and "per potential family" in caption,
         got=f"{name} ({(tmp_path / name).stat().st_size} bytes)",
@@ -156,8 +154,7 @@ def test_a_users_ode_solver_joins_the_study_by_class(study):
     ref = study[(study.scene == sc.name) & (study.method == "RK45")]
     got = mine[mine.method == "MyRK45"]
     assert_true(
-        len(got) == len(ref) > 0
-        and list(got.err_contact_time) == list(ref.err_contact_time),
+        len(got) == len(ref) > 0 and list(got.err_contact_time) == list(ref.err_contact_time),
         got=list(got.err_contact_time),
         should=list(ref.err_contact_time),
         claim=CLAIM,
@@ -195,8 +192,11 @@ def test_a_method_without_a_style_fails_the_plots(tmp_path):
     row = {"scene": "hertz-k1e9", "method": "MyRK45", "setting": "rtol=1e-06", "seconds": 1e-3}
     df = pd.DataFrame([{**row, **{col: 1e-6 for col, _ in METRICS}}])
     for name, plot in (
-        ("wp_overview_figure", lambda: wp_overview_figure(df, tmp_path)),
-        ("wp_figures", lambda: wp_figures(df, tmp_path, {"hertz-k1e9": "hertz-k1e9"})),
+        ("wp_overview_figure", lambda: wp_overview_figure(df, tmp_path, {"hertz-k1e9": "p"})),
+        (
+            "wp_figures",
+            lambda: wp_figures(df, tmp_path, {"hertz-k1e9": "hertz-k1e9"}, {"hertz-k1e9": "p"}),
+        ),
     ):
         with pytest.raises(ValueError, match="MyRK45"):
             plot()

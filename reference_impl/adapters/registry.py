@@ -54,6 +54,7 @@ __all__ = [
     "register",
     "registered",
     "resolve_class",
+    "resolved_spec",
 ]
 
 _REGISTRY: dict[str, str | type] = {
@@ -208,6 +209,15 @@ def resolve_class(target: str) -> type:
         f"unknown adapter {target!r}; registered: {', '.join(registered())}; "
         "or give package.module:Class or cmd:COMMAND"
     )
+
+
+def resolved_spec(spec: str) -> tuple[str, dict[str, Any]]:
+    """``(target, kwargs)`` of a spec with its bare values mapped to their keys
+    (``mujoco[timeconst,Euler]`` -> ``{"solref": "timeconst", "integrator": "Euler"}``)."""
+    target, kwargs = parse_spec(spec)
+    if _BARE in kwargs:
+        _resolve_bare(resolve_class(target), kwargs, spec)
+    return target, kwargs
 
 
 def get_adapter(spec):

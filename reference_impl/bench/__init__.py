@@ -4,9 +4,12 @@
 through the exact solution, evaluates the scorecard metrics
 (`reference_impl.bench.metrics`) against tolerances (`load_tolerances`, defaults
 in ``tolerances.toml``), and writes JSON and JUnit reports
-(`reference_impl.bench.report`). A metric is "pass", "fail", "skip" or "error"
-(the suite's own reference could not decide it: never the code's failure).
-``BenchResult.exit_status(gate=True)`` is 0 when every metric passes, 1 when one
+(`reference_impl.bench.report`). A metric is "pass", "fail", "skip", "error"
+(the suite's own reference could not decide it: never the code's failure) or "n/a"
+(it does not apply to the scene), and belongs to one of two verdicts: "implementation"
+(against the exact solution of the declared law) or "delivery" (against what the
+scene asks). ``BenchResult.exit_status(gate)`` (gate True or "both", "implementation",
+"delivery") is 0 when every metric it reads passes, 1 when one
 failed (or the run was interrupted), 3 when none failed but one is "error";
 usage and configuration errors raise `HCVInputError` (exit status 2).
 """

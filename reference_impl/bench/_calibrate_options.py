@@ -13,7 +13,7 @@ from __future__ import annotations
 import inspect
 import math
 
-from reference_impl.adapters.registry import parse_spec, resolve_class
+from reference_impl.adapters.registry import parse_spec, resolve_class, resolved_spec
 from reference_impl.errors import HCVInputError
 from reference_impl.theory.damping import RESTITUTION_ENDS
 
@@ -31,7 +31,9 @@ def spec_with_options(spec: str, options: dict) -> str:
     """``spec`` with constructor arguments added or replaced (``NAME[k=v,...]``, ``cmd[...]:``)."""
     if not options:
         return spec
-    target, kwargs = parse_spec(spec)
+    # Bare values (``mujoco[timeconst,Euler]``, as the scorecard prints a spec) are mapped
+    # to their keys first: the rewritten spec names every value by its key.
+    target, kwargs = resolved_spec(spec)
     for key, val in options.items():
         if not isinstance(key, str) or not key.isidentifier():
             raise HCVInputError(f"adapter option {key!r} is not a name")

@@ -14,8 +14,14 @@ __all__ = ["metric_columns"]  # the rest is private to the bench package
 
 # How the status "error" is shown: it is ours (the reference's), not the code's.
 _OURS = "ERROR (ours)"
-_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS}
-_UNITS = {"max_penetration": " m", "contact_time": " s", "dt_crit": " dt_safe"}
+_PLAIN_STATUS = {"pass": "pass", "fail": "FAIL", "skip": "skip", "error": _OURS, "n/a": "n/a"}
+_UNITS = {
+    "max_penetration": " m",
+    "contact_time": " s",
+    "contact_time_asked": " s",
+    "peak_force_asked": " N",
+    "dt_crit": " dt_safe",
+}
 
 
 def _fmt(v) -> str:
@@ -41,6 +47,8 @@ def _fmt_v(v, unit: str = "") -> str:
 # Metrics whose value is a relative error of one quantity, and that quantity's key.
 _RELATIVE = {
     "restitution_asked": "restitution",
+    "contact_time_asked": "contact_time",
+    "peak_force_asked": "max_force",
     "restitution_exact": "restitution",
     "max_penetration": "max_penetration",
     "contact_time": "contact_time",
@@ -60,7 +68,12 @@ def _worst_relative(result, m):
     worst = None
     for r in _records(result, m):
         meas = (r.measured or {}).get(key)
-        ref = r.asked_e if m.metric == "restitution_asked" else (r.exact or {}).get(key)
+        if m.metric == "restitution_asked":
+            ref = r.asked_e
+        elif m.metric.endswith("_asked"):
+            ref = (r.asked or {}).get(m.metric[: -len("_asked")])
+        else:
+            ref = (r.exact or {}).get(key)
         if not isinstance(meas, float) or not isinstance(ref, float) or not ref:
             continue
         err = abs(meas - ref) / abs(ref)
@@ -74,9 +87,12 @@ def metric_columns(result, m) -> dict:
 
     ``measured`` and ``reference`` are the compared quantities (e.g. the
     restitution and the asked restitution, at the worst speed ``v0``); ``error``
-    is what the tolerance bounds (a relative error, a spread, a ratio ...).
-    Attributes ``measured`` / ``expected`` of the metric result are used when the
-    metric provides them.
+    is what the tolerance bounds when it is an error (a relative error, a spread, a
+    difference); a ratio (``dt_crit``) and an order (``speed_error``) have their own
+    fields ``ratio`` and ``order``, never ``error``. Delivery metrics add the split of
+    their error, ``model_error`` and ``step_error``; ``verdict`` names the question a
+    metric answers ("implementation" or "delivery"). Attributes ``measured`` /
+    ``expected`` of the metric result are used when the metric provides them.
     """
     tol = m.tolerance
     out = {
@@ -88,17 +104,24 @@ def metric_columns(result, m) -> dict:
         "unit": _UNITS.get(m.metric, ""),
         "limit": getattr(m, "limit", None),
         "rule": getattr(m, "rule", ""),
+        "verdict": getattr(m, "verdict", "implementation"),
+        "model_error": getattr(m, "model_error", None),
+        "step_error": getattr(m, "step_error", None),
+        "ratio": getattr(m, "ratio", None),
+        "order": getattr(m, "order", None),
     }
+    if m.metric in ("dt_crit", "speed_error"):
+        out["error"] = None  # a ratio or an order: never in the error column
     if getattr(m, "rule", "") and m.status in ("pass", "fail"):
         # the metric says what it compared, at which speed, and the bound it applied
         out.update(measured=m.measured, reference=m.expected, error=m.error, v0=m.at_v0)
         return out
+    if m.status not in ("pass", "fail", "error"):  # skip, n/a: nothing was compared
+        out["error"] = None
+        return out
     if getattr(m, "measured", None) is not None:
         out["measured"] = m.measured
         out["reference"] = getattr(m, "expected", None)
-        return out
-    if m.status == "skip":
-        out["error"] = None
         return out
     if m.metric in _RELATIVE:
         out["measured"], out["reference"], out["v0"] = _worst_relative(result, m)
@@ -113,7 +136,7 @@ def metric_columns(result, m) -> dict:
     elif m.metric == "dt_crit":
         out["measured"], out["reference"] = m.value, m.reference
         if isinstance(m.value, float) and isinstance(m.reference, float) and m.reference:
-            out["error"] = m.value / m.reference if math.isfinite(m.reference) else math.nan
+            out["ratio"] = m.value / m.reference if math.isfinite(m.reference) else math.nan
     elif m.metric == "attractive_force":
         out["measured"], out["reference"] = m.value, m.reference
         if isinstance(m.value, float) and isinstance(m.reference, float):

@@ -67,11 +67,17 @@ def result_to_dict(result) -> dict:
                 "sustained": c.sustained,
             }
         )
+    verdicts = {
+        v: _overall(result.interrupted, {s: sum(m.status == s for m in result.gated(v))
+                                         for s in ("fail", "error")})
+        for v in ("implementation", "delivery")
+    }  # fmt: skip
     return _clean(
         {
             "schema": SCHEMA,
             "adapter": result.adapter,
             "status": _overall(result.interrupted, counts),
+            "verdicts": verdicts,
             "summary": counts,
             "seconds": result.seconds,
             "started": result.started,
@@ -98,10 +104,13 @@ def _overall(interrupted: bool, counts: dict) -> str:
 
 def _metric_dict(result, m) -> dict:
     """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
-    reference it is compared with), ``error`` (what the tolerance bounds) and ``at_v0``."""
+    reference it is compared with), ``error`` (what the tolerance bounds, when it is an
+    error), ``ratio`` / ``order`` (dt_crit / speed_error), ``model_error`` and
+    ``step_error`` (delivery metrics), ``verdict`` and ``at_v0``."""
     d = m.to_dict()
     c = metric_columns(result, m)
     d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])
+    d.update({k: c[k] for k in ("verdict", "model_error", "step_error", "ratio", "order")})
     d["unit"] = c["unit"].strip()
     return d
 

@@ -6,13 +6,25 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 
 from reference_impl._atomic import atomic_write
+from reference_impl.bench._cells import _fmt, _fmt_v, metric_columns
 
 __all__ = ["junit_tree", "write_junit"]
 
 
 def _details(result, m) -> str:
     """Per-speed details of one failed (or undecided) metric, for the JUnit text."""
-    lines = [m.explanation, f"tolerance: {m.tolerance}", f"value: {m.value!r}"]
+    c = metric_columns(result, m)
+    lines = [m.explanation, f"verdict: {c['verdict']}"]
+    if c["measured"] is not None or c["reference"] is not None:
+        at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
+        lines.append(
+            f"measured: {_fmt_v(c['measured'], c['unit']) or '-'}, expected: "
+            f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}"
+        )
+    for key in ("error", "model_error", "step_error", "ratio", "order"):
+        if c[key] is not None:
+            lines.append(f"{key.replace('_', ' ')}: {_fmt(c[key])}")
+    lines.append(f"tolerance: {m.tolerance or '-'}")
     for c in result.contexts:
         if c.variant == m.variant and c.scene == m.scene:
             for r in c.speeds:
@@ -37,7 +49,7 @@ def junit_tree(result) -> ET.ElementTree:
     for variant, items in by_variant.items():
         fails = sum(m.status == "fail" for m in items)
         errors = sum(m.status == "error" for m in items)
-        skips = sum(m.status == "skip" for m in items)
+        skips = sum(m.status in ("skip", "n/a") for m in items)
         suite = ET.SubElement(
             root,
             "testsuite",
@@ -61,11 +73,21 @@ def junit_tree(result) -> ET.ElementTree:
             elif m.status == "error":  # ours: the reference failed, not the code
                 el = ET.SubElement(case, "error", message=m.explanation, type="ReferenceError")
                 el.text = _details(result, m)
-            elif m.status == "skip":
-                ET.SubElement(case, "skipped", message=m.explanation)
+            elif m.status in ("skip", "n/a"):
+                ET.SubElement(case, "skipped", message=f"{m.status}: {m.explanation}")
             else:
+                c = metric_columns(result, m)
                 out = ET.SubElement(case, "system-out")
-                out.text = f"value {m.value!r}, reference {m.reference!r}, {m.tolerance}"
+                out.text = (
+                    f"{c['verdict']}: measured {_fmt_v(c['measured'], c['unit']) or '-'}, "
+                    f"expected {_fmt_v(c['reference'], c['unit']) or '-'}, "
+                    + ", ".join(
+                        f"{k.replace('_', ' ')} {_fmt(c[k])}"
+                        for k in ("error", "model_error", "step_error", "ratio", "order")
+                        if c[k] is not None
+                    )
+                    + f"; tolerance {m.tolerance or '-'}"
+                )
         totals["tests"] += len(items)
         totals["failures"] += fails
         totals["errors"] += errors

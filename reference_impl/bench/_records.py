@@ -12,9 +12,31 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from reference_impl.adapters.base import ImplementedLaw
-from reference_impl.bench.report import result_to_dict
+from reference_impl.bench._json import result_to_dict
 
-__all__ = ["EXIT_INTERNAL", "BenchResult", "MetricResult", "SceneContext", "SpeedRecord"]
+__all__ = [
+    "DELIVERY_METRICS",
+    "EXIT_INTERNAL",
+    "GATES",
+    "NA",
+    "VERDICTS",
+    "BenchResult",
+    "MetricResult",
+    "SceneContext",
+    "SpeedRecord",
+]
+
+# The two questions a scorecard answers (issue 26): does the code implement the law it
+# declares as well as a correct code can at this step ("implementation"), and does the
+# user get what the scene asks ("delivery")?
+VERDICTS = ("implementation", "delivery")
+# What ``--gate`` may select: one verdict, or both (the default).
+GATES = ("both", *VERDICTS)
+# Status of a metric that does not apply to the scene (its kind, damping or number of
+# speeds): not a test at all, unlike "skip" (a test that could not be run).
+NA = "n/a"
+# The delivery metrics (`reference_impl.bench.metrics`); every other metric is implementation.
+DELIVERY_METRICS = ("restitution_asked", "contact_time_asked", "peak_force_asked")
 
 
 @dataclass
@@ -24,7 +46,7 @@ class MetricResult:
     variant: str
     scene: str
     metric: str
-    status: str  # "pass" | "fail" | "skip" | "error" (our reference failed, not the code)
+    status: str  # "pass" | "fail" | "skip" | "error" (ours, not the code) | "n/a" (see NA)
     value: float | None = None
     reference: float | None = None
     tolerance: str = ""
@@ -36,8 +58,24 @@ class MetricResult:
     measured: float | None = None  # the code's value of the compared quantity
     expected: float | None = None  # what it is compared with
     rule: str = ""  # in words: what is compared, and the pass rule
-    # per speed: {"v0", "measured", "expected", "error", "limit"} (metrics read per speed)
+    # per speed: {"v0", "measured", "expected", "error", "limit"} (metrics read per speed;
+    # delivery metrics add "model_error" and "step_error")
     per_v0: list = field(default_factory=list)
+    # which question the metric answers: "implementation" (against the exact solution of
+    # the law the code declares, step-scaled allowance) or "delivery" (against what the
+    # scene asks, fixed user-facing tolerance): see `VERDICTS`
+    verdict: str = ""  # "" = from the metric's name (`DELIVERY_METRICS`)
+    # delivery metrics: the error split at the reported speed, both relative to the asked
+    # value: model = |declared law's exact answer - asked| (step-free: recalibrate),
+    # step = |measured - declared law's exact answer| (discretisation: refine the step)
+    model_error: float | None = None
+    step_error: float | None = None
+    ratio: float | None = None  # dt_crit: code's critical step / textbook Verlet's
+    order: float | None = None  # speed_error: observed convergence order
+
+    def __post_init__(self):
+        if not self.verdict:
+            self.verdict = "delivery" if self.metric in DELIVERY_METRICS else "implementation"
 
     def with_tolerance(self, text: str) -> MetricResult:
         self.tolerance = text
@@ -52,7 +90,10 @@ class MetricResult:
             }
             for r in self.per_v0
         ]
-        for k in ("value", "reference", "error", "limit", "measured", "expected"):
+        for k in (
+            "value", "reference", "error", "limit", "measured", "expected",
+            "model_error", "step_error", "ratio", "order",
+        ):  # fmt: skip
             v = d[k]
             if isinstance(v, float) and not math.isfinite(v):
                 d[k] = None if math.isnan(v) else ("inf" if v > 0 else "-inf")
@@ -77,12 +118,16 @@ class SpeedRecord:
     # errors of textbook velocity Verlet with the implemented law at the same dt
     # (the error a correct code makes at this step; `_textbook.textbook_errors`)
     textbook: dict | None = None
+    # what the scene asks at this speed (the scene's own law solved exactly): restitution
+    # at the asked end ("end"), contact time (s) and peak total force (N)
+    asked: dict | None = None
 
     def to_dict(self) -> dict:
         return {
             "v0": self.v0,
             "dt": self.dt,
             "asked_restitution": self.asked_e,
+            "asked": self.asked,
             "implemented_law": self.law.to_json() if self.law is not None else None,
             "exact": self.exact,
             "measured": self.measured,
@@ -158,7 +203,7 @@ class BenchResult:
 
     def counts(self) -> dict[str, int]:
         """Metrics per status: pass, fail, skip, and error (our reference failed)."""
-        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0}
+        c = {"pass": 0, "fail": 0, "skip": 0, "error": 0, NA: 0}
         for m in self.metrics:
             c[m.status] += 1
         return c
@@ -166,6 +211,12 @@ class BenchResult:
     @property
     def failures(self) -> list[MetricResult]:
         return [m for m in self.metrics if m.status == "fail"]
+
+    def gated(self, gate: str = "both") -> list[MetricResult]:
+        """The metrics a gate on ``gate`` ("both", "implementation", "delivery") reads."""
+        if gate not in GATES:
+            raise ValueError(f"gate must be one of {', '.join(GATES)}, got {gate!r}")
+        return [m for m in self.metrics if gate == "both" or m.verdict == gate]
 
     @property
     def internal_errors(self) -> list[MetricResult]:
@@ -177,15 +228,22 @@ class BenchResult:
         """No metric was decided (every one skipped: declined scenes, no reference)."""
         return not any(m.status in ("pass", "fail", "error") for m in self.metrics)
 
-    def exit_status(self, gate: bool) -> int:
-        """0; with ``gate`` 1 when a metric failed, nothing was measured (every metric
-        skipped: a gate that measured nothing does not pass) or the run was interrupted,
-        else `EXIT_INTERNAL` when the reference failed on a metric, else 0."""
+    def exit_status(self, gate: bool | str) -> int:
+        """0; with ``gate`` 1 when a metric it reads failed, it measured nothing (every
+        metric skipped or n/a: a gate that measured nothing does not pass) or the run was
+        interrupted, else `EXIT_INTERNAL` when the reference failed on one, else 0.
+
+        ``gate``: False (no gate), True or "both" (every metric), "implementation" or
+        "delivery" (that verdict's metrics only).
+        """
         if not gate:
             return 0
-        if self.failures or self.interrupted or self.measured_nothing:
+        mine = self.gated("both" if gate is True else gate)
+        if any(m.status == "fail" for m in mine) or self.interrupted:
             return 1
-        return EXIT_INTERNAL if self.internal_errors else 0
+        if not any(m.status in ("pass", "fail", "error") for m in mine):
+            return 1
+        return EXIT_INTERNAL if any(m.status == "error" for m in mine) else 0
 
     def to_dict(self) -> dict:
         return result_to_dict(self)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from reference_impl.bench._records import MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench._records import NA, MetricResult, SceneContext, SpeedRecord
 
 __all__ = ["Metric"]
 
@@ -37,6 +37,7 @@ class Metric:
     unit = ""  # unit of the measured and expected values ("" for ratios)
     impact_only = True
     magnitude = True  # the value is a size (>= 0) compared with the limit from below
+    verdict = "implementation"  # or "delivery" (`reference_impl.bench._records.VERDICTS`)
 
     def applies(self, ctx: SceneContext) -> str | None:
         if self.impact_only and ctx.kind != "impact":
@@ -56,6 +57,7 @@ class Metric:
             f"{self.field} {tol:g}" if tol is not None else "",
             explanation,
             self.description,
+            verdict=self.verdict,
             **cols,
         )
 
@@ -63,8 +65,8 @@ class Metric:
         if ctx.skipped:
             return self._result(ctx, "skip", explanation=ctx.skipped)
         reason = self.applies(ctx)
-        if reason:
-            return self._result(ctx, "skip", explanation=reason)
+        if reason:  # the metric does not apply to this scene: no test, not a skipped one
+            return self._result(ctx, NA, explanation=f"does not apply: {reason}")
         limit = float(tol[self.key][self.field])
         factor = float(tol["allowance"]["textbook_verlet"])
         if ctx.internal:

@@ -42,7 +42,7 @@ def side_by_side(docs) -> tuple[list[str], list[list[str]]]:
             v = m.get("variant", "")
             if v not in variants:
                 variants.append(v)
-            if m.get("status") == "skip":
+            if m.get("status") in ("skip", "n/a"):
                 continue
             key = (m.get("scene", ""), m.get("metric", ""))
             measured = m.get("measured", m.get("value"))
@@ -84,17 +84,14 @@ def json_number(x):
 def plot_speed_error(rows, path) -> Path:
     """Error against wall time per impact, one panel per scene, one line per adapter (log-log).
 
-    The exact solver's time for each scene is a dotted vertical line. Needs matplotlib.
+    The exact solver's time for each scene is a dotted vertical line. One legend for all
+    panels, below them (off the data, at 8.5 pt). Needs matplotlib.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     scenes = list(dict.fromkeys(r["scene"] for r in rows)) or ["(no rows)"]
-    fig, axes = plt.subplots(
-        1, len(scenes), figsize=(4.2 * len(scenes), 4.2), sharey=True, squeeze=False
-    )
+    fig = Figure(figsize=(4.2 * len(scenes), 5.0), layout="constrained")
+    axes = fig.subplots(1, len(scenes), sharey=True, squeeze=False)
     for ax, scene in zip(axes[0], scenes, strict=True):
         groups: dict[str, list] = {}
         for r in rows:
@@ -113,12 +110,16 @@ def plot_speed_error(rows, path) -> Path:
             ax.loglog([r["seconds"] for r in rs], err, marker="o", ms=3, label=adapter)
         ax.set_title(scene, fontsize=9)
         ax.set_xlabel("wall time per impact [s]")
-        ax.legend(fontsize=5)
-    axes[0][0].set_ylabel("largest relative error (e, t_c, q_max)")
+    axes[0][0].set_ylabel("largest relative error (e, t_c, q_max) [-]")
+    handles: dict = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(lab, h)
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside lower center",
+                   ncol=min(4, len(handles)), fontsize=8.5)  # fmt: skip
     fig.suptitle("speed against error (dotted: exact solver)", fontsize=10)
-    fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
-    plt.close(fig)
     return out

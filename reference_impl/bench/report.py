@@ -15,8 +15,10 @@
 * `scorecard_markdown`: for ``hcv report``; `side_by_side` and `plot_speed_error`
   (home: `reference_impl.bench.compare`, re-exported here) as well.
 
-Metric statuses: "pass", "fail", "skip" and "error" (the suite's reference
-failed). Every output above knows all four (`STATUSES`).
+Metric statuses: "pass", "fail", "skip", "error" (the suite's reference failed) and
+"n/a" (the metric does not apply to the scene's kind, damping or speeds). Every output
+above knows all five (`STATUSES`). Every metric belongs to one of two verdicts
+("implementation", "delivery"), shown in its own column and summed per code.
 
 Here: the scorecard for people (plain text, rich, markdown). The JSON and JUnit
 documents are written by `reference_impl.bench._json` and `reference_impl.bench._junit`,
@@ -39,6 +41,7 @@ from reference_impl.bench._cells import (
 )
 from reference_impl.bench._json import SCHEMA, machine_info, result_to_dict, write_json
 from reference_impl.bench._junit import junit_tree, write_junit
+from reference_impl.bench._records import NA, VERDICTS
 
 __all__ = [
     "SCHEMA",
@@ -46,6 +49,7 @@ __all__ = [
     "UNITS",
     "format_value",
     "format_with_unit",
+    "gate_lines",
     "json_number",
     "junit_tree",
     "machine_info",
@@ -60,11 +64,13 @@ __all__ = [
     "side_by_side_markdown",
     "write_json",
     "write_junit",
+    "verdict_text",
     "write_markdown",
 ]
 
-# Every metric status, in the order the summaries list them.
-STATUSES = ("pass", "fail", "skip", "error")
+# Every metric status, in the order the summaries list them ("n/a": the metric does not
+# apply to the scene; "skip": it applies but could not be run).
+STATUSES = ("pass", "fail", "skip", "error", NA)
 
 
 _STATUS = {
@@ -72,20 +78,63 @@ _STATUS = {
     "fail": "[bold red]FAIL[/]",
     "skip": "[dim]skip[/]",
     "error": f"[bold magenta]{_OURS}[/]",
+    NA: "[dim]n/a[/]",
 }
 
 
 def _count_text(counts: dict) -> str:
-    """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)")."""
+    """Counts as text, e.g. "3 pass, 1 fail, 2 skipped" (+ ", 1 ERROR (ours)", ", 4 n/a")."""
     text = f"{counts.get('pass', 0)} pass, {counts.get('fail', 0)} fail, {counts.get('skip', 0)} skipped"
     if counts.get("error"):
         text += f", {counts['error']} {_OURS}"
+    if counts.get(NA):
+        text += f", {counts[NA]} n/a"
     return text
 
 
+def _verdict_word(items) -> str:
+    """PASS / FAIL / ERROR (ours) / nothing measured, of one verdict's metrics."""
+    statuses = {m.status for m in items}
+    if "fail" in statuses:
+        return "FAIL"
+    if "error" in statuses:
+        return _OURS
+    return "pass" if "pass" in statuses else "nothing measured"
+
+
+def verdict_text(items) -> str:
+    """The two verdicts of some metrics as one phrase: "implementation pass, delivery FAIL"."""
+    return ", ".join(
+        f"{v} {_verdict_word([m for m in items if m.verdict == v])}"
+        for v in VERDICTS
+        if any(m.verdict == v for m in items)
+    )
+
+
+def _fail_line(result, m) -> str:
+    """One failed metric in one line: measured, expected, error (and its split), the
+    tolerance; a metric that compared nothing (a run failed) gives its reason instead."""
+    c = metric_columns(result, m)
+    if c["measured"] is None or c["reference"] is None:
+        return f"    FAIL {m.scene} / {m.metric}: {m.explanation}"
+    at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
+    what = [f"error {_fmt(c['error'])}"] if c["error"] is not None else []
+    if c["model_error"] is not None or c["step_error"] is not None:
+        what.append(f"model {_fmt(c['model_error']) or '-'}, step {_fmt(c['step_error']) or '-'}")
+    for key in ("ratio", "order"):
+        if c[key] is not None:
+            what.append(f"{key} {_fmt(c[key])}")
+    what.append(f"tolerance {c['tolerance'] or '-'}")
+    return (
+        f"    FAIL {m.scene} / {m.metric} ({c['verdict']}): measured "
+        f"{_fmt_v(c['measured'], c['unit'])}, expected {_fmt_v(c['reference'], c['unit'])}"
+        f"{at}; " + "; ".join(what)
+    )
+
+
 def _summary_lines(result) -> list[str]:
-    """Per code: pass / fail counts, then each failing metric with measured vs expected,
-    then each metric our reference could not decide (status "error")."""
+    """Per code: pass / fail counts and its two verdicts, then each failing metric with
+    measured vs expected, then each metric our reference could not decide ("error")."""
     lines = [
         f"hcv bench {result.adapter}: {_count_text(result.counts())}"
         + (" (interrupted)" if result.interrupted else "")
@@ -95,35 +144,49 @@ def _summary_lines(result) -> list[str]:
         by_variant.setdefault(m.variant, []).append(m)
     for variant, items in by_variant.items():
         counts = {s: sum(m.status == s for m in items) for s in STATUSES}
-        lines.append(f"  {variant}: {_count_text(counts)}")
+        both = verdict_text(items)
+        lines.append(f"  {variant}: {_count_text(counts)}" + (f"; {both}" if both else ""))
         for m in items:
             if m.status == "error":
                 lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")
-            if m.status != "fail":
-                continue
-            c = metric_columns(result, m)
-            at = f" at v0 = {c['v0']:g} m/s" if c["v0"] is not None else ""
-            lines.append(
-                f"    FAIL {m.scene} / {m.metric}: measured "
-                f"{_fmt_v(c['measured'], c['unit']) or '-'}, expected "
-                f"{_fmt_v(c['reference'], c['unit']) or '-'}{at}; error "
-                f"{_fmt(c['error']) or '-'}, tolerance {c['tolerance'] or '-'}"
-            )
+            if m.status == "fail":
+                lines.append(_fail_line(result, m))
     return lines
 
 
+def gate_lines(result, gate) -> list[str]:
+    """What ``hcv bench --gate[=WHICH]`` prints last: the verdict(s) it read and why."""
+    which = "both" if gate is True else gate
+    mine = result.gated(which)
+    c = {s: sum(m.status == s for m in mine) for s in STATUSES}
+    status = result.exit_status(which)
+    word = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
+    scope = "gate" if which == "both" else f"gate ({which})"
+    if not any(m.status in ("pass", "fail", "error") for m in mine):
+        return [
+            f"{scope}: FAIL (nothing measured: all {len(mine)} metrics skipped or "
+            "n/a; --show-skipped lists why; a gate that measured nothing does not pass)"
+        ]
+    return [
+        f"{scope}: {word} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} "
+        f"metrics failed, {c['error']} undecided by our reference; {verdict_text(mine)})"
+    ]
+
+
 _COLUMNS = (
-    "adapter", "scene", "metric", "v0", "measured", "reference", "error", "tolerance", "result"
+    "adapter", "scene", "verdict", "metric", "v0", "measured", "expected", "error",
+    "model err", "step err", "ratio", "order", "tolerance", "result",
 )  # fmt: skip
-_RIGHT = {3, 4, 5, 6}
+_RIGHT = {4, 5, 6, 7, 8, 9, 10, 11}
 
 
 def _common_speeds(result) -> dict:
     """(scene, metric) -> the speed every code's row shows: the worst over the codes.
 
     Per code, a metric reports its own worst speed; with several codes (variants) on
-    one scene, every row of a metric is read at one speed so that they compare side by
-    side (each code's own worst speed is in its FAIL line).
+    one scene, every passing row of a metric is read at one speed so that they compare
+    side by side (a failed row keeps the code's own worst speed, the one its FAIL line
+    names).
     """
     worst: dict = {}
     for m in result.metrics:
@@ -144,24 +207,31 @@ def _rows(result, show_skipped: bool) -> list[list[str]]:
     rows = []
     common = _common_speeds(result)
     for m in result.metrics:
-        if m.status == "skip" and not show_skipped:
+        if m.status in ("skip", NA) and not show_skipped:
             continue
         c = metric_columns(result, m)
         v0 = common.get((m.scene, m.metric))
-        if v0 is not None and v0 != c["v0"]:
+        # a failed metric keeps its own worst speed: its row and its FAIL line name one v0
+        if v0 is not None and v0 != c["v0"] and m.status != "fail":
             at = next((r for r in m.per_v0 if r["v0"] == v0), None)
             if at is not None:
                 c.update(measured=at["measured"], reference=at["expected"], error=at["error"])
+                c.update(model_error=at.get("model_error"), step_error=at.get("step_error"))
                 c["v0"] = v0
         rows.append(
             [
                 m.variant,
                 m.scene,
+                c["verdict"],
                 m.metric,
                 f"{c['v0']:g}" if c["v0"] is not None else "all",
                 _fmt_v(c["measured"], c["unit"]),
                 _fmt_v(c["reference"], c["unit"]),
                 _fmt(c["error"]),
+                _fmt(c["model_error"]),
+                _fmt(c["step_error"]),
+                _fmt(c["ratio"]),
+                _fmt(c["order"]),
                 c["tolerance"],
                 m.status,
             ]
@@ -178,13 +248,18 @@ def _legend_lines(result, show_skipped: bool) -> list[str]:
             lines.append(f"  {m.metric}: {m.rule}")
     if lines:
         lines = [
-            "rules (v0 in m/s; error is what the limit bounds; tolerance = base + factor x "
-            "textbook Verlet's error at the same step):"
+            "rules (v0 in m/s; error is what the limit bounds; implementation: tolerance = "
+            "base + factor x textbook Verlet's error at the same step; delivery: a fixed "
+            "tolerance, error = model part (declared law vs asked: recalibrate) + step part "
+            "(measured vs declared law: refine the step)):"
         ] + lines
     if show_skipped:
         for m in result.metrics:
-            if m.status == "skip":
-                lines.append(f"skip {m.variant} / {m.scene} / {m.metric}: {m.explanation}")
+            if m.status in ("skip", NA):
+                lines.append(
+                    f"{_PLAIN_STATUS[m.status]} {m.variant} / {m.scene} / {m.metric}: "
+                    f"{m.explanation}"
+                )
     return lines
 
 
@@ -233,7 +308,7 @@ def render_scorecard(result, console=None, show_skipped: bool = False) -> None:
         table.add_column(
             col,
             justify="right"
-            if col in ("v0", "measured", "reference", "error")
+            if _COLUMNS.index(col) in _RIGHT
             else ("center" if col == "result" else "left"),
         )
     for r in _rows(result, show_skipped):
@@ -317,20 +392,22 @@ def scorecard_markdown(result) -> str:
             else ""
         ),
         "",
-        "| adapter | scene | metric | v0 (m/s) | measured | reference | error | tolerance | result | why |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| adapter | scene | verdict | metric | v0 (m/s) | measured | expected | error | "
+        "model err | step err | ratio | order | tolerance | result | why |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for m in result.metrics:
-        if m.status == "skip":
+        if m.status in ("skip", NA):
             continue
         why = m.explanation.replace("|", "/") if m.status in ("fail", "error") else ""
         c = metric_columns(result, m)
         out.append(
-            f"| {m.variant} | {m.scene} | {m.metric} | "
+            f"| {m.variant} | {m.scene} | {c['verdict']} | {m.metric} | "
             f"{_fmt(c['v0']) if c['v0'] is not None else 'all'} | "
             f"{_fmt_v(c['measured'], c['unit'])} | {_fmt_v(c['reference'], c['unit'])} | "
-            f"{_fmt(c['error'])} | {m.tolerance} | {_OURS if m.status == 'error' else m.status} | "
-            f"{why} |"
+            f"{_fmt(c['error'])} | {_fmt(c['model_error'])} | {_fmt(c['step_error'])} | "
+            f"{_fmt(c['ratio'])} | {_fmt(c['order'])} | {m.tolerance} | "
+            f"{_OURS if m.status == 'error' else m.status} | {why} |"
         )
     if result.speed_error:
         out += [

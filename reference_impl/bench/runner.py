@@ -55,6 +55,7 @@ from reference_impl.bench.measure import (
     check_conventions,
     check_declared_law,
     contact_sample_times,
+    exact_peak_force,
     exact_reference,
     exact_tensile_on_samples,
     measure,
@@ -124,15 +125,35 @@ class _SceneRun:
             )
         return sol
 
+    def asked_values(self, sol) -> dict:
+        """What the scene asks at one speed (the delivery metrics' references): the
+        restitution at the end the scene names, the contact time (s), the peak force (N)."""
+        end = getattr(self.scene, "restitution_end", "overlap")
+        damped = bool(self.scene.zeta)
+        if end == "zero-force" and damped:
+            e = sol.restitution_zero_force
+        else:
+            e = sol.restitution
+        law = ImplementedLaw(
+            self.scene.potential, self.scene.mass, zeta=float(self.scene.zeta or 0)
+        )
+        return {
+            "restitution": float(e),
+            "end": end,
+            "contact_time": float(sol.contact_time),
+            "peak_force": exact_peak_force(law, sol.v0, lambda: sol.peak_force),
+        }
+
     def budget(self, dt: float, t_c: float) -> int:
         return int(math.ceil(self.tol["run"]["budget"] * t_c / dt)) + _EXTRA_STEPS
 
     def impact_speed(self, v0: float) -> SpeedRecord:
         spc = self.tol["run"]["steps_per_contact"]
-        t_c = self.asked(v0).contact_time
+        sol = self.asked(v0)
+        t_c = sol.contact_time
         dt = t_c / spc
         ascene = AdapterScene.from_scene(self.scene, v0, dt, self.budget(dt, t_c))
-        rec = SpeedRecord(v0=v0, dt=dt, asked_e=ascene.restitution)
+        rec = SpeedRecord(v0=v0, dt=dt, asked_e=ascene.restitution, asked=self.asked_values(sol))
         out = self.call("impact", ascene)
         rec.seconds = out.seconds
         if not out.ok:

@@ -7,9 +7,16 @@ per process. ``hcv report`` loops over `CLAIMS` and writes each measurement;
 the tests in ``verification/test_sec*.py`` carry ``pytest.mark.claim(ID)`` and
 assert on the same measurement (or its case functions).
 
+A claim that does not hold as printed also holds its own erratum text: ``PRINTED``
+(where the paper states it, the equation number or None, the LaTeX as printed; checked
+verbatim against the .tex) and ``corrected(measured, results) -> (corrected, numbers)``
+(the corrected statement and the decisive numbers, read from the results dict); the
+report's erratum (`reference_impl.report._erratum`) only formats them.
+
 Adding a claim: write ``reference_impl/claims/<name>.py`` with the names above,
-add ``<name>`` to `_MODULES` below, and write a test marked
-``@pytest.mark.claim("<id>")`` that calls ``<name>.measure()``.
+add ``<name>`` to `_MODULES` below, write a test marked
+``@pytest.mark.claim("<id>")`` that calls ``<name>.measure()``, and its independent
+script ``reports/repro/<name>.py``.
 """
 
 from __future__ import annotations
@@ -66,6 +73,16 @@ class Claim:
     def measure(self, quick: bool = False) -> Measurement:
         """The claim's measurement (cached per process by the module)."""
         return self.home.measure(quick)
+
+    @property
+    def printed(self) -> tuple[str, int | None, str] | None:
+        """(where, equation number or None, LaTeX as printed), or None where not quoted."""
+        return getattr(self.home, "PRINTED", None)
+
+    def corrected(self, measured: dict, results: dict) -> tuple[str, str] | None:
+        """(corrected statement, decisive numbers) from the claim's module, or None."""
+        fn = getattr(self.home, "corrected", None)
+        return None if fn is None else fn(measured, results)
 
 
 def _load(name: str) -> Claim:

@@ -27,6 +27,15 @@ STATEMENT = (
     "semi-ellipses and dissipative ones logarithmic spirals in the (x, x') plane."
 )
 
+# The statement as printed (where, equation number or None, LaTeX; whitespace-normalised),
+# checked verbatim against the paper's .tex by verification/test_tools_erratum.py.
+PRINTED = (
+    "section 10, text of Fig. 1",
+    None,
+    r"confirms that the Hamiltonian energy in this transformed space is conserved to machine "
+    r"precision (relative error $< 3 \times 10^{-13}$)",
+)
+
 # The paper's integrator settings (Fig. 1 text): not a tolerance of ours.
 RTOL = ATOL = 1e-13
 # Samples per curve of the figure (dense output of the same runs).
@@ -168,4 +177,34 @@ def measure(quick: bool = False) -> Measurement:
             f"decays to e² = {e * e:.4f}; H is identically the physical "
             f"energy (to {g(max(r['identity_err'] for r in rs), 2)})"
         ),
+    )
+
+
+def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
+    """The corrected statement and the decisive numbers, from a results.json claim entry.
+
+    Parameters
+    ----------
+    m : dict
+        The claim's ``measured`` figures as written to results.json.
+    r : dict
+        The whole results dict (the erratum of section 6 reads the critical-step map).
+
+    Returns
+    -------
+    (str, str)
+        The corrected statement and the numbers it rests on (read, never typed).
+    """
+    cons = [x for x in m["runs"] if x["C0"] == 0]
+    diss = [x for x in m["runs"] if x["C0"] > 0]
+    ident = max(x["identity_err"] for x in m["runs"])
+    return (
+        "M x'²/2 + K x²/2 equals m q'²/2 + U(q) identically (Theorem 2, proof); its drift in a "
+        "conservative run measures the integrator, not the harmonic structure. With C0 = 0.5 it "
+        "is not conserved: it decays to e² at separation.",
+        "C0 = 0, RK45 at RelTol = AbsTol = 1e-13: max |H/H0 − 1| = "
+        + ", ".join(f"{g(x['drift'], 2)} (v0 = {x['v0']:g})" for x in cons)
+        + f", printed bound {g(m['claimed'])}; C0 = 0.5: H_end/H0 = "
+        + ", ".join(f"{x['H_end_over_H0']:.6f}" for x in diss)
+        + f", e = {diss[0]['restitution']:.6f}; |H/E_phys − 1| ≤ {g(ident, 2)}.",
     )

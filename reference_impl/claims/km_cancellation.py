@@ -27,6 +27,15 @@ STATEMENT = (
     "stability bound, the physical trajectory."
 )
 
+# The statement as printed (where, equation number or None, LaTeX; whitespace-normalised),
+# checked verbatim against the paper's .tex by verification/test_tools_erratum.py.
+PRINTED = (
+    "section 5, Remark",
+    None,
+    r"The constants $K$ and $M$ are arbitrary; they cancel in all physically meaningful "
+    r"expressions derived from the regularisation (e.g., the damping law and the stability bound).",
+)
+
 # Damping ratio of the fixed-zeta checks (any 0 < zeta < 1 would do).
 ZETA = 0.3
 # Speed of the fixed-C0 check: the paper's middle Table 1 speed, m/s.
@@ -147,4 +156,32 @@ def measure(quick: bool = False) -> Measurement:
             f"over (K, M) (Fig. 1's e = {eb:.3f} becomes {ea:.3f} with "
             f"M = {ka[1]:g})"
         ),
+    )
+
+
+def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
+    """The corrected statement and the decisive numbers, from a results.json claim entry.
+
+    Parameters
+    ----------
+    m : dict
+        The claim's ``measured`` figures as written to results.json.
+    r : dict
+        The whole results dict (the erratum of section 6 reads the critical-step map).
+
+    Returns
+    -------
+    (str, str)
+        The corrected statement and the numbers it rests on (read, never typed).
+    """
+    (k1, e1), (k2, e2) = m["restitution_fixed_C0"].items()
+    return (
+        "K and M cancel when the damping is given by ζ = C0/(2√(KM)); at fixed C0, the law of "
+        "Eq. (11) scales as 1/√(KM) and the restitution depends on K and M. The stability bound "
+        "(Eq. 7) is independent of K and M.",
+        f"C at C0 = 0.5, (K, M) = (1, 0.75) over (1, 1): {m['C_ratio_K1_M075_over_K1_M1']:.10f}; "
+        f"spread of C over {len(m['KM_pairs'])} (K, M) pairs at fixed C0: "
+        f"{g(m['C_fixed_C0_spread'], 4)}; at fixed ζ: {g(max(m['C_fixed_zeta_spread']), 2)}; "
+        f"Δt_safe: {g(max(m['dt_safe_spread']), 2)}; restitution (paper ellipsoid, 0.99 m/s, "
+        f"C0 = 0.5): {e1:.6f} at {k1}, {e2:.6f} at {k2}.",
     )

@@ -38,6 +38,15 @@ STATEMENT = (
     "(2UU'' >= U'^2, all power laws p >= 1) it equals 2 m v0 / U'(qmax)."
 )
 
+# The statement as printed (where, equation number or None, LaTeX; whitespace-normalised),
+# checked verbatim against the paper's .tex by verification/test_tools_erratum.py.
+PRINTED = (
+    "section 6, after Eqs. (7)-(8)",
+    None,
+    r"The derived bound is rigorous: any physical timestep $\Delta t \le \Delta t_{\text{safe}}$ "
+    r"guarantees stability for the nonlinear contact simulation.",
+)
+
 # Kinds of a failing step at or below the bound; only RUNAWAY is an instability.
 RUNAWAY = "runaway"
 FAILURE_KINDS = (RUNAWAY, "bounded", "accuracy")
@@ -46,22 +55,13 @@ FAILURE_KINDS = (RUNAWAY, "bounded", "accuracy")
 # dt_safe <= 1. The search brackets every step to 0.1 % of dt_safe
 # (SearchGrid().resolution), so no extra margin is added.
 
-_MAPS: dict = {}
 
-
+@functools.cache
 def the_map(quick: bool = False):
     """The critical-step map of `coverage(quick)`, computed once per process."""
-    if quick not in _MAPS:
-        from reference_impl.studies.dtcrit_map import dt_crit_map
+    from reference_impl.studies.dtcrit_map import dt_crit_map
 
-        _MAPS[quick] = dt_crit_map(quick=quick)
-    return _MAPS[quick]
-
-
-def use_map(quick: bool, df) -> None:
-    """Adopt a map measured elsewhere (the report runs it in background processes)."""
-    _MAPS[quick] = df
-    measure.cache_clear()
+    return dt_crit_map(quick=quick)
 
 
 def _finite_le_1(x) -> bool:
@@ -279,5 +279,44 @@ def verdict_from_map(df) -> Measurement:
 
 @functools.cache
 def measure(quick: bool = False) -> Measurement:
-    """The verdict on the map of `coverage(quick)` (see `verdict_from_map`)."""
+    """The verdict on the map of `coverage(quick)` (see `verdict_from_map`; a map measured
+    elsewhere, as the report's background processes do, is passed to that function)."""
     return verdict_from_map(the_map(quick))
+
+
+def corrected(m: dict, r: dict) -> tuple[str, str]:
+    """The corrected statement and the decisive numbers, from a results.json claim entry.
+
+    Parameters
+    ----------
+    m : dict
+        The claim's ``measured`` figures as written to results.json.
+    r : dict
+        The whole results dict (the erratum of section 6 reads the critical-step map).
+
+    Returns
+    -------
+    (str, str)
+        The corrected statement and the numbers it rests on (read, never typed).
+    """
+    w, k = m.get("worst_runaway") or {}, m["per_kind"]
+    lin = m.get("linear_two_sided", {})
+    rows = r.get("dt_crit_map", [])
+    cases = ", ".join(dict.fromkeys(x["case"] for x in rows if not x["degenerate"]))
+    degenerate = ", ".join(dict.fromkeys(x["case"] for x in rows if x["degenerate"]))
+    impact = next((x["criterion"] for x in rows if x["scene"] == "impact"), "")
+    slow = m.get("moves_with_horizon", {})
+    return (
+        "Withdrawn as a sufficient condition. Measured instead with velocity Verlet "
+        f"({w.get('criterion', '')}): the smallest runaway step found on the search grid is "
+        f"{w.get('ratio', float('nan')):.4f} Δt_safe, over the {m['usable_cases']} cases with "
+        f"Δt_safe > 0 ({cases}; two-sided and two-walls scenes, and single impacts); Δt_crit = {g(lin.get('ratio'), 4)} Δt_safe for the linear spring, "
+        f"two-sided; single impacts: no runaway at or below Δt_safe, accuracy limit ({impact}) "
+        f"from {g(m.get('impact_accuracy_min_ratio'), 3)} Δt_safe. Δt_safe = 0 (no bound) for "
+        f"{degenerate or 'none'}.",
+        f"at or below Δt_safe in {m['usable_cases']} cases: {k['runaway']} runaways, "
+        f"{k['bounded']} bounded excursions, {k['accuracy']} impact accuracy limits; worst runaway "
+        f"{w.get('ratio', float('nan')):.4f} Δt_safe ({w.get('case')}, {w.get('scene')}); "
+        f"{len(slow)} runaways have a Δt_crit that moves with the confirmation horizon "
+        f"({', '.join(slow)}).",
+    )

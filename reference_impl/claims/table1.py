@@ -14,6 +14,15 @@ STATEMENT = (
     "0.99, 1.50 m/s: delta_max, U'(delta_max) and Delta t_safe are as printed in Table 1."
 )
 
+# The statement as printed (where, equation number or None, LaTeX; whitespace-normalised),
+# checked verbatim against the paper's .tex by verification/test_tools_erratum.py.
+PRINTED = (
+    "section 10, Table 1",
+    None,
+    r"Theoretical lower bounds for the critical timestep ($\Delta t_{\text{safe}}$) evaluated at "
+    r"maximum compression for the ellipsoid impact scenarios.",
+)
+
 NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
 # A cell matches when the 50-digit value rounds to the printed digits (half a unit of the
 # last printed digit): the recomputation itself is exact to far more digits.
@@ -92,4 +101,44 @@ def measure(quick: bool = False) -> Measurement:
             f"{len(bad)} of {n} cells differ at the printed digits"
             + (" (" + ", ".join(f"v0 = {c.v0} {NAMES[c.column]}" for c in bad) + ")" if bad else "")
         ),
+    )
+
+
+def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
+    """The corrected statement and the decisive numbers, from a results.json claim entry.
+
+    Parameters
+    ----------
+    m : dict
+        The claim's ``measured`` figures as written to results.json.
+    r : dict
+        The whole results dict (the erratum of section 6 reads the critical-step map).
+
+    Returns
+    -------
+    (str, str)
+        The corrected statement and the numbers it rests on (read, never typed).
+    """
+    cells = []
+    for row in m["rows"]:
+        for col, name in (
+            ("delta_max", "δmax [mm]"),
+            ("max_force", "U'(δmax) [N]"),
+            ("dt_safe", "Δt_safe [ms]"),
+        ):
+            cell = row[col]
+            if not cell["match"]:
+                cells.append(
+                    f"v0 = {row['v0']} m/s, {name}: {cell['printed']} → {cell['computed_rounded']}"
+                )
+    return (
+        "Corrected cells (recomputed at 50 digits from the printed inputs, rounded to the "
+        "printed decimals; every digit shown is certain): " + "; ".join(cells) + ".",
+        f"{m['mismatches']} of {m['cells']} cells differ; computed to 15 digits: "
+        + "; ".join(
+            f"v0 = {row['v0']}: "
+            + ", ".join(row[c]["computed"] for c in ("delta_max", "max_force", "dt_safe"))
+            for row in m["rows"]
+        )
+        + ".",
     )

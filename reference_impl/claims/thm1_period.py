@@ -23,6 +23,10 @@ STATEMENT = (
     "contact oscillation, four times the quarter-period int_0^qmax dq/qdot, is T(E) = 2 pi dJ/dE."
 )
 
+# The statement as printed (where, equation number or None, LaTeX; whitespace-normalised),
+# checked verbatim against the paper's .tex by verification/test_tools_erratum.py.
+PRINTED = ("section 4, Theorem 1", 3, r"T(E)=2\pi\,\frac{dJ}{dE}.")
+
 # Working precision of the measurement: 40 digits, far beyond any float effect.
 DPS = 40
 # A relation that holds agrees to ~1e-45 at DPS (10 guard digits in the mpmath routes);
@@ -107,4 +111,30 @@ def measure(quick: bool = False) -> Measurement:
             f"(|ratio − 2| ≤ {g(max(r['abs_ratio_minus_2'] for r in rows.values()), 2)}); "
             f"2π dJ/dE is the contact time (to {g(tc_dev, 2)})"
         ),
+    )
+
+
+def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
+    """The corrected statement and the decisive numbers, from a results.json claim entry.
+
+    Parameters
+    ----------
+    m : dict
+        The claim's ``measured`` figures as written to results.json.
+    r : dict
+        The whole results dict (the erratum of section 6 reads the critical-step map).
+
+    Returns
+    -------
+    (str, str)
+        The corrected statement and the numbers it rests on (read, never typed).
+    """
+    dev2 = max(r["abs_ratio_minus_2"] for r in m.values())
+    dtc = max(r["abs_tc_over_2pi_dJdE_minus_1"] for r in m.values())
+    cases = ", ".join(f"{n} {r['T_over_2pi_dJdE'][:12]}" for n, r in m.items())
+    return (
+        "T(E) = 4π dJ/dE (Eq. 3 and the last line of the proof); equivalently the contact "
+        "time t_c = T/2 = 2π dJ/dE.",
+        f"T/(2π dJ/dE) at 40 digits: {cases}; |ratio − 2| ≤ {g(dev2, 2)}; "
+        f"|t_c/(2π dJ/dE) − 1| ≤ {g(dtc, 2)}.",
     )

@@ -31,8 +31,8 @@ COMMANDS: tuple[tuple[str, str, str], ...] = (
      "measure the Verlet critical time step and test dt_safe"),
     ("report", "reference_impl.cli.report",
      "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-     "measured at 141 s wall on 2 quiet cores with --adapter lammps, kratos and mujoco: "
-     "reports/results.json of 2026-11-24)"),
+     "measured at 317 s wall on 2 cores at load 6-8 with --adapter lammps, kratos and mujoco: "
+     "reports/results.json of 2026-11-26)"),
     ("scenes", "reference_impl.cli.scenes",
      "list the scene catalogue (the same names work in every command); --show NAME prints "
      "one as TOML"),

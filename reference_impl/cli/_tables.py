@@ -1,16 +1,47 @@
-"""The rich tables that ``hcv solve`` and ``hcv dt-crit`` print: one column per speed."""
+"""The tables that ``hcv solve`` and ``hcv dt-crit`` print: one column per speed (rich on a
+terminal, full-width plain text otherwise), and their titles (`scene_title`)."""
 
 from __future__ import annotations
 
-__all__ = ["fmt", "print_transposed"]
+import json
+
+__all__ = ["fmt", "print_transposed", "scene_title"]
+
+
+def scene_title(command: str, scene) -> str:
+    """``hcv COMMAND: NAME (m = .. kg; potential FAMILY k = .., p = ..; damping LAW ..)``:
+    every parameter that decides the answer (the potential's and the damping law's)."""
+    from reference_impl.scenes import potential_to_dict
+
+    pot = dict(potential_to_dict(scene.potential))
+    family = pot.pop("family", "")
+    law = dict(scene.law.to_dict())
+    name = law.pop("law", "none")
+    damping = f"damping {name}" + (f" {_params(law)}" if law else "")
+    return f"hcv {command}: {scene.name} (m = {scene.mass:g} kg; potential {family} {_params(pot)}; {damping})"
+
+
+def _params(d: dict) -> str:
+    return ", ".join(
+        f"{k} = {v:.10g}" if isinstance(v, float) else f"{k} = {json.dumps(v, default=str)}"
+        for k, v in d.items()
+    )
 
 
 def print_transposed(title: str, rows: list[dict], fields, key: str, key_label: str) -> None:
-    """One row per field, one column per result (keeps wide result sets readable)."""
+    """One row per field, one column per result (keeps wide result sets readable).
+
+    On a terminal a rich table; otherwise (a pipe, a file, a CI log) plain text at full
+    width, as ``hcv bench`` prints, so that no number is ever cut to the console's width.
+    """
     from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
+    console = Console()
+    if not console.is_terminal:
+        _plain(title, rows, fields, key, key_label)
+        return
     table = Table(title=title)
     table.add_column(key_label, justify="left")
     for row in rows:
@@ -18,7 +49,25 @@ def print_transposed(title: str, rows: list[dict], fields, key: str, key_label: 
     for name, label in fields:
         # escape: rich would read units such as "[m]" or "[s]" as markup and drop them
         table.add_row(escape(label), *(fmt(row.get(name)) for row in rows))
-    Console().print(table)
+    console.print(table)
+
+
+def _plain(title: str, rows: list[dict], fields, key: str, key_label: str) -> None:
+    import sys
+
+    lines = [[key_label, *(fmt(r[key]) for r in rows)]]
+    lines += [[label, *(fmt(r.get(name)) for r in rows)] for name, label in fields]
+    widths = [max(len(line[i]) for line in lines) for i in range(len(lines[0]))]
+    out = [title]
+    for j, line in enumerate(lines):
+        cells = [line[0].ljust(widths[0])] + [
+            c.rjust(w) for c, w in zip(line[1:], widths[1:], strict=True)
+        ]
+        out.append("  ".join(cells).rstrip())
+        if j == 0:
+            out.append("  ".join("-" * w for w in widths))
+    sys.stdout.write("\n".join(out) + "\n")
+    sys.stdout.flush()
 
 
 def fmt(v) -> str:

@@ -1,6 +1,7 @@
 """``hcv bench``: the command line of the benchmark and CI gate.
 
-    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE] [--gate]
+    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE]
+                      [--gate [{both,implementation,delivery}]]
                       [--json FILE] [--junit FILE] [--plot FILE] [--markdown FILE]
 
 ADAPTER is a registered name (``kratos``, ``lammps``, ``reference``, ``subprocess``), an
@@ -109,7 +110,8 @@ class _Lines:
 _EPILOG = (
     "adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
     "kratos[hertz,verlet] or lammps[tsuji], names its key):\n{adapters}"
-    "\n\nexit status: 0 pass (or no --gate); 1 a metric failed, or nothing was "
+    "\n\nexit status: 0 pass (or no --gate); 1 a metric failed (of the verdict --gate "
+    "names: both by default, or implementation / delivery), or nothing was "
     "measured (every metric skipped); 2 usage or configuration error (also a law "
     "the adapter declares that no reference can be computed for); 3 no metric failed but "
     "our reference could not decide one; "
@@ -162,7 +164,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
     )
     b.add_argument(
-        "--gate", action="store_true", help="exit 1 when any metric fails (0 when all pass)"
+        "--gate",
+        nargs="?",
+        const="both",
+        choices=("both", "implementation", "delivery"),
+        help="exit 1 when a metric of the verdict(s) named fails (0 when all pass); "
+        "plain --gate = both: implementation (against the declared law's exact solution) "
+        "and delivery (against what the scene asks)",
     )
     b.add_argument("--json", metavar="FILE", help="write the JSON report here")
     b.add_argument("--junit", metavar="FILE", help="write JUnit XML here")
@@ -227,18 +235,9 @@ def run(args) -> int:
         raise KeyboardInterrupt
     status = result.exit_status(args.gate)
     if args.gate:
-        c = result.counts()
-        verdict = {0: "pass", 1: "FAIL"}.get(status, "ERROR (internal error of the reference)")
-        if result.measured_nothing:
-            print(
-                f"gate: FAIL (nothing measured: all {c['skip']} metrics skipped; "
-                "--show-skipped lists why; a gate that measured nothing does not pass)"
-            )
-        else:
-            print(
-                f"gate: {verdict} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} "
-                f"metrics failed, {c['error']} undecided by our reference)"
-            )
+        from reference_impl.bench.report import gate_lines
+
+        print("\n".join(gate_lines(result, args.gate)))
     return status
 
 

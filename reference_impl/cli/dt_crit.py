@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import sys
 
-from reference_impl.cli._run import EXIT_OK
-from reference_impl.cli._tables import print_transposed
+from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
+from reference_impl.cli._tables import fmt, print_transposed, scene_title
 
 __all__ = ["add_parser", "run"]
 
@@ -38,6 +38,11 @@ def add_parser(subparsers) -> None:
         "for two-sided / two-walls (runaway: energy growth, confirmed), "
         "'tol=0.01,n_phases=16' for a single impact (accuracy: rebound energy gain)",
     )
+    d.add_argument(
+        "--gate",
+        action="store_true",
+        help="exit 1 when the dt_safe bound fails at any speed (a step-size check for CI)",
+    )
     d.set_defaults(func=run)
 
 
@@ -57,16 +62,50 @@ def run(args) -> int:
         sys.stdout.write("\n")
     else:
         print_transposed(
-            f"hcv dt-crit: {scene.name} (m = {scene.mass} kg)",
-            rows,
-            _FIELDS,
-            "v0",
-            "impact speed v0 [m/s]",
+            scene_title("dt-crit", scene), rows, _FIELDS, "v0", "impact speed v0 [m/s]"
         )
         for r in rows:
-            ce = r.get("counterexample")
-            if ce:
-                print(f"v0 = {r['v0']}: counterexample {json.dumps(ce, default=str)}")
+            if r.get("counterexample"):
+                print("\n".join(counterexample_lines(r["v0"], r["counterexample"])))
+    if getattr(args, "gate", False):
+        return gate_status(rows, to=sys.stderr if args.json else sys.stdout)
+    return EXIT_OK
+
+
+def counterexample_lines(v0, ce: dict) -> list[str]:
+    """A counterexample as labelled lines (one per field; a nested table on one line)."""
+    lines = [f"counterexample at v0 = {fmt(v0)} m/s:"]
+    for k, v in ce.items():
+        label = _CE_LABELS.get(k, k)
+        if isinstance(v, dict):
+            v = ", ".join(f"{kk}: {fmt(vv)}" for kk, vv in v.items())
+        lines.append(f"  {label}: {fmt(v)}")
+    return lines
+
+
+# Labels (with units) of the counterexample's fields; others are shown by their key.
+_CE_LABELS = {
+    "dt": "dt [s]",
+    "dt_over_dt_safe": "dt / dt_safe",
+    "steps": "steps run",
+    "E0": "E_0 [J]",
+    "E_max_over_E0": "max E_n / E_0",
+    "E_end_over_E0": "E_end / E_0",
+    "max_E_over_E0_by_step": "max E_n / E_0 by step n",
+}
+
+
+def gate_status(rows: list[dict], to=None) -> int:
+    """``--gate``: 1 when the bound fails (``holds`` false) at any speed, with one line
+    (on ``to``, default stdout; stderr under ``--json``, whose stdout is the document)."""
+    to = to if to is not None else sys.stdout
+    failed = [r for r in rows if r.get("holds") is False]
+    if failed:
+        speeds = ", ".join(f"{fmt(r['v0'])} m/s (dt_crit / dt_safe = {fmt(r.get('ratio'))})"
+                           for r in failed)  # fmt: skip
+        print(f"gate: FAIL (the dt_safe bound fails at v0 = {speeds})", file=to)
+        return EXIT_FAIL
+    print(f"gate: pass (the dt_safe bound holds at all {len(rows)} speeds)", file=to)
     return EXIT_OK
 
 

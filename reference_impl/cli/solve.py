@@ -11,7 +11,7 @@ import math
 import sys
 
 from reference_impl.cli._run import EXIT_OK
-from reference_impl.cli._tables import print_transposed
+from reference_impl.cli._tables import print_transposed, scene_title
 from reference_impl.errors import HCVInputError, UnsupportedError
 
 __all__ = ["add_parser", "run"]
@@ -96,13 +96,8 @@ def run(args) -> int:
         json.dump(out, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        law_txt = (
-            f"zeta = {rows[0]['zeta']:.6g}"
-            if rows[0]["zeta"] is not None
-            else ", ".join(f"{k} = {v}" for k, v in scene.law.to_dict().items())
-        )
         print_transposed(
-            f"hcv solve: {scene.name} (m = {scene.mass} kg, {law_txt})",
+            scene_title("solve", scene),
             rows,
             _SOLVE_ROWS,
             "v0",

@@ -10,17 +10,30 @@ the other families (sphere, ellipsoid, expression; ~100x slower, same method).
 
 Both ends of contact are reported (see `LawImpactSolution`), with an error bound
 that the suite checks against a 30-digit truth (`reference_impl.exact._general_law_mp`).
+
+The linear oscillator (U' = k q and a constant C: the linear law, a power or polynomial
+law of degree 0, and the viscoelastic and universal laws on Hooke's spring) is solved in
+closed form instead (`_linear_solution`): integrated, its return near critical damping
+passes through overlaps below any float64 tolerance (q ~ exp(-pi zeta / sqrt(1 - zeta^2))
+q_max, 1e-965 at zeta = 0.999999) and its zero-force instant, heavily overdamped, is
+ill-conditioned in the state (issue 29).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from fractions import Fraction
 
 import numpy as np
 
 from reference_impl.errors import HCVInputError, UnsupportedError
-from reference_impl.exact._general_kernel import MAX_STEPS, OUT_FIELDS, python_solver
+from reference_impl.exact._general_kernel import (
+    MAX_STEPS,
+    OUT_FIELDS,
+    STOP_NO_RETURN_Q,
+    python_solver,
+)
 from reference_impl.exact._general_kernel import solve as _compiled_solve
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
@@ -120,13 +133,14 @@ class LawImpactSolution:
         -q'/v0 at that instant.
     returns_to_q0 : bool
         False when the body creeps back along the slow manifold of an overdamped
-        law and never reaches q = 0 (see `reference_impl.exact._general_kernel`).
+        law and never reaches q = 0 (see `reference_impl.exact._general_kernel`);
+        only where that creep provably never ends (`_creeps_for_ever`).
     error_time : float
         Bound on the absolute error of the contact times and of the time of q_max (s).
     error_restitution : float
         Bound on the absolute error of both restitutions.
     n_steps : int
-        Integration steps taken.
+        Integration steps taken (0 for the linear oscillator, solved in closed form).
     """
 
     v0: float
@@ -161,14 +175,163 @@ def _power_terms(pot: Potential):
     return None
 
 
+def _linear_ratio(pot: Potential, law: DampingLaw, m: float):
+    """(k, zeta^2) of a linear oscillator m q'' + c q' + k q = 0, else None.
+
+    zeta^2 = c^2 / (4 m k) is formed exactly in rationals from the floats given (k a sum of
+    Hooke terms, c the sum of the constant terms and A k or 2 zeta sqrt(m k)), so 1 - zeta^2
+    is correctly rounded however close to critical damping (the float difference loses
+    -log10(1 - zeta) digits: 6 at zeta = 0.999999, 1e-10 of the contact time).
+    """
+    # plain Python checks first: this runs before every solve (~1 us when it is not linear)
+    springs = pot.terms if isinstance(pot, SumPotential) else (pot,)
+    if law.alpha or not all(type(t) is PowerLaw and t.p == 1.0 for t in springs):
+        return None
+    terms = law.terms()
+    if any(e != 0.0 for _, e in terms):
+        return None
+    k = sum((Fraction(float(t.k)) for t in springs), Fraction(0))
+    if law.zeta:
+        return float(k), Fraction(law.zeta) ** 2
+    c = sum((Fraction(cj) for cj, _ in terms), Fraction(0)) + Fraction(law.A) * k
+    return float(k), c * c / (4 * Fraction(m) * k)
+
+
+def _linear_solution(v0: float, m: float, k: float, z2: Fraction, law: DampingLaw):
+    """Closed form of m q'' + c q' + k q = 0, q(0) = 0, q'(0) = v0 (`LawImpactSolution`).
+
+    In s = omega t (omega = sqrt(k/m)), x = omega q solves x'' + 2 zeta x' + x = 0 as in
+    `reference_impl.exact._oscillator` (the same cancellation-free forms, without its
+    limit on s_end: nothing is integrated here). Peak of x at s_p = atan2(wd, zeta)/wd,
+    1 or log1p(zeta - 1 + r)/r, where x = v0 exp(-zeta s_p); zero force (x'' = 0) at
+    2 s_p, where -x'/v0 = exp(-2 zeta s_p); return (underdamped only) at pi/wd with
+    e = exp(-pi zeta/wd). The total force F = m omega (2 zeta x' + x) is stationary where
+    the third derivative of x vanishes, at wd s = 3 phi - j pi (phi = atan2(wd, zeta));
+    for zeta >= 1 it falls from F(0) = c v0.
+    """
+    z = math.sqrt(float(z2))
+    om = math.sqrt(k) / math.sqrt(m)
+    mo = math.sqrt(m) * math.sqrt(k)  # m omega, kg/s
+    peak = 2.0 * z * mo * v0  # F(0) = c v0
+    if z2 < 1:
+        wd = math.sqrt(float(1 - z2))
+        phi = math.atan2(wd, z)
+        s_p = phi / wd
+        s_end = math.pi / wd
+        for j in range(3):
+            th = 3.0 * phi - j * math.pi
+            if 0.0 < th < math.pi:
+                ez = v0 * math.exp(-z * th / wd)
+                sw = math.sin(th) / wd
+                peak = max(peak, mo * (2.0 * z * ez * (math.cos(th) - z * sw) + ez * sw))
+    elif z2 == 1:
+        s_p, s_end = 1.0, math.inf
+    else:
+        r = math.sqrt(float(z2 - 1))
+        s_p = math.log1p(float(z2 - 1) / (z + 1.0) + r) / r  # zeta - 1 = r^2 / (zeta + 1)
+        s_end = math.inf
+    returns = math.isfinite(s_end)
+    q_max = v0 * math.exp(-z * s_p) / om
+    t_zf = 2.0 * s_p / om
+    t_end = s_end / om
+    # A few dozen correctly rounded operations (sqrt, atan2, log1p, exp: <= 1 ulp each) on
+    # arguments that are themselves within a few ulps; exp(-a) carries a's relative error
+    # times a, and a exp(-a) <= 1/e: 64 ulps of the largest time, and 64 ulps absolute of
+    # the restitutions, bound both.
+    err_t = 64.0 * _EPS * (t_end if returns else t_zf)
+    return LawImpactSolution(
+        v0=v0,
+        m=m,
+        law=law.to_dict(),
+        max_penetration=q_max,
+        max_force=k * q_max,
+        peak_force=peak,
+        time_of_max_penetration=s_p / om,
+        contact_time=t_end,
+        restitution=math.exp(-z * s_end) if returns else 0.0,
+        contact_time_zero_force=t_zf,
+        restitution_zero_force=math.exp(-2.0 * z * s_p),
+        returns_to_q0=returns,
+        error_time=err_t,
+        error_restitution=64.0 * _EPS,
+        n_steps=0,
+    )
+
+
+def _creeps_for_ever(law: DampingLaw, m: float, pot: Potential):
+    """Whether a return along the slow manifold near q = 0 never reaches it, and why.
+
+    With U ~ c q^n and C ~ c_a q^a at contact (a the smallest exponent among the law's
+    terms), the slow manifold is q' = -U'/C ~ q^(n-1-a). Inertia m q'' ~ q^(2n-3-2a) stays
+    negligible against U' ~ q^(n-1) as q -> 0 only for a <= (n-2)/2; then the time to q = 0,
+    int C/U' dq, diverges (a <= n - 2): the body never returns. For a > (n-2)/2 (every law
+    with n < 2, C(0) = 0 on Hooke's spring, the viscoelastic law for n > 2) inertia takes
+    over near q = 0 and the body returns, however late (viscoelastic A = 30 s on Hertz with
+    k = m = v0 = 1: e = 2.8e-8 after 499.7 s). At a = (n-2)/2 the tail is the universal
+    law's, a virtual oscillator with zeta0 = c_a / (2 sqrt(m) n sqrt(c/2)): no return iff
+    zeta0 >= 1.
+
+    Returns
+    -------
+    (bool or None, str)
+        True (never returns), False (returns), None (c unknown at a = (n-2)/2), and a
+        phrase naming the tail for a refusal.
+    """
+    n = float(pot.leading_exponent)
+    c = pot.leading_coefficient
+    leads: dict = {}
+
+    def add(e, coef):
+        key = round(float(e), 9)
+        leads[key] = leads.get(key, 0.0) + coef
+
+    cc = math.nan if c is None else float(c)
+    for cj, e in law.terms():
+        if cj > 0:
+            add(e, cj)
+    if law.alpha:
+        add(n - 1.0, law.alpha * n * cc)
+    if law.A:
+        add(n - 2.0, law.A * n * (n - 1.0) * cc)
+    if law.zeta:
+        add(n / 2.0 - 1.0, 2.0 * law.zeta * math.sqrt(m) * n * math.sqrt(cc / 2.0))
+    if not leads:
+        return False, "undamped at contact"
+    a = min(leads)
+    edge = (n - 2.0) / 2.0
+    if a < edge - 1e-9:
+        return True, f"C ~ q^{a:g} at contact, U ~ q^{n:g}"
+    if a > edge + 1e-9:
+        return False, f"C ~ q^{a:g} at contact, U ~ q^{n:g}: inertia takes over near q = 0"
+    z0 = leads[a] / (2.0 * math.sqrt(m) * n * math.sqrt(cc / 2.0))
+    if not math.isfinite(z0):
+        return None, "tail of unknown damping ratio"
+    return z0 >= 1.0, f"underdamped at contact, damping ratio {z0:.6g}"
+
+
+def _refuse_lost_return(pot: Potential, law: DampingLaw, m: float, v0: float) -> None:
+    """Refuse a no-return that stopped on the overlap (_NO_RETURN_Q) where the body returns.
+
+    The stop assumes a creep that never ends (`_creeps_for_ever`); where the tail returns
+    instead, its overlap fell out of float64 reach first (a near-critical tail:
+    q ~ exp(-pi zeta0 / sqrt(1 - zeta0^2)) q_max).
+    """
+    never, why = _creeps_for_ever(law, m, pot)
+    if never:
+        return
+    raise UnsupportedError(
+        f"solve_law_impact: the body returns (law {law.to_dict()}: {why}) but its overlap "
+        f"falls below 1e-10 of q_max first, out of the integrator's reach (v0 = {v0!r} m/s)"
+    )
+
+
 def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     terms = law.terms()
     cs = np.array([c for c, _ in terms], float)
     es = np.array([e for _, e in terms], float)
     zf = 2.0 * law.zeta * math.sqrt(m)
     n = float(pot.leading_exponent)
-    # Leading exponent a of C ~ q^a at contact: a creeping return takes int C / U' dq,
-    # finite only for a > n - 2 (see _general_kernel).
+    # Leading exponent a of C ~ q^a at contact.
     leads = [e for c, e in terms if c > 0]
     if law.alpha:
         leads.append(n - 1.0)
@@ -176,10 +339,17 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
         leads.append(n - 2.0)
     if law.zeta:
         leads.append(n / 2.0 - 1.0)
-    creeps = 1.0 if leads and min(leads) <= n - 2.0 + 1e-12 else 0.0
+    # The creep test of _general_kernel may stop a return only where the creep never ends
+    # (`_creeps_for_ever`; where c is unknown, a <= n - 2: int C / U' dq diverges).
+    never, _ = _creeps_for_ever(law, m, pot)
+    if never is None:
+        never = bool(leads) and min(leads) <= n - 2.0 + 1e-12
+    creeps = 1.0 if never else 0.0
     # C q' outweighs U' as q -> 0 (a < n - 1): the force pulls just before q = 0.
     pulls = 1.0 if leads and min(leads) < n - 1.0 - 1e-12 else 0.0
-    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls], float)
+    # Pure Hunt-Crossley: F = U' (1 + alpha q') never vanishes before q = 0 (_general_kernel).
+    nopull = 1.0 if law.name == "hunt-crossley" else 0.0
+    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull], float)
     if law.A and n < 2.0:
         raise HCVInputError(
             f"damping law 'viscoelastic' needs U'' finite at contact (leading exponent n >= 2, "
@@ -212,7 +382,9 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     ------
     HCVInputError
         Invalid numbers or law, a potential violating the paper's assumptions, or
-        an integration that did not finish within its step budget.
+        (`UnsupportedError`) an integration that did not finish within its step budget,
+        or a body that returns only after its overlap fell below 1e-10 of q_max (a
+        near-critical tail of a nonlinear spring), out of the integrator's reach.
     """
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
@@ -226,6 +398,9 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     _check_exponent(potential)
     qE = _validated_top(potential, E)
     cs, es, sc = _law_arrays(law, m, potential)
+    lin = _linear_ratio(potential, law, m)
+    if lin is not None:
+        return _linear_solution(v0, m, lin[0], lin[1], law)
     pk = _power_terms(potential)
     if pk is not None:
         out = _compiled_solve(v0, qE, pk[0], pk[1], cs, es, sc)
@@ -238,12 +413,16 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
             f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
         )
     returns = r["returns"] == 1.0
+    if not returns and r["stop"] == STOP_NO_RETURN_Q:
+        _refuse_lost_return(potential, law, m, v0)
     nst = int(r["n_steps"])
     t_scale = qE / v0
     t_end = r["t_end"] if returns else math.inf
     err_t = ERROR_SAFETY * r["err_t"] * t_scale + 100 * nst * _EPS * (
         t_end if returns else r["t_zf"] if math.isfinite(r["t_zf"]) else t_scale
     )
+    if r["err_zf"] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
+        err_t += ERROR_SAFETY * r["err_zf"]
     err_w = ERROR_SAFETY * r["err_w"] + 100 * nst * _EPS
     return LawImpactSolution(
         v0=v0,

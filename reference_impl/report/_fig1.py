@@ -4,23 +4,37 @@ from __future__ import annotations
 
 import numpy as np
 
-from reference_impl.claims import fig1 as fig1_claim
 from reference_impl.report._common import g
-from reference_impl.studies.paper import FIG1
+
+__all__ = ["fig1_figure"]
 
 # MATLAB's default colour order, as in the paper's figure: blue, red, yellow.
 COLOURS = ("#0072BD", "#D95319", "#EDB120")
-RTOL = fig1_claim.RTOL
 
 
-def fig1_figure(runs: list[dict], path) -> None:
-    """Panels (a) physical phase space, (b) transformed phase space, (c) time series, (d) drift."""
+def fig1_figure(runs: list[dict], path, paper: dict, rtol: float) -> None:
+    """Panels (a) physical phase space, (b) transformed phase space, (c) time series, (d) drift.
+
+    Parameters
+    ----------
+    runs : list of dict
+        `claims.fig1.runs()`: one run per speed and C0, with its curves.
+    path : path-like
+        PNG written.
+    paper : dict
+        The paper's Fig. 1 settings (`studies.paper.FIG1`: velocities, K, M, C0, claimed
+        energy error).
+    rtol : float
+        RK45's relative tolerance of the runs (the panel (d) title).
+    """
+    FIG1, RTOL = paper, rtol  # noqa: N806 (the paper's names)
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
     fig = Figure(figsize=(11.5, 8.6), dpi=110)
     ax = fig.subplots(2, 2)
-    fig.subplots_adjust(left=0.075, right=0.985, bottom=0.07, top=0.91, wspace=0.22, hspace=0.3)
+    # Room above the panels for the line legend and below for the drift legend (off the data).
+    fig.subplots_adjust(left=0.075, right=0.985, bottom=0.13, top=0.87, wspace=0.22, hspace=0.3)
     (pa, pb), (pc, pd) = ax
     speeds = list(FIG1["velocities"])
     for r in runs:
@@ -61,11 +75,20 @@ def fig1_figure(runs: list[dict], path) -> None:
     )
     pd.set(
         xlabel="time t [ms]",
-        ylabel="|H(t)/H(0) − 1|",
+        ylabel="|H(t)/H(0) − 1| [-]",
         title=f"(d) transformed energy drift, C0 = 0, RK45 rtol = atol = {g(RTOL)}",
         ylim=(1e-17, 1e-11),
     )
-    pd.legend(fontsize=8.5, loc="lower right")
+    fig.legend(
+        *pd.get_legend_handles_labels(),
+        fontsize=8.5,
+        loc="lower right",
+        bbox_to_anchor=(0.985, 0.0),
+        ncol=3,
+        title="(d) C0 = 0",
+        title_fontsize=8.5,
+        frameon=False,
+    )
     for a in ax.flat:
         a.grid(True, alpha=0.3)
         a.tick_params(labelsize=9)
@@ -77,7 +100,14 @@ def fig1_figure(runs: list[dict], path) -> None:
         Line2D([], [], color="k", ls="--", label="C0 = 0 (conservative)"),
         Line2D([], [], color="k", ls="-", label=f"C0 = {FIG1['C0'][1]:g} (universal law)"),
     ]
-    pa.legend(handles=handles, fontsize=8.5, loc="upper right")
+    fig.legend(
+        handles=handles,
+        fontsize=9,
+        loc="upper center",
+        bbox_to_anchor=(0.5, 0.945),
+        ncol=len(handles),
+        frameon=False,
+    )
     fig.suptitle(
         "Fig. 1 regenerated: ellipsoid a = 15 mm, b = c = 8 mm, m = 0.05 kg, Kn = 1e8, α = 0.5",
         fontsize=12,

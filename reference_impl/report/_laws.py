@@ -1,7 +1,7 @@
 """Report section: restitution against impact speed for every damping law (issue 18).
 
-Measured by `reference_impl.studies.laws` (calibration e = 0.8 at 1 m/s, Hertz); every
-number of the text is generated from that measurement.
+Measured by `reference_impl.studies.laws.laws_results` (calibration e = 0.8 at 1 m/s,
+Hertz); every number of the text is read from that measurement in the results dict.
 """
 
 from __future__ import annotations
@@ -11,73 +11,18 @@ import math
 import numpy as np
 
 from reference_impl.report._blocks import IMG, UL, H, P, T, _num
-from reference_impl.studies.laws import (
-    E_CAL,
-    HERTZ,
-    SPEEDS,
-    V_CAL,
-    calibrated_laws,
-    restitution_curves,
-    schwager_poeschel,
-)
 
-__all__ = ["run_laws", "laws_figure", "laws_blocks", "FIGURE"]
+__all__ = ["laws_figure", "laws_blocks", "FIGURE"]
 
 FIGURE = "damping_laws.png"
 
 
-def run_laws(quick: bool = False) -> dict:
-    """Curves at both ends, drift per law and the Schwager-Poeschel comparison (JSON-safe)."""
-
-    speeds = SPEEDS[::5] if quick else SPEEDS
-    res = restitution_curves(speeds)
-    v = res["speeds"]
-    laws = []
-    for name, c in res["curves"].items():
-        row = {"law": name, "damping": c["law"]}
-        for end in ("overlap", "zero_force"):
-            e = c[end]
-            row[end] = [float(x) for x in e]
-            row[f"{end}_spread"] = float(e.max() - e.min())
-            row[f"{end}_at_vmin"] = float(e[0])
-            row[f"{end}_at_vmax"] = float(e[-1])
-        row["returns"] = [bool(x) for x in c["returns"]]
-        laws.append(row)
-    A = calibrated_laws()["viscoelastic"]["A"]
-    sp = schwager_poeschel(A, res["k"], res["m"], v)
-    vis = res["curves"]["viscoelastic"]
-    sp_rows = []
-    for i in range(len(v)):
-        sp_rows.append(
-            {
-                "v0": float(v[i]),
-                "one_minus_e_expansion": float(sp[i]),
-                "one_minus_e_overlap": float(1 - vis["overlap"][i]),
-                "one_minus_e_zero_force": float(1 - vis["zero_force"][i]),
-                "rel_dev_overlap": float(sp[i] / (1 - vis["overlap"][i]) - 1),
-                "rel_dev_zero_force": float(sp[i] / (1 - vis["zero_force"][i]) - 1),
-            }
-        )
-    return {
-        "speeds": [float(x) for x in v],
-        "e_cal": E_CAL,
-        "v_cal": V_CAL,
-        "hertz_k": HERTZ[0],
-        "hertz_p": HERTZ[1],
-        "mass": HERTZ[2],
-        "laws": laws,
-        "schwager_poeschel": sp_rows,
-    }
-
-
 def laws_figure(data: dict, path) -> None:
-    """One figure: e(v0) of every law at both ends (log speed axis)."""
-    import matplotlib
+    """One figure: e(v0) of every law at both ends (log speed axis), the legend right of it."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8.0, 5.0))
+    fig = Figure(figsize=(11.5, 5.0), layout="constrained")
+    ax = fig.subplots()
     v = np.asarray(data["speeds"])
     for i, row in enumerate(data["laws"]):
         color = f"C{i}"
@@ -100,16 +45,15 @@ def laws_figure(data: dict, path) -> None:
     )
     ax.axvline(data["v_cal"], color="0.6", lw=0.8)
     ax.set_xlabel("impact speed v0 [m/s]")
-    ax.set_ylabel("coefficient of restitution e = -v_out / v0")
+    ax.set_ylabel("coefficient of restitution e = -v_out / v0 [-]")
     ax.set_title(
         f"Hertz contact, each law calibrated to e = {data['e_cal']} at {data['v_cal']} m/s"
     )
     ax.set_ylim(0, 1.02)
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    # Off the data: right of the axes.
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
     fig.savefig(path, dpi=130)
-    plt.close(fig)
 
 
 def _pct(x) -> str:

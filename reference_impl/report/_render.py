@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from pathlib import Path
 
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
@@ -18,9 +19,8 @@ from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._laws import laws_blocks
 from reference_impl.report._render_adapters import _adapters
-from reference_impl.report._render_sec6 import _dtmap
+from reference_impl.report._render_sec6 import dtmap_blocks
 from reference_impl.report._steps import resolution_blocks
-from reference_impl.report._wp import SUMMARY_RTOL, family_summary
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -37,7 +37,8 @@ def _header(r) -> list:
         P(
             f"Generated {r['generated_utc']} by `hcv report`{' --quick' if r['mode'] == 'quick' else ''}"
             f" in {r['timings_seconds']['total']:.1f} s on {env['cpu_count']} CPU(s); commit "
-            f"{commit[:12]}{dirty}. Every result below was computed by this run. Numbers typed in "
+            f"{commit[:12]}{dirty}. Every result below was computed by this run"
+            f"{_carried_note(r)}. Numbers typed in "
             f"are inputs only: the paper's data (Table 1 as printed, the Fig. 1 settings, "
             f"0.735 a, 3e-13), the parameters of the scenes and cases, and the tolerances of the "
             f"verdict rules, which are stated with each verdict."
@@ -49,6 +50,18 @@ def _header(r) -> list:
     counts = {v: sum(c["verdict"] == v for c in r["claims"]) for v in VERDICT_MARK}
     blocks.append(P("Verdicts: " + ", ".join(f"{n} {v}" for v, n in counts.items() if n) + "."))
     return blocks
+
+
+def _carried_note(r) -> str:
+    """The header's exception when the code sections were carried from another run."""
+    c = r.get("carried")
+    if not c:
+        return ""
+    return (
+        f", except the contact codes' sections, carried from the report of "
+        f"{c['generated_utc']} (commit {str(c.get('git_commit') or 'unknown')[:12]}) and "
+        "marked there"
+    )
 
 
 def _tests_cell(tests: list[str]) -> str:
@@ -255,15 +268,14 @@ def _wp(r) -> list:
         ),
         UL([f"{k}: {v}" for k, v in scenes.items()]),
     ]
-
-    fam = family_summary(r["work_precision"])
+    fam = r["work_precision_families"]["rows"]
     blocks.append(
         P(
             "Every potential family has a scene (the added sphere, sum of power laws and user "
             "expression run the exact solver, DOP853 and RK45 only; their trajectory truth, "
             "like the others', evaluates U, U' at 30 digits). Per family, from the measured "
             "rows (largest of the four relative errors; DOP853 at the rtol nearest "
-            f"{g(SUMMARY_RTOL)} run):"
+            f"{g(r['work_precision_families']['dop853_rtol'])} run):"
         )
     )
     blocks.append(
@@ -316,6 +328,7 @@ def _wp(r) -> list:
 
 def _hard(r) -> list:
     hc = r["hard_cases"]
+    st = hc["settings"]
     rows = []
     for x in hc["cases"]:
         qa = x.get("q_max_over_a")
@@ -340,10 +353,10 @@ def _hard(r) -> list:
         P(
             "Each case runs every part of the suite: the section 6 bound (`dt_safe`, its "
             "geometry class and the endpoint shortcut 2 m v0/U'(q_max)), the measured critical "
-            "step of one impact, the exact solver and scipy DOP853 (rtol 1e-12) against a "
-            "25-digit mpmath contact time (the physical integral for conservative contacts, "
-            "`solve_impact_mp` for damped ones), and velocity Verlet at 1000 steps per "
-            "contact. For a fixed shape the dimensionless problem depends on Kn and v0 only "
+            f"step of one impact, the exact solver and scipy DOP853 (rtol {g(st['ode_rtol'])}) "
+            f"against a {st['mp_dps']}-digit mpmath contact time (the physical integral for "
+            "conservative contacts, `solve_impact_mp` for damped ones), and velocity Verlet at "
+            f"{st['verlet_steps']} steps per contact. For a fixed shape the dimensionless problem depends on Kn and v0 only "
             "through q_max/a, so the depth sweep covers the stiffness range as well."
         ),
         T(
@@ -400,7 +413,7 @@ def _sections(r) -> list:
         + _erratum_blocks(r)
         + _table1(r)
         + _fig1(r)
-        + _dtmap(r)
+        + dtmap_blocks(r)
         + _wp(r)
         + laws_blocks(r)
         + _hard(r)
@@ -422,11 +435,14 @@ def markdown(r: dict) -> str:
 # ----------------------------------------------------------------------------------
 # HTML
 # ----------------------------------------------------------------------------------
+# Wide tables (the contact codes side by side: 4400 px) scroll inside their own box, so the
+# page itself never scrolls sideways at 1280 px (issue 31; verification/test_browser.py).
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1280px;
 margin:1.5em auto;padding:0 1em;color:#1a1a1a;line-height:1.45}
 h1{font-size:1.55em}h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margin-top:1.8em}
 table{border-collapse:collapse;margin:.8em 0;font-size:.86em}
+table{display:block;overflow-x:auto;max-width:100%}
 th,td{border:1px solid #ccc;padding:.25em .5em;vertical-align:top;text-align:left}
 th{background:#f2f2f2}td.bad{background:#fde0dc;color:#8a1c12;font-weight:600}
 td.good{background:#e3f4e1}td.warn{background:#fff3cd}
@@ -438,10 +454,17 @@ code{background:#f4f4f4;padding:0 .2em}nav a{margin-right:1em}
 """
 
 
+# A Markdown link [text](target) of the blocks' text (the erratum names its scripts so).
+_LINK = re.compile(r"\[([^\[\]]+)\]\(([^()\s]+)\)")
+
+
 def _inline(text: str) -> str:
-    """Escape, then render `code` spans."""
+    """Escape, then render `code` spans and [text](target) links (outside code spans)."""
     parts = html.escape(text).split("`")
-    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
+    return "".join(
+        f"<code>{p}</code>" if i % 2 else _LINK.sub(r'<a href="\2">\1</a>', p)
+        for i, p in enumerate(parts)
+    )
 
 
 def _html(blocks, fig_dir: Path, out: list[str]) -> None:

@@ -34,7 +34,7 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     rows, flags = [], []
     for m in d.get("metrics", []):
         status = m.get("status", "")
-        if status == "skip":
+        if status in ("skip", "n/a"):  # n/a: the metric does not apply
             continue
         unit = _UNITS.get(m.get("metric", ""), "")
         at = _bench_num(m.get("at_v0"))
@@ -64,11 +64,29 @@ def _scenes_no_code_ran(docs) -> dict[str, str]:
     for d in docs:
         for m in d.get("metrics", []):
             scene = m.get("scene", "")
-            if m.get("status") == "skip":
+            if m.get("status") in ("skip", "n/a"):
                 seen.setdefault(scene, m.get("explanation", ""))
             else:
                 ran.add(scene)
     return {k: v for k, v in seen.items() if k not in ran}
+
+
+def _carried(r) -> list:
+    """A marked paragraph when these sections were carried from an earlier run."""
+    c = r.get("carried")
+    if not c:
+        return []
+    dirty = ", with uncommitted changes" if c.get("git_dirty") else ""
+    return [
+        P(
+            f"Not run by this report ({c.get('reason', 'carried')}): the sections on "
+            f"{', '.join(map(str, c.get('adapters') or []))} below are carried unchanged from "
+            f"the report of {c['generated_utc']} (commit "
+            f"{str(c.get('git_commit') or 'unknown')[:12]}{dirty}). `hcv report --adapter NAME` "
+            "measures a code again.",
+            "warn",
+        )
+    ]
 
 
 def _adapters(r) -> list:
@@ -89,6 +107,7 @@ def _adapters(r) -> list:
     ]
     blocks = [
         H(2, "Contact codes benchmarked (hcv report --adapter)", "adapters"),
+        *_carried(r),
         P(
             "Each code ran the bench scenes through its adapter; every metric is compared "
             "with its reference (the exact solution of the law the code declares it "

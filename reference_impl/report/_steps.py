@@ -1,18 +1,7 @@
 """Report section: what each benchmarked code delivers against steps per contact.
 
-For every code given with ``hcv report --adapter`` and each of its variants, on
-the linear scene ``hooke-damped`` (the one law LAMMPS, Kratos and MuJoCo all
-have: U' = k q, constant dashpot, asked e = 0.5 at the q = 0 end) and on
-``hertz-damped`` (Tsuji-type damping, a force that is continuous at contact
-onset; MuJoCo declines it), one impact at v0 = 1 m/s is run at dt = t_c / N for N
-in `STEPS` (t_c the exact contact time of the scene as asked), through the same
-isolated executor as ``hcv bench``. Measured:
-the delivered restitution (q = 0 end, -v / v0 at the first sample out of contact)
-and the contact time; each is compared with the exact solution of the law the
-code declares at that dt (`ImplementedLaw`, which may change with dt: MuJoCo's
-timeconst clamp). The order of convergence is the slope of log(error) against
-log(dt) over N >= `FIT_FROM` (the asymptotic range; errors below `_FLOOR` are
-round-off and left out). One figure per code.
+Rendered from the study's rows (results.json ``steps_per_contact``, measured by
+`reference_impl.campaign._steps`) and its settings (``steps_per_contact_settings``).
 """
 
 from __future__ import annotations
@@ -22,103 +11,22 @@ from pathlib import Path
 
 import numpy as np
 
-from reference_impl.adapters.base import AdapterScene, ImplementedLaw
-from reference_impl.bench.measure import exact_reference, measure
-from reference_impl.bench.worker import make_executor
-from reference_impl.exact.solve import solve_impact
 from reference_impl.report._blocks import IMG, H, P, T
-from reference_impl.scenes import load_scene
 
-__all__ = ["FIT_FROM", "SCENES", "STEPS", "resolution_blocks", "resolution_study"]
-
-SCENES = ("hooke-damped", "hertz-damped")
-V0 = 1.0  # m/s, the scene's middle speed
-STEPS = (3, 5, 10, 20, 50, 100, 200, 400, 800)
-# The order is fitted where the leading error term dominates: from 20 steps per contact
-# on (below, the step is a sizeable fraction of the contact and higher terms matter).
-FIT_FROM = 20
-# Relative errors below this are round-off, not discretisation (left out of the fit).
-_FLOOR = 1e-13
-_BUDGET, _EXTRA_STEPS = 4.0, 64
+__all__ = ["plot_steps", "resolution_blocks"]
 
 
-def _order(ns, errs) -> float | None:
-    pts = [
-        (1.0 / n, e)
-        for n, e in zip(ns, errs, strict=True)
-        if n >= FIT_FROM and isinstance(e, float) and math.isfinite(e) and e > _FLOOR
-    ]
-    if len(pts) < 3:
-        return None
-    x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
-    return float(np.polyfit(x, y, 1)[0])
+def plot_steps(code: dict, path: Path, scenes) -> None:
+    """One code's figure: delivered restitution (left) and contact-time error (right)
+    against steps per contact, one row per scene of ``scenes`` it ran; each row's legend
+    (variants, the asked value, the slope guides) stands right of its panels, off the data."""
+    from matplotlib.figure import Figure
 
-
-def _one_code(spec: str, timeout: float = 120.0) -> dict:
-    """Every variant of ``spec`` on every scene of `SCENES` it runs, at every N of `STEPS`."""
-
-    executor = make_executor(spec)
-    out: dict = {"adapter": spec, "v0": V0, "variants": []}
-    try:
-        for name in SCENES:
-            sc = load_scene(name)
-            t_c = float(solve_impact(sc.potential, sc.mass, V0, sc.zeta or 0.0).contact_time)
-            for i, var in enumerate(executor.variants):
-                probe = AdapterScene.from_scene(sc, V0, t_c / 200, 1)
-                entry: dict = {"label": var.label, "scene": name,
-                               "asked_restitution": probe.restitution}  # fmt: skip
-                reason = var.supports(probe)
-                if reason:
-                    out["variants"].append({**entry, "skipped": reason})
-                    continue
-                rows = []
-                for n in STEPS:
-                    dt = t_c / n
-                    budget = int(math.ceil(_BUDGET * n)) + _EXTRA_STEPS
-                    asc = AdapterScene.from_scene(sc, V0, dt, budget)
-                    row: dict = {"steps_per_contact": n, "dt": dt}
-                    run = executor.call(i, "impact", asc, timeout=timeout)
-                    law = executor.call(i, "implemented_law", asc, timeout=timeout)
-                    if run.declined:
-                        row["failure"] = f"declined: {run.declined}"
-                    elif not run.ok or not law.ok or not isinstance(law.value, ImplementedLaw):
-                        row["failure"] = run.error or law.error or "no implemented law"
-                    else:
-                        m = measure(run.value, V0)
-                        ex = exact_reference(law.value, V0)
-                        row["restitution"] = m.get("restitution", math.nan)
-                        row["contact_time"] = m.get("contact_time", math.nan)
-                        row["exact_restitution"] = ex["restitution"]
-                        row["exact_contact_time"] = ex["contact_time"]
-                        if not m.get("separated"):
-                            row["failure"] = m.get("reason", "did not separate")
-                        else:
-                            row["err_restitution"] = abs(row["restitution"] / ex["restitution"] - 1)
-                            row["err_contact_time"] = abs(
-                                row["contact_time"] / ex["contact_time"] - 1
-                            )
-                    rows.append(row)
-                ns = [r["steps_per_contact"] for r in rows]
-                entry.update(
-                    rows=rows,
-                    order_restitution=_order(ns, [r.get("err_restitution") for r in rows]),
-                    order_contact_time=_order(ns, [r.get("err_contact_time") for r in rows]),
-                )
-                out["variants"].append(entry)
-    finally:
-        executor.close()
-    return out
-
-
-def _plot(code: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    scenes = [n for n in SCENES if any(v.get("rows") and v["scene"] == n for v in code["variants"])]
-    fig, axes = plt.subplots(len(scenes), 2, figsize=(11, 4.0 * len(scenes)), squeeze=False)
-    n = np.array([STEPS[0], STEPS[-1]], float)
+    scenes = [n for n in scenes if any(v.get("rows") and v["scene"] == n for v in code["variants"])]
+    ns_all = [r["steps_per_contact"] for v in code["variants"] for r in v.get("rows", [])]
+    n = np.array([min(ns_all), max(ns_all)], float)
+    fig = Figure(figsize=(14.0, 4.2 * len(scenes) + 0.4), layout="constrained")
+    axes = fig.subplots(len(scenes), 2, squeeze=False)
     for (a, b), name in zip(axes, scenes, strict=True):
         asked = None
         for var in code["variants"]:
@@ -131,7 +39,7 @@ def _plot(code: dict, path: Path) -> None:
             a.plot(ns, [r["exact_restitution"] for r in rows], ":", color=line.get_color(), lw=1)
             ok = [r for r in rows if r.get("err_contact_time", 0) > 0]
             b.loglog([r["steps_per_contact"] for r in ok], [r["err_contact_time"] for r in ok],
-                     "o-", ms=3, color=line.get_color(), label=var["label"])  # fmt: skip
+                     "o-", ms=3, color=line.get_color())  # fmt: skip
         if asked is not None:
             a.axhline(asked, color="k", ls="--", lw=1, label="asked (q = 0 end)")
         for order, style in ((1, "--"), (2, "-.")):
@@ -139,29 +47,21 @@ def _plot(code: dict, path: Path) -> None:
                      label=f"slope -{order}")  # fmt: skip
         a.set_xscale("log")
         for ax in (a, b):
-            ax.set_xlabel("steps per contact N (dt = t_c / N)")
-            ax.legend(fontsize=6)
-        a.set_ylabel("delivered restitution -v/v0 at q = 0")
+            ax.set_xlabel("steps per contact N = t_c / dt [-]")
+            ax.grid(True, which="major", alpha=0.3)
+        handles, labels = [], []
+        for ax in (a, b):
+            for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+                handles.append(h)
+                labels.append(lab)
+        b.legend(handles, labels, fontsize=8.5, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                 borderaxespad=0.0)  # fmt: skip
+        a.set_ylabel("delivered restitution -v/v0 at q = 0 [-]")
         a.set_title(f"{name}: restitution (dotted: exact, declared law)", fontsize=10)
-        b.set_ylabel("|contact time / exact - 1| (declared law)")
+        b.set_ylabel("|contact time / exact - 1| (declared law) [-]")
         b.set_title(f"{name}: contact-time error", fontsize=10)
     fig.suptitle(f"{code['adapter']} at v0 = {code['v0']:g} m/s")
-    fig.tight_layout()
     fig.savefig(path, dpi=100)
-    plt.close(fig)
-
-
-def resolution_study(adapters, fig_dir: Path) -> list[dict]:
-    """Measure and plot every code of ``adapters``; returns one JSON-ready dict per code."""
-    out = []
-    for spec in adapters:
-        code = _one_code(spec)
-        safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(spec))[:60]
-        if any(v.get("rows") for v in code["variants"]):
-            code["figure"] = f"steps_{safe}.png"
-            _plot(code, fig_dir / code["figure"])
-        out.append(code)
-    return out
 
 
 def _g(x, fmt="{:.3g}") -> str:
@@ -173,14 +73,15 @@ def resolution_blocks(r: dict) -> list:
     codes = r.get("steps_per_contact") or []
     if not codes:
         return []
+    st = r["steps_per_contact_settings"]
     blocks = [
         H(3, "Delivered restitution and contact time against steps per contact", "steps"),
         P(
-            f"Scenes {', '.join(SCENES)} at v0 = {V0:g} m/s, dt = t_c / N for N = "
-            f"{', '.join(map(str, STEPS))} (t_c: exact contact time of the scene as asked). "
+            f"Scenes {', '.join(st['scenes'])} at v0 = {st['v0']:g} m/s, dt = t_c / N for N = "
+            f"{', '.join(map(str, st['steps']))} (t_c: exact contact time of the scene as asked). "
             "Errors are relative to the exact solution of the law each variant declares at "
             f"that dt; the order is the slope of log(error) against log(dt) for N >= "
-            f"{FIT_FROM}; e is the restitution at q = 0 (asked: the scene's, at that end). "
+            f"{st['fit_from']}; e is the restitution at q = 0 (asked: the scene's, at that end). "
             "A variant clipping tension delivers the zero-force end of its law."
         ),
     ]

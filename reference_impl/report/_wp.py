@@ -1,4 +1,8 @@
-"""Speed against error (work-precision diagrams) in the report."""
+"""Speed against error (work-precision diagrams) in the report: the figures.
+
+Drawn from the study's rows (`reference_impl.studies.wp_summary.run_wp`, written to
+results.json as ``work_precision``); nothing here runs a solver.
+"""
 
 from __future__ import annotations
 
@@ -8,13 +12,8 @@ import numpy as np
 import pandas as pd
 
 from reference_impl.report._common import g
-from reference_impl.studies.workprecision import (
-    IVP_METHODS,
-    IVP_RTOLS,
-    VERLET_STEPS,
-    default_scenes,
-    work_precision,
-)
+
+__all__ = ["FLOOR", "METHOD_STYLE", "METRICS", "wp_figures", "wp_overview_figure"]
 
 METRICS = (
     ("err_contact_time", "contact time t_c"),
@@ -32,93 +31,14 @@ METHOD_STYLE = {
 }
 # Errors below this are drawn at it on the log axes (the exact solver can hit 0).
 FLOOR = 1e-17
-# Accuracy targets of the summary table (relative error in all four metrics).
-TARGETS = (1e-6, 1e-10)
 
 
-def settings_text(quick: bool) -> str:
-    """What the study ran (and what --quick drops)."""
-    methods = ("DOP853", "RK45") if quick else IVP_METHODS
-    rtols = IVP_RTOLS[::2] if quick else IVP_RTOLS
-    steps = VERLET_STEPS[::2] if quick else VERLET_STEPS
-    return (
-        f"solve_ivp methods {', '.join(methods)} at rtol ∈ {{{', '.join(g(r) for r in rtols)}}}"
-        f" (atol = rtol × state scale); velocity Verlet at {', '.join(map(str, steps))} steps "
-        f"per contact; the exact harmonic-map solver at its default level"
-    )
-
-
-# Scene left out by --quick (its damped twin, the ellipsoid and the other families remain).
-QUICK_SKIP = ("hertz-k1e9",)
-# Potential family of a scene, by the class of its potential.
-# The study's scene of each family, by the family's scene name (`Potential.family`).
-FAMILY_NAMES = {
-    "power": "power law (Hertz)",
-    "ellipsoid": "ellipsoid (paper)",
-    "sphere": "sphere",
-    "sum": "sum of power laws",
-    "expression": "user expression",
-}
-# The DOP853 tolerance the per-family summary quotes (the row whose rtol is nearest in log).
-SUMMARY_RTOL = 1e-12
-
-
-def scene_families() -> dict[str, str]:
-    """{scene name: family label} for `default_scenes`."""
-    return {
-        s.name: FAMILY_NAMES.get(s.potential.family, s.potential.label or type(s.potential).__name__)
-        for s in default_scenes()
-    }
-
-
-def _rtol_of(setting: str) -> float:
-    return float(setting.split("=", 1)[1]) if setting.startswith("rtol=") else math.nan
-
-
-def family_summary(rows: list[dict]) -> list[dict]:
-    """Per scene, from the measured rows: the exact solver's time, largest error and own
-    contact-time bound, and DOP853's time and largest error at the rtol nearest
-    `SUMMARY_RTOL` (and that time over the exact solver's)."""
-    fam = scene_families()
-    out = []
-    for scene in dict.fromkeys(r["scene"] for r in rows):
-        ex = [r for r in rows if r["scene"] == scene and r["method"] == "exact"]
-        dop = [
-            r
-            for r in rows
-            if r["scene"] == scene
-            and r["method"] == "DOP853"
-            and r.get("seconds") is not None
-            and math.isfinite(float(r["seconds"]))
-        ]
-        if not ex:
-            continue
-        e = ex[0]
-        d = (
-            min(dop, key=lambda r: abs(math.log10(_rtol_of(r["setting"]) / SUMMARY_RTOL)))
-            if dop
-            else None
-        )
-        out.append(
-            {
-                "scene": scene,
-                "family": fam.get(scene, "?"),
-                "exact_seconds": float(e["seconds"]),
-                "exact_max_error": _max_err(e),
-                "exact_contact_time_bound": float(e.get("contact_time_bound", math.nan)),
-                "dop853_setting": d["setting"] if d else "not run",
-                "dop853_seconds": float(d["seconds"]) if d else math.nan,
-                "dop853_max_error": _max_err(d) if d else math.nan,
-                "dop853_over_exact": float(d["seconds"]) / float(e["seconds"]) if d else math.nan,
-            }
-        )
-    return out
-
-
-def run_wp(quick: bool, progress=None) -> pd.DataFrame:
-    """`work_precision` with the report's Verlet points (quick: without `QUICK_SKIP`)."""
-    scenes = [s for s in default_scenes() if not (quick and s.name in QUICK_SKIP)]
-    return work_precision(scenes, quick=quick, progress=progress)
+def _max_err(r) -> float:
+    """Largest of the four relative errors of a row (inf when one is missing), as the
+    study's `max_error` defines it."""
+    vals = [r.get(c, math.nan) for c, _ in METRICS]
+    vals = [float(v) for v in vals if v is not None]
+    return max(vals) if vals and all(math.isfinite(v) for v in vals) else math.inf
 
 
 def _short(info: str) -> str:
@@ -136,13 +56,15 @@ def _require_styles(df: pd.DataFrame) -> None:
         )
 
 
-def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, str]]:
+def wp_figures(
+    df: pd.DataFrame, fig_dir, scenes_info: dict, families: dict[str, str]
+) -> list[tuple[str, str]]:
     """The per-family overview, then one figure per scene with four log-log panels;
     returns [(file name, caption)]. Raises ValueError for a method without a style."""
     from matplotlib.figure import Figure
 
     _require_styles(df)
-    out = [wp_overview_figure(df, fig_dir)]
+    out = [wp_overview_figure(df, fig_dir, families)]
     for scene in dict.fromkeys(df.scene):
         d = df[(df.scene == scene) & df.seconds.notna()]
         fig = Figure(figsize=(11.5, 8.4), dpi=110)
@@ -180,7 +102,7 @@ def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, 
                         )
             ax.set(
                 xlabel="wall time per impact [s] (median of repeats)",
-                ylabel="relative error",
+                ylabel="relative error [-]",
                 title=title,
             )
             ax.axhline(FLOOR, color="0.6", lw=0.6, ls=":")
@@ -217,14 +139,14 @@ def wp_figures(df: pd.DataFrame, fig_dir, scenes_info: dict) -> list[tuple[str, 
 _OVERVIEW_COLS = 3
 
 
-def wp_overview_figure(df: pd.DataFrame, fig_dir) -> tuple[str, str]:
+def wp_overview_figure(df: pd.DataFrame, fig_dir, families: dict[str, str]) -> tuple[str, str]:
     """One panel per scene (every family): the largest of the four relative errors
     against wall time, every method; returns (file name, caption). Raises ValueError for
     a method without a style."""
     from matplotlib.figure import Figure
 
     _require_styles(df)
-    fam = scene_families()
+    fam = families
     scenes = list(dict.fromkeys(df.scene))
     nrow = -(-len(scenes) // _OVERVIEW_COLS)
     fig = Figure(figsize=(13.0, 3.9 * nrow + 0.6), dpi=110)
@@ -250,7 +172,7 @@ def wp_overview_figure(df: pd.DataFrame, fig_dir) -> tuple[str, str]:
                 )
         ax.set(
             xlabel="wall time per impact [s]",
-            ylabel="largest relative error (t_c, e, q_max, q(t))",
+            ylabel="largest relative error (t_c, e, q_max, q(t)) [-]",
             title=f"{scene}: {fam.get(scene, '?')}",
         )
         ax.axhline(FLOOR, color="0.6", lw=0.6, ls=":")
@@ -284,49 +206,3 @@ def wp_overview_figure(df: pd.DataFrame, fig_dir) -> tuple[str, str]:
         "penetration, trajectory) against wall time per impact, one panel per scene and "
         f"so per potential family. Errors below {g(FLOOR)} are drawn at {g(FLOOR)}.",
     )
-
-
-def _max_err(r) -> float:
-    """Largest of the four relative errors of a row (inf when one is missing)."""
-    vals = [r.get(c, math.nan) for c, _ in METRICS]
-    vals = [float(v) for v in vals if v is not None]
-    return max(vals) if vals and all(math.isfinite(v) for v in vals) else math.inf
-
-
-def wp_summary(df: pd.DataFrame) -> list[dict]:
-    """Per scene and method: best error, and the fastest setting reaching each target."""
-    rows = []
-    for scene in dict.fromkeys(df.scene):
-        d = df[df.scene == scene]
-        ex = d[d.method == "exact"]
-        t_exact = float(ex.seconds.iloc[0]) if len(ex) else math.nan
-        for method in dict.fromkeys(d.method):
-            s = d[(d.method == method) & d.seconds.notna()]
-            if s.empty:
-                continue
-            errs = s.apply(lambda r: _max_err(r.to_dict()), axis=1)
-            best = errs.idxmin()
-            row = {
-                "scene": scene,
-                "method": method,
-                "best max error": float(errs[best]),
-                "at setting": s.setting[best],
-                "time at best [s]": float(s.seconds[best]),
-            }
-            for target in TARGETS:
-                reach = s[errs <= target]
-                if len(reach):
-                    f = reach.seconds.idxmin()
-                    row[f"fastest to ≤ {g(target)}"] = {
-                        "setting": s.setting[f],
-                        "seconds": float(s.seconds[f]),
-                        "exact_faster_by": float(s.seconds[f]) / t_exact,
-                    }
-                else:
-                    row[f"fastest to ≤ {g(target)}"] = {
-                        "setting": "not reached",
-                        "seconds": math.nan,
-                        "exact_faster_by": math.nan,
-                    }
-            rows.append(row)
-    return rows

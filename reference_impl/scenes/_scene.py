@@ -26,11 +26,8 @@ one line naming the scene and the offending key.
 
 from __future__ import annotations
 
-import difflib
 import json
-import math
 import os
-import sys
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -40,8 +37,16 @@ from typing import Any
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
 from reference_impl.scenes._catalogue import embedded_scenes
-from reference_impl.theory.damping import zeta_from_restitution
-from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
+from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength
+from reference_impl.scenes._fields import (
+    _keys,
+    _number,
+    _short,
+    _string,
+    _table,
+    _Where,
+)
+from reference_impl.theory.laws import DampingLaw
 
 __all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
 
@@ -57,24 +62,10 @@ _MAX_EXPRESSION_CHARS = 2000
 _MAX_PARAMS = 64
 _MAX_TERMS = 64
 _MAX_DEPTH = 8
-_MAX_NAME_CHARS = 200
 _KINDS = ("impact", "two-sided", "two-walls")
-_LAWS = LAWS
-_ENDS = ("overlap", "zero-force")
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
-_DAMPING_KEYS = (
-    "law",
-    "zeta",
-    "restitution",
-    "restitution_end",
-    "C0",
-    "K",
-    "M",
-    "c",
-    "exponent",
-    "A",
-    "alpha",
-)
+
+
 @dataclass(frozen=True)
 class Scene:
     """One validated scene.
@@ -106,6 +97,15 @@ class Scene:
     source : str
         Where the scene came from (a path, ``<embedded>/name.toml`` or the
         label given to `parse_scene`).
+    restitution_end : str
+        Where the scene's restitution is read: ``"overlap"`` (q back to 0) or
+        ``"zero-force"`` (``damping.restitution_end``); what ``hcv bench``'s delivery
+        metric compares with the asked restitution.
+    calibration : dict or None
+        For a law other than 'universal' given by ``restitution`` at
+        ``restitution_speed``: the request and the strength solved for it
+        (``parameter``, ``value``; a polynomial's ``scale`` too). `law` holds the
+        solved value.
     """
 
     name: str
@@ -118,6 +118,8 @@ class Scene:
     zeta: float | None
     source: str
     law: DampingLaw | None = None
+    restitution_end: str = "overlap"
+    calibration: dict | None = None
 
     def __post_init__(self):
         if self.law is None:  # built positionally by older callers: derive it
@@ -130,7 +132,8 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         """The scene in the schema of the TOML file, plus ``source`` (JSON-safe).
 
-        Without ``source`` the dict is accepted back by `scene_from_dict`.
+        Without ``source`` (and ``calibration``, present when a law's strength was
+        solved from a restitution) the dict is accepted back by `scene_from_dict`.
         """
         out: dict[str, Any] = {
             "name": self.name,
@@ -143,85 +146,15 @@ class Scene:
         out["potential"] = potential_to_dict(self.potential)
         out["damping"] = self.law.to_dict()
         out["source"] = self.source
+        if self.calibration is not None:
+            # how the law's strength was found (not read back: the law's value decides)
+            out["calibration"] = dict(self.calibration)
         return out
 
 
 def potential_to_dict(pot: Potential) -> dict[str, Any]:
     """A potential as a ``[potential]`` table of the scene schema (its family's own)."""
     return {"family": pot.family or type(pot).__name__, **pot.scene_params()}
-
-
-class _Where:
-    """Error factory that prefixes the scene source to every message."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def __call__(self, message: str) -> SceneError:
-        return SceneError(f"scene {self.source}: {message}")
-
-
-def _keys(err: _Where, table: dict, path: str, allowed, required=()) -> None:
-    """Reject unknown keys (naming the closest allowed one) and missing ones."""
-    for key in table:
-        if key not in allowed:
-            near = difflib.get_close_matches(key, allowed, n=1)
-            hint = f"did you mean {near[0]!r}?" if near else f"allowed: {', '.join(allowed)}"
-            raise err(f"unknown key {_short(path + str(key))} ({hint})")
-    for key in required:
-        if key not in table:
-            raise err(f"missing key {path + key!r}")
-
-
-def _number(
-    err: _Where,
-    value,
-    name: str,
-    *,
-    low: float = -math.inf,
-    strict: bool = True,
-    high: float = math.inf,
-) -> float:
-    """``value`` as a float, or SceneError unless it is finite and in (low, high]."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise err(f"{name} must be a number, got {_short(value)}")
-    try:
-        v = float(value)
-    except OverflowError:  # an integer beyond the float range (e.g. 400 digits)
-        raise err(f"{name} must be a finite number, got {_short(value)}") from None
-    if not math.isfinite(v):
-        raise err(f"{name} must be a finite number, got {_short(value)}")
-    if 0.0 < abs(v) < sys.float_info.min:  # subnormal: 1 / v overflows to inf
-        raise err(f"{name} = {v!r} is below the smallest normal float ({sys.float_info.min:g})")
-    if (v <= low if strict else v < low) or v > high:
-        rel = ">" if strict else ">="
-        bound = f"{rel} {low:g}" + (f" and <= {high:g}" if math.isfinite(high) else "")
-        raise err(f"{name} must be {bound}, got {_short(value)}")
-    return v
-
-
-def _short(value, limit: int = 60) -> str:
-    """repr(value), cut to ``limit`` characters (a message stays one short line)."""
-    if isinstance(value, int) and value.bit_length() > 200:  # no str(): ints of > 4300 digits
-        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _string(err: _Where, value, name: str, choices=None, max_chars: int = _MAX_NAME_CHARS) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise err(f"{name} must be a non-empty string, got {_short(value)}")
-    if len(value) > max_chars:
-        raise err(f"{name} has {len(value)} characters; at most {max_chars}")
-    if choices is not None and value not in choices:
-        raise err(f"{name} = {_short(value)} is not one of {', '.join(repr(c) for c in choices)}")
-    return value
-
-
-def _table(err: _Where, value, name: str) -> dict:
-    if not isinstance(value, dict):
-        raise err(f"{name} must be a table, got {_short(value)}")
-    return value
 
 
 class _Reader:
@@ -254,8 +187,7 @@ class _Reader:
         items = self._table[key]
         if not isinstance(items, list) or not 2 <= len(items) <= _MAX_TERMS:
             raise self._err(
-                f"{name} must be an array of at least two (at most {_MAX_TERMS}) "
-                "potential tables"
+                f"{name} must be an array of at least two (at most {_MAX_TERMS}) potential tables"
             )
         return [
             _potential(self._err, item, f"{name}[{i}]", self._depth + 1)
@@ -289,61 +221,6 @@ def _construct(err: _Where, path: str, cls, *args, **kwargs) -> Potential:
         raise
     except HCVInputError as exc:
         raise _with_context(exc, f"scene {err.source}: {path}") from exc
-
-
-def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw]:
-    """(law name, zeta of the universal law or None, DampingLaw) from ``[damping]``."""
-    table = _table(err, table, "damping")
-    _keys(err, table, "damping.", _DAMPING_KEYS)
-    law = _string(err, table.get("law", "none"), "damping.law", _LAWS)
-    if law != "universal":
-        bad = [k for k in ("zeta", "restitution", "restitution_end", "C0", "K", "M") if k in table]
-        if bad:
-            raise err(
-                f"damping.{bad[0]} belongs to law = 'universal', but damping.law is {law!r}; "
-                "remove it or change the law"
-            )
-        try:
-            dl = law_from_dict(dict(table), where="damping")
-        except HCVInputError as exc:
-            raise err(str(exc)) from None
-        return law, None, dl
-    other = [k for k in ("c", "exponent", "A", "alpha") if k in table]
-    if other:
-        raise err(f"damping.{other[0]} does not belong to law = 'universal'; remove it")
-    forms = [k for k in ("zeta", "restitution", "C0") if k in table]
-    if len(forms) != 1:
-        what = "none" if not forms else " and ".join(forms)
-        raise err(
-            f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
-            f"(with K and M), got {what}"
-        )
-    if forms[0] != "C0" and ("K" in table or "M" in table):
-        raise err("damping.K and damping.M go with damping.C0 only; remove them")
-    if "restitution_end" in table and forms[0] != "restitution":
-        raise err("damping.restitution_end goes with damping.restitution only; remove it")
-    if forms[0] == "zeta":
-        zeta = _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
-    elif forms[0] == "restitution":
-        e = _number(err, table["restitution"], "damping.restitution", low=0.0, high=1.0)
-        end = _string(
-            err, table.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
-        )
-        try:
-            zeta = zeta_from_restitution(e, end=end)
-        except HCVInputError as exc:
-            raise err(f"damping.restitution = {e!r}: {exc}") from None
-    else:
-        for key in ("K", "M"):
-            if key not in table:
-                raise err(
-                    f"damping.C0 needs damping.{key} too (zeta = C0 / (2 sqrt(K M)), section 8)"
-                )
-        c0 = _number(err, table["C0"], "damping.C0", low=0.0, strict=False)
-        K = _number(err, table["K"], "damping.K", low=0.0)
-        M = _number(err, table["M"], "damping.M", low=0.0)
-        zeta = c0 / (2.0 * math.sqrt(K * M))
-    return law, zeta, DampingLaw("universal", {"zeta": zeta})
 
 
 # Stands for the scene's source in a cached potential error (replaced by each scene's own).
@@ -417,8 +294,15 @@ def scene_from_dict(
         gap = _number(err, data["gap"], "gap", low=0.0)
     elif "gap" in data:
         raise err(f"gap applies to kind = 'two-walls' only, but kind = {kind!r}; remove it")
-    law, zeta, dlaw = _damping(err, data.get("damping", {}))
+    law, zeta, dlaw, request = _damping(err, data.get("damping", {}))
     potential, key = _cached_potential(err, data["potential"], potentials)
+    if dlaw.A and float(potential.leading_exponent) < 2.0:
+        # checked here, not first at solve time, so the message names the scene file
+        raise err(
+            "damping law 'viscoelastic' needs U'' finite at contact (leading exponent "
+            "n >= 2, force exponent p >= 1); got n = "
+            f"{float(potential.leading_exponent):.6g}, where C = A U'' is infinite at q = 0"
+        )
     # A potential with a turning point at energy E has one at every lower energy (U rises
     # continuously from 0): with a cache, energies up to the largest one checked are known.
     checked = potentials.get(("energy", key), 0.0) if key is not None else 0.0
@@ -433,7 +317,18 @@ def scene_from_dict(
             raise _with_context(exc, prefix) from exc
         if key is not None:
             checked = potentials[("energy", key)] = energy
-    return Scene(name, mass, velocities, kind, gap, potential, law, zeta, source, dlaw)
+    end = _string(
+        err,
+        data.get("damping", {}).get("restitution_end", "overlap"),
+        "damping.restitution_end",
+        _ENDS,
+    )
+    calibration = None
+    if request is not None:
+        dlaw, calibration = _solve_strength(err, potential, mass, dlaw, request)
+    return Scene(
+        name, mass, velocities, kind, gap, potential, law, zeta, source, dlaw, end, calibration
+    )
 
 
 def parse_scene(text: str, source: str = "<string>") -> Scene:

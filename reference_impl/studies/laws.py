@@ -26,6 +26,7 @@ from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.damping import zeta_from_restitution
 
 __all__ = [
+    "laws_results",
     "E_CAL",
     "V_CAL",
     "HERTZ",
@@ -135,3 +136,46 @@ def schwager_poeschel(A: float, k: float, m: float, v0) -> np.ndarray:
     c2 = 0.6 * c1 * c1
     x = 1.5 * A * (k / m) ** 0.4 * np.asarray(v0, float) ** 0.2  # beta v0^(1/5)
     return c1 * x - c2 * x * x
+
+
+def laws_results(quick: bool = False) -> dict:
+    """Curves at both ends, drift per law and the Schwager-Poeschel comparison (JSON-safe)."""
+    speeds = SPEEDS[::5] if quick else SPEEDS
+    res = restitution_curves(speeds)
+    v = res["speeds"]
+    laws = []
+    for name, c in res["curves"].items():
+        row = {"law": name, "damping": c["law"]}
+        for end in ("overlap", "zero_force"):
+            e = c[end]
+            row[end] = [float(x) for x in e]
+            row[f"{end}_spread"] = float(e.max() - e.min())
+            row[f"{end}_at_vmin"] = float(e[0])
+            row[f"{end}_at_vmax"] = float(e[-1])
+        row["returns"] = [bool(x) for x in c["returns"]]
+        laws.append(row)
+    A = calibrated_laws()["viscoelastic"]["A"]
+    sp = schwager_poeschel(A, res["k"], res["m"], v)
+    vis = res["curves"]["viscoelastic"]
+    sp_rows = []
+    for i in range(len(v)):
+        sp_rows.append(
+            {
+                "v0": float(v[i]),
+                "one_minus_e_expansion": float(sp[i]),
+                "one_minus_e_overlap": float(1 - vis["overlap"][i]),
+                "one_minus_e_zero_force": float(1 - vis["zero_force"][i]),
+                "rel_dev_overlap": float(sp[i] / (1 - vis["overlap"][i]) - 1),
+                "rel_dev_zero_force": float(sp[i] / (1 - vis["zero_force"][i]) - 1),
+            }
+        )
+    return {
+        "speeds": [float(x) for x in v],
+        "e_cal": E_CAL,
+        "v_cal": V_CAL,
+        "hertz_k": HERTZ[0],
+        "hertz_p": HERTZ[1],
+        "mass": HERTZ[2],
+        "laws": laws,
+        "schwager_poeschel": sp_rows,
+    }

@@ -36,7 +36,17 @@ _Y = {
 _SHOWN = {
     "dt-crit": ("v0", "dt_safe", "dt_crit", "ratio", "failure_kind", "holds"),
     "solve": ("v0", "dt_safe", "contact_time", "restitution", "max_penetration"),
-    "bench": ("variant", "v0", "status", "metrics_fail", "failed_metrics"),
+    "bench": (
+        "variant",
+        "v0",
+        "status",
+        "metrics_fail",
+        "failed_metrics",
+        # the delivered restitution: measured, expected (asked) and error (issue 26)
+        "measured.restitution",
+        "asked_restitution",
+        "rel_error.restitution_asked",
+    ),
     "calibrate": ("param", "target", "steps_per_contact", "found", "value", "achieved"),
 }
 # Units of the task fields, shown in the summary table's header.

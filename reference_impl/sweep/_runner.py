@@ -44,15 +44,20 @@ _WINDOW_PER_THREAD = 4
 _LOCAL_CONFIG = {"distributed.worker.daemon": False, "distributed.scheduler.worker-saturation": 1.0}
 # One compute thread per local worker process: numba's parallel loops and the BLAS would
 # otherwise each start a thread per core in every worker, N workers x N threads on N
-# cores (issue 27: each case took twice as long with 16 workers on 16 cores). Set before
-# the worker process starts (numba reads NUMBA_NUM_THREADS once, at import); Dask sets
-# the BLAS ones by default, repeated here so that a user's Dask config cannot lose them.
-_ONE_THREAD = {
-    "NUMBA_NUM_THREADS": "1",
+# cores (issue 27: each case took twice as long with 16 workers on 16 cores). The BLAS
+# ones go in Dask's pre-spawn environment (read when a library loads; Dask sets them by
+# default, repeated here so that a user's Dask config cannot lose them). NUMBA_NUM_THREADS
+# goes in the nanny's `env`, set inside the worker process before it imports anything of
+# ours: the pre-spawn environment is written into the *client's* os.environ too
+# (distributed.nanny: os.environ.update(pre_spawn_env)), and numba re-reads its config on
+# every compilation, so the client's own parallel kernels, once launched with 1 thread,
+# then failed with "Cannot set NUMBA_NUM_THREADS to a different value" (found by the suite).
+_ONE_BLAS_THREAD = {
     "OMP_NUM_THREADS": "1",
     "OPENBLAS_NUM_THREADS": "1",
     "MKL_NUM_THREADS": "1",
 }
+_ONE_NUMBA_THREAD = {"NUMBA_NUM_THREADS": "1"}
 # Cases per Dask task: about this many tasks per worker thread, so that the last tasks
 # leave the workers unevenly loaded by at most 1/8 of a worker's share; each task costs
 # the scheduler and client ~5 ms (README, measured), so grouping divides that per case.
@@ -266,7 +271,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
 
     The local cluster's workers are non-daemonic, so a case may start processes
     of its own (isolated adapters of ``bench:``), take one task at a time
-    (`_LOCAL_CONFIG`) and run one compute thread each (`_ONE_THREAD`: numba and
+    (`_LOCAL_CONFIG`) and run one compute thread each (`_ONE_NUMBA_THREAD`, `_ONE_BLAS_THREAD`: numba and
     BLAS threads). Cluster and client are closed
     on exit, also on KeyboardInterrupt.
     """
@@ -288,7 +293,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
             n = workers or os.cpu_count() or 1
             environ = {
                 **(dask.config.get("distributed.nanny.pre-spawn-environ", None) or {}),
-                **_ONE_THREAD,
+                **_ONE_BLAS_THREAD,
             }
             config = {**_LOCAL_CONFIG, "distributed.nanny.pre-spawn-environ": environ}
             with dask.config.set(config), _workers_ignore_ctrl_c():
@@ -299,6 +304,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
                     dashboard_address=None,
                     scheduler_kwargs={"dashboard_address": _LOCAL_HTTP_ADDRESS},
                     silence_logs=logging.CRITICAL,
+                    env=_ONE_NUMBA_THREAD,
                 )
             client = Client(cluster)
         yield client

@@ -21,6 +21,7 @@ Every parameter is validated here (one line naming the value, `HCVInputError`).
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -95,8 +96,14 @@ class DampingLaw:
 
     def __post_init__(self):
         if self.name not in LAWS:
+            near = (
+                difflib.get_close_matches(self.name.replace("_", "-"), LAWS, n=1, cutoff=0.75)
+                if isinstance(self.name, str)
+                else []
+            )
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
             raise HCVInputError(
-                f"unknown damping law {self.name!r}; choose one of {', '.join(LAWS)}"
+                f"unknown damping law {self.name!r}; choose one of {', '.join(LAWS)}{hint}"
             )
         if not isinstance(self.params, dict):
             raise HCVInputError(f"damping law parameters must be a table, got {self.params!r}")

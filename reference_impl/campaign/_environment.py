@@ -1,4 +1,4 @@
-"""Environment and provenance of a report run."""
+"""Environment and provenance of a report run (taken before anything is written)."""
 
 from __future__ import annotations
 

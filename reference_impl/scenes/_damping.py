@@ -1,0 +1,158 @@
+"""The ``[damping]`` table of a scene: the law, its parameters, and a restitution asked
+at a speed, whose strength is solved once the potential and mass are known (issue 26).
+Private to the scenes package (`_scene.scene_from_dict` calls `_damping` and
+`_solve_strength`)."""
+
+from __future__ import annotations
+
+import math
+
+from reference_impl.errors import HCVInputError
+from reference_impl.scenes._fields import _keys, _number, _string, _table, _Where
+from reference_impl.scenes._law_restitution import STRENGTH, law_for_restitution
+from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
+
+__all__: list[str] = []  # private to the scenes package
+
+_LAWS = LAWS
+_ENDS = ("overlap", "zero-force")
+_DAMPING_KEYS = (
+    "law",
+    "zeta",
+    "restitution",
+    "restitution_end",
+    "restitution_speed",
+    "C0",
+    "K",
+    "M",
+    "c",
+    "exponent",
+    "A",
+    "alpha",
+)
+
+
+def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw, dict | None]:
+    """(law name, zeta of the universal law or None, DampingLaw, restitution request or
+    None) from ``[damping]``; a request is solved by `_solve_strength` once U and m are known."""
+    table = _table(err, table, "damping")
+    _keys(err, table, "damping.", _DAMPING_KEYS)
+    law = _string(err, table.get("law", "none"), "damping.law", _LAWS)
+    if law != "universal":
+        return _other_law(err, law, table)
+    if "restitution_speed" in table:
+        raise err(
+            "damping.restitution_speed: the universal law's restitution does not depend on "
+            "the impact speed (Theorem 3); remove it"
+        )
+    other = [k for k in ("c", "exponent", "A", "alpha") if k in table]
+    if other:
+        raise err(f"damping.{other[0]} does not belong to law = 'universal'; remove it")
+    forms = [k for k in ("zeta", "restitution", "C0") if k in table]
+    if len(forms) != 1:
+        what = "none" if not forms else " and ".join(forms)
+        raise err(
+            f"damping.law = 'universal' needs exactly one of zeta, restitution or C0 "
+            f"(with K and M), got {what}"
+        )
+    if forms[0] != "C0" and ("K" in table or "M" in table):
+        raise err("damping.K and damping.M go with damping.C0 only; remove them")
+    if "restitution_end" in table and forms[0] != "restitution":
+        raise err("damping.restitution_end goes with damping.restitution only; remove it")
+    if forms[0] == "zeta":
+        zeta = _number(err, table["zeta"], "damping.zeta", low=0.0, strict=False)
+    elif forms[0] == "restitution":
+        e = _number(err, table["restitution"], "damping.restitution", low=0.0, high=1.0)
+        end = _string(
+            err, table.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
+        )
+        try:
+            zeta = zeta_from_restitution(e, end=end)
+        except HCVInputError as exc:
+            raise err(f"damping.restitution = {e!r}: {exc}") from None
+    else:
+        for key in ("K", "M"):
+            if key not in table:
+                raise err(
+                    f"damping.C0 needs damping.{key} too (zeta = C0 / (2 sqrt(K M)), section 8)"
+                )
+        c0 = _number(err, table["C0"], "damping.C0", low=0.0, strict=False)
+        K = _number(err, table["K"], "damping.K", low=0.0)
+        M = _number(err, table["M"], "damping.M", low=0.0)
+        zeta = c0 / (2.0 * math.sqrt(K * M))
+    return law, zeta, DampingLaw("universal", {"zeta": zeta}), None
+
+
+def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLaw, dict | None]:
+    """(law, None, DampingLaw, request) of a law other than 'universal'; with
+    ``restitution`` (and ``restitution_speed``) the law is at unit strength and the request
+    says what to solve its strength for (`_solve_strength`)."""
+    only_universal = [k for k in ("zeta", "C0", "K", "M") if k in table]
+    if law == "none":
+        only_universal += [k for k in ("restitution", "restitution_end", "restitution_speed")
+                           if k in table]  # fmt: skip
+    if only_universal:
+        raise err(
+            f"damping.{only_universal[0]} belongs to law = 'universal', but damping.law is "
+            f"{law!r}; remove it or change the law"
+        )
+    asked = {k: table[k] for k in ("restitution", "restitution_end", "restitution_speed")
+             if k in table}  # fmt: skip
+    if asked and "restitution" not in asked:
+        first = next(iter(asked))
+        raise err(f"damping.{first} goes with damping.restitution only; remove it")
+    rest = {k: v for k, v in table.items() if k not in asked}
+    request = None
+    if asked:
+        key = STRENGTH[law]
+        if "restitution_speed" not in asked:
+            raise err(
+                f"damping.restitution with law = {law!r} needs damping.restitution_speed = v "
+                "[m/s]: this law's restitution depends on the impact speed (only 'universal' "
+                "does not)"
+            )
+        if key in rest and law != "polynomial":
+            raise err(
+                f"damping.{key} and damping.restitution both set the strength of law = "
+                f"{law!r}; give one of them"
+            )
+        e = _number(err, asked["restitution"], "damping.restitution", low=0.0, high=1.0)
+        v = _number(err, asked["restitution_speed"], "damping.restitution_speed", low=0.0)
+        end = _string(
+            err, asked.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
+        )
+        if law != "polynomial":
+            rest[key] = 1.0  # unit strength, solved below once U and m are known
+        elif key not in rest:
+            raise err(
+                "damping.restitution with law = 'polynomial' needs damping.c = [c0, c1, ...]: "
+                "its shape (all coefficients are scaled to give the restitution)"
+            )
+        request = {"restitution": e, "restitution_speed": v, "restitution_end": end}
+    try:
+        dl = law_from_dict(rest, where="damping")
+    except HCVInputError as exc:
+        raise err(str(exc)) from None
+    return law, None, dl, request
+
+
+def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, request: dict):
+    """(solved law, calibration record) of a restitution request (`law_for_restitution`)."""
+    try:
+        solved, s = law_for_restitution(
+            potential,
+            mass,
+            dlaw,
+            request["restitution"],
+            request["restitution_speed"],
+            request["restitution_end"],
+        )
+    except HCVInputError as exc:
+        raise err(f"damping.restitution = {request['restitution']!r}: {exc}") from None
+    key = STRENGTH[dlaw.name]
+    value = list(solved.params[key]) if dlaw.name == "polynomial" else solved.params[key]
+    record = {**request, "parameter": key, "value": value}
+    if dlaw.name == "polynomial":
+        record["scale"] = s
+    return solved, record

@@ -1,0 +1,132 @@
+"""Restitution for every law (issue 26, item 2): ``restitution = e`` with
+``restitution_speed = v`` (and ``restitution_end``) for linear, power, polynomial,
+viscoelastic and hunt-crossley; the law's strength is solved so that its exact e at v is
+the asked one, printed (``hcv solve``) and in the JSON; without the speed such a law is
+refused in one line saying why (its e depends on the speed)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from reference_impl.errors import SceneError
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.scenes import parse_scene, scene_from_dict
+
+from .assertions import assert_true
+from .strategies import log_uniform
+
+ROOT = Path(__file__).resolve().parent.parent
+CLAIM = "scene"
+# The solved law's exact e at v: the root is accepted at |e - asked| <= 1e-9 (the exact
+# solver's error is ~1e-14), so the re-solved e is within that.
+E_TOL = 1e-9
+_LAWS = {
+    "linear": {"law": "linear"},
+    "power": {"law": "power", "exponent": 0.5},
+    "polynomial": {"law": "polynomial", "c": [1.0, 3.0e4]},
+    "viscoelastic": {"law": "viscoelastic"},
+    "hunt-crossley": {"law": "hunt-crossley"},
+}
+
+
+@settings(max_examples=10, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+@given(
+    law=st.sampled_from(sorted(_LAWS)),
+    k=log_uniform(1e6, 1e10),
+    p=st.sampled_from([1.0, 1.5, 2.0]),
+    mass=log_uniform(1e-3, 1.0),
+    v=log_uniform(0.05, 5.0),
+    e=st.floats(0.2, 0.95),
+    end=st.sampled_from(["overlap", "zero-force"]),
+)
+def test_the_solved_strength_delivers_the_asked_restitution(law, k, p, mass, v, e, end):
+    damping = {**_LAWS[law], "restitution": e, "restitution_speed": v, "restitution_end": end}
+    scene = scene_from_dict(
+        {"name": "s", "mass": mass, "velocities": [v],
+         "potential": {"family": "power", "k": k, "p": p}, "damping": damping}
+    )  # fmt: skip
+    sol = solve_law_impact(scene.potential, scene.mass, v, scene.law)
+    got = sol.restitution if end == "overlap" else sol.restitution_zero_force
+    cal = scene.calibration
+    assert_true(
+        abs(got - e) <= E_TOL and cal["value"] == scene.law.to_dict()[cal["parameter"]],
+        got=f"e = {got!r} with {scene.law.to_dict()}, calibration {cal}",
+        should=f"e = {e!r} at v = {v} m/s ({end} end) within {E_TOL:g}",
+        claim=CLAIM,
+        call=f"scene_from_dict({damping})",
+    )
+    assert scene.to_dict()["calibration"]["restitution"] == e
+
+
+@pytest.mark.parametrize("law", sorted(_LAWS))
+def test_without_a_speed_the_law_is_refused_saying_why(law):
+    text = (
+        'mass = 0.01\nvelocities = [1.0]\n[potential]\nfamily = "power"\nk = 1e9\np = 1.5\n'
+        "[damping]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in _LAWS[law].items())
+        + "restitution = 0.8\n"
+    )  # fmt: skip
+    with pytest.raises(SceneError) as info:
+        parse_scene(text, "my.toml")
+    msg = str(info.value)
+    assert_true(
+        msg.startswith("scene my.toml: damping.restitution")
+        and "restitution_speed" in msg
+        and "depends on the impact speed" in msg
+        and "\n" not in msg,
+        got=msg,
+        should="one line: needs damping.restitution_speed, its e depends on the speed",
+        claim=CLAIM,
+        call=f"parse_scene({law}, restitution without restitution_speed)",
+    )
+
+
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        ({"law": "linear", "c": 1.0}, "both set the strength"),
+        ({"law": "universal"}, "does not depend on the impact speed"),
+        ({"law": "polynomial"}, "needs damping.c = [c0, c1, ...]"),
+    ],
+)
+def test_conflicting_restitution_forms_are_refused(extra, needle):
+    data = {"name": "s", "mass": 0.01, "velocities": [1.0],
+            "potential": {"family": "power", "k": 1e9, "p": 1.5},
+            "damping": {**extra, "restitution": 0.8, "restitution_speed": 1.0}}  # fmt: skip
+    with pytest.raises(SceneError, match=needle.replace("[", r"\[").replace("]", r"\]")):
+        scene_from_dict(data, "my.toml")
+
+
+def test_hcv_solve_prints_the_solved_strength_and_puts_it_in_the_json(tmp_path):
+    f = tmp_path / "hc.toml"
+    f.write_text(
+        'name = "hc"\nmass = 0.01\nvelocities = [0.5, 1.0]\n[potential]\nfamily = "power"\n'
+        'k = 1e9\np = 1.5\n[damping]\nlaw = "hunt-crossley"\nrestitution = 0.8\n'
+        "restitution_speed = 1.0\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "reference_impl.cli", "solve", str(f)]
+    text = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    js = subprocess.run([*cmd, "--json"], env=env, capture_output=True, text=True, timeout=300)
+    doc = json.loads(js.stdout)
+    alpha = doc["scene"]["damping"]["alpha"]
+    e_at_v = [r["restitution"] for r in doc["results"] if r["v0"] == 1.0][0]
+    assert_true(
+        text.returncode == 0 and "alpha = " in text.stdout
+        and doc["scene"]["calibration"] == {"restitution": 0.8, "restitution_speed": 1.0,
+                                            "restitution_end": "overlap",
+                                            "parameter": "alpha", "value": alpha}
+        and abs(e_at_v - 0.8) <= E_TOL,
+        got=f"exit {text.returncode}; {text.stdout[:200]}; calibration "
+        f"{doc['scene'].get('calibration')}; e(1 m/s) = {e_at_v}",
+        should="alpha printed; calibration in the JSON; e = 0.8 at 1 m/s",
+        claim=CLAIM,
+        call="hcv solve hc.toml [--json]",
+    )  # fmt: skip
