@@ -35,6 +35,7 @@ from reference_impl.exact._general_kernel import (
     python_solver,
 )
 from reference_impl.exact._general_kernel import solve as _compiled_solve
+from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
@@ -393,7 +394,6 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     E = 0.5 * m * v0 * v0
     if not (math.isfinite(E) and E > 0):
         raise HCVInputError(f"kinetic energy m v0^2 / 2 = {E!r} J is not a positive float64")
-    from reference_impl.exact._validate import _check_exponent, _validated_top
 
     _check_exponent(potential)
     qE = _validated_top(potential, E)
