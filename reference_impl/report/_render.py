@@ -14,8 +14,8 @@ from pathlib import Path
 
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._blocks import markdown_lines as _md
-from reference_impl.report._common import g
 from reference_impl.report._codes import codes_blocks
+from reference_impl.report._common import g
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
 from reference_impl.report._laws import laws_blocks
