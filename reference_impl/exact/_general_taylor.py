@@ -71,11 +71,6 @@ _INT_TOL = 1e-12
 _ROOT_ITER = 120
 
 
-# The convolutions are dot products: letting the compiler reorder their sums (and fuse
-# multiply-adds) vectorises them; each sum then rounds differently, by ~1 ulp of its terms.
-_REASSOC = {"reassoc", "contract"}
-
-
 def _theta() -> float:
     """theta with theta^(K+1) / (1 - theta) = TOL (fixed point; converges in a few rounds)."""
     th = TOL ** (1.0 / (K + 1))
@@ -85,6 +80,7 @@ def _theta() -> float:
 
 
 THETA = _theta()
+_RECIP = 1.0 / np.arange(1.0, K + 1.0)  # 1 / (n + 1): a multiply, not a divide, in the recurrences
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -157,9 +153,9 @@ def _model(v0, L, N, ks, ps, cs, es, sc):
         if A != 0.0:
             c[_as_int(N * (ps[i] - 1.0))] += A * v0 / L * a * ps[i]
         if zf != 0.0:
-            c[_as_int(N * (ps[i] - 1.0) / 2.0)] += zf * math.sqrt(
-                ks[i] * (ps[i] + 1.0) / 2.0
-            ) * L ** ((ps[i] + 1.0) / 2.0) / (m * v0)
+            c[_as_int(N * (ps[i] - 1.0) / 2.0)] += (
+                zf * math.sqrt(ks[i] * (ps[i] + 1.0) / 2.0) * L ** ((ps[i] + 1.0) / 2.0) / (m * v0)
+            )
     for j in range(cs.shape[0]):
         if cs[j] != 0.0:
             d = _as_int(N * es[j])
@@ -218,7 +214,31 @@ def _horner(c, x):
     return acc
 
 
-@numba.njit(cache=True, error_model="numpy", fastmath=_REASSOC)
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _dot(a, oa, b, ob, n):
+    """sum_{i=0}^{n} a[oa + i] b[ob + n - i], a Cauchy product's coefficient n. The
+    recurrences are a chain of such sums: letting the compiler reorder each one (and
+    fuse its multiply-adds) splits it over vector lanes instead of waiting on each add;
+    the sum then rounds differently, by ~1 ulp of its terms."""
+    s = 0.0
+    for i in range(n + 1):
+        s += a[oa + i] * b[ob + n - i]
+    return s
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _sq(a, oa, n):
+    """sum_{i=0}^{n} a[oa + i] a[oa + n - i] (a square's coefficient n), each cross term once."""
+    s = 0.0
+    for i in range((n + 1) // 2):
+        s += a[oa + i] * a[oa + n - i]
+    s *= 2.0
+    if n % 2 == 0:
+        s += a[oa + n // 2] * a[oa + n // 2]
+    return s
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
     P (flat, rows of K + 1) receives the series of the powers rho^j."""
@@ -251,9 +271,29 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
         cw = 0.0
         for i in range(n + 1):
             cw += CS[i] * W[n - i]
-        W[n + 1] = -(cw + fn) / (n + 1)
-        R[n + 1] = W[n] / (n + 1)
-        T[n + 1] = N * P[(N - 1) * M + n] / (n + 1)
+        W[n + 1] = -(cw + fn) * _RECIP[n]
+        R[n + 1] = W[n] * _RECIP[n]
+        T[n + 1] = N * P[(N - 1) * M + n] * _RECIP[n]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rw(R, W, x):
+    """(rho, W) at x: even and odd coefficients as four Horner chains in x^2 (half the
+    latency of one chain: the events evaluate the step's polynomials at ~100 points)."""
+    x2 = x * x
+    ke = K - (K % 2)  # highest even index
+    ko = K - 1 + (K % 2)  # highest odd index
+    re = R[ke]
+    we = W[ke]
+    ro = R[ko]
+    wo = W[ko]
+    for k in range(ke - 2, -1, -2):
+        re = re * x2 + R[k]
+        we = we * x2 + W[k]
+    for k in range(ko - 2, 0, -2):
+        ro = ro * x2 + R[k]
+        wo = wo * x2 + W[k]
+    return re + x * ro, we + x * wo
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -285,8 +325,7 @@ def _event(kind, R, W, F, C, N, j0, D, x):
         return _horner(R, x)
     if kind == 1:
         return _horner(W, x)
-    r = _horner(R, x)
-    w = _horner(W, x)
+    r, w = _rw(R, W, x)
     if kind == 2:
         return _force(F, C, j0, D, r, w)[1]
     return _dforce(F, C, N, D, r, w)
@@ -390,6 +429,9 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         if F[j] < 0.0 or C[j] < 0.0:
             monotone = False
     pw = np.empty(K + 1)
+    xs = np.empty(NS + 1)
+    rs = np.empty(NS + 1)
+    ws = np.empty(NS + 1)
     r0, w0, t0 = 0.0, 1.0, 0.0
     peak = C[0]  # the force just after contact, C(0) v0
     past = False
@@ -432,30 +474,40 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         else:
             r_hi = _horner(R, x_from if past else x_end)
             ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
-        if not (monotone and ub <= peak):
-            gp = _event(3, R, W, F, C, N, j0, D, 0.0)
-            xp = 0.0
+        scan_peak = not (monotone and ub <= peak)
+        scan_zf = past and not zf_found
+        if scan_peak or scan_zf:
+            # rho and W on the NS + 1 points x_end i / NS in one pass (independent chains)
+            for i in range(NS + 1):
+                xs[i] = x_end * i / NS
+                rs[i] = R[K]
+                ws[i] = W[K]
+            for k in range(K - 1, -1, -1):
+                for i in range(NS + 1):
+                    rs[i] = rs[i] * xs[i] + R[k]
+                    ws[i] = ws[i] * xs[i] + W[k]
+        if scan_peak:  # dG/ds through 0 from above
+            gp = _dforce(F, C, N, D, rs[0], ws[0])
             for i in range(1, NS + 1):
-                xi = x_end * i / NS
-                gi = _event(3, R, W, F, C, N, j0, D, xi)
+                gi = _dforce(F, C, N, D, rs[i], ws[i])
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(3, R, W, F, C, N, j0, D, xp, xi, gp, gi)
+                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi)
                     peak = max(peak, _force(F, C, j0, D, _horner(R, xr), _horner(W, xr))[0])
-                gp, xp = gi, xi
-        # zero-force end: G / rho^j0 through 0 after the turning point
-        if past and not zf_found:
+                gp = gi
+        if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
             gp = _event(2, R, W, F, C, N, j0, D, x_from)
             xp = x_from
             for i in range(1, NS + 1):
-                xi = x_from + (x_end - x_from) * i / NS
-                gi = _event(2, R, W, F, C, N, j0, D, xi)
+                if xs[i] <= x_from:
+                    continue
+                gi = _force(F, C, j0, D, rs[i], ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(2, R, W, F, C, N, j0, D, xp, xi, gp, gi)
+                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi)
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
                     break
-                gp, xp = gi, xi
+                gp, xp = gi, xs[i]
         if exiting:
             t_end = _horner(T, x_end) * L / v0
             w_end = _horner(W, x_end) * v0
