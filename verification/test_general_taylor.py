@@ -174,6 +174,24 @@ def _kernel_args(pot, m, v0, law):
         (PowerLaw(1e4, 1.0), 0.01, 1.0, {"law": "linear", "c": 60.0}),
         # the universal law on a sum of power laws: C is not a power series in rho
         (PowerLaw(1e6, 1.0) + PowerLaw(1e9, 1.5), 0.01, 1.0, {"law": "universal", "zeta": 0.2}),
+        # found by a sweep: an overdamped viscoelastic law on Hooke (C = A k, 1.2 x critical)
+        # creeps back without return; a first version took a root of rho at round-off level
+        # for an exit
+        (
+            PowerLaw(1816163.7683535544, 1.0),
+            0.02830238853730305,
+            1.056828172301165,
+            {"law": "viscoelastic", "A": 0.00029715663187065343},
+        ),
+        # found by a sweep: a near-critical linear dashpot on Hooke + Hertz returns after a
+        # long creep (39 Taylor steps), over which the error in rho integrated into T
+        # outgrew the summed local estimates (5e-14 s against 4e-15 s)
+        (
+            PowerLaw(1037102.2586584735, 1.0) + PowerLaw(149486.880525022, 1.5),
+            0.04563673867883634,
+            0.14735149485274338,
+            {"law": "linear", "c": 430.15542624527825},
+        ),
     ],
 )
 def test_taylor_hands_over_outside_its_domain(pot, m, v0, law):

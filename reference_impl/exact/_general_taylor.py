@@ -61,12 +61,26 @@ TOL = 1e-16
 # Largest common denominator N of the exponents (q = L rho^N) and largest degree in rho.
 N_MAX = 8
 DEG_MAX = 48
-# A contact takes ~10 steps; more means a creeping return (or worse): handed to the GBS kernel.
-MAX_STEPS = 60
+# A contact takes 8-14 steps (measured: calibrated Hertz laws 9-10, the universal law on
+# Hertz 13). More steps mean a slow, creeping return (near-critical or overdamped), where
+# an error in rho is integrated into T over a long stretch of s and the summed local
+# estimates no longer bound it (measured: 5e-14 s against a bound of 4e-15 s after 39
+# steps, near-critical linear dashpot on Hooke + Hertz): handed to the GBS kernel.
+MAX_STEPS = 24
+# Overlap (fraction of q_max) at which a return is handed over (the GBS kernel's
+# threshold of no return): rho decays without crossing 0 there, and a root found at
+# round-off level would be no exit.
+_NO_RETURN_Q = 1e-10
 # Samples per step for the sign changes of the zero-force and peak-force functions.
 NS = 8
 # N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
 _INT_TOL = 1e-12
+# Event brackets, relative: two ulps where the output moves with the root (the time of
+# q_max, the zero-force end); 1e-9 where it is stationary there, so that a location error
+# d moves it by ~d^2 (the peak force at dF/ds = 0; T and W at the exit rho = 0 for N > 1,
+# where dT/ds = N rho^(N-1) and dW/ds = -N rho^(N-1) G vanish): 1e-18 of the step.
+_ULPS = 4.5e-16
+_STATIONARY = 1e-9
 # Root iterations (Illinois: superlinear; a float bracket needs < 2 x 53 halvings).
 _ROOT_ITER = 120
 
@@ -332,8 +346,9 @@ def _event(kind, R, W, F, C, N, j0, D, x):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb):
-    """x in [a, b] where event ``kind`` goes from ga > 0 to gb <= 0 (Illinois)."""
+def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb, rtol):
+    """x in [a, b] where event ``kind`` goes from ga > 0 to gb <= 0 (Illinois), to a
+    bracket of rtol relative (two ulps, 4.5e-16, where the output moves with x)."""
     side = 0
     x = b
     for _ in range(_ROOT_ITER):
@@ -352,7 +367,7 @@ def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb):
                 ga *= 0.5
             side = -1
         # two ulps: the bracket cannot shrink further
-        if b - a <= 4.5e-16 * max(abs(a), abs(b)) or g == 0.0:
+        if b - a <= rtol * max(abs(a), abs(b)) or g == 0.0:
             break
     return x
 
@@ -424,6 +439,9 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     W = np.zeros(K + 1)
     T = np.zeros(K + 1)
     Fs = m * v0 * v0 / L  # force unit
+    exit_tol = _STATIONARY if N > 1 else _ULPS
+    creeps = sc[4] == 1.0
+    q_top = 1.0
     monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
     for j in range(D + 1):
         if F[j] < 0.0 or C[j] < 0.0:
@@ -438,6 +456,17 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     zf_found = False
     errsum = 0.0
     for step in range(1, MAX_STEPS + 1):
+        if past and creeps:
+            # Creeping back along the slow manifold of an overdamped law (w ~ -U'/C, U' q >
+            # m w^2, C q > 100 m |w|, as in the GBS kernel), where C ~ q^a with a <= n - 2
+            # never lets it reach q = 0: rho only decays, and a root found at round-off
+            # level would be no exit. The GBS kernel reports these cases (no return).
+            q0 = r0**N
+            if q0 <= _NO_RETURN_Q * q_top:
+                return 1
+            if q0 <= 0.1 * q_top:
+                if _poly(F, 0, D, r0) * q0 > w0 * w0 and _poly(C, 0, D, r0) * q0 > 100.0 * abs(w0):
+                    return 1
         _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0)
         inv = _inv_radius(R, W, T, pw)
         if not (inv > 0.0 and inv < math.inf):
@@ -449,7 +478,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         exiting = False
         was_past = past
         if not past and _horner(W, h) < 0.0:
-            x = _root(1, R, W, F, C, N, j0, D, 0.0, h, W[0], _horner(W, h))
+            x = _root(1, R, W, F, C, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
             rm = _horner(R, x)
             out[0] = _horner(T, x) * L / v0
             qm = L * rm**N
@@ -462,9 +491,12 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
             peak = max(peak, _poly(F, 0, D, rm))
             past = True
+            q_top = rm**N
             x_from = x
         if past and _horner(R, h) <= 0.0:
-            x_end = _root(0, R, W, F, C, N, j0, D, x_from, h, _horner(R, x_from), _horner(R, h))
+            x_end = _root(
+                0, R, W, F, C, N, j0, D, x_from, h, _horner(R, x_from), _horner(R, h), exit_tol
+            )
             exiting = True
         # peak force: dG/ds through 0 from above, on NS samples of [0, x_end], unless
         # G cannot exceed the peak so far on this step (f and c grow with rho >= 0):
@@ -491,7 +523,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             for i in range(1, NS + 1):
                 gi = _dforce(F, C, N, D, rs[i], ws[i])
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi)
+                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY)
                     peak = max(peak, _force(F, C, j0, D, _horner(R, xr), _horner(W, xr))[0])
                 gp = gi
         if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
@@ -502,7 +534,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                     continue
                 gi = _force(F, C, j0, D, rs[i], ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi)
+                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi, _ULPS)
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
@@ -510,7 +542,15 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                 gp, xp = gi, xs[i]
         if exiting:
             t_end = _horner(T, x_end) * L / v0
-            w_end = _horner(W, x_end) * v0
+            we = _horner(W, x_end)
+            w_end = we * v0
+            err_t = errsum
+            err_w = errsum
+            if N == 1:
+                # dT/ds = 1 at the exit: an error e in rho moves it by e / |W| in s, so T by
+                # as much and W by |dW/ds| e / |W| (for N > 1 both are stationary there)
+                err_t += errsum / abs(we)
+                err_w += abs(CN[0] * we + FN[0]) * errsum / abs(we)
             if not zf_found:  # the force never pulls: the two ends coincide
                 out[4] = t_end
                 out[5] = w_end
@@ -518,8 +558,8 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             out[6] = t_end
             out[7] = w_end
             out[8] = 1.0
-            out[9] = errsum * L / qE  # in units of qE / v0, as the GBS kernel's
-            out[10] = errsum
+            out[9] = err_t * L / qE  # in units of qE / v0, as the GBS kernel's
+            out[10] = err_w
             out[11] = step
             out[12] = 0.0
             return 0
