@@ -4,7 +4,8 @@ One impact m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i and C any law of
 `reference_impl.theory.laws` whose exponents are multiples of 1/N (N <= `N_MAX`):
 Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji.
 The same signature and outputs (`OUT_FIELDS`) as `_general_kernel.solve`; cases
-outside that set, and bodies that do not return within `MAX_STEPS`, are handed to it.
+outside that set, creeping returns (overdamped: no return) and contacts longer than
+`MAX_STEPS` steps are handed to it.
 
 Method. Scaled overlap Q = q / L = rho^N, speed W = q' / v0, time T = t v0 / L
 (L the elastic turning point), and the independent variable s of a Sundman
@@ -33,8 +34,11 @@ last `WIN` coefficients of rho, W and T, each relative to its size; the step is
 h = theta r with theta^(K+1) / (1 - theta) = `TOL`, the sum of a geometric tail of
 the series beyond order K: its truncation, relative to the state. The error sums
 reported (err_t, err_w, in the scaled units of `_general_kernel`) add these
-estimates over the steps; `general_law` multiplies them by its safety factor and
-adds round-off.
+estimates over the steps (for N = 1, where dT/ds = 1 at the exit, plus the exit's
+shift e / |W|); `general_law` multiplies them by its safety factor and adds round-off.
+Measured on the study's Hertz laws (v0 = 1 m/s): 9-10 steps, 2-4e-16 relative error on
+every output against the 30-digit truth, the kernel ~14x faster than the GBS kernel
+(`benchmarks.bench_general_taylor`).
 """
 
 from __future__ import annotations
