@@ -26,7 +26,7 @@ from reference_impl.exact._validate import _validated_top
 from reference_impl.potentials import SumPotential
 from reference_impl.theory.laws import LAWS, law_from_dict
 from verification.assertions import assert_close, assert_less, assert_true
-from verification.test_general_law import law_cases
+from verification.strategies import law_cases
 
 CALL = "solve_law_impact (Taylor kernel)"
 # Truth runs cost 2-4 s each: two derandomised draws per law.

@@ -34,7 +34,7 @@ from reference_impl.exact._general_kernel import (
     STOP_NO_RETURN_Q,
     python_solver,
 )
-from reference_impl.exact._general_kernel import solve as _compiled_solve
+from reference_impl.exact._general_taylor import solve as _compiled_solve
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
