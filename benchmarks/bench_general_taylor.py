@@ -10,8 +10,8 @@ timed interleaved in one process (CPU time, median of the blocks, as
 * ``new``: the same call with its compiled kernel switched to `_general_taylor.solve`
   (the one-line change this module measures; `general_law` itself is not edited here);
 * ``old_k`` / ``new_k``: the two kernels alone (the compiled call, no Python around it);
-* ``new_lean``: a prototype of a leaner wrapper (`_lean`: the per-law preparation kept),
-  checked to return the same solution: what the call would cost without ~10 us of Python;
+* ``new_lean``: the prepared call (`general_law.prepare_law`: the per-law planning done
+  once and kept), checked to return the same solution;
 * ``peer``: the numba DOP853 of `benchmarks.peer_dop853` at the cheapest rung of its
   tolerance ladder whose largest error is <= max(new's, 1e-14) ("equal error").
 
@@ -31,8 +31,7 @@ from reference_impl.exact import general_law as _gl
 from reference_impl.exact._general_kernel import solve as _old_kernel
 from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact._general_taylor import solve as _new_kernel
-from reference_impl.exact._validate import _check_exponent, _validated_top
-from reference_impl.potentials._checks import positive
+from reference_impl.exact._validate import _validated_top
 from reference_impl.studies.laws import calibrated_laws, hertz
 from reference_impl.theory.laws import law_from_dict
 
@@ -57,11 +56,14 @@ _KEYS = (*_LAW_KEYS, "max_force", "time_of_max_penetration")
 
 def _with_kernel(fn):
     """`solve_law_impact` with the name ``_compiled_solve`` bound to ``fn``: the same code
-    object in a copy of its module's namespace (what the one-line import change gives)."""
-    f = _gl.solve_law_impact
+    objects (`solve_law_impact` and the `_solve_planned` it calls) in a copy of their
+    module's namespace (what the one-line import change gives)."""
     ns = dict(vars(_gl))
     ns["_compiled_solve"] = fn
-    return types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
+    for name in ("_solve_planned", "solve_law_impact"):
+        f = getattr(_gl, name)
+        ns[name] = types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
+    return ns["solve_law_impact"]
 
 
 _SOLVE = {"old": _with_kernel(_old_kernel), "new": _with_kernel(_new_kernel)}
@@ -70,42 +72,14 @@ _PREPARED: dict = {}
 
 
 def _lean(pot, m, v0, law):
-    """A prototype, not the package's code: `solve_law_impact`'s work for a power-law potential
-    with the Taylor kernel, its per-(potential, m, law) preparation (law table, checks,
-    coefficient arrays: ~10 us of the call) done once and kept. It measures what a leaner
-    `general_law` wrapper would reach; `_row` checks that it returns the same solution."""
+    """`reference_impl.exact.general_law.prepare_law`'s call (the per-(potential, m, law)
+    planning done once and kept; bit for bit `solve_law_impact`, tested): the "lean"
+    wrapper this benchmark's prototype measured, now the package's."""
     key = (id(pot), m, repr(law))
-    prep = _PREPARED.get(key)
-    if prep is None:
-        dl = law_from_dict(law)
-        _check_exponent(pot)
-        cs, es, sc = _gl._law_arrays(dl, m, pot)
-        ks, ps = _gl._power_terms(pot)
-        prep = _PREPARED[key] = (dl.to_dict(), cs, es, sc, ks, ps)
-    table, cs, es, sc, ks, ps = prep
-    v0 = positive("v0", v0, "solve_law_impact")
-    qE = _validated_top(pot, 0.5 * m * v0 * v0)
-    o = _new_kernel(v0, qE, ks, ps, cs, es, sc).tolist()
-    if o[12] != 0.0 or o[8] != 1.0:  # the prototype covers returning impacts only
-        return _SOLVE["new"](pot, m, v0, law)
-    nst = int(o[11])
-    return _gl.LawImpactSolution(
-        v0=v0,
-        m=m,
-        law=table,
-        max_penetration=o[1],
-        max_force=o[2],
-        peak_force=o[3],
-        time_of_max_penetration=o[0],
-        contact_time=o[6],
-        restitution=-o[7] / v0,
-        contact_time_zero_force=o[4],
-        restitution_zero_force=-o[5] / v0,
-        returns_to_q0=True,
-        error_time=_gl.ERROR_SAFETY * o[9] * (qE / v0) + 100 * nst * _EPS * o[6],
-        error_restitution=_gl.ERROR_SAFETY * o[10] + 100 * nst * _EPS,
-        n_steps=nst,
-    )
+    prepared = _PREPARED.get(key)
+    if prepared is None:
+        prepared = _PREPARED[key] = _gl.prepare_law(pot, m, law)
+    return prepared(v0)
 
 
 def _row(name, law, blocks):
@@ -210,8 +184,8 @@ def _print(res: dict) -> None:
     lean_met = sum(r["ratio_new_lean_vs_peer"] >= GOAL_RATIO_LAW for r in res["rows"])
     print(
         f"goal >= {GOAL_RATIO_LAW:g}x the peer: new (solve_law_impact as is, Taylor kernel) meets it"
-        f" on {sum(r['goal_met'] for r in res['rows'])}/{len(res['rows'])} laws; the lean"
-        f" wrapper prototype on {lean_met}/{len(res['rows'])}; load "
+        f" on {sum(r['goal_met'] for r in res['rows'])}/{len(res['rows'])} laws; the prepared"
+        f" call (prepare_law) on {lean_met}/{len(res['rows'])}; load "
         f"{res['load_average_1min']} before, {res['load_average_1min_after']} after, "
         f"commit {mi['commit']}"
     )
