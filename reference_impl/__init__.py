@@ -75,6 +75,8 @@ _EXPORTS = {
     "LAWS": "reference_impl.theory.laws",
     "LawImpactSolution": "reference_impl.exact.general_law",
     "solve_law_impact": "reference_impl.exact.general_law",
+    "PreparedLaw": "reference_impl.exact.general_law",
+    "prepare_law": "reference_impl.exact.general_law",
 }
 
 __all__ = [
@@ -111,6 +113,8 @@ __all__ = [
     "LAWS",
     "LawImpactSolution",
     "solve_law_impact",
+    "PreparedLaw",
+    "prepare_law",
     "solve_impact",
     "solve_impact_mp",
     "solve_impacts",

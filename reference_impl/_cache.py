@@ -54,6 +54,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from reference_impl._atomic import atomic_write
+from reference_impl._version import version
 
 __all__ = [
     "CacheWarning",
@@ -309,8 +310,6 @@ def _dependencies() -> str:
     import numba
     import numpy
     import sympy
-
-    from reference_impl._version import version
 
     parts = [
         f"hcv={version()}",

@@ -10,7 +10,11 @@ from __future__ import annotations
 import math
 
 from reference_impl.errors import HCVInputError
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact.solve import solve_impact
+from reference_impl.stability.bound import dt_safe
 from reference_impl.stability.result import DtCritResult
+from reference_impl.theory.action import action, period
 
 __all__ = ["restitution_spread", "search_loaded_scene", "solve_scene"]
 
@@ -32,10 +36,6 @@ def solve_scene(scene) -> list[dict]:
     (quadrature_error, s). The universal law and ``none`` are solved by the exact
     quadrature, the other laws by `reference_impl.exact.general_law`.
     """
-    from reference_impl.exact.general_law import solve_law_impact
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.stability.bound import dt_safe
-    from reference_impl.theory.action import action, period
 
     law = scene.law
     exact = law.name in ("none", "universal")

@@ -7,6 +7,8 @@ bad-input tests build their violating cases explicitly).
 
 from __future__ import annotations
 
+import math
+
 from hypothesis import strategies as st
 
 from reference_impl.potentials import Ellipsoid, PowerLaw, Sphere, SumPotential
@@ -324,3 +326,41 @@ __all__ += [
     "linear_oscillator_cases",
     "hunt_crossley_cases",
 ]
+
+
+# -- general damping laws (verification/test_general_law.py, test_general_taylor.py) --
+
+
+@st.composite
+def law_cases(draw, name):
+    """(potential, m, v0, law) with the law's strength gamma scaled to the contact."""
+    p = draw(st.sampled_from([1.0, 1.5, 2.0, 3.0]) if name != "universal" else st.just(1.5))
+    k = draw(log_uniform(1e4, 1e10))
+    if name in ("linear", "hunt-crossley") and draw(st.booleans()):
+        pot = PowerLaw(k, 1.0) + PowerLaw(k * draw(log_uniform(1e-2, 1e2)), 1.5)
+    else:
+        pot = PowerLaw(k, p)
+    m = draw(log_uniform(1e-3, 1.0))
+    v0 = draw(log_uniform(1e-2, 10.0))
+    qE = pot.turning_point(0.5 * m * v0 * v0)
+    K = float(pot.dU(qE)) / qE  # secant stiffness at the elastic turning point, N/m
+    gamma = draw(st.floats(0.01, 0.35))
+    c_ref = 2.0 * gamma * math.sqrt(m * K)  # kg/s
+    if name == "linear":
+        law = {"law": "linear", "c": c_ref}
+    elif name == "power":
+        e = draw(st.sampled_from([0.0, 0.25, 0.5, 1.0, 1.5]))
+        law = {"law": "power", "c": c_ref / qE**e, "exponent": e}
+    elif name == "polynomial":
+        a = draw(st.lists(st.floats(0.0, 1.0), min_size=2, max_size=3))
+        law = {"law": "polynomial", "c": [ai * c_ref / qE**i for i, ai in enumerate(a)]}
+    elif name == "viscoelastic":
+        law = {"law": "viscoelastic", "A": c_ref / K}
+    elif name == "hunt-crossley":
+        law = {"law": "hunt-crossley", "alpha": c_ref / (K * qE)}
+    else:
+        law = {"law": "universal", "zeta": gamma}
+    return pot, m, v0, law
+
+
+__all__ += ["law_cases"]

@@ -23,7 +23,6 @@ import pytest
 from reference_impl.adapters import (
     AdapterOutputError,
     AdapterRunError,
-    AdapterScene,
     ContactAdapter,
     ImplementedLaw,
     PowerDamping,
@@ -42,46 +41,13 @@ from reference_impl.integrators.verlet import SCENE_IMPACT, LaneBatch, run_lanes
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes import parse_scene
 from reference_impl.theory.damping import restitution_from_zeta
+from verification._adapter_cases import FAST, HCV_BENCH, SCRIPT, ascene, cmd, scene, scene_text
+from verification._adapter_cases import by as _by
 
 from .assertions import assert_close, assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
-SCRIPT = ROOT / "verification" / "_adapter_script.py"
 CLAIM = "bench-adapters"  # not a paper claim: the benchmark machinery (no claim marker)
-
-# Small scenes keep every benchmark run of this module to a second or two.
-_SCENE = """
-name = "{name}"
-mass = 4.1103e-3
-velocities = {vels}
-kind = "impact"
-[potential]
-family = "power"
-k = 1.0879e10
-p = 1.5
-{damping}
-"""
-_DAMPED = '[damping]\nlaw = "universal"\nzeta = 0.1'
-# Coarser critical-step bisection and a shorter speed table than the defaults.
-FAST = {"dt_crit": {"resolution": 0.05}, "run": {"speed_error_steps": [50, 100, 200]}}
-
-
-def scene(name="small", vels=(0.5, 2.0), damped=True):
-    text = _SCENE.format(name=name, vels=list(vels), damping=_DAMPED if damped else "")
-    return parse_scene(text, f"<test>/{name}.toml")
-
-
-def cmd(*args) -> str:
-    return "cmd:" + " ".join([sys.executable, str(SCRIPT), *args])
-
-
-def ascene(v0=1.0, damped=True, n_per_contact=200):
-    sc = scene(damped=damped)
-    from reference_impl import solve_impact
-
-    t_c = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time
-    dt = t_c / n_per_contact
-    return AdapterScene.from_scene(sc, v0, dt, 4 * n_per_contact)
 
 
 # ----------------------------------------------------------------------------
@@ -307,10 +273,6 @@ def test_subprocess_declared_law_is_used():
 # ----------------------------------------------------------------------------
 # the benchmark: scorecard, isolation, reports, gate
 # ----------------------------------------------------------------------------
-def _by(result, scene_name, metric):
-    return next(m for m in result.metrics if m.scene == scene_name and m.metric == metric)
-
-
 def test_bench_of_the_subprocess_script_passes_and_writes_reports(tmp_path):
     res = run_bench(
         cmd(),
@@ -430,24 +392,13 @@ def test_adapter_supporting_no_scene_is_a_configuration_error():
 # ----------------------------------------------------------------------------
 # exit statuses of the command, and the pytest plugin
 # ----------------------------------------------------------------------------
-def _bench_command() -> list[str]:
-    """``hcv bench`` through the CLI once it is wired, else the bench module stand-alone."""
-    from reference_impl import cli
-
-    try:
-        cli._parser().parse_args(["bench", "reference"])
-        return [sys.executable, "-m", "reference_impl.cli", "bench"]
-    except SystemExit:
-        return [sys.executable, "-m", "reference_impl.cli.bench"]
-
-
 def _run(args, cwd, extra_env=None, timeout=120):
     env = {**os.environ, "PYTHONPATH": str(ROOT), **(extra_env or {})}
     return subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
 def test_gate_exit_statuses(tmp_path):
-    (tmp_path / "s.toml").write_text(_SCENE.format(name="s", vels=[1.0], damping=_DAMPED))
+    (tmp_path / "s.toml").write_text(scene_text("s", [1.0]))
     fast = tmp_path / "fast.toml"
     fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
     strict = tmp_path / "strict.toml"
@@ -455,7 +406,7 @@ def test_gate_exit_statuses(tmp_path):
     strict.write_text(
         fast.read_text() + "[restitution_exact]\nrtol = 1e-9\n[allowance]\ntextbook_verlet = 1e-9\n"
     )
-    base = [*_bench_command(), cmd(), "--scenes", str(tmp_path / "s.toml"), "--gate"]
+    base = [*HCV_BENCH, cmd(), "--scenes", str(tmp_path / "s.toml"), "--gate"]
     ok = _run([*base, "--tolerances", str(fast), "--junit", str(tmp_path / "ok.xml")], tmp_path)
     assert ok.returncode == 0, ok.stdout + ok.stderr
     assert "gate: pass" in ok.stdout and (tmp_path / "ok.xml").exists()
@@ -466,9 +417,9 @@ def test_gate_exit_statuses(tmp_path):
     nogate = _run([c for c in base if c != "--gate"] + ["--tolerances", str(strict)], tmp_path)
     assert nogate.returncode == 0
     for args, message in (
-        ([*_bench_command(), "nosuch", "--gate"], "unknown adapter"),
+        ([*HCV_BENCH, "nosuch", "--gate"], "unknown adapter"),
         ([*base, "--tolerances", str(tmp_path / "none.toml")], "not found"),
-        ([*_bench_command(), "--gate"], ""),
+        ([*HCV_BENCH, "--gate"], ""),
     ):
         r = _run(args, tmp_path)
         assert r.returncode == 2, r.stdout + r.stderr
@@ -476,7 +427,7 @@ def test_gate_exit_statuses(tmp_path):
 
 
 def test_pytest_plugin_makes_one_test_per_scene_and_metric(tmp_path):
-    (tmp_path / "s.toml").write_text(_SCENE.format(name="s", vels=[1.0], damping=_DAMPED))
+    (tmp_path / "s.toml").write_text(scene_text("s", [1.0]))
     strict = tmp_path / "strict.toml"
     strict.write_text(
         "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n"
@@ -575,7 +526,7 @@ def test_third_party_adapter_registers_by_entry_point(tmp_path):
         claim="tool",
         call="registered() / get_adapter('mycode') with an hcv.adapters entry point",
     )
-    r = _run([*_bench_command(), "--help"], tmp_path, env)
+    r = _run([*HCV_BENCH, "--help"], tmp_path, env)
     assert_true(
         "mycode" in r.stdout,
         got=r.stdout[-400:],

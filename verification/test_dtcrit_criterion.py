@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 import tracemalloc
@@ -121,11 +122,11 @@ def test_cli_table_shows_failure_kind_and_sizes(tmp_path):
     )
     out = _cli("dt-crit", "lin.toml", "--criterion", "n_steps=2e4", cwd=tmp_path)
     r = search_scene(LINEAR, 1.0, [1.0], "two-sided", criterion=EnergyGrowth(n_steps=20_000))[0]
+    # Off a terminal the table is plain text: label, then the value, 2+ spaces apart.
     rows = {
-        # rich may wrap the unit " [s]" onto the next line of a narrow terminal
-        line.split("│")[1].strip().removesuffix(" [s]"): line.split("│")[2].strip()
-        for line in out.stdout.splitlines()
-        if line.count("│") >= 3
+        cells[0].removesuffix(" [s]"): cells[1]
+        for cells in (re.split(r"\s{2,}", line.strip()) for line in out.stdout.splitlines())
+        if len(cells) >= 2
     }
     # failure kind (runaway / bounded / accuracy), the bounded step and (impacts
     # only, so absent here: "—") the accuracy step, as `_fmt` prints them.

@@ -57,38 +57,6 @@ def _key(pot):
     return tuple((t.k, t.p) for t in terms)
 
 
-@st.composite
-def law_cases(draw, name):
-    """(potential, m, v0, law) with the law's strength gamma scaled to the contact."""
-    p = draw(st.sampled_from([1.0, 1.5, 2.0, 3.0]) if name != "universal" else st.just(1.5))
-    k = draw(hs.log_uniform(1e4, 1e10))
-    if name in ("linear", "hunt-crossley") and draw(st.booleans()):
-        pot = PowerLaw(k, 1.0) + PowerLaw(k * draw(hs.log_uniform(1e-2, 1e2)), 1.5)
-    else:
-        pot = PowerLaw(k, p)
-    m = draw(hs.log_uniform(1e-3, 1.0))
-    v0 = draw(hs.log_uniform(1e-2, 10.0))
-    qE = pot.turning_point(0.5 * m * v0 * v0)
-    K = float(pot.dU(qE)) / qE  # secant stiffness at the elastic turning point, N/m
-    gamma = draw(st.floats(0.01, 0.35))
-    c_ref = 2.0 * gamma * math.sqrt(m * K)  # kg/s
-    if name == "linear":
-        law = {"law": "linear", "c": c_ref}
-    elif name == "power":
-        e = draw(st.sampled_from([0.0, 0.25, 0.5, 1.0, 1.5]))
-        law = {"law": "power", "c": c_ref / qE**e, "exponent": e}
-    elif name == "polynomial":
-        a = draw(st.lists(st.floats(0.0, 1.0), min_size=2, max_size=3))
-        law = {"law": "polynomial", "c": [ai * c_ref / qE**i for i, ai in enumerate(a)]}
-    elif name == "viscoelastic":
-        law = {"law": "viscoelastic", "A": c_ref / K}
-    elif name == "hunt-crossley":
-        law = {"law": "hunt-crossley", "alpha": c_ref / (K * qE)}
-    else:
-        law = {"law": "universal", "zeta": gamma}
-    return pot, m, v0, law
-
-
 def _check_against_truth(pot, m, v0, law):
     sol = solve_law_impact(pot, m, v0, law)
     assert_true(
@@ -122,7 +90,7 @@ def _check_against_truth(pot, m, v0, law):
 def test_law_against_30_digit_truth(name):
     # No shrinking: each truth run costs seconds, and the failing draw is printed as is.
     @settings(max_examples=TRUTH_EXAMPLES, phases=(Phase.explicit, Phase.generate))
-    @given(law_cases(name))
+    @given(hs.law_cases(name))
     def run(case):
         _check_against_truth(*case)
 

@@ -33,9 +33,9 @@ from reference_impl.bench.metrics import METRICS, SceneContext, SpeedRecord
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes import parse_scene
+from verification._adapter_cases import FAST, SCRIPT, ascene, cmd, scene
+from verification._adapter_cases import by as _by
 from verification._hcv_run import ROOT, hcv
-
-from .test_adapters import FAST, SCRIPT, _by, ascene, cmd, scene
 
 _WALLS = (
     'name = "walls"\nmass = 4.1103e-3\nvelocities = [1.0]\nkind = "two-walls"\n'

@@ -21,9 +21,9 @@ import pytest
 from reference_impl.adapters import AdapterOutputError, get_adapter
 from reference_impl.adapters.subprocess import response_limit
 from reference_impl.bench import run_bench
+from verification._adapter_cases import FAST, SCRIPT, ascene, cmd, scene
+from verification._adapter_cases import by as _by
 from verification._hcv_run import ROOT, hcv, processes_with
-
-from .test_adapters import FAST, SCRIPT, _by, ascene, cmd, scene
 
 
 # ----------------------------------------------------------------------------

@@ -34,10 +34,9 @@ pytestmark = [
     ),
 ]
 
-from reference_impl import solve_impact  # noqa: E402
-from reference_impl.adapters import AdapterScene, get_adapter  # noqa: E402
+from reference_impl.adapters import get_adapter  # noqa: E402
 from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
-from reference_impl.bench.runner import resolve_scenes  # noqa: E402
+from verification._adapter_cases import scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
 
@@ -46,15 +45,6 @@ CLAIM = "bench-kratos"  # the benchmark machinery, not a paper claim
 # Elastic force against k q^p: Kratos evaluates (2/3) K_n q and K_n q in double
 # precision from E*, R that the adapter derived from k: a few ulps of round-off.
 _FORCE_RTOL = 1e-9
-
-
-def scene_at(name: str, v0: float, steps_per_contact: int = 200, zeta=None) -> AdapterScene:
-    sc = resolve_scenes([name])[0]
-    t_c = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time
-    asc = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, 4 * steps_per_contact)
-    if zeta is not None:
-        asc = asc.replace(zeta=zeta, damping="universal" if zeta else "none")
-    return asc
 
 
 def test_kratos_import_keeps_stdout_clean_and_runs_one_thread():

@@ -35,27 +35,19 @@ pytestmark = [
 ]
 
 from reference_impl import solve_impact  # noqa: E402
-from reference_impl.adapters import AdapterScene, get_adapter  # noqa: E402
+from reference_impl.adapters import get_adapter  # noqa: E402
 from reference_impl.adapters.lammps import tsuji_alpha  # noqa: E402
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory  # noqa: E402
 from reference_impl.bench import run_bench  # noqa: E402
 from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
-from reference_impl.bench.runner import resolve_scenes  # noqa: E402
 from reference_impl.theory.damping import restitution_from_zeta  # noqa: E402
+from verification._adapter_cases import FAST, HCV_BENCH, scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 CLAIM = "bench-lammps"  # the benchmark machinery, not a paper claim
 MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
-FAST = {"dt_crit": {"resolution": 0.05}, "run": {"speed_error_steps": [50, 100, 200]}}
-
-
-def scene_at(name: str, v0: float, steps_per_contact: int = 200) -> AdapterScene:
-    sc = resolve_scenes([name])[0]
-    t_c = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time
-    dt = t_c / steps_per_contact
-    return AdapterScene.from_scene(sc, v0, dt, 4 * steps_per_contact)
 
 
 def lmp(damping: str, geometry: str = "wall", **kw):
@@ -236,14 +228,12 @@ def test_hcv_bench_lammps_gate(tmp_path):
     (tsuji asks 0.729 and gets ~0.80 on LAMMPS before 2Sep2026; the constant dashpots
     depend on v0), with a scorecard on stdout and JSON and JUnit files.
     """
-    from verification.test_adapters import _bench_command
-
     js, xml = tmp_path / "lammps.json", tmp_path / "lammps.xml"
     fast = tmp_path / "fast.toml"
     fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
     r = subprocess.run(
         [
-            *_bench_command(),
+            *HCV_BENCH,
             "lammps",
             "--scenes",
             "hertz-damped",

@@ -42,6 +42,7 @@ from reference_impl import solve_impact  # noqa: E402
 from reference_impl.adapters import AdapterDeclined, AdapterScene, get_adapter  # noqa: E402
 from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
 from reference_impl.bench.runner import resolve_scenes  # noqa: E402
+from verification._adapter_cases import scene_at as _scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
 
@@ -55,12 +56,8 @@ _FORCE_RTOL = 1e-9
 
 
 def scene_at(name: str, v0: float, steps_per_contact: int = 200, zeta=None) -> AdapterScene:
-    sc = resolve_scenes([name])[0]
-    t_c = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time
-    asc = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, 4 * steps_per_contact + 64)
-    if zeta is not None:
-        asc = asc.replace(zeta=zeta, damping="universal" if zeta else "none")
-    return asc
+    """`_adapter_cases.scene_at` with 64 steps more than 4 contact times."""
+    return _scene_at(name, v0, steps_per_contact, zeta, extra_steps=64)
 
 
 def _declared_force(law, q: float, rate: float) -> float:

@@ -12,7 +12,6 @@ q - atan(q) is its interior maximum, 2.5636547...
 
 from __future__ import annotations
 
-import functools
 import math
 
 import mpmath
@@ -24,26 +23,18 @@ from reference_impl.errors import ExpressionError, HCVInputError
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from reference_impl.potentials import Expression
 from reference_impl.stability.bound import dt_safe
+from verification._near_zero_checks import (
+    _F64_RTOL,
+    _SOLVE_RTOL,
+    _contact_time_truth,
+    _reference,
+)
 from verification.assertions import assert_close, assert_true
 
-# Float64 values against the correctly rounded value: the formula above its
-# float floor and the series below it are both held to 1e-14 (45 ulps) by
-# construction; 2e-14 adds the rounding of the comparison itself.
-_F64_RTOL = 2e-14
-# Float64 contact time against the mpmath quadrature: the issue's target
-# accuracy for the exact solver (its tanh-sinh rules reach ~1e-15 here).
-_SOLVE_RTOL = 1e-13
 # 30-digit mpmath path against sympy.N at 30 digits: 25 digits leave room for
 # the last-digit rounding of both and for the 5 guard digits of the path.
 _MP_DPS = 30
 _MP_RTOL = mpmath.mpf("1e-25")
-# Digits of the independent reference values: the formulas below cancel at most
-# ~3 x 300 digits at q = 1e-300 m (q - atan(q) ~ q^3 from terms ~ q), so 1200
-# digits leave > 250 correct; each value is confirmed at 100 more digits.
-_REF_DPS = 1200
-# Digits of the independent quadrature truth: E - U(q) cancels near q_max; at 60
-# digits the cancelling stretch (s < 1e-22 in q = q_max (1 - s^2)) adds < 1e-22.
-_TRUTH_DPS = 60
 # Delta t_safe and its shortcut: a few roundings of U, U' at the (flat) maximum,
 # and the root tolerance of the inverse (4 ulps) times the slope: 1e-14.
 _DT_RTOL = 1e-14
@@ -116,25 +107,6 @@ def test_accepted_with_exact_leading_term(source, n):
     )
 
 
-@functools.lru_cache(maxsize=64)
-def _mp_function(expr: sp.Expr, sym: sp.Symbol):
-    return sp.lambdify(sym, expr, modules="mpmath")
-
-
-def _reference(
-    expr: sp.Expr, sym: sp.Symbol, q: float, dps: int, work_dps: int = _REF_DPS
-) -> mpmath.mpf:
-    """expr at the exact binary q, in mpmath at work_dps digits, confirmed at +100 digits."""
-    f = _mp_function(expr, sym)
-    with mpmath.workdps(work_dps):
-        val = f(mpmath.mpf(q))
-    with mpmath.workdps(work_dps + 100):
-        chk = f(mpmath.mpf(q))
-    with mpmath.workdps(dps + 10):
-        assert abs(val - chk) <= abs(chk) * mpmath.mpf(10) ** -(dps + 5), "reference unsettled"
-    return +val
-
-
 _EVAL_POINTS = [10.0**k for k in (-300, -150, -45, -20, -10, -6, -3, -2, -1)] + [0.37, 1.0, 2.0]
 
 
@@ -170,33 +142,6 @@ def test_float64_and_mp_values_are_correctly_rounded(source):
                 claim="expression",
                 call=f"Expression({source!r}).{name}({q:g})",
             )
-
-
-def _contact_time_truth(pot: Expression, m: float, v0: float) -> mpmath.mpf:
-    """2 int_0^q_max dq / sqrt(2 (E - U(q)) / m) at 60 digits, q = q_max (1 - s^2)."""
-    f = sp.lambdify(pot.sympy_symbol, pot.sympy_U, modules="mpmath")
-    df = sp.lambdify(pot.sympy_symbol, sp.diff(pot.sympy_U, pot.sympy_symbol), modules="mpmath")
-    with mpmath.workdps(_TRUTH_DPS):
-        m_, E = mpmath.mpf(m), mpmath.mpf(m) * mpmath.mpf(v0) ** 2 / 2
-        guess = mpmath.mpf(pot.turning_point(0.5 * m * v0**2))
-        # Solved for y = q / guess ~ 1, so that mpmath's tolerances are relative.
-        y = mpmath.findroot(lambda y: f(guess * y) / E - 1, (1, 1 + mpmath.mpf(10) ** -8))
-        q_max = guess * y
-        # Near s = 0, E - U = U'(q_max) q_max s^2 (1 + O(s^2)): the limit value.
-        end = 2 * q_max / mpmath.sqrt(2 * df(q_max) * q_max / m_)
-
-        # Integrand / (q_max / v0), which is O(1): mpmath's quad stops on an
-        # absolute error estimate, so a contact time of 1e-150 s must be scaled.
-        scale = q_max / mpmath.mpf(v0)
-
-        def integrand(s):
-            q = q_max * (1 - s * s)
-            gap = E - f(q)
-            if s < mpmath.mpf(10) ** -25 or gap <= 0:
-                return end / scale
-            return 2 * q_max * s / mpmath.sqrt(2 * gap / m_) / scale
-
-        return 2 * scale * mpmath.quad(integrand, [0, mpmath.mpf(1) / 2, 1])
 
 
 # (formula, mass kg, speed m/s): speeds keep 1 - cos(q) below q = pi.

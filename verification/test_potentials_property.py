@@ -19,14 +19,14 @@ from hypothesis import strategies as st
 from reference_impl.errors import UnsupportedError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials import Expression
-from verification.assertions import assert_close, assert_true
-from verification.strategies import expression_impacts, log_uniform, monotone_expressions
-from verification.test_potentials_near_zero import (
+from verification._near_zero_checks import (
     _F64_RTOL,
     _SOLVE_RTOL,
     _contact_time_truth,
     _reference,
 )
+from verification.assertions import assert_close, assert_true
+from verification.strategies import expression_impacts, log_uniform, monotone_expressions
 
 # Each example builds an Expression (sympy limits and series, ~0.1-0.5 s):
 # 8 examples keep each test near 5 s (60 examples each passed once, 2 min).

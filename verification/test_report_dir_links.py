@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 
 import reference_impl.campaign as report
+from reference_impl.campaign import _environment, build_report
 from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
-from reference_impl.campaign import _environment, build_report
 from reference_impl.report._files import MANIFEST, _move_in
 
 CALL = "hcv report --out DIR"

@@ -36,10 +36,11 @@ from hypothesis import strategies as st
 from reference_impl import HarmonicMap, PowerLaw, UniversalDamping, dt_safe, restitution_from_zeta
 from reference_impl.claims import km_cancellation, thm2_harmonic
 from reference_impl.claims._cases import KM_PAIRS
-from reference_impl.claims._tolerances import ODE_RTOL, ROUNDOFF_TOL, SINUSOID_TOL, TAU_EVENT_RTOL
+from reference_impl.claims._tolerances import ROUNDOFF_TOL, SINUSOID_TOL, TAU_EVENT_RTOL
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.potentials import Ellipsoid
 from reference_impl.studies.paper import FIG1, PAPER_ELLIPSOID, PAPER_MASS
+from verification._harmonic_checks import _ODE_RTOL, _x_on_path
 from verification.assertions import (
     assert_close,
     assert_less,
@@ -49,15 +50,11 @@ from verification.assertions import (
 )
 from verification.strategies import impacts, power_laws, reference_constants
 
-# _ODE_RTOL, _SINUSOID_TOL: shared with the claim modules (reasons in claims/_tolerances.py).
-_ODE_RTOL = ODE_RTOL
+# _SINUSOID_TOL: shared with the claim modules (reasons in claims/_tolerances.py).
 _SINUSOID_TOL = SINUSOID_TOL
 _TAU_EVENT_RTOL = TAU_EVENT_RTOL  # shared: reference_impl/claims/_tolerances.py
 # Elastic restitution 1: exit speed carries the global ODE error ~1e-10 v0.
 _RESTITUTION_RTOL = 1e-9
-# Relative drift of the (identically physical) energy along the ODE solution:
-# global error ~1e-10 of q and v, squared terms double it.
-_ENERGY_RTOL = 1e-9
 # Round-off of quantities that cancel analytically (reason in claims/_tolerances.py).
 _ROUNDOFF_RTOL = ROUNDOFF_TOL
 # Two ODE runs with damping laws equal to round-off: their step sequences may
@@ -82,11 +79,6 @@ def _amplitude(m: float, v0: float, hmap: HarmonicMap) -> float:
 # physical meaning and its products underflow to subnormals, where relative
 # round-off tolerances cannot apply (verification.strategies.zetas draws them).
 _ZETAS = st.just(0.0) | st.floats(1e-6, 0.9)
-
-
-def _x_on_path(hmap: HarmonicMap, q: np.ndarray) -> np.ndarray:
-    """x(q) on an ODE path (q >= 0; the clip only guards against round-off below 0)."""
-    return hmap.x(np.maximum(q, 0.0))
 
 
 @pytest.mark.claim("thm2-harmonic")

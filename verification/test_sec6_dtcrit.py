@@ -16,26 +16,18 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from reference_impl.claims import sec6_dt_safe_bound as sec6
-from reference_impl.potentials import PowerLaw
 from reference_impl.stability.search import (
     KINDS,
     EnergyGrowth,
-    SearchGrid,
     search_scene,
 )
 from reference_impl.studies.dtcrit_map import coverage
+from verification._dtcrit_checks import HERTZ, TWO_BRACKETS
 from verification.assertions import assert_close, assert_true, check_measurement
 from verification.strategies import impacts
 
 CLAIM = sec6.ID
 claim = pytest.mark.claim(CLAIM)
-
-# The resolution of every search: brackets narrower than 0.1 % of dt_safe.
-RES = SearchGrid().resolution
-# Two searches of the same threshold may land anywhere in their brackets, so
-# they agree to two bracket widths.
-TWO_BRACKETS = 2 * RES
-HERTZ = PowerLaw(1.0, 1.5)
 
 
 # ----------------------------------------------------------------------------

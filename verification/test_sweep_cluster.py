@@ -320,10 +320,18 @@ def test_sigterm_to_a_bench_sweep_leaves_no_adapter_running(tmp_path):
         text=True,
     )
     try:
+        # Wait for the adapter, or for hcv to end without starting it (then say why).
         deadline = time.monotonic() + 120
-        while not running() and time.monotonic() < deadline:
+        while not running() and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert running(), "the adapter never started"
+        if not running():
+            proc.kill()
+            _, err = proc.communicate(timeout=60)
+            pytest.fail(
+                f"got no adapter process (hcv sweep ended with exit {proc.returncode}, or was "
+                f"killed after 120 s: stderr {err[-800:]!r}), should be one "
+                "running before SIGTERM is sent [issue 22, hcv sweep bench:cmd:sleep]"
+            )
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=120)
         assert proc.returncode == 143, f"got exit {proc.returncode} ({err[-400:]}), should be 143"
@@ -348,20 +356,36 @@ def test_ctrl_c_on_a_sweep_prints_one_line(tmp_path):
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent
+    # The documentation's example, its 8 cases repeated over 8 masses: 64 searches keep the
+    # two workers busy for seconds after the first progress line, on any machine, so the
+    # Ctrl-C lands while cases run (the 8 alone may all finish before it on many cores).
+    example = (root / "docs" / "examples" / "sweep-hertz-map.toml").read_text()
+    spec = tmp_path / "spec.toml"
+    spec.write_text(example + '"mass" = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]\n')
     p = subprocess.Popen(
-        [sys.executable, "-m", "reference_impl.cli", "sweep",
-         str(root / "docs" / "examples" / "sweep-hertz-map.toml"), "--workers", "2",
+        [sys.executable, "-m", "reference_impl.cli", "sweep", str(spec), "--workers", "2",
          "--out", str(tmp_path / "out")],
         cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(root)}, stdout=subprocess.PIPE,
         stderr=subprocess.PIPE, text=True, start_new_session=True,
     )  # fmt: skip
-    while True:  # the cluster is up once progress is printed
+    seen = []  # what hcv wrote before it was ready, kept for the message
+    while not (seen and seen[-1].startswith("sweep:")):  # the cluster is up and running
         line = p.stderr.readline()
-        if line.startswith("sweep:") or not line:
+        if not line:
             break
-    time.sleep(0.5)
+        seen.append(line)
+    time.sleep(0.5)  # cases in flight on both workers
+    ready = p.poll() is None and seen and seen[-1].startswith("sweep:")
+    if not ready:
+        p.kill()
+        _, err = p.communicate(timeout=60)
+        pytest.fail(
+            f"got hcv sweep ended (exit {p.returncode}) before Ctrl-C, stderr "
+            f"{(''.join(seen) + err)[-800:]!r}, should be running its cases [sweep, Ctrl-C]"
+        )
     os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole group
     _, err = p.communicate(timeout=120)
+    err = "".join(seen) + err
     rest = [x for x in err.splitlines() if not x.startswith("sweep:")]
     assert_true(
         p.returncode == 130 and rest == ["interrupted"],

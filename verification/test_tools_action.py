@@ -17,16 +17,7 @@ from reference_impl.integrators.taylor import taylor_impact
 from reference_impl.potentials import PowerLaw, Sphere, SumPotential
 from reference_impl.theory import action as act
 from reference_impl.theory import action_closed as closed
-from verification.assertions import assert_close
-from verification.strategies import (
-    ellipsoids,
-    log_uniform,
-    masses,
-    power_laws,
-    spheres,
-    sums,
-)
-from verification.test_sec4_action import (  # noqa: E402
+from verification._action_checks import (
     _CHECK_DPS,
     _DOP853_CMP_RTOL,
     _FLOAT_RTOL,
@@ -40,6 +31,15 @@ from verification.test_sec4_action import (  # noqa: E402
     _assert_mp_close,
     _dop853_impact,
     _reference_overlap,
+)
+from verification.assertions import assert_close
+from verification.strategies import (
+    ellipsoids,
+    log_uniform,
+    masses,
+    power_laws,
+    spheres,
+    sums,
 )
 
 

@@ -36,8 +36,8 @@ from reference_impl.stability.search import (
 )
 from reference_impl.studies.dtcrit_map import criterion_sensitivity
 from reference_impl.theory.damping import restitution_from_zeta
+from verification._dtcrit_checks import HERTZ, RES, TWO_BRACKETS
 from verification.assertions import assert_close, assert_true
-from verification.test_sec6_dtcrit import HERTZ, RES, TWO_BRACKETS  # noqa: E402
 
 # Lanes of the engine and of the scalar reference do the same arithmetic up to
 # the last ulp of pow(); over 3000 steps of a stable orbit that grows to well

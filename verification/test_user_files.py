@@ -30,6 +30,7 @@ from reference_impl.campaign import _environment, build_report
 from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
 from reference_impl.report._files import MANIFEST
+from verification._sweeps import needs_dask
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -217,6 +218,7 @@ def test_sweep_never_overwrites_a_user_s_files(tmp_path, spec, capsys):
     assert _snapshot(out) == before, "got the user's files changed [issue 22, sweep --out]"
 
 
+@needs_dask  # without Dask, hcv sweep refuses (one line) before it reaches what this tests
 def test_second_sweep_into_a_locked_directory_is_refused(tmp_path, spec, capsys):
     from reference_impl._userfiles import DirLock
     from reference_impl.cli.sweep import LOCK_NAME
@@ -249,6 +251,7 @@ def test_unwritable_sweep_out_is_one_line(tmp_path, spec, capsys):
     _one_line_exit_2(capsys, ["sweep", str(spec), "--out", str(target)], "not writable")
 
 
+@needs_dask  # without Dask, hcv sweep refuses (one line) before it reaches what this tests
 def test_refused_sweep_leaves_nothing_behind(tmp_path, spec, capsys, monkeypatch):
     """Refused after the lock was taken (no scheduler at the address): DIR removed again."""
     from reference_impl.sweep import _runner

@@ -77,7 +77,9 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
+from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import zeta_from_restitution
 
 __all__ = [
     "DAMPING_MODELS",
@@ -526,8 +528,6 @@ _CALIBRATIONS: dict[tuple, float] = {}
 
 def _calibrate(pot: PowerLaw, m: float, e: float, v_ref: float, exponent: float) -> float:
     """c such that C = c q^exponent gives restitution e at v_ref (damped ODE, DOP853)."""
-    from reference_impl.integrators.ivp import integrate_impact
-    from reference_impl.theory.damping import zeta_from_restitution
 
     key = (pot.k, pot.p, m, e, v_ref, exponent)
     if key in _CALIBRATIONS:

@@ -77,6 +77,7 @@ import subprocess
 
 import numpy as np
 
+from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterRunError,
@@ -261,8 +262,6 @@ class LiggghtsAdapter(ContactAdapter):
         return out
 
     def _shared_server(self):
-        from reference_impl.adapters._persistent import PersistentProcess
-
         if self._server is None:
             self._server = PersistentProcess(
                 ["stdbuf", "-oL", "liggghts", *_ARGS], label="liggghts", startup_timeout=60.0

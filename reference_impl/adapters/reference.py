@@ -15,6 +15,7 @@ from reference_impl.adapters.base import (
     PowerDamping,
     Trajectory,
 )
+from reference_impl.adapters.law_damping import LawDamping
 from reference_impl.integrators.verlet_path import verlet_trajectory
 
 __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
@@ -29,7 +30,6 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
     TypeError
         When the law's damping is an opaque callable (not `LawDamping` / `PowerDamping`).
     """
-    from reference_impl.adapters.law_damping import LawDamping
 
     if isinstance(law.C, LawDamping):
         # any law of the table: C(q) evaluated per step (the recorder's Python loop)

@@ -102,6 +102,7 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
+from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterOutputError,
@@ -111,8 +112,10 @@ from reference_impl.adapters.base import (
     ImplementedLaw,
     trajectory_from_mapping,
 )
+from reference_impl.adapters.law_damping import implemented_law_from_table
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes._scene import _potential, _Where
+from reference_impl.theory.laws import LAWS
 
 __all__ = [
     "PROTOCOL",
@@ -200,8 +203,6 @@ def law_from_json(data, scene: AdapterScene, who: str) -> ImplementedLaw:
     if not isinstance(description, str):
         raise AdapterOutputError(f"{who}: 'implemented_law.description' must be a string")
     kw = dict(clips_tension=clips, description=description)
-    from reference_impl.adapters.law_damping import implemented_law_from_table
-    from reference_impl.theory.laws import LAWS
 
     if law not in LAWS:
         raise AdapterOutputError(
@@ -418,7 +419,6 @@ class SubprocessAdapter(ContactAdapter):
 
     def _persistent_call(self, obj: dict, limit: int) -> dict:
         """One request in persistent mode (the process is started on first use)."""
-        from reference_impl.adapters._persistent import PersistentProcess
 
         if self._server is None:
             self._server = PersistentProcess(

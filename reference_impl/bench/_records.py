@@ -12,6 +12,7 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from reference_impl.adapters.base import ImplementedLaw
+from reference_impl.bench._json import result_to_dict
 
 __all__ = [
     "DELIVERY_METRICS",
@@ -149,7 +150,6 @@ class SceneContext:
     damped: bool
     skipped: str = ""
     speeds: list[SpeedRecord] = field(default_factory=list)
-    speed_rows: list[dict] = field(default_factory=list)
     order: float | None = None
     order_error: str = ""
     sustained: dict | None = None
@@ -246,6 +246,4 @@ class BenchResult:
         return EXIT_INTERNAL if any(m.status == "error" for m in mine) else 0
 
     def to_dict(self) -> dict:
-        from reference_impl.bench._json import result_to_dict
-
         return result_to_dict(self)

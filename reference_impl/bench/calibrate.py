@@ -47,7 +47,11 @@ from reference_impl.bench._calibrate_options import (
     check_settings,
     spec_with_options,
 )
+from reference_impl.bench.measure import _restitution_zero_force, exact_reference, measure
+from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
+from reference_impl.scenes import Scene, load_scene
 
 __all__ = [
     "ENDS",
@@ -167,7 +171,6 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
     Raises `_Declined` when the adapter refuses the spec's options or declines the
     scene, HCVInputError when the spec has several variants.
     """
-    from reference_impl.bench.worker import make_executor
 
     try:
         executor = make_executor(spec, isolate=isolate)
@@ -203,7 +206,6 @@ def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
     end and, when the force never vanished after the deepest overlap, at the zero-force
     end too (where it did, that end is read there as for any run).
     """
-    from reference_impl.bench.measure import _restitution_zero_force, measure
 
     meas = measure(tr, v0)
     key = "restitution" if end == "overlap" else "restitution_zero_force"
@@ -223,8 +225,6 @@ def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
 
 def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
     """Measured quantities at the calibrated value, against the declared law and the scene."""
-    from reference_impl.bench.measure import exact_reference, measure
-    from reference_impl.exact.solve import solve_impact
 
     meas = measure(tr, v0)
     keys = ("restitution", "restitution_zero_force", "contact_time", "max_penetration")
@@ -347,8 +347,6 @@ def calibrate(
         Bad input (`check_settings`), an unknown option, a non-impact scene, an
         adapter with several variants, or one that declines every scanned value.
     """
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.scenes import Scene, load_scene
 
     settings = check_settings(
         target=target,
@@ -528,8 +526,6 @@ def delivered(
     Same scene, speed and dt = t_c / N as `calibrate`: 0 for a run without rebound,
     NaN when the run gives none.
     """
-    from reference_impl.exact.solve import solve_impact
-    from reference_impl.scenes import Scene, load_scene
 
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if v0 is None:

@@ -26,9 +26,13 @@ import math
 from dataclasses import asdict, dataclass
 
 from reference_impl.adapters.base import AdapterScene
+from reference_impl.bench.calibrate import calibrate
+from reference_impl.bench.measure import exact_reference, measure
+from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.scenes import scene_from_dict
 from reference_impl.theory.damping import zeta_from_restitution
 
 __all__ = ["ASKED", "CALIBRATED", "CODES", "CodeRow", "calibration_table", "codes_table"]
@@ -119,8 +123,6 @@ def codes_table(codes=CODES, asked=ASKED, steps=STEPS_PER_CONTACT, speeds=SPEEDS
     -------
     list of CodeRow
     """
-    from reference_impl.bench.measure import exact_reference, measure
-    from reference_impl.bench.worker import make_executor
 
     rows: list[CodeRow] = []
     for i, (code, spec, p) in enumerate(codes):
@@ -167,8 +169,6 @@ def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 20
     (``found``, ``value``) or the span the code delivers over the option's range
     (``delivered``: "out of reach"), and the calibration's one-line ``message``.
     """
-    from reference_impl.bench.calibrate import calibrate
-    from reference_impl.scenes import scene_from_dict
 
     rows = []
     for code, spec, p, param, *bracket in codes:  # an optional 5th item: the option's range

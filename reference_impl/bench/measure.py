@@ -16,6 +16,9 @@ from typing import Any
 import numpy as np
 
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
+from reference_impl.adapters.law_damping import law_of
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
@@ -174,7 +177,6 @@ def check_declared_law(law: ImplementedLaw, v0: float) -> None:
         error of the code that declared it (``hcv bench`` exit status 2), not a failed
         metric and not an error of ours.
     """
-    from reference_impl.errors import HCVInputError
 
     m = law.mass
     if not (isinstance(m, (int, float)) and math.isfinite(m) and m > 0):
@@ -228,7 +230,6 @@ def universal_zeta(law: ImplementedLaw) -> float | None:
 
 def _table_law(law: ImplementedLaw):
     """The `DampingLaw` of a declared law of the table, or None (opaque callable)."""
-    from reference_impl.adapters.law_damping import law_of
 
     return law_of(law.C)
 
@@ -293,7 +294,6 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
 
     With ``timing`` the wall time of the exact solver is measured too ("seconds").
     """
-    from reference_impl.exact.solve import solve_impact
     from reference_impl.integrators.ivp import integrate_impact
 
     pot, m = law.potential, law.mass

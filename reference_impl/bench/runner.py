@@ -61,11 +61,12 @@ from reference_impl.bench.measure import (
     measure,
 )
 from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.report import machine_info, write_json, write_junit
 from reference_impl.bench.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
-from reference_impl.scenes import Scene
+from reference_impl.scenes import Scene, potential_to_dict
 
 __all__ = [
     "DEFAULT_SCENES",
@@ -203,7 +204,6 @@ class _SceneRun:
 
     def is_scene_law(self, law: ImplementedLaw) -> bool:
         """The declared law is the scene's own (what was asked), not one the code chose."""
-        from reference_impl.scenes import potential_to_dict
 
         try:
             same_pot = potential_to_dict(law.potential) == potential_to_dict(self.scene.potential)
@@ -404,7 +404,6 @@ def run_bench(
         an adapter that supports none of the scenes). Adapter *run* failures are
         never raised: they are failed metrics.
     """
-    from reference_impl.bench.report import machine_info, write_json, write_junit
 
     tol = load_tolerances(tolerances)
     scene_list = resolve_scenes(scenes)

@@ -36,7 +36,7 @@ from pathlib import Path
 from reference_impl._format import g, jsonable
 from reference_impl.bench.report import plot_speed_error, result_to_dict
 from reference_impl.bench.runner import run_bench
-from reference_impl.campaign import _environment, _map, _steps
+from reference_impl.campaign import _codes, _environment, _map, _steps
 from reference_impl.claims import (
     CLAIMS,
     VERDICTS,
@@ -76,7 +76,7 @@ from reference_impl.studies.workprecision import (
 __all__ = ["CARRIED", "build_report", "quick_drops", "validate_report_args"]
 
 # The fields of results.json that a run without codes carries from the previous report.
-CARRIED = ("adapters", "steps_per_contact", "steps_per_contact_settings")
+CARRIED = ("adapters", "steps_per_contact", "steps_per_contact_settings", "codes_side_by_side")
 
 
 def quick_drops() -> list[str]:
@@ -165,7 +165,7 @@ def _carry(out: Path, adapters) -> tuple[dict | None, str]:
         "sections": list(CARRIED),
         "reason": "no --adapter given: the codes were not run by this report",
     }
-    data = {k: old[k] for k in CARRIED}
+    data = {k: old.get(k) for k in CARRIED}  # codes_side_by_side: absent from older files
     data.update(figures=figures, carried=source)
     names = ", ".join(str(a) for a in source["adapters"])
     return data, (
@@ -300,7 +300,8 @@ def _build(
     # section 6, Fig. 1, hard cases, sweeps, their figure, the map, its figure, the
     # criterion study, speed against error and its figures, one per adapter).
     # 9 fixed stages, 2 of the damping-law study, one per adapter and the steps study
-    n_stages = len(CLAIMS) - 1 + 9 + 2 + len(adapters) + (1 if adapters else 0)
+    # and the codes side by side
+    n_stages = len(CLAIMS) - 1 + 9 + 2 + len(adapters) + (2 if adapters else 0)
     stage = [0]
 
     def timed(name: str, fn, *args, **kw):
@@ -399,6 +400,10 @@ def _build(
         timed("steps per contact", _steps.resolution_study, adapters, fig_dir) if adapters else []
     )
 
+    side = (
+        timed("codes side by side", _codes.codes_side_by_side, adapters, say) if adapters else None
+    )
+
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures.append(_laws.FIGURE)
     figures += [b["figure"] for b in bench if b.get("figure")]
@@ -408,6 +413,7 @@ def _build(
         "adapters": [b["result"] for b in bench],
         "steps_per_contact": steps,
         "steps_per_contact_settings": _steps.settings() if adapters else None,
+        "codes_side_by_side": side,
         "carried": None,
     }
     if carried is not None:

@@ -22,6 +22,10 @@ import math
 import sys
 from pathlib import Path
 
+from reference_impl.adapters.mujoco import zeta_zero_force
+from reference_impl.bench.calibrate import calibrate, delivered
+from reference_impl.scenes import load_scene
+
 __all__ = ["END", "START", "calibration_rows", "markdown_table", "rewrite_readme"]
 
 START = "<!-- mujoco-calibrate:start -->"
@@ -44,8 +48,6 @@ def _zeta_textbook(e: float) -> float:
 
 def calibration_rows() -> list[dict]:
     """One dict per integrator, target and resolution: calibrated, naive, closed form."""
-    from reference_impl.adapters.mujoco import zeta_zero_force
-    from reference_impl.bench.calibrate import calibrate, delivered
 
     rows = []
     for integ in INTEGRATORS:
@@ -94,7 +96,6 @@ def markdown_table(rows: list[dict]) -> str:
             f"| {_f(r['textbook_delivers'])} | {_f(r['zero_force_limit_dampratio'])} |"
         )
     lines += ["", _summary(rows)]
-    from reference_impl.scenes import load_scene
 
     sc = load_scene(SCENE)
     lines += [

@@ -29,8 +29,6 @@ from reference_impl.claims._base import VERDICTS, Measurement
 
 __all__ = ["Claim", "CLAIMS", "VERDICTS", "Measurement", "claim_ids", "get_claim", "measure"]
 
-PAPER = "../shared/paper/hidden-harmonic-contact.tex"
-
 # Claim modules in paper order.
 _MODULES = (
     "thm1_period",

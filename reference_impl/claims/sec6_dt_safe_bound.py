@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from reference_impl.claims._base import Measurement, g
+from reference_impl.studies.dtcrit_map import dt_crit_map
 
 ID = "sec6-dt-safe-bound"
 SECTION = "6"
@@ -59,7 +60,6 @@ FAILURE_KINDS = (RUNAWAY, "bounded", "accuracy")
 @functools.cache
 def the_map(quick: bool = False):
     """The critical-step map of `coverage(quick)`, computed once per process."""
-    from reference_impl.studies.dtcrit_map import dt_crit_map
 
     return dt_crit_map(quick=quick)
 

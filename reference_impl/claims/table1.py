@@ -23,7 +23,6 @@ PRINTED = (
     r"maximum compression for the ellipsoid impact scenarios.",
 )
 
-COLUMNS = ("delta_max", "max_force", "dt_safe")
 NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
 # A cell matches when the 50-digit value rounds to the printed digits (half a unit of the
 # last printed digit): the recomputation itself is exact to far more digits.

@@ -15,6 +15,8 @@ import importlib
 import sys
 from collections.abc import Iterable, Sequence
 
+from reference_impl import _procs
+from reference_impl._version import version
 from reference_impl.cli._run import EXIT_INTERRUPTED, interrupted, run_command
 
 __all__ = ["COMMANDS", "main", "run_command", "solve_scene"]  # solve_scene: from tasks
@@ -60,8 +62,6 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from reference_impl._version import version
-
         print(f"{parser.prog} {version()}")
         parser.exit()
 
@@ -110,7 +110,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     an explicit ``argv`` (tests, scripts) the caller's signals and children are
     left alone.
     """
-    from reference_impl import _procs
 
     if argv is not None:
         try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 
+from reference_impl._procs import terminated
 from reference_impl.errors import HCVInputError
 
 __all__ = ["EXIT_FAIL", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "interrupted", "run_command"]
@@ -56,7 +57,6 @@ def _short_path(name) -> str:
 
 def interrupted() -> int:
     """The line and status of Ctrl-C (130) or SIGTERM handled like it (143)."""
-    from reference_impl._procs import terminated
 
     signum = terminated()
     if signum is not None:

@@ -7,6 +7,10 @@ import json
 
 __all__ = ["fmt", "print_transposed", "scene_title"]
 
+# Cells up to this many characters set a plain-text column's width: a float at 10
+# significant digits with sign and exponent is at most 17 ("-1.234567891e-300").
+_NUMBER_WIDTH = 24
+
 
 def scene_title(command: str, scene) -> str:
     """``hcv COMMAND: NAME (m = .. kg; potential FAMILY k = .., p = ..; damping LAW ..)``:
@@ -57,11 +61,16 @@ def _plain(title: str, rows: list[dict], fields, key: str, key_label: str) -> No
 
     lines = [[key_label, *(fmt(r[key]) for r in rows)]]
     lines += [[label, *(fmt(r.get(name)) for r in rows)] for name, label in fields]
-    widths = [max(len(line[i]) for line in lines) for i in range(len(lines[0]))]
+    # A column is as wide as its numbers; a long text cell (a criterion's description)
+    # runs past it, left-aligned, instead of pushing every number of the column far right.
+    widths = [max(len(line[0]) for line in lines)] + [
+        max([len(line[i]) for line in lines if len(line[i]) <= _NUMBER_WIDTH] or [1])
+        for i in range(1, len(lines[0]))
+    ]
     out = [title]
     for j, line in enumerate(lines):
         cells = [line[0].ljust(widths[0])] + [
-            c.rjust(w) for c, w in zip(line[1:], widths[1:], strict=True)
+            c.rjust(w) if len(c) <= w else c for c, w in zip(line[1:], widths[1:], strict=True)
         ]
         out.append("  ".join(cells).rstrip())
         if j == 0:

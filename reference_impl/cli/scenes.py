@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from reference_impl.cli._run import EXIT_OK
+from reference_impl.scenes._catalogue import catalogue_rows
 
 __all__ = ["add_parser", "run"]
 
@@ -22,7 +23,6 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """Print the catalogue, one scene a line, or with ``--show`` one scene's TOML."""
-    from reference_impl.scenes._catalogue import catalogue_rows
 
     if args.show:
         from reference_impl.scenes import scene_toml

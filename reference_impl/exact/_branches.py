@@ -42,6 +42,7 @@ from reference_impl.errors import HCVInputError
 from reference_impl.exact._nodes import node_function
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
+from reference_impl.exact._tail import overdamped_tail
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
 
@@ -397,7 +398,6 @@ def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float, pot, m) -> tuple
     x -> 0 only as s -> inf, exponentially, and dq/dx ~ x^beta: the time is finite
     only for beta > 0 (softening contacts, n < 2), infinite otherwise.
     """
-    from reference_impl.exact._tail import overdamped_tail  # the overdamped case only
 
     return overdamped_tail(g_of, osc, beta, pot, m, _NODE_ULPS)
 

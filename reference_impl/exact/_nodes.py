@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 # sympy itself is imported where an expression is handled: a potential of another family
 # solves without it (issue 20: start-up).
 
+from reference_impl._cache import expression_module, printed_function, record_files
 from reference_impl._jit import specialise
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, term_rows
 from reference_impl.potentials.base import Potential
@@ -358,8 +359,6 @@ def _disk_cached_expression(exprs, q):
     cannot reproduce; the caller then compiles in memory.
     """
     import sympy as sp
-
-    from reference_impl._cache import expression_module, printed_function, record_files
 
     funcs = [printed_function(q, e, f"u{i}") for i, e in enumerate(exprs)]
     if any(f is None for f in funcs):

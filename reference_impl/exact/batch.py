@@ -30,6 +30,7 @@ from reference_impl.exact._branches import (
     _pow_split,
 )
 from reference_impl.exact._validate import _check_exponent, _validated_top
+from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.prepared import prepare
 from reference_impl.exact.solve import ImpactSolution
 from reference_impl.potentials._checks import positive, real_array
@@ -330,7 +331,6 @@ _LAW_FIELDS = (
 
 def _law_batch(potential, m, v0s, law) -> dict[str, np.ndarray]:
     """One `solve_law_impact` per speed (the general law has no batch kernel)."""
-    from reference_impl.exact.general_law import solve_law_impact
 
     v = np.asarray(v0s, dtype=float)
     if v.size > BATCH_MAX:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 
@@ -34,13 +35,14 @@ from reference_impl.exact._general_kernel import (
     STOP_NO_RETURN_Q,
     python_solver,
 )
-from reference_impl.exact._general_kernel import solve as _compiled_solve
+from reference_impl.exact._general_taylor import solve as _compiled_solve
+from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.laws import DampingLaw, law_from_dict
 
-__all__ = ["LawImpactSolution", "solve_law_impact", "ERROR_SAFETY"]
+__all__ = ["ERROR_SAFETY", "LawImpactSolution", "PreparedLaw", "prepare_law", "solve_law_impact"]
 
 # The bound reported is this multiple of the summed local error estimates (each the
 # difference of the order-16 and order-14 extrapolants, itself an over-estimate of the
@@ -385,25 +387,50 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
         or a body that returns only after its overlap fell below 1e-10 of q_max (a
         near-critical tail of a nonlinear spring), out of the integrator's reach.
     """
+    return _solve_planned(_plan(potential, m, law), v0)
+
+
+class _LawPlan(NamedTuple):
+    """What an impact's solution needs of (potential, m, law) and not of v0: checked once.
+
+    A NamedTuple, not a frozen dataclass: the one-shot `solve_law_impact` builds one per
+    call, and a frozen dataclass's __init__ costs microseconds of that call."""
+
+    potential: Potential
+    m: float
+    law: DampingLaw
+    table: dict
+    cs: np.ndarray
+    es: np.ndarray
+    sc: np.ndarray
+    lin: tuple | None  # (k, zeta^2) of the linear oscillator, solved in closed form
+    pk: tuple | None  # (ks, ps) of a sum of power laws, for the compiled kernels
+
+
+def _plan(potential, m, law) -> _LawPlan:
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     law = law_from_dict(law)
     m = positive("m", m, "solve_law_impact")
+    _check_exponent(potential)
+    cs, es, sc = _law_arrays(law, m, potential)
+    lin = _linear_ratio(potential, law, m)
+    pk = _power_terms(potential) if lin is None else None
+    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk)
+
+
+def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
+    potential, m, law = plan.potential, plan.m, plan.law
     v0 = positive("v0", v0, "solve_law_impact")
     E = 0.5 * m * v0 * v0
     if not (math.isfinite(E) and E > 0):
         raise HCVInputError(f"kinetic energy m v0^2 / 2 = {E!r} J is not a positive float64")
-    from reference_impl.exact._validate import _check_exponent, _validated_top
-
-    _check_exponent(potential)
     qE = _validated_top(potential, E)
-    cs, es, sc = _law_arrays(law, m, potential)
-    lin = _linear_ratio(potential, law, m)
-    if lin is not None:
-        return _linear_solution(v0, m, lin[0], lin[1], law)
-    pk = _power_terms(potential)
-    if pk is not None:
-        out = _compiled_solve(v0, qE, pk[0], pk[1], cs, es, sc)
+    if plan.lin is not None:
+        return _linear_solution(v0, m, plan.lin[0], plan.lin[1], law)
+    cs, es, sc = plan.cs, plan.es, plan.sc
+    if plan.pk is not None:
+        out = _compiled_solve(v0, qE, plan.pk[0], plan.pk[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
     r = dict(zip(OUT_FIELDS, out.tolist(), strict=False))
@@ -427,7 +454,7 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
     return LawImpactSolution(
         v0=v0,
         m=m,
-        law=law.to_dict(),
+        law=dict(plan.table),
         max_penetration=r["q_max"],
         max_force=r["max_force"],
         peak_force=r["peak_force"],
@@ -441,3 +468,44 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
         error_restitution=err_w,
         n_steps=nst,
     )
+
+
+class PreparedLaw:
+    """`solve_law_impact` for one (potential, m, law) and many speeds.
+
+    The checks and the planning that do not depend on v0 (the law's table, the potential's
+    exponent, the coefficient arrays of the compiled kernel, the closed-form linear case)
+    are done once, here; each call solves one impact, with the same result, bit for bit,
+    as ``solve_law_impact(potential, m, v0, law)``. The potential must not be changed
+    after it is prepared.
+
+    Parameters
+    ----------
+    potential : Potential
+        Contact potential U(q) (J, q in m).
+    m : float
+        Mass in kg (reduced mass), > 0.
+    law : DampingLaw or dict
+        As for `solve_law_impact`.
+    """
+
+    __slots__ = ("_plan",)
+
+    def __init__(self, potential: Potential, m: float, law):
+        self._plan = _plan(potential, m, law)
+
+    def __call__(self, v0: float) -> LawImpactSolution:
+        """The impact at approach speed ``v0`` (m/s, > 0)."""
+        return _solve_planned(self._plan, v0)
+
+    def __repr__(self) -> str:
+        p = self._plan
+        return f"PreparedLaw({p.potential!r}, m={p.m!r}, law={p.table!r})"
+
+
+def prepare_law(potential: Potential, m: float, law) -> PreparedLaw:
+    """A solver of `solve_law_impact` for repeated speeds of one (potential, m, law).
+
+    See `PreparedLaw`; invalid input is refused here, in one line, as by `solve_law_impact`.
+    """
+    return PreparedLaw(potential, m, law)

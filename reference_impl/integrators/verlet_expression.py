@@ -16,9 +16,11 @@ import numba
 import numpy as np
 import sympy as sp
 
+from reference_impl._cache import expression_module, printed_function, record_files
 from reference_impl._jit import specialise
 from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
 from reference_impl.potentials.base import Potential
+from reference_impl.potentials.expression import Expression
 
 # Compiled kernels of user expressions, keyed by the sympy form of (U', U):
 # compiling costs a few seconds, so each distinct expression is compiled once (and kept
@@ -54,7 +56,6 @@ def _expression_kernel(pot: Potential):
     `_force_energy`. No user text is evaluated: only what sympy prints from the
     parsed, whitelisted tree, as for the numpy engine.
     """
-    from reference_impl.potentials.expression import Expression
 
     if type(pot) is not Expression:  # exact type: a subclass may change the law
         return None
@@ -122,7 +123,6 @@ def _disk_cached_kernel(key: str, q, pot: Potential):
     None when the cache is unusable or sympy prints something the module cannot
     reproduce; the caller then compiles in memory.
     """
-    from reference_impl._cache import expression_module, printed_function, record_files
 
     fn = printed_function(q, (pot.dexpr, pot.expr), "dU_U")
     if fn is None:

@@ -358,7 +358,6 @@ class PowerSeries:
 
     def _prepare(self) -> None:
         a0, e0 = self.coeffs[0], self.exps[0]
-        self.lead_coeff, self.lead_exp = a0, e0
         self._sign = 1.0 if a0 > 0 else -1.0
         self._e0 = float(e0)
         self._a0 = float(a0)
@@ -384,7 +383,6 @@ class PowerSeries:
         new.gap = e_old - 1 - float(new.exps[0])
         if new.coeffs[0] == 0:
             new.gap = math.inf
-            new.lead_coeff, new.lead_exp = sp.Integer(0), sp.Integer(0)
             new._zero = True
             return new
         new._prepare()

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from reference_impl.claims import CLAIMS, Claim, get_claim
 from reference_impl.report._blocks import UL, H, P
+from reference_impl.report._blocks import markdown_lines as _md
 
 __all__ = ["entries", "markdown", "blocks", "plain", "printed", "script_path"]
 
@@ -102,7 +103,6 @@ def blocks(results: dict, level: int = 2) -> list:
 
 def markdown(results: dict) -> str:
     """reports/erratum.md."""
-    from reference_impl.report._blocks import markdown_lines as _md
 
     out = ["# Erratum: " + results["title"].split(": ", 1)[-1] + "\n"]
     _md(blocks(results, level=2)[1:], out)

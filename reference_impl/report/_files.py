@@ -43,6 +43,7 @@ import threading
 from pathlib import Path
 
 from reference_impl._userfiles import check_path
+from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
 from reference_impl.errors import HCVInputError
 
 __all__ = ["MANIFEST", "REPORT_ENTRIES", "scripts_href", "swap_in", "validate_report_args"]
@@ -216,7 +217,6 @@ def validate_report_args(out_dir, adapters=(), force: bool = False) -> tuple[Pat
         One line naming the offending value: an unknown or malformed adapter, an
         output path that is a file, or a directory that cannot be written.
     """
-    from reference_impl.adapters.registry import get_adapter, parse_spec, resolve_class
 
     if out_dir is None or not str(out_dir).strip():
         raise HCVInputError(f"report directory must be a non-empty path, got {out_dir!r}")

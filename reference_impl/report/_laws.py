@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from reference_impl.report._blocks import IMG, H, P, T, _num
+from reference_impl.report._blocks import IMG, UL, H, P, T, _num
 
 __all__ = ["laws_figure", "laws_blocks", "FIGURE"]
 
@@ -151,6 +151,4 @@ def laws_blocks(r) -> list:
 
 
 def UL_(items):
-    from reference_impl.report._blocks import UL
-
     return UL(items)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._blocks import markdown_lines as _md
+from reference_impl.report._codes import codes_blocks
 from reference_impl.report._common import g
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
@@ -418,6 +419,7 @@ def _sections(r) -> list:
         + laws_blocks(r)
         + _hard(r)
         + _adapters(r)
+        + codes_blocks(r)
         + resolution_blocks(r)
         + _env(r)
     )
@@ -521,6 +523,7 @@ def html_page(r: dict, fig_dir: Path) -> str:
                 ("wp", "Speed vs error"),
                 ("hard", "Hard cases"),
                 *([("adapters", "Contact codes")] if r.get("adapters") else []),
+                *([("codes", "Codes side by side")] if r.get("codes_side_by_side") else []),
                 ("env", "Environment"),
             )
         )

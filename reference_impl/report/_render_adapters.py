@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+from reference_impl.bench.report import UNITS as _UNITS
+from reference_impl.bench.report import format_value as _fmt
+from reference_impl.bench.report import format_with_unit as _fmt_v
+from reference_impl.bench.report import json_number as _bench_num
+from reference_impl.bench.report import side_by_side
 from reference_impl.report._blocks import IMG, H, P, T
 
 # Column headers of each code's own table (`_adapter_rows`).
@@ -25,10 +30,6 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     ``measured`` / ``expected`` are the compared quantities (with their unit), ``error``
     what the tolerance bounds (`reference_impl.bench.report.metric_columns`).
     """
-    from reference_impl.bench.report import UNITS as _UNITS
-    from reference_impl.bench.report import format_value as _fmt
-    from reference_impl.bench.report import format_with_unit as _fmt_v
-    from reference_impl.bench.report import json_number as _bench_num
 
     rows, flags = [], []
     for m in d.get("metrics", []):
@@ -91,7 +92,6 @@ def _carried(r) -> list:
 def _adapters(r) -> list:
     """Scorecards of the contact codes given with ``hcv report --adapter``: first all codes
     side by side (`reference_impl.bench.report.side_by_side`), then each code's own table."""
-    from reference_impl.bench.report import side_by_side
 
     docs = r.get("adapters") or []
     if not docs:

@@ -39,6 +39,17 @@ refuses a version it does not know. Fields (SI units; times in s, speeds in m/s)
 ``adapters`` (list of dict), ``steps_per_contact`` (list of dict), ``steps_per_contact_settings`` (dict or null)
     The contact codes' scorecards (``hcv bench`` documents) and what they deliver against
     steps per contact; empty without codes.
+``codes_side_by_side`` (dict or null; absent from files written before it existed)
+    Asked restitution against delivered, code by code (`reference_impl.campaign._codes`):
+    ``settings`` (``asked``, ``steps_per_contact``, ``speeds``, ``mass``, ``hertz_k``,
+    ``hooke_k``, ``speed_tolerance``, ``asked_tolerance``, ``calibration_asked``,
+    ``calibration_steps_per_contact``, ``calibration_v0``), ``rows`` (one per variant,
+    asked e, steps per contact and speed: ``code``, ``variant``, ``spec``, ``match``,
+    ``k``, ``p``, ``asked``, ``steps_per_contact``, ``v0``, ``delivered``, ``tensile``
+    (largest pull / peak push), ``declared_exact``, ``error``; numbers null where it did
+    not deliver), ``calibration`` (``code``, ``variant``, ``spec``, ``match``, ``option``,
+    ``asked``, ``found`` and ``value``, or ``delivered`` (the span reached), ``message``
+    or ``error``) and ``seconds`` (per spec: ``table``, ``calibration``). Null without codes.
 ``carried`` (dict or null)
     Set when the code sections were not run but kept from the previous report in the
     output directory: ``sections`` (names of the fields above), ``git_commit``,
@@ -86,9 +97,19 @@ FIELDS: dict[str, type | tuple[type, ...]] = {
     "adapters": list,
     "steps_per_contact": list,
     "steps_per_contact_settings": (dict, type(None)),
+    "codes_side_by_side": (dict, type(None)),
     "carried": (dict, type(None)),
     "timings_seconds": dict,
 }
+# Fields an hcv-results/1 file written before they existed lacks (read as null).
+OPTIONAL = ("codes_side_by_side",)
+# What the renderer reads of ``codes_side_by_side`` (`reference_impl.report._codes`).
+CODES_SETTINGS = ("asked", "steps_per_contact", "speeds", "mass", "hertz_k", "hooke_k",
+                  "speed_tolerance", "asked_tolerance", "calibration_asked",
+                  "calibration_steps_per_contact", "calibration_v0")  # fmt: skip
+CODES_ROW = ("code", "variant", "spec", "match", "asked", "steps_per_contact", "v0",
+             "delivered", "tensile", "declared_exact", "error")  # fmt: skip
+CODES_CALIBRATION = ("code", "spec", "match", "option", "asked")
 CLAIM_FIELDS = ("id", "section", "statement", "verdict", "evidence", "rule", "measured", "headline")
 
 
@@ -128,6 +149,8 @@ def check_results(results, source: str = "results") -> dict:
             f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
         )
     for key, typ in FIELDS.items():
+        if key not in results and key in OPTIONAL:
+            continue
         if key not in results:
             raise HCVInputError(f"{source}: field {key!r} is missing ({SCHEMA})")
         if not isinstance(results[key], typ):
@@ -142,10 +165,32 @@ def check_results(results, source: str = "results") -> dict:
             raise HCVInputError(
                 f"{source}: claim {c['id']!r} has verdict {c['verdict']!r}, not one of {VERDICTS}"
             )
+    _check_codes(results.get("codes_side_by_side"), source)
     bad = [f for f in results["figures"] if not _figure_ok(f)]
     if bad:
         raise HCVInputError(f"{source}: figure {bad[0]!r} is not figures/NAME.png")
     return results
+
+
+def _check_codes(sec, source: str) -> None:
+    """``codes_side_by_side``: the settings and the fields of each row the renderer reads."""
+    if sec is None:
+        return
+    where = f"{source}: codes_side_by_side"
+    parts = {"settings": dict, "rows": list, "calibration": list, "seconds": dict}
+    for key, typ in parts.items():
+        if not isinstance(sec.get(key), typ):
+            raise HCVInputError(f"{where}: {key!r} is missing or not a {typ.__name__}")
+    missing = [k for k in CODES_SETTINGS if k not in sec["settings"]]
+    if missing:
+        raise HCVInputError(f"{where}: settings lack {', '.join(missing)}")
+    if len(sec["settings"]["speeds"]) < 2 or not sec["settings"]["steps_per_contact"]:
+        raise HCVInputError(f"{where}: settings need two speeds and a steps per contact")
+    for name, fields in (("rows", CODES_ROW), ("calibration", CODES_CALIBRATION)):
+        for i, row in enumerate(sec[name]):
+            lacks = [k for k in fields if not isinstance(row, dict) or k not in row]
+            if lacks:
+                raise HCVInputError(f"{where}: {name}[{i}] lacks {', '.join(lacks)}")
 
 
 def read_results(path) -> dict:

@@ -46,13 +46,24 @@ def _short(info: str) -> str:
     return info.split("), ", 1)[-1] if "), " in info else info
 
 
+def _require_styles(df: pd.DataFrame) -> None:
+    """A method of the study without a `METHOD_STYLE` is an error, not a curve left out."""
+    missing = sorted(set(df.method) - set(METHOD_STYLE))
+    if missing:
+        raise ValueError(
+            f"work-precision plot: method(s) {missing} have no entry in METHOD_STYLE "
+            f"(reference_impl/report/_wp.py; styled: {sorted(METHOD_STYLE)})"
+        )
+
+
 def wp_figures(
     df: pd.DataFrame, fig_dir, scenes_info: dict, families: dict[str, str]
 ) -> list[tuple[str, str]]:
     """The per-family overview, then one figure per scene with four log-log panels;
-    returns [(file name, caption)]."""
+    returns [(file name, caption)]. Raises ValueError for a method without a style."""
     from matplotlib.figure import Figure
 
+    _require_styles(df)
     out = [wp_overview_figure(df, fig_dir, families)]
     for scene in dict.fromkeys(df.scene):
         d = df[(df.scene == scene) & df.seconds.notna()]
@@ -130,9 +141,11 @@ _OVERVIEW_COLS = 3
 
 def wp_overview_figure(df: pd.DataFrame, fig_dir, families: dict[str, str]) -> tuple[str, str]:
     """One panel per scene (every family): the largest of the four relative errors
-    against wall time, every method; returns (file name, caption)."""
+    against wall time, every method; returns (file name, caption). Raises ValueError for
+    a method without a style."""
     from matplotlib.figure import Figure
 
+    _require_styles(df)
     fam = families
     scenes = list(dict.fromkeys(df.scene))
     nrow = -(-len(scenes) // _OVERVIEW_COLS)

@@ -95,15 +95,18 @@ def speed_table(bench: dict) -> str:
     if laws:
         lines += [
             "",
-            "| Hertz + damping law | `solve_law_impact` | its error | compiled DOP853 at equal "
-            "error | its error | ratio (DOP853 / ours) | scipy DOP853 (rtol 1e-12) | goal |",
-            "|---|---|---|---|---|---|---|---|",
+            "| Hertz + damping law | `solve_law_impact` | `prepare_law(pot, m, law)` call | its "
+            "error | compiled DOP853 at equal error | its error | ratio (DOP853 / one-shot) | "
+            "ratio (DOP853 / prepared) | scipy DOP853 (rtol 1e-12) | goal |",
+            "|---|---|---|---|---|---|---|---|---|---|",
         ]
         for r in laws:
+            prep = f"{r['prepared_us']:.0f} µs" if "prepared_us" in r else "—"
+            pratio = f"{r['prepared_ratio']:.2f}×" if "prepared_ratio" in r else "—"
             lines.append(
-                f"| {_cell(r['law'])} | {r['ours_us']:.0f} µs | {r['ours_max_rel_error']:.1e} | "
-                f"{_peer_cell(r)} | {r['ratio']:.2f}× | {r['scipy_us'] / 1e3:.1f} ms | "
-                f"{'met' if r['goal_met'] else '**not met**'} |"
+                f"| {_cell(r['law'])} | {r['ours_us']:.0f} µs | {prep} | "
+                f"{r['ours_max_rel_error']:.1e} | {_peer_cell(r)} | {r['ratio']:.2f}× | {pratio} | "
+                f"{r['scipy_us'] / 1e3:.1f} ms | {'met' if r['goal_met'] else '**not met**'} |"
             )
     lines.append("")
     for b in bench.get("batch", []):
@@ -126,7 +129,7 @@ def speed_table(bench: dict) -> str:
         "ours has), run over a tolerance ladder; shown at its cheapest rung with the "
         f"{bench.get('equal_error', '?')}, or at its best rung when none gets there. "
         "Goals (issue 27): universal law ≤ 8 µs per prepared call and ≥ 20× the compiled "
-        "DOP853 at ≤ 1e-14; general laws ≥ 3×; `solve_impacts` ≥ 1.8× on 2 cores. "
+        "DOP853 at ≤ 1e-14; general laws ≥ 3× (prepared call); `solve_impacts` ≥ 1.8× on 2 cores. "
         f"numbalsoda: {bench.get('numbalsoda', '?')}. Measured by `python -m "
         "benchmarks.bench_exact --json reports/bench/exact.json` "
         f"({bench.get('timing', '?')}; {mi.get('cpu_count', '?')} cpus, load {_load(bench)} "

@@ -159,8 +159,6 @@ class _Search:
     tried: dict = field(default_factory=dict)  # dt -> failed (bool)
     bounded: dict = field(default_factory=dict)  # dt -> peak E / E_0 of a bounded excursion
     evidence: dict = field(default_factory=dict)  # failing dt -> "confirmed" or "domain"
-    upward: float = 0.0  # largest ratio tried by the upward extension
-    downward: float = math.inf  # smallest ratio tried by the downward extension
     done: bool = False
 
     def smallest_bounded(self) -> tuple[float, float]:

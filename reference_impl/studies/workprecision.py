@@ -25,10 +25,11 @@ import pandas as pd
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._truth import MpInverse
-from reference_impl.exact.solve import solve_impact
+from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.integrators.verlet_path import verlet_impact
 from reference_impl.potentials.base import Potential
+from reference_impl.scenes import load_scene
 from reference_impl.studies.paper import PAPER_MASS, paper_ellipsoid
 
 __all__ = [
@@ -62,8 +63,6 @@ IVP_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 VERLET_STEPS = (10, 30, 100, 300, 1000, 3000, 10000)
 # Damping ratio of the per-family scenes (universal law): a typical e ~ 0.5 impact.
 FAMILY_ZETA = 0.2
-# Density of steel (kg/m^3), for the sphere scene's mass.
-STEEL_DENSITY = 7800.0
 # Solvers run on the added family scenes: the two explicit Runge-Kutta pairs only
 # (Radau/LSODA and Verlet on them would cost minutes for no new information).
 FAMILY_IVP_METHODS = ("DOP853", "RK45")
@@ -95,7 +94,6 @@ def family_scenes() -> list[WPScene]:
     read from the one scene catalogue (``hcv scenes --show sphere-damped``), so the
     names in the README's speed table work in every command and mean the same scene.
     """
-    from reference_impl.scenes import load_scene
 
     z, fam = FAMILY_ZETA, FAMILY_IVP_METHODS
 
@@ -121,7 +119,6 @@ _ORIGINAL = ("hertz-k1e9-damped",)
 def default_scenes() -> list[WPScene]:
     """Hertz undamped and damped (e ~ 0.53), the paper's ellipsoid (v0 = 0.99), and
     the damped sphere, sum of power laws and user expression of `family_scenes`."""
-    from reference_impl.scenes import load_scene
 
     # ~5 mm steel sphere on a wall, k = 4/3 E* sqrt(R) = 1e9 (catalogue: hertz-k1e9)
     hertz = load_scene("hertz-k1e9").potential
@@ -157,7 +154,6 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
     key = (repr(sc.potential), sc.m, sc.v0, sc.zeta, dps)
     if key in _TRUTH_CACHE:
         return _TRUTH_CACHE[key]
-    from reference_impl.exact.solve import solve_impact_mp
 
     ref = solve_impact_mp(sc.potential, sc.m, sc.v0, sc.zeta, dps=dps)
     pot, m = sc.potential, sc.m

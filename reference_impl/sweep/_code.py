@@ -8,6 +8,8 @@ They are kept apart from the scene (`Case.code`) and checked here.
 
 from __future__ import annotations
 
+from reference_impl.adapters.registry import get_adapter
+from reference_impl.bench._calibrate_options import check_option, check_settings, spec_with_options
 from reference_impl.errors import HCVInputError
 
 __all__ = ["SweepSpecError"]
@@ -95,7 +97,6 @@ def _check_code(code: dict, task: str, built: dict | None = None) -> None:
 
 def _check_calibration(code: dict, adapter: str) -> None:
     """A ``calibrate:`` case's settings, as ``hcv calibrate`` checks them."""
-    from reference_impl.bench._calibrate_options import check_option, check_settings
 
     cal = dict(code.get("calibrate", {}))
     param = cal.get("param")
@@ -120,9 +121,6 @@ def _check_calibration(code: dict, adapter: str) -> None:
 def _build(adapter: str, options: dict, built: dict) -> None:
     """Build the adapter with ``options`` as ``hcv bench`` would (cached in ``built``)."""
     import json
-
-    from reference_impl.adapters.registry import get_adapter
-    from reference_impl.bench._calibrate_options import spec_with_options
 
     if "" not in built:  # can the code be built here at all? (the base spec, once)
         try:

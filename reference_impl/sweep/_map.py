@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 import pandas as pd
 
 from reference_impl.stability.search import KINDS, SearchGrid, default_criterion
+from reference_impl.studies.dtcrit_map import coverage, map_case_rows
 from reference_impl.sweep._runner import run_cases
 
 __all__ = ["dt_crit_map_on_cluster", "map_case", "map_frame", "map_items"]
@@ -24,7 +25,6 @@ _DEFAULT_GRID = SearchGrid()
 
 def map_case(item) -> list[dict]:
     """One (case, kind) search of the map: its rows, as `dt_crit_map` builds them."""
-    from reference_impl.studies.dtcrit_map import map_case_rows
 
     case, kind, criterion, grid = item
     return map_case_rows(case, kind, criterion, grid)
@@ -73,7 +73,6 @@ def map_items(
 ) -> list[tuple]:
     """The map's searches, one item per (case, scene kind), in the map's order: each is
     what `map_case` runs (arguments as `dt_crit_map_on_cluster`)."""
-    from reference_impl.studies.dtcrit_map import coverage
 
     cases = coverage(quick) if cases is None else list(cases)
     criteria = criteria or {}

@@ -196,7 +196,7 @@ def check_scheduler_address(address) -> str:
     try:
         scheme, loc = parse_address(address.strip(), strict=False)
         if scheme in _HOST_PORT_SCHEMES:
-            host, port = parse_host_port(loc)
+            _, port = parse_host_port(loc)
             if not 0 < int(port) < 65536:
                 raise ValueError(f"port {port} is not in 1..65535")
     except (ValueError, TypeError) as exc:

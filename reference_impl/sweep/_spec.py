@@ -50,7 +50,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from reference_impl._userfiles import check_path
 from reference_impl.errors import HCVInputError
+from reference_impl.scenes import scene_from_dict
+from reference_impl.stability.search import KINDS, parse_criterion
 from reference_impl.sweep._code import (  # noqa: F401
     _CALIBRATE_KEYS,
     _CODE_PREFIXES,
@@ -251,8 +254,6 @@ def _key(task: str, criterion: str | None, scene: dict, code: dict | None = None
 
 
 def _criterion_table(src: str, task: str, value) -> dict:
-    from reference_impl.stability.search import KINDS
-
     if value is None:
         return {}
     if task != "dt-crit":
@@ -451,8 +452,6 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     from 0), so the turning-point search runs about once per potential instead of
     once per case (issue 22: 1e5 cases of one expression took ~40 min).
     """
-    from reference_impl.scenes import scene_from_dict
-    from reference_impl.stability.search import parse_criterion
 
     potentials: dict = {}
     errors = [""] * len(expanded)
@@ -545,7 +544,6 @@ def parse_spec(text: str, source: str = "<string>", progress=None) -> SweepSpec:
 
 def load_spec(path, progress=None) -> SweepSpec:
     """Load and validate a sweep spec file (one-line `SweepSpecError` on any problem)."""
-    from reference_impl._userfiles import check_path
 
     check_path(path, "spec file")
     p = Path(path)

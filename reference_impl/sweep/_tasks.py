@@ -20,7 +20,11 @@ import threading
 import time
 from dataclasses import replace
 
+from reference_impl.bench.calibrate import calibrate, spec_with_options
+from reference_impl.bench.runner import run_bench
 from reference_impl.errors import HCVInputError
+from reference_impl.scenes import scene_from_dict
+from reference_impl.tasks import search_loaded_scene, solve_scene
 
 __all__ = ["CaseTimeout", "bench_status", "check_deadline", "deadline", "run_case"]
 
@@ -79,7 +83,6 @@ def _flat(d: dict, prefix: str = "") -> dict:
 
 def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
     """As ``hcv dt-crit --json``: `search_scene` with the scene's gap, damping, criterion."""
-    from reference_impl.tasks import search_loaded_scene
 
     # An empty criterion text in a spec means the default, as an absent one.
     results = search_loaded_scene(scene, criterion or None, check_deadline)
@@ -88,7 +91,6 @@ def _dt_crit_rows(scene, criterion: str | None) -> list[dict]:
 
 def _solve_rows(scene) -> list[dict]:
     """As ``hcv solve --json``: one row per speed of `reference_impl.tasks.solve_scene`."""
-    from reference_impl.tasks import solve_scene
 
     rows = []
     for v0 in scene.velocities:
@@ -132,8 +134,6 @@ def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
     relative errors as ``rel_error.*`` columns. ``code`` holds swept adapter options
     (``adapter``) and run settings (``run``: steps_per_contact).
     """
-    from reference_impl.bench.calibrate import spec_with_options
-    from reference_impl.bench.runner import run_bench
 
     code = code or {}
     spec = spec_with_options(adapter, code.get("adapter", {}))
@@ -170,7 +170,6 @@ def _bench_rows(scene, adapter: str, code: dict | None = None) -> list[dict]:
 
 def _calibrate_rows(scene, adapter: str, code: dict) -> list[dict]:
     """``hcv calibrate`` on the case's scene: one row (value found, achieved, metrics)."""
-    from reference_impl.bench.calibrate import calibrate, spec_with_options
 
     cal = dict(code.get("calibrate", {}))
     spc = cal.pop("steps_per_contact", code.get("run", {}).get("steps_per_contact", 200))
@@ -202,7 +201,6 @@ def run_case(payload: dict) -> list[dict]:
 
     Pure: the result depends on the payload only (its ``key`` hashes it).
     """
-    from reference_impl.scenes import scene_from_dict
 
     scene = scene_from_dict(payload["scene"], f"case {payload['key']}")
     task = payload["task"]

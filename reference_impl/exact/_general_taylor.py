@@ -1,0 +1,581 @@
+"""Taylor-series integrator for sums of power laws: a faster twin of `_general_kernel` (issue 27).
+
+One impact m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i and C any law of
+`reference_impl.theory.laws` whose exponents are multiples of 1/N (N <= `N_MAX`):
+Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji.
+The same signature and outputs (`OUT_FIELDS`) as `_general_kernel.solve`; cases
+outside that set, creeping returns (overdamped: no return) and contacts longer than
+`MAX_STEPS` steps are handed to it.
+
+Method. Scaled overlap Q = q / L = rho^N, speed W = q' / v0, time T = t v0 / L
+(L the elastic turning point), and the independent variable s of a Sundman
+transformation dT/ds = N rho^(N-1):
+
+    d rho / ds = W,    dW / ds = -N rho^(N-1) (c(rho) W + f(rho)),    dT / ds = N rho^(N-1),
+
+with f = scaled U' and c = scaled C, polynomials in rho. The right-hand side is a
+polynomial: (rho, W, T) are analytic in s over the whole contact, through the
+onset (rho = 0, where q(t) is singular: q ~ v0 t - c t^(p+2)), the turning point
+(W = 0, where q is singular as a function of q-like variables) and the exit, a
+simple root of rho(s). The Taylor series of order `K` at each step comes from the
+recurrences of products (Cauchy convolutions; powers of rho by squaring), no
+derivative is approximated. About ten steps cover an impact (the GBS kernel takes
+~30 steps of 57 evaluations and re-integrates each event).
+
+Events are roots of the step's polynomials (dense output, no re-integration):
+W = 0 (maximum penetration), rho = 0 (exit: T and W are stationary in s there,
+dT/ds = 0 for N > 1, so the exit's location error does not reach them), the total
+force F = f + c W through 0 after the turning point (the zero-force end; read as
+F / rho^j0, j0 the lowest degree, so that it keeps its sign near rho = 0 instead of
+vanishing), and dF/ds through 0 from above (a peak of the force).
+
+Step and error. The radius of convergence r is estimated by the root test over the
+last `WIN` coefficients of rho, W and T, each relative to its size; the step is
+h = theta r with theta^(K+1) / (1 - theta) = `TOL`, the sum of a geometric tail of
+the series beyond order K: its truncation, relative to the state. The error sums
+reported (err_t, err_w, in the scaled units of `_general_kernel`) add these
+estimates over the steps (for N = 1, where dT/ds = 1 at the exit, plus the exit's
+shift e / |W|); `general_law` multiplies them by its safety factor and adds round-off.
+Measured on the study's Hertz laws (v0 = 1 m/s): 9-10 steps, 2-4e-16 relative error on
+every output against the 30-digit truth, the kernel ~14x faster than the GBS kernel
+(`benchmarks.bench_general_taylor`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from reference_impl.exact._general_kernel import OUT_FIELDS
+from reference_impl.exact._general_kernel import solve as _gbs_solve
+
+__all__ = ["K", "MAX_STEPS", "N_MAX", "OUT_FIELDS", "TOL", "solve", "solve_taylor"]
+
+# Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
+# measured fewest operations near K = 30 (8-10 steps per Hertz impact).
+K = 30
+# Coefficients (the last WIN of each series) in the root test of the radius: the series
+# at the onset of an undamped Hertz contact has only every fifth coefficient nonzero
+# (rho'' = -2 a rho^4), and a window of 12 sees two of them.
+WIN = 12
+# Truncation per step relative to the state (the tail of the series beyond order K).
+TOL = 1e-16
+# Largest common denominator N of the exponents (q = L rho^N) and largest degree in rho.
+N_MAX = 8
+DEG_MAX = 48
+# A contact takes 8-14 steps (measured: calibrated Hertz laws 9-10, the universal law on
+# Hertz 13). More steps mean a slow, creeping return (near-critical or overdamped), where
+# an error in rho is integrated into T over a long stretch of s and the summed local
+# estimates no longer bound it (measured: 5e-14 s against a bound of 4e-15 s after 39
+# steps, near-critical linear dashpot on Hooke + Hertz): handed to the GBS kernel.
+MAX_STEPS = 24
+# Overlap (fraction of q_max) at which a return is handed over (the GBS kernel's
+# threshold of no return): rho decays without crossing 0 there, and a root found at
+# round-off level would be no exit.
+_NO_RETURN_Q = 1e-10
+# Samples per step for the sign changes of the zero-force and peak-force functions.
+NS = 8
+# N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
+_INT_TOL = 1e-12
+# Event brackets, relative: two ulps where the output moves with the root (the time of
+# q_max, the zero-force end); 1e-9 where it is stationary there, so that a location error
+# d moves it by ~d^2 (the peak force at dF/ds = 0; T and W at the exit rho = 0 for N > 1,
+# where dT/ds = N rho^(N-1) and dW/ds = -N rho^(N-1) G vanish): 1e-18 of the step.
+_ULPS = 4.5e-16
+_STATIONARY = 1e-9
+# Root iterations (Illinois: superlinear; a float bracket needs < 2 x 53 halvings).
+_ROOT_ITER = 120
+
+
+def _theta() -> float:
+    """theta with theta^(K+1) / (1 - theta) = TOL (fixed point; converges in a few rounds)."""
+    th = TOL ** (1.0 / (K + 1))
+    for _ in range(20):
+        th = (TOL * (1.0 - th)) ** (1.0 / (K + 1))
+    return th
+
+
+THETA = _theta()
+_RECIP = 1.0 / np.arange(1.0, K + 1.0)  # 1 / (n + 1): a multiply, not a divide, in the recurrences
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _as_int(x):
+    """round(x) when x is a non-negative integer within _INT_TOL, else -1."""
+    r = math.floor(x + 0.5)
+    if r < 0 or abs(x - r) > _INT_TOL * max(1.0, abs(x)):
+        return -1
+    return int(r)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _common_n(ks, ps, cs, es, sc):
+    """Smallest N <= N_MAX making every exponent of f and c an integer multiple of 1/N, or 0."""
+    A, zf = sc[2], sc[3]
+    for N in range(1, N_MAX + 1):
+        ok = True
+        for i in range(ps.shape[0]):
+            if _as_int(N * ps[i]) < 0:
+                ok = False
+            if A != 0.0 and _as_int(N * (ps[i] - 1.0)) < 0:
+                ok = False
+            if zf != 0.0 and _as_int(N * (ps[i] - 1.0) / 2.0) < 0:
+                ok = False
+        for j in range(cs.shape[0]):
+            if cs[j] != 0.0 and _as_int(N * es[j]) < 0:
+                ok = False
+        if ok:
+            return N
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _scale(v0, qE, ks, ps, m):
+    """The elastic turning point L: sum k L^(p+1) / (p+1) = m v0^2 / 2 (Newton from qE >= L)."""
+    E = 0.5 * m * v0 * v0
+    if ks.shape[0] == 1:
+        return ((ps[0] + 1.0) * E / ks[0]) ** (1.0 / (ps[0] + 1.0))
+    L = qE
+    for _ in range(60):
+        g = -E
+        dg = 0.0
+        for i in range(ks.shape[0]):
+            lp = L ** ps[i]
+            g += ks[i] * lp * L / (ps[i] + 1.0)
+            dg += ks[i] * lp
+        step = g / dg
+        L -= step
+        if abs(step) <= 1e-13 * L:
+            break
+    return L
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _model(v0, L, N, ks, ps, cs, es, sc):
+    """Scaled polynomials f(rho) (U') and c(rho) (C), by degree; None-like (empty) if unfit."""
+    m, alpha, A, zf = sc[0], sc[1], sc[2], sc[3]
+    f = np.zeros(DEG_MAX + 1)
+    c = np.zeros(DEG_MAX + 1)
+    if zf != 0.0 and ks.shape[0] != 1:
+        return f[:0], c[:0]
+    for i in range(ks.shape[0]):
+        d = _as_int(N * ps[i])
+        if d > DEG_MAX:
+            return f[:0], c[:0]
+        a = ks[i] * L ** (ps[i] + 1.0) / (m * v0 * v0)
+        f[d] += a
+        if alpha != 0.0:
+            c[d] += alpha * v0 * a
+        if A != 0.0:
+            c[_as_int(N * (ps[i] - 1.0))] += A * v0 / L * a * ps[i]
+        if zf != 0.0:
+            c[_as_int(N * (ps[i] - 1.0) / 2.0)] += (
+                zf * math.sqrt(ks[i] * (ps[i] + 1.0) / 2.0) * L ** ((ps[i] + 1.0) / 2.0) / (m * v0)
+            )
+    for j in range(cs.shape[0]):
+        if cs[j] != 0.0:
+            d = _as_int(N * es[j])
+            if d > DEG_MAX:
+                return f[:0], c[:0]
+            c[d] += cs[j] * L ** (es[j] + 1.0) / (m * v0)
+    return f, c
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _inv_radius(R, W, T, pw):
+    """1 / r, r = min over the last WIN coefficients c_k of rho, W, T of (|c_0|+ / |c_k|)^(1/k),
+    with |c_0|+ = max(1, |c_0|) (the root test; pow only where a coefficient beats the
+    current estimate: pw[k] holds inv^k)."""
+    inv = 0.0
+    for k in range(K - WIN + 1, K + 1):
+        pw[k] = 0.0
+    for c in (R, W, T):
+        sz = max(1.0, abs(c[0]))
+        for k in range(K, K - WIN, -1):
+            a = abs(c[k]) / sz
+            if a > pw[k]:
+                inv = a ** (1.0 / k)
+                p = inv ** (K - WIN + 1)
+                for kk in range(K - WIN + 1, K + 1):
+                    pw[kk] = p
+                    p *= inv
+    return inv
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _poly(c, lo, hi, x):
+    """sum_{j=lo}^{hi} c[j] x^(j - lo) (Horner)."""
+    acc = 0.0
+    for j in range(hi, lo - 1, -1):
+        acc = acc * x + c[j]
+    return acc
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _poly_d(c, hi, x):
+    """(p(x), p'(x)) of sum_{j=0}^{hi} c[j] x^j."""
+    p = 0.0
+    dp = 0.0
+    for j in range(hi, -1, -1):
+        dp = dp * x + p
+        p = p * x + c[j]
+    return p, dp
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _horner(c, x):
+    acc = c[K]
+    for k in range(K - 1, -1, -1):
+        acc = acc * x + c[k]
+    return acc
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _dot(a, oa, b, ob, n):
+    """sum_{i=0}^{n} a[oa + i] b[ob + n - i], a Cauchy product's coefficient n. The
+    recurrences are a chain of such sums: letting the compiler reorder each one (and
+    fuse its multiply-adds) splits it over vector lanes instead of waiting on each add;
+    the sum then rounds differently, by ~1 ulp of its terms."""
+    s = 0.0
+    for i in range(n + 1):
+        s += a[oa + i] * b[ob + n - i]
+    return s
+
+
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _sq(a, oa, n):
+    """sum_{i=0}^{n} a[oa + i] a[oa + n - i] (a square's coefficient n), each cross term once."""
+    s = 0.0
+    for i in range((n + 1) // 2):
+        s += a[oa + i] * a[oa + n - i]
+    s *= 2.0
+    if n % 2 == 0:
+        s += a[oa + n // 2] * a[oa + n // 2]
+    return s
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
+    """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
+    P (flat, rows of K + 1) receives the series of the powers rho^j."""
+    R[0], W[0], T[0] = r0, w0, t0
+    M = K + 1
+    for n in range(K):
+        P[M + n] = R[n]
+        for ii in range(plan.shape[0]):
+            j = plan[ii]
+            s = 0.0
+            if j % 2 == 0:  # a square: each cross term once, doubled
+                o = (j // 2) * M
+                for i in range((n + 1) // 2):
+                    s += P[o + i] * P[o + n - i]
+                s *= 2.0
+                if n % 2 == 0:
+                    s += P[o + n // 2] * P[o + n // 2]
+            else:
+                o = (j - 1) * M
+                for i in range(n + 1):
+                    s += P[o + i] * R[n - i]
+            P[j * M + n] = s
+        fn = 0.0
+        for ii in range(fidx.shape[0]):
+            fn += FN[fidx[ii]] * P[fidx[ii] * M + n]
+        cn = 0.0
+        for ii in range(cidx.shape[0]):
+            cn += CN[cidx[ii]] * P[cidx[ii] * M + n]
+        CS[n] = cn
+        cw = 0.0
+        for i in range(n + 1):
+            cw += CS[i] * W[n - i]
+        W[n + 1] = -(cw + fn) * _RECIP[n]
+        R[n + 1] = W[n] * _RECIP[n]
+        T[n + 1] = N * P[(N - 1) * M + n] * _RECIP[n]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _rw(R, W, x):
+    """(rho, W) at x: even and odd coefficients as four Horner chains in x^2 (half the
+    latency of one chain: the events evaluate the step's polynomials at ~100 points)."""
+    x2 = x * x
+    ke = K - (K % 2)  # highest even index
+    ko = K - 1 + (K % 2)  # highest odd index
+    re = R[ke]
+    we = W[ke]
+    ro = R[ko]
+    wo = W[ko]
+    for k in range(ke - 2, -1, -2):
+        re = re * x2 + R[k]
+        we = we * x2 + W[k]
+    for k in range(ko - 2, 0, -2):
+        ro = ro * x2 + R[k]
+        wo = wo * x2 + W[k]
+    return re + x * ro, we + x * wo
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _force(F, C, j0, D, r, w):
+    """(G, G / rho^j0) with G = f(rho) + c(rho) W, the scaled total force."""
+    g0 = _poly(F, j0, D, r) + _poly(C, j0, D, r) * w
+    rj = 1.0
+    for _ in range(j0):
+        rj *= r
+    return g0 * rj, g0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _dforce(F, C, N, D, r, w):
+    """dG/ds = (f'(rho) + c'(rho) W) W - c(rho) N rho^(N-1) G."""
+    f, df = _poly_d(F, D, r)
+    c, dc = _poly_d(C, D, r)
+    G = f + c * w
+    rn = 1.0
+    for _ in range(N - 1):
+        rn *= r
+    return (df + dc * w) * w - c * N * rn * G
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _event(kind, R, W, F, C, N, j0, D, x):
+    """Event functions at x along the step: 0 rho, 1 W, 2 G / rho^j0, 3 dG/ds."""
+    if kind == 0:
+        return _horner(R, x)
+    if kind == 1:
+        return _horner(W, x)
+    r, w = _rw(R, W, x)
+    if kind == 2:
+        return _force(F, C, j0, D, r, w)[1]
+    return _dforce(F, C, N, D, r, w)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb, rtol):
+    """x in [a, b] where event ``kind`` goes from ga > 0 to gb <= 0 (Illinois), to a
+    bracket of rtol relative (two ulps, 4.5e-16, where the output moves with x)."""
+    side = 0
+    x = b
+    for _ in range(_ROOT_ITER):
+        x = (a * gb - b * ga) / (gb - ga)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+        g = _event(kind, R, W, F, C, N, j0, D, x)
+        if g > 0.0:
+            a, ga = x, g
+            if side == 1:
+                gb *= 0.5
+            side = 1
+        else:
+            b, gb = x, g
+            if side == -1:
+                ga *= 0.5
+            side = -1
+        # two ulps: the bracket cannot shrink further
+        if b - a <= rtol * max(abs(a), abs(b)) or g == 0.0:
+            break
+    return x
+
+
+@numba.njit(cache=True, error_model="numpy")
+def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
+    """One impact into ``out`` (`OUT_FIELDS`); returns 0, or 1 when the case is not for
+    this method (exponents, degree, no return within MAX_STEPS): ``out`` is then void."""
+    m = sc[0]
+    N = _common_n(ks, ps, cs, es, sc)
+    if N == 0:
+        return 1
+    L = _scale(v0, qE, ks, ps, m)
+    F, C = _model(v0, L, N, ks, ps, cs, es, sc)
+    if F.shape[0] == 0:
+        return 1
+    D = 0
+    j0 = DEG_MAX
+    for j in range(DEG_MAX + 1):
+        if F[j] != 0.0 or C[j] != 0.0:
+            D = j
+            j0 = min(j0, j)
+    # the right-hand side's polynomials N rho^(N-1) f and N rho^(N-1) c
+    DN = D + N - 1
+    FN = np.zeros(DN + 1)
+    CN = np.zeros(DN + 1)
+    nf = 0
+    nc = 0
+    for j in range(D + 1):
+        FN[j + N - 1] = N * F[j]
+        CN[j + N - 1] = N * C[j]
+        nf += F[j] != 0.0
+        nc += C[j] != 0.0
+    fidx = np.empty(nf, np.int64)
+    cidx = np.empty(nc, np.int64)
+    nf = 0
+    nc = 0
+    need = np.zeros(DN + 2, np.bool_)
+    for j in range(DN + 1):
+        if FN[j] != 0.0:
+            fidx[nf] = j
+            nf += 1
+            need[j] = True
+        if CN[j] != 0.0:
+            cidx[nc] = j
+            nc += 1
+            need[j] = True
+    need[N - 1] = True
+    # powers of rho by squaring (even) or one more factor (odd), lowest first
+    for j in range(DN, 1, -1):
+        if need[j]:
+            if j % 2 == 0:
+                need[j // 2] = True
+            else:
+                need[j - 1] = True
+    npl = 0
+    for j in range(2, DN + 1):
+        npl += need[j]
+    plan = np.empty(npl, np.int64)
+    npl = 0
+    for j in range(2, DN + 1):
+        if need[j]:
+            plan[npl] = j
+            npl += 1
+    P = np.zeros((max(DN, 1) + 1) * (K + 1))  # row j: the series of rho^j
+    P[0] = 1.0
+    CS = np.zeros(K + 1)
+    R = np.zeros(K + 1)
+    W = np.zeros(K + 1)
+    T = np.zeros(K + 1)
+    Fs = m * v0 * v0 / L  # force unit
+    exit_tol = _STATIONARY if N > 1 else _ULPS
+    creeps = sc[4] == 1.0
+    q_top = 1.0
+    monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
+    for j in range(D + 1):
+        if F[j] < 0.0 or C[j] < 0.0:
+            monotone = False
+    pw = np.empty(K + 1)
+    xs = np.empty(NS + 1)
+    rs = np.empty(NS + 1)
+    ws = np.empty(NS + 1)
+    r0, w0, t0 = 0.0, 1.0, 0.0
+    peak = C[0]  # the force just after contact, C(0) v0
+    past = False
+    zf_found = False
+    errsum = 0.0
+    for step in range(1, MAX_STEPS + 1):
+        if past and creeps:
+            # Creeping back along the slow manifold of an overdamped law (w ~ -U'/C, U' q >
+            # m w^2, C q > 100 m |w|, as in the GBS kernel), where C ~ q^a with a <= n - 2
+            # never lets it reach q = 0: rho only decays, and a root found at round-off
+            # level would be no exit. The GBS kernel reports these cases (no return).
+            q0 = r0**N
+            if q0 <= _NO_RETURN_Q * q_top:
+                return 1
+            if q0 <= 0.1 * q_top:
+                if _poly(F, 0, D, r0) * q0 > w0 * w0 and _poly(C, 0, D, r0) * q0 > 100.0 * abs(w0):
+                    return 1
+        _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0)
+        inv = _inv_radius(R, W, T, pw)
+        if not (inv > 0.0 and inv < math.inf):
+            return 1
+        h = THETA / inv
+        errsum += TOL * max(1.0, abs(t0))
+        x_end = h
+        x_from = 0.0
+        exiting = False
+        was_past = past
+        if not past and _horner(W, h) < 0.0:
+            x = _root(1, R, W, F, C, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
+            rm = _horner(R, x)
+            out[0] = _horner(T, x) * L / v0
+            qm = L * rm**N
+            out[1] = qm
+            fm = 0.0
+            for i in range(ks.shape[0]):
+                fm += ks[i] * qm ** ps[i]
+            out[2] = fm
+            # F at the turning point is U'(q_max): a value of F, so the peak is at least that
+            # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
+            peak = max(peak, _poly(F, 0, D, rm))
+            past = True
+            q_top = rm**N
+            x_from = x
+        if past and _horner(R, h) <= 0.0:
+            x_end = _root(
+                0, R, W, F, C, N, j0, D, x_from, h, _horner(R, x_from), _horner(R, h), exit_tol
+            )
+            exiting = True
+        # peak force: dG/ds through 0 from above, on NS samples of [0, x_end], unless
+        # G cannot exceed the peak so far on this step (f and c grow with rho >= 0):
+        # before the turning point G <= f(rho_hi) + c(rho_hi) w0, after it G <= f(r0).
+        if was_past:
+            ub = _poly(F, 0, D, r0)
+        else:
+            r_hi = _horner(R, x_from if past else x_end)
+            ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
+        scan_peak = not (monotone and ub <= peak)
+        scan_zf = past and not zf_found
+        if scan_peak or scan_zf:
+            # rho and W on the NS + 1 points x_end i / NS in one pass (independent chains)
+            for i in range(NS + 1):
+                xs[i] = x_end * i / NS
+                rs[i] = R[K]
+                ws[i] = W[K]
+            for k in range(K - 1, -1, -1):
+                for i in range(NS + 1):
+                    rs[i] = rs[i] * xs[i] + R[k]
+                    ws[i] = ws[i] * xs[i] + W[k]
+        if scan_peak:  # dG/ds through 0 from above
+            gp = _dforce(F, C, N, D, rs[0], ws[0])
+            for i in range(1, NS + 1):
+                gi = _dforce(F, C, N, D, rs[i], ws[i])
+                if gp > 0.0 and gi <= 0.0:
+                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY)
+                    peak = max(peak, _force(F, C, j0, D, _horner(R, xr), _horner(W, xr))[0])
+                gp = gi
+        if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
+            gp = _event(2, R, W, F, C, N, j0, D, x_from)
+            xp = x_from
+            for i in range(1, NS + 1):
+                if xs[i] <= x_from:
+                    continue
+                gi = _force(F, C, j0, D, rs[i], ws[i])[1]
+                if gp > 0.0 and gi <= 0.0:
+                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi, _ULPS)
+                    out[4] = _horner(T, xr) * L / v0
+                    out[5] = _horner(W, xr) * v0
+                    zf_found = True
+                    break
+                gp, xp = gi, xs[i]
+        if exiting:
+            t_end = _horner(T, x_end) * L / v0
+            we = _horner(W, x_end)
+            w_end = we * v0
+            err_t = errsum
+            err_w = errsum
+            if N == 1:
+                # dT/ds = 1 at the exit: an error e in rho moves it by e / |W| in s, so T by
+                # as much and W by |dW/ds| e / |W| (for N > 1 both are stationary there)
+                err_t += errsum / abs(we)
+                err_w += abs(CN[0] * we + FN[0]) * errsum / abs(we)
+            if not zf_found:  # the force never pulls: the two ends coincide
+                out[4] = t_end
+                out[5] = w_end
+            out[3] = peak * Fs
+            out[6] = t_end
+            out[7] = w_end
+            out[8] = 1.0
+            out[9] = err_t * L / qE  # in units of qE / v0, as the GBS kernel's
+            out[10] = err_w
+            out[11] = step
+            out[12] = 0.0
+            return 0
+        r0, w0, t0 = _horner(R, h), _horner(W, h), _horner(T, h)
+    return 1
+
+
+@numba.njit(cache=True, error_model="numpy")
+def solve(v0, qE, ks, ps, cs, es, sc):
+    """One impact, as `_general_kernel.solve` (same arguments, `OUT_FIELDS`): by the Taylor
+    method where it applies (module docstring), else by the GBS kernel."""
+    out = np.full(len(OUT_FIELDS), np.nan)
+    if solve_taylor(v0, qE, ks, ps, cs, es, sc, out) == 0:
+        return out
+    return _gbs_solve(v0, qE, ks, ps, cs, es, sc)

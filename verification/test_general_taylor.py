@@ -1,0 +1,215 @@
+"""The Taylor general-law kernel (`reference_impl.exact._general_taylor`, issue 27 goal 3).
+
+It is checked through `solve_law_impact` with its compiled kernel switched to the
+Taylor one (the same wrapper, so the same error bounds are reported), against the
+30-digit truth (`_general_law_mp`) within its own bounds, against the GBS kernel on
+many generated laws, and for its hand-over to the GBS kernel outside its domain.
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+
+import numpy as np
+import pytest
+from hypothesis import Phase, given, settings
+
+from reference_impl import PowerLaw
+from reference_impl.errors import UnsupportedError
+from reference_impl.exact import general_law as gl
+from reference_impl.exact._general_kernel import solve as gbs_kernel
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
+from reference_impl.exact._general_taylor import solve as taylor_kernel
+from reference_impl.exact._general_taylor import solve_taylor
+from reference_impl.exact._validate import _validated_top
+from reference_impl.potentials import SumPotential
+from reference_impl.theory.laws import LAWS, law_from_dict
+from verification.assertions import assert_close, assert_less, assert_true
+from verification.strategies import law_cases
+
+CALL = "solve_law_impact (Taylor kernel)"
+# Truth runs cost 2-4 s each: two derandomised draws per law.
+TRUTH_EXAMPLES = 2
+# q_max = L rho^N and U'(q_max) = sum k q_max^p are polynomials of degree <= N p <= 6 in
+# the state (rho, W) (N = 2 with p <= 3, N = 4 for the universal law on Hertz): their
+# relative error is at most this many times the state's, which error_restitution bounds.
+STATE_TO_OUTPUT = 8.0
+# Against the GBS kernel, for outputs without a bound of their own: the goal of issue 18
+# (1e-12), which both kernels meet (measured: GBS ~1e-14, Taylor ~3e-16).
+GOAL_RTOL = 1e-12
+_BOUNDED = (
+    ("contact_time", "error_time"),
+    ("contact_time_zero_force", "error_time"),
+    ("time_of_max_penetration", "error_time"),
+    ("restitution", "error_restitution"),
+    ("restitution_zero_force", "error_restitution"),
+)
+_UNBOUNDED = ("max_penetration", "max_force", "peak_force")
+
+
+def _bound_to(kernel):
+    """`solve_law_impact` with its name ``_compiled_solve`` bound to ``kernel`` (the one-line
+    switch; `general_law` itself stays as it is)."""
+    f = gl.solve_law_impact
+    ns = dict(vars(gl))
+    ns["_compiled_solve"] = kernel
+    return types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
+
+
+solve_taylor_law = _bound_to(taylor_kernel)
+
+
+def _key(pot):
+    terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
+    return tuple((t.k, t.p) for t in terms)
+
+
+@functools.cache
+def _truth(pot_key, m, v0, law_key):
+    terms = [PowerLaw(k, p) for k, p in pot_key]
+    pot = terms[0] if len(terms) == 1 else SumPotential(*terms)
+    return solve_law_impact_mp(pot, m, v0, dict(law_key))
+
+
+def _law_key(law):
+    return tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in law.items())
+
+
+@pytest.mark.parametrize("name", [n for n in LAWS if n != "none"])
+def test_taylor_against_30_digit_truth(name):
+    """Every output within the solver's own bound of the 30-digit truth."""
+
+    # No shrinking: each truth run costs seconds, and the failing draw is printed as is.
+    @settings(max_examples=TRUTH_EXAMPLES, phases=(Phase.explicit, Phase.generate))
+    @given(law_cases(name))
+    def run(case):
+        _check_against_truth(*case)
+
+    run()
+
+
+def _check_against_truth(pot, m, v0, law):
+    sol = solve_taylor_law(pot, m, v0, law)
+    call = f"{CALL}({pot!r}, m={m!r}, v0={v0!r}, {law})"
+    assert_true(
+        sol.returns_to_q0,
+        got=f"no return for {law} (v0 = {v0})",
+        should="a return (the drawn strength gamma <= 0.35 returns)",
+        claim="general-law",
+        call=call,
+    )
+    tr = _truth(_key(pot), m, v0, _law_key(law))
+    for key, bound in _BOUNDED:
+        err = abs(getattr(sol, key) - float(tr[key]))
+        assert_less(err, getattr(sol, bound), claim="general-law", call=call, what=key)
+    for key in _UNBOUNDED:
+        assert_close(
+            getattr(sol, key),
+            float(tr[key]),
+            rtol=STATE_TO_OUTPUT * sol.error_restitution,
+            claim="general-law",
+            call=call,
+        )
+
+
+@pytest.mark.parametrize("name", [n for n in LAWS if n != "none"])
+def test_taylor_agrees_with_gbs_kernel(name):
+    """The two kernels agree within the sum of their bounds on generated laws and speeds."""
+
+    @settings(max_examples=25, deadline=None)
+    @given(law_cases(name))
+    def run(case):
+        pot, m, v0, law = case
+        a = solve_taylor_law(pot, m, v0, law)
+        try:
+            b = gl.solve_law_impact(pot, m, v0, law)
+        except UnsupportedError:
+            # the GBS kernel's own failure (found: Hunt-Crossley on Hooke + Hertz, the exit
+            # of a pulling force; being fixed in general_law): the truth judges this case
+            _check_against_truth(pot, m, v0, law)
+            return
+        call = f"{CALL}({pot!r}, m={m!r}, v0={v0!r}, {law})"
+        assert_true(
+            a.returns_to_q0 == b.returns_to_q0,
+            got=f"returns {a.returns_to_q0} (Taylor), {b.returns_to_q0} (GBS)",
+            should="the same",
+            claim="general-law",
+            call=call,
+        )
+        for key, bound in _BOUNDED:
+            ga, gb = getattr(a, key), getattr(b, key)
+            if ga == gb:  # inf == inf for a body that does not return
+                continue
+            tol = getattr(a, bound) + getattr(b, bound)
+            assert_less(abs(ga - gb), tol, claim="general-law", call=call, what=key)
+        for key in _UNBOUNDED:
+            assert_close(
+                getattr(a, key), getattr(b, key), rtol=GOAL_RTOL, claim="general-law", call=call
+            )
+
+    run()
+
+
+def test_taylor_where_the_gbs_kernel_fails():
+    """A generated case the GBS kernel does not finish (Hunt-Crossley on Hooke + Hertz,
+    a force that pulls just before q = 0): the Taylor kernel meets the truth."""
+    pot = PowerLaw(499742563.91804487, 1.0) + PowerLaw(7695668.303783785, 1.5)
+    _check_against_truth(pot, 1.0, 1.0, {"law": "hunt-crossley", "alpha": 0.24999742544610493})
+
+
+def _kernel_args(pot, m, v0, law):
+    dl = law_from_dict(law)
+    cs, es, sc = gl._law_arrays(dl, m, pot)
+    ks, ps = gl._power_terms(pot)
+    return (v0, _validated_top(pot, 0.5 * m * v0 * v0), ks, ps, cs, es, sc)
+
+
+@pytest.mark.parametrize(
+    "pot, m, v0, law",
+    [
+        # exponent 1.3 = 13/10: no q = L rho^N with N <= 8 makes it a polynomial
+        (PowerLaw(1e9, 1.3), 0.01, 1.0, {"law": "linear", "c": 20.0}),
+        # an overdamped linear dashpot on Hooke: the body creeps back and never returns
+        (PowerLaw(1e4, 1.0), 0.01, 1.0, {"law": "linear", "c": 60.0}),
+        # the universal law on a sum of power laws: C is not a power series in rho
+        (PowerLaw(1e6, 1.0) + PowerLaw(1e9, 1.5), 0.01, 1.0, {"law": "universal", "zeta": 0.2}),
+        # found by a sweep: an overdamped viscoelastic law on Hooke (C = A k, 1.2 x critical)
+        # creeps back without return; a first version took a root of rho at round-off level
+        # for an exit
+        (
+            PowerLaw(1816163.7683535544, 1.0),
+            0.02830238853730305,
+            1.056828172301165,
+            {"law": "viscoelastic", "A": 0.00029715663187065343},
+        ),
+        # found by a sweep: a near-critical linear dashpot on Hooke + Hertz returns after a
+        # long creep (39 Taylor steps), over which the error in rho integrated into T
+        # outgrew the summed local estimates (5e-14 s against 4e-15 s)
+        (
+            PowerLaw(1037102.2586584735, 1.0) + PowerLaw(149486.880525022, 1.5),
+            0.04563673867883634,
+            0.14735149485274338,
+            {"law": "linear", "c": 430.15542624527825},
+        ),
+    ],
+)
+def test_taylor_hands_over_outside_its_domain(pot, m, v0, law):
+    """Outside its domain the Taylor kernel declines and `solve` returns the GBS kernel's result."""
+    args = _kernel_args(pot, m, v0, law)
+    out = np.full(13, np.nan)
+    call = f"solve_taylor({pot!r}, {law})"
+    assert_true(
+        solve_taylor(*args, out) == 1,
+        got="a Taylor result",
+        should="a hand-over (status 1)",
+        claim="general-law",
+        call=call,
+    )
+    assert_true(
+        np.array_equal(taylor_kernel(*args), gbs_kernel(*args), equal_nan=True),
+        got="a result other than the GBS kernel's",
+        should="the GBS kernel's, bit for bit",
+        claim="general-law",
+        call=call,
+    )
