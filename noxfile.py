@@ -83,8 +83,8 @@ def report(session: nox.Session) -> None:
 
 @nox.session(python="3.11", name="committed-report")
 def committed_report(session: nox.Session) -> None:
-    """The report committed in reports/: from a clean commit, with LAMMPS, Kratos and MuJoCo
-    side by side, so that its provenance names HEAD without "uncommitted changes" (issue 17).
+    """The report committed in reports/: from a clean commit, with LAMMPS, Kratos, MuJoCo,
+    LIGGGHTS and YADE side by side (the last two from Debian: apt-get install liggghts yade), so that its provenance names HEAD without "uncommitted changes" (issue 17).
 
     Refuses to run on a dirty work tree; commit (or stash) first, then commit what it
     rewrites (reports/ and the README's generated blocks).
@@ -94,7 +94,10 @@ def committed_report(session: nox.Session) -> None:
         session.error("the work tree has uncommitted changes; commit or stash them first")
     session.install("-e", ".[report,test,lammps,kratos,mujoco]")
     session.run(
-        "hcv", "report", "--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"
+        "hcv",
+        "report",
+        *("--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"),
+        *("--adapter", "liggghts", "--adapter", "yade"),
     )
 
 

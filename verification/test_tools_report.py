@@ -490,6 +490,7 @@ def test_committed_report_files_are_in_its_manifest():
     others = {
         ".hcv-report-manifest.json",  # the manifest itself
         "bench/exact.json",  # python -m benchmarks.bench_exact
+        "bench/general_taylor.json",  # python -m benchmarks.bench_general_taylor
         "bench/sweep.json",  # python -m benchmarks.bench_sweep
         "bench/verlet.json",  # python -m benchmarks.bench_verlet
         "bench/startup.json",  # python -m benchmarks.bench_startup
