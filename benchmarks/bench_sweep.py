@@ -288,8 +288,12 @@ def _model(runs: dict, n: int, speedup: float) -> dict:
     machine took.
     """
     fixed = {w: r["startup_s"] + r["close_s"] for w, r in runs.items()}
-    per_worker = fixed[2] - fixed[1]
-    base = fixed[1] - per_worker
+    # Starting and closing one more worker cannot save time: a 2-worker cluster measured
+    # faster than a 1-worker one is noise (its workers start in parallel), and a negative
+    # slope would predict a negative time for many workers (seen: -1.1 s at 16). Then the
+    # fixed cost is the larger of the two, per worker 0.
+    per_worker = max(fixed[2] - fixed[1], 0.0)
+    base = fixed[1] - per_worker if per_worker > 0 else max(fixed.values())
     t_case = runs[1]["in_case_cpu_s"] / n
     o = runs[1]["null_case_grouped_s"]
 
