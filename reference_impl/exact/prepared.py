@@ -36,8 +36,8 @@ from reference_impl.exact.solve import (
     _TINY,
     RTOL_STATED,
     ImpactSolution,
+    _charge_conditioning,
     _check_bound,
-    _conditioning,
     solve_impact,
 )
 from reference_impl.potentials._checks import is_real_number, positive
@@ -157,13 +157,7 @@ class PreparedImpact:
         if fast is None:
             return solve_impact(pot, m, v0, zeta)
         br, q_max, max_force = fast
-        cond = _conditioning(pot, m, osc, q_max, max_force)
-        if cond > 0.0:
-            br = br._replace(
-                err_rise=br.err_rise + cond * br.rise,
-                err_mid=br.err_mid + cond * br.mid,
-                err_fall=br.err_fall + cond * br.fall,
-            )
+        br = _charge_conditioning(br, pot, m, osc, q_max, max_force)
         _check_bound(br, pot, m, v0, zeta)
         if not (q_max >= _TINY and max_force >= _TINY and br.rise + br.fall >= _TINY):
             return solve_impact(pot, m, v0, zeta)

@@ -290,6 +290,19 @@ def _conditioning(
     return _NODE_ULPS_U * _EPS * c
 
 
+def _charge_conditioning(br, pot: Potential, m: float, osc, q_max: float, f_max: float):
+    """``br`` with `_conditioning`'s relative error charged to each of its times (one place
+    for `solve_impact` and the prepared call of `reference_impl.exact.prepared`)."""
+    cond = _conditioning(pot, m, osc, q_max, f_max)
+    if cond > 0.0:
+        br = br._replace(
+            err_rise=br.err_rise + cond * br.rise,
+            err_mid=br.err_mid + cond * br.mid,
+            err_fall=br.err_fall + cond * br.fall,
+        )
+    return br
+
+
 def _check_normal(values: dict, m: float, v0: float) -> None:
     """Refuse results that left the normal float64 range (never report 0.0 or a
     subnormal number, whose relative precision is lost)."""
@@ -399,13 +412,7 @@ def solve_impact(
     # The first strategy that answers integrates the impact (`_strategies`, one contract).
     _, (br, q_max, max_force) = choose(Job(potential, m, v0, osc, q_top, level))
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
-    cond = _conditioning(potential, m, osc, q_max, max_force)
-    if cond > 0.0:
-        br = br._replace(
-            err_rise=br.err_rise + cond * br.rise,
-            err_mid=br.err_mid + cond * br.mid,
-            err_fall=br.err_fall + cond * br.fall,
-        )
+    br = _charge_conditioning(br, potential, m, osc, q_max, max_force)
     _check_bound(br, potential, m, v0, zeta)
     if not (q_max >= _TINY and max_force >= _TINY and br.rise + br.fall >= _TINY):
         _check_normal(
