@@ -266,6 +266,11 @@ class ImpactSolution:
         idx = np.clip(np.searchsorted(table, targets), 1, _STATE_TABLE - 1)
         lo, hi = grid[idx - 1], grid[idx]
         exact_lo = targets <= table[0]
+        # A target at or past the branch's end T(upper) is its end: the instants given to
+        # a branch end at the reported peak time, which may exceed this table's T(upper)
+        # by the two quadratures' difference (~1e-15 relative), and no root is bracketed
+        # there (state() returned nan at the peak).
+        exact_hi = targets >= table[-1]
         from scipy.optimize import elementwise  # here: scipy.optimize costs 0.2 s to import
 
         res = elementwise.find_root(
@@ -274,7 +279,7 @@ class ImpactSolution:
             args=(targets,),
             tolerances=dict(xatol=0.0, xrtol=_STATE_XRTOL, fatol=0.0, frtol=0.0),
         )
-        return np.where(exact_lo, grid[0], res.x)
+        return np.where(exact_lo, grid[0], np.where(exact_hi, grid[-1], res.x))
 
 
 def _conditioning(
