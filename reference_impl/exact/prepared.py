@@ -56,6 +56,7 @@ from reference_impl.potentials.power import PowerLaw
 __all__ = ["PreparedImpact", "prepare"]
 
 _INF = math.inf
+_empty = np.empty
 
 
 class PreparedImpact:
@@ -71,7 +72,6 @@ class PreparedImpact:
         "_u",
         "_W",
         "_e_checked",
-        "_out",
         "_plan",
         "_split",
         "_family",
@@ -96,14 +96,12 @@ class PreparedImpact:
             if consts is not None:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
-            self._out = np.empty(OUT_SIZE)
         elif self._plan is not None:
             self._family = family_call(self._plan)
             if self._family is not None:
                 k = self._plan.kernel
                 c = np.array([self.m, k.q_s, k.u_s, k.n_lead])
                 self._args = (c, k.P, *self._plan.gj)
-            self._out = np.empty(FAMILY_OUT)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -130,7 +128,9 @@ class PreparedImpact:
             if E > self._e_checked:
                 _validated_top(pot, E)  # raises as solve_impact would
                 self._e_checked = E
-            out = self._out
+            # A fresh output per call (~0.1 us): one solver may be called from several
+            # threads, and another call could overwrite a shared one before it is read.
+            out = _empty(OUT_SIZE)
             power_call(v0, zeta, self._c, self._u, self._W, out)
             (
                 rise,
@@ -174,7 +174,7 @@ class PreparedImpact:
         ):
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
-            out = self._out
+            out = _empty(FAMILY_OUT)
             self._family(v0, zeta, q_top, *self._args, out)
             v = out.tolist()
             if v[8] == _OK:
