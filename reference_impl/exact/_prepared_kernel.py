@@ -4,7 +4,7 @@ One Python call of ``prepare(potential, m)(v0, zeta)`` makes one compiled call:
 
 * `power_call`: a power law, `_power_kernel.power_impact` with its per-potential
   constants read from one array (a numba call unboxes each argument: sixteen cost
-  ~0.6 us, six ~0.3 us);
+  ~0.6 us, five ~0.3 us), its output returned as the result's fields;
 * `family_call(plan)`: the other compiled families, the oscillator of
   `VirtualOscillator` (the same formulas), the parameters of `_one_call._params`,
   the Gauss-Jacobi kernel of the family's `_one_call` plan (the very call
@@ -26,7 +26,7 @@ import numpy as np
 
 from reference_impl._jit import specialise
 from reference_impl.exact._one_call import _OK, _OUT
-from reference_impl.exact._power_kernel import power_impact
+from reference_impl.exact._power_kernel import OUT_SIZE, power_impact
 
 __all__ = ["FAMILY_OUT", "family_call", "power_call"]
 
@@ -40,11 +40,32 @@ _GJ = _EV = None
 
 
 @numba.njit(cache=True, error_model="numpy")
-def power_call(v0, zeta, c, u, W, out):  # pragma: no cover - compiled
+def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
     """`power_impact` with the scalars after (v0, zeta) from ``c`` (see `power_constants`,
-    then RTOL_STATED and the smallest normal float)."""
+    then RTOL_STATED and the smallest normal float), returned as the fields of
+    `ImpactSolution` in their order: q_max, U'(q_max), the contact time, restitution, the
+    zero-force time and restitution, the two bounds; then the peak time, wd, s_peak,
+    s_end and 1.0 (0.0 when a check refused; the rest is then meaningless). A tuple
+    comes back to Python cheaper than an output array read by ``tolist``."""
+    o = np.empty(OUT_SIZE)
     power_impact(
-        v0, zeta, c[0], c[1], c[2], u, W, c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], out
+        v0, zeta, c[0], c[1], c[2], u, W, c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], o
+    )
+    rise, e_rise, mid, e_mid, fall, e_fall = o[0], o[1], o[2], o[3], o[4], o[5]
+    return (
+        o[6],
+        o[7],
+        rise + fall,
+        o[8],
+        rise + mid,
+        o[9],
+        e_rise + e_fall,
+        e_rise + e_mid,
+        rise,
+        o[10],
+        o[11],
+        o[12],
+        o[13],
     )
 
 

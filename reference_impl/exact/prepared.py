@@ -35,7 +35,7 @@ from reference_impl.errors import HCVInputError
 from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
 from reference_impl.exact._one_call import _OK, _plan, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.exact._power_kernel import OUT_SIZE, power_constants
+from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import FAMILY_OUT, family_call, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
@@ -128,26 +128,9 @@ class PreparedImpact:
             if E > self._e_checked:
                 _validated_top(pot, E)  # raises as solve_impact would
                 self._e_checked = E
-            # A fresh output per call (~0.1 us): one solver may be called from several
-            # threads, and another call could overwrite a shared one before it is read.
-            out = _empty(OUT_SIZE)
-            power_call(v0, zeta, self._c, self._u, self._W, out)
-            (
-                rise,
-                e_rise,
-                mid,
-                e_mid,
-                fall,
-                e_fall,
-                q_max,
-                f_max,
-                rest,
-                rest_zf,
-                wd,
-                sp,
-                s_end,
-                ok,
-            ) = out.tolist()
+            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = power_call(
+                v0, zeta, self._c, self._u, self._W
+            )
             if ok != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
                 return solve_impact(pot, m, v0, zeta)
             return ImpactSolution._fast(
@@ -157,12 +140,12 @@ class PreparedImpact:
                     "zeta": zeta,
                     "max_penetration": q_max,
                     "max_force": f_max,
-                    "contact_time": rise + fall,
+                    "contact_time": t,
                     "restitution": rest,
-                    "contact_time_zero_force": rise + mid,
+                    "contact_time_zero_force": t_zf,
                     "restitution_zero_force": rest_zf,
-                    "quadrature_error": e_rise + e_fall,
-                    "quadrature_error_zero_force": e_rise + e_mid,
+                    "quadrature_error": e,
+                    "quadrature_error_zero_force": e_zf,
                     "potential": pot,
                     "_osc_of": (wd, sp, s_end),
                     "_t_peak": rise,
@@ -174,6 +157,8 @@ class PreparedImpact:
         ):
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
+            # A fresh output per call (~0.1 us): one solver may be called from several
+            # threads, and another call could overwrite a shared one before it is read.
             out = _empty(FAMILY_OUT)
             self._family(v0, zeta, q_top, *self._args, out)
             v = out.tolist()
