@@ -28,11 +28,7 @@ from reference_impl._jit import specialise
 from reference_impl.exact._one_call import _OK, _OUT
 from reference_impl.exact._power_kernel import OUT_SIZE, power_impact
 
-__all__ = ["FAMILY_OUT", "family_call", "power_call"]
-
-# Output of `family_call`: the kernel's _OUT fields (six Branches fields, q_max,
-# U'(q_max), status), then wd, s_peak, s_end, the two restitutions and U''(q_max).
-FAMILY_OUT = _OUT + 6
+__all__ = ["family_call", "power_call"]
 
 # The compiled functions a copy of `_family_impact` calls (bound by `specialise`): the
 # family's Gauss-Jacobi kernel and its evaluator (U, U', U'', U''') at one overlap.
@@ -69,10 +65,11 @@ def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
     )
 
 
-def _family_impact(v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cover
+def _family_impact(v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel):  # pragma: no cover
     """One impact of a compiled family by Gauss-Jacobi (0 <= zeta < 1); c = (m, q_s, u_s,
-    n_lead) of the family's `NodeKernel`. out[8] is the kernel's status; the fields after
-    it are written when it is `_one_call._OK`."""
+    n_lead) of the family's `NodeKernel`. Returns the kernel's status (`_one_call._OK`
+    when it answered; the rest is then meaningless otherwise), the six `Branches`
+    fields, q_max, U'(q_max), wd, s_peak, s_end, the two restitutions and U''(q_max)."""
     # VirtualOscillator.__init__ and .zero_force_stretch, the same operations.
     wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
     sp = math.atan2(wd, zeta) / wd
@@ -81,14 +78,15 @@ def _family_impact(v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel, out):  
     prm[0], prm[1], prm[2], prm[3], prm[4], prm[5] = c[0], v0, zeta, wd, sp, s_end
     prm[6] = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
     prm[7], prm[8], prm[9], prm[10] = q_top, c[1], c[2], c[3]
-    _GJ(prm, P, d, fac, W, b, rtol, round_rel, out)
-    if out[8] != _OK:
-        return
-    out[9], out[10], out[11] = wd, sp, s_end
-    # solve_impact's restitution and VirtualOscillator.restitution_zero_force.
-    out[12] = math.exp(-math.pi * zeta / wd)
-    out[13] = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
-    out[14] = _EV(out[6], P)[2]
+    o = np.zeros(_OUT)
+    _GJ(prm, P, d, fac, W, b, rtol, round_rel, o)
+    rest = rest_zf = d2 = 0.0
+    if o[8] == _OK:
+        # solve_impact's restitution and VirtualOscillator.restitution_zero_force.
+        rest = math.exp(-math.pi * zeta / wd)
+        rest_zf = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
+        d2 = _EV(o[6], P)[2]
+    return (o[8], o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], wd, sp, s_end, rest, rest_zf, d2)
 
 
 @lru_cache(maxsize=64)

@@ -36,7 +36,7 @@ from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
 from reference_impl.exact._one_call import _OK, _plan, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
-from reference_impl.exact._prepared_kernel import FAMILY_OUT, family_call, power_call
+from reference_impl.exact._prepared_kernel import family_call, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -56,7 +56,6 @@ from reference_impl.potentials.power import PowerLaw
 __all__ = ["PreparedImpact", "prepare"]
 
 _INF = math.inf
-_empty = np.empty
 
 
 class PreparedImpact:
@@ -157,21 +156,18 @@ class PreparedImpact:
         ):
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
-            # A fresh output per call (~0.1 us): one solver may be called from several
-            # threads, and another call could overwrite a shared one before it is read.
-            out = _empty(FAMILY_OUT)
-            self._family(v0, zeta, q_top, *self._args, out)
-            v = out.tolist()
-            if v[8] == _OK:
+            v = self._family(v0, zeta, q_top, *self._args)
+            if v[0] == _OK:
                 return self._family_result(v0, zeta, v)
         return self._fused(v0, zeta, q_top)
 
-    def _family_result(self, v0: float, zeta: float, v: list) -> ImpactSolution:
+    def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
         """`solve_impact`'s result from `family_call`'s output (conditioning charged as
         `solve._charge_conditioning`; any bound or range refusal goes to `solve_impact`,
         which raises it)."""
         pot, m = self.potential, self.m
         (
+            _,
             rise,
             e_rise,
             mid,
@@ -180,7 +176,6 @@ class PreparedImpact:
             e_fall,
             q_max,
             f_max,
-            _,
             wd,
             sp,
             s_end,
