@@ -33,7 +33,7 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
-from reference_impl.exact._one_call import _OK, _plan, fused_impact
+from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import family_call, power_call
@@ -44,8 +44,7 @@ from reference_impl.exact.solve import (
     _TINY,
     RTOL_STATED,
     ImpactSolution,
-    _charge_conditioning,
-    _check_bound,
+    _charged,
     _conditioning_at,
     solve_impact,
 )
@@ -162,7 +161,7 @@ class PreparedImpact:
         return self._fused(v0, zeta, q_top)
 
     def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
-        """`solve_impact`'s result from `family_call`'s output (conditioning charged as
+        """`solve_impact`'s result from `family_call`'s output (conditioning charged as by
         `solve._charge_conditioning`; any bound or range refusal goes to `solve_impact`,
         which raises it)."""
         pot, m = self.potential, self.m
@@ -185,9 +184,9 @@ class PreparedImpact:
         ) = v
         cond = _conditioning_at(m, v0, zeta, sp, d2, f_max)
         if cond > 0.0:
-            e_rise = e_rise + cond * rise
-            e_mid = e_mid + cond * mid
-            e_fall = e_fall + cond * fall
+            rise, e_rise, mid, e_mid, fall, e_fall = _charged(
+                cond, rise, e_rise, mid, e_mid, fall, e_fall
+            )
         t, e, t_zf, e_zf = rise + fall, e_rise + e_fall, rise + mid, e_rise + e_mid
         # `_check_bound` (both times are finite below zeta = 1) and `_check_normal`.
         if not (
@@ -221,34 +220,31 @@ class PreparedImpact:
 
     def _fused(self, v0: float, zeta: float, q_top: float) -> ImpactSolution:
         """The fused kernel of `_one_call` (Gauss-Jacobi refused or absent: the tanh-sinh
-        ladder), as `solve_impact`'s `fused` strategy, then its checks."""
+        ladder), as `solve_impact`'s `fused` strategy, then `_family_result`."""
         pot, m = self.potential, self.m
         osc = VirtualOscillator(v0, zeta)
         fast = fused_impact(pot, m, osc, q_top)
         if fast is None:
             return solve_impact(pot, m, v0, zeta)
-        br, q_max, max_force = fast
-        br = _charge_conditioning(br, pot, m, osc, q_max, max_force)
-        _check_bound(br, pot, m, v0, zeta)
-        if not (q_max >= _TINY and max_force >= _TINY and br.rise + br.fall >= _TINY):
+        br, q_max, f_max = fast
+        d2 = curvature(pot, q_max)  # what `solve._conditioning` charges from
+        if d2 is None:  # no compiled evaluator: solve_impact's numpy U''
             return solve_impact(pot, m, v0, zeta)
-        return ImpactSolution._fast(
-            {
-                "v0": v0,
-                "m": m,
-                "zeta": zeta,
-                "max_penetration": q_max,
-                "max_force": max_force,
-                "contact_time": br.rise + br.fall,
-                "restitution": math.exp(-math.pi * zeta / osc.wd),
-                "contact_time_zero_force": br.rise + br.mid,
-                "restitution_zero_force": osc.restitution_zero_force if zeta > 0 else 1.0,
-                "quadrature_error": br.err_rise + br.err_fall,
-                "quadrature_error_zero_force": br.err_rise + br.err_mid,
-                "potential": pot,
-                "_osc": osc,
-                "_t_peak": br.rise,
-            }
+        return self._family_result(
+            v0,
+            zeta,
+            (
+                _OK,
+                *br,
+                q_max,
+                f_max,
+                osc.wd,
+                osc.s_peak,
+                osc.s_end,
+                math.exp(-math.pi * zeta / osc.wd),
+                osc.restitution_zero_force if zeta > 0 else 1.0,
+                d2,
+            ),
         )
 
 

@@ -318,16 +318,18 @@ def _conditioning_at(
 
 
 def _charge_conditioning(br, pot: Potential, m: float, osc, q_max: float, f_max: float):
-    """``br`` with `_conditioning`'s relative error charged to each of its times (one place
-    for `solve_impact` and the prepared call of `reference_impl.exact.prepared`)."""
+    """``br`` with `_conditioning`'s relative error charged to each of its times."""
     cond = _conditioning(pot, m, osc, q_max, f_max)
     if cond > 0.0:
-        br = br._replace(
-            err_rise=br.err_rise + cond * br.rise,
-            err_mid=br.err_mid + cond * br.mid,
-            err_fall=br.err_fall + cond * br.fall,
-        )
+        br = br._make(_charged(cond, *br))
     return br
+
+
+def _charged(cond: float, rise, err_rise, mid, err_mid, fall, err_fall) -> tuple:
+    """The `Branches` fields with a relative error ``cond`` charged to each time's bound
+    (one place for `solve_impact` and the prepared call of `reference_impl.exact.prepared`,
+    which works on the floats)."""
+    return rise, err_rise + cond * rise, mid, err_mid + cond * mid, fall, err_fall + cond * fall
 
 
 def _check_normal(values: dict, m: float, v0: float) -> None:
