@@ -249,6 +249,12 @@ class RestitutionSpread(Metric):
             return base
         if len(ctx.speeds) < 2:
             return "needs at least two impact speeds"
+        if ctx.speed_dependent:
+            return (
+                f"the scene's {ctx.speed_dependent!r} damping law has a speed-dependent "
+                "restitution (Theorem 3 holds for the universal law); restitution_exact "
+                "checks e at each speed"
+            )
         return None
 
     def _evaluate(self, ctx, base, factor):
