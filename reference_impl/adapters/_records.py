@@ -177,9 +177,13 @@ class AdapterScene:
         )
 
     def replace(self, **changes) -> AdapterScene:
-        """A copy with some fields changed (e.g. dt, n_steps, v0)."""
+        """A copy with some fields changed (e.g. dt, n_steps, v0). Changing ``damping`` or
+        ``zeta`` alone re-derives ``law`` and ``restitution_asked`` from them."""
         from dataclasses import replace
 
+        if ("zeta" in changes or "damping" in changes) and "law" not in changes:
+            changes["law"] = {}
+            changes.setdefault("restitution_asked", None)
         return replace(self, **changes)
 
     def to_json(self) -> dict[str, Any]:
