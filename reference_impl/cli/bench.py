@@ -172,6 +172,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "bench",
         help="benchmark a contact code against the exact solution (CI gate)",
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        # ADAPTER is required (`_adapter`); argparse's own usage would show it optional
+        usage="%(prog)s ADAPTER [--scenes SCENE [SCENE ...]] [--tolerances FILE]\n"
+        "       [--gate [{both,implementation,delivery}]] [--json FILE] [--junit FILE]\n"
+        "       [--plot FILE] [--markdown FILE] [--show-skipped]",
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
     )
