@@ -364,3 +364,34 @@ def law_cases(draw, name):
 
 
 __all__ += ["law_cases"]
+
+
+# -- restitution scenes of every law (issue 26, item 2: verification/test_bench_laws.py) ----
+@st.composite
+def restitution_law_scenes(draw, laws=("linear", "hunt-crossley")):
+    """An impact scene (dict of the scene schema) whose damping law's strength is solved
+    from a restitution e in [0.5, 0.9] asked at the first of two speeds 1.5x apart, at
+    either end: power family k, p in [1, 2], a mass. At 1.5x the speed the law's own e
+    stays above ~0.3 (hunt-crossley falls with the speed, linear on p > 1 rises), where
+    2 % of e is what a correct code delivers at fine steps."""
+    v = draw(log_uniform(1e-2, 1.0))
+    return {
+        "name": "generated-law",
+        "mass": draw(log_uniform(1e-3, 0.1)),
+        "velocities": [v, 1.5 * v],
+        "kind": "impact",
+        "potential": {
+            "family": "power",
+            "k": draw(log_uniform(1e4, 1e9)),
+            "p": draw(st.floats(1.0, 2.0)),
+        },  # fmt: skip
+        "damping": {
+            "law": draw(st.sampled_from(laws)),
+            "restitution": draw(st.floats(0.5, 0.9)),
+            "restitution_speed": v,
+            "restitution_end": draw(st.sampled_from(("overlap", "zero-force"))),
+        },
+    }
+
+
+__all__ += ["restitution_law_scenes"]

@@ -287,6 +287,9 @@ class KratosAdapter(ContactAdapter):
             return "configure one law, scheme and geometry (see variants())"
         if scene.kind != "impact":
             return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
+        law = scene.universal_only(self.label)
+        if law:
+            return law
         pot = scene.potential
         want = 1.5 if self.laws[0] == "hertz" else 1.0
         if type(pot) is not PowerLaw or pot.p != want:

@@ -297,6 +297,9 @@ class LammpsAdapter(ContactAdapter):
             return "configure one damping model and geometry (see variants())"
         if scene.kind != "impact":
             return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
+        law = scene.universal_only(self.label)
+        if law:
+            return law
         pot = scene.potential
         if type(pot) is not PowerLaw or pot.p not in (1.0, 1.5):
             return (

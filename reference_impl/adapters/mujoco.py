@@ -48,11 +48,14 @@ clamped by MuJoCo to [1e-4, 0.9999], as the adapter does before declaring):
   polynomial).
 
 The stiffness asked is the scene's k (at full impedance dmax); the damping is
-calibrated to the asked restitution at the end option ``end``: ``overlap`` (the
-q = 0 end the scene states: zeta = scene zeta, restitution exp(-pi zeta /
-sqrt(1 - zeta^2))) or ``zero-force`` (what a code that clips tension delivers:
-zeta from exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e, see
-`zeta_zero_force`). Options ``dampratio`` (the damping ratio used, replaces the
+calibrated to the restitution the scene asks (``restitution_asked``, at the scene's
+``restitution_end``), read at the end option ``end``: ``overlap`` (zeta whose q = 0
+restitution exp(-pi zeta / sqrt(1 - zeta^2)) is the asked e: the scene's zeta when
+it asks at the overlap end) or ``zero-force`` (what a code that clips tension
+delivers: zeta from exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e, see
+`zeta_zero_force`; the scene's zeta when it asks at the zero-force end). A damping
+law other than the universal one (or none) is declined: MuJoCo's constant dashpot
+is the universal law of p = 1 only. Options ``dampratio`` (the damping ratio used, replaces the
 calibration) or ``damping`` (c in N s/m) set it directly: they are what
 ``hcv calibrate mujoco --param dampratio`` searches.
 
@@ -337,6 +340,9 @@ class MujocoAdapter(ContactAdapter):
             return "configure one solref form, impedance, integrator and end (see variants())"
         if scene.kind != "impact":
             return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
+        law = scene.universal_only(self.label)
+        if law:
+            return law
         pot = scene.potential
         if type(pot) is not PowerLaw or pot.p != 1.0:
             return (

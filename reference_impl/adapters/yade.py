@@ -306,6 +306,9 @@ class YadeAdapter(ContactAdapter):
             return "configure one input and geometry (see variants())"
         if scene.kind != "impact":
             return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
+        law = scene.universal_only(self.label)
+        if law:
+            return law
         pot = scene.potential
         law = _LAW[self.inputs[0]]
         want = 1.5 if law == "mindlin" else 1.0
