@@ -36,6 +36,10 @@ def _scenes():
     out.append(("power-law p = 5", PowerLaw(1.0e15, 5.0), 0.01, 2.0))
     # No compiled node function: numpy node values.
     out.append(("saturating", SaturatingForce(2.0e3, 1.0e-4), 0.02, 1.5))
+    # Sums the fused Gauss-Jacobi rule does not take (exponents 3 and 3.97 share no small
+    # substitution order; a higher term above _GJ_RATIO_MAX): the fused tanh-sinh kernel.
+    out.append(("sum 1.5 + 2.97", PowerLaw(1e9, 1.5) + PowerLaw(1e10, 2.97), 0.01, 1.0))
+    out.append(("sum crossover", PowerLaw(1e6, 1.5) + PowerLaw(1e9, 3.0), 0.01, 3.0))
     # The terms hand over inside the contact (issue 22): the split quadrature.
     out.append(("split sum", PowerLaw(1e-12, 0.01) + PowerLaw(1.0, 20.0), 1.0, 100.0))
     return out
