@@ -325,17 +325,16 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
 
 @numba.njit(cache=True)
 def _ts_common_x(L, d, zeta, wd, s_end, v0):  # pragma: no cover - compiled
-    """x at the tanh-sinh nodes of the three common-case rows (same formulas as
-    `VirtualOscillator.x` for row 0 and `x_from_end` for rows 1 and 2)."""
+    """x at the tanh-sinh nodes of the common-case rows: row 0 from contact onset, rows
+    1 and 2 back from s_end (the formulas of `VirtualOscillator.x` and `x_from_end`);
+    here and in the fused kernel (`_one_call`), for as many rows as L has."""
     n = d.shape[0]
-    xs = np.empty((3, n))
-    for j in range(n):
-        s = L[0] * d[j]
-        xs[0, j] = v0 * np.exp(-zeta * s) * (np.sin(wd * s) / wd)
-    for i in range(1, 3):
+    xs = np.empty((L.shape[0], n))
+    for i in range(L.shape[0]):
         for j in range(n):
             dd = L[i] * d[j]
-            xs[i, j] = v0 * np.exp(-zeta * (s_end - dd)) * (np.sin(wd * dd) / wd)
+            s = dd if i == 0 else s_end - dd
+            xs[i, j] = v0 * np.exp(-zeta * s) * (np.sin(wd * dd) / wd)
     return xs
 
 

@@ -44,6 +44,7 @@ from reference_impl.exact._branches import (
     Branches,
     _fill_rows,
     _jacobi_pair,
+    _ts_common_x,
     level_up,
     per_potential,
 )
@@ -156,17 +157,11 @@ def _tanh_sinh(prm, P, d, w, w_diff, beta, round_ulps, out):  # pragma: no cover
         L[1] = s_end - sp
         L[2] = lz
     nn = d.shape[0]
-    xs = np.empty(nn)
+    xs = _ts_common_x(L, d, zeta, wd, s_end, v0)
     g = np.empty((nr, nn))
     qs = np.empty(nn)
     for i in range(nr):
-        # Row 0 from contact onset, rows 1 and 2 back from s_end (the formulas of
-        # `VirtualOscillator.x` and `x_from_end`).
-        for j in range(nn):
-            dd = L[i] * d[j]
-            s = dd if i == 0 else s_end - dd
-            xs[j] = v0 * math.exp(-zeta * s) * (math.sin(wd * dd) / wd)
-        _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
+        _NODES(xs[i], m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
     if not rows_positive(g, L):
         out[8] = _BAD_NODE
         return
