@@ -16,6 +16,8 @@ whole inside numba, generic in the node loop of `_nodes`:
 * tanh-sinh (`tanh_sinh`) for the common rows of `_branches._tanh_sinh` (zeta = 0,
   or 0 < zeta < 1 with the zero-force instant close to s_end), level by level.
 
+The sums are those of `_sums` (one source per loop: `gj_rows` around `_node_values`,
+`ts_compensated`), the tanh-sinh node positions `_branches._ts_common_x`.
 Both also return the peak (q_max and U'(q_max)). Anything else (zeta >= 1, the
 rare stretches, a node outside float64 range) returns None and `solve_impact`
 runs the general path of `_branches`, which also names a bad node.
