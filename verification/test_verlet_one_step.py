@@ -14,11 +14,15 @@ its own frozen copies in `verification/test_tools_verlet_recorder.py`.
 
 from __future__ import annotations
 
+import ast
+import pathlib
+
 import numba
 import numpy as np
 import pytest
 import sympy as sp
 
+import reference_impl
 import reference_impl.integrators.verlet as verlet
 from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, LaneBatch, run_lanes
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw, SaturatingForce
@@ -144,3 +148,106 @@ def test_compiled_expression_lanes_are_the_frozen_kernel_bit_for_bit(monkeypatch
     monkeypatch.setattr(verlet, "_expression_kernel", lambda pot: frozen_kernel(force_energy))
     old = run_lanes(expr, 1.0, SCENE_WALLS, batch, engine="numba", zeta=0.02)
     _same_bits(new, old, "run_lanes(Expression, engine='numba')")
+
+
+# ----------------------------------------------------------------------------
+# the rule: one velocity-Verlet update in the package
+# ----------------------------------------------------------------------------
+# The one function allowed to write the scalar step, and the numpy lanes engine, kept
+# because it measures faster than the step run as Python for its use (many lanes of a
+# potential without a compiled force; the figure is in its comment).
+_ONE_STEP = "integrators/verlet_kernel.py:_kdk"
+_NUMPY_LANES = "integrators/verlet.py:_run_numpy"
+
+
+def _kick(node, kicks: set[str] | None = None) -> bool:
+    """``a + b * c`` (a kick: a velocity plus a step times a force), with ``a`` one of
+    ``kicks`` when given."""
+    if not (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add)):
+        return False
+    if not isinstance(node.right, ast.BinOp) or not isinstance(node.right.op, ast.Mult):
+        return False
+    return kicks is None or (isinstance(node.left, ast.Name) and node.left.id in kicks)
+
+
+def _uses(node, names: set[str]) -> bool:
+    return any(isinstance(n, ast.Name) and n.id in names for n in ast.walk(node))
+
+
+def _verlet_updates(tree: ast.AST) -> list[str]:
+    """Functions that write a velocity-Verlet update: a half kick ``vh = v + c * F``, a
+    drift using ``vh`` (``y = y + dt * vh`` or ``y += dt * vh``) and a second kick from
+    ``vh`` by a force (``vh + c * F``, assigned to another name or not at all)."""
+    found = []
+    for fn in ast.walk(tree):
+        if not isinstance(fn, ast.FunctionDef):
+            continue
+        kicks = {
+            t.id
+            for node in ast.walk(fn)
+            if isinstance(node, ast.Assign) and _kick(node.value)
+            for t in node.targets
+            if isinstance(t, ast.Name)
+        }
+        drift = any(
+            (isinstance(node, ast.Assign) and _kick(node.value) and _uses(node.value.right, kicks))
+            or (
+                isinstance(node, ast.AugAssign)
+                and isinstance(node.op, ast.Add)
+                and isinstance(node.value, ast.BinOp)
+                and isinstance(node.value.op, ast.Mult)
+                and _uses(node.value, kicks)
+            )
+            for node in ast.walk(fn)
+        )
+        # ``v = v + c * F`` updates v in place (symplectic Euler's kick), not from a half step.
+        in_place = {
+            id(node.value)
+            for node in ast.walk(fn)
+            if isinstance(node, ast.Assign)
+            and _kick(node.value)
+            and isinstance(node.value.left, ast.Name)
+            and any(isinstance(t, ast.Name) and t.id == node.value.left.id for t in node.targets)
+        }
+        second = any(
+            _kick(node, kicks) and not _uses(node.right, kicks) and id(node) not in in_place
+            for node in ast.walk(fn)
+        )
+        if kicks and drift and second:
+            found.append(fn.name)
+    return found
+
+
+def test_the_velocity_verlet_step_is_written_once():
+    root = pathlib.Path(reference_impl.__file__).parent
+    found = sorted(
+        f"{path.relative_to(root).as_posix()}:{name}"
+        for path in root.rglob("*.py")
+        for name in _verlet_updates(ast.parse(path.read_text()))
+    )
+    assert_true(
+        found == sorted([_ONE_STEP, _NUMPY_LANES]),
+        got=f"velocity-Verlet updates written in {found}",
+        should=f"only {_ONE_STEP} (and the numpy lanes {_NUMPY_LANES})",
+        claim="tool",
+        call="ast scan of reference_impl",
+    )
+
+
+def test_the_rule_sees_a_copied_step():
+    """The scan finds a step in each spelling (the check can fail), and not symplectic Euler."""
+    src = (
+        "def a(v, y, F, half, dt):\n    vh = v + half * F\n    y = y + dt * vh\n"
+        "    v = vh + half * F\n    return y, v\n"
+        "def b(v, y, F, half, dt):\n    vh = v + half * F\n    y += dt * vh\n"
+        "    return y, vh + half * F\n"
+        "def c(v, y, F, dt):\n    v = v + dt * F\n    y = y + dt * v\n    return y, v\n"
+    )
+    found = _verlet_updates(ast.parse(src))
+    assert_true(
+        found == ["a", "b"],
+        got=found,
+        should="['a', 'b'] (c is symplectic Euler: one full kick, no half step)",
+        claim="tool",
+        call="_verlet_updates(synthetic)",
+    )
