@@ -1,8 +1,9 @@
 """The velocity-Verlet step, the compiled lane kernel and the term kinds they evaluate.
 
 `_kdk` is the one source of the step (issue 27: one source per loop), numba-compatible
-Python generic in its force ``_force_energy``: the lane kernel here and the recorder
-(`reference_impl.integrators.verlet_path`) call it compiled around the term table,
+Python generic in its force ``_force_energy``: the lane kernel `_kernel` and the
+recorder's loop `_record_kernel` (driven by `reference_impl.integrators.verlet_path`),
+both here, call it compiled around the term table,
 `reference_impl.integrators.verlet_expression` compiles it around an expression's force,
 and the recorder runs it as Python around any `Potential`'s.
 `_kernel` (numba) advances many lanes of one scene; the force of a potential with
@@ -142,8 +143,12 @@ def _overlap(y, gap, scene):
     if scene == SCENE_IMPACT:
         return y, -1.0
     # max() is the overlap with the nearer wall on either side (y - gap > 0 > -y beyond
-    # the upper wall, -y > 0 > y - gap below the lower one): as fast as the two-branch
-    # form the lane kernel had (0.95-1.03 of it, interleaved, load 5 on 2 cores).
+    # the upper wall, -y > 0 > y - gap below the lower one), without a branch. Measured
+    # interleaved against main's loops (CPU time, load 3-6 on 2 cores): the lane kernel
+    # (eight lanes in lockstep; presumably mispredicted branches) 0.96 of its two-branch
+    # form, the single-body recorder (max() on its latency chain) 1.04-1.08 of its
+    # four-branch form on two walls. Branches everywhere instead: lanes 1.02, recorder
+    # 0.96-0.99; the lanes are the hot loop (a search runs ~1e7 lane-steps).
     return max(y - gap, -y), -1.0 if y > gap else 1.0
 
 
@@ -456,3 +461,59 @@ def _kernel(
             return b0
         b0 += B
     return b0
+
+
+# ----------------------------------------------------------------------------
+# the recorder's loop (`reference_impl.integrators.verlet_path`)
+# ----------------------------------------------------------------------------
+# The per-step coefficient C(q) of `_kdk` is on only in the Python binding given one: a
+# global, so that the compiled recorder holds no trace of it (the dead test, a runtime
+# flag, cost 5-8 % of a step: measured interleaved, 2e5 two-walls steps, load 5 on 2 cores).
+_WITH_COEFFICIENT = False
+
+
+# The recorder's loop lives here, beside `_kdk`, not in `verlet_path`: numba checks a
+# cached function against its own source file only, so a loop in another file kept the
+# step it had inlined after `_kdk` changed here (seen while measuring; issue 27).
+@numba.njit(cache=True)
+def _record_kernel(fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, scene, gap, q, v, f):
+    """Integrate one body for up to q.shape[0] - 1 steps of `_kdk`; fill q, v, f (repulsive force).
+
+    Returns the status: n > 0 separated at step n (impact: first q <= 0 after
+    contact), -n blown at step n (q > q_sup; q[n] and v[n] hold the overlap and the
+    half-step velocity, f[n] is nan), 0 when it ran every step. Damping: the
+    universal law with 2 zeta sqrt(m) = c_damp, plus c_pow q^a_pow, plus (where
+    ``_WITH_COEFFICIENT``) the per-step coefficient of the binding; with ``clip`` a
+    tensile total force is set to 0. Compiled as it stands (term table: ``fam``,
+    ``par``); `verlet_path._record_python` is the same function run as Python around a
+    `Potential`.
+    """
+    y = 0.0
+    vel = v0 if scene == SCENE_IMPACT else -v0  # two-walls: at the lower wall, moving into it
+    F = 0.0
+    half = 0.5 * dt / m
+    q[0] = 0.0
+    v[0] = vel
+    f[0] = 0.0
+    touched = False
+    # One loop-invariant test for the rarely used terms: written as two tests in the
+    # loop, the unused pow() slowed an undamped-law impact by 10 % (measured, 1000 steps).
+    extra = c_pow > 0.0 or clip or _WITH_COEFFICIENT
+    for n in range(1, q.shape[0]):
+        y, vh, vel, F, qq, rep, _, state = _kdk(
+            y, vel, F, half, dt, scene, gap, q_sup, c_damp, extra, c_pow, a_pow,
+            _WITH_COEFFICIENT, clip, fam, par,
+        )  # fmt: skip
+        if state == _BEYOND:
+            q[n] = qq
+            v[n] = vh
+            f[n] = np.nan
+            return -n
+        if state == _CONTACT:
+            touched = True
+        q[n] = qq
+        v[n] = vel
+        f[n] = rep
+        if scene == SCENE_IMPACT and touched and qq <= 0.0:
+            return n
+    return 0

@@ -26,63 +26,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from reference_impl._jit import rebind
 from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, kernel_terms
-from reference_impl.integrators.verlet_kernel import _BEYOND, _CONTACT, _kdk, _overlap
+from reference_impl.integrators.verlet_kernel import _kdk, _overlap, _record_kernel
 
 __all__ = ["VerletPath", "verlet_impact", "verlet_trajectory"]
-
-
-# The per-step coefficient C(q) of `_kdk` is on only in the Python binding given one: a
-# global, so that the compiled recorder holds no trace of it (the dead test, a runtime
-# flag, cost 5-8 % of a step: measured interleaved, 2e5 two-walls steps, load 5 on 2 cores).
-_WITH_COEFFICIENT = False
-
-
-@numba.njit(cache=True)
-def _record_kernel(fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, scene, gap, q, v, f):
-    """Integrate one body for up to q.shape[0] - 1 steps of `_kdk`; fill q, v, f (repulsive force).
-
-    Returns the status: n > 0 separated at step n (impact: first q <= 0 after
-    contact), -n blown at step n (q > q_sup; q[n] and v[n] hold the overlap and the
-    half-step velocity, f[n] is nan), 0 when it ran every step. Damping: the
-    universal law with 2 zeta sqrt(m) = c_damp, plus c_pow q^a_pow, plus (where
-    ``_WITH_COEFFICIENT``) the per-step coefficient of the binding; with ``clip`` a
-    tensile total force is set to 0. Compiled as it stands (term table: ``fam``,
-    ``par``); `_record_python` is the same function run as Python around a `Potential`.
-    """
-    y = 0.0
-    vel = v0 if scene == SCENE_IMPACT else -v0  # two-walls: at the lower wall, moving into it
-    F = 0.0
-    half = 0.5 * dt / m
-    q[0] = 0.0
-    v[0] = vel
-    f[0] = 0.0
-    touched = False
-    # One loop-invariant test for the rarely used terms: written as two tests in the
-    # loop, the unused pow() slowed an undamped-law impact by 10 % (measured, 1000 steps).
-    extra = c_pow > 0.0 or clip or _WITH_COEFFICIENT
-    for n in range(1, q.shape[0]):
-        y, vh, vel, F, qq, rep, _, state = _kdk(
-            y, vel, F, half, dt, scene, gap, q_sup, c_damp, extra, c_pow, a_pow,
-            _WITH_COEFFICIENT, clip, fam, par,
-        )  # fmt: skip
-        if state == _BEYOND:
-            q[n] = qq
-            v[n] = vh
-            f[n] = np.nan
-            return -n
-        if state == _CONTACT:
-            touched = True
-        q[n] = qq
-        v[n] = vel
-        f[n] = rep
-        if scene == SCENE_IMPACT and touched and qq <= 0.0:
-            return n
-    return 0
 
 
 def _python_force(q, pot, c_fun):
