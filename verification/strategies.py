@@ -395,3 +395,45 @@ def restitution_law_scenes(draw, laws=("linear", "hunt-crossley")):
 
 
 __all__ += ["restitution_law_scenes"]
+
+
+# -- near-critical universal law on the GBS kernel's families (test_general_law_bounds.py) --
+
+# Damping ratios of the near-critical draw: from e = 4e-3 (zeta = 0.8) to e = 2.7e-10
+# (zeta = 0.99), where the return decays by orders before q = 0.
+NEAR_CRITICAL_ZETA = (0.8, 0.99)
+
+
+@st.composite
+def near_critical_universal_cases(draw, families=("power", "sphere", "ellipsoid", "expression")):
+    """(family, potential, m, v0, zeta): a family the GBS kernel integrates, zeta near 1.
+
+    Hertz (handed from the Taylor kernel to the GBS kernel past its step budget), sphere,
+    ellipsoid and a user expression (plain-Python path); the caps draw their turning point
+    inside the domain as `impacts` does. ``families`` may add "saturating", whose
+    contact time still exceeds its bound above zeta ~ 0.96 because its float U is
+    3e-13 off near x = 0.01 (see verification/test_general_law_bounds.py).
+    """
+    from reference_impl.potentials import Expression, SaturatingForce
+
+    family = draw(st.sampled_from(list(families)))
+    if family == "power":
+        pots = st.builds(PowerLaw, k=log_uniform(1e4, 1e10), p=st.just(1.5))
+    elif family == "sphere":
+        pots = spheres()
+    elif family == "ellipsoid":
+        pots = ellipsoids()
+    elif family == "expression":
+        pots = st.builds(
+            lambda k, c: Expression("k*q**2.5/2.5 + c*q**2/2", k=k, c=c),
+            log_uniform(1e6, 1e10),
+            log_uniform(1e3, 1e6),
+        )
+    else:
+        pots = st.builds(SaturatingForce, F0=log_uniform(1e-1, 1e3), q_s=log_uniform(1e-3, 1.0))
+    pot, m, v0 = draw(impacts(pots))
+    zeta = draw(st.floats(*NEAR_CRITICAL_ZETA))
+    return family, pot, m, v0, zeta
+
+
+__all__ += ["NEAR_CRITICAL_ZETA", "near_critical_universal_cases"]
