@@ -5,13 +5,12 @@ solve_impact_mp`), for any family. Near zeta = 1 the return decays by orders bef
 q = 0 (e = 2.7e-10 at zeta = 0.99): the kernel once held its local errors to q_E and v0
 there, and the contact time (q = 0 end) was up to 3000 times its reported bound
 (Hertz, zeta = 0.99; 1-6 times on the user expression at zeta = 0.95-0.99). The
-saturating force near zeta = 1 still exceeds it, from its float U (a strict xfail below,
-with the numbers and the cause).
+saturating force near zeta = 1 exceeded it while its float U was 3e-13 off (fixed: see
+test_saturating_near_critical_within_reported_bounds).
 """
 
 from __future__ import annotations
 
-import pytest
 from hypothesis import example, given, settings
 
 from reference_impl.exact._truth import solve_impact_mp
@@ -34,18 +33,10 @@ def test_universal_near_critical_within_reported_bounds(case):
     _check_bounds(*case)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="saturating force near critical damping: the contact time is 6.9x its bound at "
-    "zeta = 0.99, v0 = 8 m/s (F0 = q_s = 1, m = 1; 3.5x at v0 = 0.25; 3100x before the "
-    "kernel's relative error control). Cause: the potential's float U, not the integrator: "
-    "SaturatingForce._U's series x^3/3 - x^5/5 + x^7/7 below x = 0.01 is 3e-13 off there "
-    "(2e-13 just above, from x - atan x), and the universal law's C = 2 zeta sqrt(m) "
-    "U'/sqrt(2U) carries it into a tail whose sensitivity grows like 1/(1 - zeta^2)^1.5; with "
-    "U summed to 13 terms below x = 0.2 (1e-16) the same kernel gives 3.8e-13 relative, "
-    "0.14 of its bound. potentials/saturating.py (and the Verlet kernel's copy of its "
-    "closed form) is not this change's; measured 2026-11-26",
-)
+# Saturating force near critical damping: 6.9x its bound at zeta = 0.99, v0 = 8 m/s while
+# its float U was 3e-13 off (3-term series below x = 0.01); the near-critical tail
+# magnifies U's error like 1/(1 - zeta^2)^1.5. With U correctly rounded to ~1e-14
+# (test_potentials_near_zero) it is inside its bound.
 def test_saturating_near_critical_within_reported_bounds():
     _check_bounds("saturating", SaturatingForce(1.0, 1.0), 1.0, 8.0, 0.99)
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, TERM_SATURATING, term_rows
 from reference_impl.potentials.base import Potential
-from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce
+from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce, saturating_series
 
 __all__ = ["SCENE_IMPACT", "SCENE_WALLS", "STATUS_NAMES", "SaturatingForce", "kernel_terms"]
 
@@ -90,6 +90,12 @@ def kernel_terms(pot: Potential) -> tuple[np.ndarray, np.ndarray] | None:
 # ----------------------------------------------------------------------------
 # numba kernel
 # ----------------------------------------------------------------------------
+# The saturating energy's series, the potential's own function compiled (one source: a
+# change of the series there reaches the kernel; numba's cache is keyed by this file, so
+# the potential's module is named here too: saturating.py).
+_sat_series = numba.njit(cache=True, inline="always")(saturating_series)
+
+
 @numba.njit(cache=True, inline="always")
 def _force_energy(q, fam, par):
     """U'(q) (N) and U(q) (J) for q > 0, summed over the kernel terms."""
@@ -120,7 +126,7 @@ def _force_energy(q, fam, par):
             x2 = x * x
             F += F0 * x2 / (1.0 + x2)
             if x < _SAT_SERIES_X:
-                U += F0 * qs * (x2 * x / 3.0 - x2 * x2 * x / 5.0 + x2 * x2 * x2 * x / 7.0)
+                U += F0 * qs * _sat_series(x)
             else:
                 U += F0 * qs * (x - math.atan(x))
     return F, U
