@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import math
 
-from reference_impl.adapters._mujoco_support import zeta_zero_force
+from reference_impl.adapters._asked import asked_universal_zeta
 from reference_impl.adapters._records import AdapterDeclined, AdapterScene, ImplementedLaw
 from reference_impl.adapters.law_damping import LawDamping
 from reference_impl.potentials.base import SumPotential
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.damping import zeta_from_restitution
 from reference_impl.theory.laws import DampingLaw
 
 __all__ = ["asked_zeta", "mjcf", "scene_mapping"]
@@ -38,8 +37,10 @@ def asked_zeta(scene: AdapterScene, end: str, dampratio, damping) -> float:
     Calibrated to the restitution the scene asks (``restitution_asked``, read at the
     scene's ``restitution_end``) so that the universal law's e at the adapter's ``end``
     is that value: ``overlap`` exp(-pi zeta / sqrt(1 - zeta^2)), ``zero-force``
-    `zeta_zero_force` (what MuJoCo, which clips tension, delivers at both ends). When
-    the two ends agree this is the scene's own zeta, exactly.
+    exp(-2 zeta s_peak) (what MuJoCo, which clips tension, delivers at both ends), by
+    the helper every built-in adapter shares
+    (`reference_impl.adapters._asked.asked_universal_zeta`). When the two ends agree
+    this is the scene's own zeta, exactly.
 
     Raises
     ------
@@ -54,14 +55,7 @@ def asked_zeta(scene: AdapterScene, end: str, dampratio, damping) -> float:
         return dampratio
     if damping is not None:
         return damping / (2.0 * math.sqrt(scene.mass * scene.potential.k))
-    e = float(scene.restitution_asked)
-    if scene.damping != "universal" or not scene.zeta or e >= 1.0:
-        return 0.0
-    if end == scene.restitution_end:
-        return float(scene.zeta)
-    if end == "zero-force":
-        return zeta_zero_force(e)
-    return zeta_from_restitution(e, end="overlap")
+    return asked_universal_zeta(scene, end)
 
 
 def scene_mapping(

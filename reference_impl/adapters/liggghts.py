@@ -48,8 +48,18 @@ Clipping: ``limitForce`` is off by default: the total force pulls at the end of
 contact (measured: 6.8 % of the peak force on ``hertz-damped``, e = 0.729; 26 % on
 ``hooke-damped``, e = 0.5; 12.7 % for Hertz at e = 0.5) and the restitution at
 q = 0 is e. ``limitForce on`` clips it (``clips_tension``), the body leaves at the
-zero-force end and e comes out higher (0.55 for 0.5; no coefficientRestitution
-reaches 0.2: the floor 0.05 gives 0.213).
+zero-force end and e comes out higher (0.55 for coefficientRestitution 0.5; no
+coefficientRestitution reaches 0.2: the floor 0.05 gives 0.213).
+
+What is asked (protocol ``hcv-adapter/2``): both models integrate the universal
+law, so the adapter writes the coefficientRestitution whose zeta = -betaeff has the
+restitution the scene asks at the end LIGGGHTS delivers it: the scene's
+``restitution_end`` with ``limitForce off``, the zero-force end with ``limitForce
+on`` (a clipped contact leaves there, whichever end is read;
+`reference_impl.adapters._asked`). A scene asking e at the overlap end with
+``limitForce off`` gets e itself; one asking at the zero-force end gets the lower
+exp(-pi zeta / sqrt(1 - zeta^2)) of zeta = the zero-force inverse of e. When that
+input is <= 0.05 the scene is declined.
 
 Staggering: none to declare. LIGGGHTS is velocity Verlet (``fix nve/sphere``):
 ``fix print`` runs at the end of a step, when x, v and f all belong to t[n + 1];
@@ -77,6 +87,7 @@ import subprocess
 
 import numpy as np
 
+from reference_impl.adapters._asked import asked_universal_zeta, delivery_end
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -88,6 +99,7 @@ from reference_impl.adapters.base import (
 )
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "GEOMETRIES",
@@ -328,10 +340,12 @@ class LiggghtsAdapter(ContactAdapter):
                 f"LIGGGHTS model {self.models[0]} is U' = k q^{want:g}; scene potential "
                 f"{pot!r} has no equivalent in it"
             )
-        if self.restitution is None and scene.restitution <= _E_MIN:
+        e_in = self.mapping(scene)["coefficientRestitution"]
+        if self.restitution is None and e_in <= _E_MIN:
             return (
-                f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} "
-                f"(asked e = {scene.restitution:.6g}); out of its reach"
+                f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} (asked e = "
+                f"{scene.restitution_asked:.6g} at the {scene.restitution_end} end needs "
+                f"{e_in:.6g}); out of its reach"
             )
         return None
 
@@ -357,11 +371,17 @@ class LiggghtsAdapter(ContactAdapter):
             "youngsModulus": float(2.0 * y_eff),  # Yeff = Y/2: same material, nu = 0
             "poissonsRatio": 0.0,
             "coefficientRestitution": float(
-                scene.restitution if self.restitution is None else self.restitution
+                self._asked_restitution(scene) if self.restitution is None else self.restitution
             ),
             "characteristicVelocity": _CHAR_VEL,
             "limitForce": "on" if self.limits[0] else "off",
         }
+
+    def _asked_restitution(self, scene: AdapterScene) -> float:
+        """coefficientRestitution whose zeta = -betaeff gives the asked e at the end
+        LIGGGHTS delivers it (zero-force with ``limitForce on``, else the asked end)."""
+        zeta = asked_universal_zeta(scene, delivery_end(scene, self.limits[0]))
+        return restitution_from_zeta(zeta) if zeta else 1.0
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         mp = self.mapping(scene)
