@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from reference_impl.adapters._asked import asked_universal_zeta
+from reference_impl.adapters._codes_common import default_radius
 from reference_impl.adapters._records import AdapterDeclined, AdapterScene, ImplementedLaw
 from reference_impl.adapters.law_damping import LawDamping
 from reference_impl.potentials.base import SumPotential
@@ -22,9 +23,6 @@ __all__ = ["asked_zeta", "mjcf", "scene_mapping"]
 # MuJoCo's impedance clamp (mjMINIMP, mjMAXIMP) and default solimp / solref.
 _MINIMP, _MAXIMP = 1e-4, 0.9999
 _DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %): the
-# radius does not enter the sphere-plane distance law, only the picture.
-_RADIUS_OVER_QMAX = 100.0
 
 
 def _clamp_imp(x: float) -> float:
@@ -86,8 +84,7 @@ def scene_mapping(
     zeta = asked_zeta(scene, end, dampratio, damping)
     c = 2.0 * zeta * math.sqrt(m * k)
     vmax = max(scene.velocities or (scene.v0,))
-    q_top = float(pot.turning_point(0.5 * m * vmax * vmax))
-    R = float(radius if radius is not None else _RADIUS_OVER_QMAX * q_top)
+    R = default_radius(scene, radius)
     if impedance == "constant":
         d = _clamp_imp(imp)
         solimp = (d, d, _DEFAULT_SOLIMP[2], _DEFAULT_SOLIMP[3], _DEFAULT_SOLIMP[4])

@@ -77,9 +77,14 @@ from importlib import metadata
 import numpy as np
 
 from reference_impl.adapters._asked import asked_universal_zeta, delivery_end, invert_decreasing
+from reference_impl.adapters._codes_common import (
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.damping import restitution_zero_force_from_zeta
 
 __all__ = [
@@ -97,8 +102,6 @@ SCHEMES = {"euler": "Symplectic_Euler", "verlet": "Velocity_Verlet"}
 GEOMETRIES = ("wall", "pair")
 # Force lag (steps) of TOTAL_FORCES after a step, per scheme (measured, see the docstring).
 _FORCE_LAG = {"euler": 1, "verlet": 0}
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %).
-_RADIUS_OVER_QMAX = 100.0
 # Kratos' linear law: modified radius r sqrt(alpha (2 - alpha)), alpha = 0.05, and the
 # sphere-sphere factor beta (DEM_D_Linear_viscous_Coulomb_CL.cpp).
 _LINEAR_RADIUS_FACTOR = 0.31225
@@ -244,14 +247,10 @@ class KratosAdapter(ContactAdapter):
         if reason:
             raise HCVInputError(f"adapter kratos: {reason}")
         self._default_set = law is None and scheme is None and geometry == "wall"
-        laws = _split("law", law, tuple(LAWS))
-        schemes = _split("scheme", scheme, tuple(SCHEMES))
-        geoms = _split("geometry", geometry, GEOMETRIES)
-        if radius is not None and not (
-            isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0
-        ):
-            raise HCVInputError(f"adapter kratos: radius must be a number > 0, got {radius!r}")
-        self.laws, self.schemes, self.geoms, self.radius = laws, schemes, geoms, radius
+        self.laws = split_option("kratos", "law", law, tuple(LAWS))
+        self.schemes = split_option("kratos", "scheme", scheme, tuple(SCHEMES))
+        self.geoms = split_option("kratos", "geometry", geometry, GEOMETRIES)
+        self.radius = positive_option("kratos", "radius", radius)
         if restitution is not None and not (
             isinstance(restitution, (int, float))
             and not isinstance(restitution, bool)
@@ -327,30 +326,22 @@ class KratosAdapter(ContactAdapter):
         return d
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one law, scheme and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        law = scene.universal_only(self.label)
-        if law:
-            return law
-        pot = scene.potential
         want = 1.5 if self.laws[0] == "hertz" else 1.0
-        if type(pot) is not PowerLaw or pot.p != want:
-            return (
-                f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
-                f"{pot!r} has no equivalent in this variant"
-            )
-        return None
+        return refuse_scene(
+            self,
+            scene,
+            configure="law, scheme and geometry",
+            powers=(want,),
+            no_power=f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
+            f"{scene.potential!r} has no equivalent in this variant",
+        )
 
     # -- the mapping ------------------------------------------------------------
     def _mapping(self, scene: AdapterScene) -> dict:
         """Kratos material parameters and the implemented law for one scene."""
         pot, m = scene.potential, scene.mass
         law, geom = self.laws[0], self.geoms[0]
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = pot.turning_point(0.5 * m * vmax * vmax)
-        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
+        R = default_radius(scene, self.radius)
         r_eff = R if geom == "wall" else 0.5 * R
         if law == "hertz":
             e_star = 3.0 * pot.k / (4.0 * math.sqrt(r_eff))
@@ -416,14 +407,6 @@ class KratosAdapter(ContactAdapter):
             **info,
         }
         return Trajectory(t, q, v, f, meta)
-
-
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(f"adapter kratos: {what} {x!r} is not one of {', '.join(allowed)}")
-    return items
 
 
 def _parameters(scheme: str, dt: float) -> dict:

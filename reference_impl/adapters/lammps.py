@@ -82,6 +82,12 @@ from reference_impl.adapters._asked import (
     delivery_end,
     invert_decreasing,
 )
+from reference_impl.adapters._codes_common import (
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters.base import (
     AdapterScene,
     ContactAdapter,
@@ -105,8 +111,6 @@ __all__ = [
 
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
 GEOMETRIES = ("wall", "pair")
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %).
-_RADIUS_OVER_QMAX = 100.0
 # LAMMPS version (YYYYMMDD) from which tsuji's alpha carries the sqrt(2) factor.
 _TSUJI_SQRT2_SINCE = 20260902
 # Calibration of a constant damping: IVP tolerance and relative root tolerance.
@@ -236,33 +240,12 @@ class LammpsAdapter(ContactAdapter):
         if reason:
             raise HCVInputError(f"adapter lammps: {reason}")
         self._default_set = damping is None
-        models = (
-            DAMPING_MODELS
-            if damping in (None, "all")
-            else tuple(d.strip() for d in str(damping).split("+"))
-        )
-        geoms = tuple(g.strip() for g in str(geometry).split("+"))
-        for d in models:
-            if d not in DAMPING_MODELS:
-                raise HCVInputError(
-                    f"adapter lammps: damping {d!r} is not one of {', '.join(DAMPING_MODELS)}"
-                )
-        for g in geoms:
-            if g not in GEOMETRIES:
-                raise HCVInputError(
-                    f"adapter lammps: geometry {g!r} is not one of {', '.join(GEOMETRIES)}"
-                )
-        for key, val in (("radius", radius), ("eta_n0", eta_n0)):
-            if val is not None and not (
-                isinstance(val, (int, float))
-                and math.isfinite(val)
-                and val >= (0 if key == "eta_n0" else 1e-300)
-            ):
-                raise HCVInputError(f"adapter lammps: {key} must be a number > 0, got {val!r}")
-        self.models, self.geoms = models, geoms
+        self.models = split_option("lammps", "damping", damping, DAMPING_MODELS)
+        # one geometry or both joined by "+" ("all" is not a geometry here)
+        self.geoms = split_option("lammps", "geometry", geometry, GEOMETRIES, every=False)
         self.limit_damping = bool(limit_damping)
-        self.radius = radius
-        self.eta_n0 = eta_n0
+        self.radius = positive_option("lammps", "radius", radius)
+        self.eta_n0 = positive_option("lammps", "eta_n0", eta_n0, allow_zero=True)
         self._lmp = None
         self._version = None
         self._maps: dict = {}
@@ -319,20 +302,14 @@ class LammpsAdapter(ContactAdapter):
         return self._version
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one damping model and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        law = scene.universal_only(self.label)
-        if law:
-            return law
-        pot = scene.potential
-        if type(pot) is not PowerLaw or pot.p not in (1.0, 1.5):
-            return (
-                f"LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
-                f"scene potential {pot!r} has no LAMMPS equivalent"
-            )
-        return None
+        return refuse_scene(
+            self,
+            scene,
+            configure="damping model and geometry",
+            powers=(1.0, 1.5),
+            no_power="LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
+            f"scene potential {scene.potential!r} has no LAMMPS equivalent",
+        )
 
     # -- the mapping ------------------------------------------------------------
     def _mapping(self, scene: AdapterScene) -> dict:
@@ -351,9 +328,7 @@ class LammpsAdapter(ContactAdapter):
             return self._maps[key]
         pot, m = scene.potential, scene.mass
         model, geom = self.models[0], self.geoms[0]
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = pot.turning_point(0.5 * m * vmax * vmax)
-        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
+        R = default_radius(scene, self.radius)
         r_eff = R if geom == "wall" else 0.5 * R
         normal = "hooke" if pot.p == 1.0 else "hertz"
         k_n = float(pot.k if normal == "hooke" else pot.k / math.sqrt(r_eff))

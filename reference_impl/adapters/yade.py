@@ -87,6 +87,13 @@ import shutil
 import numpy as np
 
 from reference_impl.adapters._asked import asked_universal_zeta, delivery_end, invert_decreasing
+from reference_impl.adapters._codes_common import (
+    bool_option,
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -114,7 +121,6 @@ INPUTS = ("en", "betan", "tc", "kn")
 GEOMETRIES = ("wall", "pair")
 INSTALL = "apt-get install -y yade"
 _LAW = {"en": "mindlin", "betan": "mindlin", "tc": "viscel", "kn": "viscel"}
-_RADIUS_OVER_QMAX = 100.0
 # Seconds allowed to YADE's own start-up on top of a run's timeout (~3 s measured).
 _STARTUP = 120.0
 # Answer size bound (bytes per sample: 3 numbers of ~25 characters and separators).
@@ -173,14 +179,6 @@ def _user_en(scene: AdapterScene) -> float:
     return restitution_from_zeta(zeta) if zeta else 1.0
 
 
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(f"adapter yade: {what} {x!r} is not one of {', '.join(allowed)}")
-    return items
-
-
 class YadeAdapter(ContactAdapter):
     """Head-on normal impacts in YADE (see the module docstring for the law).
 
@@ -229,24 +227,14 @@ class YadeAdapter(ContactAdapter):
         if reason:
             raise HCVInputError(f"adapter yade: {reason}")
         self._default_set = input is None and geometry is None
-        self.inputs = _split("input", input, INPUTS)
-        self.geoms = _split("geometry", "wall" if geometry is None else geometry, GEOMETRIES)
-        for key, val in (("radius", radius), ("timeout", timeout)):
-            if val is not None and not (
-                isinstance(val, (int, float))
-                and not isinstance(val, bool)
-                and math.isfinite(val)
-                and val > 0
-            ):
-                raise HCVInputError(f"adapter yade: {key} must be a number > 0, got {val!r}")
-        self.radius = None if radius is None else float(radius)
+        self.inputs = split_option("yade", "input", input, INPUTS)
+        geometry = "wall" if geometry is None else geometry
+        self.geoms = split_option("yade", "geometry", geometry, GEOMETRIES)
+        self.radius = positive_option("yade", "radius", radius)
+        timeout = positive_option("yade", "timeout", timeout)
         self.timeout_given = timeout is not None
-        self.timeout = 60.0 if timeout is None else float(timeout)
-        if not isinstance(persistent, bool):
-            raise HCVInputError(
-                f"adapter yade: persistent must be true or false, got {persistent!r}"
-            )
-        self.persistent = persistent
+        self.timeout = 60.0 if timeout is None else timeout
+        self.persistent = bool_option("yade", "persistent", persistent)
         self.given = {}
         for key, val, ok in (
             ("en", en, lambda x: 0.0 < x <= 1.0),
@@ -335,19 +323,18 @@ class YadeAdapter(ContactAdapter):
         }
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one input and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        law = scene.universal_only(self.label)
-        if law:
-            return law
-        pot = scene.potential
-        law = _LAW[self.inputs[0]]
-        want = 1.5 if law == "mindlin" else 1.0
-        if type(pot) is not PowerLaw or pot.p != want:
-            name = "Hertz-Mindlin" if law == "mindlin" else "ViscElMat"
-            return f"YADE {name} is U' = k q^{want:g}; scene potential {pot!r} has no equivalent"
+        mindlin = _LAW[self.inputs[0]] == "mindlin"
+        want = 1.5 if mindlin else 1.0
+        reason = refuse_scene(
+            self,
+            scene,
+            configure="input and geometry",
+            powers=(want,),
+            no_power=f"YADE {'Hertz-Mindlin' if mindlin else 'ViscElMat'} is U' = k "
+            f"q^{want:g}; scene potential {scene.potential!r} has no equivalent",
+        )
+        if reason:
+            return reason
         if self.inputs[0] in ("en", "tc") and _user_en(scene) <= 0.0:
             return (
                 f"YADE's {self.inputs[0]} input needs e > 0 (asked e = "
@@ -363,8 +350,7 @@ class YadeAdapter(ContactAdapter):
         inp, geom = self.inputs[0], self.geoms[0]
         # YADE clips tension: the zeta whose zero-force e is the asked one, at either end
         zeta_asked = asked_universal_zeta(scene, delivery_end(scene, clips_tension=True))
-        vmax = max(scene.velocities or (scene.v0,))
-        R = self.radius or _RADIUS_OVER_QMAX * float(pot.turning_point(0.5 * m * vmax * vmax))
+        R = default_radius(scene, self.radius)
         body_mass = m if geom == "wall" else 2.0 * m
         sc: dict = {"geometry": geom, "R": float(R), "mass": float(body_mass)}
         k_law, zeta = pot.k, 0.0
