@@ -437,3 +437,23 @@ def near_critical_universal_cases(draw, families=("power", "sphere", "ellipsoid"
 
 
 __all__ += ["NEAR_CRITICAL_ZETA", "near_critical_universal_cases"]
+
+
+# -- what an adapter is asked (protocol hcv-adapter/2: verification/test_adapter_asked.py) --
+@st.composite
+def universal_asks(draw):
+    """(e, end, k, m, v0) of a universal impact scene asking e in [0.3, 0.95] at the
+    "overlap" or the "zero-force" end: the stiffness k of a power law (N/m^p, five
+    decades), a mass (kg), a speed (m/s). Over this range every built-in code's damping
+    input reaches the asked e (LIGGGHTS's floor 0.05 and Kratos' range [0.001, 0.999]
+    lie outside it)."""
+    return (
+        draw(st.floats(0.3, 0.95)),
+        draw(st.sampled_from(("overlap", "zero-force"))),
+        draw(log_uniform(1e4, 1e9)),
+        draw(log_uniform(1e-3, 1.0)),
+        draw(log_uniform(1e-2, 1.0)),
+    )
+
+
+__all__ += ["universal_asks"]
