@@ -47,6 +47,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 import stat
 import sys
 import warnings
@@ -64,6 +65,7 @@ __all__ = [
     "expression_module",
     "expressions_dir",
     "max_bytes",
+    "numba_key",
     "printed_function",
     "record_files",
 ]
@@ -80,7 +82,9 @@ class CacheWarning(UserWarning):
     """The compile cache cannot be used; code is compiled for this process only."""
 
 
-_state: dict = {"usable": None, "warned": False, "tmp": None}
+_state: dict = {"usable": None, "warned": False, "tmp": None, "numba_root": None}
+# Set beside NUMBA_CACHE_DIR to the value this package gave it (`_numba_dir_is_ours`).
+_MARK = "_HCV_NUMBA_CACHE_DIR"
 
 
 def cache_dir() -> Path:
@@ -118,20 +122,27 @@ def _untrusted(path: Path) -> str | None:
     Owned by another user, or writable by group or others: numba's files are pickles, so
     such a cache could run another user's code in this process.
     """
-    me = os.geteuid()
     for p in (path, *(path / s for s in _SUBDIRS)):
-        try:
-            st = os.stat(p)  # a link is judged by its target
-        except FileNotFoundError:
-            continue
-        if st.st_uid != me:
-            return f"{p} is owned by another user (uid {st.st_uid})"
-        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-            return (
-                f"{p} is writable by group or others (mode {oct(stat.S_IMODE(st.st_mode))}); "
-                "its pickled code would run here. chmod 700 it after checking its content, "
-                "or remove it"
-            )
+        why = _who_else_writes(p)
+        if why is not None:
+            return why
+    return None
+
+
+def _who_else_writes(p: Path) -> str | None:
+    """Why another user could write the directory ``p`` (None when none can, or it is absent)."""
+    try:
+        st = os.stat(p)  # a link is judged by its target
+    except FileNotFoundError:
+        return None
+    if st.st_uid != os.geteuid():
+        return f"{p} is owned by another user (uid {st.st_uid})"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return (
+            f"{p} is writable by group or others (mode {oct(stat.S_IMODE(st.st_mode))}); "
+            "its pickled code would run here. chmod 700 it after checking its content, "
+            "or remove it"
+        )
     return None
 
 
@@ -178,25 +189,43 @@ def _private_tmp() -> str | None:
     return _state["tmp"]
 
 
+def _numba_dir_is_ours() -> bool:
+    """True unless the user set ``NUMBA_CACHE_DIR`` (a value this package set, marked in
+    ``_HCV_NUMBA_CACHE_DIR`` and inherited by a child process, is still ours)."""
+    value = os.environ.get("NUMBA_CACHE_DIR")
+    return value is None or value == os.environ.get(_MARK)
+
+
+def _set_numba_dir(target: str) -> None:
+    """Point numba at ``target``, marked as ours (`_numba_dir_is_ours`)."""
+    os.environ["NUMBA_CACHE_DIR"] = os.environ[_MARK] = target
+    numba_config = sys.modules.get("numba.core.config")
+    if numba_config is not None:  # numba is imported: tell it too (it reads CACHE_DIR per use)
+        numba_config.CACHE_DIR = target
+
+
 def configure_numba_cache() -> bool:
     """Point numba's disk cache at the per-user directory; True when it is usable.
 
     Called once when the package is imported (before numba is), and cheap: one directory
-    check. When the directory is unusable, numba compiles into a private temporary
-    directory removed at exit, and one `CacheWarning` names the directory and the reason.
+    check. The keyed sub-directory (`_select_numba_dir`) is chosen when numba is imported,
+    so a command that never compiles pays nothing for the key. When the directory is
+    unusable, numba compiles into a private temporary directory removed at exit, and one
+    `CacheWarning` names the directory and the reason.
     """
     if _state["usable"] is not None:
         return _state["usable"]
     root = cache_dir()
     reason = _unusable(root)
     _state["usable"] = reason is None
-    if "NUMBA_CACHE_DIR" not in os.environ:
-        target = str(root / "numba") if reason is None else _private_tmp()
-        if target is not None:
-            os.environ["NUMBA_CACHE_DIR"] = target
-            numba_config = sys.modules.get("numba.core.config")
-            if numba_config is not None:  # numba was imported first: tell it too
-                numba_config.CACHE_DIR = target
+    _state["numba_root"] = None
+    if _numba_dir_is_ours():
+        if reason is None:
+            _state["numba_root"] = root / "numba"  # its keyed sub-directory: when numba loads
+        else:
+            target = _private_tmp()
+            if target is not None:
+                _set_numba_dir(target)
     if reason is not None:
         _warn_once(
             f"hcv: the compile cache {root} {reason}; compiling for this process only "
@@ -206,19 +235,175 @@ def configure_numba_cache() -> bool:
     return _state["usable"]
 
 
+# --------------------------------------------------------------------------- numba's keyed directory
+
+# The package files numba's machine code depends on: every module that compiles code with
+# numba, and every package module those import (numba freezes the module globals a compiled
+# function reads, constants from other modules included, into its machine code). numba checks
+# a cached function against its own file's stamp only, so a change to any of these selects
+# a fresh directory instead. verification/test_cache_key.py checks the list against the
+# imports (AST), so a new compiled module cannot be left out.
+_COMPILED_SOURCES = (
+    "_atomic.py", "_cache.py", "_jit.py", "_stored.py", "_version.py", "errors.py",
+    "exact/_branches.py", "exact/_general_kernel.py", "exact/_general_taylor.py",
+    "exact/_nodes.py", "exact/_one_call.py", "exact/_oscillator.py", "exact/_power_kernel.py",
+    "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_split.py",
+    "exact/_strategies.py", "exact/_sums.py", "exact/_tail.py", "exact/_truth.py",
+    "exact/_validate.py", "exact/batch.py", "exact/general_law.py", "exact/prepared.py",
+    "exact/solve.py",
+    "integrators/verlet_expression.py", "integrators/verlet_kernel.py",
+    "potentials/_checks.py", "potentials/_expr_parse.py", "potentials/_expr_turning.py",
+    "potentials/_families.py", "potentials/_near_zero.py", "potentials/_rising.py",
+    "potentials/_terms.py", "potentials/base.py", "potentials/expression.py",
+    "potentials/power.py", "potentials/saturating.py",
+    "theory/damping.py", "theory/harmonic_map.py", "theory/laws.py",
+)  # fmt: skip
+_PACKAGE = Path(__file__).resolve().parent
+# numba/<_KEY_PREFIX><hex>: the keyed directories; numba/<name>_<40 hex>: numba's own
+# directories of the layout before keys (its UserProvidedCacheLocator names them so).
+_KEY_PREFIX = "key-"
+_KEYED = re.compile(r"key-[0-9a-f]{24}")
+_UNKEYED = re.compile(r"[A-Za-z0-9_.-]+_[0-9a-f]{40}")
+# Pruning keeps the most recently used few, and any used within the last hour: another
+# process (another checkout, another version) may be running on it. numba makes a removed
+# directory again before each save, so a process that loses its directory recompiles.
+_KEEP_KEYS = 3
+_KEEP_RECENT_S = 3600.0
+
+
+def _source_digest(package: Path) -> str:
+    """Digest of the relative path and content of each of `_COMPILED_SOURCES` in ``package``.
+
+    The content, not the stamp (size, mtime): a wheel may carry fixed mtimes, so a file of
+    the same size and mtime can hold other code. About 1 ms for the 0.4 MB read.
+    """
+    h = hashlib.sha256()
+    for rel in _COMPILED_SOURCES:
+        try:
+            data = (package / rel).read_bytes()
+        except OSError:
+            data = b"<missing>"
+        h.update(f"{rel}\0{len(data)}\0".encode())
+        h.update(data)
+    return h.hexdigest()
+
+
+def _versions() -> str:
+    """This package's version and those of numba, numpy and Python (no import of its own)."""
+    from importlib.metadata import version as dist_version
+
+    parts = [f"hcv={version()}", f"python={sys.version}"]
+    for name in ("numba", "numpy"):
+        module = sys.modules.get(name)
+        v = getattr(module, "__version__", None)
+        if v is None:  # numba was not imported (a direct call): ask its metadata
+            try:
+                v = dist_version(name)
+            except Exception:
+                v = "none"
+        parts.append(f"{name}={v}")
+    return "\n".join(parts)
+
+
+def numba_key() -> str:
+    """Name of numba's cache sub-directory for this package: a digest of the versions and
+    of the compiled sources (`_source_digest`)."""
+    text = f"{_versions()}\n{_source_digest(_PACKAGE)}"
+    return _KEY_PREFIX + hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _select_numba_dir() -> None:
+    """Point numba at ``numba/<key>`` of the cache (made 0700, checked like the cache),
+    then prune the old keyed directories. Once per configuration; nothing when the user set
+    ``NUMBA_CACHE_DIR`` or the cache is unusable."""
+    numba_root = _state.get("numba_root")
+    if numba_root is None:
+        return
+    _state["numba_root"] = None
+    target = numba_root / numba_key()
+    try:
+        for d in (numba_root, target):
+            d.mkdir(mode=0o700, exist_ok=True)  # the cache root exists (`_unusable` made it)
+        why = _who_else_writes(numba_root) or _who_else_writes(target)
+        if why is None:
+            os.utime(target)  # recently used: last to be pruned
+    except OSError as exc:
+        why = f"cannot be written ({exc.strerror or type(exc).__name__})"
+    if why is not None:
+        _state["usable"] = False
+        _warn_once(f"hcv: the compile cache {why}; compiling for this process only")
+        tmp = _private_tmp()
+        if tmp is not None:
+            _set_numba_dir(tmp)
+        return
+    _set_numba_dir(str(target))
+    _prune_numba_dirs(numba_root, keep=target)
+
+
+def _prune_numba_dirs(numba_root: Path, keep: Path, now: float | None = None) -> list[Path]:
+    """Remove this cache's old numba directories; the ones removed.
+
+    Only real directories (a symbolic link is never followed, nor removed) lying directly in
+    the resolved ``numba_root``, owned by this user and named as this cache names them
+    (`_KEYED`, or `_UNKEYED` of the layout before keys); the `_KEEP_KEYS` most recently
+    used keyed ones, ``keep`` and any used within `_KEEP_RECENT_S` stay. Errors are
+    ignored: another process may be pruning too.
+    """
+    import shutil
+    import time
+
+    if not shutil.rmtree.avoids_symlink_attacks:  # rmtree could follow a link planted in it
+        return []
+    now = time.time() if now is None else now
+    real_root = os.path.realpath(numba_root)
+    me = os.geteuid()
+    keyed, old = [], []
+    try:
+        entries = list(os.scandir(real_root))
+    except OSError:
+        return []
+    for entry in entries:
+        try:
+            st = entry.stat(follow_symlinks=False)
+        except OSError:
+            continue
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != me or entry.name == keep.name:
+            continue
+        if os.path.dirname(os.path.realpath(entry.path)) != real_root:
+            continue  # not directly inside the resolved root
+        if _KEYED.fullmatch(entry.name):
+            keyed.append((st.st_mtime, entry.path))
+        elif _UNKEYED.fullmatch(entry.name):
+            old.append((st.st_mtime, entry.path))
+    keyed.sort(reverse=True)
+    candidates = keyed[max(_KEEP_KEYS - 1, 0):] + old  # ``keep`` is one of the few kept
+    removed = []
+    for used, path in candidates:
+        if now - used < _KEEP_RECENT_S:
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+        if not os.path.lexists(path):
+            removed.append(Path(path))
+    return removed
+
+
 # --------------------------------------------------------------------------- damaged files
 
 
 def _guard_numba_loader() -> None:
-    """Wrap numba's cache loader (now if imported, else when ``numba.core.caching`` is)."""
-    if _state.get("guarded"):
-        return
-    _state["guarded"] = True
+    """Wrap numba's cache loader and choose the keyed directory (`_numba_loaded`): now if
+    ``numba.core.caching`` is imported, else when it is."""
     module = sys.modules.get("numba.core.caching")
     if module is not None:
-        _wrap_loader(module)
-    else:
+        _numba_loaded(module)
+    elif not _state.get("hooked"):
+        _state["hooked"] = True
         sys.meta_path.insert(0, _PatchOnImport())
+
+
+def _numba_loaded(caching) -> None:
+    _wrap_loader(caching)
+    _select_numba_dir()
 
 
 class _PatchOnImport:
@@ -237,7 +422,7 @@ class _PatchOnImport:
 
         def exec_module(module):
             execute(module)
-            _wrap_loader(module)
+            _numba_loaded(module)
 
         spec.loader.exec_module = exec_module
         return spec
