@@ -2,9 +2,21 @@
 
 **Location.** ``$HCV_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/hidden-harmonic-verification``,
 else ``~/.cache/hidden-harmonic-verification``. numba's own disk cache goes to its
-``numba/`` sub-directory (``NUMBA_CACHE_DIR`` is set there when the user did not set it;
-a user's ``NUMBA_CACHE_DIR`` is left alone), the user expressions' generated modules to
-``expressions/``.
+``numba/key-<digest>`` sub-directory (``NUMBA_CACHE_DIR`` is set there when the user did not
+set it; a user's ``NUMBA_CACHE_DIR`` is left alone), the user expressions' generated modules
+to ``expressions/``.
+
+**Fresh code, fresh cache.** numba checks a cached function only against the stamp of its
+own source file, so a caller kept a changed callee's old machine code. The sub-directory is
+therefore named by `reference_impl._numba_dir.numba_key`, a digest of the versions and of the
+content of every compiled source (and the modules they import): any change there selects a
+fresh directory. It is chosen when numba is imported (`_select_numba_dir`, from the import
+hook below; 1-3 ms, nothing for a command that never imports numba), made 0700 and checked
+like the cache; old ones are pruned then (`reference_impl._numba_dir.prune_numba_dirs`:
+the 3 most recently used and any used within the hour stay, a symbolic link is never
+followed). A ``NUMBA_CACHE_DIR`` the user set gets numba's rule only (a stale callee is
+possible after an edit); one this package set is marked in ``_HCV_NUMBA_CACHE_DIR``, so a
+child process does not take the value it inherits for the user's.
 
 **Degrading.** A cache directory that cannot be created or written, or whose file system
 has less than `MIN_FREE_BYTES` free, is not an error: numba then compiles into a private
@@ -47,7 +59,6 @@ import importlib.util
 import json
 import math
 import os
-import re
 import stat
 import sys
 import warnings
@@ -55,6 +66,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from reference_impl._atomic import atomic_write
+from reference_impl._numba_dir import numba_key, prune_numba_dirs
 from reference_impl._version import version
 
 __all__ = [
@@ -65,7 +77,6 @@ __all__ = [
     "expression_module",
     "expressions_dir",
     "max_bytes",
-    "numba_key",
     "printed_function",
     "record_files",
 ]
@@ -237,81 +248,6 @@ def configure_numba_cache() -> bool:
 
 # --------------------------------------------------------------------------- numba's keyed directory
 
-# The package files numba's machine code depends on: every module that compiles code with
-# numba, and every package module those import (numba freezes the module globals a compiled
-# function reads, constants from other modules included, into its machine code). numba checks
-# a cached function against its own file's stamp only, so a change to any of these selects
-# a fresh directory instead. verification/test_cache_key.py checks the list against the
-# imports (AST), so a new compiled module cannot be left out.
-_COMPILED_SOURCES = (
-    "_atomic.py", "_cache.py", "_jit.py", "_stored.py", "_version.py", "errors.py",
-    "exact/_branches.py", "exact/_general_kernel.py", "exact/_general_taylor.py",
-    "exact/_nodes.py", "exact/_one_call.py", "exact/_oscillator.py", "exact/_power_kernel.py",
-    "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_split.py",
-    "exact/_strategies.py", "exact/_sums.py", "exact/_tail.py", "exact/_truth.py",
-    "exact/_validate.py", "exact/batch.py", "exact/general_law.py", "exact/prepared.py",
-    "exact/solve.py",
-    "integrators/verlet_expression.py", "integrators/verlet_kernel.py",
-    "potentials/_checks.py", "potentials/_expr_parse.py", "potentials/_expr_turning.py",
-    "potentials/_families.py", "potentials/_near_zero.py", "potentials/_rising.py",
-    "potentials/_terms.py", "potentials/base.py", "potentials/expression.py",
-    "potentials/power.py", "potentials/saturating.py",
-    "theory/damping.py", "theory/harmonic_map.py", "theory/laws.py",
-)  # fmt: skip
-_PACKAGE = Path(__file__).resolve().parent
-# numba/<_KEY_PREFIX><hex>: the keyed directories; numba/<name>_<40 hex>: numba's own
-# directories of the layout before keys (its UserProvidedCacheLocator names them so).
-_KEY_PREFIX = "key-"
-_KEYED = re.compile(r"key-[0-9a-f]{24}")
-_UNKEYED = re.compile(r"[A-Za-z0-9_.-]+_[0-9a-f]{40}")
-# Pruning keeps the most recently used few, and any used within the last hour: another
-# process (another checkout, another version) may be running on it. numba makes a removed
-# directory again before each save, so a process that loses its directory recompiles.
-_KEEP_KEYS = 3
-_KEEP_RECENT_S = 3600.0
-
-
-def _source_digest(package: Path) -> str:
-    """Digest of the relative path and content of each of `_COMPILED_SOURCES` in ``package``.
-
-    The content, not the stamp (size, mtime): a wheel may carry fixed mtimes, so a file of
-    the same size and mtime can hold other code. About 1 ms for the 0.4 MB read.
-    """
-    h = hashlib.sha256()
-    for rel in _COMPILED_SOURCES:
-        try:
-            data = (package / rel).read_bytes()
-        except OSError:
-            data = b"<missing>"
-        h.update(f"{rel}\0{len(data)}\0".encode())
-        h.update(data)
-    return h.hexdigest()
-
-
-def _versions() -> str:
-    """This package's version and those of numba, numpy and Python (no import of its own)."""
-    from importlib.metadata import version as dist_version
-
-    parts = [f"hcv={version()}", f"python={sys.version}"]
-    for name in ("numba", "numpy"):
-        module = sys.modules.get(name)
-        v = getattr(module, "__version__", None)
-        if v is None:  # numba was not imported (a direct call): ask its metadata
-            try:
-                v = dist_version(name)
-            except Exception:
-                v = "none"
-        parts.append(f"{name}={v}")
-    return "\n".join(parts)
-
-
-def numba_key() -> str:
-    """Name of numba's cache sub-directory for this package: a digest of the versions and
-    of the compiled sources (`_source_digest`)."""
-    text = f"{_versions()}\n{_source_digest(_PACKAGE)}"
-    return _KEY_PREFIX + hashlib.sha256(text.encode()).hexdigest()[:24]
-
-
 def _select_numba_dir() -> None:
     """Point numba at ``numba/<key>`` of the cache (made 0700, checked like the cache),
     then prune the old keyed directories. Once per configuration; nothing when the user set
@@ -328,7 +264,7 @@ def _select_numba_dir() -> None:
         if why is None:
             os.utime(target)  # recently used: last to be pruned
     except OSError as exc:
-        why = f"cannot be written ({exc.strerror or type(exc).__name__})"
+        why = f"{target} cannot be written ({exc.strerror or type(exc).__name__})"
     if why is not None:
         _state["usable"] = False
         _warn_once(f"hcv: the compile cache {why}; compiling for this process only")
@@ -337,54 +273,7 @@ def _select_numba_dir() -> None:
             _set_numba_dir(tmp)
         return
     _set_numba_dir(str(target))
-    _prune_numba_dirs(numba_root, keep=target)
-
-
-def _prune_numba_dirs(numba_root: Path, keep: Path, now: float | None = None) -> list[Path]:
-    """Remove this cache's old numba directories; the ones removed.
-
-    Only real directories (a symbolic link is never followed, nor removed) lying directly in
-    the resolved ``numba_root``, owned by this user and named as this cache names them
-    (`_KEYED`, or `_UNKEYED` of the layout before keys); the `_KEEP_KEYS` most recently
-    used keyed ones, ``keep`` and any used within `_KEEP_RECENT_S` stay. Errors are
-    ignored: another process may be pruning too.
-    """
-    import shutil
-    import time
-
-    if not shutil.rmtree.avoids_symlink_attacks:  # rmtree could follow a link planted in it
-        return []
-    now = time.time() if now is None else now
-    real_root = os.path.realpath(numba_root)
-    me = os.geteuid()
-    keyed, old = [], []
-    try:
-        entries = list(os.scandir(real_root))
-    except OSError:
-        return []
-    for entry in entries:
-        try:
-            st = entry.stat(follow_symlinks=False)
-        except OSError:
-            continue
-        if not stat.S_ISDIR(st.st_mode) or st.st_uid != me or entry.name == keep.name:
-            continue
-        if os.path.dirname(os.path.realpath(entry.path)) != real_root:
-            continue  # not directly inside the resolved root
-        if _KEYED.fullmatch(entry.name):
-            keyed.append((st.st_mtime, entry.path))
-        elif _UNKEYED.fullmatch(entry.name):
-            old.append((st.st_mtime, entry.path))
-    keyed.sort(reverse=True)
-    candidates = keyed[max(_KEEP_KEYS - 1, 0):] + old  # ``keep`` is one of the few kept
-    removed = []
-    for used, path in candidates:
-        if now - used < _KEEP_RECENT_S:
-            continue
-        shutil.rmtree(path, ignore_errors=True)
-        if not os.path.lexists(path):
-            removed.append(Path(path))
-    return removed
+    prune_numba_dirs(numba_root, keep=target)
 
 
 # --------------------------------------------------------------------------- damaged files

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reference_impl import _cache, _stored
+from reference_impl import _cache, _numba_dir, _stored
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -279,9 +279,9 @@ def test_a_cache_directory_of_another_user_is_refused(tmp_path):
 
 
 def test_a_keyed_numba_directory_others_can_write_is_refused(tmp_path):
-    """numba's files go to ``numba/<key>`` (`_cache.numba_key`): that directory is checked too."""
+    """numba's files go to ``numba/<key>`` (`_numba_dir.numba_key`): that directory is checked too."""
     cache = tmp_path / "cache"
-    keyed = cache / "numba" / _cache.numba_key()  # the key a new process of this tree computes
+    keyed = cache / "numba" / _numba_dir.numba_key()  # the key a new process of this tree computes
     keyed.mkdir(parents=True)
     os.chmod(cache, 0o700)
     os.chmod(cache / "numba", 0o700)
@@ -313,7 +313,7 @@ def test_numba_cache_dir_of_the_user_is_left_alone(tmp_path, whose):
     if whose == "the user's":
         expected = str(theirs)
     else:
-        expected = str(cache / "numba" / _cache.numba_key())
+        expected = str(cache / "numba" / _numba_dir.numba_key())
     assert_true(
         got["value"] == 3.0 and got["numba_cache_dir"] == expected and not got["warnings"],
         got=f"{got}",

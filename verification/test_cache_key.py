@@ -1,11 +1,11 @@
-"""numba's disk cache is keyed by the package's compiled sources (`reference_impl._cache`).
+"""numba's disk cache is keyed by the package's compiled sources (`reference_impl._numba_dir`).
 
 numba checks a cached function only against the stamp (mtime, size) of its own source
 file: a compiled function in file X that calls or inlines one from file Y keeps Y's old
 machine code after Y changes, as long as X is unchanged. The first test shows that of numba
 alone, on a two-file package made in a temporary directory (if numba one day notices, it
 fails and says so). The package therefore caches into ``numba/<key>``, the key a digest of
-the versions and of the content of every compiled source (`_cache._COMPILED_SOURCES`, which
+the versions and of the content of every compiled source (`_numba_dir._COMPILED_SOURCES`, which
 the AST test below checks is complete); old keyed directories are pruned without ever
 following a symbolic link out of the cache.
 """
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from reference_impl import _cache
+from reference_impl import _numba_dir
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -69,7 +69,7 @@ def test_numba_alone_keeps_a_callees_old_code(tmp_path):
         (first, second) == ("1.0", "1.0"),
         got=f"A() = {first}, then {second} after B changed",
         should="1.0 then 1.0 (numba keeps B's old code inside A's cache entry); if numba now "
-        "gives 2.0 it checks callees itself, and the keyed directory of reference_impl._cache "
+        "gives 2.0 it checks callees itself, and the keyed directory of reference_impl._numba_dir "
         "may be revisited",
         claim="tool",
         call="numba cache=True, A calls B, B edited",
@@ -119,21 +119,21 @@ def test_the_package_cache_follows_a_changed_callee(tmp_path, stamp):
 
 def test_the_key_follows_compiled_sources_only(tmp_path, monkeypatch):
     copy = tmp_path / "reference_impl"
-    for rel in _cache._COMPILED_SOURCES:
+    for rel in _numba_dir._COMPILED_SOURCES:
         (copy / rel).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(PACKAGE / rel, copy / rel)
     other = copy / "cli" / "main.py"  # not compiled, imported by no compiled module
     other.parent.mkdir()
     other.write_text("X = 1\n")
-    base = _cache._source_digest(copy)
+    base = _numba_dir._source_digest(copy)
     _edit_keeping_stamp(other, "X = 1", "X = 2", keep_mtime=False)
-    after_other = _cache._source_digest(copy)
+    after_other = _numba_dir._source_digest(copy)
     kernel = copy / "integrators" / "verlet_kernel.py"
     _edit_keeping_stamp(kernel, "import math", "import Math", keep_mtime=True)
-    after_kernel = _cache._source_digest(copy)
-    key = _cache.numba_key()
-    monkeypatch.setattr(_cache, "version", lambda: "999.0")
-    key_new_version = _cache.numba_key()
+    after_kernel = _numba_dir._source_digest(copy)
+    key = _numba_dir.numba_key()
+    monkeypatch.setattr(_numba_dir, "version", lambda: "999.0")
+    key_new_version = _numba_dir.numba_key()
     assert_true(
         after_other == base and after_kernel != base and key_new_version != key,
         got=f"digest {base[:12]} -> {after_other[:12]} (cli) -> {after_kernel[:12]} "
@@ -178,13 +178,13 @@ def test_compiled_sources_list_every_module_numba_code_depends_on():
             seen.add(m)
             todo.extend(n for n in parsed[m][0] if n in files)
     needed = {files[m].relative_to(PACKAGE).as_posix() for m in seen}
-    listed = set(_cache._COMPILED_SOURCES)
+    listed = set(_numba_dir._COMPILED_SOURCES)
     assert_true(
         needed == listed,
         got=f"missing {sorted(needed - listed)}, listed but not needed {sorted(listed - needed)}",
         should="_COMPILED_SOURCES equal to the numba modules and their package imports",
         claim="tool",
-        call="reference_impl._cache._COMPILED_SOURCES",
+        call="reference_impl._numba_dir._COMPILED_SOURCES",
     )
 
 
@@ -224,7 +224,7 @@ def test_pruning_keeps_the_recent_few_and_never_leaves_the_root(tmp_path):
     inner = make(key.format(8), 48.0)
     (inner / "escape").symlink_to(outside, target_is_directory=True)  # a link inside an old one
     os.utime(inner, (now - 48 * _HOUR,) * 2)
-    removed = {p.name for p in _cache._prune_numba_dirs(root, keep=current, now=now)}
+    removed = {p.name for p in _numba_dir.prune_numba_dirs(root, keep=current, now=now)}
     left = {p.name for p in root.iterdir()}
     expected_removed = {key.format(i) for i in (2, 3, 4, 5, 8)} | {"exact_" + "a" * 40}
     intact = sorted(p.name for p in outside.rglob("*"))
