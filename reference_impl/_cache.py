@@ -66,7 +66,6 @@ from functools import lru_cache
 from pathlib import Path
 
 from reference_impl._atomic import atomic_write
-from reference_impl._numba_dir import numba_key, prune_numba_dirs
 from reference_impl._version import version
 
 __all__ = [
@@ -256,6 +255,9 @@ def _select_numba_dir() -> None:
     if numba_root is None:
         return
     _state["numba_root"] = None
+    # Deferred: a command that never imports numba does not load it (1 ms).
+    from reference_impl._numba_dir import numba_key, prune_numba_dirs
+
     target = numba_root / numba_key()
     try:
         for d in (numba_root, target):

@@ -20,7 +20,7 @@ import stat
 import sys
 from pathlib import Path
 
-from reference_impl._version import version
+from reference_impl._version import __version__
 
 __all__ = ["numba_key", "prune_numba_dirs"]
 
@@ -77,10 +77,15 @@ def _source_digest(package: Path) -> str:
 
 
 def _versions() -> str:
-    """This package's version and those of numba, numpy and Python (no import of its own)."""
+    """This package's version and those of numba, numpy and Python (no import of its own).
+
+    The package's is the source tree's `__version__`, not the installed metadata's
+    (`reference_impl._version.version`, whose first call scans ``sys.path``: 18 ms): the code
+    numba compiles is hashed whole anyway (`_source_digest`, ``_version.py`` included).
+    """
     from importlib.metadata import version as dist_version
 
-    parts = [f"hcv={version()}", f"python={sys.version}"]
+    parts = [f"hcv={__version__}", f"python={sys.version}"]
     for name in ("numba", "numpy"):
         module = sys.modules.get(name)
         v = getattr(module, "__version__", None)

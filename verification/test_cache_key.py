@@ -132,7 +132,7 @@ def test_the_key_follows_compiled_sources_only(tmp_path, monkeypatch):
     _edit_keeping_stamp(kernel, "import math", "import Math", keep_mtime=True)
     after_kernel = _numba_dir._source_digest(copy)
     key = _numba_dir.numba_key()
-    monkeypatch.setattr(_numba_dir, "version", lambda: "999.0")
+    monkeypatch.setattr(_numba_dir, "__version__", "999.0")
     key_new_version = _numba_dir.numba_key()
     assert_true(
         after_other == base and after_kernel != base and key_new_version != key,
