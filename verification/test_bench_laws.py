@@ -25,9 +25,9 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from reference_impl.adapters import get_adapter
+from reference_impl.adapters import ContactAdapter, Trajectory, get_adapter
 from reference_impl.adapters.base import AdapterScene
-from reference_impl.adapters.reference import ReferenceAdapter
+from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory
 from reference_impl.adapters.subprocess import PROTOCOL
 from reference_impl.bench.runner import run_bench
 from reference_impl.scenes import scene_from_dict
@@ -247,4 +247,50 @@ def test_the_restitution_floor_passes_a_correct_code_at_small_e_not_a_wrong_one(
         "10 % off: fail",
         claim=CLAIM,
         call="run_bench(reference, e = 0.004) and run_bench(10 % off, e = 0.7)",
+    )
+
+
+class _Overdamped(ContactAdapter):
+    """A code that runs and declares a linear dashpot of damping ratio 1.3 on a Hooke
+    spring: overdamped, the body creeps and never returns to q = 0 (its exact answer is
+    e = 0, no contact time)."""
+
+    name = "overdamped"
+    isolate = False
+    ZETA = 1.3
+
+    def _law(self, scene):
+        from reference_impl.adapters import implemented_law_from_table
+
+        k = scene.potential_spec["k"]
+        c = 2.0 * self.ZETA * (scene.mass * k) ** 0.5
+        return implemented_law_from_table(scene.potential, scene.mass, {"law": "linear", "c": c})
+
+    def _impact_impl(self, scene):
+        t, q, v, f = law_trajectory(self._law(scene), scene.v0, scene.dt, scene.n_steps)
+        return Trajectory(t, q, v, f)
+
+    def implemented_law(self, scene):
+        return self._law(scene)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    raises=ValueError,
+    reason="h-review: a code declaring an overdamped law of the table (linear, zeta 1.3 on "
+    "Hooke) stops run_bench with 'ValueError: cannot convert float NaN to integer' in "
+    "_SceneRun.budget (the speed table's t_c is the declared law's contact time, NaN when "
+    "it never returns): hcv bench prints a traceback, exit 1, no scorecard",
+)
+def test_a_code_declaring_an_overdamped_law_gets_a_scorecard():
+    scene = {**_HC, "name": "linear-e-0.004"}
+    scene["damping"] = {"law": "linear", "restitution": 0.004, "restitution_speed": 0.5}
+    result = run_bench(_Overdamped(), [scene_from_dict(scene)])
+    got = _by(result)
+    assert_true(
+        "restitution_asked" in got,
+        got=f"metrics {sorted(got)}",
+        should="a scorecard (the delivered e = 0 scored against the asked 0.004)",
+        claim=CLAIM,
+        call="run_bench(overdamped linear code, linear e = 0.004 at 0.5 m/s)",
     )
