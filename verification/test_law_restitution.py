@@ -132,16 +132,9 @@ def test_hcv_solve_prints_the_solved_strength_and_puts_it_in_the_json(tmp_path):
     )  # fmt: skip
 
 
-# --- acceptance review of issue 26 (h-review): defects found, held as strict xfails ---
+# --- acceptance review of issue 26 (h-review): defects found, fixed (h-scenefix) ---
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="h-review: restitution_speed = 1e300 / 1e-300 passes _number (finite, > 0) and "
-    "fails later inside the strength solve as 'damping.restitution = 0.7: kinetic energy "
-    "m v0^2 / 2 = inf J is not a positive float64': the line names restitution and v0, "
-    "not damping.restitution_speed = 1e+300",
-)
 @pytest.mark.parametrize("speed", [1e300, 1e-300])
 def test_an_extreme_restitution_speed_is_refused_naming_it(speed):
     data = {"name": "s", "mass": 0.01, "velocities": [1.0],
@@ -152,20 +145,16 @@ def test_an_extreme_restitution_speed_is_refused_naming_it(speed):
         scene_from_dict(data, "my.toml")
     msg = str(info.value)
     assert_true(
-        "damping.restitution_speed" in msg and "\n" not in msg,
+        f"damping.restitution_speed = {speed!r}" in msg
+        and "positive normal float64" in msg
+        and "\n" not in msg,
         got=msg,
-        should=f"one line naming damping.restitution_speed = {speed!r}",
+        should=f"one line naming damping.restitution_speed = {speed!r} and the range that works",
         claim=CLAIM,
         call=f"scene_from_dict(hunt-crossley, restitution_speed = {speed!r})",
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="h-review: law = 'none' with restitution_speed is refused with 'damping."
-    "restitution_speed belongs to law = 'universal'', but the universal law refuses "
-    "restitution_speed too (Theorem 3): the line sends the user to a law that rejects it",
-)
 def test_restitution_speed_with_no_damping_is_not_said_to_belong_to_universal():
     data = {"name": "s", "mass": 0.01, "velocities": [1.0],
             "potential": {"family": "power", "k": 1e9, "p": 1.5},
@@ -174,9 +163,14 @@ def test_restitution_speed_with_no_damping_is_not_said_to_belong_to_universal():
         scene_from_dict(data, "my.toml")
     msg = str(info.value)
     assert_true(
-        "belongs to law = 'universal'" not in msg,
+        "belongs to law = 'universal'" not in msg
+        and "takes no restitution" in msg
+        and all(
+            law in msg for law in ("linear", "power", "polynomial", "viscoelastic", "hunt-crossley")
+        ),
         got=msg,
-        should="a reason that does not point to the universal law (which refuses it too)",
+        should="'none' takes no restitution; the speed-dependent laws take restitution_speed "
+        "(not the universal law, which refuses it too)",
         claim=CLAIM,
         call="scene_from_dict(law = 'none', restitution_speed = 0.5)",
     )

@@ -6,6 +6,7 @@ Private to the scenes package (`_scene.scene_from_dict` calls `_damping` and
 from __future__ import annotations
 
 import math
+import sys
 
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes._fields import _keys, _number, _string, _table, _Where
@@ -89,9 +90,15 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
     ``restitution`` (and ``restitution_speed``) the law is at unit strength and the request
     says what to solve its strength for (`_solve_strength`)."""
     only_universal = [k for k in ("zeta", "C0", "K", "M") if k in table]
-    if law == "none":
-        only_universal += [k for k in ("restitution", "restitution_end", "restitution_speed")
-                           if k in table]  # fmt: skip
+    asked_keys = [k for k in ("restitution", "restitution_end", "restitution_speed") if k in table]
+    if law == "none" and asked_keys and not only_universal:
+        # not 'universal' only: restitution_speed belongs to the speed-dependent laws
+        raise err(
+            f"damping.{asked_keys[0]}: law = 'none' takes no restitution (no damping, e = 1); "
+            "for a restitution choose law = 'universal' (restitution, optional "
+            f"restitution_end) or a speed-dependent law ({', '.join(STRENGTH)}: restitution "
+            "with restitution_speed), or remove it"
+        )
     if only_universal:
         raise err(
             f"damping.{only_universal[0]} belongs to law = 'universal', but damping.law is "
@@ -139,6 +146,7 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
 
 def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, request: dict):
     """(solved law, calibration record) of a restitution request (`law_for_restitution`)."""
+    _check_speed(err, potential, mass, request["restitution_speed"])
     try:
         solved, s = law_for_restitution(
             potential,
@@ -156,3 +164,24 @@ def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, reque
     if dlaw.name == "polynomial":
         record["scale"] = s
     return solved, record
+
+
+def _check_speed(err: _Where, potential, mass: float, v: float) -> None:
+    """Refuse a ``restitution_speed`` whose impact the exact solver cannot represent, in a
+    line naming it: m v^2 / 2 must be a positive normal float64 (the solvers' own check,
+    which would otherwise fail inside the strength search naming v0), and U must reach it."""
+    tiny, huge = sys.float_info.min, sys.float_info.max
+    energy = 0.5 * mass * v * v
+    if not (math.isfinite(energy) and energy >= tiny):
+        # the speeds whose energy is in range, for this mass (sqrt(2 huge) overflows: split)
+        v_lo = math.sqrt(2.0 / mass) * math.sqrt(tiny)
+        v_hi = math.sqrt(2.0 / mass) * math.sqrt(huge)
+        raise err(
+            f"damping.restitution_speed = {v!r}: the kinetic energy m v^2 / 2 = {energy!r} J "
+            f"(m = {mass!r} kg) must be a positive normal float64 in [{tiny:.3g}, {huge:.3g}] J, "
+            f"i.e. {v_lo:.3g} < v < {v_hi:.3g} m/s; rescale the units (e.g. mm, g, ms)"
+        )
+    try:
+        potential.turning_point(energy)
+    except HCVInputError as exc:
+        raise err(f"damping.restitution_speed = {v!r} m/s (E = {energy:.6g} J): {exc}") from None
