@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from reference_impl.errors import SceneError
 from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.scenes import parse_scene, scene_from_dict
+from reference_impl.scenes import load_scene, parse_scene, scene_from_dict
 
 from .assertions import assert_true
 from .strategies import log_uniform
@@ -173,4 +173,33 @@ def test_restitution_speed_with_no_damping_is_not_said_to_belong_to_universal():
         "(not the universal law, which refuses it too)",
         claim=CLAIM,
         call="scene_from_dict(law = 'none', restitution_speed = 0.5)",
+    )
+
+
+def test_hcv_scenes_show_prints_the_solved_strength_after_the_toml(tmp_path):
+    # docs/benchmarking.md: the solved strength is printed by `hcv scenes --show`; on main
+    # it echoed the TOML only. The line is a TOML comment: the output loads back.
+    f = tmp_path / "hc.toml"
+    f.write_text(
+        'name = "hc"\nmass = 0.01\nvelocities = [0.5, 1.0]\n[potential]\nfamily = "power"\n'
+        'k = 1e9\np = 1.5\n[damping]\nlaw = "hunt-crossley"\nrestitution = 0.7\n'
+        "restitution_speed = 0.5\n"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-m", "reference_impl.cli", "scenes", "--show", str(f)]
+    r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    alpha = load_scene(str(f)).law.params["alpha"]
+    want = f"# solved: alpha = {alpha:.6g} s/m (e = 0.7 at 0.5 m/s, overlap end)"
+    last = r.stdout.splitlines()[-1] if r.stdout else ""
+    back = parse_scene(r.stdout, "shown") if r.returncode == 0 else None
+    assert_true(
+        r.returncode == 0
+        and r.stdout.startswith(f.read_text())
+        and last == want
+        and back is not None
+        and back.law.params["alpha"] == alpha,
+        got=f"exit {r.returncode}; last line {last!r}; {r.stderr[-200:]}",
+        should=f"the TOML, then {want!r}, loading back as the same scene",
+        claim=CLAIM,
+        call="hcv scenes --show hc.toml",
     )

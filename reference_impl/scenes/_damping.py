@@ -94,7 +94,7 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
     if law == "none" and asked_keys and not only_universal:
         # not 'universal' only: restitution_speed belongs to the speed-dependent laws
         raise err(
-            f"damping.{asked_keys[0]}: law = 'none' takes no restitution (no damping, e = 1); "
+            f"damping.{asked_keys[0]}: damping.law is 'none', which takes no restitution (e = 1); "
             "for a restitution choose law = 'universal' (restitution, optional "
             f"restitution_end) or a speed-dependent law ({', '.join(STRENGTH)}: restitution "
             "with restitution_speed), or remove it"

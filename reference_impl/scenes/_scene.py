@@ -46,9 +46,18 @@ from reference_impl.scenes._fields import (
     _table,
     _Where,
 )
+from reference_impl.scenes._law_restitution import strength_text
 from reference_impl.theory.laws import DampingLaw
 
-__all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
+__all__ = [
+    "Scene",
+    "load_scene",
+    "parse_scene",
+    "scene_from_dict",
+    "embedded_scenes",
+    "scene_show",
+    "scene_toml",
+]
 
 # A scene is a few lines; refusing anything larger keeps a wrong path (a log,
 # a binary) from being read whole into memory.
@@ -419,6 +428,25 @@ def scene_toml(path_or_name: str | os.PathLike) -> str:
     raises `SceneError` with one line.
     """
     load_scene(path_or_name)
+    return _toml_text(path_or_name)
+
+
+def scene_show(path_or_name: str | os.PathLike) -> str:
+    """What ``hcv scenes --show`` prints: the scene's TOML (`scene_toml`) and, for a law
+    whose strength was solved from ``restitution`` at ``restitution_speed``, a last
+    comment line ``# solved: alpha = ... s/m (e = ... at ... m/s, ... end)`` (still
+    valid TOML: the output loads back as the same scene).
+    """
+    scene = load_scene(path_or_name)
+    text = _toml_text(path_or_name)
+    if scene.calibration is None:
+        return text
+    sep = "" if text.endswith("\n") or not text else "\n"
+    return f"{text}{sep}# solved: {strength_text(scene.law, scene.calibration)}\n"
+
+
+def _toml_text(path_or_name: str | os.PathLike) -> str:
+    """The file's (or the catalogue scene's) text, as it is (loaded already)."""
     text_arg = os.fspath(path_or_name)
     if text_arg in embedded_scenes() and not Path(text_arg).is_file():
         return (resources.files(__package__) / f"{text_arg}.toml").read_text(encoding="utf-8")
