@@ -203,3 +203,64 @@ def test_hcv_scenes_show_prints_the_solved_strength_after_the_toml(tmp_path):
         claim=CLAIM,
         call="hcv scenes --show hc.toml",
     )
+
+
+# --- F11: a law that is the universal law (C constant on Hooke, or C = 0) says so ---
+
+
+def _scene(family, law):
+    return scene_from_dict(
+        {"name": "s", "mass": 0.01, "velocities": [0.5],
+         "potential": family, "damping": law}, "my.toml",
+    )  # fmt: skip
+
+
+HOOKE = {"family": "power", "k": 2e5, "p": 1.0}
+HERTZ = {"family": "power", "k": 1e9, "p": 1.5}
+
+
+@pytest.mark.parametrize(
+    "law",
+    [{"law": "linear", "c": 10.0}, {"law": "power", "c": 10.0, "exponent": 0.0},
+     {"law": "polynomial", "c": [10.0, 0.0]}, {"law": "viscoelastic", "A": 10.0 / 2e5},
+     {"law": "linear", "restitution": 0.7, "restitution_speed": 0.5}],
+)  # fmt: skip
+def test_a_constant_law_on_hooke_is_the_universal_law_at_its_zeta(law):
+    from reference_impl.exact.solve import solve_impact
+
+    sc = _scene(HOOKE, law)
+    zeta = sc.equivalent_universal_zeta
+    # C = c on U = k q^2 / 2 is 2 zeta sqrt(m k): the two exact solutions agree to round-off
+    # (each ~1e-14; 1e-12 leaves room for the two closed forms' different rounding).
+    got = solve_law_impact(sc.potential, sc.mass, 0.5, sc.law).restitution if zeta else None
+    want = solve_impact(sc.potential, sc.mass, 0.5, zeta).restitution if zeta else None
+    assert_true(
+        zeta is not None and zeta > 0 and abs(got - want) <= 1e-12,
+        got=f"zeta {zeta}; e(law) {got}, e(universal) {want}",
+        should="zeta = c / (2 sqrt(m k)) whose universal e is the law's",
+        claim=CLAIM,
+        call=f"Scene(Hooke, {law}).equivalent_universal_zeta",
+    )
+
+
+@pytest.mark.parametrize(
+    ("family", "law", "want"),
+    [(HERTZ, {"law": "hunt-crossley", "restitution": 1.0, "restitution_speed": 0.5}, 0.0),
+     (HOOKE, {"law": "linear", "restitution": 1.0, "restitution_speed": 0.5}, 0.0),
+     (HOOKE, {"law": "none"}, 0.0),
+     (HOOKE, {"law": "universal", "zeta": 0.2}, 0.2),
+     (HOOKE, {"law": "hunt-crossley", "alpha": 0.1}, None),
+     (HOOKE, {"law": "power", "c": 10.0, "exponent": 0.5}, None),
+     (HOOKE, {"law": "polynomial", "c": [10.0, 5.0]}, None),
+     (HERTZ, {"law": "linear", "c": 10.0}, None),
+     (HERTZ, {"law": "viscoelastic", "A": 1e-6}, None)],
+)  # fmt: skip
+def test_equivalent_universal_zeta_of_other_laws(family, law, want):
+    got = _scene(family, law).equivalent_universal_zeta
+    assert_true(
+        got == want,
+        got=repr(got),
+        should=repr(want),
+        claim=CLAIM,
+        call=f"Scene({family}, {law}).equivalent_universal_zeta",
+    )

@@ -9,6 +9,7 @@ import math
 import sys
 
 from reference_impl.errors import HCVInputError
+from reference_impl.potentials import PowerLaw
 from reference_impl.scenes._fields import _keys, _number, _string, _table, _Where
 from reference_impl.scenes._law_restitution import STRENGTH, law_for_restitution
 from reference_impl.theory.damping import zeta_from_restitution
@@ -185,3 +186,29 @@ def _check_speed(err: _Where, potential, mass: float, v: float) -> None:
         potential.turning_point(energy)
     except HCVInputError as exc:
         raise err(f"damping.restitution_speed = {v!r} m/s (E = {energy:.6g} J): {exc}") from None
+
+
+def _universal_zeta(potential, mass: float, law: DampingLaw) -> float | None:
+    """The zeta of the universal law whose C(q) is this law's, or None when none is.
+
+    C(q) = 0 (law 'none', or a law at strength 0, e.g. solved for e = 1) is the universal
+    law at zeta = 0. On a Hooke potential (family power, p = 1: U = k q^2 / 2) the universal
+    C = 2 zeta sqrt(m) U' / sqrt(2 U) = 2 zeta sqrt(m k) is a constant, so a law whose C is
+    the constant c (linear c; power with exponent 0; a polynomial [c0]; viscoelastic
+    A U'' = A k) is the universal law at zeta = c / (2 sqrt(m k)), exactly. Other potentials
+    (a sum or an expression that happens to be Hooke included) are not recognised.
+    """
+    if law.name == "universal":
+        return law.zeta
+    if law.is_zero():
+        return 0.0
+    if type(potential) is not PowerLaw or potential.p != 1.0:
+        return None
+    k = potential.k
+    if law.name == "viscoelastic":
+        c = law.A * k
+    elif law.terms() and all(e == 0.0 for _, e in law.terms()):
+        c = sum(c for c, _ in law.terms())
+    else:
+        return None
+    return c / (2.0 * math.sqrt(mass * k))

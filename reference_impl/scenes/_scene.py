@@ -37,7 +37,7 @@ from typing import Any
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
 from reference_impl.scenes._catalogue import embedded_scenes
-from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength
+from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength, _universal_zeta
 from reference_impl.scenes._fields import (
     _keys,
     _number,
@@ -137,6 +137,19 @@ class Scene:
             else:
                 law = DampingLaw("none")
             object.__setattr__(self, "law", law)
+
+    @property
+    def equivalent_universal_zeta(self) -> float | None:
+        """The damping ratio of the universal law (Theorem 3) with the same C(q) as this
+        scene's law, or None when no universal law has it.
+
+        0 for no damping or a law at strength 0 (e.g. solved for ``restitution = 1``);
+        on a Hooke potential (``family = "power"``, ``p = 1``) a constant C = c (``linear``;
+        ``power`` with exponent 0; ``polynomial`` [c0]; ``viscoelastic`` A k) is the
+        universal law at zeta = c / (2 sqrt(m k)). A code that integrates only the universal
+        law runs such a scene exactly at this zeta.
+        """
+        return _universal_zeta(self.potential, self.mass, self.law)
 
     def to_dict(self) -> dict[str, Any]:
         """The scene in the schema of the TOML file, plus ``source`` (JSON-safe).
