@@ -19,6 +19,7 @@ scene is read. Here:
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -176,6 +177,45 @@ def test_every_builtin_adapter_declines_a_law_it_does_not_integrate(name):
         should="every variant declines in one line naming the 'hunt-crossley' law",
         claim=CLAIM,
         call=f"{name}.variants()[i].supports(hunt-crossley scene)",
+    )
+
+
+# A linear dashpot on Hooke is the universal law at zeta = c / (2 sqrt(m k)) (constant C);
+# so is any law at strength 0 (e = 1 asked): codes that map the universal law run them.
+_LINEAR_HOOKE = {
+    **_HC, "name": "linear-hooke",
+    "damping": {"law": "linear", "restitution": 0.7, "restitution_speed": 0.5},
+}  # fmt: skip
+_UNDAMPED_LAW = {
+    **_HC, "name": "hc-e1",
+    "damping": {"law": "hunt-crossley", "restitution": 1.0, "restitution_speed": 0.5},
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", _BUILTINS)
+def test_a_law_equal_to_the_universal_one_is_sent_as_universal_and_not_declined(name):
+    sc = scene_from_dict(_LINEAR_HOOKE)
+    ascene = AdapterScene.from_scene(sc, 0.5, 1e-6, 100)
+    undamped = AdapterScene.from_scene(scene_from_dict(_UNDAMPED_LAW), 0.5, 1e-6, 100)
+    c = sc.law.to_dict()["c"]
+    zeta = c / (2.0 * math.sqrt(0.01 * 2.0e5))
+    declined = {
+        v.label: r
+        for s in (ascene, undamped)
+        for v in get_adapter(name).variants()
+        if (r := v.supports(s)) and ("'linear'" in r or "'hunt-crossley'" in r)
+    }
+    assert_true(
+        ascene.damping == "universal"
+        and ascene.zeta == pytest.approx(zeta, rel=1e-15)  # one rounding of c/(2 sqrt(mk))
+        and ascene.restitution_asked == pytest.approx(0.7, rel=1e-12)  # solver's rtol
+        and undamped.damping == "none"
+        and not declined,
+        got=f"{ascene.damping} zeta {ascene.zeta} e {ascene.restitution_asked}; "
+        f"undamped sent as {undamped.damping}; declined {declined}",
+        should=f"universal, zeta {zeta}, e 0.7; 'none'; no variant declining by law name",
+        claim=CLAIM,
+        call=f"AdapterScene.from_scene(linear on Hooke) -> {name}.supports",
     )
 
 

@@ -221,6 +221,12 @@ class AdapterScene:
         law = scene.law.to_dict() if scene.law is not None else {"law": "none"}
         name = scene.damping_law
         zeta = float(scene.zeta or 0.0) if name == "universal" else 0.0
+        eq = getattr(scene, "equivalent_universal_zeta", None)
+        if name not in ("none", "universal") and eq is not None:
+            # The scene's law is the universal law at zeta = eq (a constant C on Hooke, or
+            # a law at strength 0): sent as such, so a code that maps only the universal
+            # law runs it instead of declining (`Scene.equivalent_universal_zeta`).
+            name, zeta, law = "universal", float(eq), {"law": "universal", "zeta": float(eq)}
         if name == "universal" and zeta == 0.0:
             name, law = "none", {"law": "none"}
         end = getattr(scene, "restitution_end", "overlap")
