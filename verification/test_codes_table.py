@@ -212,3 +212,32 @@ def test_liggghts_limit_force_delivers_its_own_e_for_e_typed():
     # up to the text output's round-off (LIGGGHTS prints 17 significant digits)
     assert_close(row.delivered, want, rtol=1e-12, claim=CLAIM, call=f"{spec}, e = 0.5 typed")
     assert row.variant == "liggghts[hertz,wall,limit_force]", row.variant
+
+
+def test_calibration_table_keeps_the_other_inputs_as_typed(monkeypatch):
+    """`calibration_table` searches one option, which the adapters take over their own
+    mapping of e; the code's other e input is typed as is: YADE ViscElMat's tc is the
+    one of the asked e (as in the committed table), not the adapter's mapping of e at
+    the zero-force end. Checked on the specs the search is given, no code run."""
+    from reference_impl.adapters.registry import parse_spec
+    from reference_impl.bench import codes as bc
+    from reference_impl.errors import HCVInputError
+
+    seen: list[str] = []
+
+    def refuse(spec, scene, **kw):
+        seen.append(spec)
+        raise HCVInputError("not run here")
+
+    monkeypatch.setattr(bc, "calibrate", refuse)
+    rows = bc.calibration_table(asked=(0.5,))
+    assert len(seen) == len(bc.CALIBRATED) == len(rows), seen
+    for (_code, spec, _p, param, *_), run in zip(bc.CALIBRATED, seen, strict=True):
+        opts = parse_spec(run)[1]
+        assert param not in opts, f"got {run}, should leave {param} to the search [{CLAIM}]"
+        if spec == "yade[input=tc,geometry=wall]":
+            tc = math.sqrt((math.pi**2 + math.log(0.5) ** 2) * bc.MASS / bc.HOOKE_K)
+            assert_close(opts.get("tc", math.nan), tc, rtol=0.0, claim=CLAIM,
+                         call=f"{run}: YADE tc of e = 0.5 as typed")  # fmt: skip
+        else:
+            assert run == spec, f"got {run}, should be {spec} unchanged [{CLAIM}]"

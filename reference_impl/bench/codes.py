@@ -145,7 +145,7 @@ def _typed_options(spec: str, e: float, p: float) -> dict:
     return {key: float(v) for key, v in typed.items() if key not in opts}
 
 
-def typed_spec(spec: str, e: float, p: float) -> tuple[str, str]:
+def typed_spec(spec: str, e: float, p: float, keep: str | None = None) -> tuple[str, str]:
     """``spec`` with the code's own e input set to ``e`` as a user types it.
 
     Parameters
@@ -158,6 +158,8 @@ def typed_spec(spec: str, e: float, p: float) -> tuple[str, str]:
     p : float
         Exponent of the scene's power law (1.5 Hertz, 1 Hooke): YADE ViscElMat's tc and
         cn need its k.
+    keep : str, optional
+        An option left out (the one `calibration_table` searches).
 
     Returns
     -------
@@ -165,7 +167,7 @@ def typed_spec(spec: str, e: float, p: float) -> tuple[str, str]:
         The spec to run and the options added (``,key=value`` as adapters' labels
         write them, removed from the row's variant name).
     """
-    typed = _typed_options(spec, e, p)
+    typed = {k: v for k, v in _typed_options(spec, e, p).items() if k != keep}
     if not typed:
         return spec, ""
     added = "".join(f",{key}={v!r}" for key, v in typed.items())
@@ -263,7 +265,9 @@ def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 20
     adapter's ``calibration_range`` unless given. Returns dicts with the code,
     variant, option, asked e, and either the value found
     (``found``, ``value``) or the span the code delivers over the option's range
-    (``delivered``: "out of reach"), and the calibration's one-line ``message``.
+    (``delivered``: "out of reach"), and the calibration's one-line ``message``. The
+    searched option overrides the adapter's mapping of e; the code's other e inputs are
+    typed as is (`typed_spec`: YADE ViscElMat's tc of the asked e).
     """
 
     rows = []
@@ -281,8 +285,11 @@ def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 20
                 }
             )
             row = {"code": code, "variant": spec, "option": param, "asked": e}
+            # the code's other e inputs as typed (YADE tc's contact time): only ``param``
+            # is searched, and the adapter's own mapping of e must not move the rest
+            run, _ = typed_spec(spec, e, p, keep=param)
             try:
-                res = calibrate(spec, scene, param=param, target=e, bracket=bracket[0] if bracket else None,
+                res = calibrate(run, scene, param=param, target=e, bracket=bracket[0] if bracket else None,
                                 steps_per_contact=steps_per_contact, timeout=_TIMEOUT)  # fmt: skip
             except HCVInputError as exc:  # not installed, or declined
                 row.update(found=False, error=str(exc))
