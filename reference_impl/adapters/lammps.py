@@ -58,7 +58,9 @@ a constant: for hooke with velocity / mass_velocity, C = 2 zeta_a sqrt(m k) (exa
 the universal law of p = 1); otherwise C is calibrated so that the exact restitution
 of the damped ODE at that end is the asked e at the scene's middle speed (other
 speeds then show the v0-dependence that Theorem 3 predicts), unless ``eta_n0`` is
-given.
+given. The ``restitution`` option bypasses all this for tsuji and coeff_restitution:
+its e is written into ``pair_coeff`` as is (what a user types; what ``hcv calibrate
+lammps[...] --param restitution`` searches).
 
 The total normal force may pull at the end of contact (LAMMPS does not clip it)
 unless ``limit_damping`` is set, which sets a negative total normal force to 0.
@@ -110,6 +112,7 @@ __all__ = [
 ]
 
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
+_E_MODELS = ("tsuji", "coeff_restitution")  # the models whose pair_coeff input is an e
 GEOMETRIES = ("wall", "pair")
 # LAMMPS version (YYYYMMDD) from which tsuji's alpha carries the sqrt(2) factor.
 _TSUJI_SQRT2_SINCE = 20260902
@@ -222,6 +225,9 @@ class LammpsAdapter(ContactAdapter):
     eta_n0 : float, optional
         Fixed damping coefficient for velocity / mass_velocity / viscoelastic
         (instead of the calibration).
+    restitution : float, optional
+        The e written into ``pair_coeff`` as is for tsuji and coeff_restitution
+        (0 < e <= 1), instead of the one mapped from the scene.
     """
 
     name = "lammps"
@@ -235,6 +241,7 @@ class LammpsAdapter(ContactAdapter):
         limit_damping: bool = False,
         radius: float | None = None,
         eta_n0: float | None = None,
+        restitution: float | None = None,
     ):
         reason = lammps_available()
         if reason:
@@ -246,6 +253,17 @@ class LammpsAdapter(ContactAdapter):
         self.limit_damping = bool(limit_damping)
         self.radius = positive_option("lammps", "radius", radius)
         self.eta_n0 = positive_option("lammps", "eta_n0", eta_n0, allow_zero=True)
+        self.restitution = positive_option("lammps", "restitution", restitution)
+        if self.restitution is not None and self.restitution > 1.0:
+            raise HCVInputError(
+                f"adapter lammps: restitution must be in (0, 1], got {restitution!r}"
+            )
+        other = [d for d in self.models if d not in _E_MODELS]
+        if self.restitution is not None and other:
+            raise HCVInputError(
+                f"adapter lammps: restitution is an input of {' and '.join(_E_MODELS)} only, "
+                f"not of damping {other[0]!r} (give damping=tsuji or coeff_restitution)"
+            )
         self._lmp = None
         self._version = None
         self._maps: dict = {}
@@ -260,12 +278,24 @@ class LammpsAdapter(ContactAdapter):
         if not self.single:
             return "lammps"
         extra = ",limit_damping" if self.limit_damping else ""
+        if self.restitution is not None:
+            extra += f",restitution={self.restitution!r}"
         return f"lammps[{self.models[0]},{self.geoms[0]}{extra}]"
+
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Search range of ``hcv calibrate``: the e of tsuji and coeff_restitution."""
+        return (1e-3, 1.0) if param == "restitution" else None
 
     def variants(self) -> list[ContactAdapter]:
         if self.single:
             return [self]
-        kw = dict(limit_damping=self.limit_damping, radius=self.radius, eta_n0=self.eta_n0)
+        kw = dict(
+            limit_damping=self.limit_damping,
+            radius=self.radius,
+            eta_n0=self.eta_n0,
+            restitution=self.restitution,
+        )
         out: list[ContactAdapter] = [
             LammpsAdapter(damping=d, geometry=g, **kw) for g in self.geoms for d in self.models
         ]
@@ -277,6 +307,7 @@ class LammpsAdapter(ContactAdapter):
                     geometry="wall",
                     limit_damping=True,
                     radius=self.radius,
+                    restitution=self.restitution,
                 )
             )
         return out
@@ -347,8 +378,12 @@ class LammpsAdapter(ContactAdapter):
         }
         asked = f"asked e = {scene.restitution_asked:.6g} at the {end} end"
         if model in ("tsuji", "coeff_restitution"):
+            if self.restitution is not None:  # written as is (what a user types)
+                asked = f"given e = {self.restitution:.6g}"
             if model == "tsuji":
-                e = _tsuji_input(zeta_t, p, self.version)
+                e = self.restitution
+                if e is None:
+                    e = _tsuji_input(zeta_t, p, self.version)
                 alpha = tsuji_alpha(e, self.version)
                 zeta = alpha / math.sqrt(2.0 * (p + 1.0))
                 desc = (
@@ -356,7 +391,9 @@ class LammpsAdapter(ContactAdapter):
                     f"zeta = {zeta:.6g}"
                 )
             else:
-                e = restitution_from_zeta(zeta_t) if zeta_t else 1.0
+                e = self.restitution
+                if e is None:
+                    e = restitution_from_zeta(zeta_t) if zeta_t else 1.0
                 zeta = _zeta_linear(e) if e < 1.0 else 0.0
                 desc = f"coeff_restitution e = {e:.6g} ({asked}): universal law, zeta = {zeta:.6g}"
             lam["coef"] = float(e)

@@ -198,9 +198,12 @@ class YadeAdapter(ContactAdapter):
         run (~3 s each), as a one-shot ``cmd:`` adapter does: for comparison.
     en, betan, cn : float, optional
         The damping input written instead of the one mapped from the scene: ``en``
-        for inputs en and tc (tc stays the one of the asked e), ``betan`` for input
+        for inputs en and tc (tc the one of the asked e unless given), ``betan`` for input
         betan, ``cn`` (per material, N s/m) for input kn. What ``hcv calibrate
         yade[...] --param en|betan|cn`` searches.
+    tc : float, optional
+        Contact time (s) written for input tc instead of the one of the asked e (with
+        ``en``: the pair a user types for an e of their own).
 
     Without options the variants are every input on the wall, and en and tc
     between two spheres.
@@ -222,6 +225,7 @@ class YadeAdapter(ContactAdapter):
         en: float | None = None,
         betan: float | None = None,
         cn: float | None = None,
+        tc: float | None = None,
     ):
         reason = yade_available()
         if reason:
@@ -240,6 +244,7 @@ class YadeAdapter(ContactAdapter):
             ("en", en, lambda x: 0.0 < x <= 1.0),
             ("betan", betan, lambda x: x >= 0.0),
             ("cn", cn, lambda x: x >= 0.0),
+            ("tc", tc, lambda x: math.isfinite(x) and x > 0.0),
         ):
             if val is None:
                 continue
@@ -248,10 +253,11 @@ class YadeAdapter(ContactAdapter):
             self.given[key] = float(val)
         if self.given and len(self.inputs) > 1:
             raise HCVInputError(
-                "adapter yade: en, betan and cn need one input (e.g. yade[en,wall,en=0.5])"
+                "adapter yade: en, betan, cn and tc need one input (e.g. yade[en,wall,en=0.5])"
             )
         if self.given:
-            used = {"en": {"en"}, "tc": {"en"}, "betan": {"betan"}, "kn": {"cn"}}[self.inputs[0]]
+            used = {"en": {"en"}, "tc": {"en", "tc"}, "betan": {"betan"}, "kn": {"cn"}}
+            used = used[self.inputs[0]]
             unused = sorted(set(self.given) - used)
             if unused:
                 raise HCVInputError(
@@ -371,7 +377,7 @@ class YadeAdapter(ContactAdapter):
             e_user = _user_en(scene)
             e = self.given.get("en", e_user)
             la = math.log(e_user) if e_user > 0 else 0.0
-            tc = math.sqrt((math.pi**2 + la * la) * m / pot.k)  # the user's tc for k
+            tc = self.given.get("tc", math.sqrt((math.pi**2 + la * la) * m / pot.k))  # user's
             le = math.log(e)
             sc.update(law="viscel", material={"tc": tc, "en": float(e), "et": float(e)})
             mass_r = m / 2.0 if geom == "wall" else m  # the wall's 0 mass -> the sphere's
