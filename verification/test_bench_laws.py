@@ -274,14 +274,6 @@ class _Overdamped(ContactAdapter):
         return self._law(scene)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=ValueError,
-    reason="h-review: a code declaring an overdamped law of the table (linear, zeta 1.3 on "
-    "Hooke) stops run_bench with 'ValueError: cannot convert float NaN to integer' in "
-    "_SceneRun.budget (the speed table's t_c is the declared law's contact time, NaN when "
-    "it never returns): hcv bench prints a traceback, exit 1, no scorecard",
-)
 def test_a_code_declaring_an_overdamped_law_gets_a_scorecard():
     scene = {**_HC, "name": "linear-e-0.004"}
     scene["damping"] = {"law": "linear", "restitution": 0.004, "restitution_speed": 0.5}

@@ -311,6 +311,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         else:
             out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
         out["restitution_zero_force"] = sol.restitution_zero_force if zeta > 0 else 1.0
+        out["contact_time_zero_force"] = sol.contact_time_zero_force if zeta > 0 else math.inf
         out["peak_force"] = exact_peak_force(law, v0, lambda: sol.peak_force)
         out["zeta"] = zeta
         if timing:
@@ -325,6 +326,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         out["max_penetration"] = sol.max_penetration
         out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
         out["restitution_zero_force"] = sol.restitution_zero_force
+        out["contact_time_zero_force"] = sol.contact_time_zero_force
         out["peak_force"] = sol.peak_force
         if timing:
             out["seconds"] = _time(lambda: solve_law_impact(pot, m, v0, dl))
@@ -341,6 +343,7 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         else:
             out["restitution"], out["contact_time"] = res.restitution, res.contact_time
         out["restitution_zero_force"] = res.restitution_zero_force
+        out["contact_time_zero_force"] = res.t_zero_force
         out["peak_force"] = exact_peak_force(law, v0)
         if timing:
             out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
