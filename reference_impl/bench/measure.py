@@ -112,6 +112,11 @@ def measure(tr: Trajectory, v0: float) -> dict:
     out["tensile"] = float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan
     if not after.size:
         out["reason"] = f"did not separate within {q.size - 1} steps"
+        # an overdamped law never returns to q = 0, but its force vanishes in finite
+        # time: the zero-force end is measured when the run got there
+        e_zf = _restitution_zero_force(q, v, f, q.size - 1, v0, separated=False)
+        if math.isfinite(e_zf):
+            out["restitution_zero_force"] = e_zf
         return out
     j = end
     out["separated"] = True
@@ -124,22 +129,24 @@ def measure(tr: Trajectory, v0: float) -> dict:
     return out
 
 
-def _restitution_zero_force(q, v, f, end: int, v0: float) -> float:
+def _restitution_zero_force(q, v, f, end: int, v0: float, separated: bool = True) -> float:
     """-v / v0 where the total force first vanishes after the deepest overlap.
 
     The first sample from the peak on with force <= 0 (the out-of-contact sample
     ``end`` has force 0, so a code whose force never pulls ends there and both ends
     coincide); v is interpolated linearly in the force between that sample and the
     one before. NaN when a force sample on the way is not finite (lagged force whose
-    aligned value is unknown).
+    aligned value is unknown), or, for a run that did not separate (``end`` its last
+    sample, still in contact), when the force has not vanished by then.
     """
     peak = int(np.argmax(q[:end]))
-    seg = f[peak : end + 1]
-    if not np.all(np.isfinite(seg[:-1])):
+    # a separated run's sample ``end`` is out of contact (force 0 by convention): left out
+    seg = f[peak:end] if separated else f[peak : end + 1]
+    if not np.all(np.isfinite(seg)):
         return math.nan
-    hit = np.nonzero(seg[:-1] <= 0.0)[0]
+    hit = np.nonzero(seg <= 0.0)[0]
     if not hit.size:
-        return float(-v[end] / v0)
+        return float(-v[end] / v0) if separated else math.nan
     i = peak + int(hit[0])
     if i == 0 or f[i - 1] <= 0.0:
         return float(-v[i] / v0)

@@ -270,6 +270,19 @@ class ContactTimeAsked(_Delivered):
     unit = " s"
     description = "contact duration against the scene's own law solved exactly"
 
+    def applies(self, ctx):
+        base = super().applies(ctx)
+        if base:
+            return base
+        for rec in ctx.speeds:
+            asked = (rec.asked or {}).get("contact_time")
+            if isinstance(asked, float) and math.isinf(asked):
+                return (
+                    f"the scene's law never returns to q = 0 at v0 = {rec.v0:g} m/s "
+                    "(overdamped): no contact time is asked"
+                )
+        return None
+
 
 class PeakForceAsked(_Delivered):
     name = key = "peak_force_asked"

@@ -130,9 +130,11 @@ class _SceneRun:
         return out
 
     def asked(self, v0: float):
-        """Exact solution of the scene's own law (ours): `_Ours` when it fails. The
-        harmonic map for the universal law (or none), else the general-law reference
-        (`reference_impl.exact.general_law`, ~1e-14), with the law's solved parameters."""
+        """Exact solution of the scene's own law and the contact time (s) the step is
+        taken from (`_horizon`: the zero-force end's when the law is overdamped): `_Ours`
+        when it fails. The harmonic map for the universal law (or none), else the
+        general-law reference (`reference_impl.exact.general_law`, ~1e-14), with the
+        law's solved parameters."""
         sc = self.scene
         try:
             if sc.damping_law in ("none", "universal"):
@@ -141,16 +143,18 @@ class _SceneRun:
                 from reference_impl.exact.general_law import solve_law_impact
 
                 sol = solve_law_impact(sc.potential, sc.mass, v0, sc.law)
-            t_c = float(sol.contact_time)
+            t_c = _horizon(float(sol.contact_time), float(sol.contact_time_zero_force))
         except Exception as exc:
             raise _Ours(
                 f"exact solution of the scene at v0 = {v0:g} m/s failed: {_one_line(exc)}"
             ) from None
-        if not (math.isfinite(t_c) and t_c > 0):
+        if t_c is None:
             raise _Ours(
-                f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time {t_c!r}"
+                f"exact solution of the scene at v0 = {v0:g} m/s gave no finite contact time "
+                f"(overlap end {sol.contact_time!r} s, zero-force end "
+                f"{sol.contact_time_zero_force!r} s)"
             )
-        return sol
+        return sol, t_c
 
     def asked_values(self, sol, v0: float) -> dict:
         """What the scene asks at one speed (the delivery metrics' references): the
@@ -177,8 +181,7 @@ class _SceneRun:
 
     def impact_speed(self, v0: float) -> SpeedRecord:
         spc = self.tol["run"]["steps_per_contact"]
-        sol = self.asked(v0)
-        t_c = sol.contact_time
+        sol, t_c = self.asked(v0)
         dt = t_c / spc
         ascene = AdapterScene.from_scene(self.scene, v0, dt, self.budget(dt, t_c))
         asked = self.asked_values(sol, v0)
@@ -355,7 +358,7 @@ class _SceneRun:
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
         v0 = sc.velocities[0]
-        t_c = self.asked(v0).contact_time
+        t_c = self.asked(v0)[1]
         dt = t_c / self.tol["run"]["steps_per_contact"]
         n = int(self.tol["run"]["sustained_steps"])
         ascene = AdapterScene.from_scene(sc, v0, dt, n)
