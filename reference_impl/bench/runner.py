@@ -86,6 +86,11 @@ __all__ = [
 ]
 
 
+# Prefix of the reason a declined scene is skipped with (`SceneContext.skipped`), whoever
+# declines: a built-in adapter's ``supports`` or a cmd: program's ``unsupported`` answer.
+_DECLINED = "declined by the code: "
+
+
 def _horizon(contact_time: float, contact_time_zero_force: float) -> float | None:
     """The contact time the step and the step budget are taken from (s), or None.
 
@@ -396,7 +401,7 @@ class _SceneRun:
                 ctx.speeds.append(self.impact_speed(v0))
             self.speed_table(rows)
         except _Declined as exc:
-            ctx.skipped, ctx.speeds, ctx.sustained = f"declined by the code: {exc}", [], None
+            ctx.skipped, ctx.speeds, ctx.sustained = f"{_DECLINED}{exc}", [], None
         except _Ours as exc:
             ctx.internal = str(exc)
         return ctx
@@ -438,9 +443,9 @@ def run_bench(
     Raises
     ------
     HCVInputError
-        Usage or configuration errors (unknown adapter, bad scene, bad tolerances,
-        an adapter that supports none of the scenes). Adapter *run* failures are
-        never raised: they are failed metrics.
+        Usage or configuration errors (unknown adapter, bad scene, bad tolerances). A
+        variant declining scenes (all of them, even) is no error: they are skipped with
+        the reason. Adapter *run* failures are never raised: they are failed metrics.
     """
 
     tol = load_tolerances(tolerances)
@@ -457,14 +462,11 @@ def run_bench(
     for var in variants:  # in-process adapters with their own timeout take the run's
         if getattr(var, "timeout_given", True) is False:
             var.timeout = float(tol["run"]["timeout"])
+    # a variant that declines a scene (``supports`` here, or an ``unsupported`` answer of a
+    # cmd: program during the run) is one rule: the scene is skipped with its reason, and
+    # a run that declined everything measured nothing (exit 1 with --gate, 0 without):
+    # valid input, never a usage error
     plan = plan_cells(variants, scene_list)
-    if all(reason for *_, reason in plan):
-        executor.close()
-        reasons = sorted({reason for *_, reason in plan})
-        raise HCVInputError(
-            f"adapter {spec!r} supports none of the scenes "
-            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}"
-        )
     result = BenchResult(
         adapter=spec,
         scenes=[s.name for s in scene_list],
@@ -492,7 +494,7 @@ def run_bench(
                     sc.kind,
                     scene_damped(sc),
                     speed_dependent_law(sc),
-                    skipped=reason,
+                    skipped=f"{_DECLINED}{reason}",
                 )
                 result.metrics.extend(
                     MetricResult(
@@ -500,7 +502,7 @@ def run_bench(
                         sc.name,
                         m.name,
                         "skip",
-                        explanation=f"scene not supported: {reason}",
+                        explanation=f"{_DECLINED}{reason}",
                         description=m.description,
                     )
                     for m in METRICS
