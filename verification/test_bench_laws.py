@@ -154,7 +154,7 @@ def test_a_correct_code_passes_both_verdicts_on_a_restitution_scene(data):
     assert_true(
         at_v["expected"] == pytest.approx(data["damping"]["restitution"], abs=1e-8)
         and e.model_error is not None
-        and e.model_error < 1e-9,
+        and abs(e.model_error) < 1e-9,
         got=f"asked {at_v['expected']!r}, model part {e.model_error!r}",
         should=f"asked {data['damping']['restitution']!r} (1e-8), model part 0",
         claim=CLAIM,
@@ -213,7 +213,7 @@ def test_mujoco_calibrates_to_the_zero_force_end_the_scene_asks():
     spec = "mujoco[timeconst,constant,Euler,zero-force]"
     e = _by(run_bench(spec, [scene_from_dict(data)]))["restitution_asked"]
     assert_true(
-        e.status == "pass" and e.model_error < 1e-9 and e.expected == pytest.approx(0.7),
+        e.status == "pass" and abs(e.model_error) < 1e-9 and e.expected == pytest.approx(0.7),
         got=f"{e.status}: measured {e.measured}, expected {e.expected}, model "
         f"{e.model_error}, step {e.step_error} ({e.explanation})",
         should="pass, expected 0.7, model part < 1e-9",

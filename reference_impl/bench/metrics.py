@@ -142,9 +142,10 @@ class _Delivered(Metric):
     The limit is the tolerance itself (``rtol`` of the metric's table): fixed and
     user-facing, never scaled by the step, because the user's question "do I get what
     I asked for" does not change with the step. The error |measured - asked| / asked is
-    split at every speed into a model part |declared - asked| / asked (the exact answer
-    of the law the code declares: step-free, fixed by recalibrating) and a step part
-    |measured - declared| / asked (the discretisation: fixed by refining the step).
+    split at every speed into a signed model part (declared - asked) / asked (the exact
+    answer of the law the code declares: step-free, fixed by recalibrating) and a signed
+    step part (measured - declared) / asked (the discretisation: fixed by refining the
+    step): error = |model + step|.
     """
 
     verdict = "delivery"
@@ -157,8 +158,8 @@ class _Delivered(Metric):
     def rule(self):
         return (
             f"|{self.label} - asked| / asked, every speed, <= rtol (fixed: never scaled by "
-            "the step); error = model (declared law's exact vs asked) + step (measured vs "
-            "declared law's exact)"
+            "the step); error = |model + step|, signed parts: model = (declared law's exact - "
+            "asked) / asked, step = (measured - declared law's exact) / asked"
         )
 
     def _keys(self, rec: SpeedRecord) -> tuple[str, str]:
@@ -190,8 +191,11 @@ class _Delivered(Metric):
                     "expected": asked,
                     "declared": declared,
                     "error": abs(got - asked) / asked,
-                    "model_error": abs(declared - asked) / asked,
-                    "step_error": abs(got - declared) / asked,
+                    # signed, so that model + step = (measured - asked) / asked exactly (up to
+                    # round-off) and |model + step| = error: opposite signs say the step
+                    # compensates the model
+                    "model_error": (declared - asked) / asked,
+                    "step_error": (got - declared) / asked,
                     "limit": max(base, atol / asked),
                 }
             )
@@ -230,8 +234,9 @@ class _Delivered(Metric):
     def _why(self, r, lim) -> str:
         u = self.unit
         split = (
-            f"; model {r['model_error']:.2g} (the declared law's exact answer is "
-            f"{r['declared']:.6g}{u}: recalibrate), step {r['step_error']:.2g} (refine the step)"
+            f"; model {r['model_error']:+.2g} (the declared law's exact answer is "
+            f"{r['declared']:.6g}{u}: recalibrate), step {r['step_error']:+.2g} (refine the "
+            "step)"
             if math.isfinite(r["declared"])
             else "; no exact answer of the declared law to split the error"
         )
@@ -252,8 +257,9 @@ class RestitutionAsked(_Delivered):
     def rule(self):
         return (
             "|restitution - asked| / asked, every speed, <= max(rtol, atol / asked) (fixed: "
-            "never scaled by the step; atol: the absolute floor of small e); error = model "
-            "(declared law's exact vs asked) + step (measured vs declared law's exact)"
+            "never scaled by the step; atol: the absolute floor of small e); error = "
+            "|model + step|, signed parts: model = (declared law's exact - asked) / asked, "
+            "step = (measured - declared law's exact) / asked"
         )
 
     def _keys(self, rec):

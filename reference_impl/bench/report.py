@@ -255,8 +255,9 @@ def _legend_lines(result, show_skipped: bool) -> list[str]:
         lines = [
             "rules (v0 in m/s; error is what the limit bounds; implementation: tolerance = "
             "base + factor x textbook Verlet's error at the same step; delivery: a fixed "
-            "tolerance, error = model part (declared law vs asked: recalibrate) + step part "
-            "(measured vs declared law: refine the step)):"
+            "tolerance, error = |model + step|, both signed: model = declared law's exact - "
+            "asked (recalibrate), step = measured - declared law's exact (refine the step), "
+            "over asked):"
         ] + lines
     if show_skipped:
         for m in result.metrics:
