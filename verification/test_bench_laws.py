@@ -286,3 +286,19 @@ def test_a_code_declaring_an_overdamped_law_gets_a_scorecard():
         claim=CLAIM,
         call="run_bench(overdamped linear code, linear e = 0.004 at 0.5 m/s)",
     )
+
+
+def test_the_restitution_tolerance_column_shows_the_limit_applied():
+    """rtol 0.02 with the absolute floor 0.005 at an asked e = 0.1: the limit on the
+    relative error is max(0.02, 0.005 / 0.1) = 0.05, printed in the row (not only the
+    two numbers it comes from) and stored as ``limit``."""
+    data = {**_UNIVERSAL, "name": "e-0.1", "velocities": [0.5]}
+    data["damping"] = {"law": "universal", "restitution": 0.1}
+    e = _by(run_bench(ReferenceAdapter(), [scene_from_dict(data)]))["restitution_asked"]
+    assert_true(
+        e.limit == pytest.approx(0.05, rel=1e-12) and e.tolerance.endswith("limit 0.05"),
+        got=f"limit {e.limit!r}, tolerance column {e.tolerance!r}",
+        should="limit 0.05 (max(0.02, 0.005 / 0.1)), the column ending 'limit 0.05'",
+        claim=CLAIM,
+        call="run_bench(reference, universal e = 0.1)",
+    )

@@ -228,7 +228,9 @@ class _Delivered(Metric):
             per_v0=[{k: v for k, v in r.items() if k != "rec"} for r in rows],
         )
         if atol:
-            res.with_tolerance(f"{self.field} {base:g}, atol {atol:g}")
+            # the limit applied at the worst speed, on the relative error: max(rtol, atol /
+            # asked) (JSON ``limit``)
+            res.with_tolerance(f"{self.field} {base:g}, atol {atol:g}: limit {lim:.3g}")
         return res
 
     def _why(self, r, lim) -> str:
