@@ -64,9 +64,11 @@ def _adapter(args) -> str:
     """The adapter of parsed arguments (also when written right after ``--gate``)."""
     after_gate = getattr(args, "gate_adapter", None)
     if after_gate is not None and args.adapter is not None:
+        # the order on the command line is lost here (either order gives this namespace):
+        # name the value and the kinds, not where to write them
         raise HCVInputError(
-            f"--gate takes {', '.join(_GATE_KINDS)} or nothing, got {after_gate!r} (the "
-            f"adapter is {args.adapter!r}); write --gate KIND after the adapter"
+            f"--gate {after_gate}: {after_gate!r} is not one of "
+            f"{'|'.join(_GATE_KINDS)} (or nothing, for both); the adapter is {args.adapter!r}"
         )
     adapter = args.adapter if args.adapter is not None else after_gate
     if adapter is None:
