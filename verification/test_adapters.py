@@ -380,13 +380,16 @@ def test_tolerances_override_and_validation(tmp_path):
         load_tolerances(tmp_path / "missing.toml")
 
 
-def test_adapter_supporting_no_scene_is_a_configuration_error():
+def test_adapter_supporting_no_scene_measured_nothing():
+    """Valid input (issue 26 review F6): every scene skipped with its reason, exit 1 with
+    --gate (nothing measured), never a configuration error (verification/test_bench_declines.py)."""
     walls = parse_scene(
         'name = "w"\nmass = 1.0\nvelocities = [1.0]\nkind = "two-walls"\n'
         'gap = 0.1\n[potential]\nfamily = "power"\nk = 1.0\np = 1.5\n'
     )
-    with pytest.raises(HCVInputError, match="supports none of the scenes"):
-        run_bench(cmd(), scenes=[walls])
+    res = run_bench(cmd(), scenes=[walls])
+    assert res.measured_nothing and res.exit_status(gate=True) == 1, res.counts()
+    assert res.contexts[0].skipped.startswith("declined by the code: "), res.contexts[0].skipped
 
 
 # ----------------------------------------------------------------------------

@@ -218,7 +218,16 @@ def test_gate_before_the_adapter_runs_the_gate(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, needle",
     [
-        (["bench", "reference", "--gate", "hertz"], "write --gate KIND after the adapter"),
+        # after the adapter (issue 26 review F12: it said "write --gate KIND after the
+        # adapter", where it was) and before it: the value and the kinds, either order
+        (
+            ["bench", "reference", "--gate", "hertz"],
+            "'hertz' is not one of both|implementation|delivery",
+        ),
+        (
+            ["bench", "--gate", "hertz", "reference"],
+            "'hertz' is not one of both|implementation|delivery",
+        ),
         (["bench", "--gate"], "hcv bench needs an ADAPTER"),
         (["bench"], "hcv bench needs an ADAPTER"),
     ],

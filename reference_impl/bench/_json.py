@@ -106,7 +106,10 @@ def _metric_dict(result, m) -> dict:
     """A metric as JSON, with its separate columns: ``measured``, ``expected`` (the
     reference it is compared with), ``error`` (what the tolerance bounds, when it is an
     error), ``ratio`` / ``order`` (dt_crit / speed_error), ``model_error`` and
-    ``step_error`` (delivery metrics), ``verdict`` and ``at_v0``."""
+    ``step_error`` (delivery metrics, signed: error = |model + step|), ``verdict`` and
+    ``at_v0``. ``limit`` is the limit applied to ``error`` at the worst speed: base +
+    factor x allowance (implementation), rtol or, with an absolute floor atol,
+    max(rtol, atol / asked) (delivery; e.g. 0.005 / 0.1 = 0.05 for an asked e = 0.1)."""
     d = m.to_dict()
     c = metric_columns(result, m)
     d.update(measured=c["measured"], expected=c["reference"], error=c["error"], at_v0=c["v0"])

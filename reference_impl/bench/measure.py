@@ -18,6 +18,7 @@ import numpy as np
 from reference_impl.adapters.base import ImplementedLaw, PowerDamping, Trajectory
 from reference_impl.adapters.law_damping import law_of
 from reference_impl.errors import HCVInputError
+from reference_impl.exact._oscillator import ZETA_MAX
 from reference_impl.exact.solve import solve_impact
 from reference_impl.potentials.power import PowerLaw
 
@@ -36,6 +37,12 @@ __all__ = [
 _TENSILE_SAMPLES = 4001
 # Exact references of non-universal laws: DOP853 tolerance.
 _IVP_RTOL = 1e-12
+# Budget of right-hand-side evaluations of every DOP853 fallback (a callable C(q) the
+# exact solvers do not cover): a law whose body returns to q = 0 took at most 13,383
+# (measured: Hooke, universal zeta 0.999, e ~ 1e-31; 321-2,883 for zeta <= 0.95 and
+# Hunt-Crossley); one creeping back (overdamped) spends ~1.5e5 and minutes before the
+# integrator's horizon. Past this budget: a one-line error (ours), never a hang.
+_IVP_MAX_NFEV = 50_000
 
 
 # ----------------------------------------------------------------------------
@@ -105,6 +112,11 @@ def measure(tr: Trajectory, v0: float) -> dict:
     out["tensile"] = float(max(0.0, -np.min(fc)) / fmax) if fc.size and fmax > 0 else math.nan
     if not after.size:
         out["reason"] = f"did not separate within {q.size - 1} steps"
+        # an overdamped law never returns to q = 0, but its force vanishes in finite
+        # time: the zero-force end is measured when the run got there
+        e_zf = _restitution_zero_force(q, v, f, q.size - 1, v0, separated=False)
+        if math.isfinite(e_zf):
+            out["restitution_zero_force"] = e_zf
         return out
     j = end
     out["separated"] = True
@@ -117,22 +129,24 @@ def measure(tr: Trajectory, v0: float) -> dict:
     return out
 
 
-def _restitution_zero_force(q, v, f, end: int, v0: float) -> float:
+def _restitution_zero_force(q, v, f, end: int, v0: float, separated: bool = True) -> float:
     """-v / v0 where the total force first vanishes after the deepest overlap.
 
     The first sample from the peak on with force <= 0 (the out-of-contact sample
     ``end`` has force 0, so a code whose force never pulls ends there and both ends
     coincide); v is interpolated linearly in the force between that sample and the
     one before. NaN when a force sample on the way is not finite (lagged force whose
-    aligned value is unknown).
+    aligned value is unknown), or, for a run that did not separate (``end`` its last
+    sample, still in contact), when the force has not vanished by then.
     """
     peak = int(np.argmax(q[:end]))
-    seg = f[peak : end + 1]
-    if not np.all(np.isfinite(seg[:-1])):
+    # a separated run's sample ``end`` is out of contact (force 0 by convention): left out
+    seg = f[peak:end] if separated else f[peak : end + 1]
+    if not np.all(np.isfinite(seg)):
         return math.nan
-    hit = np.nonzero(seg[:-1] <= 0.0)[0]
+    hit = np.nonzero(seg <= 0.0)[0]
     if not hit.size:
-        return float(-v[end] / v0)
+        return float(-v[end] / v0) if separated else math.nan
     i = peak + int(hit[0])
     if i == 0 or f[i - 1] <= 0.0:
         return float(-v[i] / v0)
@@ -250,6 +264,7 @@ def _tensile_exact(law: ImplementedLaw, v0: float, t_end: float) -> float:
         C=C,
         rtol=1e-10,
         t_eval=np.linspace(0.0, t_end, _TENSILE_SAMPLES),
+        max_nfev=_IVP_MAX_NFEV,
     )
     q, v = res.q, res.v
     inside = q > 0
@@ -280,7 +295,9 @@ def exact_tensile_on_samples(
         return math.nan
     ts = np.unique(np.clip(np.where(back >= 0, t_end - back, -back), 0.0, t_end))
     C = law.damping_coefficient
-    res = integrate_impact(law.potential, law.mass, v0, C=C, rtol=1e-10, t_eval=ts)
+    res = integrate_impact(
+        law.potential, law.mass, v0, C=C, rtol=1e-10, t_eval=ts, max_nfev=_IVP_MAX_NFEV
+    )
     q, v = res.q, res.v
     inside = q > 0
     if not np.any(inside):
@@ -299,18 +316,22 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
     pot, m = law.potential, law.mass
     zeta = universal_zeta(law)
     out: dict[str, Any] = {}
-    if zeta is not None and zeta < 1.0:
+    if zeta is not None and zeta <= ZETA_MAX:
+        # the harmonic map for every zeta it covers, overdamped included (zeta >= 1: no
+        # return to q = 0, e = 0 and t_c = inf at the overlap end): never the ODE, which
+        # creeps towards q = 0 without end
         sol = solve_impact(pot, m, v0, zeta)
         out["method"] = "exact (harmonic map)"
         out["max_penetration"] = sol.max_penetration
         if law.clips_tension and zeta > 0:
             e = sol.restitution_zero_force
-            q_zf = float(sol.state(np.array([sol.contact_time_zero_force]))[0][0])
+            q_zf = _q_zero_force(sol)
             out["restitution"] = e
             out["contact_time"] = sol.contact_time_zero_force + q_zf / (e * v0)
         else:
             out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
         out["restitution_zero_force"] = sol.restitution_zero_force if zeta > 0 else 1.0
+        out["contact_time_zero_force"] = sol.contact_time_zero_force if zeta > 0 else math.inf
         out["peak_force"] = exact_peak_force(law, v0, lambda: sol.peak_force)
         out["zeta"] = zeta
         if timing:
@@ -325,12 +346,15 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         out["max_penetration"] = sol.max_penetration
         out["restitution"], out["contact_time"] = sol.restitution, sol.contact_time
         out["restitution_zero_force"] = sol.restitution_zero_force
+        out["contact_time_zero_force"] = sol.contact_time_zero_force
         out["peak_force"] = sol.peak_force
         if timing:
             out["seconds"] = _time(lambda: solve_law_impact(pot, m, v0, dl))
     else:
         C = law.damping_coefficient
-        res = integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=law.clips_tension)
+        res = integrate_impact(
+            pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=law.clips_tension, max_nfev=_IVP_MAX_NFEV
+        )
         out["method"] = f"DOP853 rtol={_IVP_RTOL:g}"
         out["max_penetration"] = res.q_max
         if law.clips_tension and res.t_zero_force < res.contact_time:
@@ -341,14 +365,28 @@ def exact_reference(law: ImplementedLaw, v0: float, *, timing: bool = False) -> 
         else:
             out["restitution"], out["contact_time"] = res.restitution, res.contact_time
         out["restitution_zero_force"] = res.restitution_zero_force
+        out["contact_time_zero_force"] = res.t_zero_force
         out["peak_force"] = exact_peak_force(law, v0)
         if timing:
-            out["seconds"] = _time(lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL))
+            out["seconds"] = _time(
+                lambda: integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, max_nfev=_IVP_MAX_NFEV)
+            )
     out["energy_ratio"] = out["restitution"] ** 2
     out["tensile"] = _tensile_exact(law, v0, out["contact_time"])
     return {
         k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in out.items()
     }
+
+
+def _q_zero_force(sol) -> float:
+    """Overlap (m) at the first zero of the total force of a universal-law solution.
+
+    Virtual time 2 s_peak (`VirtualOscillator.s_zero_force`), mapped by U(q) = m x^2 / 2:
+    closed form for every zeta (``state`` covers zeta < 1 only); the same value as
+    ``sol.state(contact_time_zero_force)`` there, to the map's inversion (~1e-15).
+    """
+    osc = sol._osc
+    return float(sol._q_of_x(osc.x(osc.s_zero_force)))
 
 
 # Points of the grid on which the peak of the total force is bracketed before it is
@@ -383,7 +421,9 @@ def exact_peak_force(law: ImplementedLaw, v0: float, first=None) -> float:
         return float(law.damping_coefficient(np.array([q]))[0])
 
     try:
-        res = integrate_impact(pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=True)
+        res = integrate_impact(
+            pot, m, v0, C=C, rtol=_IVP_RTOL, dense_output=True, max_nfev=_IVP_MAX_NFEV
+        )
         t_end = res.t_zero_force if math.isfinite(res.t_zero_force) else res.t[-1]
 
         def force(t):

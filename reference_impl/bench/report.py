@@ -146,6 +146,10 @@ def _summary_lines(result) -> list[str]:
         counts = {s: sum(m.status == s for m in items) for s in STATUSES}
         both = verdict_text(items)
         lines.append(f"  {variant}: {_count_text(counts)}" + (f"; {both}" if both else ""))
+        # a declined scene: one line with the reason (not one per metric), whoever declined
+        for ctx in result.contexts:
+            if ctx.variant == variant and ctx.skipped:
+                lines.append(f"    SKIPPED {ctx.scene}: {ctx.skipped}")
         for m in items:
             if m.status == "error":
                 lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")
@@ -165,7 +169,8 @@ def gate_lines(result, gate) -> list[str]:
     if not any(m.status in ("pass", "fail", "error") for m in mine):
         return [
             f"{scope}: FAIL (nothing measured: all {len(mine)} metrics skipped or "
-            "n/a; --show-skipped lists why; a gate that measured nothing does not pass)"
+            "n/a, the SKIPPED lines above and --show-skipped say why; a gate that "
+            "measured nothing does not pass)"
         ]
     return [
         f"{scope}: {word} ({c['fail']} of {c['pass'] + c['fail'] + c['error']} "
@@ -250,8 +255,9 @@ def _legend_lines(result, show_skipped: bool) -> list[str]:
         lines = [
             "rules (v0 in m/s; error is what the limit bounds; implementation: tolerance = "
             "base + factor x textbook Verlet's error at the same step; delivery: a fixed "
-            "tolerance, error = model part (declared law vs asked: recalibrate) + step part "
-            "(measured vs declared law: refine the step)):"
+            "tolerance, error = |model + step|, both signed: model = declared law's exact - "
+            "asked (recalibrate), step = measured - declared law's exact (refine the step), "
+            "over asked):"
         ] + lines
     if show_skipped:
         for m in result.metrics:

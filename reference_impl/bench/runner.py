@@ -50,9 +50,11 @@ from reference_impl.bench._plan import (
 from reference_impl.bench._records import EXIT_INTERNAL, BenchResult
 from reference_impl.bench._textbook import (
     _ORDER_FLOOR,
+    table_errors,
     textbook_drift,
     textbook_errors,
     textbook_order,
+    worst_table_error,
 )
 from reference_impl.bench.measure import (
     check_conventions,
@@ -82,6 +84,24 @@ __all__ = [
     "resolve_scenes",
     "run_bench",
 ]
+
+
+# Prefix of the reason a declined scene is skipped with (`SceneContext.skipped`), whoever
+# declines: a built-in adapter's ``supports`` or a cmd: program's ``unsupported`` answer.
+_DECLINED = "declined by the code: "
+
+
+def _horizon(contact_time: float, contact_time_zero_force: float) -> float | None:
+    """The contact time the step and the step budget are taken from (s), or None.
+
+    The overlap end when the body returns to q = 0; else (an overdamped law: it creeps
+    back and never gets there, contact time inf) the zero-force end, where the force
+    first vanishes and which every damped law reaches in finite time.
+    """
+    for t in (contact_time, contact_time_zero_force):
+        if isinstance(t, (int, float)) and math.isfinite(t) and t > 0:
+            return float(t)
+    return None
 
 
 # ----------------------------------------------------------------------------
@@ -115,9 +135,11 @@ class _SceneRun:
         return out
 
     def asked(self, v0: float):
-        """Exact solution of the scene's own law (ours): `_Ours` when it fails. The
-        harmonic map for the universal law (or none), else the general-law reference
-        (`reference_impl.exact.general_law`, ~1e-14), with the law's solved parameters."""
+        """Exact solution of the scene's own law and the contact time (s) the step is
+        taken from (`_horizon`: the zero-force end's when the law is overdamped): `_Ours`
+        when it fails. The harmonic map for the universal law (or none), else the
+        general-law reference (`reference_impl.exact.general_law`, ~1e-14), with the
+        law's solved parameters."""
         sc = self.scene
         try:
             if sc.damping_law in ("none", "universal"):
@@ -126,16 +148,18 @@ class _SceneRun:
                 from reference_impl.exact.general_law import solve_law_impact
 
                 sol = solve_law_impact(sc.potential, sc.mass, v0, sc.law)
-            t_c = float(sol.contact_time)
+            t_c = _horizon(float(sol.contact_time), float(sol.contact_time_zero_force))
         except Exception as exc:
             raise _Ours(
                 f"exact solution of the scene at v0 = {v0:g} m/s failed: {_one_line(exc)}"
             ) from None
-        if not (math.isfinite(t_c) and t_c > 0):
+        if t_c is None:
             raise _Ours(
-                f"exact solution of the scene at v0 = {v0:g} m/s gave the contact time {t_c!r}"
+                f"exact solution of the scene at v0 = {v0:g} m/s gave no finite contact time "
+                f"(overlap end {sol.contact_time!r} s, zero-force end "
+                f"{sol.contact_time_zero_force!r} s)"
             )
-        return sol
+        return sol, t_c
 
     def asked_values(self, sol, v0: float) -> dict:
         """What the scene asks at one speed (the delivery metrics' references): the
@@ -162,8 +186,7 @@ class _SceneRun:
 
     def impact_speed(self, v0: float) -> SpeedRecord:
         spc = self.tol["run"]["steps_per_contact"]
-        sol = self.asked(v0)
-        t_c = sol.contact_time
+        sol, t_c = self.asked(v0)
         dt = t_c / spc
         ascene = AdapterScene.from_scene(self.scene, v0, dt, self.budget(dt, t_c))
         asked = self.asked_values(sol, v0)
@@ -277,7 +300,14 @@ class _SceneRun:
                 "err_max_penetration": 0.0,
             }
         )
-        t_c = ex["contact_time"]
+        t_c = _horizon(ex["contact_time"], ex.get("contact_time_zero_force", math.nan))
+        if t_c is None:
+            ctx.order_internal = (
+                "exact reference of the speed table: no finite contact time at either end "
+                f"(overlap {ex['contact_time']!r} s, zero force "
+                f"{ex.get('contact_time_zero_force', math.nan)!r} s)"
+            )
+            return
         pts = []
         order, why = textbook_order(
             rec.law, rec.v0, ex, t_c, self.tol["run"]["speed_error_steps"], self.budget
@@ -305,13 +335,10 @@ class _SceneRun:
                 rows.append(row)
                 continue
             meas = measure(out.value, rec.v0)
-            errs = {}
-            for k in ("restitution", "contact_time", "max_penetration"):
-                got, want = meas.get(k, math.nan), ex[k]
-                errs[f"err_{k}"] = abs(got - want) / abs(want) if math.isfinite(got) else math.inf
+            errs = table_errors(meas, ex)
             row.update(errs)
             rows.append(row)
-            worst = max(errs.values())
+            worst = worst_table_error(errs)
             if math.isfinite(worst) and worst > _ORDER_FLOOR:
                 pts.append((dt, worst))
         mine = [
@@ -336,7 +363,7 @@ class _SceneRun:
     def sustained(self) -> None:
         ctx, sc = self.ctx, self.scene
         v0 = sc.velocities[0]
-        t_c = self.asked(v0).contact_time
+        t_c = self.asked(v0)[1]
         dt = t_c / self.tol["run"]["steps_per_contact"]
         n = int(self.tol["run"]["sustained_steps"])
         ascene = AdapterScene.from_scene(sc, v0, dt, n)
@@ -374,7 +401,7 @@ class _SceneRun:
                 ctx.speeds.append(self.impact_speed(v0))
             self.speed_table(rows)
         except _Declined as exc:
-            ctx.skipped, ctx.speeds, ctx.sustained = f"declined by the code: {exc}", [], None
+            ctx.skipped, ctx.speeds, ctx.sustained = f"{_DECLINED}{exc}", [], None
         except _Ours as exc:
             ctx.internal = str(exc)
         return ctx
@@ -416,9 +443,9 @@ def run_bench(
     Raises
     ------
     HCVInputError
-        Usage or configuration errors (unknown adapter, bad scene, bad tolerances,
-        an adapter that supports none of the scenes). Adapter *run* failures are
-        never raised: they are failed metrics.
+        Usage or configuration errors (unknown adapter, bad scene, bad tolerances). A
+        variant declining scenes (all of them, even) is no error: they are skipped with
+        the reason. Adapter *run* failures are never raised: they are failed metrics.
     """
 
     tol = load_tolerances(tolerances)
@@ -435,14 +462,11 @@ def run_bench(
     for var in variants:  # in-process adapters with their own timeout take the run's
         if getattr(var, "timeout_given", True) is False:
             var.timeout = float(tol["run"]["timeout"])
+    # a variant that declines a scene (``supports`` here, or an ``unsupported`` answer of a
+    # cmd: program during the run) is one rule: the scene is skipped with its reason, and
+    # a run that declined everything measured nothing (exit 1 with --gate, 0 without):
+    # valid input, never a usage error
     plan = plan_cells(variants, scene_list)
-    if all(reason for *_, reason in plan):
-        executor.close()
-        reasons = sorted({reason for *_, reason in plan})
-        raise HCVInputError(
-            f"adapter {spec!r} supports none of the scenes "
-            f"({', '.join(s.name for s in scene_list)}): {reasons[0]}"
-        )
     result = BenchResult(
         adapter=spec,
         scenes=[s.name for s in scene_list],
@@ -470,7 +494,7 @@ def run_bench(
                     sc.kind,
                     scene_damped(sc),
                     speed_dependent_law(sc),
-                    skipped=reason,
+                    skipped=f"{_DECLINED}{reason}",
                 )
                 result.metrics.extend(
                     MetricResult(
@@ -478,7 +502,7 @@ def run_bench(
                         sc.name,
                         m.name,
                         "skip",
-                        explanation=f"scene not supported: {reason}",
+                        explanation=f"{_DECLINED}{reason}",
                         description=m.description,
                     )
                     for m in METRICS

@@ -10,10 +10,10 @@ JSON protocol of docs/adapter-protocol.md); names and import paths take
 constructor arguments as ``NAME[key=value,...]``.
 
 Exit status: 0; with ``--gate`` 0 when every metric passes, 1 when any fails or
-nothing was measured (every metric skipped), 3 when none fails but the suite's own reference could not decide one (an
+nothing was measured (every metric skipped, e.g. the code declined every scene), 3 when none fails but the suite's own reference could not decide one (an
 internal error, never counted against the code); 2 for usage or configuration
 errors (unknown adapter, bad scene or tolerances file, an output path that
-cannot be written, an adapter that supports none of the scenes); 130 on Ctrl-C
+cannot be written); a code declining scenes is never one; 130 on Ctrl-C
 (the scorecard so far is printed and the files written, then "interrupted").
 `add_parser` adds the subcommand to the ``hcv`` parser and `run` runs it;
 ``python -m reference_impl.cli.bench`` runs it stand-alone.
@@ -64,9 +64,11 @@ def _adapter(args) -> str:
     """The adapter of parsed arguments (also when written right after ``--gate``)."""
     after_gate = getattr(args, "gate_adapter", None)
     if after_gate is not None and args.adapter is not None:
+        # the order on the command line is lost here (either order gives this namespace):
+        # name the value and the kinds, not where to write them
         raise HCVInputError(
-            f"--gate takes {', '.join(_GATE_KINDS)} or nothing, got {after_gate!r} (the "
-            f"adapter is {args.adapter!r}); write --gate KIND after the adapter"
+            f"--gate {after_gate}: {after_gate!r} is not one of "
+            f"{'|'.join(_GATE_KINDS)} (or nothing, for both); the adapter is {args.adapter!r}"
         )
     adapter = args.adapter if args.adapter is not None else after_gate
     if adapter is None:
@@ -148,7 +150,7 @@ _EPILOG = (
     "kratos[hertz,verlet] or lammps[tsuji], names its key):\n{adapters}"
     "\n\nexit status: 0 pass (or no --gate); 1 a metric failed (of the verdict --gate "
     "names: both by default, or implementation / delivery), or nothing was "
-    "measured (every metric skipped); 2 usage or configuration error (also a law "
+    "measured (every metric skipped, e.g. every scene declined: one SKIPPED line each); 2 usage or configuration error (also a law "
     "the adapter declares that no reference can be computed for); 3 no metric failed but "
     "our reference could not decide one; "
     "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C)."

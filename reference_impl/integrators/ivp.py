@@ -339,6 +339,33 @@ def _is_ode_solver(method) -> bool:
     return isinstance(method, type) and issubclass(method, OdeSolver)
 
 
+class _Budgeted:
+    """`_ContactRHS` with a budget of right-hand-side evaluations (``max_nfev``)."""
+
+    def __init__(self, rhs, budget: int, what: str):
+        self._rhs, self._left, self._budget, self._what = rhs, budget, budget, what
+
+    def __getattr__(self, name):
+        return getattr(self._rhs, name)
+
+    def _spend(self):
+        self._left -= 1
+        if self._left < 0:
+            raise RuntimeError(
+                f"integrate_impact: budget of {self._budget} right-hand-side evaluations "
+                f"(max_nfev) spent before q returned to 0 for {self._what}: the body "
+                "creeps towards q = 0 (an overdamped law?)"
+            )
+
+    def in_s(self, s, y):
+        self._spend()
+        return self._rhs.in_s(s, y)
+
+    def in_sigma(self, sigma, y):
+        self._spend()
+        return self._rhs.in_sigma(sigma, y)
+
+
 def integrate_impact(
     potential: Potential,
     m: float,
@@ -352,6 +379,7 @@ def integrate_impact(
     t_eval=None,
     dense_output: bool = False,
     t_max: float | None = None,
+    max_nfev: int | None = None,
 ) -> IVPImpact:
     """Integrate one normal impact m q'' = -U'(q) - C(q) q' with solve_ivp.
 
@@ -386,6 +414,10 @@ def integrate_impact(
     t_max : float, optional
         Integration horizon (s); default 1000 q_max / v0. If q has not returned
         to 0 by then, ``returned`` is False and the end-of-contact fields are NaN.
+    max_nfev : int, optional
+        Budget of right-hand-side evaluations over all phases (default None: none
+        but ``t_max``). A body creeping towards q = 0 (an overdamped law) can spend
+        minutes before ``t_max``; past the budget a one-line RuntimeError is raised.
 
     Returns
     -------
@@ -397,7 +429,8 @@ def integrate_impact(
         Invalid argument (subclasses: NoTurningPointError if the potential cannot
         stop the impact, NonMonotoneError if U' <= 0 before the turning point).
     RuntimeError
-        solve_ivp failed other than by a body creeping towards q = 0.
+        solve_ivp failed other than by a body creeping towards q = 0, or the
+        ``max_nfev`` budget was spent.
     """
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
@@ -451,6 +484,12 @@ def integrate_impact(
     q_s = q_scale
     t_s = q_scale / v0
     rhs = _ContactRHS(potential, m, C, hmap, q_s=q_s, t_s=t_s)
+    if max_nfev is not None:
+        if not (isinstance(max_nfev, int) and max_nfev > 0):
+            raise HCVInputError(
+                f"integrate_impact: max_nfev must be a positive int or None, got {max_nfev!r}"
+            )
+        rhs = _Budgeted(rhs, max_nfev, f"{potential!r}, m = {m!r}, v0 = {v0!r}")
     dense = dense_output or t_eval is not None
     opts = dict(method=method, rtol=rtol, dense_output=dense)
     n = len(scales)
