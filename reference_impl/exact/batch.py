@@ -29,8 +29,8 @@ from reference_impl.exact._branches import (
     _jacobi_pair,
     _pow_split,
 )
+from reference_impl.exact._law_batch import solve_law_batch
 from reference_impl.exact._validate import _check_exponent, _validated_top
-from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.prepared import prepare
 from reference_impl.exact.solve import ImpactSolution
 from reference_impl.potentials._checks import positive, real_array
@@ -135,8 +135,9 @@ def solve_impacts(
         Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
     law : DampingLaw or dict, optional
         A damping law of `reference_impl.theory.laws` other than ``universal`` / ``none``
-        (then ``zetas`` must stay 0): every speed is solved by
-        `reference_impl.exact.general_law.solve_law_impact`, and the arrays are its fields
+        (then ``zetas`` must stay 0): every speed is solved as by
+        `reference_impl.exact.general_law.solve_law_impact` (bit for bit; the integrations
+        on every core, `_law_batch`), and the arrays are its fields
         (max_penetration, max_force, peak_force, contact_time, restitution,
         contact_time_zero_force, restitution_zero_force, returns_to_q0,
         error_time, error_restitution).
@@ -163,7 +164,8 @@ def solve_impacts(
         if dl.name in ("universal", "none"):
             zetas = dl.zeta
         else:
-            return _law_batch(potential, m, v0s, dl)
+            # Every core: the compiled integrations in a prange loop (`_law_batch`).
+            return solve_law_batch(potential, m, v0s, dl, BATCH_MAX)
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impacts")
@@ -369,31 +371,3 @@ def _power_law_fill(
         bad[i] = b
         nbad += 0 if b == 0 else 1
     return left, nbad
-
-
-_LAW_FIELDS = (
-    "max_penetration",
-    "max_force",
-    "peak_force",
-    "contact_time",
-    "restitution",
-    "contact_time_zero_force",
-    "restitution_zero_force",
-    "returns_to_q0",
-    "error_time",
-    "error_restitution",
-)
-
-
-def _law_batch(potential, m, v0s, law) -> dict[str, np.ndarray]:
-    """One `solve_law_impact` per speed (the general law has no batch kernel)."""
-
-    v = np.asarray(v0s, dtype=float)
-    if v.size > BATCH_MAX:
-        raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
-    out = {key: np.full(v.size, np.nan) for key in _LAW_FIELDS}
-    for i, vi in enumerate(v.ravel()):
-        sol = solve_law_impact(potential, m, float(vi), law)
-        for key in _LAW_FIELDS:
-            out[key][i] = float(getattr(sol, key))
-    return {key: arr.reshape(v.shape) for key, arr in out.items()}
