@@ -26,7 +26,12 @@ def _workload():
 
 
 def test_batch_kernels_are_parallel():
-    for kernel in (batch._gj_batch, batch._power_law_fill, batch._count_invalid):
+    for kernel in (
+        batch._gj_batch,
+        batch._power_law_fill,
+        batch._count_invalid,
+        batch._zeta_factors,
+    ):
         assert_true(
             kernel.targetoptions.get("parallel") is True,
             got=f"{kernel.py_func.__name__} compiled with {kernel.targetoptions}",

@@ -242,19 +242,14 @@ def _refuse_invalid(v: np.ndarray, z: np.ndarray, m: float, tiny: float) -> None
 @numba.njit(cache=True)
 def _run_values(z):  # pragma: no cover - compiled
     """The first value of each run of equal values of ``z`` (a sweep grid: a few runs)."""
-    n = z.shape[0]
-    runs = 1
-    for i in range(1, n):
-        if z[i] != z[i - 1]:
-            runs += 1
-    vals = np.empty(runs)
+    vals = np.empty(z.shape[0])
     vals[0] = z[0]
     r = 1
-    for i in range(1, n):
+    for i in range(1, z.shape[0]):
         if z[i] != z[i - 1]:
             vals[r] = z[i]
             r += 1
-    return vals
+    return vals[:r]
 
 
 def _unique_zetas(z: np.ndarray) -> np.ndarray:
@@ -292,6 +287,7 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
         z,
         zu,
         sums_u,
+        _zeta_factors(zu),
         ok_u,
         nodes_u,
         c0,
@@ -306,8 +302,8 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
         todo,
         bad,
     )
-    for j, key in enumerate(("max_penetration", "max_force", "contact_time")):
-        for i in np.flatnonzero(bad & (1 << j))[: 1 if nbad else 0]:
+    for j, key in enumerate(("max_penetration", "max_force", "contact_time") if nbad else ()):
+        for i in np.flatnonzero(bad & (1 << j))[:1]:
             val = out[_FIELDS.index(key), i]
             raise UnsupportedError(
                 f"solve_impacts: {key} = {float(val)!r} is below the normal float64 "
@@ -318,8 +314,41 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
 
 
 @numba.njit(cache=True, parallel=True)
+def _zeta_factors(zu):  # pragma: no cover - compiled
+    """Per distinct zeta: exp(-zeta s_peak) and the two restitutions (overlap end, zero
+    force), the expressions `solve_impact` evaluates, once per zeta instead of per impact.
+    (-0.0 and 0.0, one entry of ``zu``, give the same bits in each.)"""
+    f = np.empty((zu.shape[0], 3))
+    for j in numba.prange(zu.shape[0]):
+        zz = zu[j]
+        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
+        sp = math.atan2(wd, zz) / wd
+        f[j, 0] = math.exp(-zz * sp)
+        f[j, 1] = math.exp(-math.pi * zz / wd)
+        f[j, 2] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
+    return f
+
+
+@numba.njit(cache=True, parallel=True)
 def _power_law_fill(
-    v, z, zu, sums_u, ok_u, nodes_u, c0, b_hi, b_lo, q_scale, two_n, k, p, tiny, out, todo, bad
+    v,
+    z,
+    zu,
+    sums_u,
+    per_zeta,
+    ok_u,
+    nodes_u,
+    c0,
+    b_hi,
+    b_lo,
+    q_scale,
+    two_n,
+    k,
+    p,
+    tiny,
+    out,
+    todo,
+    bad,
 ):  # pragma: no cover - compiled
     """Every field of the impacts whose zeta the Gauss-Jacobi sums accept, into the rows of
     ``out`` (order of _FIELDS), ``todo[i]`` False there and True (row NaN) elsewhere, and
@@ -351,18 +380,16 @@ def _power_law_fill(
         e_rise = c * sums_u[iu, 3] + roundoff * rise
         e_fall = c * sums_u[iu, 4] + roundoff * fall
         e_mid = c * sums_u[iu, 5] + roundoff * (abs(fall) + abs(fall - mid))
-        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
-        sp = math.atan2(wd, zz) / wd
-        x_pk = vi * math.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
+        x_pk = vi * per_zeta[iu, 0]  # sin(wd s_peak) / wd = 1 at the peak
         # Factored as in `_strategies.peak` (no intermediate underflow for tiny m or v0).
         q_max = q_scale * x_pk**two_n
         f_max = k * q_max**p
         out[0, i] = q_max
         out[1, i] = f_max
         out[2, i] = rise + fall
-        out[3, i] = math.exp(-math.pi * zz / wd)
+        out[3, i] = per_zeta[iu, 1]
         out[4, i] = rise + mid
-        out[5, i] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
+        out[5, i] = per_zeta[iu, 2]
         out[6, i] = e_rise + e_fall
         out[7, i] = e_rise + e_mid
         todo[i] = False
