@@ -102,3 +102,22 @@ def test_law_batch_refuses_a_bad_speed_as_the_single_call():
     assert str(batch.value) == str(single.value), (
         f"got {batch.value}, should be {single.value} [solve_impacts, law batch refusal]"
     )
+
+
+def test_law_batch_rows_that_never_return():
+    """Hertz + a constant dashpot: the slow speeds creep back and never reach q = 0
+    (inf contact time, restitution 0, NaN-free zero-force fields), beside returning ones."""
+    law, m, speeds = {"law": "linear", "c": 50.0}, 1e-3, (1e-4, 1.0, 3e-4, 0.1)
+    pot = PowerLaw(1e9, 1.5)  # one potential, as the batch (its validated tops are cached)
+    sols = [solve_law_impact(pot, m, v, law) for v in speeds]
+    assert not sols[0].returns_to_q0 and sols[1].returns_to_q0, "workload lost its creep"
+    got = solve_impacts(PowerLaw(1e9, 1.5), m, np.array(speeds), law=law)
+    for key in _law_batch.LAW_FIELDS:
+        ref = np.array([float(getattr(s, key)) for s in sols])
+        assert_true(
+            got[key].tobytes() == ref.tobytes(),
+            got=f"{key} = {got[key]}",
+            should=f"{ref} (solve_law_impact per speed, bit for bit)",
+            claim="solve_impacts",
+            call=f"solve_impacts(hertz, {m}, {speeds}, law={law})",
+        )

@@ -7,15 +7,16 @@ nor the schedule changes a bit (issue 27, goal 4). What is not compiled stays as
 `solve_law_impact`, one speed after another, in the order given:
 
 * each speed's checks and its validated top ``qE`` (`_validate._validated_top`, whose
-  cache makes ``qE`` depend on the speeds solved before: so the same order),
+  cache makes ``qE`` depend on the speeds solved before: called at the speeds whose
+  energy sets a new record, in order, which leaves every speed the loop's ``qE``),
 * the linear oscillator in closed form and the potentials without a compiled kernel
   (sphere, ellipsoid, expression): the whole impact, by `prepare_law`,
 * an integration that did not finish: `prepare_law`'s call of that speed again, which
   raises the message of `solve_law_impact`; a lost return: `general_law._refuse_lost_return`.
 
-The bounds and fields are then formed from the kernel's row as `general_law._solve_planned`
-forms them (`_finish`; the test compares every field with `prepare_law` bit for bit, so the
-two cannot drift apart unseen).
+The bounds and fields are then formed from the kernel's rows as `general_law._solve_planned`
+forms them, the same float operations elementwise (`_fill`; the test compares every field
+with `solve_law_impact` bit for bit, so the two cannot drift apart unseen).
 """
 
 from __future__ import annotations
@@ -99,20 +100,13 @@ def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.nd
         for i in range(v.size):
             _store(out, i, prepared(float(v[i])))
         return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
-    q_top = np.empty(v.size)
-    for i in range(v.size):
-        vi = float(v[i])
-        energy = 0.5 * plan.m * vi * vi
-        if not (math.isfinite(vi) and vi > 0 and math.isfinite(energy) and energy > 0):
-            prepared(vi)  # raises solve_law_impact's message for this speed
-        q_top[i] = _validated_top(plan.potential, energy)
+    q_top = _tops(plan, prepared, v)
     rows = np.empty((v.size, len(OUT_FIELDS)))
     # Speeds cost unequal step counts: small chunks handed out as threads free up, not
     # one equal share each (rows do not depend on who computes them).
     with numba.parallel_chunksize(_CHUNK):
         _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, rows)
-    for i in range(v.size):
-        _finish(out, i, float(v[i]), float(q_top[i]), rows[i], prepared)
+    _finish(out, v, q_top, rows, prepared)
     return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
 
 
@@ -121,37 +115,68 @@ def _store(out: np.ndarray, i: int, sol) -> None:
         out[j, i] = float(getattr(sol, key))
 
 
-def _finish(out: np.ndarray, i: int, v0: float, q_top: float, row: np.ndarray, prepared) -> None:
-    """Column ``i`` of ``out`` from the kernel's row, as `general_law._solve_planned`."""
-    r = {name: float(row[j]) for name, j in _COL.items()}
-    if r["status"] != 0.0 or not math.isfinite(r["q_max"]):
-        # Not finished within the step budget: the single call raises its message.
-        _store(out, i, prepared(v0))
-        return
+def _tops(plan, prepared, v: np.ndarray) -> np.ndarray:
+    """The ``qE`` each speed gets in a serial loop of `solve_law_impact` calls.
+
+    `_validated_top` returns the top of the largest energy validated so far (its cache),
+    so between two speeds whose energy sets a new record it returns the last record's
+    value: it is called at the records only, in order (the cache evolves as in the loop).
+    """
+    with np.errstate(all="ignore"):
+        energy = 0.5 * plan.m * v * v  # as _solve_planned: (0.5 m v0) v0
+    bad = ~(np.isfinite(v) & (v > 0) & np.isfinite(energy) & (energy > 0))
+    for i in np.flatnonzero(bad)[:1]:
+        prepared(float(v[i]))  # raises solve_law_impact's message for this speed
+    record = np.ones(v.size, dtype=bool)
+    record[1:] = energy[1:] > np.maximum.accumulate(energy)[:-1]
+    at = np.flatnonzero(record)
+    tops = np.array([_validated_top(plan.potential, float(energy[i])) for i in at])
+    # Each speed takes the value of the last record at or before it.
+    return tops[np.cumsum(record) - 1]
+
+
+def _finish(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray, prepared):
+    """``out`` from the kernel's rows, as `general_law._solve_planned` forms one impact
+    (the same float operations in the same order, elementwise)."""
+    with np.errstate(all="ignore"):  # no-return rows carry NaN fields, as in the single call
+        _fill(out, v, q_top, rows)
+    r = {name: rows[:, j] for name, j in _COL.items()}
+    failed = (r["status"] != 0.0) | ~np.isfinite(r["q_max"])
+    lost = ~failed & (r["returns"] != 1.0) & (r["stop"] == STOP_NO_RETURN_Q)
+    # In the order of the speeds, as the serial loop meets them.
+    plan = prepared._plan
+    for i in np.flatnonzero(failed | lost):
+        if failed[i]:
+            # Not finished within the step budget: the single call raises its message.
+            _store(out, i, prepared(float(v[i])))
+        else:
+            _gl._refuse_lost_return(plan.potential, plan.law, plan.m, float(v[i]))
+
+
+def _fill(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray) -> None:
+    """Every column of ``out``, vectorised: `_solve_planned`'s expressions, term by term."""
+    r = {name: rows[:, j] for name, j in _COL.items()}
     returns = r["returns"] == 1.0
-    if not returns and r["stop"] == STOP_NO_RETURN_Q:
-        plan = prepared._plan
-        _gl._refuse_lost_return(plan.potential, plan.law, plan.m, v0)
-    nst = int(r["n_steps"])
-    t_scale = q_top / v0
-    t_end = r["t_end"] if returns else math.inf
-    err_t = _gl.ERROR_SAFETY * r["err_t"] * t_scale + 100 * nst * _EPS * (
-        t_end if returns else r["t_zf"] if math.isfinite(r["t_zf"]) else t_scale
-    )
-    if r["err_zf"] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
-        err_t += _gl.ERROR_SAFETY * r["err_zf"]
-    err_w = _gl.ERROR_SAFETY * r["err_w"] + 100 * nst * _EPS
-    col = (
+    nst = 100.0 * np.trunc(r["n_steps"])  # 100 * int(n_steps), exact
+    t_scale = q_top / v
+    t_end = np.where(returns, r["t_end"], math.inf)
+    tail = np.where(returns, t_end, np.where(np.isfinite(r["t_zf"]), r["t_zf"], t_scale))
+    es = _gl.ERROR_SAFETY
+    err_t = es * r["err_t"] * t_scale + nst * _EPS * tail
+    # the zero-force instant's own sensitivity (_general_kernel)
+    err_t = np.where(r["err_zf"] > 0.0, err_t + es * r["err_zf"], err_t)
+    err_w = es * r["err_w"] + nst * _EPS
+    cols = (
         r["q_max"],
         r["max_force"],
         r["peak_force"],
         t_end,
-        -r["w_end"] / v0 if returns else 0.0,
+        np.where(returns, -r["w_end"] / v, 0.0),
         r["t_zf"],
-        -r["w_zf"] / v0,
-        1.0 if returns else 0.0,
+        -r["w_zf"] / v,
+        np.where(returns, 1.0, 0.0),
         err_t,
         err_w,
     )
-    for j, value in enumerate(col):
-        out[j, i] = value
+    for j, col in enumerate(cols):
+        out[j] = col
