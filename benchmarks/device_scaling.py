@@ -12,7 +12,9 @@ one run, the JSON rewritten after each (a run stopped midway keeps what it measu
    dominate), the grid 50 zetas x 2000 speeds of `bench_exact` (the per-impact fill
    dominates) and a grid 50 x 20000. Wall time, median of blocks interleaved over the
    thread counts; every thread count's arrays compared with one thread's, bit for bit.
-2. ``law``: `solve_impacts(..., law=Hunt-Crossley)` (the general-law batch) likewise.
+2. ``law``: `solve_impacts(..., law=Hunt-Crossley)` (the general-law batch) likewise, on
+   rising speeds (each a new energy record: a serial validated top per speed) and on
+   the same speeds shuffled.
 3. ``sweep``: the 480-case dt-crit map of `benchmarks.bench_sweep` (16 exponents x 30
    masses) through the engine of ``hcv sweep`` on local clusters of 1, 2, 16, 8, 4
    workers (one numba thread each); `bench_sweep._fit` fits fixed + per worker + per
@@ -190,14 +192,25 @@ def _section_law(args, budget: float) -> dict:
     threads = _threads_available(args.threads)
     # A new potential each call: the general law's error_time depends on the validated
     # tops cached per potential object by earlier calls (`_validate._validated_top`).
-    row = _thread_scaling(
-        f"Hertz + {law}, {v.size} speeds",
-        lambda: solve_impacts(PowerLaw(1.0e9, 1.5), m, v, law=law),
-        threads,
-        budget,
-        args.blocks,
-    )
-    return {"rows": [row], "thread_counts": threads}
+    # Rising speeds each set a new energy record (one serial `_validated_top` call per
+    # speed); shuffled ones few (the compiled integrations alone are spread).
+    shuffled = np.random.default_rng(2027).permutation(v)
+    rows = []
+    for label, vs in (("rising", v), ("shuffled", shuffled)):
+        try:
+            rows.append(
+                _thread_scaling(
+                    f"Hertz + {law}, {v.size} speeds, {label}",
+                    lambda vs=vs: solve_impacts(PowerLaw(1.0e9, 1.5), m, vs, law=law),
+                    threads,
+                    budget / 2,
+                    args.blocks,
+                )
+            )
+        except Exception:  # noqa: BLE001 - recorded; the next workload runs
+            rows.append({"workload": label, "error": traceback.format_exc(limit=4)})
+            _say(f"law {label}: error\n{rows[-1]['error']}")
+    return {"rows": rows, "thread_counts": threads}
 
 
 def _section_sweep(args, budget: float, res: dict, out: Path) -> dict:
