@@ -2,9 +2,21 @@
 
 **Location.** ``$HCV_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/hidden-harmonic-verification``,
 else ``~/.cache/hidden-harmonic-verification``. numba's own disk cache goes to its
-``numba/`` sub-directory (``NUMBA_CACHE_DIR`` is set there when the user did not set it;
-a user's ``NUMBA_CACHE_DIR`` is left alone), the user expressions' generated modules to
-``expressions/``.
+``numba/key-<digest>`` sub-directory (``NUMBA_CACHE_DIR`` is set there when the user did not
+set it; a user's ``NUMBA_CACHE_DIR`` is left alone), the user expressions' generated modules
+to ``expressions/``.
+
+**Fresh code, fresh cache.** numba checks a cached function only against the stamp of its
+own source file, so a caller kept a changed callee's old machine code. The sub-directory is
+therefore named by `reference_impl._numba_dir.numba_key`, a digest of the versions and of the
+content of every compiled source (and the modules they import): any change there selects a
+fresh directory. It is chosen when numba is imported (`_select_numba_dir`, from the import
+hook below; 1-3 ms, nothing for a command that never imports numba), made 0700 and checked
+like the cache; old ones are pruned then (`reference_impl._numba_dir.prune_numba_dirs`:
+the 3 most recently used and any used within the hour stay, a symbolic link is never
+followed). A ``NUMBA_CACHE_DIR`` the user set gets numba's rule only (a stale callee is
+possible after an edit); one this package set is marked in ``_HCV_NUMBA_CACHE_DIR``, so a
+child process does not take the value it inherits for the user's.
 
 **Degrading.** A cache directory that cannot be created or written, or whose file system
 has less than `MIN_FREE_BYTES` free, is not an error: numba then compiles into a private
@@ -80,7 +92,9 @@ class CacheWarning(UserWarning):
     """The compile cache cannot be used; code is compiled for this process only."""
 
 
-_state: dict = {"usable": None, "warned": False, "tmp": None}
+_state: dict = {"usable": None, "warned": False, "tmp": None, "numba_root": None}
+# Set beside NUMBA_CACHE_DIR to the value this package gave it (`_numba_dir_is_ours`).
+_MARK = "_HCV_NUMBA_CACHE_DIR"
 
 
 def cache_dir() -> Path:
@@ -118,20 +132,27 @@ def _untrusted(path: Path) -> str | None:
     Owned by another user, or writable by group or others: numba's files are pickles, so
     such a cache could run another user's code in this process.
     """
-    me = os.geteuid()
     for p in (path, *(path / s for s in _SUBDIRS)):
-        try:
-            st = os.stat(p)  # a link is judged by its target
-        except FileNotFoundError:
-            continue
-        if st.st_uid != me:
-            return f"{p} is owned by another user (uid {st.st_uid})"
-        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-            return (
-                f"{p} is writable by group or others (mode {oct(stat.S_IMODE(st.st_mode))}); "
-                "its pickled code would run here. chmod 700 it after checking its content, "
-                "or remove it"
-            )
+        why = _who_else_writes(p)
+        if why is not None:
+            return why
+    return None
+
+
+def _who_else_writes(p: Path) -> str | None:
+    """Why another user could write the directory ``p`` (None when none can, or it is absent)."""
+    try:
+        st = os.stat(p)  # a link is judged by its target
+    except FileNotFoundError:
+        return None
+    if st.st_uid != os.geteuid():
+        return f"{p} is owned by another user (uid {st.st_uid})"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return (
+            f"{p} is writable by group or others (mode {oct(stat.S_IMODE(st.st_mode))}); "
+            "its pickled code would run here. chmod 700 it after checking its content, "
+            "or remove it"
+        )
     return None
 
 
@@ -178,25 +199,43 @@ def _private_tmp() -> str | None:
     return _state["tmp"]
 
 
+def _numba_dir_is_ours() -> bool:
+    """True unless the user set ``NUMBA_CACHE_DIR`` (a value this package set, marked in
+    ``_HCV_NUMBA_CACHE_DIR`` and inherited by a child process, is still ours)."""
+    value = os.environ.get("NUMBA_CACHE_DIR")
+    return value is None or value == os.environ.get(_MARK)
+
+
+def _set_numba_dir(target: str) -> None:
+    """Point numba at ``target``, marked as ours (`_numba_dir_is_ours`)."""
+    os.environ["NUMBA_CACHE_DIR"] = os.environ[_MARK] = target
+    numba_config = sys.modules.get("numba.core.config")
+    if numba_config is not None:  # numba is imported: tell it too (it reads CACHE_DIR per use)
+        numba_config.CACHE_DIR = target
+
+
 def configure_numba_cache() -> bool:
     """Point numba's disk cache at the per-user directory; True when it is usable.
 
     Called once when the package is imported (before numba is), and cheap: one directory
-    check. When the directory is unusable, numba compiles into a private temporary
-    directory removed at exit, and one `CacheWarning` names the directory and the reason.
+    check. The keyed sub-directory (`_select_numba_dir`) is chosen when numba is imported,
+    so a command that never compiles pays nothing for the key. When the directory is
+    unusable, numba compiles into a private temporary directory removed at exit, and one
+    `CacheWarning` names the directory and the reason.
     """
     if _state["usable"] is not None:
         return _state["usable"]
     root = cache_dir()
     reason = _unusable(root)
     _state["usable"] = reason is None
-    if "NUMBA_CACHE_DIR" not in os.environ:
-        target = str(root / "numba") if reason is None else _private_tmp()
-        if target is not None:
-            os.environ["NUMBA_CACHE_DIR"] = target
-            numba_config = sys.modules.get("numba.core.config")
-            if numba_config is not None:  # numba was imported first: tell it too
-                numba_config.CACHE_DIR = target
+    _state["numba_root"] = None
+    if _numba_dir_is_ours():
+        if reason is None:
+            _state["numba_root"] = root / "numba"  # its keyed sub-directory: when numba loads
+        else:
+            target = _private_tmp()
+            if target is not None:
+                _set_numba_dir(target)
     if reason is not None:
         _warn_once(
             f"hcv: the compile cache {root} {reason}; compiling for this process only "
@@ -206,19 +245,56 @@ def configure_numba_cache() -> bool:
     return _state["usable"]
 
 
+# --------------------------------------------------------------------------- numba's keyed directory
+
+def _select_numba_dir() -> None:
+    """Point numba at ``numba/<key>`` of the cache (made 0700, checked like the cache),
+    then prune the old keyed directories. Once per configuration; nothing when the user set
+    ``NUMBA_CACHE_DIR`` or the cache is unusable."""
+    numba_root = _state.get("numba_root")
+    if numba_root is None:
+        return
+    _state["numba_root"] = None
+    # Deferred: a command that never imports numba does not load it (1 ms).
+    from reference_impl._numba_dir import numba_key, prune_numba_dirs
+
+    target = numba_root / numba_key()
+    try:
+        for d in (numba_root, target):
+            d.mkdir(mode=0o700, exist_ok=True)  # the cache root exists (`_unusable` made it)
+        why = _who_else_writes(numba_root) or _who_else_writes(target)
+        if why is None:
+            os.utime(target)  # recently used: last to be pruned
+    except OSError as exc:
+        why = f"{target} cannot be written ({exc.strerror or type(exc).__name__})"
+    if why is not None:
+        _state["usable"] = False
+        _warn_once(f"hcv: the compile cache {why}; compiling for this process only")
+        tmp = _private_tmp()
+        if tmp is not None:
+            _set_numba_dir(tmp)
+        return
+    _set_numba_dir(str(target))
+    prune_numba_dirs(numba_root, keep=target)
+
+
 # --------------------------------------------------------------------------- damaged files
 
 
 def _guard_numba_loader() -> None:
-    """Wrap numba's cache loader (now if imported, else when ``numba.core.caching`` is)."""
-    if _state.get("guarded"):
-        return
-    _state["guarded"] = True
+    """Wrap numba's cache loader and choose the keyed directory (`_numba_loaded`): now if
+    ``numba.core.caching`` is imported, else when it is."""
     module = sys.modules.get("numba.core.caching")
     if module is not None:
-        _wrap_loader(module)
-    else:
+        _numba_loaded(module)
+    elif not _state.get("hooked"):
+        _state["hooked"] = True
         sys.meta_path.insert(0, _PatchOnImport())
+
+
+def _numba_loaded(caching) -> None:
+    _wrap_loader(caching)
+    _select_numba_dir()
 
 
 class _PatchOnImport:
@@ -237,7 +313,7 @@ class _PatchOnImport:
 
         def exec_module(module):
             execute(module)
-            _wrap_loader(module)
+            _numba_loaded(module)
 
         spec.loader.exec_module = exec_module
         return spec

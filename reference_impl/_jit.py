@@ -22,7 +22,7 @@ import types
 
 import numba
 
-__all__ = ["binding_name", "specialise"]
+__all__ = ["binding_name", "rebind", "specialise"]
 
 
 def _stable_name(value) -> str | None:
@@ -48,7 +48,7 @@ def binding_name(func, bound: dict) -> str:
     return f"{func.__qualname__}__{digest}"
 
 
-def specialise(func, cache: bool, *, error_model: str = "numpy", **bound):
+def specialise(func, cache: bool, *, error_model: str = "numpy", inline: str = "never", **bound):
     """A numba-compiled copy of the plain function ``func`` with globals ``bound`` rebound.
 
     Parameters
@@ -61,6 +61,8 @@ def specialise(func, cache: bool, *, error_model: str = "numpy", **bound):
         bindings never share a cache entry).
     error_model : str
         numba's error model of the copy ("numpy": inf/nan; "python": exceptions).
+    inline : str
+        numba's ``inline`` option of the copy ("always": inlined into its callers' IR).
     **bound
         Global names of ``func`` and the compiled functions they stand for in this copy.
 
@@ -82,4 +84,18 @@ def specialise(func, cache: bool, *, error_model: str = "numpy", **bound):
     f = types.FunctionType(func.__code__, glb, func.__name__, func.__defaults__)
     f.__qualname__ = binding_name(func, bound)
     f.__module__, f.__doc__ = func.__module__, func.__doc__
-    return numba.njit(cache=cache, error_model=error_model)(f)
+    return numba.njit(cache=cache, error_model=error_model, inline=inline)(f)
+
+
+def rebind(func, **bound):
+    """A plain Python copy of ``func`` with globals ``bound`` rebound (no compile).
+
+    The Python binding of a numba-compatible function written once: e.g. the Verlet
+    step around a `Potential`'s own force. ``func`` is the plain function (a numba
+    dispatcher's ``py_func``); the copy keeps its name, qualified name and defaults.
+    """
+    glb = dict(func.__globals__)
+    glb.update(bound)
+    f = types.FunctionType(func.__code__, glb, func.__name__, func.__defaults__)
+    f.__qualname__, f.__module__, f.__doc__ = func.__qualname__, func.__module__, func.__doc__
+    return f

@@ -99,6 +99,11 @@ def main(argv: list[str]) -> int:
     if request["request"] != "impact":
         json.dump({"unsupported": "adapter-script has no two-walls model"}, sys.stdout)
         return 0
+    if scene["damping"]["law"] not in ("none", "universal"):  # protocol 2: any law is sent
+        law = scene["damping"]["law"]
+        json.dump({"unsupported": f"adapter-script integrates the universal law, not {law!r}"},
+                  sys.stdout)  # fmt: skip
+        return 0
     active = scene["v0"] > above
     if active:
         _misbehave(mode)

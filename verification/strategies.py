@@ -364,3 +364,96 @@ def law_cases(draw, name):
 
 
 __all__ += ["law_cases"]
+
+
+# -- restitution scenes of every law (issue 26, item 2: verification/test_bench_laws.py) ----
+@st.composite
+def restitution_law_scenes(draw, laws=("linear", "hunt-crossley")):
+    """An impact scene (dict of the scene schema) whose damping law's strength is solved
+    from a restitution e in [0.5, 0.9] asked at the first of two speeds 1.5x apart, at
+    either end: power family k, p in [1, 2], a mass. At 1.5x the speed the law's own e
+    stays above ~0.3 (hunt-crossley falls with the speed, linear on p > 1 rises), where
+    2 % of e is what a correct code delivers at fine steps."""
+    v = draw(log_uniform(1e-2, 1.0))
+    return {
+        "name": "generated-law",
+        "mass": draw(log_uniform(1e-3, 0.1)),
+        "velocities": [v, 1.5 * v],
+        "kind": "impact",
+        "potential": {
+            "family": "power",
+            "k": draw(log_uniform(1e4, 1e9)),
+            "p": draw(st.floats(1.0, 2.0)),
+        },  # fmt: skip
+        "damping": {
+            "law": draw(st.sampled_from(laws)),
+            "restitution": draw(st.floats(0.5, 0.9)),
+            "restitution_speed": v,
+            "restitution_end": draw(st.sampled_from(("overlap", "zero-force"))),
+        },
+    }
+
+
+__all__ += ["restitution_law_scenes"]
+
+
+# -- near-critical universal law on the GBS kernel's families (test_general_law_bounds.py) --
+
+# Damping ratios of the near-critical draw: from e = 4e-3 (zeta = 0.8) to e = 2.7e-10
+# (zeta = 0.99), where the return decays by orders before q = 0.
+NEAR_CRITICAL_ZETA = (0.8, 0.99)
+
+
+@st.composite
+def near_critical_universal_cases(draw, families=("power", "sphere", "ellipsoid", "expression")):
+    """(family, potential, m, v0, zeta): a family the GBS kernel integrates, zeta near 1.
+
+    Hertz (handed from the Taylor kernel to the GBS kernel past its step budget), sphere,
+    ellipsoid and a user expression (plain-Python path); the caps draw their turning point
+    inside the domain as `impacts` does. ``families`` may add "saturating", whose
+    contact time still exceeds its bound above zeta ~ 0.96 because its float U is
+    3e-13 off near x = 0.01 (see verification/test_general_law_bounds.py).
+    """
+    from reference_impl.potentials import Expression, SaturatingForce
+
+    family = draw(st.sampled_from(list(families)))
+    if family == "power":
+        pots = st.builds(PowerLaw, k=log_uniform(1e4, 1e10), p=st.just(1.5))
+    elif family == "sphere":
+        pots = spheres()
+    elif family == "ellipsoid":
+        pots = ellipsoids()
+    elif family == "expression":
+        pots = st.builds(
+            lambda k, c: Expression("k*q**2.5/2.5 + c*q**2/2", k=k, c=c),
+            log_uniform(1e6, 1e10),
+            log_uniform(1e3, 1e6),
+        )
+    else:
+        pots = st.builds(SaturatingForce, F0=log_uniform(1e-1, 1e3), q_s=log_uniform(1e-3, 1.0))
+    pot, m, v0 = draw(impacts(pots))
+    zeta = draw(st.floats(*NEAR_CRITICAL_ZETA))
+    return family, pot, m, v0, zeta
+
+
+__all__ += ["NEAR_CRITICAL_ZETA", "near_critical_universal_cases"]
+
+
+# -- what an adapter is asked (protocol hcv-adapter/2: verification/test_adapter_asked.py) --
+@st.composite
+def universal_asks(draw):
+    """(e, end, k, m, v0) of a universal impact scene asking e in [0.3, 0.95] at the
+    "overlap" or the "zero-force" end: the stiffness k of a power law (N/m^p, five
+    decades), a mass (kg), a speed (m/s). Over this range every built-in code's damping
+    input reaches the asked e (LIGGGHTS's floor 0.05 and Kratos' range [0.001, 0.999]
+    lie outside it)."""
+    return (
+        draw(st.floats(0.3, 0.95)),
+        draw(st.sampled_from(("overlap", "zero-force"))),
+        draw(log_uniform(1e4, 1e9)),
+        draw(log_uniform(1e-3, 1.0)),
+        draw(log_uniform(1e-2, 1.0)),
+    )
+
+
+__all__ += ["universal_asks"]

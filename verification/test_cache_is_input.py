@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reference_impl import _cache, _stored
+from reference_impl import _cache, _numba_dir, _stored
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -167,11 +167,11 @@ _RUN = textwrap.dedent(
 )
 
 
-def _run(tmp_path: Path, cache: Path) -> dict:
+def _run(tmp_path: Path, cache: Path, **extra: str) -> dict:
     script = tmp_path / "cached.py"
     script.write_text(_RUN)
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-    env.update(HCV_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT))
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "_HCV_NUMBA_CACHE_DIR")}
+    env.update(HCV_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT), **extra)
     r = subprocess.run(
         [sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300
     )
@@ -275,4 +275,49 @@ def test_a_cache_directory_of_another_user_is_refused(tmp_path):
         should="one CacheWarning, a private temporary cache",
         claim="tool",
         call="HCV_CACHE_DIR owned by nobody",
+    )
+
+
+def test_a_keyed_numba_directory_others_can_write_is_refused(tmp_path):
+    """numba's files go to ``numba/<key>`` (`_numba_dir.numba_key`): that directory is checked too."""
+    cache = tmp_path / "cache"
+    keyed = cache / "numba" / _numba_dir.numba_key()  # the key a new process of this tree computes
+    keyed.mkdir(parents=True)
+    os.chmod(cache, 0o700)
+    os.chmod(cache / "numba", 0o700)
+    os.chmod(keyed, 0o777)
+    got = _run(tmp_path, cache)
+    assert_true(
+        got["value"] == 3.0
+        and len(got["warnings"]) == 1
+        and "writable by" in got["warnings"][0]
+        and str(keyed) in got["warnings"][0]
+        and not str(got["numba_cache_dir"]).startswith(str(cache))
+        and not any(keyed.iterdir()),
+        got=f"{got}",
+        should=f"one CacheWarning naming {keyed}, a private temporary cache, nothing written there",
+        claim="tool",
+        call="numba/<key> writable by all",
+    )
+
+
+@pytest.mark.parametrize("whose", ["the user's", "inherited from an hcv parent"])
+def test_numba_cache_dir_of_the_user_is_left_alone(tmp_path, whose):
+    """A NUMBA_CACHE_DIR the user set is used as it is (numba's own rule, file stamps only:
+    the docs say so); one an hcv process set for its children is replaced by the key's."""
+    cache, theirs = tmp_path / "cache", tmp_path / "theirs"
+    extra = {"NUMBA_CACHE_DIR": str(theirs)}
+    if whose != "the user's":
+        extra["_HCV_NUMBA_CACHE_DIR"] = str(theirs)
+    got = _run(tmp_path, cache, **extra)
+    if whose == "the user's":
+        expected = str(theirs)
+    else:
+        expected = str(cache / "numba" / _numba_dir.numba_key())
+    assert_true(
+        got["value"] == 3.0 and got["numba_cache_dir"] == expected and not got["warnings"],
+        got=f"{got}",
+        should=f"NUMBA_CACHE_DIR {expected}, no warning",
+        claim="tool",
+        call=f"NUMBA_CACHE_DIR {whose}",
     )

@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from reference_impl.bench.codes import SPEEDS, codes_table
+from reference_impl.theory.damping import zeta_from_restitution
 
 from .assertions import assert_close, assert_true
 
@@ -73,3 +76,168 @@ def test_calibration_table_finds_the_input_or_says_out_of_reach():
     out = by[("narrow", 0.5)]
     assert not out["found"] and "out of reach" in out["message"] and out["delivered"][1] < 0.5
     assert "unknown adapter" in by[("nowhere", 0.5)]["error"]
+
+
+# -- each asked e typed into the code as is (the table's point, docs/crosswalk.md) ------
+
+# Why a code is not here: its one-line install (its cases skip with it).
+_INSTALLED = {
+    "lammps": ("reference_impl.adapters.lammps", "lammps_available"),
+    "kratos": ("reference_impl.adapters.kratos", "kratos_available"),
+    "liggghts": ("reference_impl.adapters.liggghts", "liggghts_available"),
+    "yade": ("reference_impl.adapters.yade", "yade_available"),
+    "mujoco": ("reference_impl.adapters.mujoco", "mujoco_available"),
+}
+
+
+def _missing(spec: str) -> str | None:
+    import importlib
+
+    from reference_impl.adapters.registry import parse_spec
+
+    module, fn = _INSTALLED[parse_spec(spec)[0]]
+    return getattr(importlib.import_module(module), fn)()
+
+
+def _typed_input(law, p: float, e: float) -> list[tuple[str, float, float]]:
+    """(input, value in the code's mapping, value a user types for e) of one variant.
+
+    A user types e itself where the code's input is a restitution; YADE ViscElMat's
+    tc / cn and MuJoCo's dampratio are the linear spring-dashpot's of that e at q = 0
+    (Pournin 2001: tc = sqrt((pi^2 + ln^2 e) m / k), c = 2 zeta sqrt(m k), per material
+    2 c in series).
+    """
+    from reference_impl.bench.codes import HERTZ_K, HOOKE_K, MASS
+
+    par = law.params
+    k = HERTZ_K if p == 1.5 else HOOKE_K
+    zeta = zeta_from_restitution(e)
+    if "coef" in par:  # LAMMPS pair_coeff
+        return [("LAMMPS pair_coeff e", par["coef"], e)]
+    if "coefficientRestitution" in par:
+        return [("LIGGGHTS coefficientRestitution", par["coefficientRestitution"], e)]
+    if "gamma" in par:
+        return [("Kratos COEFFICIENT_OF_RESTITUTION", par["restitution"], e)]
+    if "ip2" in par:
+        return [("YADE Mindlin en", par["ip2"][1], e)] if par["ip2"][0] == "en" else []
+    if par.get("input") == "tc":
+        tc = math.sqrt((math.pi**2 + math.log(e) ** 2) * MASS / k)
+        return [("YADE ViscElMat en", par["material"]["en"], e),
+                ("YADE ViscElMat tc", par["material"]["tc"], tc)]  # fmt: skip
+    if par.get("input") == "kn":
+        return [("YADE ViscElMat cn", par["material"]["cn"], 4.0 * zeta * math.sqrt(MASS * k))]
+    return [("MuJoCo dampratio", par["solref"][1], zeta)]
+
+
+def _specs_run(monkeypatch, codes, asked):
+    """The adapter spec `codes_table` runs for each (code spec, asked e), without
+    running anything (the executor is refused and the spec kept)."""
+    from reference_impl.bench import codes as bc
+    from reference_impl.errors import HCVInputError
+
+    seen: list[str] = []
+
+    def refuse(spec):
+        seen.append(spec)
+        raise HCVInputError("not run here")
+
+    monkeypatch.setattr(bc, "make_executor", refuse)
+    bc.codes_table(codes=codes, asked=asked, steps=(200,), speeds=(0.01,))
+    return seen
+
+
+def _code_cases():
+    from reference_impl.bench.codes import CODES
+
+    return [pytest.param(c, id=c[1]) for c in CODES]
+
+
+@pytest.mark.parametrize("variant", _code_cases())
+def test_codes_table_types_e_into_the_code_as_is(monkeypatch, variant):
+    """Each variant of CODES gets each asked e in its own input unchanged, not the
+    input the adapter maps to deliver e (protocol hcv-adapter/2): the table shows what
+    the code does with e typed in. Checked on the adapter's mapping, no code run."""
+    from reference_impl.adapters.registry import get_adapter
+    from reference_impl.bench.codes import ASKED, _scene
+
+    code, spec, p = variant
+    reason = _missing(spec)
+    if reason:
+        pytest.skip(reason)
+    specs = _specs_run(monkeypatch, [variant], ASKED)
+    # one spec per asked e, or one for them all (the scene's e then goes through the
+    # adapter's own mapping)
+    assert len(specs) in (1, len(ASKED)), specs
+    for e, run in zip(ASKED, specs * len(ASKED) if len(specs) == 1 else specs, strict=True):
+        adapter = get_adapter(run)
+        try:
+            law = adapter.implemented_law(_scene(p, e, 0.01, 200))
+        finally:
+            adapter.close()
+        typed = _typed_input(law, p, e)
+        assert typed, f"got no e input in {law.params}, should have one [{CLAIM}, {run}]"
+        for what, got, want in typed:
+            # the value written as is: a float through the spec's repr, exactly
+            assert_close(got, want, rtol=0.0, claim=CLAIM, call=f"{run}: {what} for e = {e}")
+
+
+def _committed_row(spec: str, asked: float, n: int, v0: float) -> dict:
+    import json
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "reports" / "results.json"
+    rows = json.loads(path.read_text())["codes_side_by_side"]["rows"]
+    return next(
+        r for r in rows
+        if (r["spec"], r["asked"], r["steps_per_contact"], r["v0"]) == (spec, asked, n, v0)
+    )  # fmt: skip
+
+
+@pytest.mark.liggghts
+def test_liggghts_limit_force_delivers_its_own_e_for_e_typed():
+    """LIGGGHTS with limitForce on, coefficientRestitution 0.5 typed: the clipped contact
+    leaves at the zero-force end, e ~ 0.55 (the committed table's value), not the 0.5
+    the adapter's own mapping would deliver."""
+    from reference_impl.adapters.liggghts import liggghts_available
+
+    reason = liggghts_available()
+    if reason:
+        pytest.skip(reason)
+    spec = "liggghts[hertz,wall,limit_force=true]"
+    (row,) = codes_table(codes=[("LIGGGHTS", spec, 1.5)], asked=(0.5,), steps=(200,),
+                         speeds=(0.01,))  # fmt: skip
+    assert not row.error, row.error
+    want = _committed_row(spec, 0.5, 200, 0.01)["delivered"]
+    # the same LIGGGHTS input and step as the committed run: equal to its stored digits
+    # up to the text output's round-off (LIGGGHTS prints 17 significant digits)
+    assert_close(row.delivered, want, rtol=1e-12, claim=CLAIM, call=f"{spec}, e = 0.5 typed")
+    assert row.variant == "liggghts[hertz,wall,limit_force]", row.variant
+
+
+def test_calibration_table_keeps_the_other_inputs_as_typed(monkeypatch):
+    """`calibration_table` searches one option, which the adapters take over their own
+    mapping of e; the code's other e input is typed as is: YADE ViscElMat's tc is the
+    one of the asked e (as in the committed table), not the adapter's mapping of e at
+    the zero-force end. Checked on the specs the search is given, no code run."""
+    from reference_impl.adapters.registry import parse_spec
+    from reference_impl.bench import codes as bc
+    from reference_impl.errors import HCVInputError
+
+    seen: list[str] = []
+
+    def refuse(spec, scene, **kw):
+        seen.append(spec)
+        raise HCVInputError("not run here")
+
+    monkeypatch.setattr(bc, "calibrate", refuse)
+    rows = bc.calibration_table(asked=(0.5,))
+    assert len(seen) == len(bc.CALIBRATED) == len(rows), seen
+    for (_code, spec, _p, param, *_), run in zip(bc.CALIBRATED, seen, strict=True):
+        opts = parse_spec(run)[1]
+        assert param not in opts, f"got {run}, should leave {param} to the search [{CLAIM}]"
+        if spec == "yade[input=tc,geometry=wall]":
+            tc = math.sqrt((math.pi**2 + math.log(0.5) ** 2) * bc.MASS / bc.HOOKE_K)
+            assert_close(opts.get("tc", math.nan), tc, rtol=0.0, claim=CLAIM,
+                         call=f"{run}: YADE tc of e = 0.5 as typed")  # fmt: skip
+        else:
+            assert run == spec, f"got {run}, should be {spec} unchanged [{CLAIM}]"

@@ -174,3 +174,63 @@ def test_a_missing_program_is_refused_by_report_and_sweep_before_any_work(tmp_pa
     pytest.importorskip("distributed")
     _one_line_exit_2(capsys, ["sweep", str(spec), "--out", str(tmp_path / "sw")], "does not exist")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"], "got files written"
+
+
+# ----------------------------------------------------------------------------
+# issue 26: `hcv bench --gate ADAPTER` (the order before --gate took a value)
+# ----------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "argv, adapter, gate",
+    [
+        (["--gate", "reference"], "reference", "both"),
+        (["--gate", "cmd:./code", "--scenes", "hertz"], "cmd:./code", "both"),
+        (["--scenes", "hertz", "--gate", "reference"], "reference", "both"),
+        (["--gate", "delivery", "reference"], "reference", "delivery"),
+        (["reference", "--gate"], "reference", "both"),
+        (["reference", "--gate", "implementation"], "reference", "implementation"),
+    ],
+)
+def test_gate_before_the_adapter_parses(argv, adapter, gate):
+    from reference_impl import cli
+    from reference_impl.cli.bench import _adapter
+
+    args = cli._parser().parse_args(["bench", *argv])
+    got = (_adapter(args), args.gate)
+    assert got == (adapter, gate), (
+        f"got {got}, should be {(adapter, gate)} [issue 26, hcv bench {' '.join(argv)}]"
+    )
+
+
+def test_gate_before_the_adapter_runs_the_gate(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        "name = 's'\nmass = 0.01\nvelocities = [0.5]\n"
+        "[potential]\nfamily = 'power'\nk = 2e5\np = 1.0\n"
+    )
+    code = main(["bench", "--gate", "reference", "--scenes", str(scene)])
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert code == 0 and last.startswith("gate: pass"), (
+        f"got exit {code}, last line {last!r}, should be 0 and 'gate: pass ...' "
+        "[issue 26, hcv bench --gate reference]"
+    )
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["bench", "reference", "--gate", "hertz"], "write --gate KIND after the adapter"),
+        (["bench", "--gate"], "hcv bench needs an ADAPTER"),
+        (["bench"], "hcv bench needs an ADAPTER"),
+    ],
+)
+def test_a_gate_value_that_is_no_verdict_is_one_line(capsys, argv, needle):
+    _one_line_exit_2(capsys, argv, needle)
+
+
+def test_the_gate_kinds_of_the_parser_are_the_verdicts():
+    from reference_impl.bench._records import GATES
+    from reference_impl.cli.bench import _GATE_KINDS
+
+    assert set(_GATE_KINDS) == set(GATES), (
+        f"got {_GATE_KINDS}, should be {GATES} [issue 26, hcv bench --gate KIND]"
+    )

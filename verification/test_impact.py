@@ -169,6 +169,22 @@ def test_state_endpoints_and_continuity():
     assert_close(dq[5:-5], v[1:-1][5:-5], rtol=0, atol=2e-4 * 1.2, claim="impl", call="state(t)")
 
 
+@pytest.mark.parametrize("zeta", [0.0, 0.2])
+def test_state_at_the_peak_is_the_peak(zeta):
+    # The instant of maximum compression and its neighbours within rounding: the rising
+    # branch's quadrature may put T(s_peak) an ulp or two below the reported peak time.
+    sol = solve_impact(PowerLaw(1e9, 1.5), 0.0041, 1.0, zeta)
+    tp = sol._t_peak
+    t = np.array([np.nextafter(tp, 0.0), tp, np.nextafter(tp, 1.0)])
+    t = np.concatenate([t, tp * (1.0 + 1e-15 * np.arange(-3, 4))])
+    q, v = sol.state(t)
+    call = f"solve_impact(hertz, zeta={zeta}).state(t_peak +- 3e-15 relative)"
+    # q is flat at the peak: a time error dt moves it by ~a dt^2 / 2, far below 1e-13.
+    assert_close(q, sol.max_penetration, rtol=1e-13, claim="impl", call=call)
+    # v = -a dt with |a| ~ v0 / t_peak: |v| <= ~1e-14 v0 for dt ~ 1e-14 t_peak.
+    assert_close(v, 0.0, rtol=0, atol=1e-12 * sol.v0, claim="impl", call=call)
+
+
 @pytest.mark.parametrize(
     "args, err",
     [

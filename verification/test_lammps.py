@@ -170,22 +170,21 @@ def test_restitution_of_each_damping_model(model):
     if model == "coeff_restitution":
         assert_close(es[1], asked, rtol=1e-3, claim=CLAIM, call="coeff_restitution vs asked")
     if model == "tsuji":
+        # the adapter writes the e whose alpha(e) gives the asked zeta (alpha inverted):
+        # the declared law's exact e is the asked one (1e-12: brentq to round-off)
         version = get_adapter("lammps[damping=tsuji]").version
-        zeta = tsuji_alpha(asked, version) / math.sqrt(5.0)
-        assert_close(
-            exact[1],
-            restitution_from_zeta(zeta),
-            rtol=1e-12,
-            claim=CLAIM,
-            call="tsuji implemented law",
-        )
-        if version < 20260902:  # alpha without its sqrt(2): e too high (~0.80 for 0.729)
+        assert_close(exact[1], asked, rtol=1e-12, claim=CLAIM, call="tsuji implemented law")
+        written = adapter.implemented_law(scene_at("hertz-damped", 1.0)).params["coef"]
+        zeta = tsuji_alpha(written, version) / math.sqrt(5.0)
+        assert_close(zeta, 0.1, rtol=1e-12, claim=CLAIM, call="tsuji alpha(e written)")
+        if version < 20260902:  # alpha without its sqrt(2): e as written is too high
+            naive = restitution_from_zeta(tsuji_alpha(asked, version) / math.sqrt(5.0))
             assert_true(
-                es[1] / asked - 1 > 0.05,
-                got=f"e = {es[1]:.4f}",
-                should=f"well above {asked:.4f}",
+                naive / asked - 1 > 0.05,
+                got=f"e = {naive:.4f} for tsuji e = {asked:.4f} written as is",
+                should=f"well above {asked:.4f} (~0.80)",
                 claim=CLAIM,
-                call="tsuji vs asked",
+                call="tsuji's own e -> alpha map",
             )
 
 
@@ -196,7 +195,7 @@ def test_limit_damping_restitution_is_the_zero_force_end():
     law = adapter.implemented_law(s)
     adapter.close()
     ex = exact_reference(law, 1.0)
-    sol = solve_impact(s.potential, s.mass, 1.0, s.zeta)
+    sol = solve_impact(s.potential, s.mass, 1.0, law.zeta)
     assert m["tensile"] == 0.0 and ex["tensile"] == 0.0
     assert_close(
         ex["restitution"],
@@ -205,6 +204,10 @@ def test_limit_damping_restitution_is_the_zero_force_end():
         claim=CLAIM,
         call="exact_reference(clips_tension)",
     )
+    # protocol 2: the clipped contact leaves at the zero-force end, so the adapter asks
+    # the zeta whose zero-force e is the asked one (1e-12: inverted to a few ulps)
+    assert_close(ex["restitution"], s.restitution_asked, rtol=1e-12, claim=CLAIM,
+                 call="LAMMPS limit_damping: declared law's e vs asked")  # fmt: skip
     assert_close(
         m["restitution"],
         ex["restitution"],
@@ -225,8 +228,8 @@ def test_limit_damping_restitution_is_the_zero_force_end():
 def test_hcv_bench_lammps_gate(tmp_path):
     """The gate over every default LAMMPS variant on one damped scene: runs, reports, exits 1.
 
-    (tsuji asks 0.729 and gets ~0.80 on LAMMPS before 2Sep2026; the constant dashpots
-    depend on v0), with a scorecard on stdout and JSON and JUnit files.
+    (the constant dashpots depend on v0), with a scorecard on stdout and JSON and JUnit
+    files.
     """
     js, xml = tmp_path / "lammps.json", tmp_path / "lammps.xml"
     fast = tmp_path / "fast.toml"

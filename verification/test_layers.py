@@ -24,7 +24,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
     frozenset(x)
     for x in (
         {"_version", "_atomic"},
-        {"errors"},
+        {"errors", "_numba_dir"},
         {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
         {"_stored"},
         {"potentials"},

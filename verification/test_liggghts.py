@@ -126,7 +126,7 @@ def test_liggghts_integrates_the_reference_verlet_scheme():
     )
 
 
-# The issue's table at 200 steps per contact (asked e -> delivered e).
+# The issue's table at 200 steps per contact (coefficientRestitution e -> delivered e).
 ISSUE_TABLE = {
     False: {0.9: 0.9002, 0.5: 0.5000, 0.2: 0.1990},
     True: {0.9: 0.9021, 0.5: 0.5504, 0.2: 0.3246},
@@ -142,10 +142,13 @@ def test_issue_28_table_of_delivered_restitution(limit):
     the step's error (first order in the damping: the dashpot sees the half-step
     velocity; measured on the reference Verlet, 5e-3 relative at e = 0.2 and 200
     steps per contact, 1.3x kept as margin), and the issue's table within its 4
-    digits (plus 1e-4 for its own rounding of v0 and the step).
+    digits (plus 1e-4 for its own rounding of v0 and the step). The table is LIGGGHTS's
+    answer to coefficientRestitution = e written as is (the ``restitution`` option).
     """
-    adapter = get_adapter(f"liggghts[hertz,wall,limit_force={str(limit).lower()}]")
     for e, table in ISSUE_TABLE[limit].items():
+        adapter = get_adapter(
+            f"liggghts[hertz,wall,limit_force={str(limit).lower()},restitution={e}]"
+        )
         got = []
         for v0 in (0.01, 100.0):
             s = issue_scene(e, v0)
@@ -180,6 +183,25 @@ def test_issue_28_table_of_delivered_restitution(limit):
         # the universal law: the same e four decades of speed apart (round-off only)
         assert_close(got[0], got[1], rtol=1e-9, claim=CLAIM, call=f"e({e}) at 0.01 vs 100 m/s")
         assert_close(got[0], table, rtol=0, atol=1.5e-4, claim=CLAIM, call=f"issue table, e = {e}")
+
+
+def test_limit_force_delivers_the_asked_e():
+    """Protocol 2: with ``limitForce on`` the contact leaves at the zero-force end, so the
+    adapter writes the coefficientRestitution whose zeta has the asked e (0.5 at q = 0
+    here) there: 0.436, below 0.5. One run: the declared law's exact e is 0.5 (1e-12:
+    zeta inverted to a few ulps), LIGGGHTS delivers it within the step error (< 5e-3 at
+    200 steps, as above), where coefficientRestitution = 0.5 gives 0.5504 (the table).
+    e = 0.2 would need coefficientRestitution below LIGGGHTS's floor 0.05: declined."""
+    adapter = get_adapter("liggghts[hertz,wall,limit_force=true]")
+    s = issue_scene(0.5, 1.0)
+    e_in = adapter.mapping(s)["coefficientRestitution"]
+    assert_true(e_in < 0.44, got=f"coefficientRestitution {e_in!r}", should="< 0.44",
+                claim=CLAIM, call="limit_force mapping, e = 0.5 asked at q = 0")  # fmt: skip
+    exact = exact_reference(adapter.implemented_law(s), 1.0)["restitution"]
+    assert_close(exact, 0.5, rtol=1e-12, claim=CLAIM, call="limit_force: declared law's e")
+    m = measure(adapter.impact(s), 1.0)["restitution"]
+    assert_close(m, 0.5, rtol=5e-3, claim=CLAIM, call="limit_force: delivered e, asked 0.5")
+    assert "0.05" in str(adapter.supports(issue_scene(0.2, 1.0)))
 
 
 def test_traps_hard_particles_and_limitforce_placement():

@@ -346,3 +346,38 @@ def test_cancellation_far_from_contact_is_evaluated_at_raised_precision():
             claim="expression",
             call=f"Expression('q - tanh(q)').d2U({q})",
         )
+
+
+# SaturatingForce's float U = F0 q_s (x - atan x), x = q/q_s: the difference cancels by
+# 3/x^2 (48 at the switch x = 0.25), and atan and the subtraction each round once:
+# 48 x 2 x 1.1e-16 = 1.1e-14 above the switch; below it the 14-term series truncates at
+# 1.4e-18 and its Horner sum rounds a few ulps. Main's 3-term series switching at
+# x = 0.01 was 3e-13 off on both sides (found through the general-law solver's bound).
+_SAT_U_RTOL = 1.1e-14
+
+
+def test_saturating_energy_is_correctly_rounded_in_float64_and_in_the_verlet_kernel():
+    from reference_impl.integrators.verlet_kernel import _force_energy, kernel_terms
+    from reference_impl.potentials import SaturatingForce
+
+    pot = SaturatingForce(2.0, 0.5)
+    q = np.concatenate([np.geomspace(1e-6, 5.0, 1201), [0.005, 0.0050001, 0.125, 0.1249999]])
+    with mpmath.workdps(40):
+        truth = np.array(
+            [float(2.0 * 0.5 * (mpmath.mpf(x) / 0.5 - mpmath.atan(mpmath.mpf(x) / 0.5)))
+             for x in q]
+        )  # fmt: skip
+    fam, par = kernel_terms(pot)
+    for name, got in (
+        ("SaturatingForce._U", pot._U(q)),
+        ("verlet_kernel._force_energy", np.array([_force_energy(x, fam, par)[1] for x in q])),
+    ):
+        err = np.abs(got / truth - 1.0)
+        worst = int(np.argmax(err))
+        assert_true(
+            err[worst] <= _SAT_U_RTOL,
+            got=f"relative error {err[worst]:.3g} at q = {q[worst]!r} m",
+            should=f"<= {_SAT_U_RTOL:g} (cancellation 3/x^2 <= 48 at the switch)",
+            claim="float64 U of SaturatingForce",
+            call=name,
+        )

@@ -46,20 +46,7 @@ def test_every_family_has_a_scene(study):
     )
 
 
-# Registered families the study cannot hold yet, each with its measured cause.
-_NOT_IN_STUDY = {
-    "saturating": pytest.mark.xfail(
-        strict=True,
-        reason="the study's 30-digit truth (exact.solve_impact_mp) fails for SaturatingForce: "
-        "'inverse of U at 51 digits: Newton for U(q) = 3.5e-8 J did not converge' "
-        "(F0 = q_s = 1, m = 1 kg, v0 = 1 and 8 m/s, zeta = 0 and 0.2; measured 2026-11-26)",
-    ),
-}
-
-
-@pytest.mark.parametrize(
-    "family", [pytest.param(f, marks=_NOT_IN_STUDY.get(f, ())) for f in sorted(FAMILIES)]
-)
+@pytest.mark.parametrize("family", sorted(FAMILIES))
 def test_every_registered_family_has_a_study_scene(family):
     """The study's families are the registry's: a new family fails here until it has a scene
     (no list to edit), and `FAMILY_NAMES` only names registered ones."""

@@ -60,7 +60,12 @@ def scene_at(name: str, v0: float, steps_per_contact: int = 200) -> AdapterScene
     return AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, 4 * steps_per_contact)
 
 
-def issue_scene(k: float, p: float, e: float, v0: float, spc: int = 200) -> AdapterScene:
+def issue_scene(
+    k: float, p: float, e: float, v0: float, spc: int = 200, end: str = "overlap"
+) -> AdapterScene:
+    """The issue-28 scene: the universal law of e at q = 0, asking at ``end`` (at the
+    zero-force end it asks that law's zero-force e, which YADE, clipping tension,
+    delivers with the same zeta: its inputs are then those a user sets for e)."""
     pot = PowerLaw(k, p)
     zeta = zeta_from_restitution(e)
     t_c = solve_impact(pot, MASS, v0, zeta).contact_time
@@ -76,6 +81,7 @@ def issue_scene(k: float, p: float, e: float, v0: float, spc: int = 200) -> Adap
         dt=t_c / spc,
         n_steps=4 * spc,
         velocities=(0.01, 1.0, 100.0),
+        restitution_end=end,
     )
 
 
@@ -115,7 +121,8 @@ def test_yade_force_is_the_declared_law(yade, label):
         call=f"{label}.probe_forces at 12 states",
     )
     if adapter.inputs[0] == "en":
-        assert_close(phys["betan"], thornton_betan(s.restitution), rtol=1e-14, claim=CLAIM,
+        en = adapter.mapping(s)["scene"]["ip2"][1]  # the en written (Thornton inverted)
+        assert_close(phys["betan"], thornton_betan(en), rtol=1e-14, claim=CLAIM,
                      call="YADE's betan of en vs Thornton 2013 B6-B7")  # fmt: skip
     if adapter.inputs[0] == "tc" and adapter.geoms[0] == "wall":
         # the wall's zero mass is replaced by the sphere's: massR = m/2, k comes out halved
@@ -148,17 +155,19 @@ def test_realigned_trajectory_is_the_reference_verlet(yade):
     )
 
 
-# The issue's table at 200 steps per contact (asked e -> delivered e).
+# The issue's table at 200 steps per contact (the input e a user writes -> delivered e).
 EN_TABLE = {0.9: 0.9000, 0.5: 0.5000, 0.2: 0.1997}
 TC_TABLE = {0.9: 0.9290, 0.5: 0.6446, 0.2: 0.4266}
 
 
 def test_issue_28_table_hertz_mindlin_en(yade):
-    """en = e delivers e (Thornton's fit, clipped contact) at 0.01 and 100 m/s; YADE is
-    the reference Verlet of the declared law to round-off (1e-9), and within the step
-    error of its exact value (first order in the damping: < 5e-3 at 200 steps)."""
-    adapter = yade["yade[en,wall]"]
+    """en = e written as is (the ``en`` option) delivers e to Thornton's fit (clipped
+    contact) at 0.01 and 100 m/s; YADE is the reference Verlet of the declared law to
+    round-off (1e-9), and within the step error of its exact value (first order in the
+    damping: < 5e-3 at 200 steps)."""
     for e, table in EN_TABLE.items():
+        adapter = YadeAdapter(input="en", geometry="wall", en=e)
+        adapter._server = yade["yade[en,wall]"].server  # the module's one YADE process
         got = []
         for v0 in (0.01, 100.0):
             s = issue_scene(1.0879e10, 1.5, e, v0)
@@ -174,17 +183,36 @@ def test_issue_28_table_hertz_mindlin_en(yade):
 
 
 def test_issue_28_table_viscelmat_tc_on_a_wall(yade):
-    """tc/en on a wall (Hooke k = 1e6): massR = m/2 halves k and c, so e comes out high.
-    Against the exact e of the declared (halved, clipped) law within 1 %: first order in
-    the damping plus YADE's dashpot acting at q = 0 on the first step (measured 0.6 %
-    at e = 0.2, 200 steps per contact); against the issue's table within its digits."""
+    """tc/en of e on a wall (Hooke k = 1e6): massR = m/2 halves k and c, so e comes out
+    high. Against the exact e of the declared (halved, clipped) law within 1 %: first
+    order in the damping plus YADE's dashpot acting at q = 0 on the first step (measured
+    0.6 % at e = 0.2, 200 steps per contact); against the issue's table within its
+    digits. The scene asks at the zero-force end, so the inputs are the user's tc, en
+    for e (`issue_scene`)."""
     adapter = yade["yade[tc,wall]"]
     for e, table in TC_TABLE.items():
-        s = issue_scene(1.0e6, 1.0, e, 1.0)
+        s = issue_scene(1.0e6, 1.0, e, 1.0, end="zero-force")
+        en = adapter.mapping(s)["scene"]["material"]["en"]
+        # round trip e -> zeta -> e at q = 0: a few ulps
+        assert_close(en, e, rtol=1e-14, claim=CLAIM, call=f"tc wall: en written for e = {e}")
         m = measure(adapter.impact(s), 1.0)["restitution"]
         exact = exact_reference(adapter.implemented_law(s), 1.0)["restitution"]
         assert_close(m, exact, rtol=1e-2, claim=CLAIM, call=f"tc wall e = {e} vs exact")
         assert_close(m, table, rtol=0, atol=1.5e-4, claim=CLAIM, call=f"issue table tc e={e}")
+
+
+def test_betan_delivers_the_asked_e_though_yade_clips(yade):
+    """Protocol 2: YADE clips tension, so the adapter asks betan of the zeta whose
+    zero-force e is the asked one (0.5 at q = 0 here). One run: the declared law's
+    exact e is 0.5 (1e-12: zeta inverted to a few ulps), and YADE delivers it within
+    the step error (first order in the damping: < 5e-3 at 200 steps, as above). With
+    the scene's own zeta YADE would deliver 0.55."""
+    adapter = yade["yade[betan,wall]"]
+    s = issue_scene(1.0879e10, 1.5, 0.5, 1.0)
+    exact = exact_reference(adapter.implemented_law(s), 1.0)["restitution"]
+    assert_close(exact, 0.5, rtol=1e-12, claim=CLAIM, call="betan wall: declared law's e")
+    m = measure(adapter.impact(s), 1.0)["restitution"]
+    assert_close(m, 0.5, rtol=5e-3, claim=CLAIM, call="betan wall: delivered e, asked 0.5")
 
 
 def test_launcher_traps_opts_global_and_default_damping(tmp_path):

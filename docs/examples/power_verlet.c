@@ -1,4 +1,4 @@
-/* A complete contact code for `hcv bench "cmd:./power_verlet"` (protocol hcv-adapter/1).
+/* A complete contact code for `hcv bench "cmd:./power_verlet"` (protocol hcv-adapter/2).
  *
  * Reads one JSON request on stdin, integrates the normal impact with velocity
  * Verlet and writes the trajectory as JSON on stdout (docs/adapter-protocol.md).
@@ -83,6 +83,8 @@ int main(void) {
         !number(req, "v0", &v0) || !number(req, "dt", &dt) || !number(req, "n_steps", &nd))
         fail("request lacks k, p, mass, v0, dt or n_steps");
     law = value_of(req, "law");
+    if (law && strncmp(law, "\"universal\"", 11) != 0 && strncmp(law, "\"none\"", 6) != 0)
+        decline("integrates the universal damping law (or none) only");
     if (law && strncmp(law, "\"universal\"", 11) == 0 && !number(req, "zeta", &zeta))
         fail("universal damping without zeta");
     long n_max = (long)nd, n = 0;

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import math
 
-from reference_impl.adapters._mujoco_support import zeta_zero_force
-from reference_impl.adapters._records import AdapterScene, ImplementedLaw
+from reference_impl.adapters._asked import asked_universal_zeta
+from reference_impl.adapters._codes_common import default_radius
+from reference_impl.adapters._records import AdapterDeclined, AdapterScene, ImplementedLaw
 from reference_impl.adapters.law_damping import LawDamping
 from reference_impl.potentials.base import SumPotential
 from reference_impl.potentials.power import PowerLaw
@@ -22,9 +23,6 @@ __all__ = ["asked_zeta", "mjcf", "scene_mapping"]
 # MuJoCo's impedance clamp (mjMINIMP, mjMAXIMP) and default solimp / solref.
 _MINIMP, _MAXIMP = 1e-4, 0.9999
 _DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %): the
-# radius does not enter the sphere-plane distance law, only the picture.
-_RADIUS_OVER_QMAX = 100.0
 
 
 def _clamp_imp(x: float) -> float:
@@ -32,16 +30,30 @@ def _clamp_imp(x: float) -> float:
 
 
 def asked_zeta(scene: AdapterScene, end: str, dampratio, damping) -> float:
-    """Damping ratio asked of MuJoCo at full impedance."""
+    """Damping ratio asked of MuJoCo at full impedance.
+
+    Calibrated to the restitution the scene asks (``restitution_asked``, read at the
+    scene's ``restitution_end``) so that the universal law's e at the adapter's ``end``
+    is that value: ``overlap`` exp(-pi zeta / sqrt(1 - zeta^2)), ``zero-force``
+    exp(-2 zeta s_peak) (what MuJoCo, which clips tension, delivers at both ends), by
+    the helper every built-in adapter shares
+    (`reference_impl.adapters._asked.asked_universal_zeta`). When the two ends agree
+    this is the scene's own zeta, exactly.
+
+    Raises
+    ------
+    AdapterDeclined
+        A damping law other than the universal one (or none): MuJoCo's constant
+        dashpot is not it, and treating it as undamped would score the wrong law.
+    """
+    reason = scene.universal_only("mujoco")
+    if reason:
+        raise AdapterDeclined(reason)
     if dampratio is not None:
         return dampratio
     if damping is not None:
         return damping / (2.0 * math.sqrt(scene.mass * scene.potential.k))
-    if scene.damping != "universal" or not scene.zeta:
-        return 0.0
-    if end == "zero-force":
-        return zeta_zero_force(scene.restitution)
-    return float(scene.zeta)
+    return asked_universal_zeta(scene, end)
 
 
 def scene_mapping(
@@ -72,8 +84,7 @@ def scene_mapping(
     zeta = asked_zeta(scene, end, dampratio, damping)
     c = 2.0 * zeta * math.sqrt(m * k)
     vmax = max(scene.velocities or (scene.v0,))
-    q_top = float(pot.turning_point(0.5 * m * vmax * vmax))
-    R = float(radius if radius is not None else _RADIUS_OVER_QMAX * q_top)
+    R = default_radius(scene, radius)
     if impedance == "constant":
         d = _clamp_imp(imp)
         solimp = (d, d, _DEFAULT_SOLIMP[2], _DEFAULT_SOLIMP[3], _DEFAULT_SOLIMP[4])

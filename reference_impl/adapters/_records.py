@@ -14,7 +14,10 @@ import numpy as np
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
 from reference_impl.scenes import potential_to_dict
-from reference_impl.theory.damping import restitution_from_zeta
+from reference_impl.theory.damping import (
+    restitution_from_zeta,
+    restitution_zero_force_from_zeta,
+)
 
 __all__ = [
     "AdapterDeclined",
@@ -80,9 +83,11 @@ class AdapterScene:
     v0 : float
         Approach speed at contact onset (m/s, > 0).
     damping : str
-        "none" or "universal".
+        The damping law's name: "none", "universal" or another law of
+        `reference_impl.theory.laws` ("linear", "power", "polynomial", "viscoelastic",
+        "hunt-crossley").
     zeta : float
-        Damping ratio of the universal law (0 for "none").
+        Damping ratio of the universal law (0 for every other law).
     dt : float
         Time step (s).
     n_steps : int
@@ -91,6 +96,22 @@ class AdapterScene:
         Every speed of the scene (m/s).
     gap : float or None
         Free-flight gap between the walls (m), "two-walls" only.
+    law : dict
+        The damping law with its (solved) parameters in the form of a scene's
+        ``[damping]`` table and of ``implemented_law.damping``, e.g.
+        ``{"law": "hunt-crossley", "alpha": 0.31}`` (s/m); empty: derived from
+        ``damping`` and ``zeta``.
+    restitution_asked : float or None
+        The restitution the scene asks at ``restitution_end`` (at ``restitution_speed``
+        for a speed-dependent law); None: the universal law's e from ``zeta`` at
+        ``restitution_end`` (1 without damping).
+    restitution_end : str
+        Where the asked restitution is read: "overlap" (q back to 0) or "zero-force"
+        (the total force first 0 after maximum compression).
+    restitution_speed : float or None
+        Impact speed (m/s) at which a speed-dependent law's restitution was asked
+        (its strength was solved there); None for the universal law or a law given
+        by its parameters.
     """
 
     name: str
@@ -105,16 +126,64 @@ class AdapterScene:
     n_steps: int
     velocities: tuple[float, ...] = ()
     gap: float | None = None
+    law: dict = field(default_factory=dict)
+    restitution_asked: float | None = None
+    restitution_end: str = "overlap"
+    restitution_speed: float | None = None
+
+    def __post_init__(self):
+        if not self.law:  # built by older callers from damping and zeta alone
+            table = {"law": "universal", "zeta": float(self.zeta)}
+            object.__setattr__(
+                self, "law", table if self.damping == "universal" else {"law": "none"}
+            )
+        if self.restitution_asked is None:
+            e = 1.0
+            if self.damping == "universal" and self.zeta:
+                e = float(
+                    restitution_zero_force_from_zeta(self.zeta)
+                    if self.restitution_end == "zero-force"
+                    else restitution_from_zeta(self.zeta)
+                )
+            object.__setattr__(self, "restitution_asked", e)
 
     @property
     def restitution(self) -> float:
-        """Restitution asked for: exp(-pi zeta / sqrt(1 - zeta^2)), 1 without damping."""
-        return restitution_from_zeta(self.zeta) if self.damping == "universal" else 1.0
+        """Protocol-1 restitution: the universal law's exp(-pi zeta / sqrt(1 - zeta^2))
+        (the overlap end, whatever end the scene asks), 1 without damping; for any other
+        law the asked one (`restitution_asked`). Read `restitution_asked` at
+        `restitution_end` for what the scene asks."""
+        if self.damping == "universal":
+            return restitution_from_zeta(self.zeta)
+        if self.damping == "none":
+            return 1.0
+        return float(self.restitution_asked)
+
+    def universal_only(self, who: str) -> str | None:
+        """Why a code that integrates the universal law only (or none) declines this
+        scene (one line naming the law), or None when the scene's law is one of them."""
+        if self.damping in ("none", "universal"):
+            return None
+        params = ", ".join(f"{k} = {v!r}" for k, v in self.law.items() if k != "law")
+        asked = (
+            f" (solved for e = {self.restitution_asked:g} at "
+            f"{self.restitution_speed:g} m/s, {self.restitution_end} end)"
+            if self.restitution_speed is not None
+            else ""
+        )
+        return (
+            f"{who} maps only the universal damping law (or none) onto the code's inputs, "
+            f"not the scene's {self.damping!r} law ({params}){asked}"
+        )
 
     def replace(self, **changes) -> AdapterScene:
-        """A copy with some fields changed (e.g. dt, n_steps, v0)."""
+        """A copy with some fields changed (e.g. dt, n_steps, v0). Changing ``damping`` or
+        ``zeta`` alone re-derives ``law`` and ``restitution_asked`` from them."""
         from dataclasses import replace
 
+        if ("zeta" in changes or "damping" in changes) and "law" not in changes:
+            changes["law"] = {}
+            changes.setdefault("restitution_asked", None)
         return replace(self, **changes)
 
     def to_json(self) -> dict[str, Any]:
@@ -125,26 +194,52 @@ class AdapterScene:
             "potential": dict(self.potential_spec),
             "mass": self.mass,
             "v0": self.v0,
-            "damping": {"law": self.damping, "zeta": self.zeta, "restitution": self.restitution},
+            "damping": {
+                # protocol 1's fields, unchanged for the universal law and none
+                "law": self.damping,
+                "zeta": self.zeta,
+                "restitution": self.restitution,
+                # protocol 2: the law's (solved) parameters and what the scene asks
+                "params": dict(self.law),
+                "restitution_asked": self.restitution_asked,
+                "restitution_end": self.restitution_end,
+            },
             "dt": self.dt,
             "n_steps": int(self.n_steps),
             "velocities": list(self.velocities),
         }
+        if self.restitution_speed is not None:
+            out["damping"]["restitution_speed"] = self.restitution_speed
         if self.gap is not None:
             out["gap"] = self.gap
         return out
 
     @classmethod
     def from_scene(cls, scene, v0: float, dt: float, n_steps: int) -> AdapterScene:
-        """Build from a validated `reference_impl.scenes.Scene` at one speed."""
-        if scene.damping_law not in ("none", "universal"):
-            # Sending it as "none" would score codes against the wrong law.
-            raise HCVInputError(
-                f"scene {scene.name!r}: hcv bench sends scenes with damping law 'none' or "
-                f"'universal' (got {scene.damping_law!r}); a code that integrates another law "
-                "declares it in implemented_law.damping and is scored against it"
-            )
-        zeta = float(scene.zeta or 0.0) if scene.damping_law == "universal" else 0.0
+        """Build from a validated `reference_impl.scenes.Scene` at one speed: any damping
+        law, with its solved parameters and the restitution the scene asks."""
+        law = scene.law.to_dict() if scene.law is not None else {"law": "none"}
+        name = scene.damping_law
+        zeta = float(scene.zeta or 0.0) if name == "universal" else 0.0
+        eq = getattr(scene, "equivalent_universal_zeta", None)
+        if name not in ("none", "universal") and eq is not None:
+            # The scene's law is the universal law at zeta = eq (a constant C on Hooke, or
+            # a law at strength 0): sent as such, so a code that maps only the universal
+            # law runs it instead of declining (`Scene.equivalent_universal_zeta`).
+            name, zeta, law = "universal", float(eq), {"law": "universal", "zeta": float(eq)}
+        if name == "universal" and zeta == 0.0:
+            name, law = "none", {"law": "none"}
+        end = getattr(scene, "restitution_end", "overlap")
+        cal = getattr(scene, "calibration", None) or {}
+        speed = cal.get("restitution_speed")
+        if "restitution" in cal:
+            asked = float(cal["restitution"])
+        elif name in ("none", "universal"):
+            asked = None  # from zeta at the asked end (`__post_init__`)
+        else:
+            # a law given by its parameters: its e depends on the speed; what it asks
+            # is its own exact e at this run's speed (`reference_impl.exact.general_law`)
+            asked = _law_restitution(scene, law, float(v0), end)
         return cls(
             name=scene.name,
             kind=scene.kind,
@@ -152,13 +247,26 @@ class AdapterScene:
             potential_spec=potential_to_dict(scene.potential),
             mass=float(scene.mass),
             v0=float(v0),
-            damping=scene.damping_law if zeta > 0 else "none",
+            damping=name,
             zeta=zeta,
             dt=float(dt),
             n_steps=int(n_steps),
             velocities=tuple(scene.velocities),
             gap=scene.gap,
+            law=law,
+            restitution_asked=asked,
+            restitution_end=end,
+            restitution_speed=None if speed is None else float(speed),
         )
+
+
+def _law_restitution(scene, law: dict, v0: float, end: str) -> float:
+    """Exact restitution of a scene's law (not the universal one) at v0 and ``end``."""
+    from reference_impl.exact.general_law import solve_law_impact
+    from reference_impl.theory.laws import law_from_dict
+
+    sol = solve_law_impact(scene.potential, float(scene.mass), v0, law_from_dict(law))
+    return float(sol.restitution_zero_force if end == "zero-force" else sol.restitution)
 
 
 @dataclass

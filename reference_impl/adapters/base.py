@@ -25,8 +25,13 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
    *effective* mass ``mass`` (kg), the approach speed ``v0`` (m/s, > 0), the
    damping asked for (``damping`` = "none" or "universal" with ratio ``zeta``, i.e.
    C(q) = 2 zeta sqrt(m) U'/sqrt(2U), whose restitution is ``restitution`` at every
-   speed), the time step ``dt`` (s) and a step budget ``n_steps``; ``velocities``
-   lists every speed of the scene (for codes that calibrate a damping constant).
+   speed, or another law of `reference_impl.theory.laws`; ``law`` is the law with
+   its solved parameters, e.g. ``{"law": "hunt-crossley", "alpha": 0.31}``, and
+   ``restitution_asked`` the e the scene asks at ``restitution_end``, for a
+   speed-dependent law at ``restitution_speed``), the time step ``dt`` (s) and a
+   step budget ``n_steps``; ``velocities`` lists every speed of the scene (for codes
+   that calibrate a damping constant). A code that integrates the universal law only
+   declines other laws (item 7; `AdapterScene.universal_only` words the reason).
    ``cmd:``: the ``"scene"`` object of the request (`AdapterScene.to_json`).
 3. Start at contact onset: t = 0, overlap q = 0, dq/dt = v0 (q > 0 is overlap,
    dq/dt > 0 approaching). For two bodies, q is the total overlap and ``mass``
@@ -110,6 +115,7 @@ from reference_impl.adapters._records import (
     PowerDamping,
     Trajectory,
 )
+from reference_impl.adapters.law_damping import scene_law
 
 __all__ = [
     "AdapterDeclined",
@@ -174,13 +180,9 @@ class ContactAdapter:
         return None
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
-        """The law the code integrates for this scene; default: exactly the scene's."""
-        return ImplementedLaw(
-            scene.potential,
-            scene.mass,
-            zeta=scene.zeta,
-            description="as asked (the adapter declares no other law)",
-        )
+        """The law the code integrates for this scene; default: exactly the scene's
+        (any damping law, with its solved parameters: `reference_impl.adapters.law_damping.scene_law`)."""
+        return scene_law(scene, description="as asked (the adapter declares no other law)")
 
     def variants(self) -> list[ContactAdapter]:
         """Configurations benchmarked separately; default: this adapter alone."""

@@ -36,6 +36,15 @@ The adapter reads gamma from Kratos' own functions, so the declared law is the
 law Kratos integrates; whether its restitution is the asked one is what the
 scorecard's ``restitution_asked`` tells.
 
+What is asked (protocol ``hcv-adapter/2``): the e Kratos is given is chosen so that
+its gamma delivers the scene's ``restitution_asked`` at the scene's
+``restitution_end`` (`kratos_restitution`): the contact is clipped, so the target is
+the universal law's zeta whose zero-force restitution is the asked e, at either end.
+Linear: Kratos' own closed form at that zeta (gamma then within Kratos' bisection
+interval, 16 / 2^18 = 6.1e-5, of it). Hertz: Thornton's fit inverted (to round-off);
+e near 1 (zeta below gamma(0.999) sqrt(6/5) = 0.0051) gets gamma = 0 or 0.0047,
+whichever is nearer. The ``restitution`` option bypasses this (Kratos' input as given).
+
 Time schemes and staggering
 ---------------------------
 ``Symplectic_Euler`` (Kratos' default): v_{n+1} = v_n + F(x_n, v_n)/m dt, then
@@ -67,25 +76,41 @@ from importlib import metadata
 
 import numpy as np
 
+from reference_impl.adapters._asked import asked_universal_zeta, delivery_end, invert_decreasing
+from reference_impl.adapters._codes_common import (
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import restitution_zero_force_from_zeta
 
-__all__ = ["GEOMETRIES", "LAWS", "SCHEMES", "KratosAdapter", "kratos_available", "load_kratos"]
+__all__ = [
+    "GEOMETRIES",
+    "LAWS",
+    "SCHEMES",
+    "KratosAdapter",
+    "kratos_available",
+    "kratos_restitution",
+    "load_kratos",
+]
 
 LAWS = {"hertz": "DEM_D_Hertz_viscous_Coulomb", "linear": "DEM_D_Linear_viscous_Coulomb"}
 SCHEMES = {"euler": "Symplectic_Euler", "verlet": "Velocity_Verlet"}
 GEOMETRIES = ("wall", "pair")
 # Force lag (steps) of TOTAL_FORCES after a step, per scheme (measured, see the docstring).
 _FORCE_LAG = {"euler": 1, "verlet": 0}
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %).
-_RADIUS_OVER_QMAX = 100.0
 # Kratos' linear law: modified radius r sqrt(alpha (2 - alpha)), alpha = 0.05, and the
 # sphere-sphere factor beta (DEM_D_Linear_viscous_Coulomb_CL.cpp).
 _LINEAR_RADIUS_FACTOR = 0.31225
 _LINEAR_BETA_PAIR = 1.432
 # Half-width of the square wall, in sphere radii (the sphere hits its centre).
 _WALL_HALF_WIDTH = 10.0
+# Kratos' range of COEFFICIENT_OF_RESTITUTION (sphere_strategy.py: e < 0.001 is raised
+# to 0.001, e > 0.999 gives gamma = 0).
+_E_RANGE = (0.001, 0.999)
 
 _KRATOS = None  # (KratosMultiphysics, DEMApplication, DEMAnalysisStage) once loaded
 
@@ -164,6 +189,28 @@ def kratos_gamma(law: str, e: float) -> float:
     )
 
 
+def kratos_restitution(law: str, scene: AdapterScene) -> float:
+    """COEFFICIENT_OF_RESTITUTION whose Kratos gamma delivers the scene's asked e.
+
+    Kratos clips tension, so its restitution is the universal law's zero-force one
+    at either end: the target is zeta_a = the zero-force inverse of the asked e
+    (`reference_impl.adapters._asked`). Linear law: Kratos' gamma is the root of the
+    closed form exp(-2 gamma arccos(gamma) / sqrt(1 - gamma^2)) = e, so e is that
+    closed form at zeta_a (Kratos' bisection then finds gamma to its 1e-4 interval).
+    Hertz: Thornton's fit gamma(e) x sqrt(6/5) is inverted on Kratos' range
+    [0.001, 0.999], where it decreases (14.2 to 0.0047); a zeta_a below its range
+    (e above ~0.99) gets 1 (gamma = 0), one above it 0.001 (Kratos' own floor).
+    """
+    zeta = asked_universal_zeta(scene, delivery_end(scene, clips_tension=True))
+    if not zeta:
+        return 1.0
+    if law == "linear":
+        return restitution_zero_force_from_zeta(zeta)
+    scale = math.sqrt(1.2)  # zeta = gamma sqrt(6/5) for Hertz (module docstring)
+    e = invert_decreasing(lambda x: kratos_gamma("hertz", x) * scale, zeta, *_E_RANGE)
+    return 1.0 if e == _E_RANGE[1] and zeta < 0.5 * kratos_gamma("hertz", e) * scale else e
+
+
 class KratosAdapter(ContactAdapter):
     """Head-on normal impacts in Kratos DEM (see the module docstring for the mapping).
 
@@ -200,14 +247,10 @@ class KratosAdapter(ContactAdapter):
         if reason:
             raise HCVInputError(f"adapter kratos: {reason}")
         self._default_set = law is None and scheme is None and geometry == "wall"
-        laws = _split("law", law, tuple(LAWS))
-        schemes = _split("scheme", scheme, tuple(SCHEMES))
-        geoms = _split("geometry", geometry, GEOMETRIES)
-        if radius is not None and not (
-            isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0
-        ):
-            raise HCVInputError(f"adapter kratos: radius must be a number > 0, got {radius!r}")
-        self.laws, self.schemes, self.geoms, self.radius = laws, schemes, geoms, radius
+        self.laws = split_option("kratos", "law", law, tuple(LAWS))
+        self.schemes = split_option("kratos", "scheme", scheme, tuple(SCHEMES))
+        self.geoms = split_option("kratos", "geometry", geometry, GEOMETRIES)
+        self.radius = positive_option("kratos", "radius", radius)
         if restitution is not None and not (
             isinstance(restitution, (int, float))
             and not isinstance(restitution, bool)
@@ -221,7 +264,7 @@ class KratosAdapter(ContactAdapter):
     @classmethod
     def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
         """Default range of an option for ``hcv calibrate``: Kratos' own e limits."""
-        return (0.001, 0.999) if param == "restitution" else None
+        return _E_RANGE if param == "restitution" else None
 
     # -- configuration ----------------------------------------------------------
     @property
@@ -283,27 +326,22 @@ class KratosAdapter(ContactAdapter):
         return d
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one law, scheme and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        pot = scene.potential
         want = 1.5 if self.laws[0] == "hertz" else 1.0
-        if type(pot) is not PowerLaw or pot.p != want:
-            return (
-                f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
-                f"{pot!r} has no equivalent in this variant"
-            )
-        return None
+        return refuse_scene(
+            self,
+            scene,
+            configure="law, scheme and geometry",
+            powers=(want,),
+            no_power=f"Kratos {LAWS[self.laws[0]]} is U' = k q^{want:g}; scene potential "
+            f"{scene.potential!r} has no equivalent in this variant",
+        )
 
     # -- the mapping ------------------------------------------------------------
     def _mapping(self, scene: AdapterScene) -> dict:
         """Kratos material parameters and the implemented law for one scene."""
         pot, m = scene.potential, scene.mass
         law, geom = self.laws[0], self.geoms[0]
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = pot.turning_point(0.5 * m * vmax * vmax)
-        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
+        R = default_radius(scene, self.radius)
         r_eff = R if geom == "wall" else 0.5 * R
         if law == "hertz":
             e_star = 3.0 * pot.k / (4.0 * math.sqrt(r_eff))
@@ -312,7 +350,7 @@ class KratosAdapter(ContactAdapter):
             e_star = pot.k / (beta * math.pi * _LINEAR_RADIUS_FACTOR * r_eff)
         body_mass = m if geom == "wall" else 2.0 * m
         density = body_mass / (4.0 / 3.0 * math.pi * R**3)
-        e = scene.restitution if self.restitution is None else self.restitution
+        e = kratos_restitution(law, scene) if self.restitution is None else self.restitution
         gamma = kratos_gamma(law, e)
         zeta = gamma * math.sqrt(1.2) if law == "hertz" else gamma
         desc = (
@@ -369,14 +407,6 @@ class KratosAdapter(ContactAdapter):
             **info,
         }
         return Trajectory(t, q, v, f, meta)
-
-
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(f"adapter kratos: {what} {x!r} is not one of {', '.join(allowed)}")
-    return items
 
 
 def _parameters(scheme: str, dt: float) -> dict:

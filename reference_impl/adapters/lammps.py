@@ -45,12 +45,22 @@ section 9), whose restitution is v0-independent; coeff_restitution asks for
 zeta_l, so its exact restitution *is* e. The measured prefactors are checked
 against this table by `LammpsAdapter.probe_force` in the test suite.
 
-What is asked for each model: tsuji and coeff_restitution get the scene's e.
-velocity, mass_velocity and viscoelastic get a constant: for hooke with
-velocity / mass_velocity, C = 2 zeta sqrt(m k) (exact, the universal law of
-p = 1); otherwise C is calibrated so that the exact restitution of the damped
-ODE is e at the scene's middle speed (other speeds then show the v0-dependence
-that Theorem 3 predicts), unless ``eta_n0`` is given.
+What is asked for each model (protocol ``hcv-adapter/2``): the restitution the
+scene asks (``restitution_asked``), at the end LAMMPS delivers it: the scene's
+``restitution_end``, or the zero-force end with ``limit_damping`` (a clipped contact
+leaves there, whichever end is read). zeta_a is the universal law's damping ratio
+with that restitution at that end (`reference_impl.adapters._asked`).
+coeff_restitution gets e = exp(-pi zeta_a / sqrt(1 - zeta_a^2)), whose zeta_l is
+zeta_a; tsuji gets the e whose alpha(e) / sqrt(2 (p + 1)) is zeta_a (alpha
+inverted on [0, 1], where it decreases; outside its range the nearest end, e.g.
+e = 1 and alpha = 3e-4 for no damping). velocity, mass_velocity and viscoelastic get
+a constant: for hooke with velocity / mass_velocity, C = 2 zeta_a sqrt(m k) (exact,
+the universal law of p = 1); otherwise C is calibrated so that the exact restitution
+of the damped ODE at that end is the asked e at the scene's middle speed (other
+speeds then show the v0-dependence that Theorem 3 predicts), unless ``eta_n0`` is
+given. The ``restitution`` option bypasses all this for tsuji and coeff_restitution:
+its e is written into ``pair_coeff`` as is (what a user types; what ``hcv calibrate
+lammps[...] --param restitution`` searches).
 
 The total normal force may pull at the end of contact (LAMMPS does not clip it)
 unless ``limit_damping`` is set, which sets a negative total normal force to 0.
@@ -69,6 +79,17 @@ from importlib import metadata
 import numpy as np
 from scipy.optimize import brentq
 
+from reference_impl.adapters._asked import (
+    asked_universal_zeta,
+    delivery_end,
+    invert_decreasing,
+)
+from reference_impl.adapters._codes_common import (
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters.base import (
     AdapterScene,
     ContactAdapter,
@@ -79,7 +100,7 @@ from reference_impl.adapters.base import (
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.ivp import integrate_impact
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
 
 __all__ = [
     "DAMPING_MODELS",
@@ -91,9 +112,8 @@ __all__ = [
 ]
 
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
+_E_MODELS = ("tsuji", "coeff_restitution")  # the models whose pair_coeff input is an e
 GEOMETRIES = ("wall", "pair")
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %).
-_RADIUS_OVER_QMAX = 100.0
 # LAMMPS version (YYYYMMDD) from which tsuji's alpha carries the sqrt(2) factor.
 _TSUJI_SQRT2_SINCE = 20260902
 # Calibration of a constant damping: IVP tolerance and relative root tolerance.
@@ -169,6 +189,19 @@ def tsuji_alpha(e: float, version: int) -> float:
     return a * math.sqrt(2.0) if version >= _TSUJI_SQRT2_SINCE else a
 
 
+def _tsuji_input(zeta: float, p: float, version: int) -> float:
+    """LAMMPS's tsuji ``e`` whose alpha(e) / sqrt(2 (p + 1)) is the damping ratio zeta.
+
+    alpha decreases on [0, 1] (from 1.2728 to 3e-4, x sqrt(2) since 2Sep2026): a zeta
+    outside its range gets the nearest end (e = 1 for no damping, as LAMMPS's own
+    e = 1 does), whose law the adapter declares.
+    """
+    if not zeta:
+        return 1.0
+    scale = math.sqrt(2.0 * (p + 1.0))
+    return invert_decreasing(lambda x: tsuji_alpha(x, version) / scale, zeta, 0.0, 1.0)
+
+
 def _zeta_linear(e: float) -> float:
     le = math.log(e)
     return -le / math.sqrt(math.pi**2 + le * le)
@@ -192,6 +225,9 @@ class LammpsAdapter(ContactAdapter):
     eta_n0 : float, optional
         Fixed damping coefficient for velocity / mass_velocity / viscoelastic
         (instead of the calibration).
+    restitution : float, optional
+        The e written into ``pair_coeff`` as is for tsuji and coeff_restitution
+        (0 < e <= 1), instead of the one mapped from the scene.
     """
 
     name = "lammps"
@@ -205,38 +241,29 @@ class LammpsAdapter(ContactAdapter):
         limit_damping: bool = False,
         radius: float | None = None,
         eta_n0: float | None = None,
+        restitution: float | None = None,
     ):
         reason = lammps_available()
         if reason:
             raise HCVInputError(f"adapter lammps: {reason}")
         self._default_set = damping is None
-        models = (
-            DAMPING_MODELS
-            if damping in (None, "all")
-            else tuple(d.strip() for d in str(damping).split("+"))
-        )
-        geoms = tuple(g.strip() for g in str(geometry).split("+"))
-        for d in models:
-            if d not in DAMPING_MODELS:
-                raise HCVInputError(
-                    f"adapter lammps: damping {d!r} is not one of {', '.join(DAMPING_MODELS)}"
-                )
-        for g in geoms:
-            if g not in GEOMETRIES:
-                raise HCVInputError(
-                    f"adapter lammps: geometry {g!r} is not one of {', '.join(GEOMETRIES)}"
-                )
-        for key, val in (("radius", radius), ("eta_n0", eta_n0)):
-            if val is not None and not (
-                isinstance(val, (int, float))
-                and math.isfinite(val)
-                and val >= (0 if key == "eta_n0" else 1e-300)
-            ):
-                raise HCVInputError(f"adapter lammps: {key} must be a number > 0, got {val!r}")
-        self.models, self.geoms = models, geoms
+        self.models = split_option("lammps", "damping", damping, DAMPING_MODELS)
+        # one geometry or both joined by "+" ("all" is not a geometry here)
+        self.geoms = split_option("lammps", "geometry", geometry, GEOMETRIES, every=False)
         self.limit_damping = bool(limit_damping)
-        self.radius = radius
-        self.eta_n0 = eta_n0
+        self.radius = positive_option("lammps", "radius", radius)
+        self.eta_n0 = positive_option("lammps", "eta_n0", eta_n0, allow_zero=True)
+        self.restitution = positive_option("lammps", "restitution", restitution)
+        if self.restitution is not None and self.restitution > 1.0:
+            raise HCVInputError(
+                f"adapter lammps: restitution must be in (0, 1], got {restitution!r}"
+            )
+        other = [d for d in self.models if d not in _E_MODELS]
+        if self.restitution is not None and other:
+            raise HCVInputError(
+                f"adapter lammps: restitution is an input of {' and '.join(_E_MODELS)} only, "
+                f"not of damping {other[0]!r} (give damping=tsuji or coeff_restitution)"
+            )
         self._lmp = None
         self._version = None
         self._maps: dict = {}
@@ -251,12 +278,24 @@ class LammpsAdapter(ContactAdapter):
         if not self.single:
             return "lammps"
         extra = ",limit_damping" if self.limit_damping else ""
+        if self.restitution is not None:
+            extra += f",restitution={self.restitution!r}"
         return f"lammps[{self.models[0]},{self.geoms[0]}{extra}]"
+
+    @classmethod
+    def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
+        """Search range of ``hcv calibrate``: the e of tsuji and coeff_restitution."""
+        return (1e-3, 1.0) if param == "restitution" else None
 
     def variants(self) -> list[ContactAdapter]:
         if self.single:
             return [self]
-        kw = dict(limit_damping=self.limit_damping, radius=self.radius, eta_n0=self.eta_n0)
+        kw = dict(
+            limit_damping=self.limit_damping,
+            radius=self.radius,
+            eta_n0=self.eta_n0,
+            restitution=self.restitution,
+        )
         out: list[ContactAdapter] = [
             LammpsAdapter(damping=d, geometry=g, **kw) for g in self.geoms for d in self.models
         ]
@@ -268,6 +307,7 @@ class LammpsAdapter(ContactAdapter):
                     geometry="wall",
                     limit_damping=True,
                     radius=self.radius,
+                    restitution=self.restitution,
                 )
             )
         return out
@@ -293,17 +333,14 @@ class LammpsAdapter(ContactAdapter):
         return self._version
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one damping model and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        pot = scene.potential
-        if type(pot) is not PowerLaw or pot.p not in (1.0, 1.5):
-            return (
-                f"LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
-                f"scene potential {pot!r} has no LAMMPS equivalent"
-            )
-        return None
+        return refuse_scene(
+            self,
+            scene,
+            configure="damping model and geometry",
+            powers=(1.0, 1.5),
+            no_power="LAMMPS granular models are hooke (U' = k q) and hertz (U' = k q^1.5); "
+            f"scene potential {scene.potential!r} has no LAMMPS equivalent",
+        )
 
     # -- the mapping ------------------------------------------------------------
     def _mapping(self, scene: AdapterScene) -> dict:
@@ -313,6 +350,8 @@ class LammpsAdapter(ContactAdapter):
             scene.mass,
             scene.zeta,
             scene.damping,
+            scene.restitution_asked,
+            scene.restitution_end,
             tuple(scene.velocities),
             tuple(sorted(scene.potential_spec.items())),
         )
@@ -320,13 +359,13 @@ class LammpsAdapter(ContactAdapter):
             return self._maps[key]
         pot, m = scene.potential, scene.mass
         model, geom = self.models[0], self.geoms[0]
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = pot.turning_point(0.5 * m * vmax * vmax)
-        R = float(self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top)
+        R = default_radius(scene, self.radius)
         r_eff = R if geom == "wall" else 0.5 * R
         normal = "hooke" if pot.p == 1.0 else "hertz"
         k_n = float(pot.k if normal == "hooke" else pot.k / math.sqrt(r_eff))
-        e = scene.restitution
+        # what the scene asks, at the end LAMMPS delivers it (zero-force with limit_damping)
+        end = delivery_end(scene, self.limit_damping)
+        zeta_t = asked_universal_zeta(scene, end)
         p = pot.p
         lam: dict = {
             "normal": normal,
@@ -337,15 +376,27 @@ class LammpsAdapter(ContactAdapter):
             "atom_mass": m if geom == "wall" else 2.0 * m,
             "damping": model,
         }
+        asked = f"asked e = {scene.restitution_asked:.6g} at the {end} end"
         if model in ("tsuji", "coeff_restitution"):
-            lam["coef"] = float(e)
+            if self.restitution is not None:  # written as is (what a user types)
+                asked = f"given e = {self.restitution:.6g}"
             if model == "tsuji":
+                e = self.restitution
+                if e is None:
+                    e = _tsuji_input(zeta_t, p, self.version)
                 alpha = tsuji_alpha(e, self.version)
                 zeta = alpha / math.sqrt(2.0 * (p + 1.0))
-                desc = f"tsuji alpha(e = {e:.6g}) = {alpha:.6g}: universal law, zeta = {zeta:.6g}"
+                desc = (
+                    f"tsuji alpha(e = {e:.6g}) = {alpha:.6g} ({asked}): universal law, "
+                    f"zeta = {zeta:.6g}"
+                )
             else:
+                e = self.restitution
+                if e is None:
+                    e = restitution_from_zeta(zeta_t) if zeta_t else 1.0
                 zeta = _zeta_linear(e) if e < 1.0 else 0.0
-                desc = f"coeff_restitution e = {e:.6g}: universal law, zeta = {zeta:.6g}"
+                desc = f"coeff_restitution e = {e:.6g} ({asked}): universal law, zeta = {zeta:.6g}"
+            lam["coef"] = float(e)
             law = ImplementedLaw(
                 pot, m, zeta=zeta, clips_tension=self.limit_damping, description=f"{normal}, {desc}"
             )
@@ -357,11 +408,15 @@ class LammpsAdapter(ContactAdapter):
             elif scene.damping != "universal":
                 c, how = 0.0, "no damping asked"
             elif exponent == (p - 1.0) / 2.0:  # hooke with a constant C: the universal law
-                c, how = 2.0 * scene.zeta * math.sqrt(m * pot.k), "exact (universal law of p = 1)"
+                c = 2.0 * zeta_t * math.sqrt(m * pot.k)
+                how = f"exact (universal law of p = 1, {asked})"
+            elif not zeta_t:
+                c, how = 0.0, asked
             else:
                 v_ref = float(np.median(scene.velocities or (scene.v0,)))
-                c = _calibrate(pot, m, e, v_ref, exponent)
-                how = f"calibrated to e = {e:.6g} at v0 = {v_ref:g} m/s"
+                e = float(scene.restitution_asked)
+                c = _calibrate(pot, m, e, v_ref, exponent, end)
+                how = f"calibrated to e = {e:.6g} at the {end} end at v0 = {v_ref:g} m/s"
             lam["coef"] = float(_eta_n0(model, c, m, r_eff))
             law = ImplementedLaw(
                 pot,
@@ -526,23 +581,27 @@ def _eta_n0(model: str, c: float, m: float, r_eff: float) -> float:
 _CALIBRATIONS: dict[tuple, float] = {}
 
 
-def _calibrate(pot: PowerLaw, m: float, e: float, v_ref: float, exponent: float) -> float:
-    """c such that C = c q^exponent gives restitution e at v_ref (damped ODE, DOP853)."""
+def _calibrate(
+    pot: PowerLaw, m: float, e: float, v_ref: float, exponent: float, end: str = "overlap"
+) -> float:
+    """c such that C = c q^exponent gives restitution e at v_ref at ``end`` (damped ODE,
+    DOP853): "overlap" (q back to 0) or "zero-force" (the total force first 0)."""
 
-    key = (pot.k, pot.p, m, e, v_ref, exponent)
+    key = (pot.k, pot.p, m, e, v_ref, exponent, end)
     if key in _CALIBRATIONS:
         return _CALIBRATIONS[key]
     q_max = pot.turning_point(0.5 * m * v_ref * v_ref)
     # First guess: the universal law's C at half the turning point, as a c q^exponent.
     q_h = 0.5 * q_max
     u, du = (float(f(np.array([q_h]))[0]) for f in (pot._U, pot._dU))
-    guess = 2.0 * zeta_from_restitution(e) * math.sqrt(m) * du / math.sqrt(2.0 * u)
+    guess = 2.0 * zeta_from_restitution(e, end=end) * math.sqrt(m) * du / math.sqrt(2.0 * u)
     guess /= q_h**exponent
 
     def gap(log_c: float) -> float:
         damp = PowerDamping(math.exp(log_c), exponent)
         res = integrate_impact(pot, m, v_ref, C=damp, rtol=_CALIB_RTOL)
-        got = res.restitution if res.returned and math.isfinite(res.restitution) else 0.0
+        got = res.restitution_zero_force if end == "zero-force" else res.restitution
+        got = got if res.returned and math.isfinite(got) else 0.0
         return got - e
 
     lo = hi = math.log(guess)

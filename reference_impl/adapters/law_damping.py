@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_impl.adapters.base import ImplementedLaw, PowerDamping
+from reference_impl.adapters._records import AdapterScene, ImplementedLaw, PowerDamping
 from reference_impl.potentials.base import Potential
 from reference_impl.theory.laws import DampingLaw, law_C, law_from_dict
 
-__all__ = ["LawDamping", "implemented_law_from_table"]
+__all__ = ["LawDamping", "implemented_law_from_table", "scene_law"]
 
 
 @dataclass(frozen=True)
@@ -78,3 +78,11 @@ def law_of(damping) -> DampingLaw | None:
     if isinstance(damping, PowerDamping):
         return DampingLaw("power", {"c": damping.c, "exponent": damping.exponent})
     return None
+
+
+def scene_law(scene: AdapterScene, **kw) -> ImplementedLaw:
+    """The law an `AdapterScene` asks, as an `ImplementedLaw` (any law of the table, with
+    its solved parameters; keywords such as ``description`` go to `ImplementedLaw`)."""
+    if scene.damping in ("none", "universal"):
+        return ImplementedLaw(scene.potential, scene.mass, zeta=scene.zeta, **kw)
+    return implemented_law_from_table(scene.potential, scene.mass, dict(scene.law), **kw)

@@ -48,8 +48,18 @@ Clipping: ``limitForce`` is off by default: the total force pulls at the end of
 contact (measured: 6.8 % of the peak force on ``hertz-damped``, e = 0.729; 26 % on
 ``hooke-damped``, e = 0.5; 12.7 % for Hertz at e = 0.5) and the restitution at
 q = 0 is e. ``limitForce on`` clips it (``clips_tension``), the body leaves at the
-zero-force end and e comes out higher (0.55 for 0.5; no coefficientRestitution
-reaches 0.2: the floor 0.05 gives 0.213).
+zero-force end and e comes out higher (0.55 for coefficientRestitution 0.5; no
+coefficientRestitution reaches 0.2: the floor 0.05 gives 0.213).
+
+What is asked (protocol ``hcv-adapter/2``): both models integrate the universal
+law, so the adapter writes the coefficientRestitution whose zeta = -betaeff has the
+restitution the scene asks at the end LIGGGHTS delivers it: the scene's
+``restitution_end`` with ``limitForce off``, the zero-force end with ``limitForce
+on`` (a clipped contact leaves there, whichever end is read;
+`reference_impl.adapters._asked`). A scene asking e at the overlap end with
+``limitForce off`` gets e itself; one asking at the zero-force end gets the lower
+exp(-pi zeta / sqrt(1 - zeta^2)) of zeta = the zero-force inverse of e. When that
+input is <= 0.05 the scene is declined.
 
 Staggering: none to declare. LIGGGHTS is velocity Verlet (``fix nve/sphere``):
 ``fix print`` runs at the end of a step, when x, v and f all belong to t[n + 1];
@@ -77,6 +87,14 @@ import subprocess
 
 import numpy as np
 
+from reference_impl.adapters._asked import asked_universal_zeta, delivery_end
+from reference_impl.adapters._codes_common import (
+    bool_option,
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -87,7 +105,7 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "GEOMETRIES",
@@ -100,8 +118,6 @@ __all__ = [
 MODELS = ("hertz", "hooke")
 GEOMETRIES = ("wall", "pair")
 INSTALL = "apt-get install -y liggghts"
-# Overlap at the scene's largest speed as a fraction of the sphere radius (1 %).
-_RADIUS_OVER_QMAX = 100.0
 # characteristicVelocity of model hooke (m/s): any value, Yeff is solved for it.
 _CHAR_VEL = 1.0
 # LIGGGHTS refuses coefficientRestitution <= this (global_properties.cpp line 488).
@@ -129,16 +145,6 @@ def liggghts_zeta(e: float) -> float:
         return 0.0
     le = math.log(e)
     return -le / math.sqrt(le * le + math.pi**2)
-
-
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(
-                f"adapter liggghts: {what} {x!r} is not one of {', '.join(allowed)}"
-            )
-    return items
 
 
 class LiggghtsAdapter(ContactAdapter):
@@ -182,26 +188,17 @@ class LiggghtsAdapter(ContactAdapter):
         if reason:
             raise HCVInputError(f"adapter liggghts: {reason}")
         self._default_set = model is None and geometry is None and limit_force is None
-        self.models = _split("model", model, MODELS)
-        self.geoms = _split("geometry", "wall" if geometry is None else geometry, GEOMETRIES)
-        if limit_force is not None and not isinstance(limit_force, bool):
-            raise HCVInputError(
-                f"adapter liggghts: limit_force must be true or false, got {limit_force!r}"
-            )
+        self.models = split_option("liggghts", "model", model, MODELS)
+        geometry = "wall" if geometry is None else geometry
+        self.geoms = split_option("liggghts", "geometry", geometry, GEOMETRIES)
+        bool_option("liggghts", "limit_force", limit_force)
         # both settings as variants only when nothing is configured (the default set)
         self.limits = (
             ((False, True) if self._default_set else (False,))
             if limit_force is None
             else (limit_force,)
         )
-        if radius is not None and not (
-            isinstance(radius, (int, float))
-            and not isinstance(radius, bool)
-            and math.isfinite(radius)
-            and radius > 0
-        ):
-            raise HCVInputError(f"adapter liggghts: radius must be a number > 0, got {radius!r}")
-        self.radius = None if radius is None else float(radius)
+        self.radius = positive_option("liggghts", "radius", radius)
         if restitution is not None and not (
             isinstance(restitution, (int, float))
             and not isinstance(restitution, bool)
@@ -213,10 +210,7 @@ class LiggghtsAdapter(ContactAdapter):
             )
         self.restitution = None if restitution is None else float(restitution)
         self._version: str | None = None
-        if not isinstance(persistent, bool):
-            raise HCVInputError(
-                f"adapter liggghts: persistent must be true or false, got {persistent!r}"
-            )
+        bool_option("liggghts", "persistent", persistent)
         # stdbuf (coreutils) makes LIGGGHTS flush per line; without it: one process per run
         self.persistent = persistent and shutil.which("stdbuf") is not None
         self._server = None
@@ -314,21 +308,23 @@ class LiggghtsAdapter(ContactAdapter):
         return d
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one model, geometry and limit_force (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        pot = scene.potential
         want = 1.5 if self.models[0] == "hertz" else 1.0
-        if type(pot) is not PowerLaw or pot.p != want:
+        reason = refuse_scene(
+            self,
+            scene,
+            configure="model, geometry and limit_force",
+            powers=(want,),
+            no_power=f"LIGGGHTS model {self.models[0]} is U' = k q^{want:g}; scene potential "
+            f"{scene.potential!r} has no equivalent in it",
+        )
+        if reason:
+            return reason
+        e_in = self.mapping(scene)["coefficientRestitution"]
+        if self.restitution is None and e_in <= _E_MIN:
             return (
-                f"LIGGGHTS model {self.models[0]} is U' = k q^{want:g}; scene potential "
-                f"{pot!r} has no equivalent in it"
-            )
-        if self.restitution is None and scene.restitution <= _E_MIN:
-            return (
-                f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} "
-                f"(asked e = {scene.restitution:.6g}); out of its reach"
+                f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} (asked e = "
+                f"{scene.restitution_asked:.6g} at the {scene.restitution_end} end needs "
+                f"{e_in:.6g}); out of its reach"
             )
         return None
 
@@ -337,9 +333,7 @@ class LiggghtsAdapter(ContactAdapter):
         """LIGGGHTS inputs for one scene: R, atom mass, Y, e, vc (see the module docstring)."""
         pot, m = scene.potential, scene.mass
         model, geom = self.models[0], self.geoms[0]
-        vmax = max(scene.velocities or (scene.v0,))
-        q_top = float(pot.turning_point(0.5 * m * vmax * vmax))
-        R = self.radius if self.radius is not None else _RADIUS_OVER_QMAX * q_top
+        R = default_radius(scene, self.radius)
         r_eff = R if geom == "wall" else 0.5 * R
         if model == "hertz":
             y_eff = 0.75 * pot.k / math.sqrt(r_eff)
@@ -354,11 +348,17 @@ class LiggghtsAdapter(ContactAdapter):
             "youngsModulus": float(2.0 * y_eff),  # Yeff = Y/2: same material, nu = 0
             "poissonsRatio": 0.0,
             "coefficientRestitution": float(
-                scene.restitution if self.restitution is None else self.restitution
+                self._asked_restitution(scene) if self.restitution is None else self.restitution
             ),
             "characteristicVelocity": _CHAR_VEL,
             "limitForce": "on" if self.limits[0] else "off",
         }
+
+    def _asked_restitution(self, scene: AdapterScene) -> float:
+        """coefficientRestitution whose zeta = -betaeff gives the asked e at the end
+        LIGGGHTS delivers it (zero-force with ``limitForce on``, else the asked end)."""
+        zeta = asked_universal_zeta(scene, delivery_end(scene, self.limits[0]))
+        return restitution_from_zeta(zeta) if zeta else 1.0
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         mp = self.mapping(scene)

@@ -48,11 +48,14 @@ clamped by MuJoCo to [1e-4, 0.9999], as the adapter does before declaring):
   polynomial).
 
 The stiffness asked is the scene's k (at full impedance dmax); the damping is
-calibrated to the asked restitution at the end option ``end``: ``overlap`` (the
-q = 0 end the scene states: zeta = scene zeta, restitution exp(-pi zeta /
-sqrt(1 - zeta^2))) or ``zero-force`` (what a code that clips tension delivers:
-zeta from exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e, see
-`zeta_zero_force`). Options ``dampratio`` (the damping ratio used, replaces the
+calibrated to the restitution the scene asks (``restitution_asked``, at the scene's
+``restitution_end``), read at the end option ``end``: ``overlap`` (zeta whose q = 0
+restitution exp(-pi zeta / sqrt(1 - zeta^2)) is the asked e: the scene's zeta when
+it asks at the overlap end) or ``zero-force`` (what a code that clips tension
+delivers: zeta from exp(-2 zeta arccos zeta / sqrt(1 - zeta^2)) = e, see
+`zeta_zero_force`; the scene's zeta when it asks at the zero-force end). A damping
+law other than the universal one (or none) is declined: MuJoCo's constant dashpot
+is the universal law of p = 1 only. Options ``dampratio`` (the damping ratio used, replaces the
 calibration) or ``damping`` (c in N s/m) set it directly: they are what
 ``hcv calibrate mujoco --param dampratio`` searches.
 
@@ -90,6 +93,7 @@ from importlib import metadata
 
 import numpy as np
 
+from reference_impl.adapters._codes_common import positive_option, refuse_scene, split_option
 from reference_impl.adapters._mujoco_model import asked_zeta, mjcf, scene_mapping
 from reference_impl.adapters._mujoco_support import (
     _badqacc_index,
@@ -105,7 +109,6 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.potentials.power import PowerLaw
 
 __all__ = [
     "END",
@@ -155,31 +158,6 @@ def load_mujoco():
 
 def _warning_to_stderr(message) -> None:
     print(f"MuJoCo warning: {message}", file=sys.stderr)
-
-
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(f"adapter mujoco: {what} {x!r} is not one of {', '.join(allowed)}")
-    return items
-
-
-def _positive(name: str, value, allow_zero: bool = False):
-    if value is None:
-        return None
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, (int, float))
-        or not math.isfinite(value)
-        or value < 0
-        or (value == 0 and not allow_zero)
-    ):
-        raise HCVInputError(
-            f"adapter mujoco: {name} must be a number {'>=' if allow_zero else '>'} 0, "
-            f"got {value!r}"
-        )
-    return float(value)
 
 
 class MujocoAdapter(ContactAdapter):
@@ -241,18 +219,18 @@ class MujocoAdapter(ContactAdapter):
             raise HCVInputError(f"adapter mujoco: {reason}")
         self._default_set = solref is None and impedance is None and integrator is None
         self._default_set = self._default_set and end is None
-        self.forms = _split("solref", solref, SOLREF_FORMS)
-        self.imps = _split("impedance", impedance, IMPEDANCES)
-        self.integrators = _split("integrator", integrator, INTEGRATORS)
+        self.forms = split_option("mujoco", "solref", solref, SOLREF_FORMS)
+        self.imps = split_option("mujoco", "impedance", impedance, IMPEDANCES)
+        self.integrators = split_option("mujoco", "integrator", integrator, INTEGRATORS)
         # the calibration end is a setting (default overlap), a variant axis only when asked
-        self.ends = _split("end", "overlap" if end is None else end, END)
+        self.ends = split_option("mujoco", "end", "overlap" if end is None else end, END)
         if dampratio is not None and damping is not None:
             raise HCVInputError("adapter mujoco: give dampratio or damping, not both")
-        self.dampratio = _positive("dampratio", dampratio, allow_zero=True)
-        self.damping = _positive("damping", damping, allow_zero=True)
-        self.imp = _positive("imp", imp)
-        self.width = _positive("width", width)
-        self.radius = _positive("radius", radius)
+        self.dampratio = positive_option("mujoco", "dampratio", dampratio, allow_zero=True)
+        self.damping = positive_option("mujoco", "damping", damping, allow_zero=True)
+        self.imp = positive_option("mujoco", "imp", imp)
+        self.width = positive_option("mujoco", "width", width)
+        self.radius = positive_option("mujoco", "radius", radius)
 
     # -- configuration ----------------------------------------------------------
     @classmethod
@@ -333,16 +311,16 @@ class MujocoAdapter(ContactAdapter):
         return d
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one solref form, impedance, integrator and end (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        pot = scene.potential
-        if type(pot) is not PowerLaw or pot.p != 1.0:
-            return (
-                f"MuJoCo's soft contact is a linear spring (U' = k q, power p = 1); scene "
-                f"potential {pot!r} has no equivalent"
-            )
+        reason = refuse_scene(
+            self,
+            scene,
+            configure="solref form, impedance, integrator and end",
+            powers=(1.0,),
+            no_power="MuJoCo's soft contact is a linear spring (U' = k q, power p = 1); scene "
+            f"potential {scene.potential!r} has no equivalent",
+        )
+        if reason:
+            return reason
         if self.forms[0] == "timeconst" and self._zeta(scene) == 0.0:
             return (
                 "solref timeconst form cannot express zero damping: dampratio 0 makes a "

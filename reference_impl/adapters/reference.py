@@ -15,7 +15,7 @@ from reference_impl.adapters.base import (
     PowerDamping,
     Trajectory,
 )
-from reference_impl.adapters.law_damping import LawDamping
+from reference_impl.adapters.law_damping import LawDamping, scene_law
 from reference_impl.integrators.verlet_path import verlet_trajectory
 
 __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
@@ -54,10 +54,12 @@ def law_trajectory(law: ImplementedLaw, v0: float, dt: float, n_steps: int):
 
 
 class ReferenceAdapter(ContactAdapter):
-    """Our velocity Verlet with the exact force law of the scene (universal damping).
+    """Our velocity Verlet with the exact force law of the scene, any damping law.
 
     It is the baseline every other adapter is compared with, run through the
-    same contract, and it implements exactly the law it is asked for.
+    same contract, and it implements exactly the law it is asked for: the universal
+    law by its ratio, every other law of `reference_impl.theory.laws` with the
+    parameters the scene sends (a law solved from a restitution: the solved strength).
     """
 
     name = "reference"
@@ -76,9 +78,18 @@ class ReferenceAdapter(ContactAdapter):
             "scheme": "velocity Verlet (kick-drift-kick), dashpot at the half-step velocity",
         }
 
+    def _damping(self, scene: AdapterScene) -> dict:
+        """verlet_trajectory's damping keywords for the scene's law."""
+        if scene.damping in ("none", "universal"):
+            return {"zeta": scene.zeta}
+        C = scene_law(scene).C
+        if isinstance(C, PowerDamping):
+            return {"damping": C}
+        return {"c_fun": C}  # a LawDamping: C(q) evaluated at each step
+
     def _impact_impl(self, scene: AdapterScene) -> Trajectory:
         t, q, v, f = verlet_trajectory(
-            scene.potential, scene.mass, scene.v0, scene.dt, scene.n_steps, zeta=scene.zeta
+            scene.potential, scene.mass, scene.v0, scene.dt, scene.n_steps, **self._damping(scene)
         )
         return Trajectory(t, q, v, f, {"steps": int(t.size - 1)})
 
@@ -89,8 +100,8 @@ class ReferenceAdapter(ContactAdapter):
             scene.v0,
             scene.dt,
             scene.n_steps,
-            zeta=scene.zeta,
             kind="two-walls",
             gap=float(scene.gap or 0.0),
+            **self._damping(scene),
         )
         return Trajectory(t, q, v, f, {"steps": int(t.size - 1)})

@@ -3,12 +3,12 @@
 For every run the suite starts COMMAND once, writes one JSON request to its
 standard input, closes it, and reads one JSON response from its standard output.
 The command's standard error is kept and shown when the run fails. Protocol
-``hcv-adapter/1`` (the same text is in ``docs/adapter-protocol.md``):
+``hcv-adapter/2`` (the same text is in ``docs/adapter-protocol.md``):
 
 Request (stdin)::
 
     {
-      "protocol": "hcv-adapter/1",
+      "protocol": "hcv-adapter/2",
       "request": "impact",                 # or "sustained" (two-walls scenes)
       "scene": {
         "name": "hertz-damped",
@@ -16,9 +16,19 @@ Request (stdin)::
         "potential": {"family": "power", "k": 1.0879e10, "p": 1.5},
         "mass": 0.0041103,                 # effective mass, kg
         "v0": 1.0,                         # approach speed at contact onset, m/s
-        "damping": {"law": "universal",    # or "none"
-                    "zeta": 0.1,           # C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q))
-                    "restitution": 0.7292},# e asked for (1 for "none")
+        "damping": {"law": "universal",    # or "none", "linear", "power", "polynomial",
+                                           # "viscoelastic", "hunt-crossley"
+                    "zeta": 0.1,           # C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q));
+                                           # 0 for every other law
+                    "restitution": 0.7292, # protocol 1: exp(-pi zeta / sqrt(1 - zeta^2))
+                                           # (1 for "none", the asked e for other laws)
+                    "params": {"law": "universal", "zeta": 0.1},
+                                           # the law and its (solved) parameters, as
+                                           # implemented_law.damping
+                    "restitution_asked": 0.7292,  # e the scene asks, at:
+                    "restitution_end": "overlap", # or "zero-force"
+                    "restitution_speed": 0.5},    # m/s; only for a law whose strength
+                                           # was solved from e at that speed
         "dt": 1.8e-7,                      # time step, s
         "n_steps": 600,                    # step budget
         "velocities": [0.1, 1.0, 5.0],     # every speed of the scene
@@ -53,8 +63,9 @@ record every step; stop at the first step after q has returned to <= 0, or after
 ``n_steps`` steps; all four arrays have the same length (>= 2). Non-finite
 numbers may be written as null (a blown-up run is a result, not an error). To
 report a failure, write ``{"error": "one line"}`` or exit with a non-zero status.
-To decline a scene the code cannot run (no sphere model, no sustained scenes),
-write ``{"unsupported": "one line"}``: the scene is skipped, not failed.
+To decline a scene the code cannot run (no sphere model, no sustained scenes, a
+damping law it does not integrate), write ``{"unsupported": "one line"}``: the scene
+is skipped, not failed.
 Nothing else may be written to stdout; diagnostics go to stderr. An optional
 ``"staggering"`` key declares samples stored shifted in time (``{"force": 1}``:
 force one step late; ``{"v": 0.5}``: half-step velocities), contract item 11 of
@@ -126,7 +137,11 @@ __all__ = [
     "response_limit",
 ]
 
-PROTOCOL = "hcv-adapter/1"
+# Protocol 2 (issue 26) adds to protocol 1's request ``damping.params`` (the law with its
+# solved parameters), ``restitution_asked``, ``restitution_end`` and, for a law solved
+# from a restitution, ``restitution_speed``; every protocol-1 field is still sent with
+# its meaning, so a protocol-1 program runs unchanged on the scenes it knew.
+PROTOCOL = "hcv-adapter/2"
 # Characters of the command's stderr kept for a failure report (the tail).
 _STDERR_TAIL = 4000
 # Response size bound: a sample is 4 numbers of at most ~25 characters in JSON plus

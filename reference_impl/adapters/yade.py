@@ -31,8 +31,19 @@ mbar is the dynamic body's mass (m on a wall). So U' = k q^(3/2) with
 k = kno and C = 2 betan sqrt(3/2 k m) q^(1/4): the universal law with
 **zeta = betan sqrt(6/5)**, tension clipped. Input ``en`` sets betan by
 Thornton et al. 2013, eqs. (B6)-(B7) (`thornton_betan`), fitted so that the
-clipped Hertz contact leaves at e: the delivered restitution is e to the fit's
-accuracy. Input ``betan`` is given directly (the adapter asks zeta / sqrt(6/5)).
+clipped Hertz contact leaves at en (to the fit's accuracy). Input ``betan`` is
+given directly.
+
+What is asked (protocol ``hcv-adapter/2``): YADE clips tension, so its restitution
+is the universal law's zero-force one at either end, and the adapter asks zeta_a,
+the zeta whose zero-force restitution is the scene's ``restitution_asked``
+(`reference_impl.adapters._asked`), whichever ``restitution_end`` the scene names.
+``betan`` gets zeta_a / sqrt(6/5); ``en`` gets the e whose Thornton betan is
+zeta_a / sqrt(6/5) (the fit inverted to round-off, so the fit's own error does not
+enter); ``kn`` gets cn = 2 (2 zeta_a sqrt(m k)); ``tc`` gets the tc and en a user
+sets for zeta_a (en = exp(-pi zeta_a / sqrt(1 - zeta_a^2))), which YADE's wall
+quirk below turns into another law on a wall: that variant cannot deliver the asked
+e there (declared as such, and shown by the delivery verdict).
 
 ViscElMat (``Ip2_ViscElMat_ViscElMat_ViscElPhys`` + ``Law2_ScGeom_ViscElPhys_Basic``)::
 
@@ -75,6 +86,14 @@ import shutil
 
 import numpy as np
 
+from reference_impl.adapters._asked import asked_universal_zeta, delivery_end, invert_decreasing
+from reference_impl.adapters._codes_common import (
+    bool_option,
+    default_radius,
+    positive_option,
+    refuse_scene,
+    split_option,
+)
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -86,6 +105,7 @@ from reference_impl.adapters.base import (
 )
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
+from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "GEOMETRIES",
@@ -101,7 +121,6 @@ INPUTS = ("en", "betan", "tc", "kn")
 GEOMETRIES = ("wall", "pair")
 INSTALL = "apt-get install -y yade"
 _LAW = {"en": "mindlin", "betan": "mindlin", "tc": "viscel", "kn": "viscel"}
-_RADIUS_OVER_QMAX = 100.0
 # Seconds allowed to YADE's own start-up on top of a run's timeout (~3 s measured).
 _STARTUP = 120.0
 # Answer size bound (bytes per sample: 3 numbers of ~25 characters and separators).
@@ -140,12 +159,24 @@ def thornton_betan(e: float) -> float:
     return math.sqrt(1.0 / (1.0 - (1.0 + e) ** 2 * math.exp(alphan)) - 1.0)
 
 
-def _split(what: str, value, allowed: tuple) -> tuple:
-    items = allowed if value in (None, "all") else tuple(x.strip() for x in str(value).split("+"))
-    for x in items:
-        if x not in allowed:
-            raise HCVInputError(f"adapter yade: {what} {x!r} is not one of {', '.join(allowed)}")
-    return items
+def _thornton_input(zeta: float) -> float:
+    """``en`` whose Thornton betan x sqrt(6/5) is the damping ratio zeta.
+
+    betan(e) decreases on (0, 1] (to 0 at e = 1) and grows without bound as e -> 0:
+    inverted on [1e-12, 1] (betan(1e-12) ~ 7e5, beyond any zeta asked).
+    """
+    if not zeta:
+        return 1.0
+    scale = math.sqrt(1.2)  # zeta = betan sqrt(6/5) (module docstring)
+    return invert_decreasing(lambda x: thornton_betan(x) * scale, zeta, 1e-12, 1.0)
+
+
+def _user_en(scene: AdapterScene) -> float:
+    """The ``en`` a user sets with ``tc`` for the asked law (a linear spring-dashpot of
+    that e at q = 0, Pournin 2001): exp(-pi zeta / sqrt(1 - zeta^2)) of the zeta YADE,
+    which clips tension, is asked (`_asked`); 0 for zeta >= 1."""
+    zeta = asked_universal_zeta(scene, delivery_end(scene, clips_tension=True))
+    return restitution_from_zeta(zeta) if zeta else 1.0
 
 
 class YadeAdapter(ContactAdapter):
@@ -167,9 +198,12 @@ class YadeAdapter(ContactAdapter):
         run (~3 s each), as a one-shot ``cmd:`` adapter does: for comparison.
     en, betan, cn : float, optional
         The damping input written instead of the one mapped from the scene: ``en``
-        for inputs en and tc (tc stays the one of the asked e), ``betan`` for input
+        for inputs en and tc (tc the one of the asked e unless given), ``betan`` for input
         betan, ``cn`` (per material, N s/m) for input kn. What ``hcv calibrate
         yade[...] --param en|betan|cn`` searches.
+    tc : float, optional
+        Contact time (s) written for input tc instead of the one of the asked e (with
+        ``en``: the pair a user types for an e of their own).
 
     Without options the variants are every input on the wall, and en and tc
     between two spheres.
@@ -191,34 +225,26 @@ class YadeAdapter(ContactAdapter):
         en: float | None = None,
         betan: float | None = None,
         cn: float | None = None,
+        tc: float | None = None,
     ):
         reason = yade_available()
         if reason:
             raise HCVInputError(f"adapter yade: {reason}")
         self._default_set = input is None and geometry is None
-        self.inputs = _split("input", input, INPUTS)
-        self.geoms = _split("geometry", "wall" if geometry is None else geometry, GEOMETRIES)
-        for key, val in (("radius", radius), ("timeout", timeout)):
-            if val is not None and not (
-                isinstance(val, (int, float))
-                and not isinstance(val, bool)
-                and math.isfinite(val)
-                and val > 0
-            ):
-                raise HCVInputError(f"adapter yade: {key} must be a number > 0, got {val!r}")
-        self.radius = None if radius is None else float(radius)
+        self.inputs = split_option("yade", "input", input, INPUTS)
+        geometry = "wall" if geometry is None else geometry
+        self.geoms = split_option("yade", "geometry", geometry, GEOMETRIES)
+        self.radius = positive_option("yade", "radius", radius)
+        timeout = positive_option("yade", "timeout", timeout)
         self.timeout_given = timeout is not None
-        self.timeout = 60.0 if timeout is None else float(timeout)
-        if not isinstance(persistent, bool):
-            raise HCVInputError(
-                f"adapter yade: persistent must be true or false, got {persistent!r}"
-            )
-        self.persistent = persistent
+        self.timeout = 60.0 if timeout is None else timeout
+        self.persistent = bool_option("yade", "persistent", persistent)
         self.given = {}
         for key, val, ok in (
             ("en", en, lambda x: 0.0 < x <= 1.0),
             ("betan", betan, lambda x: x >= 0.0),
             ("cn", cn, lambda x: x >= 0.0),
+            ("tc", tc, lambda x: math.isfinite(x) and x > 0.0),
         ):
             if val is None:
                 continue
@@ -227,10 +253,11 @@ class YadeAdapter(ContactAdapter):
             self.given[key] = float(val)
         if self.given and len(self.inputs) > 1:
             raise HCVInputError(
-                "adapter yade: en, betan and cn need one input (e.g. yade[en,wall,en=0.5])"
+                "adapter yade: en, betan, cn and tc need one input (e.g. yade[en,wall,en=0.5])"
             )
         if self.given:
-            used = {"en": {"en"}, "tc": {"en"}, "betan": {"betan"}, "kn": {"cn"}}[self.inputs[0]]
+            used = {"en": {"en"}, "tc": {"en", "tc"}, "betan": {"betan"}, "kn": {"cn"}}
+            used = used[self.inputs[0]]
             unused = sorted(set(self.given) - used)
             if unused:
                 raise HCVInputError(
@@ -302,33 +329,39 @@ class YadeAdapter(ContactAdapter):
         }
 
     def supports(self, scene: AdapterScene) -> str | None:
-        if not self.single:
-            return "configure one input and geometry (see variants())"
-        if scene.kind != "impact":
-            return f"{self.label} runs single impacts only (scene kind {scene.kind!r})"
-        pot = scene.potential
-        law = _LAW[self.inputs[0]]
-        want = 1.5 if law == "mindlin" else 1.0
-        if type(pot) is not PowerLaw or pot.p != want:
-            name = "Hertz-Mindlin" if law == "mindlin" else "ViscElMat"
-            return f"YADE {name} is U' = k q^{want:g}; scene potential {pot!r} has no equivalent"
-        if self.inputs[0] in ("en", "tc") and scene.restitution <= 0.0:
-            return f"YADE's {self.inputs[0]} input needs e > 0 (asked {scene.restitution:g})"
+        mindlin = _LAW[self.inputs[0]] == "mindlin"
+        want = 1.5 if mindlin else 1.0
+        reason = refuse_scene(
+            self,
+            scene,
+            configure="input and geometry",
+            powers=(want,),
+            no_power=f"YADE {'Hertz-Mindlin' if mindlin else 'ViscElMat'} is U' = k "
+            f"q^{want:g}; scene potential {scene.potential!r} has no equivalent",
+        )
+        if reason:
+            return reason
+        if self.inputs[0] in ("en", "tc") and _user_en(scene) <= 0.0:
+            return (
+                f"YADE's {self.inputs[0]} input needs e > 0 (asked e = "
+                f"{scene.restitution_asked:g} at the {scene.restitution_end} end needs "
+                "zeta >= 1 of a linear contact)"
+            )
         return None
 
     # -- the mapping ------------------------------------------------------------
     def mapping(self, scene: AdapterScene) -> dict:
         """YADE inputs for one scene and the law they give (see the module docstring)."""
-        pot, m, e_asked = scene.potential, scene.mass, scene.restitution
+        pot, m = scene.potential, scene.mass
         inp, geom = self.inputs[0], self.geoms[0]
-        e = self.given.get("en", e_asked)
-        vmax = max(scene.velocities or (scene.v0,))
-        R = self.radius or _RADIUS_OVER_QMAX * float(pot.turning_point(0.5 * m * vmax * vmax))
+        # YADE clips tension: the zeta whose zero-force e is the asked one, at either end
+        zeta_asked = asked_universal_zeta(scene, delivery_end(scene, clips_tension=True))
+        R = default_radius(scene, self.radius)
         body_mass = m if geom == "wall" else 2.0 * m
         sc: dict = {"geometry": geom, "R": float(R), "mass": float(body_mass)}
-        zeta_asked = scene.zeta if scene.damping == "universal" else 0.0
         k_law, zeta = pot.k, 0.0
         if _LAW[inp] == "mindlin":
+            e = self.given.get("en", _thornton_input(zeta_asked) if inp == "en" else 1.0)
             # E* = Y/2 (same material, nu = 0), R* = R/2 on a wall and for two spheres
             sc.update(law="mindlin", young=float(2.0 * 0.75 * pot.k / math.sqrt(0.5 * R)))
             betan = (
@@ -341,8 +374,10 @@ class YadeAdapter(ContactAdapter):
             src = f"Thornton 2013 B6-B7 of en = {e:.6g}" if inp == "en" else "given"
             how = f"betan = {betan:.6g} ({src})"
         elif inp == "tc":
-            la = math.log(e_asked) if e_asked > 0 else 0.0
-            tc = math.sqrt((math.pi**2 + la * la) * m / pot.k)  # the user's tc for k
+            e_user = _user_en(scene)
+            e = self.given.get("en", e_user)
+            la = math.log(e_user) if e_user > 0 else 0.0
+            tc = self.given.get("tc", math.sqrt((math.pi**2 + la * la) * m / pot.k))  # user's
             le = math.log(e)
             sc.update(law="viscel", material={"tc": tc, "en": float(e), "et": float(e)})
             mass_r = m / 2.0 if geom == "wall" else m  # the wall's 0 mass -> the sphere's

@@ -19,6 +19,8 @@ __all__ = [
     "bench_scene_names",
     "plan_cells",
     "resolve_scenes",
+    "scene_damped",
+    "speed_dependent_law",
 ]
 
 # Scenes run when none are given (all in the one catalogue, `hcv scenes`).
@@ -73,6 +75,22 @@ def resolve_scenes(scenes: Sequence[str | Scene] | None) -> list[Scene]:
     if dup:
         raise HCVInputError(f"scene names must be unique, {', '.join(sorted(dup))} repeats")
     return out
+
+
+def scene_damped(scene: Scene) -> bool:
+    """The scene's damping law dissipates (any law with a non-zero strength)."""
+    law = scene.law
+    if law is None or scene.damping_law == "universal":
+        return scene.damping_law == "universal" and bool(scene.zeta)
+    return not law.is_zero()
+
+
+def speed_dependent_law(scene: Scene) -> str:
+    """The scene's law name when its restitution depends on the impact speed (every
+    damped law but the universal one, Theorem 3), else ""."""
+    if scene.damping_law in ("none", "universal") or not scene_damped(scene):
+        return ""
+    return scene.damping_law
 
 
 def plan_cells(variants, scenes: Sequence[Scene]) -> list[tuple]:

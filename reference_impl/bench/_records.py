@@ -148,6 +148,9 @@ class SceneContext:
     scene: str
     kind: str
     damped: bool
+    # the scene's damping law when its restitution depends on the speed (not the
+    # universal law, Theorem 3): the spread metric then does not apply
+    speed_dependent: str = ""
     skipped: str = ""
     speeds: list[SpeedRecord] = field(default_factory=list)
     order: float | None = None

@@ -72,7 +72,7 @@ class Metric:
         if ctx.internal:
             return self._result(ctx, "error", tol=limit, explanation=_ours(ctx.internal))
         try:
-            res = self._evaluate(ctx, limit, factor)
+            res = self._evaluate_table(ctx, limit, factor, tol[self.key])
         except _Missing as miss:
             return self._result(ctx, "fail", tol=limit, explanation=str(miss))
         except _Internal as exc:
@@ -89,6 +89,10 @@ class Metric:
             res.status = "fail"
             res.explanation = f"{self.name} = {res.error!r} is not a magnitude >= 0"
         return res
+
+    def _evaluate_table(self, ctx: SceneContext, base: float, factor: float, table: dict):
+        """`_evaluate`, for metrics that read more of their tolerance table than ``field``."""
+        return self._evaluate(ctx, base, factor)
 
     def _evaluate(self, ctx: SceneContext, base: float, factor: float) -> MetricResult:
         raise NotImplementedError  # pragma: no cover

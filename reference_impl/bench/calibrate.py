@@ -196,6 +196,18 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
         executor.close()
 
 
+def _universal_scene(scene) -> Scene:
+    """The scene, refused (one line) when its damping law is not 'none' or 'universal':
+    the calibration's references (contact time, the scene as asked) are the harmonic map's."""
+    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    if sc.damping_law not in ("none", "universal"):
+        raise HCVInputError(
+            f"scene {sc.name!r}: hcv calibrate runs scenes of damping law 'none' or "
+            f"'universal' (got {sc.damping_law!r}); hcv bench runs every law"
+        )
+    return sc
+
+
 def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
     """(restitution at ``end``, read): NaN for a run that blew up or never touched;
     ``read`` is False for a run without rebound counted as 0.
@@ -357,7 +369,7 @@ def calibrate(
         bracket=bracket,
     )
     target, v0, bracket = settings["target"], settings["v0"], settings["bracket"]
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    sc = _universal_scene(scene)
     if sc.kind != "impact":
         raise HCVInputError(f"scene {sc.name!r}: calibrate runs impact scenes, not {sc.kind!r}")
     if v0 is None:
@@ -527,7 +539,7 @@ def delivered(
     NaN when the run gives none.
     """
 
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    sc = _universal_scene(scene)
     if v0 is None:
         v0 = float(sorted(sc.velocities)[len(sc.velocities) // 2])
     t_c = float(solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time)

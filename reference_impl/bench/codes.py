@@ -6,7 +6,16 @@ k = 1.0879e10 N/m^1.5 or, for the linear codes, Hooke k = 1e6 N/m) on a wall is
 run with each asked restitution, at 20 and 200 steps per contact and at two
 speeds four decades apart. Each row keeps the delivered restitution (q = 0 end),
 the tensile force at the end of contact (max pull / peak push) and the exact
-restitution of the law the code declares. Codes that are not installed give one
+restitution of the law the code declares.
+
+Each asked e is typed into the code's own e input as is (`typed_spec`), as a user
+does: LAMMPS coeff_restitution / tsuji ``restitution=e``, LIGGGHTS
+``coefficientRestitution``, Kratos ``COEFFICIENT_OF_RESTITUTION``, YADE ``en`` (and, for
+ViscElMat, the tc = sqrt((pi^2 + ln^2 e) m / k) and cn = 2 (2 zeta sqrt(m k)) of
+Pournin's linear law of that e at q = 0), MuJoCo's ``dampratio`` = that zeta. The
+adapters' own mapping (protocol ``hcv-adapter/2``: the input that delivers the asked e
+at the end the code delivers it) would hide what the code does with e typed in, which
+is the table's point; an option given in the spec is kept. Codes that are not installed give one
 row saying so. Runs go through the benchmark's executors (a worker process per
 isolated adapter, its timeout), so a crashing code fails its rows only.
 
@@ -26,6 +35,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from reference_impl.adapters.base import AdapterScene
+from reference_impl.adapters.registry import parse_spec
 from reference_impl.bench.calibrate import calibrate
 from reference_impl.bench.measure import exact_reference, measure
 from reference_impl.bench.worker import make_executor
@@ -35,7 +45,15 @@ from reference_impl.potentials.power import PowerLaw
 from reference_impl.scenes import scene_from_dict
 from reference_impl.theory.damping import zeta_from_restitution
 
-__all__ = ["ASKED", "CALIBRATED", "CODES", "CodeRow", "calibration_table", "codes_table"]
+__all__ = [
+    "ASKED",
+    "CALIBRATED",
+    "CODES",
+    "CodeRow",
+    "calibration_table",
+    "codes_table",
+    "typed_spec",
+]
 
 MASS = 4.1103e-3  # kg: 10 mm steel sphere
 HERTZ_K = 1.0879e10  # N/m^1.5: on a steel wall (E* = 115.4 GPa, R = 5 mm)
@@ -87,6 +105,78 @@ class CodeRow:
         return asdict(self)
 
 
+def _typed_options(spec: str, e: float, p: float) -> dict:
+    """The options of ``spec`` that type ``e`` into the code's own input as is.
+
+    Empty for an adapter or a variant with no such input (the reference adapter, a
+    ``cmd:`` program, LAMMPS's constant dampings: their own mapping stands), and for an
+    input the spec already sets.
+    """
+    try:
+        name, opts = parse_spec(spec)
+    except HCVInputError:
+        return {}  # make_executor says why, in the rows
+    bare = set(map(str, opts.pop("__bare__", [])))
+
+    def pick(key: str, allowed: tuple) -> str | None:  # keyed (input=en) or bare (en)
+        return opts.get(key) or next((b for b in bare if b in allowed), None)
+
+    k = HERTZ_K if p == 1.5 else HOOKE_K
+    zeta = float(zeta_from_restitution(e)) if e < 1.0 else 0.0  # linear law's e at q = 0
+    typed: dict = {}
+    if name in ("liggghts", "kratos"):
+        typed = {"restitution": e}
+    elif name == "lammps" and pick("damping", ("tsuji", "coeff_restitution")) in (
+        "tsuji",
+        "coeff_restitution",
+    ):
+        typed = {"restitution": e}
+    elif name == "yade":
+        inp = pick("input", ("en", "betan", "tc", "kn"))
+        if inp == "en":
+            typed = {"en": e}
+        elif inp == "tc":  # Pournin 2001: the tc and en a user sets for k, m and e
+            tc = math.sqrt((math.pi**2 + math.log(e) ** 2) * MASS / k)
+            typed = {"en": e, "tc": tc}
+        elif inp == "kn":  # per material, two in series: cn = 2 c, c = 2 zeta sqrt(m k)
+            typed = {"cn": 2.0 * 2.0 * zeta * math.sqrt(MASS * k)}
+    elif name == "mujoco" and "damping" not in opts:
+        typed = {"dampratio": zeta}
+    return {key: float(v) for key, v in typed.items() if key not in opts}
+
+
+def typed_spec(spec: str, e: float, p: float, keep: str | None = None) -> tuple[str, str]:
+    """``spec`` with the code's own e input set to ``e`` as a user types it.
+
+    Parameters
+    ----------
+    spec : str
+        An adapter spec of `CODES` (or any other: those without an e input come back
+        unchanged).
+    e : float
+        The asked restitution, typed as is.
+    p : float
+        Exponent of the scene's power law (1.5 Hertz, 1 Hooke): YADE ViscElMat's tc and
+        cn need its k.
+    keep : str, optional
+        An option left out (the one `calibration_table` searches).
+
+    Returns
+    -------
+    (str, str)
+        The spec to run and the options added (``,key=value`` as adapters' labels
+        write them, removed from the row's variant name).
+    """
+    typed = {k: v for k, v in _typed_options(spec, e, p).items() if k != keep}
+    if not typed:
+        return spec, ""
+    added = "".join(f",{key}={v!r}" for key, v in typed.items())
+    spec = spec.strip()
+    if spec.endswith("]"):
+        return f"{spec[:-1]}{added}]", added
+    return f"{spec}[{added[1:]}]", added
+
+
 def _scene(p: float, e: float, v0: float, spc: int) -> AdapterScene:
     k = HERTZ_K if p == 1.5 else HOOKE_K
     pot = PowerLaw(k, p)
@@ -126,37 +216,45 @@ def codes_table(codes=CODES, asked=ASKED, steps=STEPS_PER_CONTACT, speeds=SPEEDS
 
     rows: list[CodeRow] = []
     for i, (code, spec, p) in enumerate(codes):
-        k = HERTZ_K if p == 1.5 else HOOKE_K
-        cells = [(e, n, v) for e in asked for n in steps for v in speeds]
-        try:
-            ex = make_executor(spec)
-        except HCVInputError as exc:  # not installed, or a spec of another version
-            rows += [CodeRow(code, spec, k, p, e, n, v, error=str(exc)) for e, n, v in cells]
-            continue
-        try:
-            label = ex.variants[0].label
-            for e, n, v in cells:
-                row = CodeRow(code, label, k, p, e, n, v)
-                rows.append(row)
-                s = _scene(p, e, v, n)
-                reason = ex.variants[0].supports(s)
-                if reason:
-                    row.error = f"declined: {reason}"
-                    continue
-                out = ex.call(0, "impact", s, timeout=_TIMEOUT)
-                if not out.ok:
-                    row.error = out.declined or out.error
-                    continue
-                m = measure(out.value, v)
-                row.delivered = float(m.get("restitution", math.nan))
-                row.tensile = float(m.get("tensile", math.nan))
-                law = ex.call(0, "implemented_law", s, timeout=_TIMEOUT)
-                if law.ok:
-                    row.declared_exact = float(exact_reference(law.value, v)["restitution"])
-        finally:
-            ex.close()
+        for e in asked:
+            rows += _typed_rows(code, spec, p, e, steps, speeds)
         if progress is not None:
             progress(i + 1, len(codes))
+    return rows
+
+
+def _typed_rows(code: str, spec: str, p: float, e: float, steps, speeds) -> list[CodeRow]:
+    """The rows of one variant and one asked e, typed into the code as is (`typed_spec`)."""
+    k = HERTZ_K if p == 1.5 else HOOKE_K
+    run, added = typed_spec(spec, e, p)
+    cells = [(n, v) for n in steps for v in speeds]
+    try:
+        ex = make_executor(run)
+    except HCVInputError as exc:  # not installed, or a spec of another version
+        return [CodeRow(code, spec, k, p, e, n, v, error=str(exc)) for n, v in cells]
+    rows: list[CodeRow] = []
+    try:
+        label = ex.variants[0].label.replace(added, "") if added else ex.variants[0].label
+        for n, v in cells:
+            row = CodeRow(code, label, k, p, e, n, v)
+            rows.append(row)
+            s = _scene(p, e, v, n)
+            reason = ex.variants[0].supports(s)
+            if reason:
+                row.error = f"declined: {reason}"
+                continue
+            out = ex.call(0, "impact", s, timeout=_TIMEOUT)
+            if not out.ok:
+                row.error = out.declined or out.error
+                continue
+            m = measure(out.value, v)
+            row.delivered = float(m.get("restitution", math.nan))
+            row.tensile = float(m.get("tensile", math.nan))
+            law = ex.call(0, "implemented_law", s, timeout=_TIMEOUT)
+            if law.ok:
+                row.declared_exact = float(exact_reference(law.value, v)["restitution"])
+    finally:
+        ex.close()
     return rows
 
 
@@ -167,7 +265,9 @@ def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 20
     adapter's ``calibration_range`` unless given. Returns dicts with the code,
     variant, option, asked e, and either the value found
     (``found``, ``value``) or the span the code delivers over the option's range
-    (``delivered``: "out of reach"), and the calibration's one-line ``message``.
+    (``delivered``: "out of reach"), and the calibration's one-line ``message``. The
+    searched option overrides the adapter's mapping of e; the code's other e inputs are
+    typed as is (`typed_spec`: YADE ViscElMat's tc of the asked e).
     """
 
     rows = []
@@ -185,8 +285,11 @@ def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 20
                 }
             )
             row = {"code": code, "variant": spec, "option": param, "asked": e}
+            # the code's other e inputs as typed (YADE tc's contact time): only ``param``
+            # is searched, and the adapter's own mapping of e must not move the rest
+            run, _ = typed_spec(spec, e, p, keep=param)
             try:
-                res = calibrate(spec, scene, param=param, target=e, bracket=bracket[0] if bracket else None,
+                res = calibrate(run, scene, param=param, target=e, bracket=bracket[0] if bracket else None,
                                 steps_per_contact=steps_per_contact, timeout=_TIMEOUT)  # fmt: skip
             except HCVInputError as exc:  # not installed, or declined
                 row.update(found=False, error=str(exc))

@@ -143,7 +143,12 @@ class _Delivered(Metric):
         """(measured key, exact key) at this speed."""
         return self.measured_key, self.quantity
 
-    def _evaluate(self, ctx, base, factor):
+    def _evaluate_table(self, ctx, base, factor, table):
+        # an absolute floor (``atol``, same unit as the quantity) where the table has one:
+        # the limit on the relative error at a speed is max(rtol, atol / asked)
+        return self._evaluate(ctx, base, factor, float(table.get("atol", 0.0)))
+
+    def _evaluate(self, ctx, base, factor, atol: float = 0.0):
         rows = []
         for rec in ctx.speeds:
             mkey, xkey = self._keys(rec)
@@ -165,24 +170,29 @@ class _Delivered(Metric):
                     "error": abs(got - asked) / asked,
                     "model_error": abs(declared - asked) / asked,
                     "step_error": abs(got - declared) / asked,
-                    "limit": base,
+                    "limit": max(base, atol / asked),
                 }
             )
-        worst = max(rows, key=lambda r: r["error"] if math.isfinite(r["error"]) else math.inf)
+
+        def score(r):
+            return r["error"] / r["limit"] if math.isfinite(r["error"]) else math.inf
+
+        worst = max(rows, key=score)
         err = worst["error"] if math.isfinite(worst["error"]) else math.inf
-        ok = err <= base
+        lim = worst["limit"]
+        ok = err <= lim
         model, step = (
             (worst[k] if math.isfinite(worst[k]) else None) for k in ("model_error", "step_error")
         )
-        return self._result(
+        res = self._result(
             ctx,
             "pass" if ok else "fail",
             err,
             worst["expected"],
             base,
-            "" if ok else self._why(worst, base),
+            "" if ok else self._why(worst, lim),
             error=err,
-            limit=base,
+            limit=lim,
             at_v0=worst["v0"],
             measured=worst["measured"],
             expected=worst["expected"],
@@ -191,6 +201,9 @@ class _Delivered(Metric):
             step_error=step,
             per_v0=[{k: v for k, v in r.items() if k != "rec"} for r in rows],
         )
+        if atol:
+            res.with_tolerance(f"{self.field} {base:g}, atol {atol:g}")
+        return res
 
     def _why(self, r, lim) -> str:
         u = self.unit
@@ -212,6 +225,14 @@ class RestitutionAsked(_Delivered):
     measured_key = "restitution"
     label = "restitution"
     description = "restitution at the asked end against the value the scene asks"
+
+    @property
+    def rule(self):
+        return (
+            "|restitution - asked| / asked, every speed, <= max(rtol, atol / asked) (fixed: "
+            "never scaled by the step; atol: the absolute floor of small e); error = model "
+            "(declared law's exact vs asked) + step (measured vs declared law's exact)"
+        )
 
     def _keys(self, rec):
         if (rec.asked or {}).get("end") == "zero-force":
@@ -249,6 +270,12 @@ class RestitutionSpread(Metric):
             return base
         if len(ctx.speeds) < 2:
             return "needs at least two impact speeds"
+        if ctx.speed_dependent:
+            return (
+                f"the scene's {ctx.speed_dependent!r} damping law has a speed-dependent "
+                "restitution (Theorem 3 holds for the universal law); restitution_exact "
+                "checks e at each speed"
+            )
         return None
 
     def _evaluate(self, ctx, base, factor):

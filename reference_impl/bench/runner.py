@@ -34,6 +34,7 @@ from collections.abc import Callable
 import numpy as np
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory
+from reference_impl.adapters.law_damping import implemented_law_from_table, law_of
 from reference_impl.bench._dtcrit import _EXTRA_STEPS, dt_crit
 from reference_impl.bench._errors import DeclaredLawError, _Declined, _Ours
 from reference_impl.bench._plan import (
@@ -43,6 +44,8 @@ from reference_impl.bench._plan import (
     bench_scene_names,
     plan_cells,
     resolve_scenes,
+    scene_damped,
+    speed_dependent_law,
 )
 from reference_impl.bench._records import EXIT_INTERNAL, BenchResult
 from reference_impl.bench._textbook import (
@@ -91,8 +94,9 @@ class _SceneRun:
     def __init__(self, executor, index: int, label: str, scene: Scene, tol: dict):
         self.ex, self.index, self.scene, self.tol = executor, index, scene, tol
         self.timeout = float(tol["run"]["timeout"])
-        damped = scene.damping_law == "universal" and bool(scene.zeta)
-        self.ctx = SceneContext(label, scene.name, scene.kind, damped)
+        self.ctx = SceneContext(
+            label, scene.name, scene.kind, scene_damped(scene), speed_dependent_law(scene)
+        )
         self.timed_out = ""
 
     def call(self, method: str, ascene: AdapterScene) -> Outcome:
@@ -111,9 +115,17 @@ class _SceneRun:
         return out
 
     def asked(self, v0: float):
-        """Exact solution of the scene's own law (ours): `_Ours` when it fails."""
+        """Exact solution of the scene's own law (ours): `_Ours` when it fails. The
+        harmonic map for the universal law (or none), else the general-law reference
+        (`reference_impl.exact.general_law`, ~1e-14), with the law's solved parameters."""
+        sc = self.scene
         try:
-            sol = solve_impact(self.scene.potential, self.scene.mass, v0, self.scene.zeta or 0.0)
+            if sc.damping_law in ("none", "universal"):
+                sol = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0)
+            else:
+                from reference_impl.exact.general_law import solve_law_impact
+
+                sol = solve_law_impact(sc.potential, sc.mass, v0, sc.law)
             t_c = float(sol.contact_time)
         except Exception as exc:
             raise _Ours(
@@ -125,23 +137,24 @@ class _SceneRun:
             )
         return sol
 
-    def asked_values(self, sol) -> dict:
+    def asked_values(self, sol, v0: float) -> dict:
         """What the scene asks at one speed (the delivery metrics' references): the
-        restitution at the end the scene names, the contact time (s), the peak force (N)."""
+        restitution at the end the scene names (for a law solved from a restitution at a
+        speed, that e at that speed; its exact e at every other speed), the contact time
+        (s), the peak force (N), all of the scene's own law solved exactly."""
         end = getattr(self.scene, "restitution_end", "overlap")
-        damped = bool(self.scene.zeta)
-        if end == "zero-force" and damped:
-            e = sol.restitution_zero_force
+        damped = scene_damped(self.scene)
+        e = sol.restitution_zero_force if end == "zero-force" and damped else sol.restitution
+        sc = self.scene
+        if sc.damping_law in ("none", "universal"):
+            law = ImplementedLaw(sc.potential, sc.mass, zeta=float(sc.zeta or 0.0))
         else:
-            e = sol.restitution
-        law = ImplementedLaw(
-            self.scene.potential, self.scene.mass, zeta=float(self.scene.zeta or 0)
-        )
+            law = implemented_law_from_table(sc.potential, sc.mass, sc.law.to_dict())
         return {
             "restitution": float(e),
             "end": end,
             "contact_time": float(sol.contact_time),
-            "peak_force": exact_peak_force(law, sol.v0, lambda: sol.peak_force),
+            "peak_force": exact_peak_force(law, v0, lambda: sol.peak_force),
         }
 
     def budget(self, dt: float, t_c: float) -> int:
@@ -153,7 +166,8 @@ class _SceneRun:
         t_c = sol.contact_time
         dt = t_c / spc
         ascene = AdapterScene.from_scene(self.scene, v0, dt, self.budget(dt, t_c))
-        rec = SpeedRecord(v0=v0, dt=dt, asked_e=ascene.restitution, asked=self.asked_values(sol))
+        asked = self.asked_values(sol, v0)
+        rec = SpeedRecord(v0=v0, dt=dt, asked_e=asked["restitution"], asked=asked)
         out = self.call("impact", ascene)
         rec.seconds = out.seconds
         if not out.ok:
@@ -205,16 +219,18 @@ class _SceneRun:
     def is_scene_law(self, law: ImplementedLaw) -> bool:
         """The declared law is the scene's own (what was asked), not one the code chose."""
 
+        sc = self.scene
         try:
-            same_pot = potential_to_dict(law.potential) == potential_to_dict(self.scene.potential)
+            same_pot = potential_to_dict(law.potential) == potential_to_dict(sc.potential)
         except Exception:
             return False
-        return (
-            same_pot
-            and law.C is None
-            and law.mass == self.scene.mass
-            and float(law.zeta or 0.0) == float(self.scene.zeta or 0.0)
-        )
+        if not (same_pot and law.mass == sc.mass):
+            return False
+        if sc.damping_law in ("none", "universal"):
+            return law.C is None and float(law.zeta or 0.0) == float(sc.zeta or 0.0)
+        # another law of the table: the same law with the same (solved) parameters
+        declared = law_of(law.C) if law.C is not None else None
+        return declared is not None and declared.to_dict() == sc.law.to_dict()
 
     def check_law(self, law: ImplementedLaw, v0: float) -> None:
         """`DeclaredLawError` when the code declares a law we cannot accept (not ours)."""
@@ -448,7 +464,14 @@ def run_bench(
             progress(0.0, total)
         for done, (i, var, sc, reason) in enumerate(plan, start=1):
             if reason:
-                ctx = SceneContext(var.label, sc.name, sc.kind, bool(sc.zeta), skipped=reason)
+                ctx = SceneContext(
+                    var.label,
+                    sc.name,
+                    sc.kind,
+                    scene_damped(sc),
+                    speed_dependent_law(sc),
+                    skipped=reason,
+                )
                 result.metrics.extend(
                     MetricResult(
                         var.label,

@@ -10,8 +10,10 @@ The input that delivers the asked e is searched by
 `reference_impl.bench.codes.calibration_table` for the variants of
 `reference_impl.bench.codes.CALIBRATED`, for `CALIBRATION_ASKED` only: one asked e
 costs 36 to 41 s per YADE variant, 9 s for LIGGGHTS, 5 s for Kratos, 0.5 s for MuJoCo,
-~90 s for the five codes, against ~45 s for their whole table (measured 2026-11-26 on
-2 cores at load 6-7); the three asked e would add ~3 minutes to a ~5-minute report.
+~90 s for the five codes (measured 2026-11-26 on 2 cores at load 6-7), against 38-43 s
+for their whole table at load 2-3 (17 s before each asked e got its own run, typed into
+the code as is: three code starts per variant); the three asked e would add ~3 minutes
+to a ~5-minute report.
 
 The result is the results dict's ``codes_side_by_side`` (schema in
 `reference_impl.report._schema`), rendered by `reference_impl.report._codes`.

@@ -41,6 +41,42 @@ EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 _MAX_SCENE_ARGS = 100_000
 
 
+# What --gate may name (`reference_impl.bench._records.GATES`, repeated here: parsing the
+# arguments imports nothing numerical, issue 20; verification/test_hostile_bench_usage.py checks
+# the two agree).
+_GATE_KINDS = ("both", "implementation", "delivery")
+
+
+class _GateAction(argparse.Action):
+    """``--gate [KIND]``. A value that is not a kind is the adapter written after the flag
+    (``hcv bench --gate reference``, the order before --gate took a value): it is kept
+    in ``gate_adapter`` and `_adapter` takes it when no adapter follows."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if values is None or values in _GATE_KINDS:
+            setattr(namespace, self.dest, values or "both")
+        else:
+            setattr(namespace, self.dest, "both")
+            namespace.gate_adapter = values
+
+
+def _adapter(args) -> str:
+    """The adapter of parsed arguments (also when written right after ``--gate``)."""
+    after_gate = getattr(args, "gate_adapter", None)
+    if after_gate is not None and args.adapter is not None:
+        raise HCVInputError(
+            f"--gate takes {', '.join(_GATE_KINDS)} or nothing, got {after_gate!r} (the "
+            f"adapter is {args.adapter!r}); write --gate KIND after the adapter"
+        )
+    adapter = args.adapter if args.adapter is not None else after_gate
+    if adapter is None:
+        raise HCVInputError(
+            "hcv bench needs an ADAPTER (a registered name, package.module:Class or "
+            "cmd:COMMAND), e.g. hcv bench reference --gate"
+        )
+    return adapter
+
+
 def _scene_args(values: Sequence[str] | None) -> list[str] | None:
     if values is None:
         return None
@@ -136,6 +172,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "bench",
         help="benchmark a contact code against the exact solution (CI gate)",
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        # ADAPTER is required (`_adapter`); argparse's own usage would show it optional
+        usage="%(prog)s ADAPTER [--scenes SCENE [SCENE ...]] [--tolerances FILE]\n"
+        "       [--gate [{both,implementation,delivery}]] [--json FILE] [--junit FILE]\n"
+        "       [--plot FILE] [--markdown FILE] [--show-skipped]",
         description="Run scenes through a contact code's adapter and through the exact "
         "solution; print the scorecard; with --gate exit 1 when a metric fails.",
     )
@@ -151,7 +191,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         return plain_format_help()
 
     b.format_help = format_help
-    adapter = b.add_argument("adapter", help=_ADAPTER_HELP.format(names="see hcv bench --help"))
+    # optional to argparse only so that `hcv bench --gate ADAPTER` parses (`_adapter`)
+    adapter = b.add_argument(
+        "adapter", nargs="?", help=_ADAPTER_HELP.format(names="see hcv bench --help")
+    )
     b.add_argument(
         "--scenes",
         nargs="+",
@@ -166,11 +209,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     b.add_argument(
         "--gate",
         nargs="?",
-        const="both",
-        choices=("both", "implementation", "delivery"),
+        action=_GateAction,
+        metavar="{both,implementation,delivery}",
         help="exit 1 when a metric of the verdict(s) named fails (0 when all pass); "
         "plain --gate = both: implementation (against the declared law's exact solution) "
-        "and delivery (against what the scene asks)",
+        "and delivery (against what the scene asks); hcv bench --gate ADAPTER works too",
     )
     b.add_argument("--json", metavar="FILE", help="write the JSON report here")
     b.add_argument("--junit", metavar="FILE", help="write JUnit XML here")
@@ -193,6 +236,7 @@ def run(args) -> int:
     )
     from reference_impl.bench.runner import run_bench
 
+    args.adapter = _adapter(args)
     scenes = _scene_args(args.scenes)
     _check_files(args, scenes)
     if sys.stderr.isatty():

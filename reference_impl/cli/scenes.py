@@ -16,18 +16,22 @@ def add_parser(subparsers) -> None:
         "--show NAME prints one as TOML",
     )
     ls.add_argument(
-        "--show", metavar="NAME", help="print this scene's TOML (a catalogue name or a file)"
+        "--show",
+        metavar="NAME",
+        help="print this scene's TOML (a catalogue name or a file), and the strength solved "
+        "for a restitution asked at a speed",
     )
     ls.set_defaults(func=run)
 
 
 def run(args) -> int:
-    """Print the catalogue, one scene a line, or with ``--show`` one scene's TOML."""
+    """Print the catalogue, one scene a line, or with ``--show`` one scene's TOML (and,
+    for a law solved from a restitution at a speed, a ``# solved:`` line after it)."""
 
     if args.show:
-        from reference_impl.scenes import scene_toml
+        from reference_impl.scenes import scene_show
 
-        print(scene_toml(args.show), end="")
+        print(scene_show(args.show), end="")
         return EXIT_OK
     for r in catalogue_rows():
         params = " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"

@@ -15,14 +15,14 @@ are cut into pieces of at most _PIECE units of virtual time, over which the
 integrand, an analytic function of s with unit time scale, is resolved by a
 fixed tanh-sinh rule.
 
-Power laws first try Gauss-Jacobi rules, kept only when two rule sizes agree to
-_GJ_RTOL on every stretch. Compiled families (sums, caps, expressions) run their
-fast paths whole in compiled code (`_one_call`, called by `solve_impact` first);
-what reaches this module for them is the general tanh-sinh path.
+Power laws first try Gauss-Jacobi rules (`_power_kernel`), and compiled families
+(sums, caps, expressions) run their fast paths whole in compiled code (`_one_call`),
+both before this module (`_strategies`); what reaches it is the general tanh-sinh
+path. The Gauss-Jacobi rules' constants and branch rows are kept here.
 
 Every error returned is the quadrature estimate |fine - coarse| plus a bound on
-the round-off of the sum (numpy's pairwise sum for tanh-sinh, recursive summation
-in the compiled Gauss-Jacobi loops; relative to the sum of |w f|) and of the node
+the round-off of the sum (pairwise or compensated for tanh-sinh, recursive summation
+in the Gauss-Jacobi loops; relative to the sum of |w f|; `_sums`) and of the node
 values (_NODE_ULPS ulps).
 """
 
@@ -41,7 +41,8 @@ from reference_impl._stored import stored_floats
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._nodes import node_function
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.exact._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule, sums_from_values
+from reference_impl.exact._quadrature import DEFAULT_LEVEL, pairwise_ulps, rule
+from reference_impl.exact._sums import rows_positive, ts_compensated, ts_pairwise
 from reference_impl.exact._tail import overdamped_tail
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -51,7 +52,7 @@ __all__ = ["Branches", "branch_integrals", "compiled_nodes", "dq_dx", "power_law
 _EPS = float(np.finfo(float).eps)
 # Round-off bound of a sum of N positive products w_k f_k summed one after the other
 # (the compiled Gauss-Jacobi loops): N ulps of the sum of |w f| (recursive summation).
-# The tanh-sinh sums use numpy's pairwise sum instead (`_quadrature.pairwise_ulps`).
+# The tanh-sinh sums charge the pairwise bound instead (`_quadrature.pairwise_ulps`).
 _SUM_ULPS_PER_NODE = 1.0
 # Relative round-off of one node value dq/dx(x(s)): exp, sin and the power or the
 # inverse of U each contribute a few ulps, amplified by |beta| <= 1 in x^beta.
@@ -168,11 +169,12 @@ def _checked(g: np.ndarray, x: np.ndarray, osc: VirtualOscillator, pot: Potentia
     return g
 
 
-def _sums(g, lengths, betas, r):
-    """Values and error bounds (quadrature + round-off) of the rows of g."""
-    val, err = sums_from_values(g, lengths, betas, r)
-    absum = np.sum(np.abs(g) * r.w, axis=-1) * lengths
-    err = err + (pairwise_ulps(r.w.size) + _NODE_ULPS) * _EPS * absum
+def _sums(g, lengths, beta, r):
+    """Values and error bounds (quadrature + round-off) of the rows of g (`_sums.ts_pairwise`)."""
+    g = np.ascontiguousarray(g, dtype=float)
+    L = np.asarray(lengths, dtype=float)
+    val, err = np.empty(g.shape[0]), np.empty(g.shape[0])
+    ts_pairwise(g, L, r.w, r.w_diff, r.d[0], float(beta), _ROUND_ULPS[r.d.size], val, err)
     return val, err
 
 
@@ -186,13 +188,7 @@ def branch_integrals(
     met lies in (0, q_hi], which brackets the compiled inverse of U.
     """
     beta = 2.0 / pot.leading_exponent - 1.0
-    if type(pot) is PowerLaw:
-        fast = _gauss_jacobi_power_law(pot, m, osc, beta)
-        if fast is not None:
-            return fast
-        lv = DEFAULT_LEVEL if level is None else level
-        return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
-    compiled = compiled_nodes(pot)
+    compiled = None if type(pot) is PowerLaw else compiled_nodes(pot)
     if compiled is None:
         lv = DEFAULT_LEVEL if level is None else level
         return _tanh_sinh(pot, m, osc, beta, lv, lambda x: dq_dx(pot, m, x, osc.v0))
@@ -268,17 +264,16 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
         if _NEGLIGIBLE_SHARE <= (lz / sp) ** (1.0 + beta) and lz < sp:
             # The common case, in one evaluation: rise, fall from the end, and the short
             # stretch [2 s_peak, s_end] subtracted from the fall for the zero-force time.
-            # Nodes and sums are compiled (`_ts_common_x`, `_ts_common_sums`): numpy's
+            # Nodes and sums are compiled (`_ts_common_x`, `_sums.ts_compensated`): numpy's
             # per-call overhead on ~300 nodes cost more than the node evaluations.
             L = np.array([sp, osc.s_end - sp, lz])
             xs = _ts_common_x(L, r_s.d, z, osc.wd, osc.s_end, osc.v0)
             with np.errstate(all="ignore"):
                 g = dqdx(xs)
-            v, e = np.empty(3), np.empty(3)
-            if not _ts_common_sums(
-                g, L, r_s.w, r_s.w_diff, r_s.d[0], beta, _ROUND_ULPS[r_s.d.size], v, e
-            ):
+            if not rows_positive(g, L):
                 _checked(g, xs, osc, pot)  # raises: a node value is not finite and > 0
+            v, e = np.empty(3), np.empty(3)
+            ts_compensated(g, L, r_s.w, r_s.w_diff, r_s.d[0], beta, _ROUND_ULPS[r_s.d.size], v, e)
             rise, fall, stretch = (float(t) for t in v)
             e_rise, e_fall, e_stretch = (float(t) for t in e)
             return Branches(rise, e_rise, fall - stretch, e_fall + e_stretch, fall, e_fall)
@@ -330,57 +325,17 @@ def _tanh_sinh(pot, m, osc: VirtualOscillator, beta: float, level: int, dqdx) ->
 
 @numba.njit(cache=True)
 def _ts_common_x(L, d, zeta, wd, s_end, v0):  # pragma: no cover - compiled
-    """x at the tanh-sinh nodes of the three common-case rows (same formulas as
-    `VirtualOscillator.x` for row 0 and `x_from_end` for rows 1 and 2)."""
+    """x at the tanh-sinh nodes of the common-case rows: row 0 from contact onset, rows
+    1 and 2 back from s_end (the formulas of `VirtualOscillator.x` and `x_from_end`);
+    here and in the fused kernel (`_one_call`), for as many rows as L has."""
     n = d.shape[0]
-    xs = np.empty((3, n))
-    for j in range(n):
-        s = L[0] * d[j]
-        xs[0, j] = v0 * np.exp(-zeta * s) * (np.sin(wd * s) / wd)
-    for i in range(1, 3):
+    xs = np.empty((L.shape[0], n))
+    for i in range(L.shape[0]):
         for j in range(n):
             dd = L[i] * d[j]
-            xs[i, j] = v0 * np.exp(-zeta * (s_end - dd)) * (np.sin(wd * dd) / wd)
+            s = dd if i == 0 else s_end - dd
+            xs[i, j] = v0 * np.exp(-zeta * s) * (np.sin(wd * dd) / wd)
     return xs
-
-
-@numba.njit(cache=True)
-def _ts_common_sums(g, L, w, w_diff, d0, beta, round_ulps, val, err):  # pragma: no cover
-    """Values and errors of the rows of g as `_sums` computes them, into val and err;
-    False when a node value is not finite and > 0 (the caller then raises through
-    `_checked`).
-
-    The sums are compensated (Neumaier): their round-off is at most 2 ulps of the
-    sum of |terms| plus O(N eps^2), below the pairwise bound ``round_ulps`` charged
-    (the same bound as the numpy path, so both paths report the same error terms).
-    """
-    nr, n = g.shape
-    for i in range(nr):
-        if not L[i] > 0.0:
-            val[i] = 0.0
-            err[i] = 0.0
-            continue
-        s = 0.0
-        c = 0.0
-        sd = 0.0
-        sa = 0.0
-        for j in range(n):
-            gj = g[i, j]
-            if not (gj > 0.0 and gj < np.inf):
-                return False
-            t = gj * w[j]
-            u = s + t
-            if abs(s) >= abs(t):
-                c += (s - u) + t
-            else:
-                c += (t - u) + s
-            s = u
-            sd += gj * w_diff[j]
-            sa += t
-        tail = g[i, 0] * (L[i] * d0) / (1.0 + beta)
-        val[i] = L[i] * (s + c) + tail
-        err[i] = abs(L[i] * sd) + abs(L[i] * g[i, 0] * w[0]) + round_ulps * _EPS * L[i] * sa
-    return True
 
 
 def _smooth(g_of, x_of_s, start: float, length: float, r) -> tuple[float, float]:
@@ -402,18 +357,11 @@ def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float, pot, m) -> tuple
     return overdamped_tail(g_of, osc, beta, pot, m, _NODE_ULPS)
 
 
-def _branch_rows(osc: VirtualOscillator):
-    """Branches (S0, S1, Phi0, Phi1, length) with x = A exp(-zeta S) sin(wd Phi), S and Phi
-    affine in the distance d from the branch's singular end (see `_fill_rows`)."""
-    rows = np.empty((3, 5))
-    lz = osc.zero_force_stretch if osc.zeta > 0.0 else 0.0
-    nr = _fill_rows(osc.zeta, osc.s_peak, osc.s_end, lz, rows)
-    return rows[:nr]
-
-
 @numba.njit(cache=True)
 def _fill_rows(zeta, sp, s_end, lz, rows):  # pragma: no cover - compiled
-    """The rows of `_branch_rows` into ``rows`` (3 x 5); returns how many are used.
+    """Branches (S0, S1, Phi0, Phi1, length) with x = A exp(-zeta S) sin(wd Phi), S and
+    Phi affine in the distance d from the branch's singular end, into ``rows`` (3 x 5);
+    returns how many are used.
 
     The rising branch (from s = 0), the falling branch (back from s_end) and the
     stretch from the zero-force instant (lz = s_end - 2 s_peak before it) to s_end
@@ -468,54 +416,3 @@ def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
     W[: sizes[0], 0] = w[: sizes[0]]
     W[sizes[0] :, 1] = w[sizes[0] :]
     return u, W
-
-
-def _gauss_jacobi_power_law(pot: PowerLaw, m: float, osc: VirtualOscillator, beta: float):
-    """Branch integrals for a power law by Gauss-Jacobi, or None when not applicable.
-
-    For U = k q^n / n, dq/dx = c x^beta exactly and x(s) = s h(s) with h analytic, so
-    dq/dx = c h^beta s^beta: Gauss-Jacobi with weight s^beta converges geometrically
-    (rate set by the zero of h at s_end). Two rule sizes are compared and the result
-    is used only when they agree to _GJ_RTOL (row by row); scipy's Jacobi rules lose accuracy for
-    beta near -1, hence the range limit.
-    """
-    if osc.zeta >= _GJ_ZETA_MAX or beta < _GJ_BETA_MIN:
-        return None
-    c_pl, _ = power_law_scale(pot, m, osc.v0)
-    rows = _branch_rows(osc)
-    if rows[:, 4].min() <= 0:
-        return None  # an empty stretch: the tanh-sinh path handles it
-    u, W = _jacobi_pair(beta)
-    sums = _gj_sums(rows, u, W, osc.zeta, osc.wd, beta, c_pl)
-    coarse, fine = sums[:, 0], sums[:, 1]
-    # Positive integrand: the round-off bound is relative to the sum itself.
-    err = np.abs(fine - coarse) + (_SUM_ULPS_PER_NODE * _GJ_SIZES[1] + _NODE_ULPS) * _EPS * fine
-    # Each row's two rule sizes must agree to _GJ_RTOL of that row (the falling rows
-    # are several times the rising one near zeta = 0.9).
-    if not np.all(np.abs(fine - coarse) <= _GJ_RTOL * np.abs(fine)):
-        return None
-    rise, e_rise = float(fine[0]), float(err[0])
-    if osc.zeta == 0.0:
-        return Branches(rise, e_rise, rise, e_rise, rise, e_rise)
-    fall, e_fall = float(fine[1]), float(err[1])
-    return Branches(rise, e_rise, fall - float(fine[2]), e_fall + float(err[2]), fall, e_fall)
-
-
-@numba.njit(cache=True)
-def _gj_sums(rows, u, W, zeta, wd, beta, c_pl):  # pragma: no cover - compiled
-    """sum_j W[j, k] c ((x/v0)(s_j)/s_j)^beta L^(beta+1) per branch row.
-
-    Compiled: ~120 nodes make numpy's per-call overhead dominate (39 us vs ~5 us).
-    """
-    nr, nn = rows.shape[0], u.shape[0]
-    out = np.zeros((nr, W.shape[1]))
-    for i in range(nr):
-        s0, s1, p0, p1, L = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
-        scale = c_pl * L ** (beta + 1.0)
-        for j in range(nn):
-            d = u[j]
-            x = np.exp(-zeta * (s0 + s1 * d)) * np.sin(wd * (p0 + p1 * d)) / wd
-            f = scale * (x / (L * d)) ** beta
-            for k in range(W.shape[1]):
-                out[i, k] += W[j, k] * f
-    return out

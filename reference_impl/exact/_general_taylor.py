@@ -39,6 +39,12 @@ shift e / |W|); `general_law` multiplies them by its safety factor and adds roun
 Measured on the study's Hertz laws (v0 = 1 m/s): 9-10 steps, 2-4e-16 relative error on
 every output against the 30-digit truth, the kernel ~14x faster than the GBS kernel
 (`benchmarks.bench_general_taylor`).
+
+The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk cache of
+this module is keyed by this file alone: a change of `_general_kernel` (or
+`_general_step`) leaves this module's cached machine code running the old kernel until
+this file changes too (measured: the hand-over tests then differ from the kernel), so
+such a change comes with a line here. Last: the near-critical error control (2026-11-26).
 """
 
 from __future__ import annotations

@@ -27,9 +27,14 @@ import numba
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.exact import general_law as _gl
 from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_NO_RETURN_Q
 from reference_impl.exact._validate import _validated_top
+from reference_impl.exact.general_law import (
+    ERROR_SAFETY,
+    _compiled_solve,
+    _refuse_lost_return,
+    prepare_law,
+)
 
 __all__ = ["LAW_FIELDS", "solve_law_batch"]
 
@@ -51,12 +56,13 @@ _EPS = np.finfo(float).eps
 # Speeds per chunk of the parallel loop (~20-200 us each: the hand-out costs far less).
 _CHUNK = 4
 # The compiled integration `solve_law_impact` calls (bound once; a global of the loop below).
-_SOLVE = _gl._compiled_solve
+_SOLVE = _compiled_solve
 
 
-# Cached (its first compile takes seconds): like `_general_taylor.solve`, which calls the
-# GBS kernel of another module, a change of the called kernel alone does not refresh the
-# cache; the bit-for-bit test against `solve_law_impact` then fails (clear __pycache__).
+# Cached (its first compile takes seconds). It compiles in the kernel of other modules:
+# the cache directory is keyed by the content of every compiled source
+# (`reference_impl._numba_dir._COMPILED_SOURCES`, this file included), so a change of
+# that kernel selects a fresh directory instead of reusing this machine code.
 @numba.njit(cache=True, parallel=True)
 def _solve_rows(v, q_top, ks, ps, cs, es, sc, rows):  # pragma: no cover - compiled
     """``rows[i]`` = the kernel's `OUT_FIELDS` of speed ``v[i]`` (one speed per thread step)."""
@@ -93,7 +99,7 @@ def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.nd
     out = np.full((len(LAW_FIELDS), v.size), np.nan)
     if not v.size:
         return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
-    prepared = _gl.prepare_law(potential, m, law)
+    prepared = prepare_law(potential, m, law)
     plan = prepared._plan
     if plan.lin is not None or plan.pk is None:
         # Closed form, or a Python potential: no compiled loop to spread over the cores.
@@ -150,7 +156,7 @@ def _finish(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray,
             # Not finished within the step budget: the single call raises its message.
             _store(out, i, prepared(float(v[i])))
         else:
-            _gl._refuse_lost_return(plan.potential, plan.law, plan.m, float(v[i]))
+            _refuse_lost_return(plan.potential, plan.law, plan.m, float(v[i]))
 
 
 def _fill(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray) -> None:
@@ -161,7 +167,7 @@ def _fill(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray) -
     t_scale = q_top / v
     t_end = np.where(returns, r["t_end"], math.inf)
     tail = np.where(returns, t_end, np.where(np.isfinite(r["t_zf"]), r["t_zf"], t_scale))
-    es = _gl.ERROR_SAFETY
+    es = ERROR_SAFETY
     err_t = es * r["err_t"] * t_scale + nst * _EPS * tail
     # the zero-force instant's own sensitivity (_general_kernel)
     err_t = np.where(r["err_zf"] > 0.0, err_t + es * r["err_zf"], err_t)

@@ -16,6 +16,8 @@ whole inside numba, generic in the node loop of `_nodes`:
 * tanh-sinh (`tanh_sinh`) for the common rows of `_branches._tanh_sinh` (zeta = 0,
   or 0 < zeta < 1 with the zero-force instant close to s_end), level by level.
 
+The sums are those of `_sums` (one source per loop: `gj_rows` around `_node_values`,
+`ts_compensated`), the tanh-sinh node positions `_branches._ts_common_x`.
 Both also return the peak (q_max and U'(q_max)). Anything else (zeta >= 1, the
 rare stretches, a node outside float64 range) returns None and `solve_impact`
 runs the general path of `_branches`, which also names a bad node.
@@ -44,7 +46,7 @@ from reference_impl.exact._branches import (
     Branches,
     _fill_rows,
     _jacobi_pair,
-    _ts_common_sums,
+    _ts_common_x,
     level_up,
     per_potential,
 )
@@ -58,6 +60,13 @@ from reference_impl.exact._nodes import (
 )
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._quadrature import rule
+from reference_impl.exact._sums import (
+    GJ_BAD_NODE,
+    GJ_OK,
+    gj_rows,
+    rows_positive,
+    ts_compensated,
+)
 from reference_impl.potentials.base import Potential
 
 __all__ = ["curvature", "fused_impact", "gauss_jacobi_impact"]
@@ -83,8 +92,9 @@ _OUT = 9
 
 
 # Whole-impact kernels, written once and compiled per node loop by `_kernels_for`
-# (`reference_impl._jit.specialise` binds _NODES, a `NodeKernel.nodes`, and _PEAK).
-_NODES = _PEAK = None
+# (`reference_impl._jit.specialise` binds _NODES, a `NodeKernel.nodes`, _PEAK, and
+# _GJ_ROWS, `_sums.gj_rows` around `_node_values`).
+_NODES = _PEAK = _GJ_ROWS = None
 
 
 def _peak(prm, P, out):  # pragma: no cover - compiled
@@ -99,8 +109,25 @@ def _peak(prm, P, out):  # pragma: no cover - compiled
     out[7] = m * xa[0] / g[0]
 
 
-def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cover
+def _node_values(rows, i, d, args, vals):  # pragma: no cover - compiled
+    """dq/dx d^-beta at the nodes d = t^b of branch row i (`_sums.gj_rows`'s integrand);
+    False when a node value is not finite and > 0. args = (prm, P, d^-beta, x, g, q)."""
+    prm, P, fac, xs, g, qs = args
     m, v0, zeta, wd = prm[0], prm[1], prm[2], prm[3]
+    s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
+    for j in range(d.shape[0]):
+        xs[j] = v0 * math.exp(-zeta * (s0 + s1 * d[j])) * math.sin(wd * (p0 + p1 * d[j])) / wd
+    _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
+    for j in range(d.shape[0]):
+        gj = g[j]
+        if not (gj > 0.0 and gj < np.inf):
+            return False
+        vals[j] = gj * fac[j]
+    return True
+
+
+def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cover
+    zeta = prm[2]
     rows = np.empty((3, 5))
     nr = _fill_rows(zeta, prm[4], prm[5], prm[6], rows)
     for i in range(nr):
@@ -112,35 +139,13 @@ def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cov
         out[8] = _CROSSOVER
         return
     nn = d.shape[0]
-    xs = np.empty(nn)
-    g = np.empty(nn)
-    qs = np.empty(nn)
+    args = (prm, P, fac, np.empty(nn), np.empty(nn), np.empty(nn))
     fine = np.empty(3)
     err = np.empty(3)
-    for i in range(nr):
-        s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
-        for j in range(nn):
-            xs[j] = v0 * math.exp(-zeta * (s0 + s1 * d[j])) * math.sin(wd * (p0 + p1 * d[j])) / wd
-        _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
-        c = 0.0
-        f = 0.0
-        for j in range(nn):
-            gj = g[j]
-            if not (gj > 0.0 and gj < np.inf):
-                out[8] = _BAD_NODE
-                return
-            t = gj * fac[j]
-            c += W[j, 0] * t
-            f += W[j, 1] * t
-        scale = rows[i, 4] * b
-        c *= scale
-        f *= scale
-        diff = abs(f - c)
-        if not diff <= rtol * f:
-            out[8] = _DISAGREE
-            return
-        fine[i] = f
-        err[i] = diff + round_rel * f
+    status = _GJ_ROWS(rows, nr, d, W, args, b, rtol, round_rel, fine, err)
+    if status != GJ_OK:
+        out[8] = _BAD_NODE if status == GJ_BAD_NODE else _DISAGREE
+        return
     _store(fine, err, nr, out)
     out[8] = _OK
 
@@ -154,22 +159,17 @@ def _tanh_sinh(prm, P, d, w, w_diff, beta, round_ulps, out):  # pragma: no cover
         L[1] = s_end - sp
         L[2] = lz
     nn = d.shape[0]
-    xs = np.empty(nn)
+    xs = _ts_common_x(L, d, zeta, wd, s_end, v0)
     g = np.empty((nr, nn))
     qs = np.empty(nn)
     for i in range(nr):
-        # Row 0 from contact onset, rows 1 and 2 back from s_end (the formulas of
-        # `VirtualOscillator.x` and `x_from_end`).
-        for j in range(nn):
-            dd = L[i] * d[j]
-            s = dd if i == 0 else s_end - dd
-            xs[j] = v0 * math.exp(-zeta * s) * (math.sin(wd * dd) / wd)
-        _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
-    val = np.empty(nr)
-    err = np.empty(nr)
-    if not _ts_common_sums(g, L, w, w_diff, d[0], beta, round_ulps, val, err):
+        _NODES(xs[i], m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
+    if not rows_positive(g, L):
         out[8] = _BAD_NODE
         return
+    val = np.empty(nr)
+    err = np.empty(nr)
+    ts_compensated(g, L, w, w_diff, d[0], beta, round_ulps, val, err)
     if nr == 1:
         _store(val, err, 1, out)
     else:
@@ -185,12 +185,14 @@ def _kernels_for(nodes, cache: bool, entry: str | None = None):
     """(gauss_jacobi, tanh_sinh) compiled around the node loop ``nodes``; their disk-cache
     files are noted under the compile-cache ``entry`` when given (for its eviction)."""
     peak = specialise(_peak, cache, _NODES=nodes)
-    gauss_jacobi = specialise(_gauss_jacobi, cache, _NODES=nodes, _PEAK=peak)
+    values = specialise(_node_values, cache, _NODES=nodes)
+    rows = gj_rows(values, cache)
+    gauss_jacobi = specialise(_gauss_jacobi, cache, _GJ_ROWS=rows, _PEAK=peak)
     tanh_sinh = specialise(_tanh_sinh, cache, _NODES=nodes, _PEAK=peak)
     if entry is not None:
         from reference_impl._cache import record_files
 
-        record_files(entry, [peak, gauss_jacobi, tanh_sinh])
+        record_files(entry, [peak, values, rows, gauss_jacobi, tanh_sinh])
     return gauss_jacobi, tanh_sinh
 
 

@@ -88,6 +88,25 @@ class VirtualOscillator:
         # x'' = 0 at exactly twice the peak time (see module docstring).
         self.s_zero_force = 2.0 * self.s_peak
 
+    @classmethod
+    def _of(cls, v0: float, zeta: float, wd: float, s_peak: float, s_end: float):
+        """The underdamped oscillator (0 <= zeta < 1) from wd, s_peak and s_end computed
+        elsewhere by `__init__`'s formulas (the prepared call's compiled kernels), without
+        repeating them: the same attributes."""
+        osc = object.__new__(cls)
+        osc.__dict__.update(
+            {
+                "v0": v0,
+                "zeta": zeta,
+                "wd": wd,
+                "r": 0.0,
+                "s_peak": s_peak,
+                "s_end": s_end,
+                "s_zero_force": 2.0 * s_peak,
+            }
+        )
+        return osc
+
     @property
     def zero_force_stretch(self) -> float:
         """Virtual time from the zero-force instant to s_end (underdamped), cancellation-free:

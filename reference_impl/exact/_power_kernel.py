@@ -1,10 +1,12 @@
 """One power-law impact in one compiled call (issue 27, goal 2).
 
-For U = k q^n / n the Gauss-Jacobi path of `_branches` (`_gauss_jacobi_power_law`) is
-whole in `power_impact`: the oscillator, the branch rows, the sums of `_gj_sums` (the same
-compiled loop), their agreement test and bounds, and the peak, with the same operations
-in the same order, so the numbers are those of that path bit for bit (tests through
-`prepare` and `solve_impact`). `_strategies.power_law` and `prepared` call it.
+For U = k q^n / n, dq/dx = c x^beta exactly and x(s) = s h(s) with h analytic, so
+dq/dx = c h^beta s^beta: Gauss-Jacobi with weight s^beta converges geometrically (rate set
+by the zero of h at s_end). `power_impact` is that whole impact in one compiled call: the
+oscillator, the branch rows, the sums (`_sums.gj_rows` bound to the closed form
+`_power_values`: two rule sizes, kept only when they agree to _GJ_RTOL on every row;
+scipy's Jacobi rules lose accuracy for beta near -1, hence _GJ_BETA_MIN and _GJ_ZETA_MAX),
+and the peak. `_strategies.power_law` and `prepared` call it.
 """
 
 from __future__ import annotations
@@ -23,10 +25,10 @@ from reference_impl.exact._branches import (
     _SUM_ULPS_PER_NODE,
     _exponent_splits,
     _fill_rows,
-    _gj_sums,
     _jacobi_pair,
     _pow_split,
 )
+from reference_impl.exact._sums import GJ_OK, gj_rows
 from reference_impl.potentials.power import PowerLaw
 
 __all__ = ["OUT_SIZE", "power_constants", "power_impact"]
@@ -53,6 +55,23 @@ def power_constants(pot: PowerLaw, m: float) -> tuple | None:
     return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p)
 
 
+@numba.njit(cache=True)
+def _power_values(rows, i, d, args, vals):  # pragma: no cover - compiled
+    """c ((x/v0)(s)/s)^beta L^(beta+1) at the nodes d of branch row i (the values carry
+    their scale); args = (zeta, wd, beta, c)."""
+    zeta, wd, beta, c_pl = args
+    s0, s1, p0, p1, L = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
+    scale = c_pl * L ** (beta + 1.0)
+    for j in range(d.shape[0]):
+        dj = d[j]
+        x = np.exp(-zeta * (s0 + s1 * dj)) * np.sin(wd * (p0 + p1 * dj)) / wd
+        vals[j] = scale * (x / (L * dj)) ** beta
+    return True
+
+
+_POWER_ROWS = gj_rows(_power_values, cache=True)
+
+
 @numba.njit(cache=True, error_model="numpy")
 def power_impact(
     v0, zeta, c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, two_n, k, p, rtol_stated, tiny, out
@@ -60,11 +79,10 @@ def power_impact(
     """One power-law impact by Gauss-Jacobi, as `solve_impact` computes it (pragma: compiled).
 
     The oscillator (`VirtualOscillator`), the branch rows (`_fill_rows`), the scale
-    c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums
-    (`_gj_sums`), their agreement test and bounds (`_gauss_jacobi_power_law`), the
-    peak (`_strategies.peak`), and, given ``rtol_stated`` and ``tiny``, the bound and
-    range checks (`solve._check_bound`, `_check_normal`; inf and 0 skip them): out[13] = 0
-    when any of them refuses.
+    c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums, their
+    agreement test and bounds (`_sums.gj_rows`), the peak (`_strategies.peak`), and,
+    given ``rtol_stated`` and ``tiny``, the bound and range checks (`solve._check_bound`,
+    `_check_normal`; inf and 0 skip them): out[13] = 0 when any of them refuses.
     """  # pragma: no cover - compiled
     out[13] = 0.0
     wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
@@ -77,19 +95,17 @@ def power_impact(
         if not rows[i, 4] > 0.0:
             return
     c_pl = c_m * (v0**b_hi * math.exp(b_lo * math.log(v0)))
-    sums = _gj_sums(rows[:nr], u, W, zeta, wd, beta, c_pl)
-    err = np.empty(nr)
-    for i in range(nr):
-        coarse, fine = sums[i, 0], sums[i, 1]
-        err[i] = abs(fine - coarse) + round_rel * fine
-        if not abs(fine - coarse) <= _GJ_RTOL * abs(fine):
-            return
-    rise, e_rise = sums[0, 1], err[0]
+    fine = np.empty(3)
+    err = np.empty(3)
+    args = (zeta, wd, beta, c_pl)
+    if _POWER_ROWS(rows, nr, u, W, args, 0.0, _GJ_RTOL, round_rel, fine, err) != GJ_OK:
+        return
+    rise, e_rise = fine[0], err[0]
     if zeta == 0.0:
         mid, e_mid, fall, e_fall = rise, e_rise, rise, e_rise
     else:
-        fall, e_fall = sums[1, 1], err[1]
-        mid, e_mid = fall - sums[2, 1], e_fall + err[2]
+        fall, e_fall = fine[1], err[1]
+        mid, e_mid = fall - fine[2], e_fall + err[2]
     x_peak = v0 * math.exp(-zeta * sp)
     q_max = q_scale * x_peak**two_n
     f_max = k * q_max**p

@@ -15,11 +15,12 @@ from functools import lru_cache
 
 import numpy as np
 
+from reference_impl.exact._sums import ts_pairwise
+
 __all__ = [
     "TanhSinhRule",
     "rule",
     "integrate_left_singular",
-    "sums_from_values",
     "pairwise_ulps",
 ]
 
@@ -121,48 +122,17 @@ def integrate_left_singular(f, length, beta: float, level: int = DEFAULT_LEVEL):
         The integral(s).
     error : float or numpy.ndarray
         |fine - coarse| estimate of the absolute error of the coarse rule, an upper
-        estimate for the returned (fine) value.
+        estimate for the returned (fine) value (no round-off term).
     """
     r = rule(level, beta)
     L = np.asarray(length, dtype=float)
-    empty = L <= 0
     # Zero-length intervals integrate to 0; evaluate them on a dummy unit interval.
-    d = np.where(empty, 1.0, L)[..., None] * r.d
-    value, err = sums_from_values(f(d), L, beta, r)
-    if value.ndim == 0:
-        return float(value), float(err)
-    return value, err
-
-
-def sums_from_values(fd, length, beta, r: TanhSinhRule):
-    """Integrals from integrand values already evaluated at the rule's nodes.
-
-    Parameters
-    ----------
-    fd : numpy.ndarray
-        f at ``length * rule(level).d``; last axis runs over the nodes.
-    length : float or numpy.ndarray
-        Interval length(s), broadcastable to ``fd.shape[:-1]``.
-    beta : float or numpy.ndarray
-        Endpoint exponent(s) for the analytic tail (> -1).
-    r : TanhSinhRule
-        The rule whose nodes ``fd`` was evaluated at.
-
-    Returns
-    -------
-    value, error : numpy.ndarray
-        As in `integrate_left_singular`.
-    """
-    L = np.asarray(length, dtype=float)
-    empty = L <= 0
-    # An empty interval integrates to 0 whatever f returned on its (degenerate) nodes.
-    fd = np.where(empty[..., None], 0.0, fd)
-    # Analytic tail on [0, d_min]: f ~ f(d_min) (d / d_min)^beta there.
-    tail = fd[..., 0] * (L * r.d[0]) / (1.0 + np.asarray(beta, dtype=float))
-    # np.sum over the last (contiguous) axis sums pairwise: round-off O(log2 N) ulps,
-    # where a BLAS dot only guarantees O(N) (see `PAIRWISE_ULPS`).
-    value = L * np.sum(fd * r.w, axis=-1) + tail
-    # Fine-minus-coarse, plus the first node's share as a bound on the end
-    # correction (it dominates only when beta is close to -1, n > ~30).
-    err = np.abs(L * np.sum(fd * r.w_diff, axis=-1)) + np.abs(L * fd[..., 0] * r.w[0])
-    return value, err
+    d = np.where(L <= 0, 1.0, L)[..., None] * r.d
+    fd = np.asarray(f(d), dtype=float)
+    rows = np.ascontiguousarray(fd.reshape(-1, fd.shape[-1]))
+    lengths = np.ascontiguousarray(np.broadcast_to(L, fd.shape[:-1]).reshape(-1))
+    value, err = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    ts_pairwise(rows, lengths, r.w, r.w_diff, r.d[0], float(beta), 0.0, value, err)
+    if L.ndim == 0:
+        return float(value[0]), float(err[0])
+    return value.reshape(fd.shape[:-1]), err.reshape(fd.shape[:-1])

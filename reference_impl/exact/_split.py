@@ -49,7 +49,8 @@ from reference_impl.exact._branches import (
 from reference_impl.exact._nodes import _TERM_POWER, _term_rows, _terms_eval
 from reference_impl.exact._one_call import _term_ratio
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.exact._quadrature import pairwise_ulps, rule, sums_from_values
+from reference_impl.exact._quadrature import pairwise_ulps, rule
+from reference_impl.exact._sums import ts_pairwise
 from reference_impl.potentials.base import Potential
 
 __all__ = ["SPLIT_SHARE", "SPLIT_ZETA_MAX", "higher_share", "needs_split", "split_impact"]
@@ -233,11 +234,13 @@ def _cut_error(q_cut: float, speed: float) -> float:
 
 
 def _sum(f, L: float, r):
-    """Value and error bound (quadrature + round-off) of int_0^L f over the rule's nodes."""
-    v, e = sums_from_values(f, L, 0.0, r)
-    absum = float(np.sum(np.abs(f) * r.w)) * L
-    e = float(e) + (pairwise_ulps(r.w.size) + _NODE_ULPS) * _EPS * absum
-    return float(v), e
+    """Value and error bound (quadrature + round-off) of int_0^L f over the rule's nodes
+    (`_sums.ts_pairwise`: f is regular at 0 here, beta = 0)."""
+    v, e = np.empty(1), np.empty(1)
+    f = np.ascontiguousarray(f, dtype=float).reshape(1, -1)
+    ulps = pairwise_ulps(r.w.size) + _NODE_ULPS
+    ts_pairwise(f, np.array([float(L)]), r.w, r.w_diff, r.d[0], 0.0, ulps, v, e)
+    return float(v[0]), float(e[0])
 
 
 def split_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float):

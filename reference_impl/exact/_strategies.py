@@ -16,8 +16,7 @@ Each strategy is a function ``plan(job) -> Answer | None`` with one contract:
 The order is the solver's preference: a power law's Gauss-Jacobi rule in one compiled
 call, the split quadrature (Gauss-Jacobi first) where a
 sum's terms hand over inside the contact, else the fused compiled kernel of `_one_call`,
-else the general path of `_branches` (power laws' Gauss-Jacobi, tanh-sinh level by level,
-the overdamped tail).
+else the general path of `_branches` (tanh-sinh level by level, the overdamped tail).
 """
 
 from __future__ import annotations
@@ -103,10 +102,10 @@ def peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tupl
 
 
 def power_law(job: Job) -> Answer | None:
-    """A power law by Gauss-Jacobi in one compiled call (`_power_kernel`): the numbers of
-    `general`'s power-law path bit for bit, without its Python around the sums."""
+    """A power law by Gauss-Jacobi in one compiled call (`_power_kernel`), whatever the
+    tanh-sinh level asked (the level is that of `general`'s rules, used when this refuses)."""
     pot, osc = job.potential, job.osc
-    if job.level is not None or type(pot) is not PowerLaw or osc.zeta >= _GJ_ZETA_MAX:
+    if type(pot) is not PowerLaw or osc.zeta >= _GJ_ZETA_MAX:
         return None
     consts = power_constants(pot, job.m)
     if consts is None:

@@ -34,6 +34,12 @@ __all__ = ["MpInverse", "solve_impact_mp"]
 _GUARD = 15
 # Newton iterations of the inverse of U at high precision (quadratic: ~8 suffice).
 _NEWTON_MAX = 100
+# Guard bits of `MpInverse` against cancellation in U: the first try with extra bits uses
+# this many, doubled up to _EXTRA_MAX times the working precision (a saturating force at
+# x = 1e-30 loses 200 bits); each result is checked with _CHECK_BITS more.
+_EXTRA_START = 32
+_EXTRA_MAX = 8
+_CHECK_BITS = 32
 # Seed table of `MpInverse` given the largest energy: this many energies, geometric
 # from u_max * _SEED_SPAN to u_max (one vectorised float inverse for all calls).
 _SEED_POINTS = 400
@@ -80,7 +86,9 @@ class MpInverse:
     1.6-7x less time than with a float inverse per call on its scenes whose float
     inverse is numeric, `solve_impact_mp` 1.7-6.5x (measured). Energies without a float seed start from the
     leading power law U ~ U(q_ref) (q/q_ref)^n in mpmath. Call it inside the working
-    precision.
+    precision. Where U loses digits to cancellation (the saturating force's
+    q_s F0 (x - atan x) as x -> 0), U is evaluated with guard bits, doubled until
+    Newton converges and a check with more bits confirms it (`_newton`).
 
     Raises
     ------
@@ -91,6 +99,8 @@ class MpInverse:
     def __init__(self, pot: Potential, u_max: float | None = None):
         self.pot = pot
         self._table = None
+        # guard bits of the last converged call (a start for the next; see __call__)
+        self._extra = 0
         if u_max is not None:
             u_tab = u_max * np.geomspace(_SEED_SPAN, 1.0, _SEED_POINTS)
             with np.errstate(all="ignore"):
@@ -135,19 +145,50 @@ class MpInverse:
             n_lead = mpmath.mpf(pot.leading_exponent)
             q_ref = mpmath.mpf(pot.q_scale)
             q = q_ref * (u / pot._U(q_ref)) ** (1 / n_lead)
+        prec = mpmath.mp.prec
         lu = mpmath.log(u)
         # log U carries an absolute rounding error ~ |log u| ulps: the step cannot get smaller.
-        tol = mpmath.mpf(2) ** (-mpmath.mp.prec + 8) * max(1, abs(lu))
-        for _ in range(_NEWTON_MAX):
-            U = pot._U(q)
-            step = (mpmath.log(U) - lu) * U / (q * pot._dU(q))
-            q = q * mpmath.exp(-step)
-            if abs(step) < tol:
-                return q
+        tol = mpmath.mpf(2) ** (-prec + 8) * max(1, abs(lu))
+        # U itself may lose digits to cancellation (the saturating force's q_s F0 (x - atan x)
+        # loses 2 log10(1/x) digits as x -> 0): Newton then stalls at U's noise, above tol.
+        # So U is evaluated with `extra` guard bits, doubled until the result holds.
+        extra = self._extra
+        while extra <= _EXTRA_MAX * prec:
+            with mpmath.workprec(prec + extra):
+                qx = self._newton(+q, u, lu, tol)
+            if qx is not None:
+                self._extra = extra
+                return +qx
+            extra = max(2 * extra, _EXTRA_START)
         raise HCVInputError(
             f"inverse of U at {mpmath.mp.dps} digits: Newton for U(q) = {mpmath.nstr(u, 8)} J "
             f"did not converge ({pot!r})"
         )
+
+    def _newton(self, q, u, lu, tol):
+        """Newton on log U from q at the current precision; None when U's noise stops it.
+
+        A step below tol is accepted only when log U(q) with `_CHECK_BITS` more bits is
+        within 4 tol of log u too: where U cancels, its computed value is quantised
+        (steps of an ulp of the terms, not of U), so Newton can stop on a step of exactly
+        0 with q off by that quantum (measured: 4e-21 relative at 40 digits, u = 5e-61 J
+        on the saturating force); more bits refine the quantum and expose it.
+        """
+        pot = self.pot
+        for _ in range(_NEWTON_MAX):
+            U = pot._U(q)
+            if not U > 0:  # every digit cancelled
+                return None
+            slope = q * pot._dU(q) / U  # d log U / d log q
+            step = (mpmath.log(U) - lu) / slope
+            q = q * mpmath.exp(-step)
+            if abs(step) < tol:
+                with mpmath.workprec(mpmath.mp.prec + _CHECK_BITS):
+                    Uc = pot._U(q)
+                    if Uc > 0 and abs(mpmath.log(Uc) - lu) <= 4 * tol * abs(slope):
+                        return q
+                return None
+        return None
 
 
 def solve_impact_mp(potential: Potential, m, v0, zeta=0, *, dps: int = 30) -> dict:

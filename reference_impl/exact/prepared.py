@@ -1,21 +1,28 @@
 """Repeated impacts of one potential and mass: `prepare(potential, m)` (issue 27, goal 2).
 
 `solve_impact` checks its potential and mass, plans its path and assembles its
-result in Python around ~5-10 us of compiled work, on every call. A prepared
-solver does the checks and the planning once; each call then
+result in Python around ~5-15 us of compiled work, on every call. A prepared
+solver does the checks and the planning once (the compiled entry, its constants
+packed in arrays); each call then makes one compiled call (`_prepared_kernel`):
 
-* for a power law (the Gauss-Jacobi path of `_branches`), makes one compiled call
-  (`_power_kernel.power_impact`) that computes the oscillator, the branch sums (`_gj_sums`,
-  the same compiled loop), the peak and the checks of `solve_impact`, and builds
-  the `ImpactSolution` from its output;
-* for the other compiled families, calls the fused kernel of `_one_call` directly
-  (the same call `solve_impact` makes), without re-checking the potential.
+* a power law (the Gauss-Jacobi path of `_branches`): `power_call`, the oscillator,
+  the branch sums (`_gj_sums`, the same compiled loop), the peak and the bound and
+  range checks of `solve_impact`;
+* the other compiled families: `family_call`, the oscillator, the family's
+  Gauss-Jacobi kernel of `_one_call` (the first call `solve_impact`'s `fused`
+  strategy makes), the restitutions and U''(q_max); the conditioning charge
+  (`solve._conditioning_at`) and the checks are a few float operations here.
+  When Gauss-Jacobi refuses, the fused kernel (`_one_call.fused_impact`: the
+  tanh-sinh ladder) runs as in `solve_impact`.
 
-Every call returns exactly what `solve_impact(potential, m, v0, zeta)` returns,
-bit for bit (the same operations in the same order; held by a test over every
-family). Whatever the fast path does not cover (zeta >= 0.9, the split and
-tanh-sinh paths, a bound or range refusal, bad input) is passed to `solve_impact`
-itself, which solves it or raises its one-line error.
+The result is built from a dict (`ImpactSolution._fast`); its oscillator is kept as
+(wd, s_peak, s_end) and built on first use (`ImpactSolution.__getattr__`), with the
+attributes `VirtualOscillator(v0, zeta)` has. Every call returns exactly what
+`solve_impact(potential, m, v0, zeta)` returns, bit for bit (the same operations in
+the same order; held by verification/test_exact_prepared.py over every family).
+Whatever the fast paths do not cover (zeta >= 0.9, the split and general paths, a
+bound or range refusal, bad input) is passed to `solve_impact` itself, which solves
+it or raises its one-line error.
 """
 
 from __future__ import annotations
@@ -26,9 +33,10 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
-from reference_impl.exact._one_call import _OK, _OUT, _params, _plan, _result, fused_impact
+from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
-from reference_impl.exact._power_kernel import OUT_SIZE, power_constants, power_impact
+from reference_impl.exact._power_kernel import power_constants
+from reference_impl.exact._prepared_kernel import family_call, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -36,8 +44,8 @@ from reference_impl.exact.solve import (
     _TINY,
     RTOL_STATED,
     ImpactSolution,
-    _charge_conditioning,
-    _check_bound,
+    _charged,
+    _conditioning_at,
     solve_impact,
 )
 from reference_impl.potentials._checks import is_real_number, positive
@@ -55,7 +63,18 @@ class PreparedImpact:
     Calling it with (v0, zeta) returns `solve_impact(potential, m, v0, zeta)`.
     """
 
-    __slots__ = ("potential", "m", "_power", "_out", "_plan", "_split")
+    __slots__ = (
+        "potential",
+        "m",
+        "_c",
+        "_u",
+        "_W",
+        "_e_checked",
+        "_plan",
+        "_split",
+        "_family",
+        "_args",
+    )
 
     def __init__(self, potential: Potential, m: float):
         if not isinstance(potential, Potential):
@@ -63,14 +82,24 @@ class PreparedImpact:
         self.potential = potential
         self.m = positive("m", m, "prepare")
         _check_exponent(potential)
-        self._power = None
-        self._out = np.empty(OUT_SIZE)
+        self._c = self._u = self._W = self._family = self._args = None
+        # Largest energy whose turning point this power law has had validated.
+        self._e_checked = 0.0
         # The other compiled families: their plan of `_one_call` (None: no compiled form),
         # and whether a sum's terms can hand over inside a contact (`_split`).
         self._plan = None if type(potential) is PowerLaw else _plan(potential)
         self._split = per_potential(_INFO, _split_info, potential) is not None
         if type(potential) is PowerLaw:
-            self._power = power_constants(potential, self.m)
+            consts = power_constants(potential, self.m)
+            if consts is not None:
+                c_m, b_hi, b_lo, self._u, self._W, *rest = consts
+                self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
+        elif self._plan is not None:
+            self._family = family_call(self._plan)
+            if self._family is not None:
+                k = self._plan.kernel
+                c = np.array([self.m, k.q_s, k.u_s, k.n_lead])
+                self._args = (c, k.P, *self._plan.gj)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -78,104 +107,144 @@ class PreparedImpact:
     def __call__(self, v0: float, zeta: float = 0.0) -> ImpactSolution:
         """The impact at speed v0 (m/s) and damping ratio zeta, as `solve_impact`."""
         pot, m = self.potential, self.m
-        if (type(v0) is not float or type(zeta) is not float) and (
-            is_real_number(v0) and is_real_number(zeta)
-        ):
+        if type(v0) is not float or type(zeta) is not float:
+            if not (is_real_number(v0) and is_real_number(zeta)):
+                return solve_impact(pot, m, v0, zeta)
             # numpy scalars and ints as `solve_impact`'s checks take them (float(value)).
             try:
                 v0, zeta = float(v0), float(zeta)
             except OverflowError:
                 return solve_impact(pot, m, v0, zeta)
-        if not (
-            type(v0) is float
-            and type(zeta) is float
-            and 0.0 < v0 < _INF
-            and 0.0 <= zeta < _GJ_ZETA_MAX
-        ):
+        if not (0.0 < v0 < _INF and 0.0 <= zeta < _GJ_ZETA_MAX):
             return solve_impact(pot, m, v0, zeta)
         E = 0.5 * m * v0 * v0
         if not (E >= _TINY and E < _INF):
             return solve_impact(pot, m, v0, zeta)
-        q_top = _validated_top(pot, E)
-        if self._power is not None:
-            out = self._out
-            power_impact(v0, zeta, *self._power, RTOL_STATED, _TINY, out)
-            if out[13] != 1.0:
+        if self._c is not None:
+            # A power law: its kernel does not use q_top, and an energy at most one
+            # already validated passes `_validated_top` unchanged (no error, no new entry).
+            if E > self._e_checked:
+                _validated_top(pot, E)  # raises as solve_impact would
+                self._e_checked = E
+            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = power_call(
+                v0, zeta, self._c, self._u, self._W
+            )
+            if ok != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
                 return solve_impact(pot, m, v0, zeta)
-            (
-                rise,
-                e_rise,
-                mid,
-                e_mid,
-                fall,
-                e_fall,
-                q_max,
-                f_max,
-                rest,
-                rest_zf,
-                wd,
-                sp,
-                s_end,
-                _,
-            ) = out.tolist()
-            osc = object.__new__(VirtualOscillator)
-            osc.__dict__.update(
-                v0=v0, zeta=zeta, wd=wd, r=0.0, s_peak=sp, s_end=s_end, s_zero_force=2.0 * sp
-            )
             return ImpactSolution._fast(
-                v0=v0,
-                m=m,
-                zeta=zeta,
-                max_penetration=q_max,
-                max_force=f_max,
-                contact_time=rise + fall,
-                restitution=rest,
-                contact_time_zero_force=rise + mid,
-                restitution_zero_force=rest_zf,
-                quadrature_error=e_rise + e_fall,
-                quadrature_error_zero_force=e_rise + e_mid,
-                potential=pot,
-                _osc=osc,
-                _t_peak=rise,
+                {
+                    "v0": v0,
+                    "m": m,
+                    "zeta": zeta,
+                    "max_penetration": q_max,
+                    "max_force": f_max,
+                    "contact_time": t,
+                    "restitution": rest,
+                    "contact_time_zero_force": t_zf,
+                    "restitution_zero_force": rest_zf,
+                    "quadrature_error": e,
+                    "quadrature_error_zero_force": e_zf,
+                    "potential": pot,
+                    "_osc_of": (wd, sp, s_end),
+                    "_t_peak": rise,
+                }
             )
+        q_top = _validated_top(pot, E)
         if self._plan is None or (
             self._split and needs_split(pot, lambda: turning_point(pot, m, v0, q_top), q_top)
         ):
             return solve_impact(pot, m, v0, zeta)
-        osc = VirtualOscillator(v0, zeta)
-        plan = self._plan
-        fast = None
-        if plan.gj is not None:
-            # Gauss-Jacobi first, as `fused_impact`; on a refusal it runs the whole ladder.
-            k = plan.kernel
-            out = np.empty(_OUT)
-            plan.gauss_jacobi(_params(osc, m, q_top, k), k.P, *plan.gj, out)
-            if out[8] == _OK:
-                fast = _result(out)
-        if fast is None:
-            fast = fused_impact(pot, m, osc, q_top)
-        if fast is None:
-            return solve_impact(pot, m, v0, zeta)
-        br, q_max, max_force = fast
-        br = _charge_conditioning(br, pot, m, osc, q_max, max_force)
-        _check_bound(br, pot, m, v0, zeta)
-        if not (q_max >= _TINY and max_force >= _TINY and br.rise + br.fall >= _TINY):
+        if self._family is not None:
+            v = self._family(v0, zeta, q_top, *self._args)
+            if v[0] == _OK:
+                return self._family_result(v0, zeta, v)
+        return self._fused(v0, zeta, q_top)
+
+    def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
+        """`solve_impact`'s result from `family_call`'s output (conditioning charged as by
+        `solve._charge_conditioning`; any bound or range refusal goes to `solve_impact`,
+        which raises it)."""
+        pot, m = self.potential, self.m
+        (
+            _,
+            rise,
+            e_rise,
+            mid,
+            e_mid,
+            fall,
+            e_fall,
+            q_max,
+            f_max,
+            wd,
+            sp,
+            s_end,
+            rest,
+            rest_zf,
+            d2,
+        ) = v
+        cond = _conditioning_at(m, v0, zeta, sp, d2, f_max)
+        if cond > 0.0:
+            rise, e_rise, mid, e_mid, fall, e_fall = _charged(
+                cond, rise, e_rise, mid, e_mid, fall, e_fall
+            )
+        t, e, t_zf, e_zf = rise + fall, e_rise + e_fall, rise + mid, e_rise + e_mid
+        # `_check_bound` (both times are finite below zeta = 1) and `_check_normal`.
+        if not (
+            e <= RTOL_STATED * t
+            and e_zf <= RTOL_STATED * t_zf
+            and t < _INF
+            and t_zf < _INF
+            and q_max >= _TINY
+            and f_max >= _TINY
+            and t >= _TINY
+        ):
             return solve_impact(pot, m, v0, zeta)
         return ImpactSolution._fast(
-            v0=v0,
-            m=m,
-            zeta=zeta,
-            max_penetration=q_max,
-            max_force=max_force,
-            contact_time=br.rise + br.fall,
-            restitution=math.exp(-math.pi * zeta / osc.wd),
-            contact_time_zero_force=br.rise + br.mid,
-            restitution_zero_force=osc.restitution_zero_force if zeta > 0 else 1.0,
-            quadrature_error=br.err_rise + br.err_fall,
-            quadrature_error_zero_force=br.err_rise + br.err_mid,
-            potential=pot,
-            _osc=osc,
-            _t_peak=br.rise,
+            {
+                "v0": v0,
+                "m": m,
+                "zeta": zeta,
+                "max_penetration": q_max,
+                "max_force": f_max,
+                "contact_time": t,
+                "restitution": rest,
+                "contact_time_zero_force": t_zf,
+                "restitution_zero_force": rest_zf,
+                "quadrature_error": e,
+                "quadrature_error_zero_force": e_zf,
+                "potential": pot,
+                "_osc_of": (wd, sp, s_end),
+                "_t_peak": rise,
+            }
+        )
+
+    def _fused(self, v0: float, zeta: float, q_top: float) -> ImpactSolution:
+        """The fused kernel of `_one_call` (Gauss-Jacobi refused or absent: the tanh-sinh
+        ladder), as `solve_impact`'s `fused` strategy, then `_family_result`."""
+        pot, m = self.potential, self.m
+        osc = VirtualOscillator(v0, zeta)
+        fast = fused_impact(pot, m, osc, q_top)
+        if fast is None:
+            return solve_impact(pot, m, v0, zeta)
+        br, q_max, f_max = fast
+        d2 = curvature(pot, q_max)  # what `solve._conditioning` charges from
+        if d2 is None:  # no compiled evaluator: solve_impact's numpy U''
+            return solve_impact(pot, m, v0, zeta)
+        return self._family_result(
+            v0,
+            zeta,
+            (
+                _OK,
+                *br,
+                q_max,
+                f_max,
+                osc.wd,
+                osc.s_peak,
+                osc.s_end,
+                math.exp(-math.pi * zeta / osc.wd),
+                osc.restitution_zero_force if zeta > 0 else 1.0,
+                d2,
+            ),
         )
 
 

@@ -131,13 +131,27 @@ class ImpactSolution:
     _t_peak: float = field(repr=False, compare=False)
 
     @classmethod
-    def _fast(cls, **fields) -> ImpactSolution:
-        """Construct without the frozen dataclass __init__ (one object.__setattr__ per
-        field cost ~2 us, a tenth of a compiled-family impact); every field is given
-        and there is no __post_init__, so the instance is the same."""
+    def _fast(cls, fields=(), /, **kw) -> ImpactSolution:
+        """Construct from every field, given as a dict (fastest: keywords cost ~1 us of a
+        ~7 us prepared impact) or as keywords, without the frozen dataclass __init__ (one
+        object.__setattr__ per field cost ~2 us); there is no __post_init__, so the
+        instance is the same."""
         obj = object.__new__(cls)
-        obj.__dict__.update(fields)
+        obj.__dict__.update(fields, **kw)
         return obj
+
+    def __getattr__(self, name: str):
+        # Called only for a name missing from the instance: the prepared call
+        # (`reference_impl.exact.prepared`) leaves `_osc` out and keeps the oscillator's
+        # (wd, s_peak, s_end) as `_osc_of`; the oscillator is built from them on first use
+        # (the trajectory, `to_dict`), saving ~0.6 us of an ~7 us impact.
+        if name == "_osc":
+            d = self.__dict__
+            of = d.get("_osc_of")
+            if of is not None:
+                osc = d["_osc"] = VirtualOscillator._of(d["v0"], d["zeta"], *of)
+                return osc
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def to_dict(self) -> dict:
         """The scalar results as a plain dict (for JSON), with ``peak_force``."""
@@ -252,6 +266,11 @@ class ImpactSolution:
         idx = np.clip(np.searchsorted(table, targets), 1, _STATE_TABLE - 1)
         lo, hi = grid[idx - 1], grid[idx]
         exact_lo = targets <= table[0]
+        # A target at or past the branch's end T(upper) is its end: the instants given to
+        # a branch end at the reported peak time, which may exceed this table's T(upper)
+        # by the two quadratures' difference (~1e-15 relative), and no root is bracketed
+        # there (state() returned nan at the peak).
+        exact_hi = targets >= table[-1]
         from scipy.optimize import elementwise  # here: scipy.optimize costs 0.2 s to import
 
         res = elementwise.find_root(
@@ -260,7 +279,7 @@ class ImpactSolution:
             args=(targets,),
             tolerances=dict(xatol=0.0, xrtol=_STATE_XRTOL, fatol=0.0, frtol=0.0),
         )
-        return np.where(exact_lo, grid[0], res.x)
+        return np.where(exact_lo, grid[0], np.where(exact_hi, grid[-1], res.x))
 
 
 def _conditioning(
@@ -279,11 +298,19 @@ def _conditioning(
     """
     if type(pot) is PowerLaw:
         return 0.0  # c = (n - 1)/n < 1: within the node ulps already charged
-    u = 0.5 * m * (osc.v0 * math.exp(-osc.zeta * osc.s_peak)) ** 2
     d2 = curvature(pot, q_max)
     if d2 is None:
         with np.errstate(all="ignore"):
             d2 = float(pot._d2U(np.array([q_max]))[0])
+    return _conditioning_at(m, osc.v0, osc.zeta, osc.s_peak, d2, f_max)
+
+
+def _conditioning_at(
+    m: float, v0: float, zeta: float, s_peak: float, d2: float, f_max: float
+) -> float:
+    """`_conditioning` given U''(q_max) = d2 (also the prepared call's, which gets d2 from
+    its compiled call): U(q_max) from the oscillator's peak, c = |U U''| / U'^2."""
+    u = 0.5 * m * (v0 * math.exp(-zeta * s_peak)) ** 2
     c = abs(u * d2) / (f_max * f_max) if f_max > 0 else math.inf
     if not math.isfinite(c):
         c = math.inf
@@ -291,16 +318,18 @@ def _conditioning(
 
 
 def _charge_conditioning(br, pot: Potential, m: float, osc, q_max: float, f_max: float):
-    """``br`` with `_conditioning`'s relative error charged to each of its times (one place
-    for `solve_impact` and the prepared call of `reference_impl.exact.prepared`)."""
+    """``br`` with `_conditioning`'s relative error charged to each of its times."""
     cond = _conditioning(pot, m, osc, q_max, f_max)
     if cond > 0.0:
-        br = br._replace(
-            err_rise=br.err_rise + cond * br.rise,
-            err_mid=br.err_mid + cond * br.mid,
-            err_fall=br.err_fall + cond * br.fall,
-        )
+        br = br._make(_charged(cond, *br))
     return br
+
+
+def _charged(cond: float, rise, err_rise, mid, err_mid, fall, err_fall) -> tuple:
+    """The `Branches` fields with a relative error ``cond`` charged to each time's bound
+    (one place for `solve_impact` and the prepared call of `reference_impl.exact.prepared`,
+    which works on the floats)."""
+    return rise, err_rise + cond * rise, mid, err_mid + cond * mid, fall, err_fall + cond * fall
 
 
 def _check_normal(values: dict, m: float, v0: float) -> None:
@@ -421,18 +450,20 @@ def solve_impact(
             v0,
         )
     return ImpactSolution._fast(
-        v0=v0,
-        m=m,
-        zeta=zeta,
-        max_penetration=q_max,
-        max_force=max_force,
-        contact_time=br.rise + br.fall,
-        restitution=restitution,
-        contact_time_zero_force=br.rise + br.mid,
-        restitution_zero_force=osc.restitution_zero_force if zeta > 0 else 1.0,
-        quadrature_error=br.err_rise + br.err_fall,
-        quadrature_error_zero_force=br.err_rise + br.err_mid,
-        potential=potential,
-        _osc=osc,
-        _t_peak=br.rise,
+        {
+            "v0": v0,
+            "m": m,
+            "zeta": zeta,
+            "max_penetration": q_max,
+            "max_force": max_force,
+            "contact_time": br.rise + br.fall,
+            "restitution": restitution,
+            "contact_time_zero_force": br.rise + br.mid,
+            "restitution_zero_force": osc.restitution_zero_force if zeta > 0 else 1.0,
+            "quadrature_error": br.err_rise + br.err_fall,
+            "quadrature_error_zero_force": br.err_rise + br.err_mid,
+            "potential": potential,
+            "_osc": osc,
+            "_t_peak": br.rise,
+        }
     )

@@ -1,8 +1,8 @@
 """A user `Expression` compiled into the lane kernel (sympy U', U -> numba).
 
 `_expression_kernel` builds the same kernel as
-`reference_impl.integrators.verlet_kernel._kernel` with the expression's force
-in place of `_force_energy`; `_worth_compiling` decides when a batch repays
+`reference_impl.integrators.verlet_kernel._kernel`, and its step `_kdk`, with the
+expression's force in place of `_force_energy` (`reference_impl._jit.specialise`); `_worth_compiling` decides when a batch repays
 the compile. Used by `reference_impl.integrators.verlet.run_lanes` for the
 expressions without a term table: one that is a sum of constants times powers
 of q has one (`reference_impl.potentials._terms`) and runs in `_kernel` itself.
@@ -10,15 +10,13 @@ of q has one (`reference_impl.potentials._terms`) and runs in `_kernel` itself.
 
 from __future__ import annotations
 
-import types
-
 import numba
 import numpy as np
 import sympy as sp
 
 from reference_impl._cache import expression_module, printed_function, record_files
 from reference_impl._jit import specialise
-from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kernel
+from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kdk, _kernel
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.expression import Expression
 
@@ -82,9 +80,7 @@ def _expression_kernel(pot: Potential):
             a, b = fn(x)
             return float(a), float(b)
 
-        src = _kernel.py_func
-        env = dict(src.__globals__, _force_energy=force_energy)
-        kern = numba.njit(types.FunctionType(src.__code__, env, "_kernel_expression"))
+        kern, _ = _bound_kernel(False, force_energy)
         _probe(kern, pot)
     except Exception:  # noqa: BLE001 -- any compile failure: the numpy engine runs it
         kern = None
@@ -130,12 +126,22 @@ def _disk_cached_kernel(key: str, q, pot: Potential):
     module = expression_module("verlet", key, _MODULE_HEAD + fn + _FORCE_SOURCE)
     if module is None:
         return None
-    # error_model="python", as `_kernel` itself is compiled.
-    kern = specialise(
-        _kernel.py_func, True, error_model="python", _force_energy=module.force_energy
-    )
-    record_files(module.__name__, [module.dU_U, module.force_energy, kern])
+    kern, step = _bound_kernel(True, module.force_energy)
+    record_files(module.__name__, [module.dU_U, module.force_energy, step, kern])
     return kern
+
+
+def _bound_kernel(cache: bool, force_energy):
+    """(kernel, step): `_kernel` and its step `_kdk` compiled around ``force_energy`` (one
+    source, bound again); error_model="python", as `_kernel` itself is compiled. The step
+    is inlined into the kernel, as in the term-table kernel."""
+    step = specialise(
+        _kdk.py_func, cache, error_model="python", inline="always", _force_energy=force_energy
+    )
+    kern = specialise(
+        _kernel.py_func, cache, error_model="python", _force_energy=force_energy, _kdk=step
+    )
+    return kern, step
 
 
 def _probe(kern, pot: Potential) -> None:

@@ -1,5 +1,11 @@
-"""The compiled velocity-Verlet lane kernel and the term kinds it evaluates.
+"""The velocity-Verlet step, the compiled lane kernel and the term kinds they evaluate.
 
+`_kdk` is the one source of the step (issue 27: one source per loop), numba-compatible
+Python generic in its force ``_force_energy``: the lane kernel `_kernel` and the
+recorder's loop `_record_kernel` (driven by `reference_impl.integrators.verlet_path`),
+both here, call it compiled around the term table,
+`reference_impl.integrators.verlet_expression` compiles it around an expression's force,
+and the recorder runs it as Python around any `Potential`'s.
 `_kernel` (numba) advances many lanes of one scene; the force of a potential with
 a term table (`reference_impl.potentials._terms`: PowerLaw, Ellipsoid, Sphere,
 `SaturatingForce`, expressions that are sums of powers, sums of them) is
@@ -17,7 +23,7 @@ import numpy as np
 
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, TERM_SATURATING, term_rows
 from reference_impl.potentials.base import Potential
-from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce
+from reference_impl.potentials.saturating import _SAT_SERIES_X, SaturatingForce, saturating_series
 
 __all__ = ["SCENE_IMPACT", "SCENE_WALLS", "STATUS_NAMES", "SaturatingForce", "kernel_terms"]
 
@@ -84,6 +90,12 @@ def kernel_terms(pot: Potential) -> tuple[np.ndarray, np.ndarray] | None:
 # ----------------------------------------------------------------------------
 # numba kernel
 # ----------------------------------------------------------------------------
+# The saturating energy's series, the potential's own function compiled (one source: a
+# change of the series there reaches the kernel; numba's cache is keyed by this file, so
+# the potential's module is named here too: saturating.py).
+_sat_series = numba.njit(cache=True, inline="always")(saturating_series)
+
+
 @numba.njit(cache=True, inline="always")
 def _force_energy(q, fam, par):
     """U'(q) (N) and U(q) (J) for q > 0, summed over the kernel terms."""
@@ -114,7 +126,7 @@ def _force_energy(q, fam, par):
             x2 = x * x
             F += F0 * x2 / (1.0 + x2)
             if x < _SAT_SERIES_X:
-                U += F0 * qs * (x2 * x / 3.0 - x2 * x2 * x / 5.0 + x2 * x2 * x2 * x / 7.0)
+                U += F0 * qs * _sat_series(x)
             else:
                 U += F0 * qs * (x - math.atan(x))
     return F, U
@@ -129,12 +141,108 @@ _BLOCK = 8
 
 @numba.njit(cache=True, inline="always")
 def _overlap(y, gap, scene):
-    """Overlap q (m, > 0 in contact) and the sign of the contact force on y."""
+    """Overlap q (m) and the sign of the contact force on y.
+
+    q > 0 in contact; in flight minus the distance to the nearer wall (two walls) or y
+    itself (impact), which the recorder reports.
+    """
     if scene == SCENE_IMPACT:
         return y, -1.0
-    if y > gap:
-        return y - gap, -1.0
-    return -y, 1.0
+    # max() is the overlap with the nearer wall on either side (y - gap > 0 > -y beyond
+    # the upper wall, -y > 0 > y - gap below the lower one), without a branch. Measured
+    # interleaved against main's loops (CPU time, load 3-6 on 2 cores): the lane kernel
+    # (eight lanes in lockstep; presumably mispredicted branches) 0.96 of its two-branch
+    # form, the single-body recorder (max() on its latency chain) 1.04-1.08 of its
+    # four-branch form on two walls. Branches everywhere instead: lanes 1.02, recorder
+    # 0.96-0.99; the lanes are the hot loop (a search runs ~1e7 lane-steps).
+    return max(y - gap, -y), -1.0 if y > gap else 1.0
+
+
+@numba.njit(cache=True, inline="always")
+def _coefficient(q, fam, par):
+    """A damping coefficient C(q) (kg/s) given per step: none in the compiled bindings;
+    the Python binding of `_kdk` (`reference_impl.integrators.verlet_path`) rebinds it."""
+    return 0.0
+
+
+# Contact state after one step (`_kdk`).
+_FREE = 0  # no overlap: no force
+_CONTACT = 1  # overlap in the potential's domain: force evaluated
+_BEYOND = 2  # overlap beyond q_sup, or nan: the run has blown up
+
+
+@numba.njit(cache=True, inline="always")
+def _kdk(
+    y, vel, F, half, dt, scene, gap, q_sup, c_damp, extra, c_pow, a_pow, c_fun, clip, fam, par
+):
+    """One velocity-Verlet step: half kick, drift, force at the new position, half kick.
+
+    The one source of the step (issue 27): the lane kernel `_kernel` and the recorder
+    (`reference_impl.integrators.verlet_path`) call it; it is bound to the term table's
+    `_force_energy` here (compiled), to an expression's compiled force by
+    `reference_impl._jit.specialise`, and to a Python potential's by
+    `reference_impl._jit.rebind` (run as Python).
+
+    Parameters
+    ----------
+    y, vel, F : float
+        Position (m), velocity (m/s) and total force on y (N) at step n.
+    half, dt : float
+        dt / (2 m) (s/kg) and the step dt (s).
+    scene, gap : int, float
+        `SCENE_IMPACT` or `SCENE_WALLS` and its gap (m); see `_overlap`.
+    q_sup : float
+        Largest overlap of the potential's domain (m).
+    c_damp : float
+        2 zeta sqrt(m) of the universal damping C = c_damp U'/sqrt(2U) (kg^(1/2)).
+    extra : bool
+        Any of the three below in use (one test per step instead of three).
+    c_pow, a_pow : float
+        Power-law damping C = c_pow q^a_pow (kg/s/m^a), off at c_pow = 0.
+    c_fun : bool
+        Add the per-step coefficient ``_coefficient(q, fam, par)`` (kg/s).
+    clip : bool
+        Set a tensile total contact force to 0.
+    fam, par
+        The arguments of ``_force_energy`` (term table: family codes and parameters).
+
+    Returns
+    -------
+    y, vh, vel, F, q, rep, U, state
+        Position, half-step and new velocity, total force, overlap, repulsive contact
+        force (N, the dashpot evaluated with vh), U(q) (J, 0 out of contact) and the
+        contact state (`_FREE`, `_CONTACT`, `_BEYOND`; at `_BEYOND` vel and F are those
+        of step n and rep is nan).
+    """
+    vh = vel + half * F
+    y = y + dt * vh
+    q, sgn = _overlap(y, gap, scene)
+    rep = 0.0
+    U = 0.0
+    if q > 0.0:
+        if not q <= q_sup:  # also catches nan
+            return y, vh, vel, F, q, math.nan, U, _BEYOND
+        fe, U = _force_energy(q, fam, par)
+        # The dashpot opposes dq/dt = -sgn vh; written on the total force F, as the
+        # lane kernel always was: F = sgn * rep bit for bit (sgn = +-1, negation is exact),
+        # and two multiplications shorter than building rep first (4 % on damped lanes).
+        F = sgn * fe
+        if c_damp > 0.0 and U > 0.0:
+            F -= c_damp * fe / math.sqrt(2.0 * U) * vh
+        if extra:
+            if c_pow > 0.0:
+                F -= c_pow * q**a_pow * vh
+            if c_fun:
+                F -= _coefficient(q, fam, par) * vh
+            if clip and sgn * F < 0.0:
+                F = sgn * 0.0
+        rep = sgn * F
+        state = _CONTACT
+    else:
+        F = 0.0
+        state = _FREE
+    vel = vh + half * F
+    return y, vh, vel, F, q, rep, U, state
 
 
 # Lane-steps one call of the kernel may take before it returns to Python, where
@@ -269,26 +377,18 @@ def _kernel(
                 nB[j] += 1
                 n = nB[j]
                 h = hB[j]
-                half = halfB[j]
-                vh = v[j] + half * F[j]
-                yy = y[j] + h * vh
+                yy, vh, vv, f, q, rep, U, state = _kdk(
+                    y[j], v[j], F[j], halfB[j], h, scene, gapB[j], q_sup, c_damp,
+                    False, 0.0, 0.0, False, False, fam, par,
+                )  # fmt: skip
                 y[j] = yy
-                q, sgn = _overlap(yy, gapB[j], scene)
                 status = -1
-                U = 0.0
-                f = 0.0
-                if q > 0.0:
-                    if not q <= q_sup:  # also catches NaN
-                        status = _ST_BLOWN
-                    else:
-                        fe, U = _force_energy(q, fam, par)
-                        f = sgn * fe
-                        if c_damp > 0.0 and U > 0.0:
-                            f -= c_damp * fe / math.sqrt(2.0 * U) * vh
+                if state == _BEYOND:
+                    status = _ST_BLOWN
+                else:
+                    if state == _CONTACT:
                         touched[j] = True
-                if status < 0:
                     F[j] = f
-                    vv = vh + half * f
                     v[j] = vv
                     e = 0.5 * m * vv * vv + U
                     if not e < math.inf:  # non-finite velocity or energy
@@ -367,3 +467,59 @@ def _kernel(
             return b0
         b0 += B
     return b0
+
+
+# ----------------------------------------------------------------------------
+# the recorder's loop (`reference_impl.integrators.verlet_path`)
+# ----------------------------------------------------------------------------
+# The per-step coefficient C(q) of `_kdk` is on only in the Python binding given one: a
+# global, so that the compiled recorder holds no trace of it (the dead test, a runtime
+# flag, cost 5-8 % of a step: measured interleaved, 2e5 two-walls steps, load 5 on 2 cores).
+_WITH_COEFFICIENT = False
+
+
+# The recorder's loop lives here, beside `_kdk`, not in `verlet_path`: numba checks a
+# cached function against its own source file only, so a loop in another file kept the
+# step it had inlined after `_kdk` changed here (seen while measuring; issue 27).
+@numba.njit(cache=True)
+def _record_kernel(fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, scene, gap, q, v, f):
+    """Integrate one body for up to q.shape[0] - 1 steps of `_kdk`; fill q, v, f (repulsive force).
+
+    Returns the status: n > 0 separated at step n (impact: first q <= 0 after
+    contact), -n blown at step n (q > q_sup; q[n] and v[n] hold the overlap and the
+    half-step velocity, f[n] is nan), 0 when it ran every step. Damping: the
+    universal law with 2 zeta sqrt(m) = c_damp, plus c_pow q^a_pow, plus (where
+    ``_WITH_COEFFICIENT``) the per-step coefficient of the binding; with ``clip`` a
+    tensile total force is set to 0. Compiled as it stands (term table: ``fam``,
+    ``par``); `verlet_path._record_python` is the same function run as Python around a
+    `Potential`.
+    """
+    y = 0.0
+    vel = v0 if scene == SCENE_IMPACT else -v0  # two-walls: at the lower wall, moving into it
+    F = 0.0
+    half = 0.5 * dt / m
+    q[0] = 0.0
+    v[0] = vel
+    f[0] = 0.0
+    touched = False
+    # One loop-invariant test for the rarely used terms: written as two tests in the
+    # loop, the unused pow() slowed an undamped-law impact by 10 % (measured, 1000 steps).
+    extra = c_pow > 0.0 or clip or _WITH_COEFFICIENT
+    for n in range(1, q.shape[0]):
+        y, vh, vel, F, qq, rep, _, state = _kdk(
+            y, vel, F, half, dt, scene, gap, q_sup, c_damp, extra, c_pow, a_pow,
+            _WITH_COEFFICIENT, clip, fam, par,
+        )  # fmt: skip
+        if state == _BEYOND:
+            q[n] = qq
+            v[n] = vh
+            f[n] = np.nan
+            return -n
+        if state == _CONTACT:
+            touched = True
+        q[n] = qq
+        v[n] = vel
+        f[n] = rep
+        if scene == SCENE_IMPACT and touched and qq <= 0.0:
+            return n
+    return 0

@@ -5,15 +5,15 @@ energies and statuses, not a trajectory. Whatever needs the steps themselves
 comes here: the work-precision points of velocity Verlet (`verlet_impact`), and
 the reference adapter's trajectories and the critical-step baseline
 (`verlet_trajectory`, used by `reference_impl.adapters.reference`). It is the
-engine's algorithm with the engine's force kernel (`_force_energy`, the same
-numba function, so the arithmetic is identical): kick-drift-kick with the force
+engine's step (`reference_impl.integrators.verlet_kernel._kdk`, the same function,
+so the arithmetic is identical): kick-drift-kick with the force
 at the new position, the dashpot evaluated with the half-step velocity. Scenes:
 one wall at y = 0 (impact, starting exactly at a step boundary: y_0 = 0,
 v_0 = impact speed) or two walls (y = 0 and y = gap). Damping: the universal law
 (2 zeta sqrt(m) U'/sqrt(2U)), a power law c q^a, and, in the Python loop only,
 any coefficient C(q) given as a callable; optionally a tensile total force is
 clipped to 0. Known potential families run in one numba kernel; any other
-`Potential` runs the same loop in plain Python.
+`Potential` runs the same loop and step in plain Python (rebound to its force).
 
 From an impact's record (`VerletPath`): the end of contact by linear
 interpolation of the last drift (the drift is linear in time), the restitution
@@ -26,119 +26,40 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, _force_energy, kernel_terms
+from reference_impl._jit import rebind
+from reference_impl.integrators.verlet import SCENE_IMPACT, SCENE_WALLS, kernel_terms
+from reference_impl.integrators.verlet_kernel import _kdk, _overlap, _record_kernel
 
 __all__ = ["VerletPath", "verlet_impact", "verlet_trajectory"]
 
 
-@numba.njit(cache=True)
-def _record_kernel(fam, par, q_sup, m, c_damp, c_pow, a_pow, clip, dt, v0, scene, gap, q, v, f):
-    """Integrate one body for up to q.shape[0] - 1 steps; fill q, v, f (repulsive force).
-
-    Returns the status: n > 0 separated at step n (impact: first q <= 0 after
-    contact), -n blown at step n (q > q_sup; q[n] and v[n] hold the overlap and the
-    half-step velocity, f[n] is nan), 0 when it ran every step. Damping: the
-    universal law with 2 zeta sqrt(m) = c_damp, plus c_pow q^a_pow; with ``clip`` a
-    tensile total force is set to 0.
-    """
-    y = 0.0
-    vel = v0 if scene == SCENE_IMPACT else -v0  # two-walls: at the lower wall, moving into it
-    F = 0.0
-    half = 0.5 * dt / m
-    q[0] = 0.0
-    v[0] = vel
-    f[0] = 0.0
-    touched = False
-    # One loop-invariant test for the rarely used terms: written as two tests in the
-    # loop, the unused pow() slowed an undamped-law impact by 10 % (measured, 1000 steps).
-    extra = c_pow > 0.0 or clip
-    for n in range(1, q.shape[0]):
-        vh = vel + half * F
-        y = y + dt * vh
-        if scene == SCENE_IMPACT:
-            qq = y
-            sgn = -1.0
-        elif y > gap:
-            qq = y - gap
-            sgn = -1.0
-        elif y < 0.0:
-            qq = -y
-            sgn = 1.0
-        else:
-            qq = max(y - gap, -y)  # in flight: minus the distance to the nearer wall
-            sgn = 0.0
-        rep = 0.0
-        if qq > 0.0:
-            if not qq <= q_sup:
-                q[n] = qq
-                v[n] = vh
-                f[n] = np.nan
-                return -n
-            fe, U = _force_energy(qq, fam, par)
-            rep = fe
-            # dq/dt at the half step is -sgn * vh (exactly vh for the impact: sgn = -1)
-            if c_damp > 0.0 and U > 0.0:
-                rep += c_damp * fe / math.sqrt(2.0 * U) * (-sgn * vh)
-            if extra:
-                if c_pow > 0.0:
-                    rep += c_pow * qq**a_pow * (-sgn * vh)
-                if clip and rep < 0.0:
-                    rep = 0.0
-            touched = True
-        F = sgn * rep
-        vel = vh + half * F
-        q[n] = qq
-        v[n] = vel
-        f[n] = rep
-        if scene == SCENE_IMPACT and touched and qq <= 0.0:
-            return n
-    return 0
+def _python_force(q, pot, c_fun):
+    """U'(q) (N) and U(q) (J) of ``pot`` at one overlap q > 0 (m): `_force_energy` of the
+    Python binding, whose ``fam, par`` are the potential and the coefficient C(q)."""
+    arr = np.array([q])
+    return float(pot._dU(arr)[0]), float(pot._U(arr)[0])
 
 
-def _record_python(pot, m, c_damp, c_pow, a_pow, clip, dt, v0, scene, gap, q, v, f, c_fun):
-    """`_record_kernel` through the Potential API (one scalar call per step), for
-    potentials without a kernel; ``c_fun`` adds any other damping coefficient C(q)
-    (kg/s, vectorised, e.g. a `LawDamping`), evaluated at each step."""
-    y, vel = 0.0, (v0 if scene == SCENE_IMPACT else -v0)
-    F, half, touched = 0.0, 0.5 * dt / m, False
-    q[0], v[0], f[0] = 0.0, vel, 0.0
-    for n in range(1, q.shape[0]):
-        vh = vel + half * F
-        y += dt * vh
-        if scene == SCENE_IMPACT:
-            qq, sgn = y, -1.0
-        elif y > gap:
-            qq, sgn = y - gap, -1.0
-        elif y < 0.0:
-            qq, sgn = -y, 1.0
-        else:
-            qq, sgn = max(y - gap, -y), 0.0
-        rep = 0.0
-        if qq > 0.0:
-            if not qq <= pot.q_sup:
-                q[n], v[n], f[n] = qq, vh, np.nan
-                return -n
-            arr = np.array([qq])
-            fe, U = float(pot._dU(arr)[0]), float(pot._U(arr)[0])
-            rep = fe
-            if c_damp > 0.0 and U > 0.0:
-                rep += c_damp * fe / math.sqrt(2.0 * U) * (-sgn * vh)
-            if c_pow > 0.0:
-                rep += c_pow * qq**a_pow * (-sgn * vh)
-            if c_fun is not None:
-                rep += float(c_fun(arr)[0]) * (-sgn * vh)
-            if clip and rep < 0.0:
-                rep = 0.0
-            touched = True
-        F = sgn * rep
-        vel = vh + half * F
-        q[n], v[n], f[n] = qq, vel, rep
-        if scene == SCENE_IMPACT and touched and qq <= 0.0:
-            return n
-    return 0
+def _python_coefficient(q, pot, c_fun):
+    """The damping coefficient C(q) (kg/s) of a vectorised ``c_fun`` at one overlap q (m)."""
+    return float(c_fun(np.array([q]))[0])
+
+
+# `_record_kernel` run as Python around a `Potential` (one scalar call per step), for
+# potentials without a kernel or with a per-step coefficient C(q): the same source,
+# with the step's force and coefficient rebound (and its overlap run as Python).
+_python_step = rebind(
+    _kdk.py_func,
+    _force_energy=_python_force,
+    _coefficient=_python_coefficient,
+    _overlap=_overlap.py_func,
+)
+_record_python = {
+    False: rebind(_record_kernel.py_func, _kdk=_python_step),
+    True: rebind(_record_kernel.py_func, _kdk=_python_step, _WITH_COEFFICIENT=True),
+}
 
 
 def _record(pot, m, v0, dt, n_steps, *, c_damp, c_pow, a_pow, clip, scene, gap, c_fun):
@@ -149,11 +70,12 @@ def _record(pot, m, v0, dt, n_steps, *, c_damp, c_pow, a_pow, clip, scene, gap, 
     """
     q, v, f = np.empty(n_steps + 1), np.empty(n_steps + 1), np.empty(n_steps + 1)
     terms = None if c_fun is not None else kernel_terms(pot)
-    args = (float(m), c_damp, c_pow, a_pow, bool(clip), float(dt), float(v0), scene, float(gap))
+    args = (float(pot.q_sup), float(m), c_damp, c_pow, a_pow, bool(clip), float(dt))
+    args = (*args, float(v0), scene, float(gap), q, v, f)
     if terms is None:
-        status = _record_python(pot, *args, q, v, f, c_fun)
+        status = _record_python[c_fun is not None](pot, c_fun, *args)
     else:
-        status = _record_kernel(terms[0], terms[1], float(pot.q_sup), *args, q, v, f)
+        status = _record_kernel(terms[0], terms[1], *args)
     return q, v, f, int(status)
 
 

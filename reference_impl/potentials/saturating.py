@@ -15,12 +15,30 @@ from reference_impl.potentials._families import register_family
 from reference_impl.potentials._terms import saturating_row
 from reference_impl.potentials.base import Potential
 
-__all__ = ["SaturatingForce"]
+__all__ = ["SaturatingForce", "saturating_series"]
 
-# Below this x = q/q_s the saturating energy q_s F0 (x - atan x) is taken from
-# its series, because the difference loses all digits as x -> 0 (also read by the
-# Verlet kernel, which evaluates the same closed form compiled).
-_SAT_SERIES_X = 1e-2
+# Below this x = q/q_s the saturating energy q_s F0 (x - atan x) is taken from its
+# series, because the difference cancels: x - atan x ~ x^3/3 loses a factor 3/x^2 of
+# relative precision (75 ulps at x = 0.2, 48 at 0.25). At and above 0.25 that is
+# <= 48 x 1.1e-16 = 5e-15 relative; below, the series to x^29 (14 terms) truncates at
+# 0.25^28 x 3/31 = 1.4e-18 relative. (Up to 2026-11 the switch was at 0.01 with three
+# terms: 3e-13 off on both sides, which the near-critical tail of the general-law
+# solver magnified past its error bound.) Also read by the Verlet kernel, which
+# evaluates the same closed form compiled (`saturating_series`).
+_SAT_SERIES_X = 0.25
+# (-1)^k / (2k + 3), k = 0..13: x - atan x = x^3 sum_k c_k x^(2k).
+_SAT_SERIES = tuple((-1.0) ** k / (2 * k + 3) for k in range(14))
+
+
+def saturating_series(x):
+    """x - atan x by its series (dimensionless; used for 0 <= x < `_SAT_SERIES_X`), for a
+    float or elementwise a numpy array; numba-compilable (the Verlet kernel compiles this
+    same function)."""
+    x2 = x * x
+    s = _SAT_SERIES[13]
+    for k in range(12, -1, -1):
+        s = s * x2 + _SAT_SERIES[k]
+    return s * x2 * x
 
 
 @register_family
@@ -57,8 +75,8 @@ class SaturatingForce(Potential):
         x = q / self.q_s
         if ns is np:
             x = np.asarray(x, dtype=float)
-            series = x**3 / 3 - x**5 / 5 + x**7 / 7
-            with np.errstate(invalid="ignore"):
+            with np.errstate(invalid="ignore", over="ignore"):
+                series = saturating_series(np.minimum(x, _SAT_SERIES_X))
                 exact = x - np.arctan(x)
             return self.F0 * self.q_s * np.where(x < _SAT_SERIES_X, series, exact)
         return self.F0 * self.q_s * (x - ns.atan(x))

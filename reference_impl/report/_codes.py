@@ -116,8 +116,10 @@ def codes_blocks(r: dict) -> list:
         P(
             f"A sphere of m = {st['mass'] * 1e3:.4g} g on a wall: Hertz k = {st['hertz_k']:.5g} "
             f"N/m^1.5 or, for the linear variants, Hooke k = {st['hooke_k']:.3g} N/m; each code "
-            "is given each asked restitution through its own input (the universal law's ζ for "
-            "that e) and run at dt = t_c / N (t_c: the exact contact time). Each cell is the "
+            "is given each asked e typed into its own input as is (e itself where the input is "
+            "a restitution; the linear law's ζ, tc or dashpot of that e at q = 0 for MuJoCo's "
+            "dampratio and YADE's ViscElMat), not the input that would deliver it, and run at "
+            "dt = t_c / N (t_c: the exact contact time). Each cell is the "
             f"restitution delivered at q = 0 with N = {fine} / N = {coarse} steps per contact, "
             f"at v0 = {lo:g} m/s; † marks a cell where the other speed delivers an e differing "
             f"by more than {st['speed_tolerance']:g} (values below); bold: either delivered e "

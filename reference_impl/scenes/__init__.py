@@ -14,6 +14,7 @@ _FROM_SCENE = (
     "parse_scene",
     "potential_to_dict",
     "scene_from_dict",
+    "scene_show",
     "scene_toml",
 )
 
@@ -24,6 +25,7 @@ __all__ = [
     "parse_scene",
     "potential_to_dict",
     "scene_from_dict",
+    "scene_show",
     "scene_toml",
 ]
 

@@ -6,8 +6,10 @@ Private to the scenes package (`_scene.scene_from_dict` calls `_damping` and
 from __future__ import annotations
 
 import math
+import sys
 
 from reference_impl.errors import HCVInputError
+from reference_impl.potentials import PowerLaw
 from reference_impl.scenes._fields import _keys, _number, _string, _table, _Where
 from reference_impl.scenes._law_restitution import STRENGTH, law_for_restitution
 from reference_impl.theory.damping import zeta_from_restitution
@@ -89,9 +91,15 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
     ``restitution`` (and ``restitution_speed``) the law is at unit strength and the request
     says what to solve its strength for (`_solve_strength`)."""
     only_universal = [k for k in ("zeta", "C0", "K", "M") if k in table]
-    if law == "none":
-        only_universal += [k for k in ("restitution", "restitution_end", "restitution_speed")
-                           if k in table]  # fmt: skip
+    asked_keys = [k for k in ("restitution", "restitution_end", "restitution_speed") if k in table]
+    if law == "none" and asked_keys and not only_universal:
+        # not 'universal' only: restitution_speed belongs to the speed-dependent laws
+        raise err(
+            f"damping.{asked_keys[0]}: damping.law is 'none', which takes no restitution (e = 1); "
+            "for a restitution choose law = 'universal' (restitution, optional "
+            f"restitution_end) or a speed-dependent law ({', '.join(STRENGTH)}: restitution "
+            "with restitution_speed), or remove it"
+        )
     if only_universal:
         raise err(
             f"damping.{only_universal[0]} belongs to law = 'universal', but damping.law is "
@@ -139,6 +147,7 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
 
 def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, request: dict):
     """(solved law, calibration record) of a restitution request (`law_for_restitution`)."""
+    _check_speed(err, potential, mass, request["restitution_speed"])
     try:
         solved, s = law_for_restitution(
             potential,
@@ -156,3 +165,50 @@ def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, reque
     if dlaw.name == "polynomial":
         record["scale"] = s
     return solved, record
+
+
+def _check_speed(err: _Where, potential, mass: float, v: float) -> None:
+    """Refuse a ``restitution_speed`` whose impact the exact solver cannot represent, in a
+    line naming it: m v^2 / 2 must be a positive normal float64 (the solvers' own check,
+    which would otherwise fail inside the strength search naming v0), and U must reach it."""
+    tiny, huge = sys.float_info.min, sys.float_info.max
+    energy = 0.5 * mass * v * v
+    if not (math.isfinite(energy) and energy >= tiny):
+        # the speeds whose energy is in range, for this mass (sqrt(2 huge) overflows: split)
+        v_lo = math.sqrt(2.0 / mass) * math.sqrt(tiny)
+        v_hi = math.sqrt(2.0 / mass) * math.sqrt(huge)
+        raise err(
+            f"damping.restitution_speed = {v!r}: the kinetic energy m v^2 / 2 = {energy!r} J "
+            f"(m = {mass!r} kg) must be a positive normal float64 in [{tiny:.3g}, {huge:.3g}] J, "
+            f"i.e. {v_lo:.3g} < v < {v_hi:.3g} m/s; rescale the units (e.g. mm, g, ms)"
+        )
+    try:
+        potential.turning_point(energy)
+    except HCVInputError as exc:
+        raise err(f"damping.restitution_speed = {v!r} m/s (E = {energy:.6g} J): {exc}") from None
+
+
+def _universal_zeta(potential, mass: float, law: DampingLaw) -> float | None:
+    """The zeta of the universal law whose C(q) is this law's, or None when none is.
+
+    C(q) = 0 (law 'none', or a law at strength 0, e.g. solved for e = 1) is the universal
+    law at zeta = 0. On a Hooke potential (family power, p = 1: U = k q^2 / 2) the universal
+    C = 2 zeta sqrt(m) U' / sqrt(2 U) = 2 zeta sqrt(m k) is a constant, so a law whose C is
+    the constant c (linear c; power with exponent 0; a polynomial [c0]; viscoelastic
+    A U'' = A k) is the universal law at zeta = c / (2 sqrt(m k)), exactly. Other potentials
+    (a sum or an expression that happens to be Hooke included) are not recognised.
+    """
+    if law.name == "universal":
+        return law.zeta
+    if law.is_zero():
+        return 0.0
+    if type(potential) is not PowerLaw or potential.p != 1.0:
+        return None
+    k = potential.k
+    if law.name == "viscoelastic":
+        c = law.A * k
+    elif law.terms() and all(e == 0.0 for _, e in law.terms()):
+        c = sum(c for c, _ in law.terms())
+    else:
+        return None
+    return c / (2.0 * math.sqrt(mass * k))

@@ -19,7 +19,7 @@ import numpy as np
 from reference_impl.errors import HCVInputError
 from reference_impl.theory.laws import DampingLaw, law_C
 
-__all__ = ["STRENGTH", "law_for_restitution"]
+__all__ = ["STRENGTH", "law_for_restitution", "strength_text"]
 
 # The one strength parameter of each law ("c" of a polynomial: all coefficients scaled).
 STRENGTH = {
@@ -28,6 +28,15 @@ STRENGTH = {
     "polynomial": "c",
     "viscoelastic": "A",
     "hunt-crossley": "alpha",
+}
+# Units of each strength (as `reference_impl.theory.laws` documents them; a power law's
+# c is in N s m^-(1+exponent), its exponent filled in by `strength_text`).
+_STRENGTH_UNITS = {
+    "linear": "N s/m",
+    "power": "N s m^-{}",
+    "polynomial": "N s m^-(1+i)",
+    "viscoelastic": "s",
+    "hunt-crossley": "s/m",
 }
 # The exact restitution is good to ~1e-14 (`ERROR_SAFETY` bound of the general-law solver);
 # the root is accepted when the law's e at the strength found is this close to the asked one.
@@ -150,3 +159,31 @@ def law_for_restitution(
             f"returning to q = 0 there); ask for a larger e or another law"
         )
     return _with_strength(unit, s), s
+
+
+def strength_text(law: DampingLaw, calibration: dict) -> str:
+    """One line saying the solved strength of a law and what it was solved for, e.g.
+    ``alpha = 1.2697 s/m (e = 0.7 at 0.5 m/s, overlap end)``.
+
+    Parameters
+    ----------
+    law : DampingLaw
+        The solved law (its strength parameter holds the solved value).
+    calibration : dict
+        The scene's calibration record (``restitution``, ``restitution_speed``,
+        ``restitution_end``, ``parameter``; ``scale`` for a polynomial).
+    """
+    key = calibration["parameter"]
+    unit = _STRENGTH_UNITS[law.name]
+    if law.name == "power":
+        unit = unit.format(f"{1.0 + law.params['exponent']:g}")
+    value = law.params[key]
+    if law.name == "polynomial":
+        shown = "[" + ", ".join(f"{c:.6g}" for c in value) + "]"
+        how = f"the given c scaled by {calibration['scale']:.6g}; "
+    else:
+        shown, how = f"{value:.6g}", ""
+    return (
+        f"{key} = {shown} {unit} ({how}e = {calibration['restitution']:g} at "
+        f"{calibration['restitution_speed']:g} m/s, {calibration['restitution_end']} end)"
+    )

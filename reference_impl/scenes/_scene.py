@@ -37,7 +37,7 @@ from typing import Any
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
 from reference_impl.scenes._catalogue import embedded_scenes
-from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength
+from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength, _universal_zeta
 from reference_impl.scenes._fields import (
     _keys,
     _number,
@@ -46,9 +46,18 @@ from reference_impl.scenes._fields import (
     _table,
     _Where,
 )
+from reference_impl.scenes._law_restitution import strength_text
 from reference_impl.theory.laws import DampingLaw
 
-__all__ = ["Scene", "load_scene", "parse_scene", "scene_from_dict", "embedded_scenes", "scene_toml"]
+__all__ = [
+    "Scene",
+    "load_scene",
+    "parse_scene",
+    "scene_from_dict",
+    "embedded_scenes",
+    "scene_show",
+    "scene_toml",
+]
 
 # A scene is a few lines; refusing anything larger keeps a wrong path (a log,
 # a binary) from being read whole into memory.
@@ -128,6 +137,19 @@ class Scene:
             else:
                 law = DampingLaw("none")
             object.__setattr__(self, "law", law)
+
+    @property
+    def equivalent_universal_zeta(self) -> float | None:
+        """The damping ratio of the universal law (Theorem 3) with the same C(q) as this
+        scene's law, or None when no universal law has it.
+
+        0 for no damping or a law at strength 0 (e.g. solved for ``restitution = 1``);
+        on a Hooke potential (``family = "power"``, ``p = 1``) a constant C = c (``linear``;
+        ``power`` with exponent 0; ``polynomial`` [c0]; ``viscoelastic`` A k) is the
+        universal law at zeta = c / (2 sqrt(m k)). A code that integrates only the universal
+        law runs such a scene exactly at this zeta.
+        """
+        return _universal_zeta(self.potential, self.mass, self.law)
 
     def to_dict(self) -> dict[str, Any]:
         """The scene in the schema of the TOML file, plus ``source`` (JSON-safe).
@@ -419,6 +441,25 @@ def scene_toml(path_or_name: str | os.PathLike) -> str:
     raises `SceneError` with one line.
     """
     load_scene(path_or_name)
+    return _toml_text(path_or_name)
+
+
+def scene_show(path_or_name: str | os.PathLike) -> str:
+    """What ``hcv scenes --show`` prints: the scene's TOML (`scene_toml`) and, for a law
+    whose strength was solved from ``restitution`` at ``restitution_speed``, a last
+    comment line ``# solved: alpha = ... s/m (e = ... at ... m/s, ... end)`` (still
+    valid TOML: the output loads back as the same scene).
+    """
+    scene = load_scene(path_or_name)
+    text = _toml_text(path_or_name)
+    if scene.calibration is None:
+        return text
+    sep = "" if text.endswith("\n") or not text else "\n"
+    return f"{text}{sep}# solved: {strength_text(scene.law, scene.calibration)}\n"
+
+
+def _toml_text(path_or_name: str | os.PathLike) -> str:
+    """The file's (or the catalogue scene's) text, as it is (loaded already)."""
     text_arg = os.fspath(path_or_name)
     if text_arg in embedded_scenes() and not Path(text_arg).is_file():
         return (resources.files(__package__) / f"{text_arg}.toml").read_text(encoding="utf-8")

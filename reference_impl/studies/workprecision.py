@@ -117,17 +117,22 @@ _ORIGINAL = ("hertz-k1e9-damped",)
 
 
 def default_scenes() -> list[WPScene]:
-    """Hertz undamped and damped (e ~ 0.53), the paper's ellipsoid (v0 = 0.99), and
-    the damped sphere, sum of power laws and user expression of `family_scenes`."""
+    """Hertz undamped and damped (e ~ 0.53), the paper's ellipsoid (v0 = 0.99), the
+    damped sphere, sum of power laws and user expression of `family_scenes`, and the
+    saturating force (catalogue scene ``saturating``, v0 = 1 m/s, undamped)."""
 
     # ~5 mm steel sphere on a wall, k = 4/3 E* sqrt(R) = 1e9 (catalogue: hertz-k1e9)
     hertz = load_scene("hertz-k1e9").potential
     added = [s for s in family_scenes() if s.name not in _ORIGINAL and s.name != "ellipsoid-damped"]
+    # The saturating force's catalogue scene is undamped (the section 6 map's case); run
+    # like the family scenes (DOP853 and RK45 only, no Verlet points).
+    sat = load_scene("saturating")
     return [
         WPScene("hertz-k1e9", hertz, 0.0041, 1.0, 0.0),
         WPScene("hertz-k1e9-damped", hertz, 0.0041, 1.0, FAMILY_ZETA),
         WPScene("paper-ellipsoid", paper_ellipsoid(), PAPER_MASS, 0.99, 0.0),
         *added,
+        WPScene("saturating", sat.potential, sat.mass, 1.0, 0.0, FAMILY_IVP_METHODS, False),
     ]
 
 

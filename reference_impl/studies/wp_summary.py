@@ -62,6 +62,7 @@ FAMILY_NAMES = {
     "sphere": "sphere",
     "sum": "sum of power laws",
     "expression": "user expression",
+    "saturating": "saturating force",
 }
 # The DOP853 tolerance the per-family summary quotes (the row whose rtol is nearest in log).
 SUMMARY_RTOL = 1e-12
