@@ -98,6 +98,15 @@ def _load() -> str:
         return "n/a"
 
 
+def _payloads(masses: int) -> list[dict]:
+    """The cases of the map: 16 exponents x ``masses`` masses (30: the 480-case map)."""
+    from reference_impl.sweep import parse_spec
+
+    values = [float(m) for m in range(1, masses + 1)]
+    spec = parse_spec(_SPEC.format(masses=values), "bench-sweep")
+    return [c.payload() for c in spec.cases]
+
+
 def _cluster_run(n: int, payloads: list[dict], tag: str) -> dict:
     """64 cases on a fresh n-worker LocalCluster (warmed); wall, in-case time, start-up."""
     from reference_impl.sweep import iter_outcomes, open_client, run_case
@@ -169,16 +178,14 @@ def main(argv=None) -> None:
     )
     args = ap.parse_args(argv)
     from reference_impl.provenance import machine_info
-    from reference_impl.sweep import parse_spec, run_case
+    from reference_impl.sweep import run_case
 
     info = machine_info()
     print(
         f"machine: {info['cpu']}; {info['cpu_count']} logical cores; commit {info['commit']}; "
         f"load average {_load()}"
     )
-    masses = [float(m) for m in range(1, args.masses + 1)]
-    spec = parse_spec(_SPEC.format(masses=masses), "bench-sweep")
-    payloads = [c.payload() for c in spec.cases]
+    payloads = _payloads(args.masses)
     _warm()
     t, c = time.perf_counter(), time.process_time()
     serial_rows = [run_case(p) for p in payloads]
@@ -278,6 +285,29 @@ def main(argv=None) -> None:
         print(f"written: {args.json}")
 
 
+def _fit(runs: dict, n: int) -> dict:
+    """Fixed + per worker + per case, from the 1- and 2-worker runs (see `_model`)."""
+    fixed = {w: runs[w]["startup_s"] + runs[w]["close_s"] for w in (1, 2)}
+    # Starting and closing one more worker cannot save time: a 2-worker cluster measured
+    # faster than a 1-worker one is noise (its workers start in parallel), and a negative
+    # slope would predict a negative time for many workers (seen: -1.1 s at 16). Then the
+    # fixed cost is the larger of the two, per worker 0.
+    per_worker = max(fixed[2] - fixed[1], 0.0)
+    base = fixed[1] - per_worker if per_worker > 0 else max(fixed.values())
+    return {
+        "fixed": fixed,
+        "base": base,
+        "per_worker": per_worker,
+        "t_case": runs[1]["in_case_cpu_s"] / n,
+        "o": runs[1]["null_case_grouped_s"],
+    }
+
+
+def _predict(fit: dict, workers: int, cases: int) -> float:
+    """T(N, C) = base + per_worker N + C (t + o) / N: the time on N idle cores (s)."""
+    return fit["base"] + fit["per_worker"] * workers + cases * (fit["t_case"] + fit["o"]) / workers
+
+
 def _model(runs: dict, n: int, speedup: float) -> dict:
     """Fixed + per case + per worker: fitted from the 1- and 2-worker runs, printed.
 
@@ -287,18 +317,12 @@ def _model(runs: dict, n: int, speedup: float) -> dict:
     the time on N idle cores; the 2-worker measurement against it shows what the shared
     machine took.
     """
-    fixed = {w: r["startup_s"] + r["close_s"] for w, r in runs.items()}
-    # Starting and closing one more worker cannot save time: a 2-worker cluster measured
-    # faster than a 1-worker one is noise (its workers start in parallel), and a negative
-    # slope would predict a negative time for many workers (seen: -1.1 s at 16). Then the
-    # fixed cost is the larger of the two, per worker 0.
-    per_worker = max(fixed[2] - fixed[1], 0.0)
-    base = fixed[1] - per_worker if per_worker > 0 else max(fixed.values())
-    t_case = runs[1]["in_case_cpu_s"] / n
-    o = runs[1]["null_case_grouped_s"]
+    fit = _fit(runs, n)
+    fixed, base, per_worker = fit["fixed"], fit["base"], fit["per_worker"]
+    t_case, o = fit["t_case"], fit["o"]
 
     def predict(workers: int, cases: int) -> float:
-        return base + per_worker * workers + cases * (t_case + o) / workers
+        return _predict(fit, workers, cases)
 
     measured_2 = fixed[2] + runs[2]["wall_s"]
     print(

@@ -29,8 +29,8 @@ from reference_impl.exact._branches import (
     _jacobi_pair,
     _pow_split,
 )
+from reference_impl.exact._law_batch import solve_law_batch
 from reference_impl.exact._validate import _check_exponent, _validated_top
-from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.exact.prepared import prepare
 from reference_impl.exact.solve import ImpactSolution
 from reference_impl.potentials._checks import positive, real_array
@@ -135,8 +135,9 @@ def solve_impacts(
         Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
     law : DampingLaw or dict, optional
         A damping law of `reference_impl.theory.laws` other than ``universal`` / ``none``
-        (then ``zetas`` must stay 0): every speed is solved by
-        `reference_impl.exact.general_law.solve_law_impact`, and the arrays are its fields
+        (then ``zetas`` must stay 0): every speed is solved as by
+        `reference_impl.exact.general_law.solve_law_impact` (bit for bit; the integrations
+        on every core, `_law_batch`), and the arrays are its fields
         (max_penetration, max_force, peak_force, contact_time, restitution,
         contact_time_zero_force, restitution_zero_force, returns_to_q0,
         error_time, error_restitution).
@@ -163,12 +164,13 @@ def solve_impacts(
         if dl.name in ("universal", "none"):
             zetas = dl.zeta
         else:
-            return _law_batch(potential, m, v0s, dl)
+            # Every core: the compiled integrations in a prange loop (`_law_batch`).
+            return solve_law_batch(potential, m, v0s, dl, BATCH_MAX)
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impacts")
-    v_in = real_array("v0s", v0s, "solve_impacts")
-    z_in = real_array("zetas", zetas, "solve_impacts")
+    v_in = _float_array("v0s", v0s)
+    z_in = _float_array("zetas", zetas)
     try:
         v, z = np.broadcast_arrays(v_in, z_in)
     except ValueError:
@@ -179,28 +181,20 @@ def solve_impacts(
     if v.size > BATCH_MAX:
         raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
     shape = v.shape
-    v, z = v.ravel(), z.ravel()
-    for vi in v[~(np.isfinite(v) & (v > 0))][:1]:
-        raise HCVInputError(f"impact speed v0 must be a finite number > 0, got {vi!r}")
-    with np.errstate(all="ignore"):
-        energy = 0.5 * m * v * v
+    v, z = np.ascontiguousarray(v).ravel(), np.ascontiguousarray(z).ravel()
     tiny = float(np.finfo(float).tiny)
-    for i in np.flatnonzero(~(np.isfinite(energy) & (energy >= tiny)))[:1]:
-        raise HCVInputError(
-            f"solve_impacts: kinetic energy m v0^2 / 2 = {float(energy[i])!r} J (m = {m!r}, v0 = "
-            f"{float(v[i])!r}) is not a positive float64 in the normal range [{tiny:.3g}, "
-            f"{np.finfo(float).max:.3g}] J: rescale the units (e.g. mm, g, ms)"
-        )
-    for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
-        _check_zeta(zi)
+    # One compiled pass over every impact; the messages below only when it finds a bad one.
+    if _count_invalid(v, z, m, tiny):
+        _refuse_invalid(v, z, m, tiny)
     _check_exponent(potential)
-    out = np.full((len(_FIELDS), v.size), np.nan)
-    todo = np.ones(v.size, dtype=bool)
+    # Every entry is written below: by the kernel, or by the one-by-one loop.
+    out = np.empty((len(_FIELDS), v.size))
     beta = 2.0 / potential.leading_exponent - 1.0
     if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN and v.size:
         _validated_top(potential, 0.5 * m * float(v.max()) ** 2)
-        _power_law_batch(potential, m, v, z, beta, out, todo)
-    rest = np.flatnonzero(todo)
+        rest = _power_law_batch(potential, m, v, z, beta, out)
+    else:
+        rest = np.arange(v.size)
     # One impact at a time, checked and planned once (`prepare`: bit for bit solve_impact).
     solver = prepare(potential, m) if rest.size else None
     for i in rest:
@@ -210,21 +204,65 @@ def solve_impacts(
     return {key: out[j].reshape(shape) for j, key in enumerate(_FIELDS)}
 
 
-def _grouped_unique(z: np.ndarray):
-    """``np.unique(z, return_inverse=True)``, through the runs of equal values first: a
-    sweep grid (each zeta repeated over the speeds) sorts its few runs, not every impact."""
-    if z.size < 2:
-        return np.unique(z, return_inverse=True)
-    starts = np.flatnonzero(np.concatenate(([True], z[1:] != z[:-1])))
-    zu, inv_runs = np.unique(z[starts], return_inverse=True)
-    lengths = np.diff(np.append(starts, z.size))
-    return zu, np.repeat(inv_runs.ravel(), lengths)
+def _float_array(name: str, values) -> np.ndarray:
+    """``values`` as float64 (`real_array`), without its copy when they already are."""
+    if isinstance(values, np.ndarray) and values.dtype == np.float64:
+        return values
+    return real_array(name, values, "solve_impacts")
 
 
-def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
-    """Fill ``out`` for the impacts the compiled Gauss-Jacobi loop accepts."""
+@numba.njit(cache=True, parallel=True)
+def _count_invalid(v, z, m, tiny):  # pragma: no cover - compiled
+    """How many impacts `_refuse_invalid` would refuse (an integer sum: any thread count)."""
+    bad = 0
+    for i in numba.prange(v.shape[0]):
+        vi, zi = v[i], z[i]
+        energy = 0.5 * m * vi * vi
+        ok = math.isfinite(vi) and vi > 0.0 and math.isfinite(energy) and energy >= tiny
+        bad += 0 if ok and math.isfinite(zi) and zi >= 0.0 else 1
+    return bad
+
+
+def _refuse_invalid(v: np.ndarray, z: np.ndarray, m: float, tiny: float) -> None:
+    """Raise, naming the first offending speed, energy or damping ratio."""
+    for vi in v[~(np.isfinite(v) & (v > 0))][:1]:
+        raise HCVInputError(f"impact speed v0 must be a finite number > 0, got {vi!r}")
+    with np.errstate(all="ignore"):
+        energy = 0.5 * m * v * v
+    for i in np.flatnonzero(~(np.isfinite(energy) & (energy >= tiny)))[:1]:
+        raise HCVInputError(
+            f"solve_impacts: kinetic energy m v0^2 / 2 = {float(energy[i])!r} J (m = {m!r}, v0 = "
+            f"{float(v[i])!r}) is not a positive float64 in the normal range [{tiny:.3g}, "
+            f"{np.finfo(float).max:.3g}] J: rescale the units (e.g. mm, g, ms)"
+        )
+    for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
+        _check_zeta(zi)
+
+
+@numba.njit(cache=True)
+def _run_values(z):  # pragma: no cover - compiled
+    """The first value of each run of equal values of ``z`` (a sweep grid: a few runs)."""
+    vals = np.empty(z.shape[0])
+    vals[0] = z[0]
+    r = 1
+    for i in range(1, z.shape[0]):
+        if z[i] != z[i - 1]:
+            vals[r] = z[i]
+            r += 1
+    return vals[:r]
+
+
+def _unique_zetas(z: np.ndarray) -> np.ndarray:
+    """``np.unique(z)``, through the runs of equal values first: a sweep grid (each zeta
+    repeated over the speeds) sorts its few runs, not every impact."""
+    return np.unique(_run_values(z)) if z.size else np.unique(z)
+
+
+def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
+    """Fill ``out`` for the impacts the compiled Gauss-Jacobi loop accepts; returns the
+    indices of the others (for the one-by-one loop)."""
     # The dimensionless sums depend on zeta only: one evaluation per distinct zeta.
-    zu, inv = _grouped_unique(z)
+    zu = _unique_zetas(z)
     sums_u, ok_u = _gj_batch(zu, *_jacobi_pair(beta), beta, _GJ_ZETA_MAX, _GJ_RTOL)
     # Damping ratios near 0.9 need larger rules (longer branches): a second pass.
     nodes_u = np.full(zu.size, float(_GJ_SIZES[1]))
@@ -242,11 +280,14 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
     # As `solve_impact` (`solve._check_normal`): a result outside the normal float64
     # range is refused, never returned as 0.0 or a subnormal number.
     tiny = float(np.finfo(float).tiny)
-    bad = _power_law_fill(
+    todo = np.empty(v.size, dtype=np.bool_)
+    bad = np.empty(v.size, dtype=np.int8)
+    left, nbad = _power_law_fill(
         v,
-        inv,
         z,
+        zu,
         sums_u,
+        _zeta_factors(zu),
         ok_u,
         nodes_u,
         c0,
@@ -259,8 +300,9 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
         tiny,
         out,
         todo,
+        bad,
     )
-    for j, key in enumerate(("max_penetration", "max_force", "contact_time")):
+    for j, key in enumerate(("max_penetration", "max_force", "contact_time") if nbad else ()):
         for i in np.flatnonzero(bad & (1 << j))[:1]:
             val = out[_FIELDS.index(key), i]
             raise UnsupportedError(
@@ -268,23 +310,69 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out, todo) -> None:
                 f"range ({tiny:.3g}) for m = {m!r} kg, v0 = {float(v[i])!r} m/s: rescale the "
                 "units (e.g. mm, g, ms) so that it is a normal number"
             )
+    return np.flatnonzero(todo) if left else np.arange(0)
+
+
+@numba.njit(cache=True, parallel=True)
+def _zeta_factors(zu):  # pragma: no cover - compiled
+    """Per distinct zeta: exp(-zeta s_peak) and the two restitutions (overlap end, zero
+    force), the expressions `solve_impact` evaluates, once per zeta instead of per impact.
+    (-0.0 and 0.0, one entry of ``zu``, give the same bits in each.)"""
+    f = np.empty((zu.shape[0], 3))
+    for j in numba.prange(zu.shape[0]):
+        zz = zu[j]
+        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
+        sp = math.atan2(wd, zz) / wd
+        f[j, 0] = math.exp(-zz * sp)
+        f[j, 1] = math.exp(-math.pi * zz / wd)
+        f[j, 2] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
+    return f
 
 
 @numba.njit(cache=True, parallel=True)
 def _power_law_fill(
-    v, inv, z, sums_u, ok_u, nodes_u, c0, b_hi, b_lo, q_scale, two_n, k, p, tiny, out, todo
+    v,
+    z,
+    zu,
+    sums_u,
+    per_zeta,
+    ok_u,
+    nodes_u,
+    c0,
+    b_hi,
+    b_lo,
+    q_scale,
+    two_n,
+    k,
+    p,
+    tiny,
+    out,
+    todo,
+    bad,
 ):  # pragma: no cover - compiled
     """Every field of the impacts whose zeta the Gauss-Jacobi sums accept, into the rows of
-    ``out`` (order of _FIELDS), ``todo`` cleared there; one impact per thread step, so
-    the results do not depend on the thread count. Returns per impact the bits j of its
-    fields (q_max, U'(q_max), contact time) below ``tiny``."""
+    ``out`` (order of _FIELDS), ``todo[i]`` False there and True (row NaN) elsewhere, and
+    ``bad[i]`` the bits j of its fields (q_max, U'(q_max), contact time) below ``tiny``.
+    One impact per thread step, so the results do not depend on the thread count; the
+    two returned counts (impacts left, impacts with a bad bit) are integer sums.
+
+    The index of an impact's zeta in the sorted distinct ``zu`` is found here, by
+    bisection (a few compares), not by a serial ``np.unique(..., return_inverse=True)``.
+    """
     nv = v.shape[0]
-    bad = np.zeros(nv, dtype=np.int8)
+    left = 0
+    nbad = 0
     for i in numba.prange(nv):
-        iu = inv[i]
+        zz = z[i]
+        iu = np.searchsorted(zu, zz)
         if not ok_u[iu]:
+            for f in range(out.shape[0]):
+                out[f, i] = np.nan
+            todo[i] = True
+            bad[i] = 0
+            left += 1
             continue
-        vi, zz = v[i], z[i]
+        vi = v[i]
         # c v0^beta with the exponent split as in `_branches.power_law_scale`.
         c = c0 * vi**b_hi * math.exp(b_lo * math.log(vi))
         roundoff = (_SUM_ULPS_PER_NODE * nodes_u[iu] + _NODE_ULPS) * _EPS
@@ -292,52 +380,21 @@ def _power_law_fill(
         e_rise = c * sums_u[iu, 3] + roundoff * rise
         e_fall = c * sums_u[iu, 4] + roundoff * fall
         e_mid = c * sums_u[iu, 5] + roundoff * (abs(fall) + abs(fall - mid))
-        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
-        sp = math.atan2(wd, zz) / wd
-        x_pk = vi * math.exp(-zz * sp)  # sin(wd s_peak) / wd = 1 at the peak
+        x_pk = vi * per_zeta[iu, 0]  # sin(wd s_peak) / wd = 1 at the peak
         # Factored as in `_strategies.peak` (no intermediate underflow for tiny m or v0).
         q_max = q_scale * x_pk**two_n
         f_max = k * q_max**p
         out[0, i] = q_max
         out[1, i] = f_max
         out[2, i] = rise + fall
-        out[3, i] = math.exp(-math.pi * zz / wd)
+        out[3, i] = per_zeta[iu, 1]
         out[4, i] = rise + mid
-        out[5, i] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
+        out[5, i] = per_zeta[iu, 2]
         out[6, i] = e_rise + e_fall
         out[7, i] = e_rise + e_mid
         todo[i] = False
-        bad[i] = (
-            (0 if q_max >= tiny else 1)
-            + (0 if f_max >= tiny else 2)
-            + (0 if rise + fall >= tiny else 4)
-        )
-    return bad
-
-
-_LAW_FIELDS = (
-    "max_penetration",
-    "max_force",
-    "peak_force",
-    "contact_time",
-    "restitution",
-    "contact_time_zero_force",
-    "restitution_zero_force",
-    "returns_to_q0",
-    "error_time",
-    "error_restitution",
-)
-
-
-def _law_batch(potential, m, v0s, law) -> dict[str, np.ndarray]:
-    """One `solve_law_impact` per speed (the general law has no batch kernel)."""
-
-    v = np.asarray(v0s, dtype=float)
-    if v.size > BATCH_MAX:
-        raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {BATCH_MAX}")
-    out = {key: np.full(v.size, np.nan) for key in _LAW_FIELDS}
-    for i, vi in enumerate(v.ravel()):
-        sol = solve_law_impact(potential, m, float(vi), law)
-        for key in _LAW_FIELDS:
-            out[key][i] = float(getattr(sol, key))
-    return {key: arr.reshape(v.shape) for key, arr in out.items()}
+        b = (0 if q_max >= tiny else 1) + (0 if f_max >= tiny else 2)
+        b += 0 if rise + fall >= tiny else 4
+        bad[i] = b
+        nbad += 0 if b == 0 else 1
+    return left, nbad

@@ -1,0 +1,188 @@
+"""Many speeds of one general damping law on every core: the ``law=`` branch of `solve_impacts`.
+
+`solve_law_impact` of each speed, bit for bit (test), with the compiled integration of
+the speeds (`general_law._compiled_solve`, the kernel `solve_law_impact` itself calls) run
+by a numba ``prange`` loop, one speed per thread step, so that neither the thread count
+nor the schedule changes a bit (issue 27, goal 4). What is not compiled stays as in
+`solve_law_impact`, one speed after another, in the order given:
+
+* each speed's checks and its validated top ``qE`` (`_validate._validated_top`, whose
+  cache makes ``qE`` depend on the speeds solved before: called at the speeds whose
+  energy sets a new record, in order, which leaves every speed the loop's ``qE``),
+* the linear oscillator in closed form and the potentials without a compiled kernel
+  (sphere, ellipsoid, expression): the whole impact, by `prepare_law`,
+* an integration that did not finish: `prepare_law`'s call of that speed again, which
+  raises the message of `solve_law_impact`; a lost return: `general_law._refuse_lost_return`.
+
+The bounds and fields are then formed from the kernel's rows as `general_law._solve_planned`
+forms them, the same float operations elementwise (`_fill`; the test compares every field
+with `solve_law_impact` bit for bit, so the two cannot drift apart unseen).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from reference_impl.errors import HCVInputError
+from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_NO_RETURN_Q
+from reference_impl.exact._validate import _validated_top
+from reference_impl.exact.general_law import (
+    ERROR_SAFETY,
+    _compiled_solve,
+    _refuse_lost_return,
+    prepare_law,
+)
+
+__all__ = ["LAW_FIELDS", "solve_law_batch"]
+
+# Fields of the returned dict (`LawImpactSolution`'s names), as floats.
+LAW_FIELDS = (
+    "max_penetration",
+    "max_force",
+    "peak_force",
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "returns_to_q0",
+    "error_time",
+    "error_restitution",
+)
+_COL = {name: j for j, name in enumerate(OUT_FIELDS)}
+_EPS = np.finfo(float).eps
+# Speeds per chunk of the parallel loop (~20-200 us each: the hand-out costs far less).
+_CHUNK = 4
+# The compiled integration `solve_law_impact` calls (bound once; a global of the loop below).
+_SOLVE = _compiled_solve
+
+
+# Cached (its first compile takes seconds). It compiles in the kernel of other modules:
+# the cache directory is keyed by the content of every compiled source
+# (`reference_impl._numba_dir._COMPILED_SOURCES`, this file included), so a change of
+# that kernel selects a fresh directory instead of reusing this machine code.
+@numba.njit(cache=True, parallel=True)
+def _solve_rows(v, q_top, ks, ps, cs, es, sc, rows):  # pragma: no cover - compiled
+    """``rows[i]`` = the kernel's `OUT_FIELDS` of speed ``v[i]`` (one speed per thread step)."""
+    for i in numba.prange(v.shape[0]):
+        rows[i, :] = _SOLVE(v[i], q_top[i], ks, ps, cs, es, sc)
+
+
+def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.ndarray]:
+    """`solve_law_impact` of every speed of ``v0s``, as arrays of `LAW_FIELDS`.
+
+    Parameters
+    ----------
+    potential : Potential
+        Contact potential U(q) (J, q in m).
+    m : float
+        Mass (kg), > 0.
+    v0s : array_like
+        Approach speeds (m/s), > 0.
+    law : DampingLaw or dict
+        As for `solve_law_impact`.
+    max_impacts : int
+        Largest number of speeds accepted (`batch.BATCH_MAX`).
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        One float array per field of `LAW_FIELDS`, of the shape of ``v0s``
+        (``returns_to_q0`` as 1.0 / 0.0).
+    """
+    v = np.asarray(v0s, dtype=float)
+    if v.size > max_impacts:
+        raise HCVInputError(f"{v.size} impacts requested, more than BATCH_MAX = {max_impacts}")
+    shape, v = v.shape, np.ascontiguousarray(v).ravel()
+    out = np.full((len(LAW_FIELDS), v.size), np.nan)
+    if not v.size:
+        return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
+    prepared = prepare_law(potential, m, law)
+    plan = prepared._plan
+    if plan.lin is not None or plan.pk is None:
+        # Closed form, or a Python potential: no compiled loop to spread over the cores.
+        for i in range(v.size):
+            _store(out, i, prepared(float(v[i])))
+        return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
+    q_top = _tops(plan, prepared, v)
+    rows = np.empty((v.size, len(OUT_FIELDS)))
+    # Speeds cost unequal step counts: small chunks handed out as threads free up, not
+    # one equal share each (rows do not depend on who computes them).
+    with numba.parallel_chunksize(_CHUNK):
+        _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, rows)
+    _finish(out, v, q_top, rows, prepared)
+    return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
+
+
+def _store(out: np.ndarray, i: int, sol) -> None:
+    for j, key in enumerate(LAW_FIELDS):
+        out[j, i] = float(getattr(sol, key))
+
+
+def _tops(plan, prepared, v: np.ndarray) -> np.ndarray:
+    """The ``qE`` each speed gets in a serial loop of `solve_law_impact` calls.
+
+    `_validated_top` returns the top of the largest energy validated so far (its cache),
+    so between two speeds whose energy sets a new record it returns the last record's
+    value: it is called at the records only, in order (the cache evolves as in the loop).
+    """
+    with np.errstate(all="ignore"):
+        energy = 0.5 * plan.m * v * v  # as _solve_planned: (0.5 m v0) v0
+    bad = ~(np.isfinite(v) & (v > 0) & np.isfinite(energy) & (energy > 0))
+    for i in np.flatnonzero(bad)[:1]:
+        prepared(float(v[i]))  # raises solve_law_impact's message for this speed
+    record = np.ones(v.size, dtype=bool)
+    record[1:] = energy[1:] > np.maximum.accumulate(energy)[:-1]
+    at = np.flatnonzero(record)
+    tops = np.array([_validated_top(plan.potential, float(energy[i])) for i in at])
+    # Each speed takes the value of the last record at or before it.
+    return tops[np.cumsum(record) - 1]
+
+
+def _finish(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray, prepared):
+    """``out`` from the kernel's rows, as `general_law._solve_planned` forms one impact
+    (the same float operations in the same order, elementwise)."""
+    with np.errstate(all="ignore"):  # no-return rows carry NaN fields, as in the single call
+        _fill(out, v, q_top, rows)
+    r = {name: rows[:, j] for name, j in _COL.items()}
+    failed = (r["status"] != 0.0) | ~np.isfinite(r["q_max"])
+    lost = ~failed & (r["returns"] != 1.0) & (r["stop"] == STOP_NO_RETURN_Q)
+    # In the order of the speeds, as the serial loop meets them.
+    plan = prepared._plan
+    for i in np.flatnonzero(failed | lost):
+        if failed[i]:
+            # Not finished within the step budget: the single call raises its message.
+            _store(out, i, prepared(float(v[i])))
+        else:
+            _refuse_lost_return(plan.potential, plan.law, plan.m, float(v[i]))
+
+
+def _fill(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray) -> None:
+    """Every column of ``out``, vectorised: `_solve_planned`'s expressions, term by term."""
+    r = {name: rows[:, j] for name, j in _COL.items()}
+    returns = r["returns"] == 1.0
+    nst = 100.0 * np.trunc(r["n_steps"])  # 100 * int(n_steps), exact
+    t_scale = q_top / v
+    t_end = np.where(returns, r["t_end"], math.inf)
+    tail = np.where(returns, t_end, np.where(np.isfinite(r["t_zf"]), r["t_zf"], t_scale))
+    es = ERROR_SAFETY
+    err_t = es * r["err_t"] * t_scale + nst * _EPS * tail
+    # the zero-force instant's own sensitivity (_general_kernel)
+    err_t = np.where(r["err_zf"] > 0.0, err_t + es * r["err_zf"], err_t)
+    err_w = es * r["err_w"] + nst * _EPS
+    cols = (
+        r["q_max"],
+        r["max_force"],
+        r["peak_force"],
+        t_end,
+        np.where(returns, -r["w_end"] / v, 0.0),
+        r["t_zf"],
+        -r["w_zf"] / v,
+        np.where(returns, 1.0, 0.0),
+        err_t,
+        err_w,
+    )
+    for j, col in enumerate(cols):
+        out[j] = col

@@ -1,0 +1,123 @@
+"""`solve_impacts(..., law=...)` on every core: `solve_law_impact` bit for bit (issue 27, goal 4).
+
+The general-law batch (`reference_impl.exact._law_batch`) integrates the speeds in a
+numba prange loop and forms the fields from the kernel's rows as `solve_law_impact`
+does; every field must be the single call's, on one thread and on all. Speed:
+benchmarks/bench_exact.py and benchmarks/device_scaling.py.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+from reference_impl import PowerLaw, solve_impacts
+from reference_impl.errors import HCVInputError
+from reference_impl.exact import _law_batch
+from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.potentials import SumPotential
+from verification.assertions import assert_true
+
+# Hertz (k = 1e9 Pa m^0.5, m = 4.1 g) with each kind of law, strengths of the calibrated
+# study laws (e ~ 0.8 at 1 m/s) and a strong Hunt-Crossley damper.
+LAWS = (
+    {"law": "linear", "c": 26.7},
+    {"law": "power", "c": 6.6e6, "exponent": 1.0},
+    {"law": "polynomial", "c": [19.1, 1.87e6]},
+    {"law": "viscoelastic", "A": 1.23e-6},
+    {"law": "hunt-crossley", "alpha": 0.37},
+    {"law": "hunt-crossley", "alpha": 5.0},
+)
+# Rising and falling speeds: the validated top (`_validate._validated_top`) is cached per
+# potential, so each speed must see the cache the serial loop leaves it.
+SPEEDS = (1.0, 0.3, 3.0, 0.1, 7.0, 2.0)
+
+
+def _hertz():
+    return PowerLaw(1e9, 1.5), 0.0041
+
+
+def _serial(pot, m, law):
+    """The reference: one `solve_law_impact` per speed, in order, on a fresh potential."""
+    sols = [solve_law_impact(pot, m, v, law) for v in SPEEDS]
+    return {key: np.array([float(getattr(s, key)) for s in sols]) for key in _law_batch.LAW_FIELDS}
+
+
+def test_law_batch_kernel_is_parallel():
+    kernel = _law_batch._solve_rows
+    assert_true(
+        kernel.targetoptions.get("parallel") is True,
+        got=f"_solve_rows compiled with {kernel.targetoptions}",
+        should="parallel=True (numba prange over the speeds)",
+        claim="solve_impacts",
+        call="_law_batch._solve_rows",
+    )
+
+
+@pytest.mark.parametrize("law", LAWS, ids=lambda t: f"{t['law']}")
+def test_law_batch_is_solve_law_impact_bit_for_bit(law):
+    cores = numba.config.NUMBA_NUM_THREADS
+    pot, m = _hertz()
+    want = _serial(pot, m, law)
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, cores}):
+            numba.set_num_threads(threads)
+            got = solve_impacts(PowerLaw(1e9, 1.5), m, np.array(SPEEDS), law=law)
+            for key, ref in want.items():
+                assert_true(
+                    got[key].tobytes() == ref.tobytes(),
+                    got=f"{key} = {got[key]}",
+                    should=f"{ref} (solve_law_impact per speed, bit for bit)",
+                    claim="solve_impacts",
+                    call=f"solve_impacts(hertz, {m}, {SPEEDS}, law={law}) on {threads} threads",
+                )
+    finally:
+        numba.set_num_threads(before)
+
+
+def test_law_batch_sum_and_shape():
+    law = LAWS[4]
+    pot = SumPotential(PowerLaw(1e9, 1.5), PowerLaw(1e12, 2.5))
+    want = _serial(pot, 0.01, law)
+    v = np.array(SPEEDS).reshape(2, 3)
+    got = solve_impacts(SumPotential(PowerLaw(1e9, 1.5), PowerLaw(1e12, 2.5)), 0.01, v, law=law)
+    for key, ref in want.items():
+        assert_true(
+            got[key].shape == (2, 3) and got[key].ravel().tobytes() == ref.tobytes(),
+            got=f"{key} = {got[key]}",
+            should=f"{ref.reshape(2, 3)} (solve_law_impact per speed)",
+            claim="solve_impacts",
+            call=f"solve_impacts(hertz + power 2.5, 0.01, 2x3 speeds, law={law})",
+        )
+
+
+def test_law_batch_refuses_a_bad_speed_as_the_single_call():
+    pot, m = _hertz()
+    with pytest.raises(HCVInputError) as single:
+        solve_law_impact(pot, m, -1.0, LAWS[4])
+    with pytest.raises(HCVInputError) as batch:
+        solve_impacts(pot, m, [1.0, -1.0], law=LAWS[4])
+    assert str(batch.value) == str(single.value), (
+        f"got {batch.value}, should be {single.value} [solve_impacts, law batch refusal]"
+    )
+
+
+def test_law_batch_rows_that_never_return():
+    """Hertz + a constant dashpot: the slow speeds creep back and never reach q = 0
+    (inf contact time, restitution 0, NaN-free zero-force fields), beside returning ones."""
+    law, m, speeds = {"law": "linear", "c": 50.0}, 1e-3, (1e-4, 1.0, 3e-4, 0.1)
+    pot = PowerLaw(1e9, 1.5)  # one potential, as the batch (its validated tops are cached)
+    sols = [solve_law_impact(pot, m, v, law) for v in speeds]
+    assert not sols[0].returns_to_q0 and sols[1].returns_to_q0, "workload lost its creep"
+    got = solve_impacts(PowerLaw(1e9, 1.5), m, np.array(speeds), law=law)
+    for key in _law_batch.LAW_FIELDS:
+        ref = np.array([float(getattr(s, key)) for s in sols])
+        assert_true(
+            got[key].tobytes() == ref.tobytes(),
+            got=f"{key} = {got[key]}",
+            should=f"{ref} (solve_law_impact per speed, bit for bit)",
+            claim="solve_impacts",
+            call=f"solve_impacts(hertz, {m}, {speeds}, law={law})",
+        )
