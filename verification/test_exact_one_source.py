@@ -33,9 +33,6 @@ _NO_QUADRATURE = {
     "general_law.py",
     "_general_law_mp.py",
 }
-# Still a copy, in a module another session owns: `batch._gj_batch` is the
-# dimensionless, parallel twin of `_sums.gj_rows` (strict: passes once it is moved).
-_PENDING = {"batch.py"}
 
 
 def _is_weight(node: ast.AST) -> bool:
@@ -72,15 +69,9 @@ def _weighted_sums(source: str) -> list[int]:
 
 
 def _modules():
-    names = sorted(
+    return sorted(
         p.name for p in EXACT.glob("*.py") if p.name not in _OTHER_RULES | _NO_QUADRATURE | {HOME}
     )
-    return [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="h-batch's copy"))
-        if n in _PENDING
-        else n
-        for n in names
-    ]
 
 
 def test_the_home_module_holds_both_loops():

@@ -26,10 +26,13 @@ from reference_impl.exact._branches import (
     _NODE_ULPS,
     _SUM_ULPS_PER_NODE,
     _exponent_splits,
+    _fill_rows,
     _jacobi_pair,
     _pow_split,
 )
 from reference_impl.exact._law_batch import solve_law_batch
+from reference_impl.exact._power_kernel import _POWER_ROWS
+from reference_impl.exact._sums import GJ_OK
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.prepared import prepare
 from reference_impl.exact.solve import ImpactSolution
@@ -63,58 +66,51 @@ _FIELDS = (
 def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
     """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok.
 
-    Same rows as `_branches._branch_rows` and the same sums as `_gj_sums`. Each zeta
-    is summed by one thread, in the same order whatever the thread count, so the
-    results do not depend on it (bit for bit; test).
+    The rows of `_branches._fill_rows` and the one Gauss-Jacobi loop (`_sums.gj_rows`
+    bound to `_power_kernel._power_values`, as `power_impact` sums them) at c = 1, with
+    no round-off share (``round_rel`` 0: `_power_law_fill` adds it per impact, scaled).
+    Each zeta is summed by one thread, in the same order whatever the thread count, so
+    the results do not depend on it (bit for bit; test).
     """
     nz = zetas.shape[0]
     out = np.zeros((nz, 6))
     ok = np.zeros(nz, dtype=np.bool_)
-    nn = u.shape[0]
     for i in numba.prange(nz):
-        rows = np.zeros((3, 5))
         z = zetas[i]
         if z >= zeta_max:
             continue
         wd = math.sqrt((1.0 - z) * (1.0 + z))
         sp = math.atan2(wd, z) / wd
         s_end = math.pi / wd
-        nr = 1
-        rows[0, 0], rows[0, 1], rows[0, 2], rows[0, 3], rows[0, 4] = 0.0, sp, 0.0, sp, sp
-        if z > 0.0:
-            lf = s_end - sp
-            lz = 2.0 * math.atan2(z, wd) / wd
-            if lz <= 0.0 or lz < 1e-250 * s_end:
-                continue
-            rows[1, 0], rows[1, 1], rows[1, 2], rows[1, 3], rows[1, 4] = s_end, -lf, 0.0, lf, lf
-            rows[2, 0], rows[2, 1], rows[2, 2], rows[2, 3], rows[2, 4] = s_end, -lz, 0.0, lz, lz
-            nr = 3
-        fine = np.zeros(3)
-        coarse = np.zeros(3)
+        lz = 2.0 * math.atan2(z, wd) / wd if z > 0.0 else 0.0
+        rows = np.empty((3, 5))
+        nr = _fill_rows(z, sp, s_end, lz, rows)
+        empty = False
         for r in range(nr):
-            s0, s1, p0, p1, L = rows[r, 0], rows[r, 1], rows[r, 2], rows[r, 3], rows[r, 4]
-            scale = L ** (beta + 1.0)
-            for j in range(nn):
-                d = u[j]
-                x = math.exp(-z * (s0 + s1 * d)) * math.sin(wd * (p0 + p1 * d)) / wd
-                f = scale * (x / (L * d)) ** beta
-                coarse[r] += W[j, 0] * f
-                fine[r] += W[j, 1] * f
+            empty = empty or not rows[r, 4] > 0.0
+        if empty:
+            continue
+        fine = np.empty(3)
+        err = np.empty(3)
+        # b = 0: the values carry their scale L^(beta+1), as in `power_impact`.
+        if _POWER_ROWS(rows, nr, u, W, (z, wd, beta, 1.0), 0.0, rtol, 0.0, fine, err) != GJ_OK:
+            continue
+        # err = |fine - coarse| exactly (round_rel 0). The batch's own test, relative
+        # difference <= rtol, as well: it differs from gj_rows' diff <= rtol |fine| only
+        # where a row's sum is subnormal (zeta < ~1e-150: the zero-force row), and keeps
+        # those zetas on the one-by-one path, bit for bit the results of before.
         worst = 0.0
         for r in range(nr):
-            worst = max(worst, abs(fine[r] - coarse[r]) / abs(fine[r]))
+            worst = max(worst, err[r] / abs(fine[r]))
         if not worst <= rtol:
             continue
         ok[i] = True
         if nr == 1:
             out[i, 0], out[i, 1], out[i, 2] = fine[0], fine[0], fine[0]
-            e = abs(fine[0] - coarse[0])
-            out[i, 3], out[i, 4], out[i, 5] = e, e, e
+            out[i, 3], out[i, 4], out[i, 5] = err[0], err[0], err[0]
         else:
             out[i, 0], out[i, 1], out[i, 2] = fine[0], fine[1], fine[1] - fine[2]
-            out[i, 3] = abs(fine[0] - coarse[0])
-            out[i, 4] = abs(fine[1] - coarse[1])
-            out[i, 5] = abs(fine[1] - coarse[1]) + abs(fine[2] - coarse[2])
+            out[i, 3], out[i, 4], out[i, 5] = err[0], err[1], err[1] + err[2]
     return out, ok
 
 
