@@ -31,7 +31,7 @@ COMMANDS: tuple[tuple[str, str, str], ...] = (
      "measure the Verlet critical time step and test dt_safe"),
     ("report", "reference_impl.cli.report",
      "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-     "measured at 267 s wall on 2 cores at load 1-2 with --adapter lammps, kratos, mujoco, liggghts, yade: "
+     "measured at 220 s wall on 2 cores at load 1 with --adapter lammps, kratos, mujoco, liggghts, yade: "
      "reports/results.json of 2026-11-26)"),
     ("scenes", "reference_impl.cli.scenes",
      "list the scene catalogue (the same names work in every command); --show NAME prints "

@@ -23,7 +23,7 @@ _MAX_REPORT_WORKERS = 256
 
 _HELP = (
     "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-    "measured at 267 s wall on 2 cores at load 1-2 with --adapter lammps, kratos, mujoco, liggghts, yade: "
+    "measured at 220 s wall on 2 cores at load 1 with --adapter lammps, kratos, mujoco, liggghts, yade: "
     "reports/results.json of 2026-11-26)"
 )
 
