@@ -29,8 +29,8 @@ LAWS = (
     {"law": "hunt-crossley", "alpha": 0.37},
     {"law": "hunt-crossley", "alpha": 5.0},
 )
-# Rising and falling speeds: the validated top (`_validate._validated_top`) is cached per
-# potential, so each speed must see the cache the serial loop leaves it.
+# Rising and falling speeds: the validation of `_validate._validated_top` is cached per
+# potential, and no result may depend on it (each speed is compared with a fresh object).
 SPEEDS = (1.0, 0.3, 3.0, 0.1, 7.0, 2.0)
 
 
@@ -38,9 +38,10 @@ def _hertz():
     return PowerLaw(1e9, 1.5), 0.0041
 
 
-def _serial(pot, m, law):
-    """The reference: one `solve_law_impact` per speed, in order, on a fresh potential."""
-    sols = [solve_law_impact(pot, m, v, law) for v in SPEEDS]
+def _serial(make, m, law):
+    """The reference: one `solve_law_impact` per speed, each on a fresh potential ``make()``
+    (a result depends on its own inputs only, not on the speeds solved before)."""
+    sols = [solve_law_impact(make(), m, v, law) for v in SPEEDS]
     return {key: np.array([float(getattr(s, key)) for s in sols]) for key in _law_batch.LAW_FIELDS}
 
 
@@ -58,8 +59,8 @@ def test_law_batch_kernel_is_parallel():
 @pytest.mark.parametrize("law", LAWS, ids=lambda t: f"{t['law']}")
 def test_law_batch_is_solve_law_impact_bit_for_bit(law):
     cores = numba.config.NUMBA_NUM_THREADS
-    pot, m = _hertz()
-    want = _serial(pot, m, law)
+    _, m = _hertz()
+    want = _serial(lambda: _hertz()[0], m, law)
     before = numba.get_num_threads()
     try:
         for threads in sorted({1, cores}):
@@ -79,8 +80,7 @@ def test_law_batch_is_solve_law_impact_bit_for_bit(law):
 
 def test_law_batch_sum_and_shape():
     law = LAWS[4]
-    pot = SumPotential(PowerLaw(1e9, 1.5), PowerLaw(1e12, 2.5))
-    want = _serial(pot, 0.01, law)
+    want = _serial(lambda: SumPotential(PowerLaw(1e9, 1.5), PowerLaw(1e12, 2.5)), 0.01, law)
     v = np.array(SPEEDS).reshape(2, 3)
     got = solve_impacts(SumPotential(PowerLaw(1e9, 1.5), PowerLaw(1e12, 2.5)), 0.01, v, law=law)
     for key, ref in want.items():
@@ -108,8 +108,7 @@ def test_law_batch_rows_that_never_return():
     """Hertz + a constant dashpot: the slow speeds creep back and never reach q = 0
     (inf contact time, restitution 0, NaN-free zero-force fields), beside returning ones."""
     law, m, speeds = {"law": "linear", "c": 50.0}, 1e-3, (1e-4, 1.0, 3e-4, 0.1)
-    pot = PowerLaw(1e9, 1.5)  # one potential, as the batch (its validated tops are cached)
-    sols = [solve_law_impact(pot, m, v, law) for v in speeds]
+    sols = [solve_law_impact(PowerLaw(1e9, 1.5), m, v, law) for v in speeds]  # fresh objects
     assert not sols[0].returns_to_q0 and sols[1].returns_to_q0, "workload lost its creep"
     got = solve_impacts(PowerLaw(1e9, 1.5), m, np.array(speeds), law=law)
     for key in _law_batch.LAW_FIELDS:

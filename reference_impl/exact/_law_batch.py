@@ -6,9 +6,9 @@ by a numba ``prange`` loop, one speed per thread step, so that neither the threa
 nor the schedule changes a bit (issue 27, goal 4). What is not compiled stays as in
 `solve_law_impact`, one speed after another, in the order given:
 
-* each speed's checks and its validated top ``qE`` (`_validate._validated_top`, whose
-  cache makes ``qE`` depend on the speeds solved before: called at the speeds whose
-  energy sets a new record, in order, which leaves every speed the loop's ``qE``),
+* each speed's checks and its validated top ``qE`` (`_validate._validated_top`: the
+  speed's own turning point, whatever was solved before; its cache only skips a check
+  already done, so calling it speed by speed in order raises as the loop would),
 * the linear oscillator in closed form and the potentials without a compiled kernel
   (sphere, ellipsoid, expression): the whole impact, by `prepare_law`,
 * an integration that did not finish: `prepare_law`'s call of that speed again, which
@@ -122,23 +122,17 @@ def _store(out: np.ndarray, i: int, sol) -> None:
 
 
 def _tops(plan, prepared, v: np.ndarray) -> np.ndarray:
-    """The ``qE`` each speed gets in a serial loop of `solve_law_impact` calls.
+    """The ``qE`` of each speed, as `_solve_planned` takes it: `_validated_top` of its energy.
 
-    `_validated_top` returns the top of the largest energy validated so far (its cache),
-    so between two speeds whose energy sets a new record it returns the last record's
-    value: it is called at the records only, in order (the cache evolves as in the loop).
+    That is the speed's own turning point (no dependence on the speeds before it); it is
+    called speed by speed, in order, so that a refused energy raises as in a serial loop.
     """
     with np.errstate(all="ignore"):
         energy = 0.5 * plan.m * v * v  # as _solve_planned: (0.5 m v0) v0
     bad = ~(np.isfinite(v) & (v > 0) & np.isfinite(energy) & (energy > 0))
     for i in np.flatnonzero(bad)[:1]:
         prepared(float(v[i]))  # raises solve_law_impact's message for this speed
-    record = np.ones(v.size, dtype=bool)
-    record[1:] = energy[1:] > np.maximum.accumulate(energy)[:-1]
-    at = np.flatnonzero(record)
-    tops = np.array([_validated_top(plan.potential, float(energy[i])) for i in at])
-    # Each speed takes the value of the last record at or before it.
-    return tops[np.cumsum(record) - 1]
+    return np.array([_validated_top(plan.potential, float(e)) for e in energy])
 
 
 def _finish(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray, prepared):
