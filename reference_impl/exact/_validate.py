@@ -33,6 +33,10 @@ def _check_exponent(pot: Potential) -> float:
 
 
 _VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# Turning points kept per potential (exact values of earlier energies; a repeated speed
+# skips the numeric inverse, ~0.26 ms for a sphere). Bounded: a sweep of distinct speeds
+# must not grow it without limit.
+_TOPS_KEPT = 64
 
 
 def _validated_top(pot: Potential, E: float) -> float:
@@ -43,22 +47,29 @@ def _validated_top(pot: Potential, E: float) -> float:
     skips the check: its (0, q_max(E)] lies inside the interval already checked.
     Potentials are immutable after construction, so the cache cannot go stale.
 
-    The value returned is always this energy's own turning point, never the cached
-    one: the solvers use it as a bracket and as the scale of their error control,
+    The value returned is always this energy's own turning point, never a higher
+    energy's: the solvers use it as a bracket and as the scale of their error control,
     so a cached top of a higher energy changed their numbers with the calls made
     before (general law: error_time 1.2e-15 fresh vs 8.0e-13 after a faster impact).
-    The cache speeds up the validation only; no computed value depends on it.
+    The cache only skips work (the check, or the inverse of an energy seen before);
+    no computed value depends on it.
     """
     try:
-        e_c = _VALIDATED[pot]
+        e_c, tops = _VALIDATED[pot]
     except (KeyError, TypeError):
-        e_c = None
+        e_c, tops = None, None
     if e_c is not None and E <= e_c:
-        # Checked already (on a larger interval); the same float steps as the check's call.
-        return pot.turning_point(E, check=False)
+        q = tops.get(E)
+        if q is None:
+            # Checked already (on a larger interval); the same _inverse as the checked call.
+            q = pot.turning_point(E, check=False)
+            if len(tops) >= _TOPS_KEPT:
+                tops.pop(next(iter(tops)))  # the oldest entry
+            tops[E] = q
+        return q
     q = pot.turning_point(E)
     try:
-        _VALIDATED[pot] = E
+        _VALIDATED[pot] = (E, {E: q})
     except TypeError:
         pass
     return q
