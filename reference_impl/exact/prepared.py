@@ -131,23 +131,21 @@ class PreparedImpact:
             )
             if ok != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
                 return solve_impact(pot, m, v0, zeta)
-            return ImpactSolution._fast(
-                {
-                    "v0": v0,
-                    "m": m,
-                    "zeta": zeta,
-                    "max_penetration": q_max,
-                    "max_force": f_max,
-                    "contact_time": t,
-                    "restitution": rest,
-                    "contact_time_zero_force": t_zf,
-                    "restitution_zero_force": rest_zf,
-                    "quadrature_error": e,
-                    "quadrature_error_zero_force": e_zf,
-                    "potential": pot,
-                    "_osc_of": (wd, sp, s_end),
-                    "_t_peak": rise,
-                }
+            return _solution(
+                v0,
+                m,
+                zeta,
+                pot,
+                q_max,
+                f_max,
+                t,
+                rest,
+                t_zf,
+                rest_zf,
+                e,
+                e_zf,
+                (wd, sp, s_end),
+                rise,
             )
         q_top = _validated_top(pot, E)
         if self._plan is None or (
@@ -199,23 +197,8 @@ class PreparedImpact:
             and t >= _TINY
         ):
             return solve_impact(pot, m, v0, zeta)
-        return ImpactSolution._fast(
-            {
-                "v0": v0,
-                "m": m,
-                "zeta": zeta,
-                "max_penetration": q_max,
-                "max_force": f_max,
-                "contact_time": t,
-                "restitution": rest,
-                "contact_time_zero_force": t_zf,
-                "restitution_zero_force": rest_zf,
-                "quadrature_error": e,
-                "quadrature_error_zero_force": e_zf,
-                "potential": pot,
-                "_osc_of": (wd, sp, s_end),
-                "_t_peak": rise,
-            }
+        return _solution(
+            v0, m, zeta, pot, q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, (wd, sp, s_end), rise
         )
 
     def _fused(self, v0: float, zeta: float, q_top: float) -> ImpactSolution:
@@ -246,6 +229,30 @@ class PreparedImpact:
                 d2,
             ),
         )
+
+
+def _solution(v0, m, zeta, pot, q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, osc_of, t_peak):
+    """The `ImpactSolution` of a prepared call's floats (one place for the power-law and
+    the family paths); the oscillator is built from ``osc_of`` = (wd, s_peak, s_end) on
+    first use."""
+    return ImpactSolution._fast(
+        {
+            "v0": v0,
+            "m": m,
+            "zeta": zeta,
+            "max_penetration": q_max,
+            "max_force": f_max,
+            "contact_time": t,
+            "restitution": rest,
+            "contact_time_zero_force": t_zf,
+            "restitution_zero_force": rest_zf,
+            "quadrature_error": e,
+            "quadrature_error_zero_force": e_zf,
+            "potential": pot,
+            "_osc_of": osc_of,
+            "_t_peak": t_peak,
+        }
+    )
 
 
 def prepare(potential: Potential, m: float) -> PreparedImpact:
