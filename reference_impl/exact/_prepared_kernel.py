@@ -8,9 +8,14 @@ One Python call of ``prepare(potential, m)(v0, zeta)`` makes one compiled call:
 * `family_call(plan)`: the other compiled families, the oscillator of
   `VirtualOscillator` (the same formulas), the parameters of `_one_call._params`,
   the Gauss-Jacobi kernel of the family's `_one_call` plan (the very call
-  `solve_impact` makes first), and, when it answers, the restitutions and the
-  curvature U''(q_max) that `solve._conditioning` charges (`_one_call.curvature`:
-  the same compiled evaluator at the same q_max).
+  `solve_impact` makes first); when it refuses (or the plan has no Gauss-Jacobi
+  rule), the first rung of `_one_call.fused_impact`'s tanh-sinh ladder, the
+  family's tanh-sinh kernel at `_branches.COMPILED_LEVEL`, kept when its bound is
+  within `_branches._LEVEL_UP_RTOL` (`level_up` stops there too); and, when either
+  answers, the restitutions and the curvature U''(q_max) that `solve._conditioning`
+  charges (`_one_call.curvature`: the same compiled evaluator at the same q_max).
+  A rung that `level_up` would climb past, and every other refusal, is left to the
+  Python path (`prepared.PreparedImpact._fused`), which starts the ladder again.
 
 Each runs the compiled code `solve_impact` runs, in the same order, so its numbers
 are that path's bit for bit (held by verification/test_exact_prepared.py).
@@ -25,14 +30,19 @@ import numba
 import numpy as np
 
 from reference_impl._jit import specialise
-from reference_impl.exact._one_call import _OK, _OUT
+from reference_impl.exact._branches import _LEVEL_UP_RTOL, _NEGLIGIBLE_SHARE, COMPILED_LEVEL
+from reference_impl.exact._one_call import _OK, _OUT, _ts_args
 from reference_impl.exact._power_kernel import OUT_SIZE, power_impact
 
 __all__ = ["family_call", "power_call"]
 
 # The compiled functions a copy of `_family_impact` calls (bound by `specialise`): the
-# family's Gauss-Jacobi kernel and its evaluator (U, U', U'', U''') at one overlap.
-_GJ = _EV = None
+# family's Gauss-Jacobi and tanh-sinh kernels and its evaluator (U, U', U'', U''') at one
+# overlap.
+_GJ = _TS = _EV = None
+# Status of `_family_impact` when the tanh-sinh rung it ran is not the answer `level_up`
+# would keep (a bound above _LEVEL_UP_RTOL, or not a number): Python climbs the ladder.
+_LEVEL_UP = -1.0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -65,21 +75,47 @@ def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
     )
 
 
-def _family_impact(v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel):  # pragma: no cover
-    """One impact of a compiled family by Gauss-Jacobi (0 <= zeta < 1); c = (m, q_s, u_s,
-    n_lead) of the family's `NodeKernel`. Returns the kernel's status (`_one_call._OK`
-    when it answered; the rest is then meaningless otherwise), the six `Branches`
-    fields, q_max, U'(q_max), wd, s_peak, s_end, the two restitutions and U''(q_max)."""
+def _family_impact(
+    v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel, ts_d, ts_w, ts_wd, beta, ts_ulps
+):  # pragma: no cover - compiled
+    """One impact of a compiled family (0 <= zeta < `_branches._GJ_ZETA_MAX`); c = (m, q_s,
+    u_s, n_lead, has_gj) with the first four of the family's `NodeKernel`. Gauss-Jacobi
+    first when the plan has its rule (has_gj = 1; d ... round_rel its arguments, else
+    placeholders), then, as `_one_call.fused_impact` does, the tanh-sinh rule of
+    `COMPILED_LEVEL` (ts_d ... ts_ulps: `_one_call._ts_args`) on the common rows.
+    Returns the status (`_one_call._OK` when it answered; the rest is then meaningless
+    otherwise), the six `Branches` fields, q_max, U'(q_max), wd, s_peak, s_end, the two
+    restitutions and U''(q_max)."""
     # VirtualOscillator.__init__ and .zero_force_stretch, the same operations.
     wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
     sp = math.atan2(wd, zeta) / wd
     s_end = math.pi / wd
     prm = np.empty(11)
     prm[0], prm[1], prm[2], prm[3], prm[4], prm[5] = c[0], v0, zeta, wd, sp, s_end
-    prm[6] = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
+    lz = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
+    prm[6] = lz
     prm[7], prm[8], prm[9], prm[10] = q_top, c[1], c[2], c[3]
     o = np.zeros(_OUT)
-    _GJ(prm, P, d, fac, W, b, rtol, round_rel, o)
+    o[8] = _LEVEL_UP
+    if c[4] == 1.0:
+        _GJ(prm, P, d, fac, W, b, rtol, round_rel, o)
+    if o[8] != _OK:
+        # fused_impact: the tanh-sinh rows only where the zero-force stretch is common.
+        common = True
+        if zeta > 0.0:
+            common = lz < sp and (lz / sp) ** (1.0 + beta) >= _NEGLIGIBLE_SHARE
+        if common:
+            _TS(prm, P, ts_d, ts_w, ts_wd, beta, ts_ulps, o)
+            if o[8] == _OK:
+                # level_up's `_relative_bound`: a rung above _LEVEL_UP_RTOL is climbed.
+                worst = (o[1] + o[3]) / (o[0] + o[2])
+                ok = worst <= _LEVEL_UP_RTOL
+                if math.isfinite(o[4]):
+                    ok = ok and (o[1] + o[5]) / (o[0] + o[4]) <= _LEVEL_UP_RTOL
+                if not ok:
+                    o[8] = _LEVEL_UP
+        else:
+            o[8] = _LEVEL_UP
     rest = rest_zf = d2 = 0.0
     if o[8] == _OK:
         # solve_impact's restitution and VirtualOscillator.restitution_zero_force.
@@ -90,8 +126,8 @@ def _family_impact(v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel):  # pra
 
 
 @lru_cache(maxsize=64)
-def _family_entry(gauss_jacobi, ev, entry: str | None, cache: bool):
-    fn = specialise(_family_impact, cache, _GJ=gauss_jacobi, _EV=ev)
+def _family_entry(gauss_jacobi, tanh_sinh, ev, entry: str | None, cache: bool):
+    fn = specialise(_family_impact, cache, _GJ=gauss_jacobi, _TS=tanh_sinh, _EV=ev)
     if entry is not None:
         from reference_impl._cache import record_files
 
@@ -100,12 +136,26 @@ def _family_entry(gauss_jacobi, ev, entry: str | None, cache: bool):
 
 
 def family_call(plan):
-    """The compiled whole-impact call of a `_one_call` plan with a Gauss-Jacobi rule, or
-    None (no such rule, or no compiled evaluator). Disk-cached as the plan's kernels are:
-    the table form always, an expression when its node loop came from the compile cache."""
-    if plan.gj is None or plan.kernel.ev is None:
+    """(the compiled whole-impact call of a `_one_call` plan, the arguments after (v0,
+    zeta, q_top, c)), or None when the family has no compiled evaluator. Disk-cached as
+    the plan's kernels are: the table form always, an expression when its node loop came
+    from the compile cache."""
+    k = plan.kernel
+    if k.ev is None:
         return None
-    if plan.kernel.terms:
-        return _family_entry(plan.gauss_jacobi, plan.kernel.ev, None, True)
-    entry = getattr(plan.kernel.nodes, "_hcv_entry", None)
-    return _family_entry(plan.gauss_jacobi, plan.kernel.ev, entry, entry is not None)
+    if plan.gj is not None:
+        gj = plan.gj
+    else:  # placeholders of the Gauss-Jacobi arguments (has_gj = 0: not called)
+        gj = (_NO_NODES, _NO_NODES, _NO_WEIGHTS, 0.0, 0.0, 0.0)
+    ts_d, ts_w, ts_wd, beta, ts_ulps = _ts_args(plan, COMPILED_LEVEL)
+    args = (k.P, *gj, ts_d, ts_w, ts_wd, beta, float(ts_ulps))
+    if k.terms:
+        fn = _family_entry(plan.gauss_jacobi, plan.tanh_sinh, k.ev, None, True)
+    else:
+        entry = getattr(k.nodes, "_hcv_entry", None)
+        fn = _family_entry(plan.gauss_jacobi, plan.tanh_sinh, k.ev, entry, entry is not None)
+    return fn, args
+
+
+_NO_NODES = np.zeros(1)
+_NO_WEIGHTS = np.zeros((1, 2))

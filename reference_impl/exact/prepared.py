@@ -10,10 +10,12 @@ packed in arrays); each call then makes one compiled call (`_prepared_kernel`):
   range checks of `solve_impact`;
 * the other compiled families: `family_call`, the oscillator, the family's
   Gauss-Jacobi kernel of `_one_call` (the first call `solve_impact`'s `fused`
-  strategy makes), the restitutions and U''(q_max); the conditioning charge
+  strategy makes) and, when it refuses, the first tanh-sinh rung of the fused
+  strategy, the restitutions and U''(q_max); the conditioning charge
   (`solve._conditioning_at`) and the checks are a few float operations here.
-  When Gauss-Jacobi refuses, the fused kernel (`_one_call.fused_impact`: the
-  tanh-sinh ladder) runs as in `solve_impact`.
+  When that rung would be climbed past (or anything else refuses), the fused
+  kernel (`_one_call.fused_impact`: the whole tanh-sinh ladder) runs as in
+  `solve_impact`.
 
 The result is built from a dict (`ImpactSolution._fast`); its oscillator is kept as
 (wd, s_peak, s_end) and built on first use (`ImpactSolution.__getattr__`), with the
@@ -95,11 +97,12 @@ class PreparedImpact:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
         elif self._plan is not None:
-            self._family = family_call(self._plan)
-            if self._family is not None:
+            call = family_call(self._plan)
+            if call is not None:
+                self._family, rest = call
                 k = self._plan.kernel
-                c = np.array([self.m, k.q_s, k.u_s, k.n_lead])
-                self._args = (c, k.P, *self._plan.gj)
+                has_gj = 1.0 if self._plan.gj is not None else 0.0
+                self._args = (np.array([self.m, k.q_s, k.u_s, k.n_lead, has_gj]), *rest)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
