@@ -169,10 +169,13 @@ def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - 
                 q = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
                 du = np.nan
                 continue
-            step = f / du
+            # One division per step (a division costs several multiplications' time;
+            # the step's rounding is far below an ulp of q near the root).
+            idu = 1.0 / du
+            step = f * idu
             # Halley's correction, used while it is mild (far from the root the
             # plain Newton step inside the bracket is the safer one).
-            h = 0.5 * step * d2u / du
+            h = 0.5 * step * d2u * idu
             if abs(h) < 0.5:
                 step = step / (1.0 - h)
             if abs(step) <= _TAYLOR_RTOL * q:
@@ -196,11 +199,13 @@ def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - 
         g[j] = m * xj / du
         qs[j] = q
         if q > 0.0 and du > 0.0 and u > 0.0:
-            # sigma = q U'/U = d log u / d log q, and its rate, for the next start.
-            sig = q * du / u
-            dsig = sig * (1.0 - sig) + q * q * d2u / u
+            # sigma = q U'/U = d log u / d log q, and its rate, for the next start
+            # (by reciprocals: only the start depends on them, not the root).
+            iu = 1.0 / u
+            sig = q * du * iu
+            dsig = sig * (1.0 - sig) + q * q * d2u * iu
             q_prev, u_prev, inv_sig = q, u, 1.0 / sig
-            curv = 0.5 * dsig / (sig * sig * sig)
+            curv = 0.5 * dsig * (inv_sig * inv_sig * inv_sig)
 
 
 @numba.njit(cache=True, error_model="numpy")
