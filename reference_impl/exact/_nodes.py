@@ -7,8 +7,9 @@ Here one compiled call does every node of a branch:
   cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
   power), q from V by Newton on the cubic (arithmetic only), and U' without a
   second power, U' = (alpha + 1) u V' / V (`_cap_nodes`);
-* every other family: a safeguarded Halley iteration on U (`_newton_loop`),
-  warm-started from the previous node along the branch by log q against log u to
+* every other family: a safeguarded Halley iteration on U (`_newton_loop`, the
+  branches of one call advanced node by node together so that their independent
+  chains overlap), warm-started from the previous node along the branch by log q against log u to
   second order (slope 1/sigma, sigma = q U' / U, and its rate), inside a bracket [lo, hi] that starts at
   [0, q_max] and shrinks with every step (a step leaving it is replaced by a
   bisection). Once the step is below _TAYLOR_RTOL the root is taken one step on,
@@ -138,74 +139,89 @@ def _terms_eval(q, P):  # pragma: no cover - compiled
 
 
 def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - compiled
-    """dq/dx into g and q into qs at the virtual displacements x (one branch, in order),
-    by the Halley inverse of _EV(q, P) -> (U, U', U'', U''') (see `specialise`)."""
-    q_prev, u_prev, inv_sig, curv = -1.0, 0.0, 0.0, 0.0
-    for j in range(x.shape[0]):
-        xj = x[j]
-        u = 0.5 * m * xj * xj
-        # Warm start: log q against log u to second order from the previous node
-        # (nodes come in order along a branch), else the leading power law.
-        if q_prev > 0.0:
-            lr = math.log(u / u_prev)
-            q = q_prev * math.exp(lr * (inv_sig - curv * lr))
-        else:
-            q = q_s * (u / u_s) ** (1.0 / n_lead)
-        lo, hi = 0.0, q_hi
-        if not (q > lo and q < hi):
-            q = 0.5 * hi
-        du = np.nan
-        d2u = 0.0
-        for _ in range(_NEWTON_MAX_ITER):
-            uq, du, d2u, d3u = _EV(q, P)
-            f = uq - u
-            if f < 0.0:
-                lo = q
-            elif f > 0.0:
-                hi = q
+    """dq/dx into g and q into qs at the virtual displacements x, by the Halley inverse of
+    _EV(q, P) -> (U and its first three derivatives) (see `specialise`). Each row of the
+    2-D x is one branch, its nodes in order along it: each warm-starts the next.
+
+    The rows advance together, node j of every row before node j + 1. Each row's chain
+    of dependent operations (its start from its previous node, its steps) is the one it
+    has alone, so every value is the same bit for bit, but the processor overlaps the
+    independent chains of different rows (measured: 20% less time for three rows).
+    """
+    nr = x.shape[0]
+    # Each row's previous node: q, u, 1/sigma and the start's curvature (q <= 0: none).
+    q_pr = np.full(nr, -1.0)
+    u_pr = np.zeros(nr)
+    is_pr = np.zeros(nr)
+    cv_pr = np.zeros(nr)
+    for j in range(x.shape[1]):
+        for r in range(nr):
+            xj = x[r, j]
+            u = 0.5 * m * xj * xj
+            # Warm start: log q against log u to second order from the previous node,
+            # else the leading power law.
+            q_prev = q_pr[r]
+            if q_prev > 0.0:
+                lr = math.log(u / u_pr[r])
+                q = q_prev * math.exp(lr * (is_pr[r] - cv_pr[r] * lr))
             else:
-                break
-            if not (du > 0.0 and du < np.inf):
-                q = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-                du = np.nan
-                continue
-            # One division per step (a division costs several multiplications' time;
-            # the step's rounding is far below an ulp of q near the root).
-            idu = 1.0 / du
-            step = f * idu
-            # Halley's correction, used while it is mild (far from the root the
-            # plain Newton step inside the bracket is the safer one).
-            h = 0.5 * step * d2u * idu
-            if abs(h) < 0.5:
-                step = step / (1.0 - h)
-            if abs(step) <= _TAYLOR_RTOL * q:
-                du_t = du - step * (d2u - 0.5 * step * d3u)
-                q = q - step
-                if du_t > 0.0 and du_t < np.inf:
-                    du = du_t
-                    d2u = d2u - step * d3u
+                q = q_s * (u / u_s) ** (1.0 / n_lead)
+            lo, hi = 0.0, q_hi
+            if not (q > lo and q < hi):
+                q = 0.5 * hi
+            du = np.nan
+            d2u = 0.0
+            for _ in range(_NEWTON_MAX_ITER):
+                uq, du, d2u, d3u = _EV(q, P)
+                f = uq - u
+                if f < 0.0:
+                    lo = q
+                elif f > 0.0:
+                    hi = q
                 else:
-                    # The third derivative overflowed (q^(n-4) leaves float range near
-                    # q ~ 1e-100), and the series with it: U' evaluated at the root. It
-                    # gave dq/dx = -0.0 for U' = q^0.25 + q^0.75 at x <= 1e-110.
-                    _, du, d2u, _ = _EV(q, P)
-                break
-            qn = q - step
-            if not (qn > lo and qn < hi):
-                qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-            q = qn
-        else:
-            du = np.nan  # not converged: the caller refuses the node
-        g[j] = m * xj / du
-        qs[j] = q
-        if q > 0.0 and du > 0.0 and u > 0.0:
-            # sigma = q U'/U = d log u / d log q, and its rate, for the next start
-            # (by reciprocals: only the start depends on them, not the root).
-            iu = 1.0 / u
-            sig = q * du * iu
-            dsig = sig * (1.0 - sig) + q * q * d2u * iu
-            q_prev, u_prev, inv_sig = q, u, 1.0 / sig
-            curv = 0.5 * dsig * (inv_sig * inv_sig * inv_sig)
+                    break
+                if not (du > 0.0 and du < np.inf):
+                    q = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
+                    du = np.nan
+                    continue
+                # One division per step (a division costs several multiplications' time;
+                # the step's rounding is far below an ulp of q near the root).
+                idu = 1.0 / du
+                step = f * idu
+                # Halley's correction, used while it is mild (far from the root the
+                # plain Newton step inside the bracket is the safer one).
+                h = 0.5 * step * d2u * idu
+                if abs(h) < 0.5:
+                    step = step / (1.0 - h)
+                if abs(step) <= _TAYLOR_RTOL * q:
+                    du_t = du - step * (d2u - 0.5 * step * d3u)
+                    q = q - step
+                    if du_t > 0.0 and du_t < np.inf:
+                        du = du_t
+                        d2u = d2u - step * d3u
+                    else:
+                        # The third derivative overflowed (q^(n-4) leaves float range near
+                        # q ~ 1e-100), and the series with it: U' evaluated at the root. It
+                        # gave dq/dx = -0.0 for U' = q^0.25 + q^0.75 at x <= 1e-110.
+                        _, du, d2u, _ = _EV(q, P)
+                    break
+                qn = q - step
+                if not (qn > lo and qn < hi):
+                    qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
+                q = qn
+            else:
+                du = np.nan  # not converged: the caller refuses the node
+            g[r, j] = m * xj / du
+            qs[r, j] = q
+            if q > 0.0 and du > 0.0 and u > 0.0:
+                # sigma = q U'/U = d log u / d log q, and its rate, for the next start
+                # (by reciprocals: only the start depends on them, not the root).
+                iu = 1.0 / u
+                sig = q * du * iu
+                dsig = sig * (1.0 - sig) + q * q * d2u * iu
+                inv_sig = 1.0 / sig
+                q_pr[r], u_pr[r], is_pr[r] = q, u, inv_sig
+                cv_pr[r] = 0.5 * dsig * (inv_sig * inv_sig * inv_sig)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -256,9 +272,11 @@ _newton_terms_nodes = specialise(_newton_loop, cache=True, _EV=_terms_eval)
 
 @numba.njit(cache=True, error_model="numpy")
 def _terms_nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - compiled
-    """`nodes` of a table of terms: closed form for a single cap, else Halley."""
+    """`nodes` of a table of terms (rows of x: branches): closed form for a single cap,
+    row by row, else Halley."""
     if P.shape[0] == 1 and P[0, 0] == _TERM_CAP:
-        _cap_nodes(x, m, q_hi, P, g, qs)
+        for r in range(x.shape[0]):
+            _cap_nodes(x[r], m, q_hi, P, g[r], qs[r])
     else:
         _newton_terms_nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs)
 
@@ -382,7 +400,8 @@ class NodeKernel(NamedTuple):
     """The compiled node loop of one potential and the constants it reads.
 
     ``nodes(x, m, q_hi, q_s, u_s, n_lead, P, g, qs)`` writes dq/dx and q at the
-    virtual displacements x (one branch, nodes in order) into g and qs.
+    virtual displacements x (2-D: each row one branch, its nodes in order) into the
+    arrays g and qs of x's shape.
     ``terms`` is True for the table form (shared, disk-cached kernels).
     ``ev(q, P)`` gives U and its first three derivatives at one overlap q > 0.
     """
@@ -431,8 +450,7 @@ def node_function(pot: Potential):
         rows = np.ascontiguousarray(xa.reshape(-1, xa.shape[-1]) if xa.ndim else xa.reshape(1, 1))
         g = np.empty_like(rows)
         q = np.empty_like(rows)
-        for i in range(rows.shape[0]):
-            k.nodes(rows[i], m, q_hi, k.q_s, k.u_s, k.n_lead, k.P, g[i], q[i])
+        k.nodes(rows, m, q_hi, k.q_s, k.u_s, k.n_lead, k.P, g, q)
         return g.reshape(xa.shape), q.reshape(xa.shape)
 
     return f

@@ -96,38 +96,39 @@ _OUT = 9
 
 
 # Whole-impact kernels, written once and compiled per node loop by `_kernels_for`
-# (`reference_impl._jit.specialise` binds _NODES, a `NodeKernel.nodes`, _PEAK, and
-# _GJ_ROWS, `_sums.gj_rows` around `_node_values`).
-_NODES = _PEAK = _GJ_ROWS = None
+# (`reference_impl._jit.specialise` binds _NODES, a `NodeKernel.nodes`, and _PEAK).
+_NODES = _PEAK = None
 
 
 def _peak(prm, P, out):  # pragma: no cover - compiled
     """q_max and U'(q_max) into out[6:8]: x(s_peak) = v0 exp(-zeta s_peak) exactly."""
     m, v0, zeta, sp = prm[0], prm[1], prm[2], prm[4]
-    xa = np.empty(1)
-    g = np.empty(1)
-    qs = np.empty(1)
-    xa[0] = v0 * math.exp(-zeta * sp)
+    xa = np.empty((1, 1))
+    g = np.empty((1, 1))
+    qs = np.empty((1, 1))
+    xa[0, 0] = v0 * math.exp(-zeta * sp)
     _NODES(xa, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
-    out[6] = qs[0]
-    out[7] = m * xa[0] / g[0]
+    out[6] = qs[0, 0]
+    out[7] = m * xa[0, 0] / g[0, 0]
 
 
+@numba.njit(cache=True)
 def _node_values(rows, i, d, args, vals):  # pragma: no cover - compiled
-    """dq/dx d^-beta at the nodes d = t^b of branch row i (`_sums.gj_rows`'s integrand);
-    False when a node value is not finite and > 0. args = (prm, P, d^-beta, x, g, q)."""
-    prm, P, fac, xs, g, qs = args
-    m, v0, zeta, wd = prm[0], prm[1], prm[2], prm[3]
-    s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
+    """dq/dx d^-beta at the nodes d = t^b of branch row i (`_sums.gj_rows`'s integrand),
+    from args = (d^-beta, dq/dx at the nodes of every row); False when a node value is
+    not finite and > 0."""
+    fac, g = args
     for j in range(d.shape[0]):
-        xs[j] = v0 * math.exp(-zeta * (s0 + s1 * d[j])) * math.sin(wd * (p0 + p1 * d[j])) / wd
-    _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, qs)
-    for j in range(d.shape[0]):
-        gj = g[j]
+        gj = g[i, j]
         if not (gj > 0.0 and gj < np.inf):
             return False
         vals[j] = gj * fac[j]
     return True
+
+
+# `_sums.gj_rows` around the node values (the same for every family: the values are
+# computed before, every branch in one call of the node loop).
+_GJ_ROWS = gj_rows(_node_values, True)
 
 
 def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cover
@@ -142,8 +143,20 @@ def _gauss_jacobi(prm, P, d, fac, W, b, rtol, round_rel, out):  # pragma: no cov
     if _term_ratio(P, prm[10], out[6]) > _GJ_RATIO_MAX:
         out[8] = _CROSSOVER
         return
+    # dq/dx at the nodes of every branch, in one call of the node loop (`_nodes`: the
+    # branches' chains overlap); `_GJ_ROWS` then sums them row by row.
+    m, v0, wd = prm[0], prm[1], prm[3]
     nn = d.shape[0]
-    args = (prm, P, fac, np.empty(nn), np.empty(nn), np.empty(nn))
+    xs = np.empty((nr, nn))
+    for i in range(nr):
+        s0, s1, p0, p1 = rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3]
+        for j in range(nn):
+            xs[i, j] = (
+                v0 * math.exp(-zeta * (s0 + s1 * d[j])) * math.sin(wd * (p0 + p1 * d[j])) / wd
+            )
+    g = np.empty((nr, nn))
+    _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, np.empty((nr, nn)))
+    args = (fac, g)
     fine = np.empty(3)
     err = np.empty(3)
     status = _GJ_ROWS(rows, nr, d, W, args, b, rtol, round_rel, fine, err)
@@ -165,9 +178,7 @@ def _tanh_sinh(prm, P, d, w, w_diff, beta, round_ulps, out):  # pragma: no cover
     nn = d.shape[0]
     xs = _ts_common_x(L, d, zeta, wd, s_end, v0)
     g = np.empty((nr, nn))
-    qs = np.empty(nn)
-    for i in range(nr):
-        _NODES(xs[i], m, prm[7], prm[8], prm[9], prm[10], P, g[i], qs)
+    _NODES(xs, m, prm[7], prm[8], prm[9], prm[10], P, g, np.empty((nr, nn)))
     if not rows_positive(g, L):
         out[8] = _BAD_NODE
         return
@@ -189,14 +200,12 @@ def _kernels_for(nodes, cache: bool, entry: str | None = None):
     """(gauss_jacobi, tanh_sinh) compiled around the node loop ``nodes``; their disk-cache
     files are noted under the compile-cache ``entry`` when given (for its eviction)."""
     peak = specialise(_peak, cache, _NODES=nodes)
-    values = specialise(_node_values, cache, _NODES=nodes)
-    rows = gj_rows(values, cache)
-    gauss_jacobi = specialise(_gauss_jacobi, cache, _GJ_ROWS=rows, _PEAK=peak)
+    gauss_jacobi = specialise(_gauss_jacobi, cache, _NODES=nodes, _PEAK=peak)
     tanh_sinh = specialise(_tanh_sinh, cache, _NODES=nodes, _PEAK=peak)
     if entry is not None:
         from reference_impl._cache import record_files
 
-        record_files(entry, [peak, values, rows, gauss_jacobi, tanh_sinh])
+        record_files(entry, [peak, gauss_jacobi, tanh_sinh])
     return gauss_jacobi, tanh_sinh
 
 
