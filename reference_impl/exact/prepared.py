@@ -41,7 +41,7 @@ from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import family_call, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
-from reference_impl.exact._validate import _check_exponent, _validated_top
+from reference_impl.exact._validate import _TOPS_KEPT, _check_exponent, _validated_top
 from reference_impl.exact.solve import (
     _TINY,
     RTOL_STATED,
@@ -76,6 +76,7 @@ class PreparedImpact:
         "_split",
         "_family",
         "_args",
+        "_tops",
     )
 
     def __init__(self, potential: Potential, m: float):
@@ -85,6 +86,10 @@ class PreparedImpact:
         self.m = positive("m", m, "prepare")
         _check_exponent(potential)
         self._c = self._u = self._W = self._family = self._args = None
+        # Per speed: (its validated turning point, whether the split path takes it), as
+        # `_validated_top` and `needs_split` answer them (both are functions of the speed
+        # alone for one potential and mass), bounded as `_validate._TOPS_KEPT`.
+        self._tops = {}
         # Largest energy whose turning point this power law has had validated.
         self._e_checked = 0.0
         # The other compiled families: their plan of `_one_call` (None: no compiled form),
@@ -150,10 +155,17 @@ class PreparedImpact:
                 (wd, sp, s_end),
                 rise,
             )
-        q_top = _validated_top(pot, E)
-        if self._plan is None or (
-            self._split and needs_split(pot, lambda: turning_point(pot, m, v0, q_top), q_top)
-        ):
+        got = self._tops.get(v0)
+        if got is None:
+            q_top = _validated_top(pot, E)  # raises as solve_impact would
+            off = self._plan is None or (
+                self._split and needs_split(pot, lambda: turning_point(pot, m, v0, q_top), q_top)
+            )
+            if len(self._tops) >= _TOPS_KEPT:
+                self._tops.pop(next(iter(self._tops)))  # the oldest entry
+            got = self._tops[v0] = (q_top, off)
+        q_top, off = got
+        if off:
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
             v = self._family(v0, zeta, q_top, *self._args)
