@@ -75,15 +75,18 @@ def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
     )
 
 
-def _family_impact(
-    v0, zeta, q_top, c, P, d, fac, W, b, rtol, round_rel, ts_d, ts_w, ts_wd, beta, ts_ulps
-):  # pragma: no cover - compiled
-    """One impact of a compiled family (0 <= zeta < `_branches._GJ_ZETA_MAX`); c = (m, q_s,
-    u_s, n_lead, has_gj) with the first four of the family's `NodeKernel`. Gauss-Jacobi
-    first when the plan has its rule (has_gj = 1; d ... round_rel its arguments, else
-    placeholders), then, as `_one_call.fused_impact` does, the tanh-sinh rule of
-    `COMPILED_LEVEL` (ts_d ... ts_ulps: `_one_call._ts_args`) on the common rows.
-    Returns the status (`_one_call._OK` when it answered; the rest is then meaningless
+def _family_impact(v0, zeta, q_top, c, P, W, flat):  # pragma: no cover - compiled
+    """One impact of a compiled family (0 <= zeta < `_branches._GJ_ZETA_MAX`).
+
+    c = (m, q_s, u_s, n_lead, has_gj, b, rtol, round_rel, beta, ts_ulps, n_gj, n_ts): the
+    first four of the family's `NodeKernel`, whether the plan has a Gauss-Jacobi rule, its
+    scalars (`_one_call._Plan.gj`; placeholders without one), beta and the round-off ulps
+    of the tanh-sinh rule of `COMPILED_LEVEL` (`_one_call._ts_args`), and the sizes of the
+    two rules; ``flat`` holds their node arrays one after the other (d, d^-beta of the
+    Gauss-Jacobi nodes, then the tanh-sinh d, w, w_diff), ``W`` the Gauss-Jacobi weights:
+    seven arguments instead of sixteen (numba unboxes each one on every call).
+    Gauss-Jacobi first when the plan has its rule, then, as `_one_call.fused_impact`
+    does, the tanh-sinh rule on the common rows. Returns the status (`_one_call._OK` when it answered; the rest is then meaningless
     otherwise), the six `Branches` fields, q_max, U'(q_max), wd, s_peak, s_end, the two
     restitutions and U''(q_max)."""
     # VirtualOscillator.__init__ and .zero_force_stretch, the same operations.
@@ -95,10 +98,16 @@ def _family_impact(
     lz = 2.0 * math.atan2(zeta, wd) / wd if zeta > 0.0 else 0.0
     prm[6] = lz
     prm[7], prm[8], prm[9], prm[10] = q_top, c[1], c[2], c[3]
+    n_gj, n_ts = int(c[10]), int(c[11])
+    d, fac = flat[:n_gj], flat[n_gj : 2 * n_gj]
+    t0 = 2 * n_gj
+    ts_d, ts_w = flat[t0 : t0 + n_ts], flat[t0 + n_ts : t0 + 2 * n_ts]
+    ts_wd = flat[t0 + 2 * n_ts : t0 + 3 * n_ts]
+    beta, ts_ulps = c[8], c[9]
     o = np.zeros(_OUT)
     o[8] = _LEVEL_UP
     if c[4] == 1.0:
-        _GJ(prm, P, d, fac, W, b, rtol, round_rel, o)
+        _GJ(prm, P, d, fac, W, c[5], c[6], c[7], o)
     if o[8] != _OK:
         # fused_impact: the tanh-sinh rows only where the zero-force stretch is common.
         common = True
@@ -135,26 +144,31 @@ def _family_entry(gauss_jacobi, tanh_sinh, ev, entry: str | None, cache: bool):
     return fn
 
 
-def family_call(plan):
-    """(the compiled whole-impact call of a `_one_call` plan, the arguments after (v0,
-    zeta, q_top, c)), or None when the family has no compiled evaluator. Disk-cached as
-    the plan's kernels are: the table form always, an expression when its node loop came
-    from the compile cache."""
+def family_call(plan, m: float):
+    """(the compiled whole-impact call of a `_one_call` plan for mass m, the arguments
+    after (v0, zeta, q_top): c, P, W and the flat node arrays of `_family_impact`), or None
+    when the family has no compiled evaluator. Disk-cached as the plan's kernels are: the
+    table form always, an expression when its node loop came from the compile cache."""
     k = plan.kernel
     if k.ev is None:
         return None
     if plan.gj is not None:
-        gj = plan.gj
+        d, fac, W, b, rtol, round_rel = plan.gj
+        has_gj = 1.0
     else:  # placeholders of the Gauss-Jacobi arguments (has_gj = 0: not called)
-        gj = (_NO_NODES, _NO_NODES, _NO_WEIGHTS, 0.0, 0.0, 0.0)
+        d, fac, W, b, rtol, round_rel = _NO_NODES, _NO_NODES, _NO_WEIGHTS, 0.0, 0.0, 0.0
+        has_gj = 0.0
     ts_d, ts_w, ts_wd, beta, ts_ulps = _ts_args(plan, COMPILED_LEVEL)
-    args = (k.P, *gj, ts_d, ts_w, ts_wd, beta, float(ts_ulps))
+    c = np.array(
+        [m, k.q_s, k.u_s, k.n_lead, has_gj, b, rtol, round_rel, beta, ts_ulps, d.size, ts_d.size]
+    )
+    flat = np.concatenate([d, fac, ts_d, ts_w, ts_wd])
     if k.terms:
         fn = _family_entry(plan.gauss_jacobi, plan.tanh_sinh, k.ev, None, True)
     else:
         entry = getattr(k.nodes, "_hcv_entry", None)
         fn = _family_entry(plan.gauss_jacobi, plan.tanh_sinh, k.ev, entry, entry is not None)
-    return fn, args
+    return fn, (c, k.P, np.ascontiguousarray(W), flat)
 
 
 _NO_NODES = np.zeros(1)

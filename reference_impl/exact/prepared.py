@@ -102,12 +102,9 @@ class PreparedImpact:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
         elif self._plan is not None:
-            call = family_call(self._plan)
+            call = family_call(self._plan, self.m)
             if call is not None:
-                self._family, rest = call
-                k = self._plan.kernel
-                has_gj = 1.0 if self._plan.gj is not None else 0.0
-                self._args = (np.array([self.m, k.q_s, k.u_s, k.n_lead, has_gj]), *rest)
+                self._family, self._args = call
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
