@@ -113,15 +113,16 @@ def _terms_eval(q, P):  # pragma: no cover - compiled
     du = 0.0
     d2u = 0.0
     d3u = 0.0
+    iq = 1.0 / q  # one division for the second and third derivatives of every power term
     for i in range(P.shape[0]):
         if P[i, 0] == _TERM_POWER:
             k, n = P[i, 1], P[i, 2]
             f = k * _power(q, n - 1.0, int(P[i, 3]))  # this term's U'
             du += f
             u += f * q / n
-            f2 = (n - 1.0) * f / q
+            f2 = (n - 1.0) * f * iq
             d2u += f2
-            d3u += (n - 2.0) * f2 / q
+            d3u += (n - 2.0) * f2 * iq
         else:
             kn, alpha, a, c0 = P[i, 1], P[i, 2], P[i, 3], P[i, 4]
             v = c0 * q * q * (a - q / 3.0)
