@@ -69,7 +69,7 @@ from reference_impl.exact._sums import (
 )
 from reference_impl.potentials.base import Potential
 
-__all__ = ["curvature", "fused_impact", "gauss_jacobi_impact"]
+__all__ = ["conditioning_at", "curvature", "fused_impact", "gauss_jacobi_impact"]
 
 # Rule sizes compared on the compiled families, and the largest substitution order
 # b (d = t^b) tried; larger b pushes the rule's singularities in t toward [0, 1]
@@ -363,6 +363,25 @@ def fused_impact(pot: Potential, m: float, osc: VirtualOscillator, q_top: float)
         return _result(out) if out[8] == _OK else None
 
     return level_up(run)
+
+
+# Relative accuracy of U in ulps assumed by the conditioning term of `solve._conditioning`
+# (the potentials' contract: "a few ulps").
+_NODE_ULPS_U = 16.0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def conditioning_at(m, v0, zeta, s_peak, d2, f_max):  # pragma: no cover - compiled
+    """`solve._conditioning` given U''(q_max) = d2: U(q_max) from the oscillator's peak,
+    c = |U U''| / U'^2, times _NODE_ULPS_U ulps (inf when c is not finite). Compiled, so
+    that `solve_impact` and the prepared call's kernel (`_prepared_kernel`) charge the
+    very same number."""
+    xp = v0 * math.exp(-zeta * s_peak)
+    u = 0.5 * m * (xp * xp)
+    c = abs(u * d2) / (f_max * f_max) if f_max > 0.0 else np.inf
+    if not math.isfinite(c):
+        c = np.inf
+    return _NODE_ULPS_U * _EPS * c
 
 
 def curvature(pot: Potential, q: float) -> float | None:

@@ -31,7 +31,7 @@ import numpy as np
 
 from reference_impl._jit import specialise
 from reference_impl.exact._branches import _LEVEL_UP_RTOL, _NEGLIGIBLE_SHARE, COMPILED_LEVEL
-from reference_impl.exact._one_call import _OK, _OUT, _ts_args
+from reference_impl.exact._one_call import _OK, _OUT, _ts_args, conditioning_at
 from reference_impl.exact._power_kernel import OUT_SIZE, power_impact
 
 __all__ = ["family_call", "power_call"]
@@ -40,9 +40,11 @@ __all__ = ["family_call", "power_call"]
 # family's Gauss-Jacobi and tanh-sinh kernels and its evaluator (U, U', U'', U''') at one
 # overlap.
 _GJ = _TS = _EV = None
-# Status of `_family_impact` when the tanh-sinh rung it ran is not the answer `level_up`
-# would keep (a bound above _LEVEL_UP_RTOL, or not a number): Python climbs the ladder.
+# Status of the kernels when the tanh-sinh rung run is not the answer `level_up` would
+# keep (a bound above _LEVEL_UP_RTOL, or not a number): Python climbs the ladder; and
+# `_family_impact`'s last field when neither rule answered (that, or any refusal).
 _LEVEL_UP = -1.0
+_UNANSWERED = -1.0
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -78,7 +80,7 @@ def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
 def _family_impact(v0, zeta, q_top, c, P, W, flat):  # pragma: no cover - compiled
     """One impact of a compiled family (0 <= zeta < `_branches._GJ_ZETA_MAX`).
 
-    c = (m, q_s, u_s, n_lead, has_gj, b, rtol, round_rel, beta, ts_ulps, n_gj, n_ts): the
+    c = (m, q_s, u_s, n_lead, has_gj, b, rtol, round_rel, beta, ts_ulps, n_gj, n_ts, ...): the
     first four of the family's `NodeKernel`, whether the plan has a Gauss-Jacobi rule, its
     scalars (`_one_call._Plan.gj`; placeholders without one), beta and the round-off ulps
     of the tanh-sinh rule of `COMPILED_LEVEL` (`_one_call._ts_args`), and the sizes of the
@@ -86,9 +88,16 @@ def _family_impact(v0, zeta, q_top, c, P, W, flat):  # pragma: no cover - compil
     Gauss-Jacobi nodes, then the tanh-sinh d, w, w_diff), ``W`` the Gauss-Jacobi weights:
     seven arguments instead of sixteen (numba unboxes each one on every call).
     Gauss-Jacobi first when the plan has its rule, then, as `_one_call.fused_impact`
-    does, the tanh-sinh rule on the common rows. Returns the status (`_one_call._OK` when it answered; the rest is then meaningless
-    otherwise), the six `Branches` fields, q_max, U'(q_max), wd, s_peak, s_end, the two
-    restitutions and U''(q_max)."""
+    does, the tanh-sinh rule on the common rows; then what `solve_impact` does with the
+    branches: the restitutions, the conditioning charge (`_one_call.conditioning_at` at
+    U''(q_max) of the family's evaluator), the sums and the bound and range checks (c[12],
+    c[13]: `solve.RTOL_STATED` and the smallest normal float).
+
+    Returns the fields of `ImpactSolution` as `power_call` does: q_max, U'(q_max), the
+    contact time, restitution, the zero-force time and restitution, the two bounds, the
+    peak time, wd, s_peak, s_end, then 1.0 (answered), 0.0 (a check refused:
+    `solve_impact` raises it) or _UNANSWERED (the rest is meaningless).
+    """
     # VirtualOscillator.__init__ and .zero_force_stretch, the same operations.
     wd = math.sqrt((1.0 - zeta) * (1.0 + zeta))
     sp = math.atan2(wd, zeta) / wd
@@ -125,13 +134,31 @@ def _family_impact(v0, zeta, q_top, c, P, W, flat):  # pragma: no cover - compil
                     o[8] = _LEVEL_UP
         else:
             o[8] = _LEVEL_UP
-    rest = rest_zf = d2 = 0.0
-    if o[8] == _OK:
-        # solve_impact's restitution and VirtualOscillator.restitution_zero_force.
-        rest = math.exp(-math.pi * zeta / wd)
-        rest_zf = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
-        d2 = _EV(o[6], P)[2]
-    return (o[8], o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], wd, sp, s_end, rest, rest_zf, d2)
+    if o[8] != _OK:
+        z = 0.0
+        return (z, z, z, z, z, z, z, z, z, z, z, z, _UNANSWERED)
+    # solve_impact's restitution and VirtualOscillator.restitution_zero_force.
+    rest = math.exp(-math.pi * zeta / wd)
+    rest_zf = math.exp(-2.0 * zeta * sp) if zeta > 0.0 else 1.0
+    rise, e_rise, mid, e_mid, fall, e_fall = o[0], o[1], o[2], o[3], o[4], o[5]
+    q_max, f_max = o[6], o[7]
+    # solve._charge_conditioning: U''(q_max) by the same evaluator, the same charge.
+    cond = conditioning_at(c[0], v0, zeta, sp, _EV(q_max, P)[2], f_max)
+    if cond > 0.0:
+        e_rise, e_mid, e_fall = e_rise + cond * rise, e_mid + cond * mid, e_fall + cond * fall
+    t, e, t_zf, e_zf = rise + fall, e_rise + e_fall, rise + mid, e_rise + e_mid
+    # solve._check_bound (both times are finite below zeta = 1) and _check_normal.
+    rtol, tiny = c[12], c[13]
+    ok = (
+        e <= rtol * t
+        and e_zf <= rtol * t_zf
+        and t < np.inf
+        and t_zf < np.inf
+        and q_max >= tiny
+        and f_max >= tiny
+        and t >= tiny
+    )
+    return (q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, 1.0 if ok else 0.0)
 
 
 @lru_cache(maxsize=64)
@@ -144,10 +171,11 @@ def _family_entry(gauss_jacobi, tanh_sinh, ev, entry: str | None, cache: bool):
     return fn
 
 
-def family_call(plan, m: float):
+def family_call(plan, m: float, rtol_stated: float, tiny: float):
     """(the compiled whole-impact call of a `_one_call` plan for mass m, the arguments
     after (v0, zeta, q_top): c, P, W and the flat node arrays of `_family_impact`), or None
-    when the family has no compiled evaluator. Disk-cached as the plan's kernels are: the
+    when the family has no compiled evaluator; rtol_stated and tiny: the bound and range
+    of `solve_impact`'s checks. Disk-cached as the plan's kernels are: the
     table form always, an expression when its node loop came from the compile cache."""
     k = plan.kernel
     if k.ev is None:
@@ -161,6 +189,7 @@ def family_call(plan, m: float):
     ts_d, ts_w, ts_wd, beta, ts_ulps = _ts_args(plan, COMPILED_LEVEL)
     c = np.array(
         [m, k.q_s, k.u_s, k.n_lead, has_gj, b, rtol, round_rel, beta, ts_ulps, d.size, ts_d.size]
+        + [rtol_stated, tiny]
     )
     flat = np.concatenate([d, fac, ts_d, ts_w, ts_wd])
     if k.terms:

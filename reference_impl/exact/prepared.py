@@ -102,7 +102,7 @@ class PreparedImpact:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
         elif self._plan is not None:
-            call = family_call(self._plan, self.m)
+            call = family_call(self._plan, self.m, RTOL_STATED, _TINY)
             if call is not None:
                 self._family, self._args = call
 
@@ -165,13 +165,33 @@ class PreparedImpact:
         if off:
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
-            v = self._family(v0, zeta, q_top, *self._args)
-            if v[0] == _OK:
-                return self._family_result(v0, zeta, v)
+            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = self._family(
+                v0, zeta, q_top, *self._args
+            )
+            if ok == 1.0:
+                return _solution(
+                    v0,
+                    m,
+                    zeta,
+                    pot,
+                    q_max,
+                    f_max,
+                    t,
+                    rest,
+                    t_zf,
+                    rest_zf,
+                    e,
+                    e_zf,
+                    (wd, sp, s_end),
+                    rise,
+                )
+            if ok == 0.0:  # a check refused: solve_impact raises it
+                return solve_impact(pot, m, v0, zeta)
         return self._fused(v0, zeta, q_top)
 
     def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
-        """`solve_impact`'s result from `family_call`'s output (conditioning charged as by
+        """`solve_impact`'s result from the Python ladder's branches (`_fused`; what the
+        family kernel does itself after its rules; conditioning charged as by
         `solve._charge_conditioning`; any bound or range refusal goes to `solve_impact`,
         which raises it)."""
         pot, m = self.potential, self.m

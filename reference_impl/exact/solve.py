@@ -30,6 +30,7 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._branches import dq_dx
+from reference_impl.exact._one_call import conditioning_at as _conditioning_at
 from reference_impl.exact._one_call import curvature
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
@@ -68,9 +69,7 @@ def __getattr__(name: str):
 # table), so this refuses only what they cannot resolve, e.g. an ill-conditioned
 # turning point (see `_conditioning`).
 RTOL_STATED = 1e-12
-# Relative accuracy of U in ulps assumed by the conditioning term (the potentials'
-# contract: "a few ulps"), and the machine epsilon.
-_NODE_ULPS_U = 16.0
+# The machine epsilon.
 _EPS = float(np.finfo(float).eps)
 # Smallest normal float64: energies, overlaps, forces and times below it have lost
 # relative precision (subnormal) or underflowed to 0 (issue 22).
@@ -303,18 +302,6 @@ def _conditioning(
         with np.errstate(all="ignore"):
             d2 = float(pot._d2U(np.array([q_max]))[0])
     return _conditioning_at(m, osc.v0, osc.zeta, osc.s_peak, d2, f_max)
-
-
-def _conditioning_at(
-    m: float, v0: float, zeta: float, s_peak: float, d2: float, f_max: float
-) -> float:
-    """`_conditioning` given U''(q_max) = d2 (also the prepared call's, which gets d2 from
-    its compiled call): U(q_max) from the oscillator's peak, c = |U U''| / U'^2."""
-    u = 0.5 * m * (v0 * math.exp(-zeta * s_peak)) ** 2
-    c = abs(u * d2) / (f_max * f_max) if f_max > 0 else math.inf
-    if not math.isfinite(c):
-        c = math.inf
-    return _NODE_ULPS_U * _EPS * c
 
 
 def _charge_conditioning(br, pot: Potential, m: float, osc, q_max: float, f_max: float):
