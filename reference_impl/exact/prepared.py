@@ -11,11 +11,11 @@ packed in arrays); each call then makes one compiled call (`_prepared_kernel`):
 * the other compiled families: `family_call`, the oscillator, the family's
   Gauss-Jacobi kernel of `_one_call` (the first call `solve_impact`'s `fused`
   strategy makes) and, when it refuses, the first tanh-sinh rung of the fused
-  strategy, the restitutions and U''(q_max); the conditioning charge
-  (`solve._conditioning_at`) and the checks are a few float operations here.
-  When that rung would be climbed past (or anything else refuses), the fused
-  kernel (`_one_call.fused_impact`: the whole tanh-sinh ladder) runs as in
-  `solve_impact`.
+  strategy, the restitutions, the conditioning charge (`_one_call.conditioning_at`,
+  the function `solve_impact` calls), the sums and the bound and range checks, in that
+  one compiled call. When that rung would be climbed past (or anything else refuses),
+  the fused kernel (`_one_call.fused_impact`: the whole tanh-sinh ladder) runs as in
+  `solve_impact`. Per speed, the validated turning point and the split decision are kept.
 
 The result is built from a dict (`ImpactSolution._fast`); its oscillator is kept as
 (wd, s_peak, s_end) and built on first use (`ImpactSolution.__getattr__`), with the
