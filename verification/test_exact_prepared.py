@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from reference_impl import HCVInputError, PowerLaw, prepare, solve_impact
+from reference_impl import Expression, HCVInputError, PowerLaw, prepare, solve_impact
 from reference_impl.studies.workprecision import family_scenes
 from verification.assertions import assert_true
 
@@ -48,10 +48,20 @@ def _uses_of_the_oscillator(got, want) -> dict:
     return diff
 
 
+# A compiled family without a Gauss-Jacobi rule (its sympy form is not a sum of
+# constants times powers of q): the prepared call's tanh-sinh rung.
+NO_GJ = ("expression without a Gauss-Jacobi rule", "k*q**2*(1 + q/a)**0.5", 1.0e9, 1.0e-3)
+
+
+def _no_gj_expression():
+    return Expression(NO_GJ[1], k=NO_GJ[2], a=NO_GJ[3])
+
+
 def _scenes():
     scenes = [(sc.name, sc.potential, sc.m, sc.v0) for sc in family_scenes()]
     scenes.append(("power-law p = 1 (Hooke)", PowerLaw(2.0e4, 1.0), 0.3, 2.0))
     scenes.append(("power-law p = 3", PowerLaw(1.0e12, 3.0), 0.01, 4.0))
+    scenes.append((NO_GJ[0], _no_gj_expression(), 0.0041, 1.0))
     return scenes
 
 
@@ -116,4 +126,34 @@ def test_prepare_refuses_what_solve_impact_refuses():
             should=str(want.value),
             claim="prepare",
             call=f"prepare(hertz, 0.01)({v0}, {zeta})",
+        )
+
+
+def test_prepare_solves_every_compiled_family_in_its_compiled_call(monkeypatch):
+    """The families whose Gauss-Jacobi rule refuses (the expression scene: a higher term
+    > _GJ_RATIO_MAX times the leading one at q_max) or that have none answer from the
+    prepared call's one compiled call (its tanh-sinh rung), not the Python ladder."""
+    from reference_impl.exact import prepared
+
+    scenes = {sc.name: sc for sc in family_scenes()}
+    cases = [
+        ("expression-damped", scenes["expression-damped"].potential, 0.0041, 1.0),
+        (NO_GJ[0], _no_gj_expression(), 0.0041, 1.0),
+    ]
+    for name, pot, m, v0 in cases:
+        solver = prepare(pot, m)
+        want = _fields(solve_impact(pot, m, v0, 0.2))
+        with monkeypatch.context() as mp:  # neither the Python ladder nor solve_impact
+            mp.setattr(prepared.PreparedImpact, "_fused", None)
+            mp.setattr(prepared, "solve_impact", None)
+            try:
+                got = _fields(solver(v0, 0.2))
+            except TypeError as exc:  # calling None: the compiled call did not answer
+                got = f"not answered by the compiled call ({exc})"
+        assert_true(
+            got == want,
+            got=f"{got}",
+            should=f"{want}, from the compiled call",
+            claim="prepare",
+            call=f"prepare({name}, m={m})({v0}, 0.2)",
         )
