@@ -293,22 +293,69 @@ def _cap_newton(w, a, q_hi):  # pragma: no cover - compiled
     return q
 
 
+# alpha = 1/2 (the default of both caps): V = t^(2/3) = r^2 with r = cbrt(t), t = u (alpha + 1)
+# / Kn. pow(t, 2/3) costs a libm call per node, and its exponent is the float fl(2/3),
+# 3.7e-17 off, which moves V by t^(3.7e-17): up to 112 eps for |ln t| ~ 700, 3-7 eps for
+# t ~ 1e-11 (the scenes'). Instead r starts from t's bits (its exponent divided by 3:
+# within 6 %), then two Halley steps (6e-2 -> ~1e-4 -> ~1e-13) and a Newton step, whose
+# size confirms it (<= _CBRT_STEP_MAX of r) and leaves r within an ulp: V within 1.8 eps
+# of t^(2/3) (verification/test_exact_cap_nodes.py). Arithmetic only, so it vectorises.
+_CBRT_BIAS = 0x2AA0000000000000  # 2/3 of the bits of 1.0: the bits of cbrt(1) = 1
+_CBRT_STEP_MAX = 1e-10  # the last step's size: ~1e-13 of r; 1e-10 leaves ~1e-20
+# t outside (_CBRT_T_MIN, 1 / _CBRT_T_MIN): pow (subnormal t has no such bits; near the
+# top, r^3 and 2 r^3 + t would overflow).
+_CBRT_T_MIN = 1e-290
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
+    """V = (u (alpha + 1) / Kn)^(1 / (alpha + 1)) at every node into v (``scratch`` as
+    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow."""
+    to_v = (alpha + 1.0) / kn
+    n = x.shape[0]
+    for j in range(n):
+        xj = x[j]
+        v[j] = to_v * (0.5 * m * xj * xj)  # t
+    rest = n
+    if alpha == 0.5:
+        ti = v.view(np.int64)
+        ri = scratch.view(np.int64)
+        for j in range(n):
+            ri[j] = np.int64(np.float64(ti[j]) * (1.0 / 3.0)) + _CBRT_BIAS
+        rest = 0
+        for j in range(n):
+            t = v[j]
+            r = scratch[j]
+            r3 = r * r * r
+            r = r * ((r3 + 2.0 * t) / (2.0 * r3 + t))
+            r3 = r * r * r
+            r = r * ((r3 + 2.0 * t) / (2.0 * r3 + t))
+            dr = (r * r * r - t) / (3.0 * r * r)
+            r = r - dr
+            ok = (t > _CBRT_T_MIN) & (t < 1.0 / _CBRT_T_MIN) & (abs(dr) <= _CBRT_STEP_MAX * r)
+            v[j] = r * r if ok else -1.0
+            rest += not ok
+    if rest > 0:
+        e_inv = 1.0 / (alpha + 1.0)
+        for j in range(n):
+            if alpha != 0.5 or v[j] < 0.0:
+                xj = x[j]
+                v[j] = (to_v * (0.5 * m * xj * xj)) ** e_inv
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _cap_nodes(x, m, q_hi, P, g, qs):  # pragma: no cover - compiled
     """`nodes` for a single cap: V in closed form, q from the cubic, U' = (alpha+1) u V'/V.
 
-    Three passes over the nodes, none depending on another node: the powers V (libm calls),
-    then the cubic by `_cap_root` (arithmetic only, which the compiler vectorises), then
-    `_cap_newton` for the nodes `_cap_root` did not accept (none below y = 1 in practice).
+    Three passes over the nodes, none depending on another node: the powers V
+    (`_cap_powers`), then the cubic by `_cap_root` (arithmetic only, which the compiler
+    vectorises), then `_cap_newton` for the nodes `_cap_root` did not accept (none below
+    y = 1 in practice).
     """
     kn, alpha, a, c0 = P[0, 1], P[0, 2], P[0, 3], P[0, 4]
-    e_inv = 1.0 / (alpha + 1.0)
-    to_v = (alpha + 1.0) / kn
     ia3 = 1.0 / (a * a * a)
     n = x.shape[0]
-    for j in range(n):
-        xj = x[j]
-        qs[j] = (to_v * (0.5 * m * xj * xj)) ** e_inv  # V, until the next pass
+    _cap_powers(x, m, alpha, kn, qs, g)  # V into qs
     rest = 0
     for j in range(n):
         xj = x[j]
@@ -316,7 +363,7 @@ def _cap_nodes(x, m, q_hi, P, g, qs):  # pragma: no cover - compiled
         v = qs[j]
         q, ok = _cap_root(v / c0, a, ia3, q_hi)
         du = (alpha + 1.0) * u * (c0 * q * (2.0 * a - q)) / v
-        g[j] = m * xj / du
+        g[j] = m * xj / du if ok else v  # V kept for the last pass
         qs[j] = q if ok else -1.0
         rest += not ok
     if rest == 0:
@@ -325,7 +372,7 @@ def _cap_nodes(x, m, q_hi, P, g, qs):  # pragma: no cover - compiled
         if qs[j] < 0.0:
             xj = x[j]
             u = 0.5 * m * xj * xj
-            v = (to_v * u) ** e_inv
+            v = g[j]
             q = _cap_newton(v / c0, a, q_hi)
             du = (alpha + 1.0) * u * (c0 * q * (2.0 * a - q)) / v
             g[j] = m * xj / du
