@@ -5,9 +5,10 @@ Here one compiled call does every node of a branch:
 
 * a single ellipsoid or sphere cap, U = Kn / (alpha + 1) V^(alpha + 1) with the
   cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
-  power), q from V by an interpolant of the cubic's root and one Halley step
-  (arithmetic only, no node waiting on another; `_cap_root`), and U' without a
-  second power, U' = (alpha + 1) u V' / V (`_cap_nodes`);
+  power; for alpha = 1/2 a cube root by arithmetic, `_cap_powers`), q from V by an
+  interpolant of the cubic's root and one Halley step (arithmetic only, no node
+  waiting on another; `_cap_root`), and U' without a second power,
+  U' = (alpha + 1) u V' / V (`_cap_nodes`);
 * every other family: a safeguarded Halley iteration on U (`_newton_loop`),
   warm-started from the previous node along the branch by log q against log u to
   second order (slope 1/sigma, sigma = q U' / U, and its rate), inside a bracket [lo, hi] that starts at
