@@ -99,7 +99,8 @@ class PreparedImpact:
         elif self._plan is not None:
             self._family = family_call(self._plan)
             if self._family is not None:
-                self._args = family_constants(
+                # A 1-tuple: the compiled call's arguments after (v0, zeta, q_top).
+                k = family_constants(
                     self.m,
                     self._plan.kernel,
                     self._plan.gj,
@@ -107,6 +108,7 @@ class PreparedImpact:
                     _TINY,
                     _NODE_ULPS_U * _EPS,
                 )
+                self._args = (k,)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -161,7 +163,7 @@ class PreparedImpact:
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
             q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = self._family(
-                v0, zeta, q_top, self._args
+                v0, zeta, q_top, *self._args
             )
             if ok == 1.0:
                 return _solution(
