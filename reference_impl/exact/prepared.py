@@ -10,8 +10,8 @@ packed in arrays); each call then makes one compiled call (`_prepared_kernel`):
   range checks of `solve_impact`;
 * the other compiled families: `family_call`, the oscillator, the family's
   Gauss-Jacobi kernel of `_one_call` (the first call `solve_impact`'s `fused`
-  strategy makes), the restitutions and U''(q_max); the conditioning charge
-  (`solve._conditioning_at`) and the checks are a few float operations here.
+  strategy makes), the restitutions, U''(q_max), the conditioning charge
+  (`solve._conditioning_at`) and the bound and range checks.
   When Gauss-Jacobi refuses, the fused kernel (`_one_call.fused_impact`: the
   tanh-sinh ladder) runs as in `solve_impact`.
 
@@ -36,11 +36,13 @@ from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
 from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
-from reference_impl.exact._prepared_kernel import family_call, power_call
+from reference_impl.exact._prepared_kernel import family_call, family_constants, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.solve import (
+    _EPS,
+    _NODE_ULPS_U,
     _TINY,
     RTOL_STATED,
     ImpactSolution,
@@ -97,9 +99,16 @@ class PreparedImpact:
         elif self._plan is not None:
             self._family = family_call(self._plan)
             if self._family is not None:
-                k = self._plan.kernel
-                c = np.array([self.m, k.q_s, k.u_s, k.n_lead])
-                self._args = (c, k.P, *self._plan.gj)
+                # A 1-tuple: the compiled call's arguments after (v0, zeta, q_top).
+                k = family_constants(
+                    self.m,
+                    self._plan.kernel,
+                    self._plan.gj,
+                    RTOL_STATED,
+                    _TINY,
+                    _NODE_ULPS_U * _EPS,
+                )
+                self._args = (k,)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -153,9 +162,28 @@ class PreparedImpact:
         ):
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
-            v = self._family(v0, zeta, q_top, *self._args)
-            if v[0] == _OK:
-                return self._family_result(v0, zeta, v)
+            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = self._family(
+                v0, zeta, q_top, *self._args
+            )
+            if ok == 1.0:
+                return _solution(
+                    v0,
+                    m,
+                    zeta,
+                    pot,
+                    q_max,
+                    f_max,
+                    t,
+                    rest,
+                    t_zf,
+                    rest_zf,
+                    e,
+                    e_zf,
+                    (wd, sp, s_end),
+                    rise,
+                )
+            if ok != 0.0:  # a bound or range check refused: solve_impact raises it
+                return solve_impact(pot, m, v0, zeta)
         return self._fused(v0, zeta, q_top)
 
     def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
