@@ -15,7 +15,8 @@ import pytest
 from reference_impl import PowerLaw, solve_impacts
 from reference_impl.errors import HCVInputError
 from reference_impl.exact import _law_batch
-from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact._validate import _validated_top
+from reference_impl.exact.general_law import prepare_law, solve_law_impact
 from reference_impl.potentials import SumPotential
 from verification.assertions import assert_true
 
@@ -120,3 +121,41 @@ def test_law_batch_rows_that_never_return():
             claim="solve_impacts",
             call=f"solve_impacts(hertz, {m}, {speeds}, law={law})",
         )
+
+
+@pytest.mark.parametrize(
+    "make",
+    (
+        lambda: PowerLaw(1e9, 1.5),
+        lambda: SumPotential(PowerLaw(3e5, 1.0), PowerLaw(1e9, 1.5), PowerLaw(1e14, 3.7)),
+    ),
+    ids=("hertz", "sum"),
+)
+def test_law_batch_tops_are_each_speeds_own_in_one_inverse(make):
+    """The turning points of a batch come from one inverse of every energy (not one per
+    speed: the serial Python loop that capped two cores), each bit for bit the speed's own
+    `_validated_top` on a fresh potential, whatever the order (rising and falling speeds)."""
+    rng = np.random.default_rng(27)
+    v = 10.0 ** rng.uniform(-3.0, 2.0, 300)
+    law = LAWS[4]
+    prepared = prepare_law(make(), 0.01, law)
+    pot = prepared._plan.potential
+    calls = []
+    inverse = pot._inverse
+    pot._inverse = lambda u: calls.append(np.size(u)) or inverse(u)  # instance attribute
+    got = _law_batch._tops(prepared._plan, prepared, v)
+    want = np.array([_validated_top(make(), float(0.5 * 0.01 * x * x)) for x in v])
+    assert_true(
+        got.tobytes() == want.tobytes(),
+        got=f"tops differ at {np.flatnonzero(got != want)[:3]}",
+        should="each speed's own _validated_top, bit for bit",
+        claim="solve_impacts",
+        call=f"_law_batch._tops({type(pot).__name__}, 300 speeds)",
+    )
+    assert_true(
+        len(calls) <= 2,
+        got=f"{len(calls)} inverse calls (sizes {calls[:4]}...)",
+        should="<= 2 (the check at the largest energy, one vectorised inverse)",
+        claim="solve_impacts",
+        call=f"_law_batch._tops({type(pot).__name__}, 300 speeds)",
+    )
