@@ -30,7 +30,6 @@ def test_batch_kernels_are_parallel():
         batch._gj_batch,
         batch._power_law_fill,
         batch._count_invalid,
-        batch._zeta_factors,
     ):
         assert_true(
             kernel.targetoptions.get("parallel") is True,
