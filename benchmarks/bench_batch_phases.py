@@ -10,7 +10,11 @@ from that bound is the kernels' own parallel efficiency, which only a quiet mach
 measures (`bench_exact`'s batch rows). On a busy machine the serial Python runs with
 caches its neighbours emptied, so s comes out higher than on a quiet one.
 
-Run: ``python -m benchmarks.bench_batch_phases [--calls N] [--json FILE]`` (~1 minute).
+``--fill-chunks`` also times the grid on every core with the fill in numba's equal shares
+(the default) and in chunks handed out as threads free up: on a quiet machine only.
+
+Run: ``python -m benchmarks.bench_batch_phases [--calls N] [--fill-chunks] [--json FILE]``
+(~1 minute).
 """
 
 from __future__ import annotations
@@ -38,6 +42,8 @@ from .bench_exact import (
     LAW_BATCH_N,
 )
 
+# Impacts per chunk of the grid's fill, against numba's equal shares (`--fill-chunks`).
+FILL_CHUNK_TRIED = 2048
 # The prange kernels each workload calls (module, global name): the rest of a call is serial.
 _PARALLEL = (
     (batch, "_count_invalid"),
@@ -133,6 +139,51 @@ def run(calls: int) -> dict:
     }
 
 
+def fill_chunks(calls: int) -> dict:
+    """The grid's wall time on one thread and on every core with the fill in numba's equal
+    shares (chunk 0, the default `batch._FILL_CHUNK`) and handed out in chunks of
+    `FILL_CHUNK_TRIED`, interleaved, median: whether the chunks pay on this machine (a
+    quiet one: on a busy one a neighbour's time slice decides). Every variant's arrays
+    compared bit for bit."""
+    call = _workloads()[1][1]
+    threads, chunk = numba.get_num_threads(), batch._FILL_CHUNK
+    cores = numba.config.NUMBA_NUM_THREADS
+    variants = ((1, 0), (cores, FILL_CHUNK_TRIED), (cores, 0))
+    times: dict[tuple, list[float]] = {v: [] for v in variants}
+    same = True
+    load_before = os.getloadavg()[0]
+    try:
+        ref = None
+        for th, ch in variants:
+            numba.set_num_threads(th)
+            batch._FILL_CHUNK = ch
+            got = call()
+            ref = ref or got
+            same = same and all(got[k].tobytes() == ref[k].tobytes() for k in ref)
+        for _ in range(calls):
+            for th, ch in variants:
+                numba.set_num_threads(th)
+                batch._FILL_CHUNK = ch
+                t0 = time.perf_counter()
+                call()
+                times[(th, ch)].append(time.perf_counter() - t0)
+    finally:
+        numba.set_num_threads(threads)
+        batch._FILL_CHUNK = chunk
+    t1 = statistics.median(times[variants[0]])
+    return {
+        "workload": _workloads()[1][0],
+        "ms": {
+            f"{th} threads, chunk {ch}": statistics.median(t) * 1e3 for (th, ch), t in times.items()
+        },
+        "speedup_chunked": t1 / statistics.median(times[variants[1]]),
+        "speedup_equal_shares": t1 / statistics.median(times[variants[2]]),
+        "bit_identical": same,
+        "load_average_1min": load_before,
+        "load_average_1min_after": os.getloadavg()[0],
+    }
+
+
 def _print(res: dict) -> None:
     print(f"solve_impacts serial share; {res['timing']}, {res['calls']} calls")
     for r in res["rows"]:
@@ -141,6 +192,14 @@ def _print(res: dict) -> None:
             f"{r['workload']}: {r['call_ms_1_thread']:.3f} ms a call ({ks} ms in parallel"
             f" kernels); serial share s = {100 * r['serial_share']:.2f} %,"
             f" Amdahl bound on 2 cores {r['amdahl_bound_2_cores']:.3f}x"
+        )
+    fc = res.get("fill_chunks")
+    if fc:
+        ms = "; ".join(f"{k}: {t:.3f} ms" for k, t in fc["ms"].items())
+        print(
+            f"{fc['workload']}, wall: {ms}; speed-up {fc['speedup_chunked']:.3f}x chunked,"
+            f" {fc['speedup_equal_shares']:.3f}x equal shares (identical: {fc['bit_identical']};"
+            f" load {fc['load_average_1min']:.2f} -> {fc['load_average_1min_after']:.2f})"
         )
     mi = res["machine"]
     print(
@@ -153,11 +212,18 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=30, help="calls per workload (median; >= 5)")
     ap.add_argument("--json", help="also write the result to this JSON file")
+    ap.add_argument(
+        "--fill-chunks",
+        action="store_true",
+        help="also time the grid on every core, fill in equal shares and chunked (wall)",
+    )
     args = ap.parse_args(argv)
     if args.calls < 5:
         print(f"bench_batch_phases: error: --calls {args.calls}: at least 5", file=sys.stderr)
         return 2
     res = run(args.calls)
+    if args.fill_chunks:
+        res["fill_chunks"] = fill_chunks(max(args.calls, 50))
     _print(res)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)

@@ -49,8 +49,11 @@ BATCH_MAX = 10_000_000
 # Rule sizes of the second pass (zeta near 0.9, where (16, 24) do not agree to
 # _GJ_RTOL): measured to agree up to zeta = 0.9 for Hertz.
 _GJ_SIZES_LARGE = (32, 48)
-# Impacts per chunk of `_power_law_fill` (~0.13 ms each).
-_FILL_CHUNK = 2048
+# Impacts per chunk of `_power_law_fill`; 0: numba's equal shares, one per thread. Chunks
+# of 2048 (~0.13 ms each, handed out as threads free up) cost ~1 % on one thread and did
+# not measure faster on two (1.76x against 1.82x, load 2.2; the machine was never quiet):
+# `python -m benchmarks.bench_batch_phases --fill-chunks` compares them.
+_FILL_CHUNK = 0
 # Chunks of a loop over the distinct zetas (~3.5 us each; a chunk costs ~2 us to hand
 # out): about this many, 4 zetas each for a 50-zeta grid, ~6000 for 1e5 distinct ones.
 _ZETA_PARTS = 16
@@ -307,9 +310,7 @@ def _power_law_batch(pot: PowerLaw, m, v, z, zu, beta, out) -> np.ndarray:
     tiny = float(np.finfo(float).tiny)
     todo = np.empty(v.size, dtype=np.bool_)
     bad = np.empty(v.size, dtype=np.int8)
-    # Small chunks handed out as threads free up: a thread that wakes late (tens of us on
-    # a virtual machine) then costs half its delay, not all of it. Rows do not depend on
-    # who fills them.
+    # (rows do not depend on who fills them, nor in which chunks)
     with numba.parallel_chunksize(_chunk(_FILL_CHUNK)):
         left, nbad = _power_law_fill(
             v,
