@@ -94,12 +94,22 @@ def test_law_batch_sum_and_shape():
         )
 
 
-def test_law_batch_refuses_a_bad_speed_as_the_single_call():
-    pot, m = _hertz()
-    with pytest.raises(HCVInputError) as single:
-        solve_law_impact(pot, m, -1.0, LAWS[4])
-    with pytest.raises(HCVInputError) as batch:
-        solve_impacts(pot, m, [1.0, -1.0], law=LAWS[4])
+@pytest.mark.parametrize(
+    "pot, m, speeds, bad",
+    (
+        (PowerLaw(1e9, 1.5), 0.0041, [1.0, -1.0], -1.0),
+        # k = 1e-300: 1.5 E / k overflows from E ~ 1e8 J on (q_max inf). The serial loop
+        # refuses the first such speed in the order given, not the largest: the batch's
+        # one vectorised inverse falls back to the per-speed loop to name it.
+        (PowerLaw(1e-300, 1.5), 1.0, [1.0, 1e5, 2e5], 1e5),
+    ),
+    ids=("negative speed", "no finite turning point"),
+)
+def test_law_batch_refuses_a_bad_speed_as_the_single_call(pot, m, speeds, bad):
+    with pytest.raises(HCVInputError) as single, np.errstate(all="ignore"):
+        solve_law_impact(pot, m, bad, LAWS[4])
+    with pytest.raises(HCVInputError) as batch, np.errstate(all="ignore"):
+        solve_impacts(pot, m, speeds, law=LAWS[4])
     assert str(batch.value) == str(single.value), (
         f"got {batch.value}, should be {single.value} [solve_impacts, law batch refusal]"
     )
