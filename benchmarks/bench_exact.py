@@ -153,6 +153,26 @@ def _prepared(pot, m):
     return prepare(pot, m)
 
 
+def _compiled_only(prep, v0, zeta):
+    """The one compiled call a prepared call makes at (v0, zeta), alone, or None.
+
+    Timed beside the whole call, it says how much of a row's time is compiled work and
+    how much is Python around it (why a goal is or is not in reach). It reads the
+    prepared solver's private state, so it follows `reference_impl.exact.prepared`.
+    """
+    from reference_impl.exact._prepared_kernel import power_call
+    from reference_impl.exact._validate import _validated_top
+
+    if prep._c is not None:
+        c, u, w = prep._c, prep._u, prep._W
+        return lambda: power_call(v0, zeta, c, u, w)
+    if prep._family is None:
+        return None
+    fam, args = prep._family, prep._args
+    q_top = _validated_top(prep.potential, 0.5 * prep.m * v0 * v0)
+    return lambda: fam(v0, zeta, q_top, *args)
+
+
 _UNIVERSAL_KEYS = (
     "contact_time",
     "restitution",
@@ -179,8 +199,11 @@ def _family_row(name, pot, m, v0, blocks):
         "scipy": lambda: scipy_dop853(pot, m, v0, zeta, SCIPY_RTOL),
     }
     prep = _prepared(pot, m)
+    kernel = None if prep is None else _compiled_only(prep, v0, zeta)
     if prep is not None:
         contestants["prepared"] = lambda: prep(v0, zeta)
+    if kernel is not None:
+        contestants["kernel"] = kernel
         identical = prep(v0, zeta) == sol and all(
             getattr(prep(v0, zeta), k) == getattr(sol, k) for k in _UNIVERSAL_KEYS
         )
@@ -220,6 +243,11 @@ def _family_row(name, pot, m, v0, blocks):
         and ours_err <= EQUAL_ERROR_FLOOR
         and pk["at_equal_error"]
     )
+    # By how much, and where the time goes: the compiled call alone (None: the call
+    # took no single compiled path) against the whole prepared call.
+    row["kernel_us"] = t["kernel"] * 1e6 if kernel is not None else None
+    row["time_over_goal"] = fast_us / GOAL_US
+    row["ratio_short_of_goal"] = GOAL_RATIO_UNIVERSAL / ratio
     return row
 
 
@@ -344,6 +372,7 @@ def _batch_rows(blocks, peer_us):
                     cpu1.append(time.process_time() - c0)
         numba.set_num_threads(cores)
         t1, tn = statistics.median(per[1]), statistics.median(per[cores])
+        speedup = t1 / tn
         identical = all(np.array_equal(res[1][k], res[cores][k], equal_nan=True) for k in res[1])
         rows.append(
             {
@@ -353,13 +382,17 @@ def _batch_rows(blocks, peer_us):
                 "cpu_us_per_impact_1_thread": statistics.median(cpu1) / size * 1e6,
                 "us_per_impact_all_threads": tn / size * 1e6,
                 "impacts_per_s": size / tn,
-                "parallel_speedup": t1 / tn,
+                "parallel_speedup": speedup,
                 "bit_identical_to_1_thread": bool(identical),
                 "ratio_vs_peer_single_impact": (
                     None if peer_one is None else peer_one / (tn / size * 1e6)
                 ),
                 "goal": f">= {GOAL_PARALLEL:g}x one thread on 2 cores",
-                "goal_met": bool(identical and t1 / tn >= GOAL_PARALLEL),
+                "goal_met": bool(identical and speedup >= GOAL_PARALLEL),
+                # Amdahl's serial part the speedup implies: S = 1 / (s + (1 - s) / n).
+                "implied_serial_fraction": (
+                    (cores / speedup - 1.0) / (cores - 1.0) if cores > 1 else None
+                ),
                 "load_average_1min": _load(),
             }
         )
@@ -405,6 +438,12 @@ def _numbalsoda_note() -> str:
     return "installed but not benchmarked"
 
 
+def _kernel_note(r: dict) -> str:
+    if r.get("kernel_us") is None:
+        return ""
+    return f" (compiled call alone {r['kernel_us']:.1f} us)"
+
+
 def _print(res: dict) -> None:
     print(f"ours vs compiled DOP853 at equal error; truth: {res['truth']}; {res['timing']}")
     print(
@@ -419,7 +458,7 @@ def _print(res: dict) -> None:
             f"{r['scene']:22s} {r['ours_us']:8.1f} {prep} {r['ours_max_rel_error']:8.1e}"
             f" {r['peer_us']:8.1f} {r['peer_max_rel_error']:8.1e} {r['peer_rtol']:7.0e}"
             f" {ratio:7.1f}x {r['scipy_us']:9.0f}  {r['goal']}: "
-            f"{'met' if r['goal_met'] else 'NOT met'}{best}"
+            f"{'met' if r['goal_met'] else 'NOT met'}{best}{_kernel_note(r)}"
         )
     for r in res["laws"]:
         best = "" if r["peer_at_equal_error"] else " (peer's best)"
@@ -437,6 +476,11 @@ def _print(res: dict) -> None:
             f" {b['us_per_impact_all_threads']:.2f} on {b['threads']}"
             f" ({b['parallel_speedup']:.2f}x, identical: {b['bit_identical_to_1_thread']})"
             f"  {b['goal']}: {'met' if b['goal_met'] else 'NOT met'}"
+            + (
+                ""
+                if b["implied_serial_fraction"] is None
+                else f" (implied serial part {b['implied_serial_fraction']:.1%})"
+            )
         )
     mi = res["machine"]
     print(

@@ -13,8 +13,8 @@ one run, the JSON rewritten after each (a run stopped midway keeps what it measu
    dominates) and a grid 50 x 20000. Wall time, median of blocks interleaved over the
    thread counts; every thread count's arrays compared with one thread's, bit for bit.
 2. ``law``: `solve_impacts(..., law=Hunt-Crossley)` (the general-law batch) likewise, on
-   rising speeds (each a new energy record: a serial validated top per speed) and on
-   the same speeds shuffled.
+   rising speeds (once each a new energy record with a serial validated top per speed;
+   now all tops come from one vectorised inverse) and on the same speeds shuffled.
 3. ``sweep``: the 480-case dt-crit map of `benchmarks.bench_sweep` (16 exponents x 30
    masses) through the engine of ``hcv sweep`` on local clusters of 1, 2, 16, 8, 4
    workers (one numba thread each); `bench_sweep._fit` fits fixed + per worker + per

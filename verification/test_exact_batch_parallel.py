@@ -30,7 +30,6 @@ def test_batch_kernels_are_parallel():
         batch._gj_batch,
         batch._power_law_fill,
         batch._count_invalid,
-        batch._zeta_factors,
     ):
         assert_true(
             kernel.targetoptions.get("parallel") is True,
@@ -68,8 +67,11 @@ def test_solve_impacts_same_bits_on_one_thread_and_all():
 
 def test_unique_zetas_is_numpy_unique():
     v, z = _workload()
+    tiny = float(np.finfo(float).tiny)
     for zs in (z, np.sort(z), z[:1], z[:0], np.full(7, 0.3), np.array([0.2, -0.0, 0.0, 0.2])):
-        zu = batch._unique_zetas(zs)
+        starts = np.empty(zs.size, dtype=np.bool_)
+        batch._count_invalid(np.resize(v, zs.size), zs, 0.0041, tiny, starts)
+        zu = batch._unique_zetas(zs, starts)
         want = np.unique(zs)
         assert_true(
             np.array_equal(zu, want),

@@ -15,7 +15,8 @@ import pytest
 from reference_impl import PowerLaw, solve_impacts
 from reference_impl.errors import HCVInputError
 from reference_impl.exact import _law_batch
-from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.exact._validate import _validated_top
+from reference_impl.exact.general_law import prepare_law, solve_law_impact
 from reference_impl.potentials import SumPotential
 from verification.assertions import assert_true
 
@@ -93,12 +94,22 @@ def test_law_batch_sum_and_shape():
         )
 
 
-def test_law_batch_refuses_a_bad_speed_as_the_single_call():
-    pot, m = _hertz()
-    with pytest.raises(HCVInputError) as single:
-        solve_law_impact(pot, m, -1.0, LAWS[4])
-    with pytest.raises(HCVInputError) as batch:
-        solve_impacts(pot, m, [1.0, -1.0], law=LAWS[4])
+@pytest.mark.parametrize(
+    "pot, m, speeds, bad",
+    (
+        (PowerLaw(1e9, 1.5), 0.0041, [1.0, -1.0], -1.0),
+        # k = 1e-300: 1.5 E / k overflows from E ~ 1e8 J on (q_max inf). The serial loop
+        # refuses the first such speed in the order given, not the largest: the batch's
+        # one vectorised inverse falls back to the per-speed loop to name it.
+        (PowerLaw(1e-300, 1.5), 1.0, [1.0, 1e5, 2e5], 1e5),
+    ),
+    ids=("negative speed", "no finite turning point"),
+)
+def test_law_batch_refuses_a_bad_speed_as_the_single_call(pot, m, speeds, bad):
+    with pytest.raises(HCVInputError) as single, np.errstate(all="ignore"):
+        solve_law_impact(pot, m, bad, LAWS[4])
+    with pytest.raises(HCVInputError) as batch, np.errstate(all="ignore"):
+        solve_impacts(pot, m, speeds, law=LAWS[4])
     assert str(batch.value) == str(single.value), (
         f"got {batch.value}, should be {single.value} [solve_impacts, law batch refusal]"
     )
@@ -120,3 +131,41 @@ def test_law_batch_rows_that_never_return():
             claim="solve_impacts",
             call=f"solve_impacts(hertz, {m}, {speeds}, law={law})",
         )
+
+
+@pytest.mark.parametrize(
+    "make",
+    (
+        lambda: PowerLaw(1e9, 1.5),
+        lambda: SumPotential(PowerLaw(3e5, 1.0), PowerLaw(1e9, 1.5), PowerLaw(1e14, 3.7)),
+    ),
+    ids=("hertz", "sum"),
+)
+def test_law_batch_tops_are_each_speeds_own_in_one_inverse(make):
+    """The turning points of a batch come from one inverse of every energy (not one per
+    speed: the serial Python loop that capped two cores), each bit for bit the speed's own
+    `_validated_top` on a fresh potential, whatever the order (rising and falling speeds)."""
+    rng = np.random.default_rng(27)
+    v = 10.0 ** rng.uniform(-3.0, 2.0, 300)
+    law = LAWS[4]
+    prepared = prepare_law(make(), 0.01, law)
+    pot = prepared._plan.potential
+    calls = []
+    inverse = pot._inverse
+    pot._inverse = lambda u: calls.append(np.size(u)) or inverse(u)  # instance attribute
+    got = _law_batch._tops(prepared._plan, prepared, v)
+    want = np.array([_validated_top(make(), float(0.5 * 0.01 * x * x)) for x in v])
+    assert_true(
+        got.tobytes() == want.tobytes(),
+        got=f"tops differ at {np.flatnonzero(got != want)[:3]}",
+        should="each speed's own _validated_top, bit for bit",
+        claim="solve_impacts",
+        call=f"_law_batch._tops({type(pot).__name__}, 300 speeds)",
+    )
+    assert_true(
+        len(calls) <= 2,
+        got=f"{len(calls)} inverse calls (sizes {calls[:4]}...)",
+        should="<= 2 (the check at the largest energy, one vectorised inverse)",
+        claim="solve_impacts",
+        call=f"_law_batch._tops({type(pot).__name__}, 300 speeds)",
+    )

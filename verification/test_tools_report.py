@@ -472,6 +472,29 @@ def test_readme_speed_block_is_the_committed_benchmark():
     )
 
 
+def test_speed_block_says_by_how_much_a_goal_is_not_met():
+    """Issue 27's 'done when': a row whose goal is not met says by how much and why (the
+    compiled call alone; the serial part a batch speedup implies), from the JSON's figures."""
+    from reference_impl.report.readme_table import speed_table
+
+    bench = json.loads((ROOT / "reports" / "bench" / "exact.json").read_text())
+    fam = dict(bench["families"][0], goal_met=False, time_over_goal=1.754, kernel_us=9.04)
+    fam["ratio_short_of_goal"] = 0.5  # the ratio part of the goal is met: not named
+    batch = dict(bench["batch"][0], goal_met=False, implied_serial_fraction=0.1561)
+    text = speed_table({**bench, "families": [fam], "laws": [], "batch": [batch]})
+    for want in (
+        "**not met**: 1.75× the 8 µs, its compiled call alone 9.0 µs |",
+        "**not met**: Amdahl's serial part implied: 16 % of the one-thread time)",
+    ):
+        assert_true(
+            want in text,
+            got=text,
+            should=f"a line containing {want!r}",
+            claim="report",
+            call="speed_table",
+        )
+
+
 def test_committed_report_files_are_in_its_manifest():
     """The main job refuses to overwrite report-named files its manifest does not list, so a
     committed report file missing from reports/.hcv-report-manifest.json breaks ``hcv report``

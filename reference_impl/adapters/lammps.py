@@ -43,7 +43,9 @@ uses the factor of the loaded version. Both tsuji (for p = 3/2) and
 coeff_restitution are therefore exactly the paper's universal law (Theorem 3,
 section 9), whose restitution is v0-independent; coeff_restitution asks for
 zeta_l, so its exact restitution *is* e. The measured prefactors are checked
-against this table by `LammpsAdapter.probe_force` in the test suite.
+against this table by `LammpsAdapter.probe_force` in the test suite. The
+arithmetic of the table (prefactors, their inverses, the calibration below) is
+`reference_impl.adapters._lammps_damping`.
 
 What is asked for each model (protocol ``hcv-adapter/2``): the restitution the
 scene asks (``restitution_asked``), at the end LAMMPS delivers it: the scene's
@@ -77,18 +79,21 @@ import sys
 from importlib import metadata
 
 import numpy as np
-from scipy.optimize import brentq
 
-from reference_impl.adapters._asked import (
-    asked_universal_zeta,
-    delivery_end,
-    invert_decreasing,
-)
+from reference_impl.adapters._asked import asked_universal_zeta, delivery_end
 from reference_impl.adapters._codes_common import (
     default_radius,
     positive_option,
     refuse_scene,
     split_option,
+)
+from reference_impl.adapters._lammps_damping import (
+    calibrate_constant,
+    constant_from_eta_n0,
+    eta_n0_from_constant,
+    tsuji_alpha,
+    tsuji_input,
+    zeta_linear,
 )
 from reference_impl.adapters.base import (
     AdapterScene,
@@ -98,9 +103,7 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.integrators.ivp import integrate_impact
-from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.damping import restitution_from_zeta, zeta_from_restitution
+from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "DAMPING_MODELS",
@@ -114,11 +117,6 @@ __all__ = [
 DAMPING_MODELS = ("velocity", "mass_velocity", "viscoelastic", "tsuji", "coeff_restitution")
 _E_MODELS = ("tsuji", "coeff_restitution")  # the models whose pair_coeff input is an e
 GEOMETRIES = ("wall", "pair")
-# LAMMPS version (YYYYMMDD) from which tsuji's alpha carries the sqrt(2) factor.
-_TSUJI_SQRT2_SINCE = 20260902
-# Calibration of a constant damping: IVP tolerance and relative root tolerance.
-_CALIB_RTOL = 1e-10
-_CALIB_XRTOL = 1e-10
 _CMDARGS = ["-log", "none", "-screen", "none", "-nocite"]
 
 _LAMMPS = None  # the imported module, once loaded
@@ -173,38 +171,6 @@ def load_lammps():
         ) from None
     _LAMMPS = module
     return module
-
-
-def tsuji_alpha(e: float, version: int) -> float:
-    """LAMMPS's tsuji prefactor alpha(e) (Marshall 2009, eq. 53; x sqrt(2) since 2Sep2026)."""
-    a = (
-        1.2728
-        - 4.2783 * e
-        + 11.087 * e**2
-        - 22.348 * e**3
-        + 27.467 * e**4
-        - 18.022 * e**5
-        + 4.8218 * e**6
-    )
-    return a * math.sqrt(2.0) if version >= _TSUJI_SQRT2_SINCE else a
-
-
-def _tsuji_input(zeta: float, p: float, version: int) -> float:
-    """LAMMPS's tsuji ``e`` whose alpha(e) / sqrt(2 (p + 1)) is the damping ratio zeta.
-
-    alpha decreases on [0, 1] (from 1.2728 to 3e-4, x sqrt(2) since 2Sep2026): a zeta
-    outside its range gets the nearest end (e = 1 for no damping, as LAMMPS's own
-    e = 1 does), whose law the adapter declares.
-    """
-    if not zeta:
-        return 1.0
-    scale = math.sqrt(2.0 * (p + 1.0))
-    return invert_decreasing(lambda x: tsuji_alpha(x, version) / scale, zeta, 0.0, 1.0)
-
-
-def _zeta_linear(e: float) -> float:
-    le = math.log(e)
-    return -le / math.sqrt(math.pi**2 + le * le)
 
 
 class LammpsAdapter(ContactAdapter):
@@ -383,7 +349,7 @@ class LammpsAdapter(ContactAdapter):
             if model == "tsuji":
                 e = self.restitution
                 if e is None:
-                    e = _tsuji_input(zeta_t, p, self.version)
+                    e = tsuji_input(zeta_t, p, self.version)
                 alpha = tsuji_alpha(e, self.version)
                 zeta = alpha / math.sqrt(2.0 * (p + 1.0))
                 desc = (
@@ -394,7 +360,7 @@ class LammpsAdapter(ContactAdapter):
                 e = self.restitution
                 if e is None:
                     e = restitution_from_zeta(zeta_t) if zeta_t else 1.0
-                zeta = _zeta_linear(e) if e < 1.0 else 0.0
+                zeta = zeta_linear(e) if e < 1.0 else 0.0
                 desc = f"coeff_restitution e = {e:.6g} ({asked}): universal law, zeta = {zeta:.6g}"
             lam["coef"] = float(e)
             law = ImplementedLaw(
@@ -403,7 +369,7 @@ class LammpsAdapter(ContactAdapter):
         else:
             exponent = 0.5 if model == "viscoelastic" else 0.0
             if self.eta_n0 is not None:
-                c = _coefficient(model, self.eta_n0, m, r_eff)
+                c = constant_from_eta_n0(model, self.eta_n0, m, r_eff)
                 how = "given"
             elif scene.damping != "universal":
                 c, how = 0.0, "no damping asked"
@@ -415,9 +381,9 @@ class LammpsAdapter(ContactAdapter):
             else:
                 v_ref = float(np.median(scene.velocities or (scene.v0,)))
                 e = float(scene.restitution_asked)
-                c = _calibrate(pot, m, e, v_ref, exponent, end)
+                c = calibrate_constant(pot, m, e, v_ref, exponent, end)
                 how = f"calibrated to e = {e:.6g} at the {end} end at v0 = {v_ref:g} m/s"
-            lam["coef"] = float(_eta_n0(model, c, m, r_eff))
+            lam["coef"] = float(eta_n0_from_constant(model, c, m, r_eff))
             law = ImplementedLaw(
                 pot,
                 m,
@@ -558,65 +524,3 @@ class LammpsAdapter(ContactAdapter):
             except Exception:  # pragma: no cover - closing a broken instance
                 pass
             self._lmp = None
-
-
-def _coefficient(model: str, eta_n0: float, m: float, r_eff: float) -> float:
-    """Damping constant c of C = c q^a for a given LAMMPS eta_n0."""
-    if model == "velocity":
-        return eta_n0
-    if model == "mass_velocity":
-        return eta_n0 * m
-    return eta_n0 * m * math.sqrt(r_eff)  # viscoelastic: eta_n0 m_eff sqrt(R_eff delta)
-
-
-def _eta_n0(model: str, c: float, m: float, r_eff: float) -> float:
-    """LAMMPS's eta_n0 for a damping constant c (inverse of `_coefficient`)."""
-    if model == "velocity":
-        return c
-    if model == "mass_velocity":
-        return c / m
-    return c / (m * math.sqrt(r_eff))
-
-
-_CALIBRATIONS: dict[tuple, float] = {}
-
-
-def _calibrate(
-    pot: PowerLaw, m: float, e: float, v_ref: float, exponent: float, end: str = "overlap"
-) -> float:
-    """c such that C = c q^exponent gives restitution e at v_ref at ``end`` (damped ODE,
-    DOP853): "overlap" (q back to 0) or "zero-force" (the total force first 0)."""
-
-    key = (pot.k, pot.p, m, e, v_ref, exponent, end)
-    if key in _CALIBRATIONS:
-        return _CALIBRATIONS[key]
-    q_max = pot.turning_point(0.5 * m * v_ref * v_ref)
-    # First guess: the universal law's C at half the turning point, as a c q^exponent.
-    q_h = 0.5 * q_max
-    u, du = (float(f(np.array([q_h]))[0]) for f in (pot._U, pot._dU))
-    guess = 2.0 * zeta_from_restitution(e, end=end) * math.sqrt(m) * du / math.sqrt(2.0 * u)
-    guess /= q_h**exponent
-
-    def gap(log_c: float) -> float:
-        damp = PowerDamping(math.exp(log_c), exponent)
-        res = integrate_impact(pot, m, v_ref, C=damp, rtol=_CALIB_RTOL)
-        got = res.restitution_zero_force if end == "zero-force" else res.restitution
-        got = got if res.returned and math.isfinite(got) else 0.0
-        return got - e
-
-    lo = hi = math.log(guess)
-    g_lo = g_hi = gap(lo)
-    for _ in range(40):  # widen by factors of 2 until the root is bracketed
-        if g_lo < 0:
-            lo -= math.log(2.0)
-            g_lo = gap(lo)
-        if g_hi > 0:
-            hi += math.log(2.0)
-            g_hi = gap(hi)
-        if g_lo >= 0 >= g_hi:
-            break
-    else:  # pragma: no cover - e in (0, 1) is always reachable
-        raise HCVInputError(f"cannot calibrate a q^{exponent:g} damping to e = {e:g}")
-    root = brentq(gap, lo, hi, xtol=_CALIB_XRTOL, rtol=_CALIB_XRTOL)
-    _CALIBRATIONS[key] = math.exp(root)
-    return _CALIBRATIONS[key]

@@ -35,7 +35,7 @@ GATES = ("both", *VERDICTS)
 # Status of a metric that does not apply to the scene (its kind, damping or number of
 # speeds): not a test at all, unlike "skip" (a test that could not be run).
 NA = "n/a"
-# The delivery metrics (`reference_impl.bench.metrics`); every other metric is implementation.
+# The delivery metrics (`reference_impl.bench._delivery`); every other metric is implementation.
 DELIVERY_METRICS = ("restitution_asked", "contact_time_asked", "peak_force_asked")
 
 

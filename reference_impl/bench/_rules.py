@@ -6,7 +6,8 @@ of textbook velocity Verlet with the implemented law at the same step (`_allowan
 The verdict is read at the worst speed (`Metric._worst`). A metric that cannot decide
 ends as "fail" (a run it needs failed: `_Missing`), "error" (our reference failed:
 `_Internal`) or "skip" (no reference can be run for the declared law: `_Skip`).
-The metrics themselves are in `reference_impl.bench.metrics`.
+The metrics themselves are in `reference_impl.bench.metrics` (the delivery metrics in
+`reference_impl.bench._delivery`).
 """
 
 from __future__ import annotations

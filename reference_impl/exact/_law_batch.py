@@ -3,20 +3,20 @@
 `solve_law_impact` of each speed, bit for bit (test), with the compiled integration of
 the speeds (`general_law._compiled_solve`, the kernel `solve_law_impact` itself calls) run
 by a numba ``prange`` loop, one speed per thread step, so that neither the thread count
-nor the schedule changes a bit (issue 27, goal 4). What is not compiled stays as in
-`solve_law_impact`, one speed after another, in the order given:
+nor the schedule changes a bit (issue 27, goal 4). Each speed's validated top ``qE``
+(`_validate._validated_top`: the speed's own turning point, whatever was solved before)
+comes from one vectorised inverse of every energy, bit for bit the per-speed value (`_tops`;
+a refusal is raised by the per-speed loop, in order, as the serial loop raises it). What
+else is not compiled stays as in `solve_law_impact`, one speed after another, in order:
 
-* each speed's checks and its validated top ``qE`` (`_validate._validated_top`: the
-  speed's own turning point, whatever was solved before; its cache only skips a check
-  already done, so calling it speed by speed in order raises as the loop would),
 * the linear oscillator in closed form and the potentials without a compiled kernel
   (sphere, ellipsoid, expression): the whole impact, by `prepare_law`,
 * an integration that did not finish: `prepare_law`'s call of that speed again, which
   raises the message of `solve_law_impact`; a lost return: `general_law._refuse_lost_return`.
 
-The bounds and fields are then formed from the kernel's rows as `general_law._solve_planned`
-forms them, the same float operations elementwise (`_fill`; the test compares every field
-with `solve_law_impact` bit for bit, so the two cannot drift apart unseen).
+The bounds and fields are formed from each kernel row, in the same loop, as
+`general_law._solve_planned` forms them, the same float operations (`_fields`; the test
+compares every field with `solve_law_impact` bit for bit, so the two cannot drift apart unseen).
 """
 
 from __future__ import annotations
@@ -51,7 +51,6 @@ LAW_FIELDS = (
     "error_time",
     "error_restitution",
 )
-_COL = {name: j for j, name in enumerate(OUT_FIELDS)}
 _EPS = np.finfo(float).eps
 # Speeds per chunk of the parallel loop (~20-200 us each: the hand-out costs far less).
 _CHUNK = 4
@@ -59,15 +58,64 @@ _CHUNK = 4
 _SOLVE = _compiled_solve
 
 
+# Columns of the kernel's row (`OUT_FIELDS`), as integers: globals the loop below reads.
+_Q_MAX, _MAX_FORCE, _PEAK_FORCE = (
+    OUT_FIELDS.index(k) for k in ("q_max", "max_force", "peak_force")
+)
+_T_ZF, _W_ZF, _T_END, _W_END = (OUT_FIELDS.index(k) for k in ("t_zf", "w_zf", "t_end", "w_end"))
+_RETURNS, _STATUS, _STOP = (OUT_FIELDS.index(k) for k in ("returns", "status", "stop"))
+_N_STEPS, _ERR_T, _ERR_ZF, _ERR_W = (
+    OUT_FIELDS.index(k) for k in ("n_steps", "err_t", "err_zf", "err_w")
+)
+# What `_solve_rows` says of a speed: fields formed; not finished within the step budget;
+# lost its return (`STOP_NO_RETURN_Q`): both raised by `_finish`, in the order of the speeds.
+_OK, _FAILED, _LOST = 0, 1, 2
+
+
 # Cached (its first compile takes seconds). It compiles in the kernel of other modules:
 # the cache directory is keyed by the content of every compiled source
 # (`reference_impl._numba_dir._COMPILED_SOURCES`, this file included), so a change of
 # that kernel selects a fresh directory instead of reusing this machine code.
 @numba.njit(cache=True, parallel=True)
-def _solve_rows(v, q_top, ks, ps, cs, es, sc, rows):  # pragma: no cover - compiled
-    """``rows[i]`` = the kernel's `OUT_FIELDS` of speed ``v[i]`` (one speed per thread step)."""
+def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover - compiled
+    """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its `_OK`,
+    `_FAILED` or `_LOST` (one speed per thread step: no bit depends on the threads)."""
     for i in numba.prange(v.shape[0]):
-        rows[i, :] = _SOLVE(v[i], q_top[i], ks, ps, cs, es, sc)
+        flags[i] = _fields(_SOLVE(v[i], q_top[i], ks, ps, cs, es, sc), v[i], q_top[i], out[:, i])
+
+
+@numba.njit(cache=True)
+def _fields(r, v0, q_e, col):  # pragma: no cover - compiled
+    """``col`` = the `LAW_FIELDS` of one speed from its kernel row ``r``, as
+    `general_law._solve_planned` forms them (the same float operations in the same order:
+    the test compares every field with `solve_law_impact` bit for bit); returns its flag.
+
+    Formed here, in the parallel loop, and not by numpy on the whole batch afterwards
+    (~0.25 ms for 2000 speeds, serial: 1 % of the batch on one thread)."""
+    returns = r[_RETURNS] == 1.0
+    nst = 100.0 * np.trunc(r[_N_STEPS])  # 100 * int(n_steps), exact
+    t_scale = q_e / v0
+    t_end = r[_T_END] if returns else math.inf
+    t_zf = r[_T_ZF]
+    tail = t_end if returns else (t_zf if math.isfinite(t_zf) else t_scale)
+    err_t = ERROR_SAFETY * r[_ERR_T] * t_scale + nst * _EPS * tail
+    if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
+        err_t += ERROR_SAFETY * r[_ERR_ZF]
+    col[0] = r[_Q_MAX]
+    col[1] = r[_MAX_FORCE]
+    col[2] = r[_PEAK_FORCE]
+    col[3] = t_end
+    col[4] = -r[_W_END] / v0 if returns else 0.0
+    col[5] = t_zf
+    col[6] = -r[_W_ZF] / v0
+    col[7] = 1.0 if returns else 0.0
+    col[8] = err_t
+    col[9] = ERROR_SAFETY * r[_ERR_W] + nst * _EPS
+    if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):
+        return _FAILED
+    if not returns and r[_STOP] == STOP_NO_RETURN_Q:
+        return _LOST
+    return _OK
 
 
 def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.ndarray]:
@@ -107,12 +155,12 @@ def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.nd
             _store(out, i, prepared(float(v[i])))
         return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
     q_top = _tops(plan, prepared, v)
-    rows = np.empty((v.size, len(OUT_FIELDS)))
+    flags = np.empty(v.size, dtype=np.int8)
     # Speeds cost unequal step counts: small chunks handed out as threads free up, not
     # one equal share each (rows do not depend on who computes them).
     with numba.parallel_chunksize(_CHUNK):
-        _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, rows)
-    _finish(out, v, q_top, rows, prepared)
+        _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, out, flags)
+    _finish(out, v, flags, prepared)
     return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
 
 
@@ -122,63 +170,47 @@ def _store(out: np.ndarray, i: int, sol) -> None:
 
 
 def _tops(plan, prepared, v: np.ndarray) -> np.ndarray:
-    """The ``qE`` of each speed, as `_solve_planned` takes it: `_validated_top` of its energy.
+    """The ``qE`` of each speed, as `_solve_planned` takes it: `_validated_top` of its energy,
+    bit for bit (test), all at once.
 
-    That is the speed's own turning point (no dependence on the speeds before it); it is
-    called speed by speed, in order, so that a refused energy raises as in a serial loop.
-    Cost: one inverse of U per new speed, serial (Hertz ~2.5 us in closed form; a sum of
-    power laws ~0.2 ms by `Potential._numeric_inverse`, which then dominates the batch).
+    `_validated_top(pot, E)` is the speed's own turning point ``pot._inverse([E])[0]``
+    (no dependence on the speeds before it), checked on (0, qE]. The potentials that
+    reach here (``plan.pk``: a power law or a sum of power laws) invert by elementwise
+    numpy (`PowerLaw._inverse` in closed form; `Potential._numeric_inverse`, whose
+    bracket and Newton steps update each element under its own mask), so one call on
+    every energy gives each energy's bits; the check at the largest energy covers every
+    (0, qE] (the cache of `_validated_top` skips the lower ones alike). This was a serial
+    Python loop, one inverse per speed (~3 us for Hertz): 19 % of a 2000-speed Hertz +
+    Hunt-Crossley batch on one thread, which capped two cores at 1.65x.
+
+    Anything refused (a bad speed, a failed check, a non-positive turning point) is
+    raised by the speed-by-speed loop, in order, so that the message is the serial one.
     """
     with np.errstate(all="ignore"):
         energy = 0.5 * plan.m * v * v  # as _solve_planned: (0.5 m v0) v0
     bad = ~(np.isfinite(v) & (v > 0) & np.isfinite(energy) & (energy > 0))
     for i in np.flatnonzero(bad)[:1]:
         prepared(float(v[i]))  # raises solve_law_impact's message for this speed
-    return np.array([_validated_top(plan.potential, float(e)) for e in energy])
+    pot = plan.potential
+    try:
+        _validated_top(pot, float(energy.max()))
+        with np.errstate(all="ignore"):
+            q_top = pot._inverse(energy)
+        # turning_point's own test of each q_max (NoTurningPointError otherwise)
+        refused = not bool(np.all(np.isfinite(q_top) & (q_top > 0)))
+    except HCVInputError:
+        refused = True
+    if refused:
+        return np.array([_validated_top(pot, float(e)) for e in energy])
+    return q_top
 
 
-def _finish(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray, prepared):
-    """``out`` from the kernel's rows, as `general_law._solve_planned` forms one impact
-    (the same float operations in the same order, elementwise)."""
-    with np.errstate(all="ignore"):  # no-return rows carry NaN fields, as in the single call
-        _fill(out, v, q_top, rows)
-    r = {name: rows[:, j] for name, j in _COL.items()}
-    failed = (r["status"] != 0.0) | ~np.isfinite(r["q_max"])
-    lost = ~failed & (r["returns"] != 1.0) & (r["stop"] == STOP_NO_RETURN_Q)
-    # In the order of the speeds, as the serial loop meets them.
+def _finish(out: np.ndarray, v: np.ndarray, flags: np.ndarray, prepared) -> None:
+    """The speeds `_solve_rows` flagged, in order, as the serial loop meets them."""
     plan = prepared._plan
-    for i in np.flatnonzero(failed | lost):
-        if failed[i]:
+    for i in np.flatnonzero(flags):
+        if flags[i] == _FAILED:
             # Not finished within the step budget: the single call raises its message.
             _store(out, i, prepared(float(v[i])))
         else:
             _refuse_lost_return(plan.potential, plan.law, plan.m, float(v[i]))
-
-
-def _fill(out: np.ndarray, v: np.ndarray, q_top: np.ndarray, rows: np.ndarray) -> None:
-    """Every column of ``out``, vectorised: `_solve_planned`'s expressions, term by term."""
-    r = {name: rows[:, j] for name, j in _COL.items()}
-    returns = r["returns"] == 1.0
-    nst = 100.0 * np.trunc(r["n_steps"])  # 100 * int(n_steps), exact
-    t_scale = q_top / v
-    t_end = np.where(returns, r["t_end"], math.inf)
-    tail = np.where(returns, t_end, np.where(np.isfinite(r["t_zf"]), r["t_zf"], t_scale))
-    es = ERROR_SAFETY
-    err_t = es * r["err_t"] * t_scale + nst * _EPS * tail
-    # the zero-force instant's own sensitivity (_general_kernel)
-    err_t = np.where(r["err_zf"] > 0.0, err_t + es * r["err_zf"], err_t)
-    err_w = es * r["err_w"] + nst * _EPS
-    cols = (
-        r["q_max"],
-        r["max_force"],
-        r["peak_force"],
-        t_end,
-        np.where(returns, -r["w_end"] / v, 0.0),
-        r["t_zf"],
-        -r["w_zf"] / v,
-        np.where(returns, 1.0, 0.0),
-        err_t,
-        err_w,
-    )
-    for j, col in enumerate(cols):
-        out[j] = col

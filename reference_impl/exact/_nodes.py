@@ -5,8 +5,10 @@ Here one compiled call does every node of a branch:
 
 * a single ellipsoid or sphere cap, U = Kn / (alpha + 1) V^(alpha + 1) with the
   cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
-  power), q from V by Newton on the cubic (arithmetic only), and U' without a
-  second power, U' = (alpha + 1) u V' / V (`_cap_nodes`);
+  power; for alpha = 1/2 a cube root by arithmetic, `_cap_powers`), q from V by an
+  interpolant of the cubic's root and one Halley step (arithmetic only, no node
+  waiting on another; `_cap_root`), and U' without a second power,
+  U' = (alpha + 1) u V' / V (`_cap_nodes`);
 * every other family: a safeguarded Halley iteration on U (`_newton_loop`, the
   branches of one call advanced node by node together so that their independent
   chains overlap), warm-started from the previous node along the branch by log q against log u to
@@ -225,47 +227,179 @@ def _newton_loop(x, m, q_hi, q_s, u_s, n_lead, P, g, qs):  # pragma: no cover - 
                 cv_pr[r] = 0.5 * dsig * (inv_sig * inv_sig * inv_sig)
 
 
+# The cap's cubic a q^2 - q^3/3 = w, in y = q / a and s = sqrt(w / a^3): y^2 (1 - y/3) = s^2,
+# whose root on 0 < y < 2 is y = s h(s), h analytic for |s| < 2/sqrt(3) (the double root
+# at y = 2). Its closed form y = 4 sin(psi) sin(psi + pi/3), psi = asin(sqrt(3) s / 2) / 3,
+# costs an asin and two sines per node; Newton warm-started from the previous node took
+# 3.6 cubic evaluations per node, each waiting on the last (and every node on the one
+# before). Instead h is its interpolant at the 11 Chebyshev points of 0 <= s <= sqrt(2/3)
+# (y <= 1), in powers of s (generated from the closed form at 40 digits): relative error
+# <= 3.6e-8 there (verification/test_exact_cap_nodes.py). One Halley step from it leaves
+# ~ r^3 / 3 of q for a start off by r (the cubic's Halley constant f'''/(6 f') - (f''/(2 f'))^2
+# is about -1 / (3 y^2) on 0 < y <= 1): 2e-23. Nodes whose start is farther (y > 1, or
+# inputs outside the interpolant's range) are iterated by `_cap_newton`.
+_CAP_H = (
+    1.0000000148361918,
+    0.16666228127286292,
+    0.069656354630884,
+    0.033090852700476514,
+    0.059447884418367986,
+    -0.18633455414159766,
+    0.670336948839665,
+    -1.3436104704983995,
+    1.6864996083627941,
+    -1.1725404474449665,
+    0.36315427680879814,
+)
+_H0, _H1, _H2, _H3, _H4, _H5, _H6, _H7, _H8, _H9, _H10 = _CAP_H
+# s^2 at y = 1, the end of the interpolant's range.
+_CAP_OMEGA_MAX = 2.0 / 3.0
+# Largest Halley step from the interpolant accepted, relative to q: the step is the start's
+# error to first order, and a start off by 2e-6 is left at ~ (2e-6)^3 / 3 = 3e-18 of q (the
+# interpolant's own 3.6e-8 is 55 times smaller). Anything larger is iterated.
+_CAP_STEP_MAX = 2e-6
+_PI_3 = math.pi / 3.0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cap_root(w, a, ia3, q_hi):  # pragma: no cover - compiled
+    """(q, accepted): the root of a q^2 - q^3/3 = w by the interpolant of h and one Halley
+    step (see _CAP_H), ia3 = 1 / a^3; accepted when the start was in the interpolant's range,
+    the step within _CAP_STEP_MAX of q, and 0 < q < q_hi (the bracket of `_cap_newton`)."""
+    om = w * ia3
+    s = math.sqrt(om)
+    h = _H9 + s * _H10
+    h = _H8 + s * h
+    h = _H7 + s * h
+    h = _H6 + s * h
+    h = _H5 + s * h
+    h = _H4 + s * h
+    h = _H3 + s * h
+    h = _H2 + s * h
+    h = _H1 + s * h
+    h = _H0 + s * h
+    q = a * (s * h)
+    p = q * q * (a - q / 3.0) - w
+    dp = q * (2.0 * a - q)
+    step = 2.0 * p * dp / (2.0 * dp * dp - p * (2.0 * (a - q)))
+    qn = q - step
+    ok = (om <= _CAP_OMEGA_MAX) & (abs(step) <= _CAP_STEP_MAX * q) & (qn > 0.0) & (qn < q_hi)
+    return qn, ok
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cap_newton(w, a, q_hi):  # pragma: no cover - compiled
+    """The root of a q^2 - q^3/3 = w by Newton inside the bracket (0, q_hi), from the
+    closed form (see _CAP_H; nan for w outside (0, 4 a^3 / 3], then the bracket's middle),
+    stopped when the step is below _CUBIC_XRTOL of q."""
+    psi = math.asin(math.sqrt(0.75 * (w / (a * a * a)))) / 3.0
+    q = a * (4.0 * math.sin(psi) * math.sin(psi + _PI_3))
+    lo, hi = 0.0, q_hi
+    if not (q > lo and q < hi):
+        q = 0.5 * hi
+    for _ in range(_NEWTON_MAX_ITER):
+        p = q * q * (a - q / 3.0) - w
+        if p < 0.0:
+            lo = q
+        elif p > 0.0:
+            hi = q
+        else:
+            break
+        dp = q * (2.0 * a - q)
+        step = p / dp if dp > 0.0 else np.inf
+        if abs(step) <= _CUBIC_XRTOL * q:
+            break
+        qn = q - step
+        if not (qn > lo and qn < hi):
+            qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
+        q = qn
+    return q
+
+
+# alpha = 1/2 (the default of both caps): V = t^(2/3) = r^2 with r = cbrt(t), t = u (alpha + 1)
+# / Kn. pow(t, 2/3) costs a libm call per node, and its exponent is the float fl(2/3),
+# 3.7e-17 off, which moves V by t^(3.7e-17): up to 112 eps for |ln t| ~ 700, 3-7 eps for
+# t ~ 1e-11 (the scenes'). Instead r starts from t's bits (its exponent divided by 3:
+# within 6 %), then two Halley steps (6e-2 -> ~1e-4 -> ~1e-13) and a Newton step, whose
+# size confirms it (<= _CBRT_STEP_MAX of r) and leaves r within an ulp: V within 1.8 eps
+# of t^(2/3) (verification/test_exact_cap_nodes.py). Arithmetic only, so it vectorises.
+_CBRT_BIAS = 0x2AA0000000000000  # 2/3 of the bits of 1.0: the bits of cbrt(1) = 1
+_CBRT_STEP_MAX = 1e-10  # the last step's size: ~1e-13 of r; 1e-10 leaves ~1e-20
+# t outside (_CBRT_T_MIN, 1 / _CBRT_T_MIN): pow (subnormal t has no such bits; near the
+# top, r^3 and 2 r^3 + t would overflow).
+_CBRT_T_MIN = 1e-290
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
+    """V = (u (alpha + 1) / Kn)^(1 / (alpha + 1)) at every node into v (``scratch`` as
+    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow."""
+    to_v = (alpha + 1.0) / kn
+    n = x.shape[0]
+    for j in range(n):
+        xj = x[j]
+        v[j] = to_v * (0.5 * m * xj * xj)  # t
+    rest = n
+    if alpha == 0.5:
+        ti = v.view(np.int64)
+        ri = scratch.view(np.int64)
+        for j in range(n):
+            ri[j] = np.int64(np.float64(ti[j]) * (1.0 / 3.0)) + _CBRT_BIAS
+        rest = 0
+        for j in range(n):
+            t = v[j]
+            r = scratch[j]
+            r3 = r * r * r
+            r = r * ((r3 + 2.0 * t) / (2.0 * r3 + t))
+            r3 = r * r * r
+            r = r * ((r3 + 2.0 * t) / (2.0 * r3 + t))
+            dr = (r * r * r - t) / (3.0 * r * r)
+            r = r - dr
+            ok = (t > _CBRT_T_MIN) & (t < 1.0 / _CBRT_T_MIN) & (abs(dr) <= _CBRT_STEP_MAX * r)
+            v[j] = r * r if ok else -1.0
+            rest += not ok
+    if rest > 0:
+        e_inv = 1.0 / (alpha + 1.0)
+        for j in range(n):
+            if alpha != 0.5 or v[j] < 0.0:
+                xj = x[j]
+                v[j] = (to_v * (0.5 * m * xj * xj)) ** e_inv
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _cap_nodes(x, m, q_hi, P, g, qs):  # pragma: no cover - compiled
-    """`nodes` for a single cap: V in closed form, q from the cubic, U' = (alpha+1) u V'/V."""
+    """`nodes` for a single cap: V in closed form, q from the cubic, U' = (alpha+1) u V'/V.
+
+    Three passes over the nodes, none depending on another node: the powers V
+    (`_cap_powers`), then the cubic by `_cap_root` (arithmetic only, which the compiler
+    vectorises), then `_cap_newton` for the nodes `_cap_root` did not accept (none below
+    y = 1 in practice).
+    """
     kn, alpha, a, c0 = P[0, 1], P[0, 2], P[0, 3], P[0, 4]
-    e_inv = 1.0 / (alpha + 1.0)
-    to_v = (alpha + 1.0) / kn
-    q_prev, w_prev = -1.0, 0.0
-    for j in range(x.shape[0]):
+    ia3 = 1.0 / (a * a * a)
+    n = x.shape[0]
+    _cap_powers(x, m, alpha, kn, qs, g)  # V into qs
+    rest = 0
+    for j in range(n):
         xj = x[j]
         u = 0.5 * m * xj * xj
-        v = (to_v * u) ** e_inv
-        w = v / c0  # the root of a q^2 - q^3/3 = w
-        if q_prev > 0.0:
-            q = q_prev * math.sqrt(w / w_prev)  # a q^2 dominates: q ~ sqrt(w)
-        else:
-            r = math.sqrt(w / a)
-            q = r * (1.0 + r / (6.0 * a))
-        lo, hi = 0.0, q_hi
-        if not (q > lo and q < hi):
-            q = 0.5 * hi
-        for _ in range(_NEWTON_MAX_ITER):
-            p = q * q * (a - q / 3.0) - w
-            if p < 0.0:
-                lo = q
-            elif p > 0.0:
-                hi = q
-            else:
-                break
-            dp = q * (2.0 * a - q)
-            step = p / dp if dp > 0.0 else np.inf
-            if abs(step) <= _CUBIC_XRTOL * q:
-                break
-            qn = q - step
-            if not (qn > lo and qn < hi):
-                qn = math.sqrt(lo * hi) if lo > 0.0 else hi * _DESCENT
-            q = qn
+        v = qs[j]
+        q, ok = _cap_root(v / c0, a, ia3, q_hi)
         du = (alpha + 1.0) * u * (c0 * q * (2.0 * a - q)) / v
-        g[j] = m * xj / du
-        qs[j] = q
-        if q > 0.0:
-            q_prev, w_prev = q, w
+        g[j] = m * xj / du if ok else v  # V kept for the last pass
+        qs[j] = q if ok else -1.0
+        rest += not ok
+    if rest == 0:
+        return
+    for j in range(n):
+        if qs[j] < 0.0:
+            xj = x[j]
+            u = 0.5 * m * xj * xj
+            v = g[j]
+            q = _cap_newton(v / c0, a, q_hi)
+            du = (alpha + 1.0) * u * (c0 * q * (2.0 * a - q)) / v
+            g[j] = m * xj / du
+            qs[j] = q
 
 
 _newton_terms_nodes = specialise(_newton_loop, cache=True, _EV=_terms_eval)

@@ -49,6 +49,14 @@ BATCH_MAX = 10_000_000
 # Rule sizes of the second pass (zeta near 0.9, where (16, 24) do not agree to
 # _GJ_RTOL): measured to agree up to zeta = 0.9 for Hertz.
 _GJ_SIZES_LARGE = (32, 48)
+# Impacts per chunk of `_power_law_fill`; 0: numba's equal shares, one per thread. Chunks
+# of 2048 (~0.13 ms each, handed out as threads free up) cost ~1 % on one thread and did
+# not measure faster on two (1.76x against 1.82x, load 2.2; the machine was never quiet):
+# `python -m benchmarks.bench_batch_phases --fill-chunks` compares them.
+_FILL_CHUNK = 0
+# Chunks of a loop over the distinct zetas (~3.5 us each; a chunk costs ~2 us to hand
+# out): about this many, 4 zetas each for a 50-zeta grid, ~6000 for 1e5 distinct ones.
+_ZETA_PARTS = 16
 # Fields of the returned dict, as in `ImpactSolution`.
 _FIELDS = (
     "max_penetration",
@@ -62,9 +70,22 @@ _FIELDS = (
 )
 
 
+@numba.njit(cache=True)
+def _zeta_factor_row(z, f):  # pragma: no cover - compiled
+    """``f`` = exp(-zeta s_peak) and the two restitutions (overlap end, zero force) of one
+    zeta, the expressions `solve_impact` evaluates, once per zeta instead of per impact.
+    (-0.0 and 0.0, one entry of the distinct zetas, give the same bits in each.)"""
+    wd = math.sqrt((1.0 - z) * (1.0 + z))
+    sp = math.atan2(wd, z) / wd
+    f[0] = math.exp(-z * sp)
+    f[1] = math.exp(-math.pi * z / wd)
+    f[2] = math.exp(-2.0 * z * sp) if z > 0.0 else 1.0
+
+
 @numba.njit(cache=True, parallel=True)
-def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
-    """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok.
+def _gj_batch(zetas, u, W, beta, zeta_max, rtol, factors, with_factors):  # pragma: no cover
+    """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok;
+    and, with ``with_factors``, ``factors[i]`` = `_zeta_factor_row` of ``zetas[i]``.
 
     The rows of `_branches._fill_rows` and the one Gauss-Jacobi loop (`_sums.gj_rows`
     bound to `_power_kernel._power_values`, as `power_impact` sums them) at c = 1, with
@@ -77,6 +98,8 @@ def _gj_batch(zetas, u, W, beta, zeta_max, rtol):  # pragma: no cover - compiled
     ok = np.zeros(nz, dtype=np.bool_)
     for i in numba.prange(nz):
         z = zetas[i]
+        if with_factors:
+            _zeta_factor_row(z, factors[i])
         if z >= zeta_max:
             continue
         wd = math.sqrt((1.0 - z) * (1.0 + z))
@@ -168,7 +191,8 @@ def solve_impacts(
     v_in = _float_array("v0s", v0s)
     z_in = _float_array("zetas", zetas)
     try:
-        v, z = np.broadcast_arrays(v_in, z_in)
+        # (np.broadcast_arrays costs ~10 us of serial Python: not for arrays of one shape)
+        v, z = (v_in, z_in) if v_in.shape == z_in.shape else np.broadcast_arrays(v_in, z_in)
     except ValueError:
         raise HCVInputError(
             f"solve_impacts: v0s of shape {v_in.shape} and zetas of shape {z_in.shape} do not "
@@ -180,7 +204,8 @@ def solve_impacts(
     v, z = np.ascontiguousarray(v).ravel(), np.ascontiguousarray(z).ravel()
     tiny = float(np.finfo(float).tiny)
     # One compiled pass over every impact; the messages below only when it finds a bad one.
-    if _count_invalid(v, z, m, tiny):
+    starts = np.empty(v.size, dtype=np.bool_)
+    if _count_invalid(v, z, m, tiny, starts):
         _refuse_invalid(v, z, m, tiny)
     _check_exponent(potential)
     # Every entry is written below: by the kernel, or by the one-by-one loop.
@@ -188,7 +213,7 @@ def solve_impacts(
     beta = 2.0 / potential.leading_exponent - 1.0
     if type(potential) is PowerLaw and beta >= _GJ_BETA_MIN and v.size:
         _validated_top(potential, 0.5 * m * float(v.max()) ** 2)
-        rest = _power_law_batch(potential, m, v, z, beta, out)
+        rest = _power_law_batch(potential, m, v, z, _unique_zetas(z, starts), beta, out)
     else:
         rest = np.arange(v.size)
     # One impact at a time, checked and planned once (`prepare`: bit for bit solve_impact).
@@ -200,6 +225,12 @@ def solve_impacts(
     return {key: out[j].reshape(shape) for j, key in enumerate(_FIELDS)}
 
 
+def _chunk(size: int) -> int:
+    """``size`` as the chunk size of a prange loop, on several threads; 0 (numba's equal
+    shares) on one, where there is nothing to balance and chunks cost ~1 % of the fill."""
+    return size if numba.get_num_threads() > 1 else 0
+
+
 def _float_array(name: str, values) -> np.ndarray:
     """``values`` as float64 (`real_array`), without its copy when they already are."""
     if isinstance(values, np.ndarray) and values.dtype == np.float64:
@@ -208,14 +239,16 @@ def _float_array(name: str, values) -> np.ndarray:
 
 
 @numba.njit(cache=True, parallel=True)
-def _count_invalid(v, z, m, tiny):  # pragma: no cover - compiled
-    """How many impacts `_refuse_invalid` would refuse (an integer sum: any thread count)."""
+def _count_invalid(v, z, m, tiny, starts):  # pragma: no cover - compiled
+    """How many impacts `_refuse_invalid` would refuse (an integer sum: any thread count),
+    and ``starts[i]``: does a run of equal zetas start at impact i (`_unique_zetas`)."""
     bad = 0
     for i in numba.prange(v.shape[0]):
         vi, zi = v[i], z[i]
         energy = 0.5 * m * vi * vi
         ok = math.isfinite(vi) and vi > 0.0 and math.isfinite(energy) and energy >= tiny
         bad += 0 if ok and math.isfinite(zi) and zi >= 0.0 else 1
+        starts[i] = i == 0 or zi != z[i - 1]
     return bad
 
 
@@ -235,37 +268,36 @@ def _refuse_invalid(v: np.ndarray, z: np.ndarray, m: float, tiny: float) -> None
         _check_zeta(zi)
 
 
-@numba.njit(cache=True)
-def _run_values(z):  # pragma: no cover - compiled
-    """The first value of each run of equal values of ``z`` (a sweep grid: a few runs)."""
-    vals = np.empty(z.shape[0])
-    vals[0] = z[0]
-    r = 1
-    for i in range(1, z.shape[0]):
-        if z[i] != z[i - 1]:
-            vals[r] = z[i]
-            r += 1
-    return vals[:r]
+def _unique_zetas(z: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``np.unique(z)``, from the first value of each run of equal values (``starts``, of
+    `_count_invalid`): a sweep grid (each zeta repeated over the speeds) sorts its few
+    runs, not every impact. The runs are marked in the parallel pass over the impacts; a
+    serial run-by-run loop was ~50 us per 1e5 impacts (0.7 % of a 50 x 2000 grid)."""
+    return np.unique(z[starts])
 
 
-def _unique_zetas(z: np.ndarray) -> np.ndarray:
-    """``np.unique(z)``, through the runs of equal values first: a sweep grid (each zeta
-    repeated over the speeds) sorts its few runs, not every impact."""
-    return np.unique(_run_values(z)) if z.size else np.unique(z)
-
-
-def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
+def _power_law_batch(pot: PowerLaw, m, v, z, zu, beta, out) -> np.ndarray:
     """Fill ``out`` for the impacts the compiled Gauss-Jacobi loop accepts; returns the
-    indices of the others (for the one-by-one loop)."""
-    # The dimensionless sums depend on zeta only: one evaluation per distinct zeta.
-    zu = _unique_zetas(z)
-    sums_u, ok_u = _gj_batch(zu, *_jacobi_pair(beta), beta, _GJ_ZETA_MAX, _GJ_RTOL)
+    indices of the others (for the one-by-one loop). ``zu``: the distinct zetas, sorted."""
+    # The dimensionless sums depend on zeta only: one evaluation per distinct zeta, with
+    # its factors (`_zeta_factor_row`) in the same parallel loop.
+    per_zeta = np.empty((zu.size, 3))
+    with numba.parallel_chunksize(_chunk(-(-zu.size // _ZETA_PARTS))):
+        sums_u, ok_u = _gj_batch(
+            zu, *_jacobi_pair(beta), beta, _GJ_ZETA_MAX, _GJ_RTOL, per_zeta, True
+        )
     # Damping ratios near 0.9 need larger rules (longer branches): a second pass.
     nodes_u = np.full(zu.size, float(_GJ_SIZES[1]))
     again = np.flatnonzero(~ok_u & (zu < _GJ_ZETA_MAX))
     if again.size:
         s2, ok2 = _gj_batch(
-            zu[again], *_jacobi_pair(beta, _GJ_SIZES_LARGE), beta, _GJ_ZETA_MAX, _GJ_RTOL
+            zu[again],
+            *_jacobi_pair(beta, _GJ_SIZES_LARGE),
+            beta,
+            _GJ_ZETA_MAX,
+            _GJ_RTOL,
+            per_zeta,
+            False,
         )
         sums_u[again[ok2]], ok_u[again[ok2]] = s2[ok2], True
         nodes_u[again[ok2]] = _GJ_SIZES_LARGE[1]
@@ -278,26 +310,28 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
     tiny = float(np.finfo(float).tiny)
     todo = np.empty(v.size, dtype=np.bool_)
     bad = np.empty(v.size, dtype=np.int8)
-    left, nbad = _power_law_fill(
-        v,
-        z,
-        zu,
-        sums_u,
-        _zeta_factors(zu),
-        ok_u,
-        nodes_u,
-        c0,
-        b_hi,
-        b_lo,
-        q_scale,
-        2.0 / n,
-        pot.k,
-        pot.p,
-        tiny,
-        out,
-        todo,
-        bad,
-    )
+    # (rows do not depend on who fills them, nor in which chunks)
+    with numba.parallel_chunksize(_chunk(_FILL_CHUNK)):
+        left, nbad = _power_law_fill(
+            v,
+            z,
+            zu,
+            sums_u,
+            per_zeta,
+            ok_u,
+            nodes_u,
+            c0,
+            b_hi,
+            b_lo,
+            q_scale,
+            2.0 / n,
+            pot.k,
+            pot.p,
+            tiny,
+            out,
+            todo,
+            bad,
+        )
     for j, key in enumerate(("max_penetration", "max_force", "contact_time") if nbad else ()):
         for i in np.flatnonzero(bad & (1 << j))[:1]:
             val = out[_FIELDS.index(key), i]
@@ -307,22 +341,6 @@ def _power_law_batch(pot: PowerLaw, m, v, z, beta, out) -> np.ndarray:
                 "units (e.g. mm, g, ms) so that it is a normal number"
             )
     return np.flatnonzero(todo) if left else np.arange(0)
-
-
-@numba.njit(cache=True, parallel=True)
-def _zeta_factors(zu):  # pragma: no cover - compiled
-    """Per distinct zeta: exp(-zeta s_peak) and the two restitutions (overlap end, zero
-    force), the expressions `solve_impact` evaluates, once per zeta instead of per impact.
-    (-0.0 and 0.0, one entry of ``zu``, give the same bits in each.)"""
-    f = np.empty((zu.shape[0], 3))
-    for j in numba.prange(zu.shape[0]):
-        zz = zu[j]
-        wd = math.sqrt((1.0 - zz) * (1.0 + zz))
-        sp = math.atan2(wd, zz) / wd
-        f[j, 0] = math.exp(-zz * sp)
-        f[j, 1] = math.exp(-math.pi * zz / wd)
-        f[j, 2] = math.exp(-2.0 * zz * sp) if zz > 0.0 else 1.0
-    return f
 
 
 @numba.njit(cache=True, parallel=True)

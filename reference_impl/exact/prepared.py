@@ -38,7 +38,7 @@ from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
 from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
-from reference_impl.exact._prepared_kernel import family_call, power_call
+from reference_impl.exact._prepared_kernel import family_call, family_constants, power_call
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _TOPS_KEPT, _check_exponent, _validated_top
@@ -102,9 +102,10 @@ class PreparedImpact:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
         elif self._plan is not None:
-            call = family_call(self._plan, self.m, RTOL_STATED, _TINY)
-            if call is not None:
-                self._family, self._args = call
+            self._family = family_call(self._plan)
+            if self._family is not None:
+                # A 1-tuple: the compiled call's arguments after (v0, zeta, q_top).
+                self._args = (family_constants(self.m, self._plan, RTOL_STATED, _TINY),)
 
     def __repr__(self) -> str:
         return f"prepare({self.potential!r}, {self.m!r})"
@@ -185,7 +186,7 @@ class PreparedImpact:
                     (wd, sp, s_end),
                     rise,
                 )
-            if ok == 0.0:  # a check refused: solve_impact raises it
+            if ok != 0.0:  # a bound or range check refused: solve_impact raises it
                 return solve_impact(pot, m, v0, zeta)
         return self._fused(v0, zeta, q_top)
 

@@ -25,6 +25,8 @@ The independent variables are dimensionless, s = t / t_s (t_s = q_max / v0) and
 sigma = q / q_max: solve_ivp locates events with an *absolute* tolerance of
 4 eps in the independent variable, a large relative error when t or q is tiny
 (measured 1e-7 in the restitution for q_max ~ 1e-11 m without the scaling).
+The equations of motion in these variables, kept defined at q <= 0, are
+`reference_impl.integrators._contact_rhs`.
 
 Events located on the dense output:
 
@@ -47,6 +49,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from reference_impl.errors import HCVInputError
+from reference_impl.integrators._contact_rhs import Budgeted, ContactRHS
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
 from reference_impl.theory.harmonic_map import HarmonicMap
@@ -66,9 +69,6 @@ _T_MAX_FACTOR = 1000.0
 # as the independent variable: any value well inside (0, 1) keeps away both from
 # v = 0 (at q_max, where dq/dt vanishes) and from the exit.
 _SWITCH_FRACTION = 0.5
-# Sentinel value of the zero-force event function out of contact: positive, so
-# that returning to q <= 0 is never mistaken for a (downward) zero crossing.
-_OUT_OF_CONTACT_FORCE_SIGN = 1.0
 # Phase 3 may fail only when the body creeps towards q = 0 (v -> 0, dt/dq -> inf).
 # Below this fraction of v0 such a failure is reported as "did not return".
 _CREEP_SPEED = 1e-6
@@ -199,73 +199,6 @@ class ImpactSolution:
         return out[:, 0] if t.ndim == 0 else out
 
 
-class _ContactRHS:
-    """Right-hand sides and event functions of the contact, with guards at q <= 0.
-
-    No phase steps past q = 0 (phase 3 ends exactly there), but every
-    evaluation stays defined whatever state a caller passes (Potential.U raises
-    for q < 0):
-
-    * q < 0: out of contact, elastic force, damping and d tau/dt are 0;
-    * q == 0: the potential's limit values; a non-finite limit (C(q) and
-      d tau/dt ~ q^((n-2)/2) for a leading exponent n < 2) is replaced by 0.
-      The singularity is integrable, the value at one point does not change the
-      solution, and the step-size control resolves the neighbourhood.
-    """
-
-    def __init__(self, potential: Potential, m: float, C, hmap: HarmonicMap | None, *, q_s, t_s):
-        self.pot = potential
-        self.m = m
-        self.C = C
-        self.hmap = hmap
-        self.q_s = q_s  # overlap scale (m): sigma = q / q_s in phase 3
-        self.t_s = t_s  # time scale (s): s = t / t_s
-
-    def force(self, q: float) -> float:
-        """Elastic force U'(q) (N), 0 out of contact."""
-        if q < 0:
-            return 0.0
-        f = float(self.pot.dU(q))
-        return f if math.isfinite(f) else 0.0
-
-    def damping(self, q: float) -> float:
-        """Damping coefficient C(q) (kg/s), 0 out of contact or for C = None."""
-        if self.C is None or q < 0:
-            return 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            c = float(np.asarray(self.C(q), dtype=float).reshape(-1)[0])
-        return c if math.isfinite(c) else 0.0
-
-    def rate(self, q: float) -> float:
-        """d tau / dt (virtual s per s), 0 out of contact."""
-        if q < 0:
-            return 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = float(self.hmap.dtau_dt(q))
-        return r if math.isfinite(r) else 0.0
-
-    def total_force(self, q: float, v: float) -> float:
-        """U'(q) + C(q) v (N); a positive sentinel out of contact (see module constants)."""
-        if q <= 0:
-            return _OUT_OF_CONTACT_FORCE_SIGN
-        return self.force(q) + self.damping(q) * v
-
-    # -- phases 1, 2: y = (q, v[, tau]) of s = t / t_s ----------------------------------
-    def in_s(self, s: float, y: np.ndarray) -> list[float]:
-        q, v = float(y[0]), float(y[1])
-        a = -(self.force(q) + self.damping(q) * v) / self.m
-        out = [self.t_s * v, self.t_s * a]
-        return out if self.hmap is None else out + [self.t_s * self.rate(q)]
-
-    # -- phase 3: y = (s, v[, tau]) of sigma = q / q_s -----------------------------------
-    def in_sigma(self, sigma: float, y: np.ndarray) -> list[float]:
-        q, v = sigma * self.q_s, float(y[1])
-        a = -(self.force(q) + self.damping(q) * v) / self.m
-        dq_over_v = self.q_s / v  # dt per unit sigma (s)
-        out = [dq_over_v / self.t_s, a * dq_over_v]
-        return out if self.hmap is None else out + [self.rate(q) * dq_over_v]
-
-
 def _event(fun, *, terminal: bool, direction: int):
     """Wrap ``fun(s, y)`` in a function carrying solve_ivp's event attributes."""
 
@@ -276,7 +209,7 @@ def _event(fun, *, terminal: bool, direction: int):
     return event
 
 
-def _late_zero_force(r3, rhs: _ContactRHS, has_tau: bool):
+def _late_zero_force(r3, rhs: ContactRHS, has_tau: bool):
     """First zero of U' + C v inside the last step of phase 3, or None.
 
     The step that ends at q = 0 cannot show the event to solve_ivp: the event
@@ -337,33 +270,6 @@ def _is_ode_solver(method) -> bool:
     from scipy.integrate import OdeSolver
 
     return isinstance(method, type) and issubclass(method, OdeSolver)
-
-
-class _Budgeted:
-    """`_ContactRHS` with a budget of right-hand-side evaluations (``max_nfev``)."""
-
-    def __init__(self, rhs, budget: int, what: str):
-        self._rhs, self._left, self._budget, self._what = rhs, budget, budget, what
-
-    def __getattr__(self, name):
-        return getattr(self._rhs, name)
-
-    def _spend(self):
-        self._left -= 1
-        if self._left < 0:
-            raise RuntimeError(
-                f"integrate_impact: budget of {self._budget} right-hand-side evaluations "
-                f"(max_nfev) spent before q returned to 0 for {self._what}: the body "
-                "creeps towards q = 0 (an overdamped law?)"
-            )
-
-    def in_s(self, s, y):
-        self._spend()
-        return self._rhs.in_s(s, y)
-
-    def in_sigma(self, sigma, y):
-        self._spend()
-        return self._rhs.in_sigma(sigma, y)
 
 
 def integrate_impact(
@@ -483,13 +389,13 @@ def integrate_impact(
     # (measured 1e-7 in e for q_max ~ 1e-11 m before scaling).
     q_s = q_scale
     t_s = q_scale / v0
-    rhs = _ContactRHS(potential, m, C, hmap, q_s=q_s, t_s=t_s)
+    rhs = ContactRHS(potential, m, C, hmap, q_s=q_s, t_s=t_s)
     if max_nfev is not None:
         if not (isinstance(max_nfev, int) and max_nfev > 0):
             raise HCVInputError(
                 f"integrate_impact: max_nfev must be a positive int or None, got {max_nfev!r}"
             )
-        rhs = _Budgeted(rhs, max_nfev, f"{potential!r}, m = {m!r}, v0 = {v0!r}")
+        rhs = Budgeted(rhs, max_nfev, f"{potential!r}, m = {m!r}, v0 = {v0!r}")
     dense = dense_output or t_eval is not None
     opts = dict(method=method, rtol=rtol, dense_output=dense)
     n = len(scales)

@@ -1,0 +1,170 @@
+"""The cap's node inversion (`reference_impl.exact._nodes`, issue 27 goal 2).
+
+At each quadrature node a cap solves the cubic a q^2 - q^3/3 = w for its overlap. The
+kernel takes V = t^(1 / (alpha + 1)) (for alpha = 1/2 by a cube root of its own,
+`_cap_powers`), starts from a degree-10 interpolant of the root (`_CAP_H`) and takes one
+Halley step (`_cap_root`); a node whose start is not close enough goes to a bracketed
+Newton iteration (`_cap_newton`). These tests hold the interpolant to the error its
+acceptance rule assumes, each root to an ulp of the exact root of the float w, and V to
+two ulps of the exact power (40-digit mpmath).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+from reference_impl.exact._nodes import (
+    _CAP_H,
+    _CAP_OMEGA_MAX,
+    _CAP_STEP_MAX,
+    _cap_nodes,
+    _cap_powers,
+    _cap_root,
+)
+from verification.assertions import assert_less, assert_true
+
+_EPS = float(np.finfo(float).eps)
+# The interpolant's largest relative error, measured on the generator's 20000-point
+# grid (3.55e-8); the acceptance rule assumes it is far below _CAP_STEP_MAX.
+_H_RTOL = 4e-8
+# A root accepted after one Halley step: the start's error is gone (<= 3e-18 of q, see
+# _CAP_STEP_MAX), leaving the rounding of the cubic's residual (~ eps w / (q f'), half an
+# ulp of q at small y) and of the step: measured <= 0.84 eps.
+_ROOT_RTOL = 1.0 * _EPS
+# A root from the bracketed Newton: stopped at a step <= 4 eps q (_CUBIC_XRTOL), plus the
+# rounding of the residual, plus V's own error (_CBRT_RTOL, passed to q with a factor
+# d ln q / d ln w = (1 - y/3) / (2 - y) <= 1 on y <= 1.5): measured <= 5 eps.
+_NEWTON_RTOL = 6.0 * _EPS
+# V for alpha = 1/2 (`_cap_powers`): r = cbrt(t) within an ulp after its Newton step, V = r^2
+# one more rounding: measured <= 1.8 eps over t = 1e-285 .. 1e285 (pow beyond 1e-290, 1e290).
+_CBRT_RTOL = 2.5 * _EPS
+
+
+def _exact_y(s: mpmath.mpf) -> mpmath.mpf:
+    """Root y of y^2 (1 - y/3) = s^2 on 0 < y < 2 (closed form, mpmath)."""
+    psi = mpmath.asin(mpmath.sqrt(3) * s / 2) / 3
+    return 4 * mpmath.sin(psi) * mpmath.sin(psi + mpmath.pi / 3)
+
+
+def _exact_root(w: float, a: float) -> mpmath.mpf:
+    """Root q of a q^2 - q^3/3 = w (w, a the floats given), to 40 digits."""
+    wm, am = mpmath.mpf(w), mpmath.mpf(a)
+    q0 = am * _exact_y(mpmath.sqrt(wm / am**3))
+    return mpmath.findroot(lambda q: q * q * (am - q / 3) - wm, q0)
+
+
+@pytest.mark.mpmath
+def test_cap_interpolant_error_is_what_the_halley_step_assumes():
+    """s h(s) from the table is within _H_RTOL of the exact root on its whole range."""
+    with mpmath.workdps(40):
+        s_max = math.sqrt(_CAP_OMEGA_MAX)
+        worst = 0.0
+        for s in np.linspace(0.0, s_max, 2001)[1:]:
+            h = 0.0
+            for c in reversed(_CAP_H):
+                h = h * s + c
+            worst = max(worst, float(abs(mpmath.mpf(s * h) / _exact_y(mpmath.mpf(s)) - 1)))
+    assert_less(worst, _H_RTOL, claim="impl", call="_CAP_H on 0 < s <= sqrt(2/3)", what="rel err")
+    # One Halley step from a start off by r leaves ~ r^3 / 3: the accepted steps must be so
+    # small that this is far below an ulp.
+    assert_less(_CAP_STEP_MAX**3 / 3.0, 0.05 * _EPS, claim="impl", call="_CAP_STEP_MAX")
+    assert_less(_H_RTOL, _CAP_STEP_MAX / 10.0, claim="impl", call="_CAP_H vs _CAP_STEP_MAX")
+
+
+@pytest.mark.mpmath
+@pytest.mark.parametrize("a", [0.01, 0.015, 3.7e-7, 2.5e4])
+def test_cap_root_within_an_ulp_of_the_exact_root(a):
+    """Every root `_cap_root` accepts (y = q/a from 1e-9 to 1) is within _ROOT_RTOL, and
+    every y < 0.99 is accepted (the fallback is for y > 1 only)."""
+    rng = np.random.default_rng(27)
+    ys = np.exp(rng.uniform(math.log(1e-9), math.log(1.0), 150))
+    ia3 = 1.0 / (a * a * a)
+    worst = 0.0
+    with mpmath.workdps(40):
+        for y in ys:
+            w = float(mpmath.mpf(a) ** 3 * mpmath.mpf(y) ** 2 * (1 - mpmath.mpf(y) / 3))
+            q, ok = _cap_root(w, a, ia3, 2.0 * a)
+            if y < 0.99:
+                assert_true(
+                    ok,
+                    got=f"refused (w = {w!r})",
+                    should="accepted",
+                    claim="impl",
+                    call=f"_cap_root(y = {y:.6g}, a = {a})",
+                )
+            if ok:
+                worst = max(worst, float(abs(mpmath.mpf(q) / _exact_root(w, a) - 1)))
+    assert_less(worst, _ROOT_RTOL, claim="impl", call=f"_cap_root, a = {a}", what="rel err")
+
+
+@pytest.mark.mpmath
+@pytest.mark.parametrize("alpha", [0.5, 0.3])
+def test_cap_powers_within_two_eps_of_the_exact_power(alpha):
+    """V = t^(1 / (alpha + 1)) at the nodes, t = (alpha + 1) u / Kn: for alpha = 1/2 within
+    _CBRT_RTOL of the exact t^(2/3) over t = 1e-285 .. 1e285 (pow with the float exponent
+    fl(2/3) was up to 112 eps off at |ln t| ~ 700); for other alpha, pow itself."""
+    kn, m = 1e8, 0.05
+    rng = np.random.default_rng(1)
+    t = np.exp(rng.uniform(math.log(1e-285), math.log(1e285), 400))
+    x = np.sqrt(2.0 * kn / (alpha + 1.0) * t / m)
+    v, scratch = np.empty_like(x), np.empty_like(x)
+    _cap_powers(x, m, alpha, kn, v, scratch)
+    t_k = (alpha + 1.0) / kn * (0.5 * m * x * x)  # the kernel's t, in its order
+    if alpha != 0.5:
+        assert_true(
+            # libm's pow, as the kernel calls it (numpy's array power may use its own SIMD).
+            all(vj == tj ** (1.0 / (alpha + 1.0)) for vj, tj in zip(v, t_k, strict=True)),
+            got="V differs from pow",
+            should="pow(t, 1 / (alpha + 1)) bit for bit",
+            claim="impl",
+            call=f"_cap_powers(alpha = {alpha})",
+        )
+        return
+    with mpmath.workdps(40):
+        worst = max(
+            float(abs(mpmath.mpf(vj) / mpmath.cbrt(mpmath.mpf(tj)) ** 2 - 1))
+            for vj, tj in zip(v, t_k, strict=True)
+        )
+    assert_less(worst, _CBRT_RTOL, claim="impl", call="_cap_powers(alpha = 1/2)", what="rel err")
+
+
+@pytest.mark.mpmath
+def test_cap_nodes_beyond_the_interpolant_by_newton():
+    """Nodes with y from 0.5 to 1.5 (half of them past the interpolant's range) through
+    `_cap_nodes` (the kernel's own passes): q within _NEWTON_RTOL of the exact root for the
+    exact V, and dq/dx = m x / U'(q) with U' = (alpha + 1) u V' / V at the kernel's V."""
+    kn, alpha, a, c0, m = 1e8, 0.5, 0.01, math.pi, 0.05
+    P = np.array([[1.0, kn, alpha, a, c0]])
+    ys = np.linspace(0.5, 1.5, 41)
+    # x from U(q(y)) = m x^2 / 2 with U = Kn / (alpha + 1) V^(alpha + 1).
+    v_of_y = c0 * a**3 * ys**2 * (1 - ys / 3)
+    x = np.sqrt(2.0 * kn / (alpha + 1.0) * v_of_y ** (alpha + 1.0) / m)
+    g, qs = np.empty_like(x), np.empty_like(x)
+    _cap_nodes(x, m, 2.0 * a, P, g, qs)
+    v_k, scratch = np.empty_like(x), np.empty_like(x)
+    _cap_powers(x, m, alpha, kn, v_k, scratch)  # the kernel's V
+    worst = 0.0
+    with mpmath.workdps(40):
+        for xj, qj, gj, vj in zip(x, qs, g, v_k, strict=True):
+            u = 0.5 * m * xj * xj
+            t = (alpha + 1.0) / kn * u
+            w = mpmath.cbrt(mpmath.mpf(t)) ** 2 / mpmath.mpf(c0)
+            wm, am = w, mpmath.mpf(a)
+            q0 = am * _exact_y(mpmath.sqrt(wm / am**3))
+            root = mpmath.findroot(lambda q, wm=wm, am=am: q * q * (am - q / 3) - wm, q0)
+            worst = max(worst, float(abs(mpmath.mpf(qj) / root - 1)))
+            du = (alpha + 1.0) * u * (c0 * qj * (2.0 * a - qj)) / vj
+            assert_true(
+                gj == m * xj / du,
+                got=f"dq/dx = {gj!r}",
+                should=f"{m * xj / du!r}",
+                claim="impl",
+                call=f"_cap_nodes at q = {qj!r}",
+            )
+    assert_less(
+        worst, _NEWTON_RTOL, claim="impl", call="_cap_nodes, y in [0.5, 1.5]", what="rel err"
+    )
