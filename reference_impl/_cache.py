@@ -76,6 +76,7 @@ __all__ = [
     "expression_module",
     "expressions_dir",
     "max_bytes",
+    "numba_numbers",
     "printed_function",
     "record_files",
 ]
@@ -246,6 +247,7 @@ def configure_numba_cache() -> bool:
 
 
 # --------------------------------------------------------------------------- numba's keyed directory
+
 
 def _select_numba_dir() -> None:
     """Point numba at ``numba/<key>`` of the cache (made 0700, checked like the cache),
@@ -460,6 +462,41 @@ def expression_module(kind: str, canonical: str, source: str):
         return None
 
 
+# numba types an integer literal as int64: a larger one (a parameter such as k = 1e21
+# substituted as the exact Integer 10**21, or a derivative's coefficient) fails to compile
+# with "Int value is too large". Such numbers are printed as floats (`numba_numbers`).
+_INT64_MAX = 2**63 - 1
+# Digits of those floats: the decimal is within 1e-30 of the exact number, so Python's
+# correctly rounded parse gives the nearest double (what float arithmetic would use).
+_FLOAT_DIGITS = 30
+
+
+def numba_numbers(expr):
+    """``expr`` with every integer or fraction numba cannot type (beyond int64) as a float.
+
+    Parameters
+    ----------
+    expr : sympy.Basic or tuple of sympy.Basic
+        A validated expression (or a tuple of them) about to be printed as math-module code.
+
+    Returns
+    -------
+    sympy.Basic or tuple
+        The same tree, its too-large integers and fractions replaced by sympy Floats of
+        ``_FLOAT_DIGITS`` digits; unchanged (the same object) when there are none.
+    """
+    import sympy as sp
+
+    if isinstance(expr, tuple):
+        return tuple(numba_numbers(e) for e in expr)
+    big = {
+        a: sp.Float(a, _FLOAT_DIGITS)
+        for a in expr.atoms(sp.Rational)
+        if abs(a.p) > _INT64_MAX or a.q > _INT64_MAX
+    }
+    return expr.xreplace(big) if big else expr
+
+
 def printed_function(q, expr, name: str) -> str | None:
     """``def name(q): return ...``: sympy's math-module print of ``expr``, or None.
 
@@ -473,7 +510,7 @@ def printed_function(q, expr, name: str) -> str | None:
 
     import sympy as sp
 
-    f = sp.lambdify(q, expr, modules="math")
+    f = sp.lambdify(q, numba_numbers(expr), modules="math")
     text = inspect.getsource(f)
     head = "def _lambdifygenerated("
     if not text.startswith(head) or "Dummy" in text:
@@ -484,7 +521,7 @@ def printed_function(q, expr, name: str) -> str | None:
         same = ours is theirs or (isinstance(ours, float) and ours == theirs)
         if ours is None or not same:
             return None
-    return f"def {name}(" + text[len(head):]
+    return f"def {name}(" + text[len(head) :]
 
 
 def record_files(module_name: str, dispatchers) -> None:

@@ -53,7 +53,12 @@ if TYPE_CHECKING:
 # sympy itself is imported where an expression is handled: a potential of another family
 # solves without it (issue 20: start-up).
 
-from reference_impl._cache import expression_module, printed_function, record_files
+from reference_impl._cache import (
+    expression_module,
+    numba_numbers,
+    printed_function,
+    record_files,
+)
 from reference_impl._jit import specialise
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, term_rows
 from reference_impl.potentials.base import Potential
@@ -487,7 +492,7 @@ def _compiled_expression(expr: sp.Expr, dexpr: sp.Expr, q: sp.Symbol):
     # error_model="numpy": a division by zero gives inf/nan (refused by the caller's
     # finiteness check) instead of raising inside the compiled loop.
     fu, fdu, fd2u, fd3u = (
-        numba.njit(error_model="numpy")(sp.lambdify(q, e, modules="math"))
+        numba.njit(error_model="numpy")(sp.lambdify(q, numba_numbers(e), modules="math"))
         for e in (expr, dexpr, d2expr, d3expr)
     )
 

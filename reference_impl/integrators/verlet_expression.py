@@ -14,7 +14,12 @@ import numba
 import numpy as np
 import sympy as sp
 
-from reference_impl._cache import expression_module, printed_function, record_files
+from reference_impl._cache import (
+    expression_module,
+    numba_numbers,
+    printed_function,
+    record_files,
+)
 from reference_impl._jit import specialise
 from reference_impl.integrators.verlet_kernel import _N_PAR, _PENDING, SCENE_WALLS, _kdk, _kernel
 from reference_impl.potentials.base import Potential
@@ -73,7 +78,9 @@ def _expression_kernel(pot: Potential):
             _probe(kern, pot)
             _remember(key, kern)
             return kern
-        fn = numba.njit(error_model="numpy")(sp.lambdify(q, (pot.dexpr, pot.expr), modules="math"))
+        fn = numba.njit(error_model="numpy")(
+            sp.lambdify(q, numba_numbers((pot.dexpr, pot.expr)), modules="math")
+        )
 
         @numba.njit(inline="always", error_model="numpy")
         def force_energy(x, fam, par):
