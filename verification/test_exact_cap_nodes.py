@@ -25,6 +25,8 @@ from reference_impl.exact._nodes import (
     _cap_powers,
     _cap_root,
 )
+from reference_impl import Sphere
+from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification.assertions import assert_less, assert_true
 
 _EPS = float(np.finfo(float).eps)
@@ -168,3 +170,51 @@ def test_cap_nodes_beyond_the_interpolant_by_newton():
     assert_less(
         worst, _NEWTON_RTOL, claim="impl", call="_cap_nodes, y in [0.5, 1.5]", what="rel err"
     )
+
+
+@pytest.mark.mpmath
+@pytest.mark.parametrize("a", [1e-55, 1e-60, 1e-66, 1e-75])
+def test_cap_root_at_tiny_scales_within_an_ulp_or_refused(a):
+    """At tiny a the Halley step's numerator 2 p f' (~ r a^5 y^3 for a start off by r)
+    underflows: the step came out 0 (or a few subnormal bits) and was accepted, leaving
+    the interpolant's 3.6e-8 (measured 6.7e7 eps at a = 1e-60). A root is either within
+    _ROOT_RTOL of the exact one or refused (then `_cap_newton`, whose step p / f' does
+    not underflow, takes it)."""
+    rng = np.random.default_rng(60)
+    ys = np.exp(rng.uniform(math.log(1e-9), math.log(1.0), 120))
+    ia3 = 1.0 / (a * a * a)
+    worst = 0.0
+    with mpmath.workdps(60):
+        am = mpmath.mpf(a)
+        for y in ys:
+            w = float(am**3 * mpmath.mpf(y) ** 2 * (1 - mpmath.mpf(y) / 3))
+            q, ok = _cap_root(w, a, ia3, 2.0 * a)
+            if ok:
+                # The closed form (not findroot, whose tolerance is absolute) at 60 digits.
+                exact = am * _exact_y(mpmath.sqrt(mpmath.mpf(w) / am**3))
+                worst = max(worst, float(abs(mpmath.mpf(q) / exact - 1)))
+    assert_less(worst, _ROOT_RTOL, claim="impl", call=f"_cap_root, a = {a}", what="rel err")
+
+
+@pytest.mark.mpmath
+@pytest.mark.parametrize("y", [1e-6, 1e-2])
+def test_sphere_at_tiny_radius_within_its_bound(y):
+    """A whole impact at R = 1e-60 m, q_max = y R, Kn scaled so that every quantity is a
+    normal float (the solver answers; t = 1.5 u / Kn stays inside the cube root's range):
+    its contact times within their reported bounds of the 30-digit truth. With the
+    underflowing Halley step accepted they were 1.5e-8 and 3.5e-12 off, 1.1e6 and 14 times
+    the bound."""
+    r = 1e-60
+    kn = 1.0 / (math.pi * r**3) ** 1.5
+    pot = Sphere(r, kn)
+    m, zeta = 1.0, 0.2
+    v0 = math.sqrt(2.0 * float(pot.U(y * r)) / m)
+    sol = solve_impact(pot, m, v0, zeta)
+    truth = solve_impact_mp(pot, m, v0, zeta, dps=30)
+    call = f"solve_impact({pot!r}, {m!r}, {v0!r}, {zeta!r})"
+    for key, bound in (
+        ("contact_time", sol.quadrature_error),
+        ("contact_time_zero_force", sol.quadrature_error_zero_force),
+    ):
+        real = float(abs(mpmath.mpf(getattr(sol, key)) - truth[key]))
+        assert_less(real, bound, claim="impl", call=call, what=f"|{key} - truth|")

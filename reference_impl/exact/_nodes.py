@@ -236,6 +236,12 @@ _CAP_OMEGA_MAX = 2.0 / 3.0
 # error to first order, and a start off by 2e-6 is left at ~ (2e-6)^3 / 3 = 3e-18 of q (the
 # interpolant's own 3.6e-8 is 55 times smaller). Anything larger is iterated.
 _CAP_STEP_MAX = 2e-6
+# Smallest f'^2 q for which the Halley step is taken. At tiny scales its numerator 2 p f'
+# (~ r a^5 y^3 for a start off by r) underflows: rounded to 2^-1074 absolute, i.e. to
+# 2^-1075 / (f'^2 q) of q, which this keeps below 2^-57 (eps / 32); below it (a < ~1e-58:
+# the step was 0 and the start's 3.6e-8 accepted) `_cap_newton`, whose step p / f' does
+# not underflow, takes the node.
+_CAP_SCALE_MIN = 2.0**-1018
 _PI_3 = math.pi / 3.0
 
 
@@ -243,7 +249,8 @@ _PI_3 = math.pi / 3.0
 def _cap_root(w, a, ia3, q_hi):  # pragma: no cover - compiled
     """(q, accepted): the root of a q^2 - q^3/3 = w by the interpolant of h and one Halley
     step (see _CAP_H), ia3 = 1 / a^3; accepted when the start was in the interpolant's range,
-    the step within _CAP_STEP_MAX of q, and 0 < q < q_hi (the bracket of `_cap_newton`)."""
+    the step within _CAP_STEP_MAX of q, its numerator a normal float (f'^2 q at least
+    _CAP_SCALE_MIN), and 0 < q < q_hi (the bracket of `_cap_newton`)."""
     om = w * ia3
     s = math.sqrt(om)
     h = _H9 + s * _H10
@@ -259,9 +266,16 @@ def _cap_root(w, a, ia3, q_hi):  # pragma: no cover - compiled
     q = a * (s * h)
     p = q * q * (a - q / 3.0) - w
     dp = q * (2.0 * a - q)
-    step = 2.0 * p * dp / (2.0 * dp * dp - p * (2.0 * (a - q)))
+    dd = dp * dp
+    step = 2.0 * p * dp / (2.0 * dd - p * (2.0 * (a - q)))
     qn = q - step
-    ok = (om <= _CAP_OMEGA_MAX) & (abs(step) <= _CAP_STEP_MAX * q) & (qn > 0.0) & (qn < q_hi)
+    ok = (
+        (om <= _CAP_OMEGA_MAX)
+        & (dd * q >= _CAP_SCALE_MIN)
+        & (abs(step) <= _CAP_STEP_MAX * q)
+        & (qn > 0.0)
+        & (qn < q_hi)
+    )
     return qn, ok
 
 
