@@ -17,6 +17,7 @@ import mpmath
 import numpy as np
 import pytest
 
+from reference_impl import Sphere
 from reference_impl.exact._nodes import (
     _CAP_H,
     _CAP_OMEGA_MAX,
@@ -25,7 +26,6 @@ from reference_impl.exact._nodes import (
     _cap_powers,
     _cap_root,
 )
-from reference_impl import Sphere
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification.assertions import assert_less, assert_true
 
