@@ -5,7 +5,8 @@ Here one compiled call does every node of a branch:
 
 * a single ellipsoid or sphere cap, U = Kn / (alpha + 1) V^(alpha + 1) with the
   cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
-  power; for alpha = 1/2 a cube root by arithmetic, `_cap_powers`), q from V by an
+  power, corrected for its float exponent; for alpha = 1/2 a cube root by arithmetic,
+  `_cap_powers`), q from V by an
   interpolant of the cubic's root and one Halley step (arithmetic only, no node
   waiting on another; `_cap_root`), and U' without a second power,
   U' = (alpha + 1) u V' / V (`_cap_nodes`);
@@ -331,7 +332,8 @@ _SPLIT = 134217729.0  # 2^27 + 1: Veltkamp's splitting constant for Dekker's pro
 @numba.njit(cache=True, error_model="numpy")
 def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
     """V = (u (alpha + 1) / Kn)^(1 / (alpha + 1)) at every node into v (``scratch`` as
-    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow."""
+    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow
+    times 1 + c ln t (c = `_exponent_residual`, see _SPLIT)."""
     to_v = (alpha + 1.0) / kn
     n = x.shape[0]
     for j in range(n):
