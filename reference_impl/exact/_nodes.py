@@ -374,8 +374,10 @@ def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
 
 @numba.njit(cache=True, error_model="numpy")
 def _exponent_residual(A, e):  # pragma: no cover - compiled
-    """1 / A - e for e = fl(1 / A), to a few ulps of itself (Dekker's exact product A e =
-    p + err, and 1 - p exact: p is within an ulp of 1); 0 where A or e is too large to split."""
+    """1 / A - e for e = fl(1 / A), within an ulp of itself (Dekker's exact product A e =
+    p + err, and 1 - p exact: p is within an ulp of 1; measured <= 0.5 ulp for A in 1..31).
+    For A beyond ~1e150 the low part of e's split is subnormal and c loses digits (c is
+    then below 1e-150: no effect on V); 0 where the split overflows (nan)."""
     p = A * e
     ta, te = _SPLIT * A, _SPLIT * e
     ah, eh = ta - (ta - A), te - (te - e)
