@@ -5,7 +5,8 @@ Here one compiled call does every node of a branch:
 
 * a single ellipsoid or sphere cap, U = Kn / (alpha + 1) V^(alpha + 1) with the
   cubic V = c0 (a q^2 - q^3 / 3): V at the node follows from u in closed form (one
-  power; for alpha = 1/2 a cube root by arithmetic, `_cap_powers`), q from V by an
+  power, corrected for its float exponent; for alpha = 1/2 a cube root by arithmetic,
+  `_cap_powers`), q from V by an
   interpolant of the cubic's root and one Halley step (arithmetic only, no node
   waiting on another; `_cap_root`), and U' without a second power,
   U' = (alpha + 1) u V' / V (`_cap_nodes`);
@@ -263,6 +264,12 @@ _CAP_OMEGA_MAX = 2.0 / 3.0
 # error to first order, and a start off by 2e-6 is left at ~ (2e-6)^3 / 3 = 3e-18 of q (the
 # interpolant's own 3.6e-8 is 55 times smaller). Anything larger is iterated.
 _CAP_STEP_MAX = 2e-6
+# Smallest f'^2 q for which the Halley step is taken. At tiny scales its numerator 2 p f'
+# (~ r a^5 y^3 for a start off by r) underflows: rounded to 2^-1074 absolute, i.e. to
+# 2^-1075 / (f'^2 q) of q, which this keeps below 2^-57 (eps / 32); below it (a < ~1e-58:
+# the step was 0 and the start's 3.6e-8 accepted) `_cap_newton`, whose step p / f' does
+# not underflow, takes the node.
+_CAP_SCALE_MIN = 2.0**-1018
 _PI_3 = math.pi / 3.0
 
 
@@ -270,7 +277,8 @@ _PI_3 = math.pi / 3.0
 def _cap_root(w, a, ia3, q_hi):  # pragma: no cover - compiled
     """(q, accepted): the root of a q^2 - q^3/3 = w by the interpolant of h and one Halley
     step (see _CAP_H), ia3 = 1 / a^3; accepted when the start was in the interpolant's range,
-    the step within _CAP_STEP_MAX of q, and 0 < q < q_hi (the bracket of `_cap_newton`)."""
+    the step within _CAP_STEP_MAX of q, its numerator a normal float (f'^2 q at least
+    _CAP_SCALE_MIN), and 0 < q < q_hi (the bracket of `_cap_newton`)."""
     om = w * ia3
     s = math.sqrt(om)
     h = _H9 + s * _H10
@@ -286,9 +294,16 @@ def _cap_root(w, a, ia3, q_hi):  # pragma: no cover - compiled
     q = a * (s * h)
     p = q * q * (a - q / 3.0) - w
     dp = q * (2.0 * a - q)
-    step = 2.0 * p * dp / (2.0 * dp * dp - p * (2.0 * (a - q)))
+    dd = dp * dp
+    step = 2.0 * p * dp / (2.0 * dd - p * (2.0 * (a - q)))
     qn = q - step
-    ok = (om <= _CAP_OMEGA_MAX) & (abs(step) <= _CAP_STEP_MAX * q) & (qn > 0.0) & (qn < q_hi)
+    ok = (
+        (om <= _CAP_OMEGA_MAX)
+        & (dd * q >= _CAP_SCALE_MIN)
+        & (abs(step) <= _CAP_STEP_MAX * q)
+        & (qn > 0.0)
+        & (qn < q_hi)
+    )
     return qn, ok
 
 
@@ -333,12 +348,19 @@ _CBRT_STEP_MAX = 1e-10  # the last step's size: ~1e-13 of r; 1e-10 leaves ~1e-20
 # t outside (_CBRT_T_MIN, 1 / _CBRT_T_MIN): pow (subnormal t has no such bits; near the
 # top, r^3 and 2 r^3 + t would overflow).
 _CBRT_T_MIN = 1e-290
+# Every other alpha (and alpha = 1/2 outside that range): pow(t, e) with e = fl(1/A), A =
+# alpha + 1, is off by t^(1/A - e): |1/A - e| is up to half an ulp of e (3.7e-17 for 2/3,
+# 5.5e-17 in general), i.e. ~5.5e-17 |ln t|, 1e-14 at |ln t| = 240, twice the 16 ulps a node
+# is charged (measured: contact times 1.4-3.7 times their bounds at |ln t| = 110-300). So
+# V = pow(t, e) (1 + c ln t), c = 1/A - e (`_exponent_residual`).
+_SPLIT = 134217729.0  # 2^27 + 1: Veltkamp's splitting constant for Dekker's product
 
 
 @numba.njit(cache=True, error_model="numpy")
 def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
     """V = (u (alpha + 1) / Kn)^(1 / (alpha + 1)) at every node into v (``scratch`` as
-    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow."""
+    large: overwritten); for alpha = 1/2 by the cube root of `_CBRT_BIAS`, else by pow
+    times 1 + c ln t (c = `_exponent_residual`, see _SPLIT)."""
     to_v = (alpha + 1.0) / kn
     n = x.shape[0]
     for j in range(n):
@@ -365,10 +387,31 @@ def _cap_powers(x, m, alpha, kn, v, scratch):  # pragma: no cover - compiled
             rest += not ok
     if rest > 0:
         e_inv = 1.0 / (alpha + 1.0)
+        c = _exponent_residual(alpha + 1.0, e_inv)
         for j in range(n):
             if alpha != 0.5 or v[j] < 0.0:
                 xj = x[j]
-                v[j] = (to_v * (0.5 * m * xj * xj)) ** e_inv
+                t = to_v * (0.5 * m * xj * xj)
+                vj = t**e_inv
+                if c != 0.0:
+                    # t^(1/A) = t^e_inv t^c, and t^c = 1 + c ln t to ~(c ln t)^2 ~ 1e-27.
+                    vj = vj * (1.0 + c * math.log(t))
+                v[j] = vj
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _exponent_residual(A, e):  # pragma: no cover - compiled
+    """1 / A - e for e = fl(1 / A), within an ulp of itself (Dekker's exact product A e =
+    p + err, and 1 - p exact: p is within an ulp of 1; measured <= 0.5 ulp for A in 1..31).
+    For A beyond ~1e150 the low part of e's split is subnormal and c loses digits (c is
+    then below 1e-150: no effect on V); 0 where the split overflows (nan)."""
+    p = A * e
+    ta, te = _SPLIT * A, _SPLIT * e
+    ah, eh = ta - (ta - A), te - (te - e)
+    al, el = A - ah, e - eh
+    err = ((ah * eh - p) + ah * el + al * eh) + al * el
+    c = ((1.0 - p) - err) / A
+    return c if abs(c) <= _EPS * e else 0.0
 
 
 @numba.njit(cache=True, error_model="numpy")
