@@ -221,3 +221,27 @@ def test_sphere_at_tiny_radius_within_its_bound(y):
     ):
         real = float(abs(mpmath.mpf(getattr(sol, key)) - truth[key]))
         assert_less(real, bound, claim="impl", call=call, what=f"|{key} - truth|")
+
+
+def test_cap_mp_energy_is_the_integral_of_its_mp_force():
+    """The 30-digit truth integrates U'(q) = Kn V^alpha S; U must be its integral.
+
+    With alpha + 1 formed in float (alpha = 0.0134... does not add to 1 exactly), the mp
+    U was Kn V^fl(alpha+1) / fl(alpha+1): off by ~1e-16 |ln V|, so the truth of a shallow
+    impact carried 5e-15. Central difference at 40 digits: its error ~h^2 U''' / 6, h = 1e-12
+    q, is ~1e-24 of U', far below the 1e-16 |ln V| the rounded exponent gave.
+    """
+    for alpha in (0.013462143552233824, 0.3, 1.7):
+        pot = Sphere(0.01, 1e8, alpha)
+        with mpmath.workdps(40):
+            q = mpmath.mpf("1e-12")
+            h = q * mpmath.mpf("1e-12")
+            num = (pot.U(q + h) - pot.U(q - h)) / (2 * h)
+            rel = abs(num / pot.dU(q) - 1)
+        assert_true(
+            rel < 1e-20,
+            got=f"|dU_mp/dq / U'_mp - 1| = {float(rel):.3g} at alpha = {alpha!r}",
+            should="< 1e-20 (U the integral of U' in mpmath)",
+            claim="tool",
+            call="Sphere._U / _dU in mpmath",
+        )

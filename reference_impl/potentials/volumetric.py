@@ -15,12 +15,13 @@ or passed through it, and the potential raises `DomainError`.
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
 
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials._families import register_family
 from reference_impl.potentials._terms import cap_row
-from reference_impl.potentials.base import Potential
+from reference_impl.potentials.base import Potential, is_mp
 
 __all__ = ["Ellipsoid", "Sphere"]
 
@@ -63,7 +64,12 @@ class _VolumetricCap(Potential):
         # Kn V^(alpha+1) / (alpha+1), not (Kn / (alpha+1)) V^...: the quotient would be
         # rounded to float64 before an mpmath V multiplies it, and the 30-digit path
         # would then carry a 1e-16 relative error (found by reports/repro, sec10).
-        return self.Kn * self.volume(q) ** (self.alpha + 1) / (self.alpha + 1)
+        # In mpmath alpha + 1 is formed at working precision: the float sum rounds it
+        # (alpha = 0.0134... gains ~1e-17), and U would then not be the integral of _dU
+        # (which uses alpha) by ~1e-16 |ln V|: the 30-digit truth carried 5e-15 at
+        # V ~ 1e-20 (found by review of the cap nodes).
+        ap1 = self.alpha + 1 if not is_mp(q) else sys.modules["mpmath"].mpf(self.alpha) + 1
+        return self.Kn * self.volume(q) ** ap1 / ap1
 
     def _dU(self, q):
         return self.Kn * self.volume(q) ** self.alpha * self.area(q)
