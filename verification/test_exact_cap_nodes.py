@@ -18,13 +18,13 @@ import numpy as np
 import pytest
 
 from reference_impl import Sphere
-from reference_impl.exact._nodes import (
+from reference_impl.exact._cap_nodes import (
     _CAP_H,
     _CAP_OMEGA_MAX,
     _CAP_STEP_MAX,
-    _cap_nodes,
     _cap_powers,
     _cap_root,
+    cap_nodes,
 )
 from reference_impl.exact.solve import solve_impact, solve_impact_mp
 from verification.assertions import assert_less, assert_true
@@ -140,7 +140,7 @@ def test_cap_powers_within_two_eps_of_the_exact_power(alpha):
 @pytest.mark.mpmath
 def test_cap_nodes_beyond_the_interpolant_by_newton():
     """Nodes with y from 0.5 to 1.5 (half of them past the interpolant's range) through
-    `_cap_nodes` (the kernel's own passes): q within _NEWTON_RTOL of the exact root for the
+    `cap_nodes` (the kernel's own passes): q within _NEWTON_RTOL of the exact root for the
     exact V, and dq/dx = m x / U'(q) with U' = (alpha + 1) u V' / V at the kernel's V."""
     kn, alpha, a, c0, m = 1e8, 0.5, 0.01, math.pi, 0.05
     P = np.array([[1.0, kn, alpha, a, c0]])
@@ -149,7 +149,7 @@ def test_cap_nodes_beyond_the_interpolant_by_newton():
     v_of_y = c0 * a**3 * ys**2 * (1 - ys / 3)
     x = np.sqrt(2.0 * kn / (alpha + 1.0) * v_of_y ** (alpha + 1.0) / m)
     g, qs = np.empty_like(x), np.empty_like(x)
-    _cap_nodes(x, m, 2.0 * a, P, g, qs)
+    cap_nodes(x, m, 2.0 * a, P, g, qs)
     v_k, scratch = np.empty_like(x), np.empty_like(x)
     _cap_powers(x, m, alpha, kn, v_k, scratch)  # the kernel's V
     worst = 0.0
@@ -168,10 +168,10 @@ def test_cap_nodes_beyond_the_interpolant_by_newton():
                 got=f"dq/dx = {gj!r}",
                 should=f"{m * xj / du!r}",
                 claim="impl",
-                call=f"_cap_nodes at q = {qj!r}",
+                call=f"cap_nodes at q = {qj!r}",
             )
     assert_less(
-        worst, _NEWTON_RTOL, claim="impl", call="_cap_nodes, y in [0.5, 1.5]", what="rel err"
+        worst, _NEWTON_RTOL, claim="impl", call="cap_nodes, y in [0.5, 1.5]", what="rel err"
     )
 
 
