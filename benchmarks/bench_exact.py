@@ -159,18 +159,35 @@ def _compiled_only(prep, v0, zeta):
     Timed beside the whole call, it says how much of a row's time is compiled work and
     how much is Python around it (why a goal is or is not in reach). It reads the
     prepared solver's private state, so it follows `reference_impl.exact.prepared`.
+    None also where the prepared call does not answer from that call (zeta >= 0.9, a
+    sum whose terms hand over inside the contact, a rule or check that refuses): a
+    time of a call the prepared call does not make, or that does not answer, would
+    misstate where its time goes.
     """
+    from reference_impl.exact._branches import _GJ_ZETA_MAX
     from reference_impl.exact._prepared_kernel import power_call
-    from reference_impl.exact._validate import _validated_top
 
+    if not 0.0 <= zeta < _GJ_ZETA_MAX:
+        return None  # the prepared call hands over to solve_impact
     if prep._c is not None:
         c, u, w = prep._c, prep._u, prep._W
-        return lambda: power_call(v0, zeta, c, u, w)
-    if prep._family is None:
+
+        def call():
+            return power_call(v0, zeta, c, u, w)
+
+    elif prep._family is not None:
+        prep(v0, zeta)  # keeps this speed's validated top and split decision
+        q_top, off = prep._tops[v0]
+        if off:
+            return None  # the split path: solve_impact
+        fam, args = prep._family, prep._args
+
+        def call():
+            return fam(v0, zeta, q_top, *args)
+
+    else:
         return None
-    fam, args = prep._family, prep._args
-    q_top = _validated_top(prep.potential, 0.5 * prep.m * v0 * v0)
-    return lambda: fam(v0, zeta, q_top, *args)
+    return call if call()[-1] == 1.0 else None  # last: the call's status, 1.0 answered
 
 
 _UNIVERSAL_KEYS = (
@@ -202,11 +219,11 @@ def _family_row(name, pot, m, v0, blocks):
     kernel = None if prep is None else _compiled_only(prep, v0, zeta)
     if prep is not None:
         contestants["prepared"] = lambda: prep(v0, zeta)
-    if kernel is not None:
-        contestants["kernel"] = kernel
         identical = prep(v0, zeta) == sol and all(
             getattr(prep(v0, zeta), k) == getattr(sol, k) for k in _UNIVERSAL_KEYS
         )
+    if kernel is not None:
+        contestants["kernel"] = kernel
     t = _interleaved(contestants, blocks)
     row = {
         "scene": name,
