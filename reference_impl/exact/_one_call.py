@@ -12,7 +12,9 @@ whole inside numba, generic in the node loop of `_nodes`:
   with d = t^b every e_i b is an integer, so int_0^1 g dd = b int_0^1
   t^(2b/n - 1) [g d^-beta] dt has an analytic bracket and a Gauss-Jacobi rule in
   t converges geometrically. Two rule sizes must agree to _GJ_RTOL on every row;
-  the rising row goes first, so a refusal costs a third of the evaluations;
+  the nodes of every row are inverted in one call of the node loop first (the rows'
+  chains overlap), so a refusal costs every row's evaluations, repaid by the
+  tanh-sinh rung that follows it running faster the same way;
 * tanh-sinh (`tanh_sinh`) for the common rows of `_branches._tanh_sinh` (zeta = 0,
   or 0 < zeta < 1 with the zero-force instant close to s_end), level by level.
 
