@@ -259,6 +259,7 @@ def _family_row(name, pot, m, v0, blocks):
         and ratio >= GOAL_RATIO_UNIVERSAL
         and ours_err <= EQUAL_ERROR_FLOOR
         and pk["at_equal_error"]
+        and row.get("prepared_identical", True)  # a fast call must answer as solve_impact
     )
     # By how much, and where the time goes: the compiled call alone (None: the call
     # took no single compiled path) against the whole prepared call.

@@ -481,10 +481,15 @@ def test_speed_block_says_by_how_much_a_goal_is_not_met():
     fam = dict(bench["families"][0], goal_met=False, time_over_goal=1.754, kernel_us=9.04)
     fam["ratio_short_of_goal"] = 0.5  # the ratio part of the goal is met: not named
     batch = dict(bench["batch"][0], goal_met=False, implied_serial_fraction=0.1561)
-    text = speed_table({**bench, "families": [fam], "laws": [], "batch": [batch]})
+    # Not met on its error alone, and on bit-identity alone: those are the reasons given.
+    err = dict(fam, time_over_goal=0.5, kernel_us=None, ours_max_rel_error=3e-14)
+    odd = dict(batch, bit_identical_to_1_thread=False, implied_serial_fraction=-0.01)
+    text = speed_table({**bench, "families": [fam, err], "laws": [], "batch": [batch, odd]})
     for want in (
         "**not met**: 1.75× the 8 µs, its compiled call alone 9.0 µs |",
+        "**not met**: its error 3.0e-14 > 1e-14 |",
         "**not met**: Amdahl's serial part implied: 16 % of the one-thread time)",
+        "**not met**: results differ from one thread's)",
     ):
         assert_true(
             want in text,

@@ -64,7 +64,7 @@ def _validated_top(pot: Potential, E: float) -> float:
             # Checked already (on a larger interval); the same _inverse as the checked call.
             q = pot.turning_point(E, check=False)
             if len(tops) >= _TOPS_KEPT:
-                tops.pop(next(iter(tops)))  # the oldest entry
+                tops.pop(next(iter(tops), None), None)  # oldest; another thread may have popped it
             tops[E] = q
         return q
     q = pot.turning_point(E)

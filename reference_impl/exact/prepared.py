@@ -160,7 +160,8 @@ class PreparedImpact:
                 self._split and needs_split(pot, lambda: turning_point(pot, m, v0, q_top), q_top)
             )
             if len(self._tops) >= _TOPS_KEPT:
-                self._tops.pop(next(iter(self._tops)))  # the oldest entry
+                # The oldest entry (another thread may have popped it already).
+                self._tops.pop(next(iter(self._tops), None), None)
             got = self._tops[v0] = (q_top, off)
         q_top, off = got
         if off:

@@ -97,7 +97,7 @@ def _expression_kernel(pot: Potential):
 
 def _remember(key: str, kern) -> None:
     while len(_EXPR_KERNELS) >= _EXPR_KERNELS_MAX:
-        _EXPR_KERNELS.pop(next(iter(_EXPR_KERNELS)))
+        _EXPR_KERNELS.pop(next(iter(_EXPR_KERNELS), None), None)
     _EXPR_KERNELS[key] = kern
 
 

@@ -79,6 +79,12 @@ def _family_goal(r: dict) -> str:
     if r["goal_met"]:
         return "met"
     parts = []
+    if r.get("prepared_identical") is False:
+        parts.append("the prepared call differs from solve_impact")
+    if r["ours_max_rel_error"] > 1e-14:
+        parts.append(f"its error {r['ours_max_rel_error']:.1e} > 1e-14")
+    if not r["peer_at_equal_error"]:
+        parts.append("the peer never reaches equal error")
     if "time_over_goal" in r and r["time_over_goal"] > 1.0:
         parts.append(f"{r['time_over_goal']:.2f}× the 8 µs")
     if "ratio_short_of_goal" in r and r["ratio_short_of_goal"] > 1.0:
@@ -92,8 +98,10 @@ def _batch_goal(b: dict) -> str:
     """'met', or by how much it is not and the serial part the speedup implies."""
     if b["goal_met"]:
         return "met"
+    if not b["bit_identical_to_1_thread"]:
+        return "**not met**: results differ from one thread's"
     s = b.get("implied_serial_fraction")
-    if s is None:
+    if s is None or s < 0:  # no Amdahl reading (one core, or faster than the cores)
         return "**not met**"
     return f"**not met**: Amdahl's serial part implied: {100 * s:.0f} % of the one-thread time"
 
