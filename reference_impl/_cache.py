@@ -467,7 +467,8 @@ def expression_module(kind: str, canonical: str, source: str):
 # with "Int value is too large". Such numbers are printed as floats (`numba_numbers`).
 _INT64_MAX = 2**63 - 1
 # Digits of those floats: the decimal is within 1e-30 of the exact number, so Python's
-# correctly rounded parse gives the nearest double (what float arithmetic would use).
+# correctly rounded parse gives the nearest double (but for a fraction within 1e-30 of a
+# tie between two doubles; integers below 1e30 are exact).
 _FLOAT_DIGITS = 30
 
 
