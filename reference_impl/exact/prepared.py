@@ -132,27 +132,10 @@ class PreparedImpact:
             if E > self._e_checked:
                 _validated_top(pot, E)  # raises as solve_impact would
                 self._e_checked = E
-            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = power_call(
-                v0, zeta, self._c, self._u, self._W
-            )
-            if ok != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
+            out = power_call(v0, zeta, self._c, self._u, self._W)
+            if out[12] != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
                 return solve_impact(pot, m, v0, zeta)
-            return _solution(
-                v0,
-                m,
-                zeta,
-                pot,
-                q_max,
-                f_max,
-                t,
-                rest,
-                t_zf,
-                rest_zf,
-                e,
-                e_zf,
-                (wd, sp, s_end),
-                rise,
-            )
+            return _solution(v0, m, zeta, pot, out)
         got = self._tops.get(v0)
         if got is None:
             q_top = _validated_top(pot, E)  # raises as solve_impact would
@@ -167,26 +150,10 @@ class PreparedImpact:
         if off:
             return solve_impact(pot, m, v0, zeta)
         if self._family is not None:
-            q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end, ok = self._family(
-                v0, zeta, q_top, *self._args
-            )
+            out = self._family(v0, zeta, q_top, *self._args)
+            ok = out[12]
             if ok == 1.0:
-                return _solution(
-                    v0,
-                    m,
-                    zeta,
-                    pot,
-                    q_max,
-                    f_max,
-                    t,
-                    rest,
-                    t_zf,
-                    rest_zf,
-                    e,
-                    e_zf,
-                    (wd, sp, s_end),
-                    rise,
-                )
+                return _solution(v0, m, zeta, pot, out)
             if ok != 0.0:  # a bound or range check refused: solve_impact raises it
                 return solve_impact(pot, m, v0, zeta)
         return self._fused(v0, zeta, q_top)
@@ -232,7 +199,7 @@ class PreparedImpact:
         ):
             return solve_impact(pot, m, v0, zeta)
         return _solution(
-            v0, m, zeta, pot, q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, (wd, sp, s_end), rise
+            v0, m, zeta, pot, (q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end)
         )
 
     def _fused(self, v0: float, zeta: float, q_top: float) -> ImpactSolution:
@@ -265,10 +232,13 @@ class PreparedImpact:
         )
 
 
-def _solution(v0, m, zeta, pot, q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, osc_of, t_peak):
-    """The `ImpactSolution` of a prepared call's floats (one place for the power-law and
-    the family paths); the oscillator is built from ``osc_of`` = (wd, s_peak, s_end) on
-    first use."""
+def _solution(v0, m, zeta, pot, out):
+    """The `ImpactSolution` of a prepared call's floats, in the order both compiled calls
+    (`power_call`, `family_call`) return them: q_max, f_max, t, rest, t_zf, rest_zf, e,
+    e_zf, t_peak, wd, s_peak, s_end (then their status, not read here). The oscillator is
+    built from (wd, s_peak, s_end) on first use."""
+    q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, t_peak, wd, sp, s_end = out[:12]
+    osc_of = (wd, sp, s_end)
     return ImpactSolution._fast(
         {
             "v0": v0,
