@@ -27,20 +27,11 @@ import sys
 import time
 
 import numba
-import numpy as np
 
-from reference_impl import PowerLaw, solve_impacts
 from reference_impl.exact import _law_batch, batch
 
 from ._machine import machine_info
-from .bench_exact import (
-    BATCH_N,
-    BATCH_ZETA_MAX,
-    GRID_SPEEDS,
-    GRID_ZETAS,
-    LAW_BATCH,
-    LAW_BATCH_N,
-)
+from .bench_exact import batch_workloads
 
 # Impacts per chunk of the grid's fill, against numba's equal shares (`--fill-chunks`).
 FILL_CHUNK_TRIED = 2048
@@ -55,24 +46,7 @@ _PARALLEL = (
 
 def _workloads():
     """(label, call) of each batch row of `bench_exact`, the same inputs."""
-    pot, m = PowerLaw(1.0e9, 1.5), 0.0041
-    rng = np.random.default_rng(12345)
-    v = 10.0 ** rng.uniform(-1.0, 1.0, BATCH_N)
-    z = rng.uniform(0.0, BATCH_ZETA_MAX, BATCH_N)
-    zg = np.repeat(np.linspace(0.0, BATCH_ZETA_MAX, GRID_ZETAS), GRID_SPEEDS)
-    vg = np.tile(np.logspace(-1.0, 1.0, GRID_SPEEDS), GRID_ZETAS)
-    vl = np.logspace(-1.0, 1.0, LAW_BATCH_N)
-    return (
-        (f"Hertz, {BATCH_N} impacts, distinct zeta", lambda: solve_impacts(pot, m, v, z)),
-        (
-            f"Hertz, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0",
-            lambda: solve_impacts(pot, m, vg, zg),
-        ),
-        (
-            f"Hertz + {LAW_BATCH}, {LAW_BATCH_N} speeds",
-            lambda: solve_impacts(PowerLaw(1.0e9, 1.5), m, vl, law=LAW_BATCH),
-        ),
-    )
+    return tuple((label, call) for label, _, call, _ in batch_workloads())
 
 
 def run(calls: int) -> dict:

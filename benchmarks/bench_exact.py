@@ -337,10 +337,9 @@ def _wall_median(fn, blocks):
     return statistics.median(ts)
 
 
-def _batch_rows(blocks, peer_us):
-    """`solve_impacts` on Hertz, one thread against every core (wall time, interleaved)."""
-    import numba
-
+def batch_workloads():
+    """The batch rows' workloads: (label, impacts per call, call, whether the row is
+    compared with the single-impact peer). `benchmarks.bench_batch_phases` times the same."""
     pot, m = PowerLaw(1.0e9, 1.5), 0.0041
     rng = np.random.default_rng(12345)
     v = 10.0 ** rng.uniform(-1.0, 1.0, BATCH_N)
@@ -348,30 +347,40 @@ def _batch_rows(blocks, peer_us):
     zg = np.repeat(np.linspace(0.0, BATCH_ZETA_MAX, GRID_ZETAS), GRID_SPEEDS)
     vg = np.tile(np.logspace(-1.0, 1.0, GRID_SPEEDS), GRID_ZETAS)
     vl = np.logspace(-1.0, 1.0, LAW_BATCH_N)
-    # Every core numba may use (NUMBA_NUM_THREADS, the machine's count by default).
-    cores = numba.config.NUMBA_NUM_THREADS
-    workloads = (
+    return (
         (
             f"Hertz, {BATCH_N} impacts, distinct zeta in [0, {BATCH_ZETA_MAX}]",
             BATCH_N,
             lambda: solve_impacts(pot, m, v, z),
-            peer_us,
+            True,
         ),
         (
             f"Hertz, grid {GRID_ZETAS} zeta x {GRID_SPEEDS} v0",
             vg.size,
             lambda: solve_impacts(pot, m, vg, zg),
-            peer_us,
+            True,
         ),
-        # A new potential each call: the general law's error_time depends on the
-        # validated tops that earlier calls cached per potential object.
+        # A new potential each call: each call pays the validation of its turning points,
+        # as a user's first batch on a potential does (results do not depend on it).
         (
             f"Hertz + {LAW_BATCH}, {LAW_BATCH_N} speeds (general-law batch)",
             LAW_BATCH_N,
             lambda: solve_impacts(PowerLaw(1.0e9, 1.5), m, vl, law=LAW_BATCH),
-            None,
+            False,
         ),
     )
+
+
+def _batch_rows(blocks, peer_us):
+    """`solve_impacts` on Hertz, one thread against every core (wall time, interleaved)."""
+    import numba
+
+    # Every core numba may use (NUMBA_NUM_THREADS, the machine's count by default).
+    cores = numba.config.NUMBA_NUM_THREADS
+    workloads = [
+        (label, size, call, peer_us if with_peer else None)
+        for label, size, call, with_peer in batch_workloads()
+    ]
     rows = []
     for label, size, call, peer_one in workloads:
         per = {1: [], cores: []}
