@@ -20,7 +20,6 @@ Run: ``python -m benchmarks.bench_batch_phases [--calls N] [--fill-chunks] [--js
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import sys
@@ -31,6 +30,7 @@ import numba
 from reference_impl.exact import _law_batch, batch
 
 from ._machine import machine_info
+from ._record import write_json
 from .bench_exact import batch_workloads
 
 # Impacts per chunk of the grid's fill, against numba's equal shares (`--fill-chunks`).
@@ -200,9 +200,7 @@ def main(argv=None) -> int:
         res["fill_chunks"] = fill_chunks(max(args.calls, 50))
     _print(res)
     if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(res, fh, indent=2)
+        write_json(args.json, res)
     return 0
 
 

@@ -46,6 +46,7 @@ from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from . import peer_dop853 as peer
 from ._machine import machine_info
+from ._record import write_json
 from ._scipy_peer import scipy_dop853
 
 TRUTH_DPS = 30
@@ -528,11 +529,7 @@ def main(argv=None) -> int:
     res = run(args.blocks)
     _print(res)
     if args.json:
-        import json
-
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(res, fh, indent=2, default=_json_default)
+        write_json(args.json, res, default=_json_default)
     return 0
 
 

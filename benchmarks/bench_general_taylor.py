@@ -21,7 +21,6 @@ Run: ``python -m benchmarks.bench_general_taylor [--blocks N] [--json FILE]`` (~
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import types
 
@@ -36,6 +35,7 @@ from reference_impl.studies.laws import calibrated_laws, hertz
 from reference_impl.theory.laws import law_from_dict
 
 from ._machine import machine_info
+from ._record import write_json
 from .bench_exact import (
     _LAW_KEYS,
     EQUAL_ERROR_FLOOR,
@@ -202,16 +202,9 @@ def main(argv=None) -> int:
     res = run(args.blocks)
     _print(res)
     if args.json:
-        import json
-
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(
-                res,
-                fh,
-                indent=2,
-                default=lambda x: x.item() if isinstance(x, np.generic) else str(x),
-            )
+        write_json(
+            args.json, res, default=lambda x: x.item() if isinstance(x, np.generic) else str(x)
+        )
     return 0
 
 

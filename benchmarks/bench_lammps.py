@@ -34,13 +34,13 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
-import json  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 from benchmarks._machine import machine_info  # noqa: E402
+from benchmarks._record import write_json  # noqa: E402
 from reference_impl import solve_impact  # noqa: E402
 from reference_impl.adapters.base import AdapterScene  # noqa: E402
 from reference_impl.adapters.lammps import LammpsAdapter, load_lammps  # noqa: E402
@@ -224,9 +224,7 @@ def main(argv=None) -> int:
             "ratio_vs_batch": ratio_batch,
             "max_restitution_difference": max(diff_one, diff_batch),
         }
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+        write_json(args.json, out)
     return 0
 
 

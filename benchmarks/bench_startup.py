@@ -19,7 +19,6 @@ Run: ``python -m benchmarks.bench_startup [--json FILE] [--repeats N] [--report]
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import statistics
@@ -30,6 +29,7 @@ import time
 from pathlib import Path
 
 from ._machine import machine_info
+from ._record import write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -202,9 +202,7 @@ def main(argv=None) -> int:
     e = res["expression_over_power"]
     print(f"dt-crit expression / power, warm: {e['wall_ratio']:.2f} (goal <= {e['goal']})")
     if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(res, fh, indent=2)
+        write_json(args.json, res)
     return 0
 
 

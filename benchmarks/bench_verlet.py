@@ -26,6 +26,7 @@ import time  # noqa: E402
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 
+from benchmarks._record import write_json  # noqa: E402
 from reference_impl.integrators.verlet import SCENE_WALLS, LaneBatch, run_lanes  # noqa: E402
 from reference_impl.potentials import Ellipsoid, Expression, PowerLaw  # noqa: E402
 from reference_impl.provenance import machine_info  # noqa: E402
@@ -155,12 +156,8 @@ def main(argv=None) -> None:
         "over_power_law": cpu1 / base["cpu_s"],
     }
     if args.json:
-        import json
-
         out["machine"] = machine_info()
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+        write_json(args.json, out)
 
 
 if __name__ == "__main__":
