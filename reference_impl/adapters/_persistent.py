@@ -19,6 +19,9 @@ The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
   with its exit status; an answer with another id, an answer that is not JSON or
   one over the size limit fails the request and the process is replaced. In
   every case the next request starts a fresh process: the rest go on.
+* stderr is read while the process runs (a pipe, never a file) and only its last
+  ``2 * _STDERR_TAIL`` characters are kept, as in one-shot mode: a program that
+  logs without end holds neither memory nor disk; a failure quotes the tail.
 * stdin closing is the signal to exit (``close``): the process gets
   `_EXIT_GRACE` s to do so, then it is killed. On Linux, when the suite's
   process has one thread, the server is also killed if that process dies
@@ -35,18 +38,19 @@ import selectors
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Sequence
 
+from reference_impl._procs import kill_group
 from reference_impl.adapters._records import AdapterOutputError, AdapterRunError
 
 __all__ = ["PersistentProcess", "PersistentTimeout"]
 
 # Bytes of non-JSON stdout (banners) skipped per request before the answer.
 _MAX_NOISE = 1 << 20
-# Characters of the process's stderr attached to a failure (the tail).
+# Characters of the process's stderr attached to a failure (the tail); twice as many
+# bytes are kept while it runs (a UTF-8 character cut at the front is then replaced).
 _STDERR_TAIL = 4000
 # Seconds the process gets to exit after its stdin is closed.
 _EXIT_GRACE = 5.0
@@ -99,7 +103,7 @@ class PersistentProcess:
         self.cwd = cwd
         self.startup_timeout = float(startup_timeout)
         self._proc: subprocess.Popen | None = None
-        self._err = None  # temporary file holding the process's stderr
+        self._err = bytearray()  # the last 2 * _STDERR_TAIL bytes of the process's stderr
         self._buf = bytearray()
         self._next_id = 0
         self.starts = 0  # processes started so far (for tests and reports)
@@ -110,13 +114,13 @@ class PersistentProcess:
         return self._proc is not None and self._proc.poll() is None
 
     def _start(self) -> None:
-        self._err = tempfile.TemporaryFile(prefix="hcv-persistent-")
+        self._err = bytearray()
         try:
             self._proc = subprocess.Popen(
                 self.argv,
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
-                stderr=self._err,
+                stderr=subprocess.PIPE,
                 cwd=self.cwd,
                 start_new_session=True,
                 # a preexec_fn in a threaded process may deadlock the child (dlopen locks):
@@ -128,25 +132,34 @@ class PersistentProcess:
                 ),
             )
         except OSError as exc:
-            self._err.close()
-            self._err = None
             raise AdapterRunError(
                 f"{self.label}: cannot start {self.argv[0]!r} ({exc.strerror})"
             ) from None
+        os.set_blocking(self._proc.stderr.fileno(), False)
         self._buf = bytearray()
         self.starts += 1
 
+    def _read_err(self) -> bool:
+        """Move what waits on the stderr pipe into the kept tail (never blocks); False at
+        its end (the program closed it: a selector must stop watching it)."""
+        proc = self._proc
+        if proc is None or proc.stderr is None or proc.stderr.closed:
+            return False
+        while True:
+            try:
+                data = os.read(proc.stderr.fileno(), _CHUNK)
+            except (BlockingIOError, InterruptedError):
+                return True
+            except OSError:
+                return False
+            if not data:
+                return False
+            self._err += data
+            del self._err[: -2 * _STDERR_TAIL]
+
     def _stderr_tail(self) -> str:
-        if self._err is None:
-            return ""
-        try:
-            self._err.seek(0, os.SEEK_END)
-            size = self._err.tell()
-            self._err.seek(max(0, size - 2 * _STDERR_TAIL))
-            text = self._err.read().decode(errors="replace").strip()
-            self._err.seek(0, os.SEEK_END)
-        except (OSError, ValueError):
-            return ""
+        self._read_err()
+        text = self._err.decode(errors="replace").strip()
         return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
 
     def _kill(self) -> str:
@@ -154,22 +167,13 @@ class PersistentProcess:
         proc, tail = self._proc, self._stderr_tail()
         self._proc = None
         if proc is not None:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)
-            except (ProcessLookupError, PermissionError):
-                proc.kill()
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
-                pass
-            for f in (proc.stdin, proc.stdout):
+            kill_group(proc)
+            for f in (proc.stdin, proc.stdout, proc.stderr):
                 try:
                     f.close()
                 except OSError:
                     pass
-        if self._err is not None:
-            self._err.close()
-            self._err = None
+        self._err = bytearray()
         return tail
 
     def _died(self, when: str) -> AdapterRunError:
@@ -192,15 +196,26 @@ class PersistentProcess:
         )
 
     def close(self) -> None:
-        """Close stdin (the signal to exit), wait `_EXIT_GRACE` s, then kill."""
+        """Close stdin (the signal to exit), wait `_EXIT_GRACE` s, then kill.
+
+        stderr is read meanwhile: a program blocked on a full stderr pipe could not exit.
+        """
         proc = self._proc
         if proc is None:
             return
         try:
             proc.stdin.close()
-            proc.wait(timeout=_EXIT_GRACE)
-        except (OSError, subprocess.TimeoutExpired):
+        except OSError:
             pass
+        deadline = time.monotonic() + _EXIT_GRACE
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stderr, selectors.EVENT_READ)
+            while proc.poll() is None and time.monotonic() < deadline:
+                if sel.get_map() and sel.select(min(_POLL, deadline - time.monotonic())):
+                    if not self._read_err():
+                        sel.unregister(proc.stderr)
+                elif not sel.get_map():
+                    time.sleep(min(0.05, max(deadline - time.monotonic(), 0.0)))
         self._kill()
 
     # -- one request ------------------------------------------------------------
@@ -267,12 +282,16 @@ class PersistentProcess:
         sent = 0
         with selectors.DefaultSelector() as sel:
             sel.register(proc.stdin, selectors.EVENT_WRITE)
+            sel.register(proc.stderr, selectors.EVENT_READ)
             while sent < len(line):
                 left = deadline - time.monotonic()
                 if left <= 0:
                     tail = self._kill()
                     raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
-                if not sel.select(min(left, _POLL)):
+                ready = {key.fileobj for key, _ in sel.select(min(left, _POLL))}
+                if proc.stderr in ready and not self._read_err():
+                    sel.unregister(proc.stderr)
+                if proc.stdin not in ready:
                     continue
                 try:
                     sent += os.write(proc.stdin.fileno(), line[sent : sent + _CHUNK])
@@ -288,6 +307,7 @@ class PersistentProcess:
         last = b""
         with selectors.DefaultSelector() as sel:
             sel.register(proc.stdout, selectors.EVENT_READ)
+            sel.register(proc.stderr, selectors.EVENT_READ)
             while True:
                 nl = self._buf.find(b"\n")
                 while nl >= 0:
@@ -318,7 +338,10 @@ class PersistentProcess:
                 if left <= 0:
                     tail = self._kill()
                     raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
-                if not sel.select(min(left, _POLL)):
+                ready = {key.fileobj for key, _ in sel.select(min(left, _POLL))}
+                if proc.stderr in ready and not self._read_err():
+                    sel.unregister(proc.stderr)
+                if proc.stdout not in ready:
                     continue
                 data = os.read(proc.stdout.fileno(), _CHUNK)
                 if not data:

@@ -113,6 +113,7 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
+from reference_impl._procs import kill_group
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -424,7 +425,7 @@ class SubprocessAdapter(ContactAdapter):
         finally:
             sel.close()
             if not done:  # timeout, overflow, Ctrl-C, any error: no process left behind
-                _kill_group(proc)
+                kill_group(proc)
             for f in (proc.stdin, proc.stdout, proc.stderr):
                 try:
                     f.close()
@@ -533,14 +534,3 @@ def _signame(num: int) -> str:
     except ValueError:
         return "unknown signal"
 
-
-def _kill_group(proc: subprocess.Popen) -> None:
-    """Kill the command and everything it started (its own session), then reap it."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        proc.kill()
-    try:
-        proc.wait(timeout=5)
-    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
-        pass
