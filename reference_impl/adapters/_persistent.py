@@ -9,8 +9,14 @@ Python adapters that drive such a code (`reference_impl.adapters.yade`).
 The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
 
 * Each request is one line: a JSON object with an integer ``"id"``. The answer
-  is one line: a JSON object with the same ``"id"``. Requests are sent one at a
-  time: the next is written after the answer to the previous one.
+  is one line: a JSON object with the same ``"id"``, a JSON integer (``true`` or
+  ``1.0`` is not one). Requests are sent one at a time: the next is written after
+  the answer to the previous one. Each id is drawn at random (`new_id`), not
+  counted, so an answer cannot be written before its request has been read.
+* An answer waiting before its request is sent is refused: before each request,
+  what the process wrote since the last answer is read; a line starting with
+  ``{`` (an answer written ahead, or twice) fails that request and the process
+  is replaced; other waiting lines (a late banner, a log line) are discarded.
 * Lines on stdout that do not start with ``{`` are ignored (a launcher's banner,
   e.g. YADE's "Welcome to Yade"), at most `_MAX_NOISE` bytes of them per request.
 * Bounded: a request not answered within its timeout kills the process (and
@@ -34,6 +40,7 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import random
 import selectors
 import signal
 import subprocess
@@ -58,6 +65,10 @@ _EXIT_GRACE = 5.0
 _POLL = 0.5
 _CHUNK = 1 << 16
 _PR_SET_PDEATHSIG = 1
+# Request ids are drawn from [1, _ID_BOUND): positive, and within a C int of 32 bits, so
+# that a program in any language can read and echo them.
+_ID_BOUND = 2**31
+_IDS = random.SystemRandom()
 
 
 class PersistentTimeout(AdapterRunError):
@@ -105,7 +116,7 @@ class PersistentProcess:
         self._proc: subprocess.Popen | None = None
         self._err = bytearray()  # the last 2 * _STDERR_TAIL bytes of the process's stderr
         self._buf = bytearray()
-        self._next_id = 0
+        self._last_id = 0
         self.starts = 0  # processes started so far (for tests and reports)
 
     # -- process lifetime -------------------------------------------------------
@@ -232,9 +243,11 @@ class PersistentProcess:
             The answer is not one JSON object with the request's id, or is over
             ``limit`` bytes.
         """
-        rid = self._next_id + 1
+        rid = self.new_id()
         line = (json.dumps({**obj, "id": rid}) + "\n").encode()
-        raw = self.exchange(line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False)[-1]
+        raw = self.exchange(
+            line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False, rid=rid
+        )[-1]
         try:
             data = json.loads(raw)
         except (json.JSONDecodeError, RecursionError, UnicodeDecodeError):
@@ -242,30 +255,54 @@ class PersistentProcess:
             raise AdapterOutputError(
                 f"{self.label}: answer line is not JSON (starts with {raw[:60]!r})"
             ) from None
-        if not isinstance(data, dict) or data.get("id") != rid:
+        if not isinstance(data, dict) or type(data.get("id")) is not int or data["id"] != rid:
             got = data.get("id") if isinstance(data, dict) else type(data).__name__
+            why = (
+                f" (a {type(got).__name__}: 'id' must be the request's integer)"
+                if got is not None and type(got) is not int and isinstance(data, dict)
+                else ""
+            )
             self._kill()
             raise AdapterOutputError(
-                f"{self.label}: answer to request {rid} carries id {got!r}; the process is replaced"
+                f"{self.label}: answer to request {rid} carries id {got!r}{why}; the process "
+                "is replaced"
             )
         return data
 
+    def new_id(self) -> int:
+        """A request id drawn at random, never the previous one (see the module docstring)."""
+        rid = self._last_id
+        while rid == self._last_id:
+            rid = _IDS.randrange(1, _ID_BOUND)
+        self._last_id = rid
+        return rid
+
     def exchange(
-        self, payload: bytes, is_end, timeout: float, limit: int, keep: bool = True
+        self,
+        payload: bytes,
+        is_end,
+        timeout: float,
+        limit: int,
+        keep: bool = True,
+        rid: int | None = None,
     ) -> list[bytes]:
         """The raw form of `request`: write ``payload``, read stdout lines up to the first
         for which ``is_end(line)`` holds (a code that reads a script on stdin and prints an
         end marker, e.g. LIGGGHTS). Returns the lines read, the end line last (with
         ``keep=False`` only the end line; the others are skipped, `_MAX_NOISE` bytes at
         most). Bounded like `request`; when the process dies, the message quotes its last
-        line of output that names an error, else its last line (a code's own message)."""
+        line of output that names an error, else its last line (a code's own message).
+        Output waiting before ``payload`` is sent is read first: a line starting with ``{``
+        there fails the call (an answer written before its request; ``rid`` names the
+        request in the message), other lines are discarded."""
         budget = float(timeout)
         if not self.alive:
             if self._proc is not None:  # died since the last answer: say so, then restart
                 raise self._died("between requests")
             self._start()
             budget += self.startup_timeout
-        self._next_id += 1
+        else:
+            self._refuse_waiting(rid)
         deadline = time.monotonic() + budget
         try:
             self._write(payload, deadline, budget)
@@ -275,6 +312,34 @@ class PersistentProcess:
         except BaseException:
             self._kill()  # Ctrl-C or any surprise: no process left mid-request
             raise
+
+    def _refuse_waiting(self, rid: int | None) -> None:
+        """Read what waits on stdout before a request is sent (never blocks): fail on a line
+        starting with ``{``, discard the rest (`_MAX_NOISE` bytes at most)."""
+        proc = self._proc
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stdout, selectors.EVENT_READ)
+            while len(self._buf) <= _MAX_NOISE and sel.select(0):
+                data = os.read(proc.stdout.fileno(), _CHUNK)
+                if not data:
+                    break  # the process is ending: writing the request will say so
+                self._buf += data
+        waiting, self._buf = bytes(self._buf), bytearray()
+        ahead = next((ln for ln in waiting.split(b"\n") if ln.lstrip().startswith(b"{")), None)
+        if ahead is None and len(waiting) <= _MAX_NOISE:
+            return
+        self._kill()
+        if ahead is None:
+            raise AdapterOutputError(
+                f"{self.label}: more than {_MAX_NOISE} bytes on stdout between requests; "
+                "the process is replaced"
+            )
+        which = f"request {rid}" if rid is not None else "the next request"
+        raise AdapterOutputError(
+            f"{self.label}: stdout held a line starting with {ahead.lstrip()[:40]!r} before "
+            f"{which} was sent (an answer must follow its request, once); the process is "
+            "replaced"
+        )
 
     def _write(self, line: bytes, deadline: float, budget: float) -> None:
         proc = self._proc

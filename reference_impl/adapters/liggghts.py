@@ -269,7 +269,7 @@ class LiggghtsAdapter(ContactAdapter):
         if not self.persistent:
             return _run_liggghts(script)
         server = self._shared_server()
-        marker = f"HCVEND {server._next_id + 1}"  # the exchange's own number: unique
+        marker = f"HCVEND {server.new_id()}"  # a fresh random number: no stale end line matches
         payload = f'{script}print "{marker}"\nclear\n'.encode()
         lines = server.exchange(
             payload, lambda ln: ln == marker.encode(), timeout=_TIMEOUT, limit=_MAX_OUTPUT
