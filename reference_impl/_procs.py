@@ -19,17 +19,27 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
 
-__all__ = ["become_subreaper", "descendants", "kill_descendants", "sigterm_as_interrupt"]
+__all__ = [
+    "become_subreaper",
+    "descendants",
+    "kill_descendants",
+    "kill_group",
+    "sigterm_as_interrupt",
+]
 
 # prctl option number from <linux/prctl.h>.
 _PR_SET_CHILD_SUBREAPER = 36
 # Rounds of "list the descendants, kill them": a killed process's own children are
 # re-parented to us (the subreaper) and found in the next round.
 _KILL_ROUNDS = 5
+# Seconds to wait for a SIGKILLed child to be reaped (SIGKILL cannot be ignored: the wait
+# only covers a process stuck in uninterruptible I/O).
+_REAP_WAIT = 5.0
 
 _state = {"terminated": None}
 
@@ -153,3 +163,21 @@ def kill_descendants() -> int:
         _reap()
     _reap()
     return killed
+
+
+def kill_group(proc: subprocess.Popen) -> None:
+    """SIGKILL a child started with ``start_new_session=True`` and its whole process group
+    (everything it started that did not leave the group), then reap it.
+
+    The adapters' one-shot and persistent programs both end this way on a timeout, an
+    overflow, a protocol error or Ctrl-C. A child already reaped (its group gone) or one
+    whose group cannot be signalled is killed by its own pid.
+    """
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        proc.kill()
+    try:
+        proc.wait(timeout=_REAP_WAIT)
+    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
+        pass

@@ -2,6 +2,7 @@
 
     python verification/_persistent_script.py [--banner] [--hang-above V0]
                                               [--die-after N] [--no-id]
+                                              [--stderr-bytes N]
 
 serves requests of the adapter protocol, one JSON line each on stdin, one JSON
 answer line each on stdout, with the integrator of `_adapter_script` (velocity
@@ -9,7 +10,9 @@ Verlet of the universal law). The answer's ``meta`` carries the process id and
 the options it received. ``--banner`` prints two non-JSON lines first (as YADE's
 launcher does); ``--hang-above V0`` never answers a request faster than V0;
 ``--die-after N`` exits (status 7) right after its N-th answer, i.e. between
-requests; ``--no-id`` answers without the request's id (a protocol error).
+requests; ``--no-id`` answers without the request's id (a protocol error);
+``--stderr-bytes N`` writes N bytes of log lines to stderr before each answer, the
+last one ``end of the log of answer K`` (K counts from 1).
 Option ``zeta_scale`` (in the request's ``"options"``) scales the damping ratio
 it integrates and declares: what the calibration test searches.
 """
@@ -41,6 +44,7 @@ integrate = _load_integrate()
 
 def main(argv: list[str]) -> int:
     hang_above, die_after, banner, no_id = float("inf"), None, False, False
+    stderr_bytes = 0
     args = list(argv)
     while args:
         a = args.pop(0)
@@ -52,6 +56,8 @@ def main(argv: list[str]) -> int:
             banner = True
         elif a == "--no-id":
             no_id = True
+        elif a == "--stderr-bytes":
+            stderr_bytes = int(args.pop(0))
     if banner:
         print("Welcome to a contact code 1.0", flush=True)
         print("listening on nothing", flush=True)
@@ -74,6 +80,11 @@ def main(argv: list[str]) -> int:
                 }
         if not no_id:
             out["id"] = req["id"]
+        if stderr_bytes:
+            line = "a log line of a code that never stops logging\n"
+            sys.stderr.write(line * (stderr_bytes // len(line)))
+            sys.stderr.write(f"end of the log of answer {answered + 1}\n")
+            sys.stderr.flush()
         sys.stdout.write(json.dumps(out) + "\n")
         sys.stdout.flush()
         answered += 1

@@ -276,3 +276,30 @@ def test_one_liggghts_process_gives_the_one_shot_results_and_survives_an_error()
         assert per._server.starts == 2
     finally:
         per.close()
+
+
+def test_the_version_probe_and_the_runs_leave_no_file_in_the_cwd(tmp_path, monkeypatch):
+    """Issue 36 item 10: ``liggghts -h`` without ``-log none`` left log.liggghts in the
+    user's directory (one was committed at the repository root); the probe, a persistent
+    run and a one-shot run now leave the working directory as they found it."""
+    from reference_impl.adapters import liggghts
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(liggghts, "_PROGRAM", {})  # the probe runs again, here
+    per = get_adapter("liggghts[hertz,wall]")
+    one = get_adapter("liggghts[hertz,wall,persistent=false]")
+    try:
+        assert per.version.startswith("LIGGGHTS"), per.version
+        s = scene_at("hertz-damped", 1.0, steps_per_contact=50)
+        per.impact(s)
+        one.impact(s)
+    finally:
+        per.close()
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert_true(
+        left == [],
+        got=f"{left} in the cwd",
+        should="no file (-log none on every liggghts call)",
+        claim=CLAIM,
+        call="LiggghtsAdapter.version, impact",
+    )

@@ -9,6 +9,7 @@ Uses `verification/_persistent_script.py` (no third-party code needed).
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -173,3 +174,49 @@ def test_the_server_dies_with_a_killed_suite():
     if survived:
         os.kill(server, signal.SIGKILL)  # leave nothing behind, then report
     assert not survived, "the server outlived the killed suite process by 10 s"
+
+
+def test_stderr_is_kept_as_its_last_8000_characters_while_the_process_runs():
+    """Issue 36 item 6: a persistent program's stderr went into a temporary file that grew
+    without bound (>= 100 MB, then the disk). Now only its last 8000 characters are kept,
+    as in one-shot mode: the program's fd 2 is not a growing file, the kept bytes stay
+    <= 8000 after 8 MB of log, and a failure still quotes the last lines."""
+    import stat
+
+    if not Path("/proc/self/fd").is_dir():
+        pytest.skip("needs /proc to see the program's stderr")
+    adapter = persistent("--stderr-bytes 4000000 --die-after 3")
+    try:
+        adapter.impact(scene_at(0.1))
+        adapter.impact(scene_at(1.0))
+        server = adapter._server
+        fd2 = os.stat(f"/proc/{server._proc.pid}/fd/2")
+        on_disk = fd2.st_size if stat.S_ISREG(fd2.st_mode) else 0
+        assert_true(
+            on_disk <= 8000,
+            got=f"a {on_disk}-byte file behind the program's stderr after 8 MB of log",
+            should="at most 8000 bytes kept (a pipe read while it runs)",
+            claim=CLAIM,
+            call="cmd[persistent=true] --stderr-bytes 4000000",
+        )
+        kept = len(server._err) if isinstance(server._err, (bytes, bytearray)) else on_disk
+        assert_true(
+            kept <= 8000,
+            got=f"{kept} bytes of stderr kept",
+            should="at most 8000",
+            claim=CLAIM,
+            call="PersistentProcess._err",
+        )
+        with pytest.raises(AdapterRunError, match=r"exit status 7") as info:
+            adapter.impact(scene_at(5.0))  # answers, logs, exits: fails the next request
+            adapter.impact(scene_at(5.0))
+        tail = info.value.stderr
+        assert_true(
+            tail.endswith("end of the log of answer 3") and len(tail) <= 4003,
+            got=f"a stderr tail of {len(tail)} characters ending {tail[-40:]!r}",
+            should="the last <= 4000 characters, ending with the last line written",
+            claim=CLAIM,
+            call="AdapterRunError.stderr",
+        )
+    finally:
+        adapter.close()

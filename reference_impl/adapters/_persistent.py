@@ -9,8 +9,14 @@ Python adapters that drive such a code (`reference_impl.adapters.yade`).
 The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
 
 * Each request is one line: a JSON object with an integer ``"id"``. The answer
-  is one line: a JSON object with the same ``"id"``. Requests are sent one at a
-  time: the next is written after the answer to the previous one.
+  is one line: a JSON object with the same ``"id"``, a JSON integer (``true`` or
+  ``1.0`` is not one). Requests are sent one at a time: the next is written after
+  the answer to the previous one. Each id is drawn at random (`new_id`), not
+  counted, so an answer cannot be written before its request has been read.
+* An answer waiting before its request is sent is refused: before each request,
+  what the process wrote since the last answer is read; a line starting with
+  ``{`` (an answer written ahead, or twice) fails that request and the process
+  is replaced; other waiting lines (a late banner, a log line) are discarded.
 * Lines on stdout that do not start with ``{`` are ignored (a launcher's banner,
   e.g. YADE's "Welcome to Yade"), at most `_MAX_NOISE` bytes of them per request.
 * Bounded: a request not answered within its timeout kills the process (and
@@ -19,6 +25,9 @@ The rules (also in ``docs/adapter-protocol.md``, "Persistent mode"):
   with its exit status; an answer with another id, an answer that is not JSON or
   one over the size limit fails the request and the process is replaced. In
   every case the next request starts a fresh process: the rest go on.
+* stderr is read while the process runs (a pipe, never a file) and only its last
+  ``2 * _STDERR_TAIL`` characters are kept, as in one-shot mode: a program that
+  logs without end holds neither memory nor disk; a failure quotes the tail.
 * stdin closing is the signal to exit (``close``): the process gets
   `_EXIT_GRACE` s to do so, then it is killed. On Linux, when the suite's
   process has one thread, the server is also killed if that process dies
@@ -31,22 +40,24 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import random
 import selectors
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Sequence
 
+from reference_impl._procs import kill_group
 from reference_impl.adapters._records import AdapterOutputError, AdapterRunError
 
 __all__ = ["PersistentProcess", "PersistentTimeout"]
 
 # Bytes of non-JSON stdout (banners) skipped per request before the answer.
 _MAX_NOISE = 1 << 20
-# Characters of the process's stderr attached to a failure (the tail).
+# Characters of the process's stderr attached to a failure (the tail); twice as many
+# bytes are kept while it runs (a UTF-8 character cut at the front is then replaced).
 _STDERR_TAIL = 4000
 # Seconds the process gets to exit after its stdin is closed.
 _EXIT_GRACE = 5.0
@@ -54,6 +65,10 @@ _EXIT_GRACE = 5.0
 _POLL = 0.5
 _CHUNK = 1 << 16
 _PR_SET_PDEATHSIG = 1
+# Request ids are drawn from [1, _ID_BOUND): positive, and within a C int of 32 bits, so
+# that a program in any language can read and echo them.
+_ID_BOUND = 2**31
+_IDS = random.SystemRandom()
 
 
 class PersistentTimeout(AdapterRunError):
@@ -99,9 +114,9 @@ class PersistentProcess:
         self.cwd = cwd
         self.startup_timeout = float(startup_timeout)
         self._proc: subprocess.Popen | None = None
-        self._err = None  # temporary file holding the process's stderr
+        self._err = bytearray()  # the last 2 * _STDERR_TAIL bytes of the process's stderr
         self._buf = bytearray()
-        self._next_id = 0
+        self._last_id = 0
         self.starts = 0  # processes started so far (for tests and reports)
 
     # -- process lifetime -------------------------------------------------------
@@ -110,13 +125,13 @@ class PersistentProcess:
         return self._proc is not None and self._proc.poll() is None
 
     def _start(self) -> None:
-        self._err = tempfile.TemporaryFile(prefix="hcv-persistent-")
+        self._err = bytearray()
         try:
             self._proc = subprocess.Popen(
                 self.argv,
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
-                stderr=self._err,
+                stderr=subprocess.PIPE,
                 cwd=self.cwd,
                 start_new_session=True,
                 # a preexec_fn in a threaded process may deadlock the child (dlopen locks):
@@ -128,25 +143,34 @@ class PersistentProcess:
                 ),
             )
         except OSError as exc:
-            self._err.close()
-            self._err = None
             raise AdapterRunError(
                 f"{self.label}: cannot start {self.argv[0]!r} ({exc.strerror})"
             ) from None
+        os.set_blocking(self._proc.stderr.fileno(), False)
         self._buf = bytearray()
         self.starts += 1
 
+    def _read_err(self) -> bool:
+        """Move what waits on the stderr pipe into the kept tail (never blocks); False at
+        its end (the program closed it: a selector must stop watching it)."""
+        proc = self._proc
+        if proc is None or proc.stderr is None or proc.stderr.closed:
+            return False
+        while True:
+            try:
+                data = os.read(proc.stderr.fileno(), _CHUNK)
+            except (BlockingIOError, InterruptedError):
+                return True
+            except OSError:
+                return False
+            if not data:
+                return False
+            self._err += data
+            del self._err[: -2 * _STDERR_TAIL]
+
     def _stderr_tail(self) -> str:
-        if self._err is None:
-            return ""
-        try:
-            self._err.seek(0, os.SEEK_END)
-            size = self._err.tell()
-            self._err.seek(max(0, size - 2 * _STDERR_TAIL))
-            text = self._err.read().decode(errors="replace").strip()
-            self._err.seek(0, os.SEEK_END)
-        except (OSError, ValueError):
-            return ""
+        self._read_err()
+        text = self._err.decode(errors="replace").strip()
         return text if len(text) <= _STDERR_TAIL else "..." + text[-_STDERR_TAIL:]
 
     def _kill(self) -> str:
@@ -154,22 +178,13 @@ class PersistentProcess:
         proc, tail = self._proc, self._stderr_tail()
         self._proc = None
         if proc is not None:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)
-            except (ProcessLookupError, PermissionError):
-                proc.kill()
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
-                pass
-            for f in (proc.stdin, proc.stdout):
+            kill_group(proc)
+            for f in (proc.stdin, proc.stdout, proc.stderr):
                 try:
                     f.close()
                 except OSError:
                     pass
-        if self._err is not None:
-            self._err.close()
-            self._err = None
+        self._err = bytearray()
         return tail
 
     def _died(self, when: str) -> AdapterRunError:
@@ -192,15 +207,26 @@ class PersistentProcess:
         )
 
     def close(self) -> None:
-        """Close stdin (the signal to exit), wait `_EXIT_GRACE` s, then kill."""
+        """Close stdin (the signal to exit), wait `_EXIT_GRACE` s, then kill.
+
+        stderr is read meanwhile: a program blocked on a full stderr pipe could not exit.
+        """
         proc = self._proc
         if proc is None:
             return
         try:
             proc.stdin.close()
-            proc.wait(timeout=_EXIT_GRACE)
-        except (OSError, subprocess.TimeoutExpired):
+        except OSError:
             pass
+        deadline = time.monotonic() + _EXIT_GRACE
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stderr, selectors.EVENT_READ)
+            while proc.poll() is None and time.monotonic() < deadline:
+                if sel.get_map() and sel.select(min(_POLL, deadline - time.monotonic())):
+                    if not self._read_err():
+                        sel.unregister(proc.stderr)
+                elif not sel.get_map():
+                    time.sleep(min(0.05, max(deadline - time.monotonic(), 0.0)))
         self._kill()
 
     # -- one request ------------------------------------------------------------
@@ -217,9 +243,11 @@ class PersistentProcess:
             The answer is not one JSON object with the request's id, or is over
             ``limit`` bytes.
         """
-        rid = self._next_id + 1
+        rid = self.new_id()
         line = (json.dumps({**obj, "id": rid}) + "\n").encode()
-        raw = self.exchange(line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False)[-1]
+        raw = self.exchange(
+            line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False, rid=rid
+        )[-1]
         try:
             data = json.loads(raw)
         except (json.JSONDecodeError, RecursionError, UnicodeDecodeError):
@@ -227,30 +255,54 @@ class PersistentProcess:
             raise AdapterOutputError(
                 f"{self.label}: answer line is not JSON (starts with {raw[:60]!r})"
             ) from None
-        if not isinstance(data, dict) or data.get("id") != rid:
+        if not isinstance(data, dict) or type(data.get("id")) is not int or data["id"] != rid:
             got = data.get("id") if isinstance(data, dict) else type(data).__name__
+            why = (
+                f" (a {type(got).__name__}: 'id' must be the request's integer)"
+                if got is not None and type(got) is not int and isinstance(data, dict)
+                else ""
+            )
             self._kill()
             raise AdapterOutputError(
-                f"{self.label}: answer to request {rid} carries id {got!r}; the process is replaced"
+                f"{self.label}: answer to request {rid} carries id {got!r}{why}; the process "
+                "is replaced"
             )
         return data
 
+    def new_id(self) -> int:
+        """A request id drawn at random, never the previous one (see the module docstring)."""
+        rid = self._last_id
+        while rid == self._last_id:
+            rid = _IDS.randrange(1, _ID_BOUND)
+        self._last_id = rid
+        return rid
+
     def exchange(
-        self, payload: bytes, is_end, timeout: float, limit: int, keep: bool = True
+        self,
+        payload: bytes,
+        is_end,
+        timeout: float,
+        limit: int,
+        keep: bool = True,
+        rid: int | None = None,
     ) -> list[bytes]:
         """The raw form of `request`: write ``payload``, read stdout lines up to the first
         for which ``is_end(line)`` holds (a code that reads a script on stdin and prints an
         end marker, e.g. LIGGGHTS). Returns the lines read, the end line last (with
         ``keep=False`` only the end line; the others are skipped, `_MAX_NOISE` bytes at
         most). Bounded like `request`; when the process dies, the message quotes its last
-        line of output that names an error, else its last line (a code's own message)."""
+        line of output that names an error, else its last line (a code's own message).
+        Output waiting before ``payload`` is sent is read first: a line starting with ``{``
+        there fails the call (an answer written before its request; ``rid`` names the
+        request in the message), other lines are discarded."""
         budget = float(timeout)
         if not self.alive:
             if self._proc is not None:  # died since the last answer: say so, then restart
                 raise self._died("between requests")
             self._start()
             budget += self.startup_timeout
-        self._next_id += 1
+        else:
+            self._refuse_waiting(rid)
         deadline = time.monotonic() + budget
         try:
             self._write(payload, deadline, budget)
@@ -261,18 +313,50 @@ class PersistentProcess:
             self._kill()  # Ctrl-C or any surprise: no process left mid-request
             raise
 
+    def _refuse_waiting(self, rid: int | None) -> None:
+        """Read what waits on stdout before a request is sent (never blocks): fail on a line
+        starting with ``{``, discard the rest (`_MAX_NOISE` bytes at most)."""
+        proc = self._proc
+        with selectors.DefaultSelector() as sel:
+            sel.register(proc.stdout, selectors.EVENT_READ)
+            while len(self._buf) <= _MAX_NOISE and sel.select(0):
+                data = os.read(proc.stdout.fileno(), _CHUNK)
+                if not data:
+                    break  # the process is ending: writing the request will say so
+                self._buf += data
+        waiting, self._buf = bytes(self._buf), bytearray()
+        ahead = next((ln for ln in waiting.split(b"\n") if ln.lstrip().startswith(b"{")), None)
+        if ahead is None and len(waiting) <= _MAX_NOISE:
+            return
+        self._kill()
+        if ahead is None:
+            raise AdapterOutputError(
+                f"{self.label}: more than {_MAX_NOISE} bytes on stdout between requests; "
+                "the process is replaced"
+            )
+        which = f"request {rid}" if rid is not None else "the next request"
+        raise AdapterOutputError(
+            f"{self.label}: stdout held a line starting with {ahead.lstrip()[:40]!r} before "
+            f"{which} was sent (an answer must follow its request, once); the process is "
+            "replaced"
+        )
+
     def _write(self, line: bytes, deadline: float, budget: float) -> None:
         proc = self._proc
         os.set_blocking(proc.stdin.fileno(), False)
         sent = 0
         with selectors.DefaultSelector() as sel:
             sel.register(proc.stdin, selectors.EVENT_WRITE)
+            sel.register(proc.stderr, selectors.EVENT_READ)
             while sent < len(line):
                 left = deadline - time.monotonic()
                 if left <= 0:
                     tail = self._kill()
                     raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
-                if not sel.select(min(left, _POLL)):
+                ready = {key.fileobj for key, _ in sel.select(min(left, _POLL))}
+                if proc.stderr in ready and not self._read_err():
+                    sel.unregister(proc.stderr)
+                if proc.stdin not in ready:
                     continue
                 try:
                     sent += os.write(proc.stdin.fileno(), line[sent : sent + _CHUNK])
@@ -288,6 +372,7 @@ class PersistentProcess:
         last = b""
         with selectors.DefaultSelector() as sel:
             sel.register(proc.stdout, selectors.EVENT_READ)
+            sel.register(proc.stderr, selectors.EVENT_READ)
             while True:
                 nl = self._buf.find(b"\n")
                 while nl >= 0:
@@ -318,7 +403,10 @@ class PersistentProcess:
                 if left <= 0:
                     tail = self._kill()
                     raise PersistentTimeout(f"{self.label}: timeout after {budget:g} s", tail)
-                if not sel.select(min(left, _POLL)):
+                ready = {key.fileobj for key, _ in sel.select(min(left, _POLL))}
+                if proc.stderr in ready and not self._read_err():
+                    sel.unregister(proc.stderr)
+                if proc.stdout not in ready:
                     continue
                 data = os.read(proc.stdout.fileno(), _CHUNK)
                 if not data:

@@ -126,6 +126,8 @@ _E_MIN = 0.05
 # (the bench's worker has its own per-run timeout).
 _TIMEOUT = 600.0
 _ARGS = ("-echo", "none", "-log", "none")
+# The version probe: help text, and no log.liggghts left in the caller's directory.
+_HELP_ARGS = ("-log", "none", "-h")
 # What `liggghts -h` said, once per process (the version line).
 _PROGRAM: dict = {}
 # Output bound of one run in the persistent mode (bytes): ~70 per step of fix print.
@@ -267,7 +269,7 @@ class LiggghtsAdapter(ContactAdapter):
         if not self.persistent:
             return _run_liggghts(script)
         server = self._shared_server()
-        marker = f"HCVEND {server._next_id + 1}"  # the exchange's own number: unique
+        marker = f"HCVEND {server.new_id()}"  # a fresh random number: no stale end line matches
         payload = f'{script}print "{marker}"\nclear\n'.encode()
         lines = server.exchange(
             payload, lambda ln: ln == marker.encode(), timeout=_TIMEOUT, limit=_MAX_OUTPUT
@@ -287,7 +289,8 @@ class LiggghtsAdapter(ContactAdapter):
         """The program's version line, e.g. "LIGGGHTS-PUBLIC 3.8.0"."""
         if self._version is None:
             if "version" not in _PROGRAM:  # one `liggghts -h` per process, not per variant
-                out = _run_liggghts("", timeout=60.0, args=("-h",))
+                # -log none: without it LIGGGHTS writes log.liggghts into the user's cwd
+                out = _run_liggghts("", timeout=60.0, args=_HELP_ARGS)
                 head = next((ln for ln in out.splitlines() if "Version" in ln), "")
                 _PROGRAM["version"] = head.split("Version", 1)[-1].split(",")[0].strip()
             self._version = _PROGRAM["version"] or "unknown"

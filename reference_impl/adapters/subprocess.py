@@ -59,7 +59,7 @@ Response (stdout), one JSON object::
     }
 
 Rules: start at t = 0 with q = 0 and dq/dt = v0; step with exactly ``dt``;
-record every step; stop at the first step after q has returned to <= 0, or after
+record every step (t[i] = i dt to round-off, checked: `_check_steps`); stop at the first step after q has returned to <= 0, or after
 ``n_steps`` steps; all four arrays have the same length (>= 2). Non-finite
 numbers may be written as null (a blown-up run is a result, not an error). To
 report a failure, write ``{"error": "one line"}`` or exit with a non-zero status.
@@ -85,9 +85,10 @@ sends ``"options": {"dampratio": ...}``. A request without options has no
 
 Persistent mode, ``cmd[persistent=true]:COMMAND``: the command is started once
 and serves every run: one request per line on stdin (the same object plus an
-integer ``"id"``), one answer per line on stdout (the same object as above, on
-one line, with the same ``"id"``); lines that do not start with ``{`` are
-skipped (a launcher's banner). Closing stdin asks it to exit. A request that
+integer ``"id"``, drawn at random per request), one answer per line on stdout
+(the same object as above, on one line, with the same ``"id"``, a JSON integer);
+lines that do not start with ``{`` are skipped (a launcher's banner); an answer
+line already waiting when a request is sent (written ahead) is refused. Closing stdin asks it to exit. A request that
 outlives its timeout, or a process that dies, fails that run only (one line) and
 the next run starts a fresh process (`reference_impl.adapters._persistent`).
 
@@ -113,6 +114,9 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
+import numpy as np
+
+from reference_impl._procs import kill_group
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -424,7 +428,7 @@ class SubprocessAdapter(ContactAdapter):
         finally:
             sel.close()
             if not done:  # timeout, overflow, Ctrl-C, any error: no process left behind
-                _kill_group(proc)
+                kill_group(proc)
             for f in (proc.stdin, proc.stdout, proc.stderr):
                 try:
                     f.close()
@@ -492,7 +496,9 @@ class SubprocessAdapter(ContactAdapter):
             self._laws[(scene.name, scene.v0)] = law_from_json(
                 data["implemented_law"], scene, self.label
             )
-        return trajectory_from_mapping(data, who=self.label)
+        tr = trajectory_from_mapping(data, who=self.label)
+        _check_steps(tr.t, float(scene.dt), self.label)
+        return tr
 
     def _impact_impl(self, scene: AdapterScene):
         return self._run("impact", scene)
@@ -504,6 +510,34 @@ class SubprocessAdapter(ContactAdapter):
         """The law declared in the last response for this scene and speed, else the scene's."""
         law = self._laws.get((scene.name, scene.v0))
         return law if law is not None else super().implemented_law(scene)
+
+
+def _check_steps(t: np.ndarray, dt: float, who: str) -> None:
+    """Rule 2, "step with exactly dt; record every step": t[i] = i dt to round-off.
+
+    The allowance at sample i is (i + 2) eps i dt (eps the float64 epsilon): t computed
+    as i * dt is within eps/2 of it; t accumulated by i additions of dt within about
+    i^2 eps dt / 4; printed with 15 or more significant digits and read back, within
+    another 2.5 eps. A code that steps with another dt (its own step, or answers made
+    for another request) misses by far more and is refused in one line naming the
+    sample (a critical step of infinity once passed that way).
+
+    Raises
+    ------
+    AdapterOutputError
+        The first sample off the grid.
+    """
+    i = np.arange(t.size, dtype=float)
+    want = i * dt
+    allowed = (i + 2.0) * np.finfo(float).eps * np.maximum(i, 1.0) * dt
+    off = np.flatnonzero(np.abs(t - want) > allowed)
+    if off.size:
+        k = int(off[0])
+        raise AdapterOutputError(
+            f"{who}: 't[{k}]' = {float(t[k])!r} s, should be {k} x dt = {float(want[k])!r} s "
+            f"(the asked step dt = {dt!r} s, to round-off: every step is dt and every step "
+            "is recorded)"
+        )
 
 
 def _check_program(prog: str, cwd: str | None) -> None:
@@ -532,15 +566,3 @@ def _signame(num: int) -> str:
         return signal.Signals(num).name
     except ValueError:
         return "unknown signal"
-
-
-def _kill_group(proc: subprocess.Popen) -> None:
-    """Kill the command and everything it started (its own session), then reap it."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        proc.kill()
-    try:
-        proc.wait(timeout=5)
-    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL is not ignorable
-        pass

@@ -8,7 +8,11 @@ DIR/summary.md (+ summary.png) at the end. Exit status: 0 when every case
 succeeded, 1 when some failed (their rows hold the errors) or, for ``bench:``
 tasks, when a case's scorecard did not pass (a metric failed), 2 for a bad spec
 or bad options (nothing run), 130 on Ctrl-C (cluster closed, results so far
-written).
+written). A file of DIR that cannot be written (a full disk) is one line naming
+it: exit status 2 when no case had run yet (nothing run; what this sweep created
+is removed), else 1: the sweep stops, the cases stored so far stay in
+cases.jsonl and ``--resume`` runs the rest; when none could be stored, what this
+sweep created in DIR is removed (no lock or empty file left).
 """
 
 from __future__ import annotations
@@ -150,9 +154,12 @@ def run_sweep(
 ) -> dict:
     """Run a validated `SweepSpec` into ``out_dir``; the function ``hcv sweep`` calls.
 
-    Returns a dict with ``cases``, ``ok``, ``failed``, ``rows``, ``seconds`` and
+    Returns a dict with ``cases``, ``ok``, ``failed``, ``rows``, ``seconds``,
     ``interrupted`` (True after Ctrl-C; the results so far are written, the
-    cluster closed). Raises `HCVInputError` for bad options (nothing run).
+    cluster closed), ``write_error`` (one line naming the file of DIR that could not
+    be written once cases had run, e.g. a full disk: the sweep stopped there; "" when
+    none) and ``stored`` (records in cases.jsonl). Raises `HCVInputError` for bad
+    options, or a file of DIR that cannot be written before any case ran (nothing run).
     ``on_start()`` is called once the options are accepted and the cluster answers
     (before anything is written), e.g. to print notes that a refusal must not precede.
     """
@@ -229,6 +236,12 @@ def _claim(out: Path, store, resume: bool):
 
     try:
         lock.acquire()
+    except HCVInputError:
+        undo()
+        raise
+    except OSError as exc:  # the pid could not be written (a full disk): nothing run
+        undo()
+        raise HCVInputError(f"--out {out}: {_cannot_write(exc, lock_path)}; nothing run") from None
     except BaseException:
         undo()
         raise
@@ -245,33 +258,66 @@ def _claim(out: Path, store, resume: bool):
             undo()  # refused or interrupted before anything was written
 
 
+def _cannot_write(exc: OSError, path=None) -> str:
+    """One line naming the file a write failed on (``path`` when the error names none)."""
+    name = exc.filename if exc.filename else path
+    return f"cannot write {name} ({exc.strerror or exc})"
+
+
+def _forget(out: Path, store, fresh_spec: bool, fresh_store: bool) -> None:
+    """After a write failure that stored no case: remove what this sweep created in DIR
+    (an empty case store, its spec.toml), so that `_claim` removes the lock and DIR too."""
+    if store.stored():
+        return
+    for path, fresh in ((store.path, fresh_store), (out / "spec.toml", fresh_spec)):
+        if fresh:
+            with contextlib.suppress(OSError):
+                path.unlink()
+
+
 def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, on_start) -> dict:
-    from reference_impl.sweep._output import consolidate, write_parquet, write_summary
+    from reference_impl.sweep._output import (
+        consolidate,
+        replacing,
+        write_parquet,
+        write_summary,
+    )
     from reference_impl.sweep._runner import iter_outcomes, open_client
     from reference_impl.sweep._tasks import run_case
 
     todo = [c for c in spec.cases if not c.error and c.key not in records]
+    fresh_spec = not os.path.lexists(out / "spec.toml")
+    fresh_store = not os.path.lexists(store.path)
 
     def prepare() -> None:
-        """Copy the spec, store the invalid cases (after the cluster is reachable)."""
+        """Copy the spec, store the invalid cases (after the cluster is reachable).
+
+        A write that fails here is before any case ran: one line, exit status 2.
+        """
         if on_start is not None:
             on_start()
-        (out / "spec.toml").write_text(spec.text, encoding="utf-8")
-        for case in spec.invalid:  # a row with the reason; never sent to a worker
-            if case.key not in records:
-                rec = _record(case, False, [], case.error, 0.0, "")
-                store.append(rec)
-                records[case.key] = rec
+        try:
+            with replacing(out / "spec.toml") as tmp:
+                tmp.write_text(spec.text, encoding="utf-8")
+            for case in spec.invalid:  # a row with the reason; never sent to a worker
+                if case.key not in records:
+                    rec = _record(case, False, [], case.error, 0.0, "")
+                    store.append(rec)
+                    records[case.key] = rec
+        except OSError as exc:
+            _forget(out, store, fresh_spec, fresh_store)
+            raise HCVInputError(f"--out {out}: {_cannot_write(exc)}; nothing run") from None
 
     tty = sys.stderr.isatty() if progress is None else progress
     t0 = time.perf_counter()
     where = f"scheduler {scheduler}" if scheduler else "local cluster"
     interrupted = False
+    write_error = ""  # the first file of DIR that could not be written
     try:
         if not todo:
             prepare()
         else:
-            with open_client(workers, scheduler) as client:
+            with open_client(workers, scheduler) as client, contextlib.ExitStack() as stack:
                 prepare()
                 done0 = len(spec.cases) - len(todo)
                 failed0 = sum(
@@ -283,18 +329,27 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, 
                     if scheduler
                     else f"local cluster of {n} worker process{'es' if n != 1 else ''}"
                 )
+                outcomes = stack.enter_context(
+                    contextlib.closing(
+                        iter_outcomes(
+                            client,
+                            run_case,
+                            [c.payload() for c in todo],
+                            keys=[f"hcv-case-{c.key}" for c in todo],
+                        )
+                    )
+                )
                 with _Display(len(spec.cases), done0, failed0, tty) as disp:
-                    for o in iter_outcomes(
-                        client,
-                        run_case,
-                        [c.payload() for c in todo],
-                        keys=[f"hcv-case-{c.key}" for c in todo],
-                    ):
+                    for o in outcomes:
                         case = todo[o.index]
                         rec = _record(
                             case, o.ok, o.value, o.error, o.seconds, o.worker, o.cpu_seconds
                         )
-                        store.append(rec)
+                        try:
+                            store.append(rec)
+                        except OSError as exc:  # a full disk: stop, keep what is stored
+                            write_error = _cannot_write(exc)
+                            break
                         records[case.key] = rec
                         disp.update(o.ok)
     except KeyboardInterrupt:
@@ -302,10 +357,26 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, 
         if not (out / "spec.toml").exists():  # interrupted before anything was written
             return {"interrupted": True}
     seconds = time.perf_counter() - t0
+    stored = store.stored()
+    if write_error and not stored:
+        _forget(out, store, fresh_spec, fresh_store)  # nothing to resume: leave DIR as found
+        return _result(spec, records, 0, seconds, interrupted, where, write_error, stored)
     df = consolidate(spec, records)
-    if len(df):
-        write_parquet(df, out / "results.parquet")
-    write_summary(spec, df, out, seconds=seconds, where=where, interrupted=interrupted)
+    for write in (
+        (lambda: write_parquet(df, out / "results.parquet")) if len(df) else None,
+        lambda: write_summary(spec, df, out, seconds=seconds, where=where,
+                              interrupted=interrupted),
+    ):  # fmt: skip
+        try:
+            if write is not None:
+                write()
+        except OSError as exc:
+            write_error = write_error or _cannot_write(exc)
+    return _result(spec, records, len(df), seconds, interrupted, where, write_error, stored)
+
+
+def _result(spec, records, rows, seconds, interrupted, where, write_error, stored) -> dict:
+    """What `run_sweep` returns (see there)."""
     finished = [records[c.key] for c in spec.cases if c.key in records]
     failed = sum(1 for r in finished if not r["ok"])
     return {
@@ -321,10 +392,12 @@ def _run_claimed(spec, out: Path, store, records, workers, scheduler, progress, 
         )
         if spec.task.startswith("bench:")
         else 0,
-        "rows": len(df),
+        "rows": rows,
         "seconds": seconds,
         "interrupted": interrupted,
         "where": where,
+        "write_error": write_error,
+        "stored": stored,
     }
 
 
@@ -397,6 +470,18 @@ def run(args) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERRUPTED  # the CLI makes it 143 after SIGTERM
+    if res.get("write_error"):
+        print(
+            f"hcv: error: {res['write_error']}: the sweep stopped; {res['stored']} of "
+            f"{res['cases']} cases are stored in {out / 'cases.jsonl'}"
+            + (
+                ", --resume runs the rest"
+                if res["stored"]
+                else " (none: what this sweep created there is removed)"
+            ),
+            file=sys.stderr,
+        )
+        return EXIT_FAIL
     gate = (
         f"; {res['not_passed']} of {res['ok']} benchmarked cases did not pass their "
         "scorecard (a metric failed, was undecided, or nothing was measured)"

@@ -11,13 +11,15 @@ parameters first (named by their dotted paths), then the task's fields, then
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 from pathlib import Path
 
 import pandas as pd
 
-__all__ = ["CaseStore", "consolidate", "write_summary"]
+__all__ = ["CaseStore", "consolidate", "replacing", "write_parquet", "write_summary"]
 
 # Rows of the table printed in summary.md (the full table is results.parquet).
 _SUMMARY_ROWS = 200
@@ -95,19 +97,35 @@ class CaseStore:
         return out
 
     def append(self, record: dict) -> None:
-        """Write one record and flush it to the OS (survives a kill of this process)."""
-        self.dir.mkdir(parents=True, exist_ok=True)
-        if not self._ended:
-            # A line cut by a kill has no newline: end it, or the next record joins it.
-            with self.path.open("a+b") as fh:
-                if fh.tell() > 0:
-                    fh.seek(-1, 2)
-                    if fh.read(1) != b"\n":
-                        fh.write(b"\n")
-            self._ended = True
-        with self.path.open("a", encoding="utf-8") as fh:
-            fh.write(json.dumps(record, default=_json_default, allow_nan=True) + "\n")
-            fh.flush()
+        """Write one record and flush it to the OS (survives a kill of this process).
+
+        Raises
+        ------
+        OSError
+            The file could not be written (a full disk); its ``filename`` is the store's
+            path, whatever call failed (a failed write names no file by itself).
+        """
+        try:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            if not self._ended:
+                # A line cut by a kill has no newline: end it, or the next record joins it.
+                with self.path.open("a+b") as fh:
+                    if fh.tell() > 0:
+                        fh.seek(-1, 2)
+                        if fh.read(1) != b"\n":
+                            fh.write(b"\n")
+                self._ended = True
+            with self.path.open("a", encoding="utf-8") as fh:
+                fh.write(json.dumps(record, default=_json_default, allow_nan=True) + "\n")
+                fh.flush()
+        except OSError as exc:
+            # a record cut by the failure lacks its newline: end it before the next one
+            self._ended = False
+            raise _named(exc, self.path) from None
+
+    def stored(self) -> int:
+        """Number of complete records in the file (0 when it is missing)."""
+        return len(self.load())
 
 
 def _json_default(x):
@@ -168,12 +186,32 @@ def _arrow_safe(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def _named(exc: OSError, path) -> OSError:
+    """``exc`` naming ``path`` (the file the user knows, not a temporary name)."""
+    return OSError(exc.errno, exc.strerror or str(exc), str(path))
+
+
+@contextlib.contextmanager
+def replacing(path: Path):
+    """Yield a temporary name beside ``path``; rename it to ``path`` when the block ends
+    without error, else remove it: a failed write (a full disk) leaves the previous file
+    or none, never a cut one, and raises OSError naming ``path``."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if isinstance(exc, OSError):
+            raise _named(exc, path) from None
+        raise
+
+
 def write_parquet(df: pd.DataFrame, path) -> None:
     """results.parquet via pyarrow (written to a temporary name, then renamed)."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    df.to_parquet(tmp, index=False, engine="pyarrow")
-    tmp.replace(path)
+    with replacing(Path(path)) as tmp:
+        df.to_parquet(tmp, index=False, engine="pyarrow")
 
 
 def _fmt(v) -> str:
@@ -270,7 +308,8 @@ def figure(spec, df: pd.DataFrame, path) -> bool:
     if groups:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    with replacing(Path(path)) as tmp:
+        fig.savefig(tmp, format="png")
     return True
 
 
@@ -344,5 +383,6 @@ def write_summary(
         if len(df) > _SUMMARY_ROWS:
             lines.append(f"\n(first {_SUMMARY_ROWS} of {len(df)} rows; all in results.parquet)")
     path = out_dir / "summary.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with replacing(path) as tmp:
+        tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
