@@ -308,8 +308,7 @@ def _check_inputs(source, params: dict[str, Any]) -> None:
             )
         if not is_real_number(value) or not math.isfinite(_as_float(value)):
             raise ExpressionError(
-                f"Expression: parameter {name} = {_shown(value)} must be a finite "
-                "real number"
+                f"Expression: parameter {name} = {_shown(value)} must be a finite real number"
             )
 
 
