@@ -65,7 +65,11 @@ def _check_row(got: dict, i: int, sol, call: str) -> None:
         )
 
 
-@pytest.mark.parametrize("pot", _POTENTIALS, ids=repr)
+# A sum of powers: no Gauss-Jacobi batch, every impact by `prepare` (its compiled family call).
+_SUM = PowerLaw(1.0e4, 0.5) + PowerLaw(1.0e6, 0.8)
+
+
+@pytest.mark.parametrize("pot", [*_POTENTIALS, _SUM], ids=repr)
 def test_mixed_call_twice_then_a_clean_call_all_answer(pot):
     """Fails on main: the second call raised SystemError (and every later one)."""
     z = _mixed_zetas()
