@@ -189,7 +189,9 @@ def solve_impacts(
     ------
     HCVInputError
         Invalid input (the message names the first offending value), or more
-        than BATCH_MAX impacts.
+        than BATCH_MAX impacts; a damping ratio outside `solve_impact`'s range (above
+        ZETA_MAX, or so close below 1 that s_end > S_END_MAX) is refused before any work.
+        zeta = 1 and above are solved (critical and overdamped closed forms).
     """
     if law is not None:
         from reference_impl.theory.laws import law_from_dict
