@@ -357,7 +357,8 @@ def _overdamped_tail(g_of, osc: VirtualOscillator, beta: float, pot, m) -> tuple
     return overdamped_tail(g_of, osc, beta, pot, m, _NODE_ULPS)
 
 
-@numba.njit(cache=True)
+# error_model "numpy": called inside `batch._gj_batch`'s prange loop (no exception there).
+@numba.njit(cache=True, error_model="numpy")
 def _fill_rows(zeta, sp, s_end, lz, rows):  # pragma: no cover - compiled
     """Branches (S0, S1, Phi0, Phi1, length) with x = A exp(-zeta S) sin(wd Phi), S and
     Phi affine in the distance d from the branch's singular end, into ``rows`` (3 x 5);

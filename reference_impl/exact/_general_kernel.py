@@ -96,9 +96,13 @@ STOP_CREEP = 2.0
 
 
 # ---- the algorithm (module docstring) -------------------------------------------
+# error_model "numpy" throughout (here and in `_general_step`): `_law_batch` runs this
+# kernel in a prange loop, where an exception (a division by zero) cannot be carried out
+# and poisoned every later call (issue 36); inf/NaN is refused by the status tests. The
+# same bits for every nonzero divisor.
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def forces(q, w, ks, ps, cs, es, sc):
     """(F, dF/dt, U', U' q) at (q, w): F = U' + C w the total contact force."""
     m = sc[0]
@@ -109,7 +113,7 @@ def forces(q, w, ks, ps, cs, es, sc):
     return F, dF, dU, dU * q
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def event_g(kind, q, w, ks, ps, cs, es, sc):
     if kind == 0:
         return w
@@ -119,7 +123,7 @@ def event_g(kind, q, w, ks, ps, cs, es, sc):
     return dF
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def event_dg(kind, mode, qs, s, q, w, ks, ps, cs, es, sc):
     """d g / d(independent variable) for kinds 0 (w) and 1 (F); nan for kind 2."""
     if kind == 2:
@@ -131,7 +135,7 @@ def event_dg(kind, mode, qs, s, q, w, ks, ps, cs, es, sc):
     return d
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def locate(kind, mode, qs, s, a, b, h, g0, g1, ea, eb, ks, ps, cs, es, sc, Ta, Tb):
     """Sub-step tau in (0, h) where event ``kind`` changes sign; state there.
 
@@ -204,7 +208,7 @@ def locate(kind, mode, qs, s, a, b, h, g0, g1, ea, eb, ks, ps, cs, es, sc, Ta, T
     return tau, ra, rb
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def solve(v0, qE, ks, ps, cs, es, sc):
     """One impact; returns an array of OUT_FIELDS (see module docstring)."""
     m = sc[0]

@@ -27,9 +27,10 @@ KSUB = 8.0
 
 
 # ---- force function of sums of power laws (the compiled path) -------------------
+# error_model "numpy": these run under `_law_batch`'s prange loop (see `_general_kernel`).
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def pw(q, p):
     if p == 1.5:
         return q * math.sqrt(q)
@@ -50,7 +51,7 @@ def pw(q, p):
     return q**p
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def fc(q, full, ks, ps, cs, es, sc):
     alpha, A, zf = sc[1], sc[2], sc[3]
     need_U = full or zf != 0.0
@@ -110,7 +111,7 @@ def fc(q, full, ks, ps, cs, es, sc):
 # ---- one step in the phase variables (see `_general_kernel`) ----------------------
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def state(mode, qs, s, a, b):
     """(q, w) from a phase's (s, a, b); in mode 2, qs holds alpha."""
     if mode == 0:
@@ -120,7 +121,7 @@ def state(mode, qs, s, a, b):
     return qs * s**KSUB, a
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def deriv(mode, qs, s, a, b, ks, ps, cs, es, sc):
     m = sc[0]
     if mode == 0:
@@ -138,7 +139,7 @@ def deriv(mode, qs, s, a, b, ks, ps, cs, es, sc):
     return -(C + dU / a) / m * dq, dq / a
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def gbs(mode, qs, s, a, b, h, ks, ps, cs, es, sc, Ta, Tb):
     """One extrapolated step; returns (a, b, error of a, error of b)."""
     d0a, d0b = deriv(mode, qs, s, a, b, ks, ps, cs, es, sc)

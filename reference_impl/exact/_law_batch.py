@@ -76,7 +76,9 @@ _OK, _FAILED, _LOST = 0, 1, 2
 # the cache directory is keyed by the content of every compiled source
 # (`reference_impl._numba_dir._COMPILED_SOURCES`, this file included), so a change of
 # that kernel selects a fresh directory instead of reusing this machine code.
-@numba.njit(cache=True, parallel=True)
+# error_model "numpy" on this loop and all it calls: an exception inside a prange loop
+# cannot be carried out and poisoned every later call (issue 36); inf/NaN fails `_fields`.
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover - compiled
     """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its `_OK`,
     `_FAILED` or `_LOST` (one speed per thread step: no bit depends on the threads)."""
@@ -84,7 +86,7 @@ def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover -
         flags[i] = _fields(_SOLVE(v[i], q_top[i], ks, ps, cs, es, sc), v[i], q_top[i], out[:, i])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fields(r, v0, q_e, col):  # pragma: no cover - compiled
     """``col`` = the `LAW_FIELDS` of one speed from its kernel row ``r``, as
     `general_law._solve_planned` forms them (the same float operations in the same order:

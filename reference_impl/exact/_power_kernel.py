@@ -55,7 +55,8 @@ def power_constants(pot: PowerLaw, m: float) -> tuple | None:
     return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p)
 
 
-@numba.njit(cache=True)
+# error_model "numpy": called inside `batch._gj_batch`'s prange loop (no exception there).
+@numba.njit(cache=True, error_model="numpy")
 def _power_values(rows, i, d, args, vals):  # pragma: no cover - compiled
     """c ((x/v0)(s)/s)^beta L^(beta+1) at the nodes d of branch row i (the values carry
     their scale); args = (zeta, wd, beta, c)."""

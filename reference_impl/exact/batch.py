@@ -31,6 +31,7 @@ from reference_impl.exact._branches import (
     _pow_split,
 )
 from reference_impl.exact._law_batch import solve_law_batch
+from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._power_kernel import _POWER_ROWS
 from reference_impl.exact._sums import GJ_OK
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -57,6 +58,8 @@ _FILL_CHUNK = 0
 # Chunks of a loop over the distinct zetas (~3.5 us each; a chunk costs ~2 us to hand
 # out): about this many, 4 zetas each for a 50-zeta grid, ~6000 for 1e5 distinct ones.
 _ZETA_PARTS = 16
+# The oscillator's limits (`_oscillator`), as globals of the compiled check `_count_invalid`.
+_ZETA_MAX, _S_END_MAX = ZETA_MAX, S_END_MAX
 # Fields of the returned dict, as in `ImpactSolution`.
 _FIELDS = (
     "max_penetration",
@@ -70,19 +73,33 @@ _FIELDS = (
 )
 
 
-@numba.njit(cache=True)
+# The compiled functions here run in (or under) parallel loops: error_model "numpy" makes a
+# division by zero an inf or NaN (caught by the status tests) instead of an exception, which
+# numba cannot carry out of a prange loop: it came back as SystemError on the next call and
+# on every later one (issue 36, item 4). The results are the same bits for nonzero divisors.
+@numba.njit(cache=True, error_model="numpy")
 def _zeta_factor_row(z, f):  # pragma: no cover - compiled
     """``f`` = exp(-zeta s_peak) and the two restitutions (overlap end, zero force) of one
-    zeta, the expressions `solve_impact` evaluates, once per zeta instead of per impact.
-    (-0.0 and 0.0, one entry of the distinct zetas, give the same bits in each.)"""
-    wd = math.sqrt((1.0 - z) * (1.0 + z))
-    sp = math.atan2(wd, z) / wd
+    zeta, the expressions `solve_impact` evaluates (`VirtualOscillator`'s three regimes:
+    s_peak = atan2(wd, zeta)/wd, 1 at critical damping, log1p(zeta - 1 + r)/r above it,
+    where the body never returns to q = 0: restitution 0), once per zeta instead of per
+    impact. (-0.0 and 0.0, one entry of the distinct zetas, give the same bits in each.)"""
+    if z < 1.0:
+        wd = math.sqrt((1.0 - z) * (1.0 + z))
+        sp = math.atan2(wd, z) / wd
+        f[1] = math.exp(-math.pi * z / wd)
+    elif z == 1.0:
+        sp = 1.0
+        f[1] = 0.0
+    else:
+        r = math.sqrt(z - 1.0) * math.sqrt(z + 1.0)
+        sp = math.log1p((z - 1.0) + r) / r
+        f[1] = 0.0
     f[0] = math.exp(-z * sp)
-    f[1] = math.exp(-math.pi * z / wd)
     f[2] = math.exp(-2.0 * z * sp) if z > 0.0 else 1.0
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def _gj_batch(zetas, u, W, beta, zeta_max, rtol, factors, with_factors):  # pragma: no cover
     """Dimensionless branch sums (c = 1, v0 = 1) of every zeta: rise, fall, mid, errors, ok;
     and, with ``with_factors``, ``factors[i]`` = `_zeta_factor_row` of ``zetas[i]``.
@@ -172,7 +189,9 @@ def solve_impacts(
     ------
     HCVInputError
         Invalid input (the message names the first offending value), or more
-        than BATCH_MAX impacts.
+        than BATCH_MAX impacts; a damping ratio outside `solve_impact`'s range (above
+        ZETA_MAX, or so close below 1 that s_end > S_END_MAX) is refused before any work.
+        zeta = 1 and above are solved (critical and overdamped closed forms).
     """
     if law is not None:
         from reference_impl.theory.laws import law_from_dict
@@ -238,7 +257,7 @@ def _float_array(name: str, values) -> np.ndarray:
     return real_array(name, values, "solve_impacts")
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def _count_invalid(v, z, m, tiny, starts):  # pragma: no cover - compiled
     """How many impacts `_refuse_invalid` would refuse (an integer sum: any thread count),
     and ``starts[i]``: does a run of equal zetas start at impact i (`_unique_zetas`)."""
@@ -247,7 +266,12 @@ def _count_invalid(v, z, m, tiny, starts):  # pragma: no cover - compiled
         vi, zi = v[i], z[i]
         energy = 0.5 * m * vi * vi
         ok = math.isfinite(vi) and vi > 0.0 and math.isfinite(energy) and energy >= tiny
-        bad += 0 if ok and math.isfinite(zi) and zi >= 0.0 else 1
+        ok = ok and math.isfinite(zi) and 0.0 <= zi <= _ZETA_MAX
+        # `VirtualOscillator`'s refusal of zeta just below 1 (s_end beyond S_END_MAX), the
+        # same operations: refused here, before any work, not by the one-by-one loop.
+        if ok and zi < 1.0:
+            ok = not math.pi / math.sqrt((1.0 - zi) * (1.0 + zi)) > _S_END_MAX
+        bad += 0 if ok else 1
         starts[i] = i == 0 or zi != z[i - 1]
     return bad
 
@@ -266,6 +290,11 @@ def _refuse_invalid(v: np.ndarray, z: np.ndarray, m: float, tiny: float) -> None
         )
     for zi in z[~(np.isfinite(z) & (z >= 0))][:1]:
         _check_zeta(zi)
+    # zeta above ZETA_MAX or too close below 1: `VirtualOscillator` raises its message.
+    with np.errstate(all="ignore"):
+        s_end = np.pi / np.sqrt((1.0 - z) * (1.0 + z))
+    for zi in z[(z > ZETA_MAX) | ((z < 1.0) & (s_end > S_END_MAX))][:1]:
+        VirtualOscillator(1.0, float(zi))
 
 
 def _unique_zetas(z: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -343,7 +372,7 @@ def _power_law_batch(pot: PowerLaw, m, v, z, zu, beta, out) -> np.ndarray:
     return np.flatnonzero(todo) if left else np.arange(0)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, parallel=True, error_model="numpy")
 def _power_law_fill(
     v,
     z,

@@ -29,6 +29,21 @@ _MAX_DEPTH = 100
 # Largest |exponent| of a numeric power: float64 spans 2**+-1074, so any larger
 # exponent is an overflow or a hang (9**9**9 has 370 million digits).
 _MAX_EXPONENT = 1074
+# Most decimal digits of the numerator or denominator of any number the formula forms (a
+# literal, a power, a product of constants): the exact value of every float64 number
+# written in its shortest decimal form has at most 326 (5e-324 = 5/10**324; the largest,
+# ~1.8e308, 309 digits), so 400 admits every float64 constant. Larger numbers reached
+# Python's int-to-str limit (4300 digits) inside sympy's printing (a traceback), and their
+# arithmetic grows with every derivative (issue 36).
+_MAX_DIGITS = 400
+# Deepest nesting of transcendental calls (exp, log, sin, ... not sqrt or abs): sympy's
+# limit and series at q -> 0 grow exponentially with it (measured on a shared 2-core
+# machine: sin nested 5 deep 4.3 s, asinh 5 deep 7.7 s, sin 60 deep past 600 s). A contact
+# law nests two or three (log(cosh(q)), q*tanh(sqrt(q))); the wall-time budget of the whole
+# analysis (`_expr_budget`) catches the rest (sinh(sinh(sinh(q))) takes > 100 s).
+_MAX_NESTING = 4
+# Functions that count toward _MAX_NESTING (algebraic ones do not: sqrt(sqrt(q)) = q**(1/4)).
+_ALGEBRAIC = ("sqrt", "abs")
 # Characters of the source quoted in a message, so errors stay one short line.
 _QUOTE_CHARS = 60
 # Digits used to check that each constant of U fits in float64 (magnitude only).
@@ -101,6 +116,50 @@ def _as_float(v) -> float:
         return math.nan
 
 
+def _digits(n: int) -> int:
+    """Decimal digits of |n| (within one), without converting it to a string (Python
+    refuses str() beyond 4300 digits)."""
+    return int(abs(n).bit_length() * 0.30103) + 1
+
+
+def _too_long(expr: sp.Expr) -> int:
+    """The digits of the longest numerator or denominator of ``expr``'s numeric
+    coefficient (a number, or the constant factor or term sympy folded into a product or
+    sum), when above _MAX_DIGITS; else 0."""
+    if expr.is_Rational:
+        coeff = expr
+    elif expr.is_Mul:
+        coeff = expr.as_coeff_Mul()[0]
+    elif expr.is_Add:
+        coeff = expr.as_coeff_Add()[0]
+    else:
+        return 0
+    if not coeff.is_Rational:
+        return 0
+    most = max(_digits(coeff.p), _digits(coeff.q))
+    return most if most > _MAX_DIGITS else 0
+
+
+def check_digits(expr: sp.Expr, what: str, source: str, limit: int) -> None:
+    """Refuse ``expr`` (``what`` of U = ``source``) when a number in it has more than
+    ``limit`` digits in its numerator or denominator (one line, the digits named)."""
+    for a in expr.atoms(sp.Rational):
+        most = max(_digits(a.p), _digits(a.q))
+        if most > limit:
+            raise ExpressionError(
+                f"Expression: {what} of U = {_short(source)} has a number of {most} digits, "
+                f"more than {limit}; write its constants as decimal floats (e.g. 1.5e+30)"
+            )
+
+
+def _shown(value) -> str:
+    """``value`` for a message: its repr cut to one short line; an integer too long for
+    repr (Python's 4300-digit int-to-str limit) by its digit count."""
+    if isinstance(value, int) and _digits(value) > _QUOTE_CHARS:
+        return f"an integer of {_digits(value)} digits"
+    return repr(value)[:_QUOTE_CHARS]
+
+
 def _exact(value) -> sp.Rational:
     """Exact sympy value of an int, or of the shortest decimal that reads back as the float."""
     if isinstance(value, (int, np.integer)):
@@ -114,6 +173,7 @@ class _Builder:
     def __init__(self, source: str, values: dict[str, sp.Expr]):
         self.source = source
         self.values = values  # parameter name -> exact value
+        self.nesting = 0  # transcendental calls around the node being built
 
     def fail(self, node: ast.AST, what: str, hint: str) -> ExpressionError:
         token = ast.get_source_segment(self.source, node) or type(node).__name__
@@ -122,6 +182,18 @@ class _Builder:
         return ExpressionError(f"Expression: {what} {_short(token)}{where} is not allowed ({hint})")
 
     def build(self, node: ast.AST, depth: int = 0) -> sp.Expr:
+        out = self._build(node, depth)
+        most = _too_long(out)
+        if most:
+            raise self.fail(
+                node,
+                "number",
+                f"its exact value has {most} digits, more than {_MAX_DIGITS}: write it as "
+                "a decimal float, e.g. 1.5e+30",
+            )
+        return out
+
+    def _build(self, node: ast.AST, depth: int) -> sp.Expr:
         if depth > _MAX_DEPTH:
             raise ExpressionError(
                 f"Expression: the formula is nested more than {_MAX_DEPTH} levels deep; "
@@ -196,7 +268,20 @@ class _Builder:
             raise self.fail(node, "keyword or starred argument in", f"call {name}(q) plainly")
         if len(node.args) != 1:
             raise self.fail(node, "call", f"{name} takes 1 argument, got {len(node.args)}")
-        return _FUNCTIONS[name](self.build(node.args[0], d))
+        if name in _ALGEBRAIC:
+            return _FUNCTIONS[name](self.build(node.args[0], d))
+        if self.nesting >= _MAX_NESTING:
+            raise self.fail(
+                node,
+                "call",
+                f"transcendental functions nest more than {_MAX_NESTING} deep here; sympy's "
+                "analysis grows exponentially with the nesting",
+            )
+        self.nesting += 1
+        try:
+            return _FUNCTIONS[name](self.build(node.args[0], d))
+        finally:
+            self.nesting -= 1
 
 
 def _check_inputs(source, params: dict[str, Any]) -> None:
@@ -223,8 +308,7 @@ def _check_inputs(source, params: dict[str, Any]) -> None:
             )
         if not is_real_number(value) or not math.isfinite(_as_float(value)):
             raise ExpressionError(
-                f"Expression: parameter {name} = {repr(value)[:_QUOTE_CHARS]} must be a finite "
-                "real number"
+                f"Expression: parameter {name} = {_shown(value)} must be a finite real number"
             )
 
 
@@ -237,7 +321,12 @@ def _parse(source: str, params: dict[str, float]) -> sp.Expr:
         col = f" at column {e.offset}" if e.offset else ""
         msg = f"Expression: syntax error{col}: {e.msg} in {_short(text)}"
         raise ExpressionError(msg) from None
-    except (ValueError, RecursionError, MemoryError):
+    except ValueError as e:
+        # Python refuses an integer literal of more than 4300 digits (int_max_str_digits).
+        what = "an integer literal is too long" if "digits" in str(e) else "cannot parse"
+        msg = f"Expression: {what} in {_short(text)}; check the formula"
+        raise ExpressionError(msg) from None
+    except (RecursionError, MemoryError):
         msg = f"Expression: cannot parse {_short(text)}; check the formula"
         raise ExpressionError(msg) from None
     # Every identifier first: a dunder anywhere (the usual sandbox escape) is

@@ -19,16 +19,14 @@ on exact sympy objects; numbers are compared only at raised precision.
 
 from __future__ import annotations
 
-import contextlib
 import math
-import signal
-import threading
 
 import mpmath
 import numpy as np
 import sympy as sp
 
 from reference_impl.errors import ExpressionError
+from reference_impl.potentials._expr_budget import SeriesTimeout, time_limit
 from reference_impl.potentials._expr_parse import _Q, _short
 
 __all__ = [
@@ -76,73 +74,6 @@ _FINE_SCAN_ABOVE = 10.0**_SCAN_TOP
 # subnormal); the float formula cannot be judged there, only skipped.
 _FLOAT_MIN = 1e-300
 _FLOAT_MAX = 1e307
-
-
-class SeriesTimeout(BaseException):
-    """sympy's series did not finish within its budget (or could not be bounded).
-
-    A BaseException, like KeyboardInterrupt: sympy catches ``Exception`` broadly in
-    places, and an alarm landing there would be swallowed and the series run on.
-    """
-
-
-# Interval (s) at which an expired series budget is signalled again until honoured.
-_REARM_SECONDS = 0.1
-
-
-@contextlib.contextmanager
-def time_limit(seconds: float):
-    """Raise `SeriesTimeout` inside the block after ``seconds`` of wall time.
-
-    sympy's series of a nested formula can take exponential time (exp(exp(q))
-    to order 10 takes 5 s, to order 14 minutes). The bound uses SIGALRM, which
-    only the main thread can receive; elsewhere, or when another alarm is
-    pending, the block is not entered (SeriesTimeout at once) and the caller
-    falls back to raised-precision evaluation.
-    """
-    usable = (
-        hasattr(signal, "setitimer")
-        and threading.current_thread() is threading.main_thread()
-        and signal.getitimer(signal.ITIMER_REAL)[0] == 0
-    )
-    if not usable:
-        raise SeriesTimeout("no way to bound sympy's series here")
-
-    def _expire(signum, frame):
-        if _in_finalizer(frame):
-            # An exception raised in a gc callback or a __del__ is not propagated: Python
-            # prints it as "Exception ignored in ..." (a traceback warning in the test log)
-            # and the series runs on. The timer re-fires in _REARM_SECONDS: raise then.
-            return
-        raise SeriesTimeout(f"sympy's series took more than {seconds} s")
-
-    previous = signal.signal(signal.SIGALRM, _expire)
-    # The timer re-fires every _REARM_SECONDS after the first expiry, so that an alarm
-    # swallowed by a bare ``except:`` somewhere in sympy is raised again.
-    signal.setitimer(signal.ITIMER_REAL, seconds, _REARM_SECONDS)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
-
-
-def _in_finalizer(frame) -> bool:
-    """The signal arrived inside a gc callback, a ``__del__`` or a weakref finalizer."""
-    import gc
-
-    callbacks = {getattr(cb, "__code__", None) for cb in gc.callbacks}
-    f = frame
-    while f is not None:
-        code = f.f_code
-        if (
-            code in callbacks
-            or code.co_name in ("__del__", "_remove_dead_weakref")
-            or (code.co_name == "__call__" and code.co_filename.endswith("weakref.py"))
-        ):
-            return True
-        f = f.f_back
-    return False
 
 
 def strip_abs(expr: sp.Expr, source: str) -> sp.Expr:

@@ -27,6 +27,7 @@ import numpy as np
 import sympy as sp
 
 from reference_impl.errors import ExpressionError, HCVInputError, NonMonotoneError
+from reference_impl.potentials._expr_budget import ExpressionTimeout, analysis_budget
 from reference_impl.potentials._expr_parse import (
     _Q,
     _as_float,
@@ -34,6 +35,7 @@ from reference_impl.potentials._expr_parse import (
     _check_inputs,
     _parse,
     _short,
+    check_digits,
 )
 from reference_impl.potentials._expr_turning import check_rising, rising_inverse
 from reference_impl.potentials._families import register_family
@@ -70,6 +72,14 @@ _SERIES_CHECK_FRACTIONS = (1.0, 0.5, 0.1, 1e-2, 1e-4)
 # Extra digits of the mpmath path above the float floor: there the formula loses
 # at most ~2 digits (it is float64-accurate to 1e-14), 5 covers that.
 _MP_GUARD_DPS = 5
+# Wall-time budget (s) of the whole analysis of one expression (every sympy step:
+# parse, diff, lambdify, limits, series, expansion): the issue asks <= 10 s; ordinary
+# contact laws take well under 1 s, nested ones (sin 4 deep) a few seconds.
+_ANALYSIS_SECONDS = 10.0
+# Most digits of a number in the first three derivatives (they multiply the parser's
+# <= 400-digit constants by exponents, three times): far below Python's 4300-digit
+# int-to-str limit that sympy's printing hit (issue 36).
+_MAX_DERIVATIVE_DIGITS = 2000
 # Below this overlap (m) the float floor scan has no points: the mpmath path
 # always raises its precision there.
 _MP_TINY_Q = 1e-300
@@ -117,7 +127,8 @@ class Expression(Potential):
         names in ``params``, ``pi``, ``E``, the operators ``+ - * / **`` and
         unary ``+ -``, and one-argument calls of ``sqrt, exp, log, sin, cos,
         tan, sinh, cosh, tanh, atan, asinh, abs``. Nothing else; at most 2000
-        characters.
+        characters, numbers of at most 400 digits, transcendental calls nested at
+        most 4 deep, and at most 10 s of analysis (sympy's limits and series).
     **params : float
         Values of the named parameters in ``source`` (SI units consistent with
         U in J and q in m). Every parameter must appear in ``source``.
@@ -143,7 +154,8 @@ class Expression(Potential):
     ExpressionError
         The formula is malformed, uses a name or construct outside the
         whitelist, does not depend on q, is not real, has a constant beyond
-        float64, or a parameter is invalid or unused.
+        float64 or beyond the digit or nesting bounds, its analysis ran past its
+        time budget, or a parameter is invalid or unused.
     HCVInputError
         U(0) is not 0 (assumption 2 of section 3), or the leading exponent n
         of U ~ c q^n at q -> 0+ cannot be found or is not > 0.
@@ -187,22 +199,60 @@ class Expression(Potential):
         _check_inputs(source, params)
         self.source = source
         self._params = dict(params)
+        self._stage = "parse"
+        try:
+            # Every sympy step of the analysis inside one wall-time budget (`_expr_budget`:
+            # SIGALRM stops the work where it is; the parser's static bounds hold it down
+            # where no alarm can be used).
+            with analysis_budget(_ANALYSIS_SECONDS):
+                self._analyse()
+        except ExpressionTimeout:
+            raise ExpressionError(
+                f"Expression: the analysis of U = {_short(source)} ran past "
+                f"{_ANALYSIS_SECONDS:g} s (at its {self._stage}); simplify the formula "
+                "(fewer nested functions) or use a built-in family"
+            ) from None
+
+    def _analyse(self) -> None:
+        """Parse, differentiate, compile and check the formula (`__init__`, under its budget);
+        ``_stage`` names the step under way, for the message of an expired budget."""
+        source = self.source
         self.expr = strip_abs(_parse(source, self._params), source)
         _check_expr(self.expr, source)
+        self._stage = "derivatives"
         self.dexpr = sp.diff(self.expr, _Q)
         self.d2expr = sp.diff(self.dexpr, _Q)
         exprs = (self.expr, self.dexpr, self.d2expr)
+        # The kernels differentiate once more (the third derivative, `exact._nodes`) and
+        # print every form (`_cache.numba_numbers`, lambdify): no number beyond Python's
+        # 4300-digit int-to-str limit may reach them.
+        d3expr = sp.diff(self.d2expr, _Q)
+        for what, e in (("U'", self.dexpr), ("U''", self.d2expr), ("U'''", d3expr)):
+            check_digits(e, what, source, _MAX_DERIVATIVE_DIGITS)
+        self._stage = "lambdify"
         # lambdify runs code that sympy prints from the whitelisted tree; the
         # only free name in it is q (parameters are already numbers).
         self._np_funcs = tuple(sp.lambdify(_Q, e, modules="numpy") for e in exprs)
         self._mp_funcs = tuple(sp.lambdify(_Q, e, modules="mpmath") for e in exprs)
         self._zero_limits: dict[int, sp.Expr | None] = {}
+        self._stage = "limit U(0)"
         self._check_zero()
         self._n_exact: sp.Expr | None = None
+        self._stage = "leading exponent (limit of q U'/U at q -> 0+)"
         self.leading_exponent = self._find_leading_exponent()
         self._check_real()
+        self._stage = "leading coefficient (limit of U/q^n at q -> 0+)"
         self.leading_coefficient = self._find_leading_coefficient()
+        self._stage = "float range and series near q = 0"
         self._setup_near_zero()
+        # What later calls would ask of sympy, asked here under the budget: the limits of
+        # U' and U'' at q = 0 (`_eval` at q = 0) and the term table (an expansion).
+        self._stage = "limits of U' and U'' at q = 0"
+        self._limit_at_zero(1)
+        self._limit_at_zero(2)
+        self._stage = "term table (expansion)"
+        if self.float_formula_accurate:  # the only case `_term_rows` reads it
+            _ = self._power_rows
 
     # -- public interface used by the exact solvers ---------------------------------
     @property
