@@ -213,7 +213,9 @@ def test_a_run_without_codes_carries_their_sections_marked(committed, tmp_path, 
     messages: list[str] = []
     campaign.build_report(out, readme=None, progress=messages.append)
     c = seen["carried"]
-    commit = committed["environment"]["git_commit"]
+    # The commit the code sections were measured at: the committed run's own, or, where
+    # that run carried them itself (the README's main job runs no code), the one it names.
+    commit = (committed["carried"] or committed["environment"])["git_commit"]
     md = (out / "index.md").read_text()
     manifest = json.loads((out / ".hcv-report-manifest.json").read_text())["files"]
     ok = (

@@ -21,10 +21,13 @@ __all__ = ["add_parser", "run"]
 # More local workers than this is a typo, not a machine (each is a process).
 _MAX_REPORT_WORKERS = 256
 
+# No time of a full run here: each `hcv report` rewrites reports/results.json with its own
+# time (load, cache and codes differ), so a figure copied from it goes stale with the next
+# run (issue 41); the measured times live in docs/getting-started.md. The --quick figures
+# come from reports/bench/startup.json, which only benchmarks/bench_startup.py rewrites.
 _HELP = (
-    "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-    "measured at 220 s wall on 2 cores at load 1 with --adapter lammps, kratos, mujoco, liggghts, yade: "
-    "reports/results.json of 2026-11-26)"
+    "run every verification; write HTML, Markdown, JSON and figures (minutes on 2 "
+    "cores; docs/getting-started.md gives the measured times)"
 )
 
 
