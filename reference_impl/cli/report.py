@@ -110,7 +110,7 @@ def run(args) -> int:
     """Build the report into ``args.out``; print each claim's verdict and what was written."""
     from rich.console import Console
 
-    from reference_impl.campaign import build_report
+    from reference_impl.campaign import build_report, readme_rewritten_by
 
     _check_out_dir(args.out)
     if args.from_results is not None:
@@ -158,9 +158,11 @@ def run(args) -> int:
         )
     for c in results["claims"]:
         print(f"{c['verdict']:>12}  {c['id']}")
+    readme = readme_rewritten_by(args.out)
     print(
-        f"wrote {args.out}/index.html, index.md, results.json, figures/ "
-        f"in {results['timings_seconds']['total']:.0f} s"
+        f"wrote {args.out}/index.html, index.md, erratum.md, results.json, figures/"
+        + (f" and {os.path.relpath(readme)} (its generated blocks)" if readme else "")
+        + f" in {results['timings_seconds']['total']:.0f} s"
     )
     return EXIT_OK
 
