@@ -231,6 +231,9 @@ def build_report(
         progress(note)
     # Provenance first: the temporary directory must not make the checkout look dirty.
     env = _environment.environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
+    busy = _environment.load_note(env.get("load_average_start"), env.get("cpu_count"))
+    if busy and progress is not None:
+        progress(busy)
     with swap_in(out) as tmp:
         if carried is not None:  # the carried figures move in again with the new report
             (tmp / "figures").mkdir()
@@ -478,6 +481,7 @@ def _build(
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings
+    _environment.record_end(results["environment"], say)
     say("writing results.json, index.html, index.md, erratum.md")
     results = jsonable(results)
     (out / "results.json").write_text(
