@@ -48,13 +48,20 @@ html_show_sourcelink = False
 
 def _copy_report(app, exception) -> None:
     """Put the committed report (one self-contained HTML file) at ``report/index.html``
-    of the site, so the verdict pages link to the report the checkout holds."""
+    of the site, so the verdict pages link to the report the checkout holds, with the
+    referee's scripts its erratum links to (``repro/*.py``) beside it."""
     if exception is not None or app.builder.format != "html":
         return
-    src = _ROOT / "reports" / "index.html"
+    src = _ROOT / "reports"
     dest = Path(app.outdir) / "report"
     dest.mkdir(exist_ok=True)
-    shutil.copy2(src, dest / "index.html")
+    shutil.copy2(src / "index.html", dest / "index.html")
+    shutil.copytree(
+        src / "repro",
+        dest / "repro",
+        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"),
+        dirs_exist_ok=True,
+    )
 
 
 def setup(app):

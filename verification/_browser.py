@@ -18,7 +18,14 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 from urllib.request import url2pathname
 
-__all__ = ["CHROMIUM", "INSTALL_LINE", "VIEWPORT_WIDTH", "PageDefects", "inspect_pages"]
+__all__ = [
+    "CHROMIUM",
+    "INSTALL_LINE",
+    "VIEWPORT_WIDTH",
+    "PageDefects",
+    "dead_file_links",
+    "inspect_pages",
+]
 
 CHROMIUM = Path("/usr/bin/chromium")
 INSTALL_LINE = "apt-get install chromium && pip install -e '.[docs]'"
@@ -112,6 +119,47 @@ class PageDefects:
     overflow_px: int = 0
     console_errors: list[str] = field(default_factory=list)
     pdf_bytes: int = 0
+
+
+class _Hrefs(html.parser.HTMLParser):
+    """The ``href`` of every ``<a>`` of a page."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.hrefs: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "a":
+            self.hrefs += [v for k, v in attrs if k == "href" and v]
+
+
+def dead_file_links(path: Path) -> list[str]:
+    """Relative links of an HTML file whose target file does not exist, read from its
+    source without a browser (anchors and ids are left to :func:`inspect_pages`).
+
+    Parameters
+    ----------
+    path : Path
+        The HTML file.
+
+    Returns
+    -------
+    list of str
+        Each such ``href`` as written.
+    """
+    parser = _Hrefs()
+    parser.feed(path.read_text(encoding="utf-8", errors="replace"))
+    dead = []
+    for href in parser.hrefs:
+        url = urlsplit(href)
+        if url.scheme or url.netloc or not url.path:  # another site, mailto:, or "#id"
+            continue
+        target = (path.parent / url2pathname(unquote(url.path))).resolve()
+        if target.is_dir():
+            target = target / "index.html"
+        if not target.is_file():
+            dead.append(href)
+    return dead
 
 
 class _Ids(html.parser.HTMLParser):

@@ -17,7 +17,14 @@ from pathlib import Path
 
 import pytest
 
-from verification._browser import CHROMIUM, INSTALL_LINE, VIEWPORT_WIDTH, inspect_pages
+from verification._browser import (
+    CHROMIUM,
+    INSTALL_LINE,
+    VIEWPORT_WIDTH,
+    dead_file_links,
+    inspect_pages,
+)
+from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
 REPORT = ROOT / "reports" / "index.html"
@@ -99,12 +106,34 @@ def report_defects() -> dict:
     return {"reports/index.html": inspect_pages([REPORT])[REPORT]}
 
 
+def _site_pages(site: Path) -> list[Path]:
+    """Every HTML page the site builds, in sub-directories too (the report's copy at
+    ``report/index.html``, with the links to the referee's scripts beside it)."""
+    return sorted(site.rglob("*.html"))
+
+
 @pytest.fixture(scope="module")
 def site_defects(site) -> dict:
     """Each page's defects, over every page of the built site."""
     _browser_or_skip()
-    found = inspect_pages(sorted(site.glob("*.html")))
+    found = inspect_pages(_site_pages(site))
     return {str(p.relative_to(site)): d for p, d in found.items()}
+
+
+@_NEEDS_SPHINX
+def test_every_relative_link_of_the_built_site_names_a_file(site):
+    """Without a browser: each page of the built site, its copy of the report included,
+    links only to files the site holds (the report's copy linked to five repro/*.py
+    scripts that the site did not hold, issue 41)."""
+    pages = _site_pages(site)
+    dead = {str(p.relative_to(site)): d for p in pages if (d := dead_file_links(p))}
+    assert_true(
+        not dead and site / "report" / "index.html" in pages,
+        got=f"dead links {dict(list(dead.items())[:3])}; pages {len(pages)}",
+        should="no dead link on any page, report/index.html among the pages",
+        claim="docs",
+        call="dead_file_links(every page of sphinx -b html docs)",
+    )
 
 
 @pytest.fixture
@@ -208,3 +237,26 @@ def test_checks_fail_on_planted_defects(site, tmp_path):
             f"got {field} = {value!r} on a page with a planted {name} ({snippet!r}), "
             f"should report it [inspect_pages]"
         )
+
+
+def test_dead_file_links_finds_a_missing_script_and_passes_the_others(tmp_path):
+    """The browser-free link check can fail: a link to a script that is not there is
+    found; links to a file there, a directory's index, an anchor and another site are not."""
+    (tmp_path / "repro").mkdir()
+    (tmp_path / "repro" / "fig1.py").write_text("")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "index.html").write_text("")
+    page = tmp_path / "index.html"
+    page.write_text(
+        '<a href="repro/fig1.py">ok</a> <a href="repro/table1.py">gone</a> '
+        '<a href="sub/">ok</a> <a href="#x">ok</a> <a href="https://arxiv.org/">ok</a> '
+        '<a href="sub/index.html#y">ok</a>'
+    )
+    got = dead_file_links(page)
+    assert_true(
+        got == ["repro/table1.py"],
+        got=str(got),
+        should="['repro/table1.py']",
+        claim="docs",
+        call="dead_file_links(a page with one missing script)",
+    )

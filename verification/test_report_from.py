@@ -59,9 +59,7 @@ def test_committed_results_carry_the_schema_and_every_documented_field(committed
 
 
 # The erratum's link to a claim's script, written only where the scripts lie (`scripts_href`).
-_SCRIPT_LINK = re.compile(
-    r", \[\w+\.py\]\(repro/\w+\.py\)|, <a href=\"repro/\w+\.py\">\w+\.py</a>"
-)
+_SCRIPT_LINK = re.compile(r", \[\w+\.py\]\(repro/\w+\.py\)|, <a href=\"repro/\w+\.py\">\w+\.py</a>")
 
 
 def test_render_from_reproduces_the_committed_pages(committed, tmp_path):
@@ -213,7 +211,9 @@ def test_a_run_without_codes_carries_their_sections_marked(committed, tmp_path, 
     messages: list[str] = []
     campaign.build_report(out, readme=None, progress=messages.append)
     c = seen["carried"]
-    commit = committed["environment"]["git_commit"]
+    # The commit the code sections were measured at: the committed run's own, or, where
+    # that run carried them itself (the README's main job runs no code), the one it names.
+    commit = (committed["carried"] or committed["environment"])["git_commit"]
     md = (out / "index.md").read_text()
     manifest = json.loads((out / ".hcv-report-manifest.json").read_text())["files"]
     ok = (
@@ -224,6 +224,9 @@ def test_a_run_without_codes_carries_their_sections_marked(committed, tmp_path, 
         and f"commit {commit[:12]}" in md
         and all(f in manifest and (out / f).is_file() for f in c["figures"])
         and any("carried" in m for m in messages)
+        # each section's notice says it once (it read "Not run by this report (no
+        # --adapter given: the codes were not run by this report)")
+        and max(ln.lower().count("not run by this report") for ln in md.splitlines()) == 1
     )
     assert_true(
         ok,
@@ -240,3 +243,27 @@ def test_asking_for_a_code_carries_nothing(committed, tmp_path):
     _previous_report(out, committed)
     data, note = campaign._carry(out, ["reference"])
     assert data is None and note == "", f"got {note!r}, should carry nothing when a code is asked"
+
+
+@pytest.mark.parametrize("into_checkout", [True, False])
+def test_the_final_line_names_every_file_written(into_checkout, tmp_path, monkeypatch, capsys):
+    """`hcv report`'s last line names erratum.md, and the README where the run rewrites
+    its generated blocks (into the checkout's reports/), not elsewhere. The build is a stub:
+    only the line is checked here."""
+
+    def fake_build_report(out, **kw):
+        return {"claims": [], "timings_seconds": {"total": 1.0}}
+
+    monkeypatch.setattr(campaign, "build_report", fake_build_report)
+    out = REPORTS if into_checkout else tmp_path / "rep"
+    code = main(["report", "--out", str(out)])
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    readme = "README.md (its generated blocks)" in last
+    assert_true(
+        code == 0 and "erratum.md" in last and "results.json" in last and readme == into_checkout,
+        got=f"exit {code}, {last!r}",
+        should="exit 0, a line naming erratum.md and results.json"
+        + (", and README.md" if into_checkout else ", not README.md"),
+        claim="report",
+        call=f"hcv report --out {'reports' if into_checkout else 'DIR'} (stub build)",
+    )

@@ -73,7 +73,7 @@ from reference_impl.studies.workprecision import (
     default_scenes,
 )
 
-__all__ = ["CARRIED", "build_report", "quick_drops", "validate_report_args"]
+__all__ = ["CARRIED", "build_report", "quick_drops", "readme_rewritten_by", "validate_report_args"]
 
 # The fields of results.json that a run without codes carries from the previous report.
 CARRIED = ("adapters", "steps_per_contact", "steps_per_contact_settings", "codes_side_by_side")
@@ -163,7 +163,7 @@ def _carry(out: Path, adapters) -> tuple[dict | None, str]:
     source = {
         **source,
         "sections": list(CARRIED),
-        "reason": "no --adapter given: the codes were not run by this report",
+        "reason": "no --adapter given",  # the notice says "not run by this report" itself
     }
     data = {k: old.get(k) for k in CARRIED}  # codes_side_by_side: absent from older files
     data.update(figures=figures, carried=source)
@@ -231,6 +231,9 @@ def build_report(
         progress(note)
     # Provenance first: the temporary directory must not make the checkout look dirty.
     env = _environment.environment({"thm2_random_KM": thm2_harmonic.SEED_KM})
+    busy = _environment.load_note(env.get("load_average_start"), env.get("cpu_count"))
+    if busy and progress is not None:
+        progress(busy)
     with swap_in(out) as tmp:
         if carried is not None:  # the carried figures move in again with the new report
             (tmp / "figures").mkdir()
@@ -245,6 +248,17 @@ def build_report(
         startup = json.loads(startup_json.read_text()) if startup_json.is_file() else None
         readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup))
     return results
+
+
+def readme_rewritten_by(out_dir: str | Path) -> Path | None:
+    """The README whose generated blocks `build_report` (``readme="auto"``) rewrites when
+    it writes into ``out_dir``: the checkout's README.md for its ``reports/``, else None.
+    """
+    out = Path(os.path.realpath(Path(out_dir).expanduser()))  # as validate_report_args
+    try:
+        return _readme_for(out, "auto")
+    except HCVInputError:  # unreadable or unwritable: build_report refuses to run
+        return None
 
 
 def _readme_for(out: Path, readme) -> Path | None:
@@ -467,6 +481,7 @@ def _build(
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings
+    _environment.record_end(results["environment"], say)
     say("writing results.json, index.html, index.md, erratum.md")
     results = jsonable(results)
     (out / "results.json").write_text(

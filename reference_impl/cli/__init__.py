@@ -30,9 +30,8 @@ COMMANDS: tuple[tuple[str, str, str], ...] = (
     ("dt-crit", "reference_impl.cli.dt_crit",
      "measure the Verlet critical time step and test dt_safe"),
     ("report", "reference_impl.cli.report",
-     "run every verification; write HTML, Markdown, JSON and figures (the full run was "
-     "measured at 220 s wall on 2 cores at load 1 with --adapter lammps, kratos, mujoco, liggghts, yade: "
-     "reports/results.json of 2026-11-26)"),
+     "run every verification; write HTML, Markdown, JSON and figures (minutes on 2 "
+     "cores; docs/getting-started.md gives the measured times)"),
     ("scenes", "reference_impl.cli.scenes",
      "list the scene catalogue (the same names work in every command); --show NAME prints "
      "one as TOML"),

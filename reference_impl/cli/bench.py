@@ -1,6 +1,6 @@
 """``hcv bench``: the command line of the benchmark and CI gate.
 
-    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE]
+    hcv bench ADAPTER [--scenes S [S ...]] [--tolerances FILE] [--steps-per-contact N]
                       [--gate [{both,implementation,delivery}]]
                       [--json FILE] [--junit FILE] [--plot FILE] [--markdown FILE]
 
@@ -130,6 +130,21 @@ def _check_files(args, scenes: list[str] | None) -> None:
     refuse_output_onto_input(outputs, inputs)
 
 
+def _tolerances(args):
+    """``--tolerances FILE`` (or None), with ``--steps-per-contact N`` over its
+    ``[run] steps_per_contact``; refused (one line naming N) by the tolerances' own rule."""
+    if args.steps_per_contact is None:
+        return args.tolerances
+    from reference_impl.bench.tolerances import load_tolerances
+
+    tol = load_tolerances(args.tolerances)
+    tol["run"]["steps_per_contact"] = args.steps_per_contact
+    try:
+        return load_tolerances(tol)
+    except HCVInputError as exc:
+        raise HCVInputError(f"--steps-per-contact {args.steps_per_contact}: {exc}") from None
+
+
 class _Lines:
     """Progress as plain lines on stderr (no terminal: CI logs), at most one per step."""
 
@@ -148,6 +163,8 @@ class _Lines:
 _EPILOG = (
     "adapters and their arguments (NAME[key=value,...]; a value alone, e.g. "
     "kratos[hertz,verlet] or lammps[tsuji], names its key):\n{adapters}"
+    "\n\ntheir other options (NAME[key=value,...], e.g. mujoco[dampratio=0.25] or "
+    "yade[tc=1e-4]):\n{options}"
     "\n\nexit status: 0 pass (or no --gate); 1 a metric failed (of the verdict --gate "
     "names: both by default, or implementation / delivery), or nothing was "
     "measured (every metric skipped, e.g. every scene declined: one SKIPPED line each); 2 usage or configuration error (also a law "
@@ -155,6 +172,39 @@ _EPILOG = (
     "our reference could not decide one; "
     "130 interrupted (Ctrl-C); 143 terminated (SIGTERM, handled as Ctrl-C)."
 )
+
+
+def _option_text(param) -> str:
+    """``key=X`` (a number), ``key=true|false`` (a flag) or ``key=TEXT``, from the
+    constructor parameter's annotation."""
+    kind = str(param.annotation)
+    if "bool" in kind:
+        return f"{param.name}=true|false"
+    if "float" in kind or "int" in kind:
+        return f"{param.name}=X"
+    return f"{param.name}=TEXT"
+
+
+def _options_help() -> str:
+    """One line per registered adapter: its constructor options that are not variant keys
+    (those are listed above with their values), read from the class's signature."""
+    import inspect
+
+    from reference_impl.adapters.registry import registered, resolve_class
+
+    named = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    lines = []
+    for name in registered():
+        try:
+            cls = resolve_class(name)
+            params = inspect.signature(cls).parameters.values()
+        except (HCVInputError, TypeError, ValueError):  # a plug-in that does not load
+            continue
+        keys = set(getattr(cls, "spec_values", {}) or {})
+        opts = [_option_text(p) for p in params if p.kind in named and p.name not in keys]
+        if opts:
+            lines.append(f"  {name}: {', '.join(opts)}")
+    return "\n".join(lines)
 
 
 _ADAPTER_HELP = (
@@ -176,6 +226,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
         # ADAPTER is required (`_adapter`); argparse's own usage would show it optional
         usage="%(prog)s ADAPTER [--scenes SCENE [SCENE ...]] [--tolerances FILE]\n"
+        "       [--steps-per-contact N]\n"
         "       [--gate [{both,implementation,delivery}]] [--json FILE] [--junit FILE]\n"
         "       [--plot FILE] [--markdown FILE] [--show-skipped]",
         description="Run scenes through a contact code's adapter and through the exact "
@@ -189,10 +240,21 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         # Filled in at print time: listing the names reads every installed package's
         # entry points (20 ms), which no other command should pay (issue 20).
         adapter.help = _ADAPTER_HELP.format(names=", ".join(registered()))
-        b.epilog = _EPILOG.format(adapters=adapter_help())
+        b.epilog = _EPILOG.format(adapters=adapter_help(), options=_options_help())
         return plain_format_help()
 
     b.format_help = format_help
+    plain_parse_known_args = b.parse_known_args
+
+    def parse_known_args(args=None, namespace=None):
+        # An option bench does not know is refused here, with bench's usage; argparse
+        # would hand it back to the top-level parser, which prints hcv's usage instead.
+        namespace, extra = plain_parse_known_args(args, namespace)
+        if extra:
+            b.error(f"unrecognized arguments: {' '.join(extra)}")
+        return namespace, extra
+
+    b.parse_known_args = parse_known_args
     # optional to argparse only so that `hcv bench --gate ADAPTER` parses (`_adapter`)
     adapter = b.add_argument(
         "adapter", nargs="?", help=_ADAPTER_HELP.format(names="see hcv bench --help")
@@ -207,6 +269,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     b.add_argument(
         "--tolerances", metavar="FILE", help="TOML file overriding the default tolerances"
+    )
+    b.add_argument(
+        "--steps-per-contact",
+        type=int,
+        metavar="N",
+        help="main runs at dt = exact contact time of the scene / N (default: the "
+        "tolerances' [run] steps_per_contact, 200), as hcv calibrate's option",
     )
     b.add_argument(
         "--gate",
@@ -241,6 +310,7 @@ def run(args) -> int:
     args.adapter = _adapter(args)
     scenes = _scene_args(args.scenes)
     _check_files(args, scenes)
+    tolerances = _tolerances(args)
     if sys.stderr.isatty():
         from rich.progress import Progress
 
@@ -249,7 +319,7 @@ def run(args) -> int:
             result = run_bench(
                 args.adapter,
                 scenes=scenes,
-                tolerances=args.tolerances,
+                tolerances=tolerances,
                 json_path=args.json,
                 junit_path=args.junit,
                 progress=lambda d, t: bar.update(task, completed=d, total=t),
@@ -258,7 +328,7 @@ def run(args) -> int:
         result = run_bench(
             args.adapter,
             scenes=scenes,
-            tolerances=args.tolerances,
+            tolerances=tolerances,
             json_path=args.json,
             junit_path=args.junit,
             progress=_Lines(args.adapter),

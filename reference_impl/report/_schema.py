@@ -35,7 +35,10 @@ refuses a version it does not know. Fields (SI units; times in s, speeds in m/s)
 ``figures`` (list of str), ``figure_captions`` (dict)
     Figure files relative to the results file's directory (``figures/NAME.png``).
 ``environment`` (dict)
-    Python, machine, ``git_commit``, ``git_dirty``, package versions, seeds.
+    Python, machine, ``git_commit``, ``git_dirty``, package versions, seeds; the load
+    average (1, 5, 15 min) at the start and end (``load_average_start``, ``load_average_end``)
+    and numba's cache at the start (``compile_cache_start``: ``dir``, ``entries``), absent
+    from files written before they were recorded.
 ``adapters`` (list of dict), ``steps_per_contact`` (list of dict), ``steps_per_contact_settings`` (dict or null)
     The contact codes' scorecards (``hcv bench`` documents) and what they deliver against
     steps per contact; empty without codes.

@@ -61,10 +61,35 @@ def verdict_table(results: dict) -> str:
     lines += [
         "",
         f"Generated from `reports/results.json` ({results.get('mode', '?')} run of "
-        f"{results.get('generated_utc', '?')}, commit {commit}{dirty}) by "
-        f"`python -m reference_impl.report.readme_table`.",
+        f"{results.get('generated_utc', '?')}, commit {commit}{dirty}{_run_cost(results)}) "
+        f"by `python -m reference_impl.report.readme_table`.",
     ]
     return "\n".join(lines)
+
+
+def _run_cost(results: dict) -> str:
+    """``; N s wall on C cores at load A to B, compile cache ...`` of the run (issue 41:
+    the main job's time has its one home here, with what it depends on)."""
+    env = results.get("environment", {})
+    total = results.get("timings_seconds", {}).get("total")
+    if total is None:
+        return ""
+    codes = [d.get("adapter") for d in results.get("adapters") or []]
+    with_codes = (
+        f" with {', '.join(map(str, codes))}" if codes and not results.get("carried") else ""
+    )
+    start, end = env.get("load_average_start"), env.get("load_average_end")
+    load = f" at load {start[0]:g} to {end[0]:g}" if start and end else ", load not recorded"
+    cache = env.get("compile_cache_start")
+    if cache is None:
+        state = "compile cache not recorded"
+    else:
+        state = (
+            "empty compile cache"
+            if not cache.get("entries")
+            else (f"compile cache holding {cache['entries']} kernels")
+        )
+    return f"; {total:.0f} s wall{with_codes} on {env.get('cpu_count', '?')} cores{load}, {state}"
 
 
 def _peer_cell(r: dict) -> str:
