@@ -25,7 +25,6 @@ power term in closed form, sqrt(a (b + 1) / 2) q^((b - 1) / 2); other exponents 
 caps as `solve_dop853`).
 """
 
-
 from __future__ import annotations
 
 import math
@@ -136,8 +135,6 @@ def _force(q, v, m, zeta, EL, DA):  # pragma: no cover - compiled
         c += 2.0 * zeta * math.sqrt(m) * du / math.sqrt(2.0 * u)
     f = du + c * v
     return f, (d2u + dc * v) * v - c * f / m, du
-
-
 
 
 # -- the plain model (every power by q**b) ------------------------------------------
