@@ -1,13 +1,19 @@
-"""The exact solvers against the strongest compiled peer, at equal error (issue 27).
+"""The exact solvers against the strongest compiled peers, at equal error (issues 27 and 38).
 
-Each row is one impact scored against its 30-digit mpmath truth. The peer is the
-compiled DOP853 of `benchmarks.peer_dop853` (numba, the published Dormand-Prince
-8(5,3) tableau, events on its dense output, every output ours has: both ends,
-q_max, U'(q_max) or the peak force). It is run over a ladder of tolerances, and the
-row reports the cheapest rung whose largest relative error over the outputs is at
-most max(ours, 1e-14) ("equal error"), or, when no rung gets there, the rung with
-the smallest error, marked ``best``. scipy's `solve_ivp` DOP853 (rtol 1e-12, Python
-per step) stays as a second column only: no claim rests on it.
+Each row is one impact scored against its 30-digit mpmath truth. The peers
+(`benchmarks._peers`, one column each): the compiled DOP853 on the plain equations
+(`benchmarks.peer_dop853.solve_dop853`, the peer since issue 27), the same with q^1.5
+written q sqrt(q) (`solve_dop853_sqrt`), DOP853 on the Sundman-regularised equations
+(`benchmarks.peer_sundman`; power laws and their sums) and numbalsoda's dop853 on them
+(`benchmarks.peer_numbalsoda`, where installed); each gives every output ours has (both
+ends, q_max, U'(q_max) or the peak force). Each is run over a ladder of tolerances on
+the row's set of `benchmarks._equal_error.IMPACTS` random impacts (speeds and damping
+over the ranges used here; truth: ours, checked on a subset against mpmath), and takes
+the cheapest rung whose WORST relative error over every output and impact is at most
+max(ours, 1e-14) ("equal error"), or, when no rung gets there, its best rung (marked
+``best``). The fastest peer at equal error is the ratio's denominator (``peer_*``);
+every peer's time, rung and errors are under ``peers``. scipy's `solve_ivp` DOP853
+(rtol 1e-12, Python per step) stays as a column only: no claim rests on it.
 
 Rows: the universal law on every potential family (`solve_impact`, and the
 `prepare(potential, m)` call when present), Hertz with each general damping law
@@ -17,13 +23,16 @@ Hertz impacts (distinct zetas; a 50 x 2000 grid) and on 2000 speeds of a general
 Timing: CPU time (`time.process_time`) per call, the contestants of a row
 interleaved block by block (each block ~10 ms per contestant), median of the
 blocks; the batch rows use wall time, since their point is the use of several
-cores. The JSON records the load average before and after, and the commit.
+cores. The JSON (format `SCHEMA`) records the load average before and after, and
+the commit.
 
 Goals (issue 27): universal law <= 8 us per impact from Python (prepared call) and
->= 20x the compiled DOP853 at <= 1e-14; general laws >= 3x; `solve_impacts` with
+>= 20x the fastest peer at <= 1e-14; general laws >= 3x; `solve_impacts` with
 every core >= 1.8x one thread on 2 cores.
 
-Run: ``python -m benchmarks.bench_exact [--json FILE] [--blocks N]`` (~2 minutes).
+Run: ``python -m benchmarks.bench_exact [--json FILE] [--blocks N] [--impacts N]
+[--mp-subset N]``: the sets and their mpmath subsets take most of the time (~1 s per
+30-digit impact: 10 rows x 50 of them); ``--blocks 1`` is a quick check of the timing.
 """
 
 from __future__ import annotations

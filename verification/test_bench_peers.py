@@ -16,6 +16,7 @@ import pytest
 from benchmarks import _equal_error, _peers, peer_dop853, peer_sundman
 from reference_impl import PowerLaw, Sphere, solve_impact
 from reference_impl.exact.general_law import solve_law_impact
+from reference_impl.potentials import SumPotential
 from verification.assertions import assert_close, assert_true
 
 _HERTZ = (PowerLaw(1e9, 1.5), 0.0041)
@@ -144,14 +145,25 @@ def test_sundman_n_is_the_smallest_making_the_law_polynomial():
     assert_true(got == 0, got=f"N = {got}", should="0 (a cap)", claim="bench", call="sphere")
 
 
-def test_non_polynomial_law_still_agrees():
-    """C = c q^0.3 on Hertz: |rho|^0.6 by pow (the docstring's fallback), still every output."""
-    pot, m = _HERTZ
-    law = {"law": "power", "c": 40.0, "exponent": 0.3}
-    sol, keys = _ours(pot, m, 1.0, law)
-    got = _peers.outputs(_peers.peer_cases(pot, m)["sundman"](1.0, law)(_TIGHTEST), 1.0)
+_NON_POLYNOMIAL = [
+    # C = c q^0.3 on Hertz: |rho|^0.6 by pow (no N <= 8 makes it a polynomial)
+    (_HERTZ[0], _HERTZ[1], 1.0, {"law": "power", "c": 40.0, "exponent": 0.3}),
+    # the universal law on a sum: U' / sqrt(2 U) evaluated at q = L rho^N (the catalogue's
+    # power-sum-damped scene, and a stronger damping)
+    (SumPotential(PowerLaw(1e5, 1.5), PowerLaw(2e3, 1.0)), 0.1, 0.3, {"law": "universal", "zeta": 0.2}),
+    (SumPotential(PowerLaw(1e5, 1.5), PowerLaw(2e3, 1.0)), 0.1, 1.0, {"law": "universal", "zeta": 0.6}),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("pot", "m", "v0", "law"), _NON_POLYNOMIAL)
+def test_non_polynomial_regularised_law_still_agrees(pot, m, v0, law):
+    """Where the regularised right-hand side is no polynomial (the docstring's fallbacks)."""
+    sol, keys = _ours(pot, m, v0, law)
+    got = _peers.outputs(_peers.peer_cases(pot, m)["sundman"](v0, law)(_TIGHTEST), v0)
     for k in keys:
-        assert_close(got[k], getattr(sol, k), rtol=_RTOL_PEER, claim="bench", call=f"q^0.3 {k}")
+        assert_close(
+            got[k], getattr(sol, k), rtol=_RTOL_PEER, claim="bench", call=f"sundman {law} {k}"
+        )
 
 
 def test_equal_error_rung_is_chosen_on_the_worst_impact_of_the_set():
