@@ -136,13 +136,16 @@ def set_ok(eqset: dict) -> bool:
 
 def fastest(cols: dict, t: dict) -> dict:
     """The row's peer fields: every peer's column (``peers``, with its time), and the ratio's
-    denominator, the fastest peer at equal error over the set (the fastest of all, marked
-    ``peer_at_equal_error`` False, when none gets there). ``peer_max_rel_error`` is its
-    error on the row's own scene against the 30-digit truth; ``peer_set_max_rel_error``
-    its worst over the set."""
+    denominator, the fastest peer at equal error over the set (when none gets there, the
+    one with the smallest worst error over the set, marked ``peer_at_equal_error`` False).
+    ``peer_max_rel_error`` is its error on the row's own scene against the 30-digit truth;
+    ``peer_set_max_rel_error`` its worst over the set."""
     peers = {k: {**c, "us": t[f"peer:{k}"] * 1e6} for k, c in cols.items()}
     ok = [k for k in peers if peers[k]["at_equal_error"]]
-    pick = min(ok or list(peers), key=lambda k: peers[k]["us"])
+    if ok:
+        pick = min(ok, key=lambda k: peers[k]["us"])
+    else:  # none at equal error: the most accurate (a fast but inaccurate one is no peer)
+        pick = min(peers, key=lambda k: (peers[k]["max_rel_error"], peers[k]["us"]))
     p = peers[pick]
     return {
         "peer": p["label"],

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from benchmarks import _equal_error, _peers, peer_dop853, peer_sundman
+from benchmarks import _equal_error, _peer_columns, _peers, peer_dop853, peer_sundman
 from reference_impl import PowerLaw, Sphere, solve_impact
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.potentials import SumPotential
@@ -226,3 +226,28 @@ def test_random_impacts_span_the_ranges_and_repeat():
         claim="bench",
         call="random_impacts",
     )
+
+
+def test_denominator_is_the_fastest_at_equal_error_else_the_most_accurate():
+    """Before, with no peer at equal error the fastest was taken: on the universal rows a
+    peer that ended no impact on any rung (worst error inf), at its loosest rung."""
+
+    def col(err, ok):
+        return {"label": "x", "rtol": 1e-10, "max_rel_error": err, "mean_nfev": 1.0}| {
+            "at_equal_error": ok, "ladder": [], "scene_max_rel_error": err, "scene_nfev": 1
+        }  # fmt: skip
+
+    t = {"peer:a": 2e-6, "peer:b": 1e-6, "peer:c": 1e-7}
+    cases = [
+        ({"a": col(1e-15, True), "b": col(2e-15, True), "c": col(np.inf, False)}, "b"),
+        ({"a": col(5e-14, False), "b": col(1e-13, False), "c": col(np.inf, False)}, "a"),
+    ]
+    for cols, want in cases:
+        got = _peer_columns.fastest(cols, t)["peer_name"]
+        assert_true(
+            got == want,
+            got=got,
+            should=f"{want}",
+            claim="bench",
+            call=f"fastest({ {k: c['max_rel_error'] for k, c in cols.items()} })",
+        )
