@@ -1,13 +1,19 @@
-"""The exact solvers against the strongest compiled peer, at equal error (issue 27).
+"""The exact solvers against the strongest compiled peers, at equal error (issues 27 and 38).
 
-Each row is one impact scored against its 30-digit mpmath truth. The peer is the
-compiled DOP853 of `benchmarks.peer_dop853` (numba, the published Dormand-Prince
-8(5,3) tableau, events on its dense output, every output ours has: both ends,
-q_max, U'(q_max) or the peak force). It is run over a ladder of tolerances, and the
-row reports the cheapest rung whose largest relative error over the outputs is at
-most max(ours, 1e-14) ("equal error"), or, when no rung gets there, the rung with
-the smallest error, marked ``best``. scipy's `solve_ivp` DOP853 (rtol 1e-12, Python
-per step) stays as a second column only: no claim rests on it.
+Each row is one impact scored against its 30-digit mpmath truth. The peers
+(`benchmarks._peers`, one column each): the compiled DOP853 on the plain equations
+(`benchmarks.peer_dop853.solve_dop853`, the peer since issue 27), the same with q^1.5
+written q sqrt(q) (`solve_dop853_sqrt`), DOP853 on the Sundman-regularised equations
+(`benchmarks.peer_sundman`; power laws and their sums) and numbalsoda's dop853 on them
+(`benchmarks.peer_numbalsoda`, where installed); each gives every output ours has (both
+ends, q_max, U'(q_max) or the peak force). Each is run over a ladder of tolerances on
+the row's set of `benchmarks._equal_error.IMPACTS` random impacts (speeds and damping
+over the ranges used here; truth: ours, checked on a subset against mpmath), and takes
+the cheapest rung whose WORST relative error over every output and impact is at most
+max(ours, 1e-14) ("equal error"), or, when no rung gets there, its best rung (marked
+``best``). The fastest peer at equal error is the ratio's denominator (``peer_*``);
+every peer's time, rung and errors are under ``peers``. scipy's `solve_ivp` DOP853
+(rtol 1e-12, Python per step) stays as a column only: no claim rests on it.
 
 Rows: the universal law on every potential family (`solve_impact`, and the
 `prepare(potential, m)` call when present), Hertz with each general damping law
@@ -17,13 +23,16 @@ Hertz impacts (distinct zetas; a 50 x 2000 grid) and on 2000 speeds of a general
 Timing: CPU time (`time.process_time`) per call, the contestants of a row
 interleaved block by block (each block ~10 ms per contestant), median of the
 blocks; the batch rows use wall time, since their point is the use of several
-cores. The JSON records the load average before and after, and the commit.
+cores. The JSON (format `SCHEMA`) records the load average before and after, and
+the commit.
 
 Goals (issue 27): universal law <= 8 us per impact from Python (prepared call) and
->= 20x the compiled DOP853 at <= 1e-14; general laws >= 3x; `solve_impacts` with
+>= 20x the fastest peer at <= 1e-14; general laws >= 3x; `solve_impacts` with
 every core >= 1.8x one thread on 2 cores.
 
-Run: ``python -m benchmarks.bench_exact [--json FILE] [--blocks N]`` (~2 minutes).
+Run: ``python -m benchmarks.bench_exact [--json FILE] [--blocks N] [--impacts N]
+[--mp-subset N]``: the sets and their mpmath subsets take most of the time (~1 s per
+30-digit impact: 10 rows x 50 of them); ``--blocks 1`` is a quick check of the timing.
 """
 
 from __future__ import annotations
@@ -45,10 +54,18 @@ from reference_impl.studies.laws import calibrated_laws, hertz
 from reference_impl.studies.workprecision import FAMILY_ZETA, family_scenes
 
 from . import peer_dop853 as peer
+from ._equal_error import IMPACTS, MP_SUBSET, law_bound_ok, universal_bound_ok
+from ._exact_print import numbalsoda_note, print_result
 from ._machine import machine_info
+from ._peer_columns import fastest, set_ok
+from ._peer_columns import peer_columns as _peer_columns
+from ._peers import PEERS
 from ._record import write_json
 from ._scipy_peer import scipy_dop853
 
+# The record's format: 2 adds every peer's column (`peers`), the fastest peer at equal
+# error as the ratio's denominator, and equal error over a random set (issue 38).
+SCHEMA = "hcv-bench-exact/2"
 TRUTH_DPS = 30
 # The peer's tolerance ladder: rtol = 10^(-k/2), 1e-6 .. 1e-16 (atol scaled alike).
 PEER_RTOLS = tuple(10.0 ** (-k / 2) for k in range(12, 33))
@@ -200,7 +217,7 @@ _UNIVERSAL_KEYS = (
 )
 
 
-def _family_row(name, pot, m, v0, blocks):
+def _family_row(name, pot, m, v0, blocks, impacts=IMPACTS, mp_subset=MP_SUBSET):
     zeta = FAMILY_ZETA
     t0 = time.perf_counter()
     sol = solve_impact(pot, m, v0, zeta)
@@ -209,12 +226,26 @@ def _family_row(name, pot, m, v0, blocks):
     errs = {k: _rel(getattr(sol, k), truth[k]) for k in _UNIVERSAL_KEYS}
     ours_err = max(errs.values())
     target = max(ours_err, EQUAL_ERROR_FLOOR)
-    call = _peer_case(pot, m, v0, {"law": "universal", "zeta": zeta})
-    pk = _peer_ladder(call, v0, truth, _UNIVERSAL_KEYS, target)
+    cols, calls, eqset = _peer_columns(
+        f"family {name}",
+        pot,
+        m,
+        v0,
+        {"law": "universal", "zeta": zeta},
+        truth,
+        _UNIVERSAL_KEYS,
+        target,
+        ours=lambda v, law: solve_impact(pot, m, v, law["zeta"]),
+        truth_mp=lambda v, law: solve_impact_mp(pot, m, v, law["zeta"], dps=TRUTH_DPS),
+        bound_ok=universal_bound_ok,
+        rtols=PEER_RTOLS,
+        impacts=impacts,
+        mp_subset=mp_subset,
+    )
     contestants = {
         "ours": lambda: solve_impact(pot, m, v0, zeta),
-        "peer": lambda: call(pk["rtol"]),
         "scipy": lambda: scipy_dop853(pot, m, v0, zeta, SCIPY_RTOL),
+        **{f"peer:{k}": c for k, c in calls.items()},
     }
     prep = _prepared(pot, m)
     kernel = None if prep is None else _compiled_only(prep, v0, zeta)
@@ -237,21 +268,16 @@ def _family_row(name, pot, m, v0, blocks):
         "ours_rel_errors": errs,
         "ours_max_rel_error": ours_err,
         "ours_reported_bound_rel": sol.quadrature_error / sol.contact_time,
-        "peer": "numba DOP853 (benchmarks.peer_dop853)",
-        "peer_us": t["peer"] * 1e6,
-        "peer_rtol": pk["rtol"],
-        "peer_max_rel_error": pk["max_rel_error"],
-        "peer_nfev": pk["nfev"],
-        "peer_at_equal_error": pk["at_equal_error"],
-        "peer_ladder": pk["ladder"],
-        "ratio": t["peer"] / t["ours"],
+        **fastest(cols, t),
         "scipy_us": t["scipy"] * 1e6,
         "scipy_rtol": SCIPY_RTOL,
+        "equal_error_set": eqset,
     }
+    row["ratio"] = row["peer_us"] / row["ours_us"]
     if prep is not None:
         row["prepared_us"] = t["prepared"] * 1e6
         row["prepared_identical"] = bool(identical)
-        row["prepared_ratio"] = t["peer"] / t["prepared"]
+        row["prepared_ratio"] = row["peer_us"] / row["prepared_us"]
     fast_us = row.get("prepared_us", row["ours_us"])
     ratio = row.get("prepared_ratio", row["ratio"])
     row["goal"] = f"<= {GOAL_US:g} us and >= {GOAL_RATIO_UNIVERSAL:g}x at <= 1e-14"
@@ -259,7 +285,8 @@ def _family_row(name, pot, m, v0, blocks):
         fast_us <= GOAL_US
         and ratio >= GOAL_RATIO_UNIVERSAL
         and ours_err <= EQUAL_ERROR_FLOOR
-        and pk["at_equal_error"]
+        and row["peer_at_equal_error"]
+        and set_ok(eqset)
         and row.get("prepared_identical", True)  # a fast call must answer as solve_impact
     )
     # By how much, and where the time goes: the compiled call alone (None: the call
@@ -273,7 +300,7 @@ def _family_row(name, pot, m, v0, blocks):
 _LAW_KEYS = (*_UNIVERSAL_KEYS, "peak_force")
 
 
-def _law_row(name, law, blocks):
+def _law_row(name, law, blocks, impacts=IMPACTS, mp_subset=MP_SUBSET):
     pot, m = hertz()
     v0 = LAW_V0
     t0 = time.perf_counter()
@@ -282,8 +309,22 @@ def _law_row(name, law, blocks):
     truth = solve_law_impact_mp(pot, m, v0, law, dps=TRUTH_DPS)
     errs = {k: _rel(getattr(sol, k), truth[k]) for k in _LAW_KEYS}
     ours_err = max(errs.values())
-    call = _peer_case(pot, m, v0, law)
-    pk = _peer_ladder(call, v0, truth, _LAW_KEYS, max(ours_err, EQUAL_ERROR_FLOOR))
+    cols, calls, eqset = _peer_columns(
+        f"law {name}",
+        pot,
+        m,
+        v0,
+        law,
+        truth,
+        _LAW_KEYS,
+        max(ours_err, EQUAL_ERROR_FLOOR),
+        ours=lambda v, lw: solve_law_impact(pot, m, v, lw),
+        truth_mp=lambda v, lw: solve_law_impact_mp(pot, m, v, lw, dps=TRUTH_DPS),
+        bound_ok=law_bound_ok,
+        rtols=PEER_RTOLS,
+        impacts=impacts,
+        mp_subset=mp_subset,
+    )
     # The prepared call (the law planned once per potential, mass and law), as the
     # universal rows' `prepare`: bit for bit the one-shot answer (checked here and tested).
     prep = prepare_law(pot, m, law)
@@ -292,13 +333,14 @@ def _law_row(name, law, blocks):
         {
             "ours": lambda: solve_law_impact(pot, m, v0, law),
             "prepared": lambda: prep(v0),
-            "peer": lambda: call(pk["rtol"]),
             "scipy": lambda: scipy_dop853(pot, m, v0, law, SCIPY_RTOL),
+            **{f"peer:{k}": c for k, c in calls.items()},
         },
         blocks,
     )
-    ratio = t["peer"] / t["ours"]
-    prepared_ratio = t["peer"] / t["prepared"]
+    fast = fastest(cols, t)
+    ratio = fast["peer_us"] / (t["ours"] * 1e6)
+    prepared_ratio = fast["peer_us"] / (t["prepared"] * 1e6)
     return {
         "law": name,
         "damping": law,
@@ -310,21 +352,18 @@ def _law_row(name, law, blocks):
         "ours_rel_errors": errs,
         "ours_max_rel_error": ours_err,
         "ours_reported_bound_rel": sol.error_time / sol.contact_time,
-        "peer": "numba DOP853 (benchmarks.peer_dop853)",
-        "peer_us": t["peer"] * 1e6,
-        "peer_rtol": pk["rtol"],
-        "peer_max_rel_error": pk["max_rel_error"],
-        "peer_nfev": pk["nfev"],
-        "peer_at_equal_error": pk["at_equal_error"],
-        "peer_ladder": pk["ladder"],
+        **fast,
         "ratio": ratio,
         "scipy_us": t["scipy"] * 1e6,
         "scipy_rtol": SCIPY_RTOL,
         "prepared_us": t["prepared"] * 1e6,
         "prepared_identical": bool(identical),
         "prepared_ratio": prepared_ratio,
+        "equal_error_set": eqset,
         "goal": f">= {GOAL_RATIO_LAW:g}x at equal error (prepared call)",
-        "goal_met": bool(prepared_ratio >= GOAL_RATIO_LAW and pk["at_equal_error"]),
+        "goal_met": bool(
+            prepared_ratio >= GOAL_RATIO_LAW and fast["peer_at_equal_error"] and set_ok(eqset)
+        ),
     }
 
 
@@ -427,23 +466,33 @@ def _batch_rows(blocks, peer_us):
     return rows
 
 
-def run(blocks: int = 7) -> dict:
+def run(blocks: int = 7, impacts: int = IMPACTS, mp_subset: int = MP_SUBSET) -> dict:
     load_before = _load()
-    families = [_family_row(sc.name, sc.potential, sc.m, sc.v0, blocks) for sc in family_scenes()]
+    families = [
+        _family_row(sc.name, sc.potential, sc.m, sc.v0, blocks, impacts, mp_subset)
+        for sc in family_scenes()
+    ]
     laws = [
-        _law_row(name, law, blocks)
+        _law_row(name, law, blocks, impacts, mp_subset)
         for name, law in calibrated_laws().items()
         if name != "universal"
     ]
     batch = _batch_rows(blocks, families[0]["peer_us"])
     return {
+        "schema": SCHEMA,
         "families": families,
         "laws": laws,
         "batch": batch,
         "truth": f"solve_impact_mp / solve_law_impact_mp, {TRUTH_DPS} digits",
+        "truth_dps": TRUTH_DPS,
         "peer_rtols": list(PEER_RTOLS),
-        "equal_error": f"peer's largest relative error <= max(ours, {EQUAL_ERROR_FLOOR:g})",
-        "numbalsoda": _numbalsoda_note(),
+        "equal_error": (
+            f"peer's largest relative error over every output and each of {impacts} random "
+            f"impacts <= max(ours, {EQUAL_ERROR_FLOOR:g}); truth of the set: ours, checked "
+            f"against the {TRUTH_DPS}-digit truth on {mp_subset} of them"
+        ),
+        "peers": list(PEERS),
+        "numbalsoda": numbalsoda_note(),
         "timing": f"CPU time (process_time), {blocks} interleaved blocks, median; batch: wall",
         "blocks": blocks,
         "load_average_1min": load_before,
@@ -455,79 +504,32 @@ def run(blocks: int = 7) -> dict:
     }
 
 
-def _numbalsoda_note() -> str:
-    try:
-        import numbalsoda  # noqa: F401
-    except ImportError:
-        return (
-            "not installed: 0.3.4 has no wheel for Python 3.11 and its source build needs a "
-            "Fortran compiler (none here)"
-        )
-    return "installed but not benchmarked"
-
-
-def _kernel_note(r: dict) -> str:
-    if r.get("kernel_us") is None:
-        return ""
-    return f" (compiled call alone {r['kernel_us']:.1f} us)"
-
-
-def _print(res: dict) -> None:
-    print(f"ours vs compiled DOP853 at equal error; truth: {res['truth']}; {res['timing']}")
-    print(
-        f"{'scene':22s} {'ours us':>8s} {'prep us':>8s} {'error':>8s} {'peer us':>8s}"
-        f" {'its err':>8s} {'rtol':>7s} {'ratio':>8s} {'scipy us':>9s}  goal"
-    )
-    for r in res["families"]:
-        prep = f"{r['prepared_us']:8.1f}" if "prepared_us" in r else f"{'-':>8s}"
-        ratio = r.get("prepared_ratio", r["ratio"])
-        best = "" if r["peer_at_equal_error"] else " (peer's best)"
-        print(
-            f"{r['scene']:22s} {r['ours_us']:8.1f} {prep} {r['ours_max_rel_error']:8.1e}"
-            f" {r['peer_us']:8.1f} {r['peer_max_rel_error']:8.1e} {r['peer_rtol']:7.0e}"
-            f" {ratio:7.1f}x {r['scipy_us']:9.0f}  {r['goal']}: "
-            f"{'met' if r['goal_met'] else 'NOT met'}{best}{_kernel_note(r)}"
-        )
-    for r in res["laws"]:
-        best = "" if r["peer_at_equal_error"] else " (peer's best)"
-        print(
-            f"{r['law']:22s} {r['ours_us']:8.1f} {r['prepared_us']:8.1f}"
-            f" {r['ours_max_rel_error']:8.1e}"
-            f" {r['peer_us']:8.1f} {r['peer_max_rel_error']:8.1e} {r['peer_rtol']:7.0e}"
-            f" {r['prepared_ratio']:7.2f}x {r['scipy_us']:9.0f}  {r['goal']}: "
-            f"{'met' if r['goal_met'] else 'NOT met'}{best}"
-        )
-    for b in res["batch"]:
-        print(
-            f"solve_impacts, {b['workload']}: {b['us_per_impact_1_thread']:.2f} us/impact on 1"
-            f" thread (CPU {b['cpu_us_per_impact_1_thread']:.2f}),"
-            f" {b['us_per_impact_all_threads']:.2f} on {b['threads']}"
-            f" ({b['parallel_speedup']:.2f}x, identical: {b['bit_identical_to_1_thread']})"
-            f"  {b['goal']}: {'met' if b['goal_met'] else 'NOT met'}"
-            + (
-                ""
-                if b["implied_serial_fraction"] is None
-                else f" (implied serial part {b['implied_serial_fraction']:.1%})"
-            )
-        )
-    mi = res["machine"]
-    print(
-        f"machine: {mi['platform']}, {mi['cpu_count']} cpus, load {res['load_average_1min']}"
-        f" before, {res['load_average_1min_after']} after, commit {mi['commit']}"
-        f"; numbalsoda: {res['numbalsoda']}"
-    )
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the result to this JSON file")
-    ap.add_argument("--blocks", type=int, default=7, help="interleaved blocks (median; >= 5)")
+    ap.add_argument(
+        "--blocks", type=int, default=7, help="interleaved blocks (median; 1 for a quick check)"
+    )
+    ap.add_argument(
+        "--impacts", type=int, default=IMPACTS, help=f"random impacts per row (>= {IMPACTS})"
+    )
+    ap.add_argument(
+        "--mp-subset",
+        type=int,
+        default=MP_SUBSET,
+        help=f"of them checked against the 30-digit truth (>= {MP_SUBSET})",
+    )
     args = ap.parse_args(argv)
-    if args.blocks < 5:
-        print(f"bench_exact: error: --blocks {args.blocks}: at least 5", file=sys.stderr)
-        return 2
-    res = run(args.blocks)
-    _print(res)
+    for flag, value, low in (
+        ("--blocks", args.blocks, 1),
+        ("--impacts", args.impacts, 1),
+        ("--mp-subset", args.mp_subset, 1),
+    ):
+        if value < low:
+            print(f"bench_exact: error: {flag} {value}: at least {low}", file=sys.stderr)
+            return 2
+    res = run(args.blocks, args.impacts, args.mp_subset)
+    print_result(res)
     if args.json:
         write_json(args.json, res, default=_json_default)
     return 0

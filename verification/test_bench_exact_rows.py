@@ -54,14 +54,19 @@ def test_family_row_without_a_compiled_call_still_says_if_prepared_is_identical(
     pot, m, v0 = PowerLaw(1e9, 1.5), 0.0041, 1.0
     sol = solve_impact(pot, m, v0, bench_exact.FAMILY_ZETA)
     keys = bench_exact._UNIVERSAL_KEYS
-    # The truth, the peer's ladder and the timer replaced: only the row's logic runs.
+    # The truth, the peers' columns and the timer replaced: only the row's logic runs.
     monkeypatch.setattr(bench_exact, "_compiled_only", lambda *a: None)
     monkeypatch.setattr(
         bench_exact, "solve_impact_mp", lambda *a, **k: {key: getattr(sol, key) for key in keys}
     )
-    monkeypatch.setattr(bench_exact, "_peer_case", lambda *a: lambda rtol: None)
-    ladder = {"rtol": 1e-10, "max_rel_error": 0.0, "nfev": 1, "at_equal_error": True}
-    monkeypatch.setattr(bench_exact, "_peer_ladder", lambda *a: {**ladder, "ladder": []})
+    column = {"label": "peer", "rtol": 1e-10, "max_rel_error": 0.0, "mean_nfev": 1.0}
+    column |= {"at_equal_error": True, "ladder": [], "scene_max_rel_error": 0.0, "scene_nfev": 1}
+    eqset = {"standard_met": True, "proxy_check": {"bounds_held": True}}
+    monkeypatch.setattr(
+        bench_exact,
+        "_peer_columns",
+        lambda *a, **k: ({"dop853": column}, {"dop853": lambda: None}, eqset),
+    )
     monkeypatch.setattr(bench_exact, "_interleaved", lambda c, b: dict.fromkeys(c, 1e-6))
     try:
         row = bench_exact._family_row("hertz", pot, m, v0, 1)
