@@ -29,6 +29,7 @@ from reference_impl.adapters.lammps import lammps_available
 from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
 from reference_impl.adapters.liggghts import liggghts_available
 from reference_impl.adapters.mujoco import mujoco_available
+from reference_impl.adapters.registry import resolve_class
 from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
 from reference_impl.adapters.yade import yade_available
 from reference_impl.bench.measure import universal_zeta
@@ -119,12 +120,7 @@ def _check(adapter, ask, p: float, atol: float = 0.0) -> None:
 def _adapter(name: str, **options):
     """One adapter per variant for the whole module (LAMMPS and LIGGGHTS read their
     version once)."""
-    import importlib
-
-    module = importlib.import_module(f"reference_impl.adapters.{name}")
-    cls = {"lammps": "LammpsAdapter", "kratos": "KratosAdapter", "liggghts": "LiggghtsAdapter",
-           "yade": "YadeAdapter", "mujoco": "MujocoAdapter"}[name]  # fmt: skip
-    return getattr(module, cls)(**options)
+    return resolve_class(name)(**options)
 
 
 # Why a code is not here: its one-line install (its cases skip with it).

@@ -87,6 +87,7 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._lammps_damping import (
     calibrate_constant,
     constant_from_eta_n0,
@@ -199,6 +200,22 @@ class LammpsAdapter(ContactAdapter):
     name = "lammps"
     isolate = True
     spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
+    # contract item 13: what the registry, the report and CI know of LAMMPS
+    code_info = CodeInfo(
+        code="LAMMPS",
+        restitution_input=(
+            "pair_style granular ... damping tsuji / coeff_restitution: the restitution e "
+            "itself (the other dampings take eta_n0, kg/s or 1/s)"
+        ),
+        report_variants=(
+            ("lammps[damping=coeff_restitution,geometry=wall]", 1.5),
+            ("lammps[damping=coeff_restitution,geometry=wall,limit_damping=true]", 1.5),
+            ("lammps[damping=tsuji,geometry=wall]", 1.5),
+        ),
+        extra="lammps",
+        marker="lammps",
+        test_module="verification/test_lammps.py",
+    )
 
     def __init__(
         self,

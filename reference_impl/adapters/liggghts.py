@@ -95,6 +95,7 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -174,6 +175,21 @@ class LiggghtsAdapter(ContactAdapter):
     name = "liggghts"
     isolate = True
     spec_values = {"model": MODELS, "geometry": GEOMETRIES, "limit_force": True}
+    # contract item 13: what the registry, the report and CI know of LIGGGHTS
+    code_info = CodeInfo(
+        code="LIGGGHTS",
+        restitution_input="fix property/global coefficientRestitution peratomtypepair: e",
+        report_variants=(
+            ("liggghts[hertz,wall]", 1.5),
+            ("liggghts[hertz,wall,limit_force=true]", 1.5),
+        ),
+        calibrated=(
+            ("liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
+        ),
+        apt="liggghts",
+        marker="liggghts",
+        test_module="verification/test_liggghts.py",
+    )
 
     def __init__(
         self,

@@ -105,7 +105,10 @@ def textbook_errors(
             return {
                 "internal": f"{who} at dt = {ascene.dt:.4g} s gave no finite max_penetration"
             }
-        return {"max_penetration": err, "scheme": scheme.name}
+        force = force_mismatch(tr, law)["error"]
+        if not math.isfinite(force):
+            return {"internal": f"{who} at dt = {ascene.dt:.4g} s gave no finite force"}
+        return {"max_penetration": err, "force": force, "scheme": scheme.name}
     out: dict = {"restitution_value": m.get("restitution", math.nan)}
     for k in ("restitution", "contact_time", "max_penetration"):
         got, want = m.get(k, math.nan), exact[k]

@@ -35,7 +35,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from reference_impl.adapters.base import AdapterScene
-from reference_impl.adapters.registry import parse_spec
+from reference_impl.adapters.registry import builtin_codes, parse_spec
 from reference_impl.bench.calibrate import calibrate
 from reference_impl.bench.measure import exact_reference, measure
 from reference_impl.bench.worker import make_executor
@@ -61,27 +61,17 @@ HOOKE_K = 1.0e6  # N/m: the bench's linear scene
 ASKED = (0.9, 0.5, 0.2)
 STEPS_PER_CONTACT = (200, 20)
 SPEEDS = (0.01, 100.0)  # m/s, four decades apart
-# (code, adapter spec, p): the variants users run, on a wall.
-CODES = (
-    ("LAMMPS", "lammps[damping=coeff_restitution,geometry=wall]", 1.5),
-    ("LAMMPS", "lammps[damping=coeff_restitution,geometry=wall,limit_damping=true]", 1.5),
-    ("LAMMPS", "lammps[damping=tsuji,geometry=wall]", 1.5),
-    ("LIGGGHTS", "liggghts[hertz,wall]", 1.5),
-    ("LIGGGHTS", "liggghts[hertz,wall,limit_force=true]", 1.5),
-    ("Kratos DEM", "kratos[law=hertz,scheme=verlet]", 1.5),
-    ("YADE", "yade[en,wall]", 1.5),
-    ("YADE", "yade[tc,wall]", 1.0),
-    ("YADE", "yade[kn,wall]", 1.0),
-    ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0),
-)
 _TIMEOUT = 120.0  # s per run
-# (code, adapter spec with its keys, p, option searched): the input that delivers e.
-CALIBRATED = (
-    ("LIGGGHTS", "liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
-    ("Kratos DEM", "kratos[law=hertz,scheme=verlet]", 1.5, "restitution"),
-    ("YADE", "yade[input=en,geometry=wall]", 1.5, "en"),
-    ("YADE", "yade[input=tc,geometry=wall]", 1.0, "en"),
-    ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0, "dampratio"),
+# (code, adapter spec, p): the variants users run, on a wall, and (code, adapter spec with
+# its keys, p, option searched): the input that delivers e. Both from the registry: each
+# built-in adapter declares them (`CodeInfo.report_variants`, `CodeInfo.calibrated`).
+CODES = tuple(
+    (info.code, spec, p) for info in builtin_codes().values() for spec, p in info.report_variants
+)
+CALIBRATED = tuple(
+    (info.code, spec, p, option)
+    for info in builtin_codes().values()
+    for spec, p, option in info.calibrated
 )
 
 
