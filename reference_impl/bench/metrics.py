@@ -94,7 +94,7 @@ class _RelativeToExact(Metric):
             return (
                 f"{self.quantity.replace('_', ' ')} {got:.7g}{self.unit} at v0 = "
                 f"{rec.v0:g} m/s, exact {ref:.7g}{self.unit} for the implemented law "
-                f"({law}): rel. error {err:.2g} > {lim:.2g}"
+                f"({law}): error {err:.3g} > {lim:.3g}"
             )
 
         return self._worst(ctx, rows, base, factor, why)

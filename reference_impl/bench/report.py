@@ -254,7 +254,8 @@ def _legend_lines(result, show_skipped: bool) -> list[str]:
     if lines:
         lines = [
             "rules (v0 in m/s; error is what the limit bounds; implementation: tolerance = "
-            "base + factor x textbook Verlet's error at the same step; delivery: a fixed "
+            "base + factor x the error of the code's declared scheme (textbook Verlet unless "
+            "it declares another) at the same step; delivery: a fixed "
             "tolerance, error = |model + step|, both signed: model = declared law's exact - "
             "asked (recalibrate), step = measured - declared law's exact (refine the step), "
             "over asked):"

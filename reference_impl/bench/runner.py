@@ -195,6 +195,10 @@ class _SceneRun:
         dt = t_c / spc
         ascene = AdapterScene.from_scene(self.scene, v0, dt, self.budget(dt, t_c))
         asked = self.asked_values(sol, v0)
+        # what the user asked, as typed: e at its speed (a speed-dependent law's e at
+        # another speed is the law's own target there; FAIL lines name both, issue 40 §3)
+        asked["scene_restitution"] = float(ascene.restitution_asked)
+        asked["scene_speed"] = ascene.restitution_speed
         rec = SpeedRecord(v0=v0, dt=dt, asked_e=asked["restitution"], asked=asked)
         out = self.call("impact", ascene)
         rec.seconds = out.seconds
