@@ -89,6 +89,11 @@ def test_damping_error_fails_implementation():
     assert_true("does not shrink with the step" in st[("hooke-one", "extrapolated")].explanation,
                 got=st[("hooke-one", "extrapolated")].explanation,
                 should="say the error does not shrink with the step", claim="issue 40 §1", call="extrapolated")  # fmt: skip
+    # the order of its error is ~0.3: it does not converge to the declared law (issue 40 §4)
+    sp = st[("hooke-one", "speed_error")]
+    assert_true(sp.status == "fail" and sp.explanation.startswith("does not converge"),
+                got=(sp.status, sp.explanation), should="fail, saying it does not converge",
+                claim="issue 40 §4", call="speed_error of a 10 % damping error")  # fmt: skip
 
 
 @pytest.mark.parametrize("cls", [codes.ForceTimesTwo, codes.ForceTimes1e300], ids=["x2", "x1e300"])

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["SCHEMES", "CodeInfo", "Scheme", "scheme_of"]
+__all__ = ["SCHEMES", "CodeInfo", "Scheme", "offset_refusal", "scheme_of"]
 
 # name -> (nominal order, one line). The nominal order is the scheme's order on a smooth
 # force; on a contact with a dashpot evaluated explicitly, velocity Verlet is first
@@ -104,6 +104,23 @@ def scheme_of(adapter) -> Scheme:
             f"adapter {label!r}: claimed_order must be a positive number, got {order!r}"
         )
     return Scheme(name, float(order))
+
+
+def offset_refusal(adapter) -> str | None:
+    """Why a code that declares a force offset cannot be scored, else None.
+
+    A code whose contact force starts before the bodies overlap (``force_offset`` > 0,
+    in m: PyBullet's contactSlop, a skin) integrates U(q + offset), which no law of the
+    suite describes (every U starts at q = 0): its scenes are skipped with this reason,
+    naming the offset, rather than scored against a law it does not integrate.
+    """
+    offset = getattr(adapter, "force_offset", 0.0)
+    if offset in (0, 0.0, None):
+        return None
+    return (
+        f"declares a force offset of {offset!r} m (the force starts at q = -offset), which "
+        "no contact law of the suite describes (U(q) starts at q = 0): set it to 0 to be scored"
+    )
 
 
 @dataclass(frozen=True)

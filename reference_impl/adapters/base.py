@@ -117,7 +117,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from reference_impl.adapters._declaration import SCHEMES, CodeInfo, Scheme, scheme_of
+from reference_impl.adapters._declaration import (
+    SCHEMES,
+    CodeInfo,
+    Scheme,
+    offset_refusal,
+    scheme_of,
+)
 from reference_impl.adapters._output import (
     align_staggered,
     check_staggering,
@@ -150,6 +156,7 @@ __all__ = [
     "Trajectory",
     "align_staggered",
     "check_staggering",
+    "offset_refusal",
     "scheme_of",
     "trajectory_from_mapping",
 ]
@@ -190,6 +197,7 @@ class ContactAdapter:
     time_scheme: str = "velocity-verlet"
     claimed_order: float | None = None
     scheme_rtol: float | None = None
+    force_offset: float = 0.0
     code_info: CodeInfo | None = None
 
     @property

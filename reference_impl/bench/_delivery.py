@@ -149,6 +149,7 @@ def _split_advice(r: dict, lim: float, unit: str) -> str:
 
 class RestitutionAsked(_Delivered):
     name = key = "restitution_asked"
+    rigid_applies = True  # the one metric a rigid, impulse-based contact is judged on
     quantity = "restitution"
     measured_key = "restitution"
     label = "restitution"

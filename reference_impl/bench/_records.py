@@ -164,6 +164,9 @@ class SceneContext:
     # the step-refinement study's extrapolated answer: {"error", "quantity", "allowance",
     # "order", "steps"} (`reference_impl.bench._textbook.extrapolated_error`)
     extrapolated: dict | None = None
+    # why the scene's metrics but restitution_asked do not apply: the code reported no
+    # penetration (a rigid, impulse-based contact; issue 40, §3); "" otherwise
+    rigid: str = ""
 
 
 # Gate exit status when no metric failed but the suite's own reference could not decide one.

@@ -150,6 +150,8 @@ def _summary_lines(result) -> list[str]:
         for ctx in result.contexts:
             if ctx.variant == variant and ctx.skipped:
                 lines.append(f"    SKIPPED {ctx.scene}: {ctx.skipped}")
+            if ctx.variant == variant and getattr(ctx, "rigid", ""):
+                lines.append(f"    NO PENETRATION {ctx.scene}: {ctx.rigid}; the rest n/a")
         for m in items:
             if m.status == "error":
                 lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")

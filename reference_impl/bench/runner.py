@@ -33,7 +33,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory, scheme_of
+from reference_impl.adapters.base import (
+    AdapterScene,
+    ImplementedLaw,
+    Trajectory,
+    offset_refusal,
+    scheme_of,
+)
 from reference_impl.adapters.law_damping import implemented_law_from_table, law_of
 from reference_impl.bench._dtcrit import _EXTRA_STEPS, dt_crit
 from reference_impl.bench._errors import DeclaredLawError, _Declined, _Ours
@@ -67,6 +73,7 @@ from reference_impl.bench.measure import (
     exact_reference,
     exact_tensile_on_samples,
     measure,
+    rigid_bounce,
 )
 from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.report import machine_info, write_json, write_junit
@@ -204,6 +211,14 @@ class _SceneRun:
         rec.seconds = out.seconds
         if not out.ok:
             rec.error, rec.stderr = out.error, out.stderr
+            return rec
+        rigid = rigid_bounce(out.value, v0)
+        if rigid is not None:  # no penetration: only the delivered restitution applies
+            rec.measured = rigid
+            self.ctx.rigid = (
+                f"the code reports no penetration at v0 = {v0:g} m/s (a rigid, impulse-based "
+                "contact): only the delivered restitution (restitution_asked) is compared"
+            )
             return rec
         wrong = check_conventions(out.value, v0)
         if wrong:
@@ -524,6 +539,7 @@ def run_bench(
         if progress is not None:
             progress(0.0, total)
         for done, (i, var, sc, reason) in enumerate(plan, start=1):
+            reason = reason or offset_refusal(var)
             if reason:
                 ctx = SceneContext(
                     var.label,
