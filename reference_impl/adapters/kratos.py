@@ -246,6 +246,11 @@ class KratosAdapter(ContactAdapter):
         test_module="verification/test_kratos.py",
     )
 
+    @property
+    def time_scheme(self) -> str:
+        """Contract item 12: ``Symplectic_Euler`` or ``Velocity_Verlet``, as configured."""
+        return "symplectic-euler" if self.schemes[0] == "euler" else "velocity-verlet"
+
     def __init__(
         self,
         law: str | None = None,

@@ -249,6 +249,13 @@ class MujocoAdapter(ContactAdapter):
         self.radius = positive_option("mujoco", "radius", radius)
 
     # -- configuration ----------------------------------------------------------
+    @property
+    def time_scheme(self) -> str:
+        """Contract item 12: ``Euler`` is semi-implicit (v then q with the new v), i.e.
+        symplectic Euler, and ``implicit`` is the same on a contact (implicit in passive
+        damping only); ``RK4`` is the classical fourth-order Runge-Kutta."""
+        return "rk4" if self.integrators[0] == "RK4" else "symplectic-euler"
+
     @classmethod
     def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
         """Default search range of an option for ``hcv calibrate`` (None: none known).
