@@ -57,3 +57,21 @@ class ForceTimesTwo(ImplicitEuler):
 class ForceTimes1e300(ImplicitEuler):
     name = "implicit-euler-force-x1e300"
     force_factor = 1e300
+
+
+class VariableStep(ContactAdapter):
+    """scipy's RK45 at rtol 1e-8, sampled at t = n dt (a variable-step, error-controlled
+    code: its ``dt`` is its sampling)."""
+
+    name = "variable-step"
+    isolate = False
+    time_scheme = "variable-step"
+    scheme_rtol = 1e-8
+
+    def supports(self, scene: AdapterScene) -> str | None:
+        return "single impacts only" if scene.kind != "impact" else None
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        scheme = Scheme("variable-step", None, self.scheme_rtol)
+        t, q, v, f = scheme_trajectory(scene_law(scene), scheme, scene.v0, scene.dt, scene.n_steps)
+        return Trajectory(t, q, v, f)

@@ -184,3 +184,16 @@ def test_scheme_defaults():
     s = scheme_of(_Declares(time_scheme="variable-step", scheme_rtol=1e-8))
     assert_true(s.variable and s.rtol == 1e-8, got=s, should="variable, rtol 1e-8",
                 claim="issue 40 §1", call="scheme_of variable-step")  # fmt: skip
+
+
+def test_variable_step_code_is_judged_at_its_tolerance():
+    """A variable-step code (RK45, rtol 1e-8, sampled at dt) passes implementation; the
+    step-refinement metrics do not apply (its dt is its sampling)."""
+    st = _statuses(run_bench(codes.VariableStep(), scenes=[_SCENE]))
+    bad = {k[1]: m.explanation for k, m in st.items() if m.status not in ("pass", "n/a")}
+    assert_true(not bad, got=bad, should="every implementation metric pass or n/a",
+                claim="issue 40 §1", call="run_bench(variable-step)")  # fmt: skip
+    for metric in ("speed_error", "extrapolated"):
+        m = st[("hooke-one", metric)]
+        assert_true(m.status == "n/a" and "sampling" in m.explanation, got=(m.status, m.explanation),
+                    should="n/a: dt is its sampling", claim="issue 40 §1", call=metric)  # fmt: skip
