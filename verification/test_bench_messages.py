@@ -147,3 +147,22 @@ def test_a_code_that_clips_tension_is_said_to():
     assert_true("clips tension" in why and "zero-force end" in why, got=why,
                 should="say the code clips tension and ends at the zero-force end", claim=_CLAIM,
                 call="restitution_asked of a clipping code")  # fmt: skip
+
+
+def test_fail_line_names_the_asked_e_at_the_asked_speed_first():
+    """A Hunt-Crossley scene asks e = 0.7 at 0.5 m/s; its e at 5 m/s is the law's own
+    target there. A delivery failure at 5 m/s (10 steps per contact: the step's error)
+    names the asked e at the asked speed first, then that speed's target (issue 40 §3)."""
+    from reference_impl.adapters.reference import ReferenceAdapter
+
+    scene = scene_from_dict({
+        "name": "hc", "mass": 0.01, "velocities": [5.0], "kind": "impact",
+        "potential": {"family": "power", "k": 2.0e5, "p": 1.0},
+        "damping": {"law": "hunt-crossley", "restitution": 0.7, "restitution_speed": 0.5},
+    })  # fmt: skip
+    tol = {**_FAST, "run": {**_FAST["run"], "steps_per_contact": 10}}
+    m = _by(run_bench(ReferenceAdapter(), scenes=[scene], tolerances=tol))["restitution_asked"]
+    assert_true(m.status == "fail" and m.explanation.startswith("e = 0.7 asked at 0.5 m/s (the "
+                "scene's law gives") and "at v0 = 5 m/s" in m.explanation,
+                got=(m.status, m.explanation), should="fail, 'e = 0.7 asked at 0.5 m/s' first",
+                claim=_CLAIM, call="restitution_asked of a Hunt-Crossley scene")  # fmt: skip
