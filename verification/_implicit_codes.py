@@ -75,3 +75,18 @@ class VariableStep(ContactAdapter):
         scheme = Scheme("variable-step", None, self.scheme_rtol)
         t, q, v, f = scheme_trajectory(scene_law(scene), scheme, scene.v0, scene.dt, scene.n_steps)
         return Trajectory(t, q, v, f)
+
+
+class Declared(ImplicitEuler):
+    """A correct code of any fixed-step scheme: the bench's own scheme on the scene's law,
+    declared as such (``Declared.of("explicit-euler")``)."""
+
+    @classmethod
+    def of(cls, scheme: str, order: float = 1.0) -> Declared:
+        return type(f"Declared_{scheme}", (cls,), {"name": scheme, "time_scheme": scheme,
+                                                     "claimed_order": order})()  # fmt: skip
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        scheme = Scheme(self.time_scheme, float(self.claimed_order))
+        t, q, v, f = scheme_trajectory(scene_law(scene), scheme, scene.v0, scene.dt, scene.n_steps)
+        return Trajectory(t, q, v, f)

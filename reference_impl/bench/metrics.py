@@ -319,8 +319,8 @@ class DtCrit(Metric):
             if ok
             else (
                 f"unstable at dt = {d['dt_crit']:.4g} s = {d['ratio']:.3g} dt_safe "
-                f"(v0 = {rec.v0:g} m/s: {d.get('reason') or 'energy gain'}), textbook "
-                f"Verlet with the same law holds to {ref:.3g} dt_safe: "
+                f"(v0 = {rec.v0:g} m/s: {d.get('reason') or 'energy gain'}), "
+                f"{_baseline(d)} with the same law holds to {ref:.3g} dt_safe: "
                 f"{rel:.3g} < {base:g}"
             ),
             error=None,  # a ratio, not an error: its own column
@@ -331,6 +331,12 @@ class DtCrit(Metric):
             expected=ref,
             rule=self.rule,
         )
+
+
+def _baseline(d: dict) -> str:
+    """The scheme a critical step is compared with, in words."""
+    name = d.get("baseline_scheme", "velocity-verlet")
+    return "textbook Verlet" if name == "velocity-verlet" else f"the declared scheme ({name})"
 
 
 class SpeedError(Metric):

@@ -263,7 +263,7 @@ class _SceneRun:
         # bug, x2 or x1e300, fails implementation naming the force, not the step)
         rec.measured["force_law"] = force_mismatch(out.value, rec.law)
         rec.textbook = textbook_errors(rec.law, ascene, rec.exact, self.scheme)
-        rec.dt_crit = dt_crit(self.call, ascene, rec.law, self.tol)
+        rec.dt_crit = dt_crit(self.call, ascene, rec.law, self.tol, self.scheme)
         return rec
 
     def is_scene_law(self, law: ImplementedLaw) -> bool:
