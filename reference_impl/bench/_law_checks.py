@@ -18,6 +18,7 @@ __all__ = ["Extrapolated", "ForceLaw"]
 
 class ForceLaw(Metric):
     name = key = "force_law"
+    unit = " N"  # of the measured and expected forces (the error is over the peak force)
     field = "rtol"
     description = "reported force against the declared law at the reported states"
     rule = (
