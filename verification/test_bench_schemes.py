@@ -210,12 +210,16 @@ _ELASTIC = scene_from_dict(
 )
 
 
-@pytest.mark.parametrize("scheme, order", [("explicit-euler", 1), ("symplectic-euler", 1), ("rk4", 4)])
+@pytest.mark.parametrize(
+    "scheme, order", [("explicit-euler", 1), ("symplectic-euler", 1), ("rk4", 4)]
+)
 @pytest.mark.parametrize("scene", [_SCENE, _ELASTIC], ids=["damped", "elastic"])
 def test_every_declared_scheme_passes_implementation(scheme, order, scene):
     """A correct code of each scheme passes implementation, critical step included (on
     main a correct explicit Euler failed dt_crit against Verlet's: 0.12 of it, elastic)."""
     res = run_bench(codes.Declared.of(scheme, order), scenes=[scene])
-    bad = {k[1]: m.explanation for k, m in _statuses(res).items() if m.status not in ("pass", "n/a")}
+    bad = {
+        k[1]: m.explanation for k, m in _statuses(res).items() if m.status not in ("pass", "n/a")
+    }
     assert_true(not bad, got=bad, should="every implementation metric pass or n/a",
                 claim="issue 40 §1", call=f"run_bench({scheme} code)")  # fmt: skip
