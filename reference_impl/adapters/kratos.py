@@ -83,6 +83,7 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 from reference_impl.errors import HCVInputError
 from reference_impl.theory.damping import restitution_zero_force_from_zeta
@@ -234,6 +235,21 @@ class KratosAdapter(ContactAdapter):
     name = "kratos"
     isolate = True
     spec_values = {"law": tuple(LAWS), "scheme": tuple(SCHEMES), "geometry": GEOMETRIES}
+    # contract item 13: what the registry, the report and CI know of Kratos DEM
+    code_info = CodeInfo(
+        code="Kratos DEM",
+        restitution_input="COEFFICIENT_OF_RESTITUTION of the material: e",
+        report_variants=(("kratos[law=hertz,scheme=verlet]", 1.5),),
+        calibrated=(("kratos[law=hertz,scheme=verlet]", 1.5, "restitution"),),
+        extra="kratos",
+        marker="kratos",
+        test_module="verification/test_kratos.py",
+    )
+
+    @property
+    def time_scheme(self) -> str:
+        """Contract item 12: ``Symplectic_Euler`` or ``Velocity_Verlet``, as configured."""
+        return "symplectic-euler" if self.schemes[0] == "euler" else "velocity-verlet"
 
     def __init__(
         self,

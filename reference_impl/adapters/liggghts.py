@@ -51,15 +51,13 @@ q = 0 is e. ``limitForce on`` clips it (``clips_tension``), the body leaves at t
 zero-force end and e comes out higher (0.55 for coefficientRestitution 0.5; no
 coefficientRestitution reaches 0.2: the floor 0.05 gives 0.213).
 
-What is asked (protocol ``hcv-adapter/2``): both models integrate the universal
-law, so the adapter writes the coefficientRestitution whose zeta = -betaeff has the
-restitution the scene asks at the end LIGGGHTS delivers it: the scene's
-``restitution_end`` with ``limitForce off``, the zero-force end with ``limitForce
-on`` (a clipped contact leaves there, whichever end is read;
-`reference_impl.adapters._asked`). A scene asking e at the overlap end with
-``limitForce off`` gets e itself; one asking at the zero-force end gets the lower
-exp(-pi zeta / sqrt(1 - zeta^2)) of zeta = the zero-force inverse of e. When that
-input is <= 0.05 the scene is declined.
+What is typed (protocol ``hcv-adapter/2``; issue 40, §2): coefficientRestitution is the
+asked e itself, as LIGGGHTS documents it and a user types it. Both models integrate the
+universal law of that e, so with ``limitForce off`` a scene asking e at the overlap end
+gets it; with ``limitForce on`` (or a scene asking at the zero-force end) what is
+delivered differs, and the delivery verdict says by how much. The input that would
+deliver the asked e is ``hcv calibrate liggghts[...] --param restitution``, a separate
+answer. An asked e <= 0.05 (LIGGGHTS refuses such inputs) declines the scene.
 
 Staggering: none to declare. LIGGGHTS is velocity Verlet (``fix nve/sphere``):
 ``fix print`` runs at the end of a step, when x, v and f all belong to t[n + 1];
@@ -87,7 +85,6 @@ import subprocess
 
 import numpy as np
 
-from reference_impl.adapters._asked import asked_universal_zeta, delivery_end
 from reference_impl.adapters._codes_common import (
     bool_option,
     default_radius,
@@ -95,6 +92,7 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -105,7 +103,6 @@ from reference_impl.adapters.base import (
     Trajectory,
 )
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.damping import restitution_from_zeta
 
 __all__ = [
     "GEOMETRIES",
@@ -176,6 +173,21 @@ class LiggghtsAdapter(ContactAdapter):
     name = "liggghts"
     isolate = True
     spec_values = {"model": MODELS, "geometry": GEOMETRIES, "limit_force": True}
+    # contract item 13: what the registry, the report and CI know of LIGGGHTS
+    code_info = CodeInfo(
+        code="LIGGGHTS",
+        restitution_input="fix property/global coefficientRestitution peratomtypepair: e",
+        report_variants=(
+            ("liggghts[hertz,wall]", 1.5),
+            ("liggghts[hertz,wall,limit_force=true]", 1.5),
+        ),
+        calibrated=(
+            ("liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
+        ),
+        apt="liggghts",
+        marker="liggghts",
+        test_module="verification/test_liggghts.py",
+    )
 
     def __init__(
         self,
@@ -326,8 +338,7 @@ class LiggghtsAdapter(ContactAdapter):
         if self.restitution is None and e_in <= _E_MIN:
             return (
                 f"LIGGGHTS refuses coefficientRestitution <= {_E_MIN:g} (asked e = "
-                f"{scene.restitution_asked:.6g} at the {scene.restitution_end} end needs "
-                f"{e_in:.6g}); out of its reach"
+                f"{e_in:.6g} at the {scene.restitution_end} end, typed as is); out of its reach"
             )
         return None
 
@@ -351,17 +362,18 @@ class LiggghtsAdapter(ContactAdapter):
             "youngsModulus": float(2.0 * y_eff),  # Yeff = Y/2: same material, nu = 0
             "poissonsRatio": 0.0,
             "coefficientRestitution": float(
-                self._asked_restitution(scene) if self.restitution is None else self.restitution
+                self._typed_restitution(scene) if self.restitution is None else self.restitution
             ),
             "characteristicVelocity": _CHAR_VEL,
             "limitForce": "on" if self.limits[0] else "off",
         }
 
-    def _asked_restitution(self, scene: AdapterScene) -> float:
-        """coefficientRestitution whose zeta = -betaeff gives the asked e at the end
-        LIGGGHTS delivers it (zero-force with ``limitForce on``, else the asked end)."""
-        zeta = asked_universal_zeta(scene, delivery_end(scene, self.limits[0]))
-        return restitution_from_zeta(zeta) if zeta else 1.0
+    def _typed_restitution(self, scene: AdapterScene) -> float:
+        """The coefficientRestitution a user types: the asked e itself (1 without damping),
+        as LIGGGHTS documents it (issue 40, §2). With ``limitForce on`` the contact leaves
+        at the zero-force end and delivers more (0.55 for 0.5): the delivery verdict says
+        so, and ``hcv calibrate`` finds the input that would deliver the asked e."""
+        return float(scene.restitution_asked) if scene.damping != "none" else 1.0
 
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         mp = self.mapping(scene)

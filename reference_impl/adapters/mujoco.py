@@ -94,6 +94,7 @@ from importlib import metadata
 import numpy as np
 
 from reference_impl.adapters._codes_common import positive_option, refuse_scene, split_option
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._mujoco_model import asked_zeta, mjcf, scene_mapping
 from reference_impl.adapters._mujoco_support import (
     _badqacc_index,
@@ -200,6 +201,21 @@ class MujocoAdapter(ContactAdapter):
         "integrator": INTEGRATORS,
         "end": END,
     }
+    # contract item 13: what the registry, the report and CI know of MuJoCo
+    code_info = CodeInfo(
+        code="MuJoCo",
+        restitution_input=(
+            "geom solref = (timeconst, dampratio): the damping ratio of the linear "
+            "spring-dashpot (no restitution input)"
+        ),
+        report_variants=(("mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0),),
+        calibrated=(
+            ("mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0, "dampratio"),
+        ),
+        extra="mujoco",
+        marker="mujoco",
+        test_module="verification/test_mujoco.py",
+    )
     isolate = True
 
     def __init__(
@@ -233,6 +249,13 @@ class MujocoAdapter(ContactAdapter):
         self.radius = positive_option("mujoco", "radius", radius)
 
     # -- configuration ----------------------------------------------------------
+    @property
+    def time_scheme(self) -> str:
+        """Contract item 12: ``Euler`` is semi-implicit (v then q with the new v), i.e.
+        symplectic Euler, and ``implicit`` is the same on a contact (implicit in passive
+        damping only); ``RK4`` is the classical fourth-order Runge-Kutta."""
+        return "rk4" if self.integrators[0] == "RK4" else "symplectic-euler"
+
     @classmethod
     def calibration_range(cls, param: str, scene) -> tuple[float, float] | None:
         """Default search range of an option for ``hcv calibrate`` (None: none known).

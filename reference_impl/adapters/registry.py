@@ -49,6 +49,9 @@ def _base():
 __all__ = [
     "ENTRY_POINT_GROUP",
     "adapter_help",
+    "apt_packages",
+    "builtin_codes",
+    "install_extras",
     "get_adapter",
     "parse_spec",
     "register",
@@ -57,15 +60,17 @@ __all__ = [
     "resolved_spec",
 ]
 
+# The built-in adapters, in the order the report shows the codes (`builtin_codes`).
 _REGISTRY: dict[str, str | type] = {
     "reference": "reference_impl.adapters.reference:ReferenceAdapter",
     "lammps": "reference_impl.adapters.lammps:LammpsAdapter",
-    "kratos": "reference_impl.adapters.kratos:KratosAdapter",
-    "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
     "liggghts": "reference_impl.adapters.liggghts:LiggghtsAdapter",
+    "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "yade": "reference_impl.adapters.yade:YadeAdapter",
+    "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
+_BUILTIN = tuple(_REGISTRY)  # names registered at import, before any `register` call
 _SPEC_RE = re.compile(r"^(?P<target>[^\[\]]+?)(?:\[(?P<args>.*)\])?$", re.S)
 _IMPORT_RE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 _NAME_RE = re.compile(r"^[A-Za-z][\w-]*$")
@@ -297,3 +302,35 @@ def _missing_arguments(cls: type, kwargs: dict) -> list[str]:
         and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
         and p.name not in kwargs
     ]
+
+
+def builtin_codes() -> dict:
+    """name -> `CodeInfo` of every built-in adapter of a contact code (contract item 13).
+
+    The one list of the codes: the report's side-by-side variants, the install lines of
+    CI and nox, and the test that every code has its test module, marker and docs row
+    are all made from it. Imports the adapters' modules (never the codes themselves).
+    """
+    out = {}
+    for name in _BUILTIN:
+        info = getattr(resolve_class(name), "code_info", None)
+        if info is not None:
+            out[name] = info
+    return out
+
+
+def install_extras() -> list[str]:
+    """The pip extras that install the built-in codes (``.ci/run``, ``noxfile.py``)."""
+    return [i.extra for i in builtin_codes().values() if i.extra]
+
+
+def apt_packages() -> list[str]:
+    """The Debian packages that install the built-in codes (``.ci/run``)."""
+    return [i.apt for i in builtin_codes().values() if i.apt]
+
+
+if __name__ == "__main__":  # ``python -m reference_impl.adapters.registry extras|apt|names``
+    _what = {"extras": install_extras, "apt": apt_packages, "names": lambda: list(builtin_codes())}
+    if len(sys.argv) != 2 or sys.argv[1] not in _what:
+        sys.exit(f"usage: python -m reference_impl.adapters.registry {'|'.join(_what)}")
+    print(" ".join(_what[sys.argv[1]]()))

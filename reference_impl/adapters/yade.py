@@ -94,6 +94,7 @@ from reference_impl.adapters._codes_common import (
     refuse_scene,
     split_option,
 )
+from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -212,6 +213,22 @@ class YadeAdapter(ContactAdapter):
     name = "yade"
     isolate = False  # YADE runs in its own process, bounded by `PersistentProcess`
     spec_values = {"input": INPUTS, "geometry": GEOMETRIES}
+    # contract item 13: what the registry, the report and CI know of YADE
+    code_info = CodeInfo(
+        code="YADE",
+        restitution_input=(
+            "FrictMat + Ip2_FrictMat_FrictMat_MindlinPhys(en=e); ViscElMat(tc, en) or "
+            "(kn, cn) per material"
+        ),
+        report_variants=(("yade[en,wall]", 1.5), ("yade[tc,wall]", 1.0), ("yade[kn,wall]", 1.0)),
+        calibrated=(
+            ("yade[input=en,geometry=wall]", 1.5, "en"),
+            ("yade[input=tc,geometry=wall]", 1.0, "en"),
+        ),
+        apt="yade",
+        marker="yade",
+        test_module="verification/test_yade.py",
+    )
     # leapfrog: the force of a step belongs to the sample before, v to half a step before
     staggering = {"force": 1, "v": 0.5}
 

@@ -1,4 +1,5 @@
-"""The critical step of a code, and of textbook Verlet with the law the code declares.
+"""The critical step of a code, and of its declared scheme (textbook Verlet unless it
+declares another: adapter contract item 12) with the law the code declares.
 
 Increasing dt (in units of dt_safe, section 6) until the rebound energy exceeds
 (1 + gain_tol) E_0, the run blows up or fails (`_DT_SCAN`), then bisection to the
@@ -11,7 +12,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Trajectory
+from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Scheme, Trajectory
+from reference_impl.bench._schemes import scheme_trajectory
 from reference_impl.bench.measure import measure
 from reference_impl.bench.worker import _one_line
 from reference_impl.stability.bound import dt_safe as _dt_safe
@@ -46,21 +48,28 @@ def _verdict(m: dict, tol: dict) -> tuple[bool, str]:
     return True, ""
 
 
-def _verlet_stable(
-    law: ImplementedLaw, v0: float, dt: float, q_max: float, tol: dict
-) -> tuple[bool, str]:
-    from reference_impl.adapters.reference import law_trajectory
+# The scheme of a code that declares none: the baseline the bench always used.
+_VERLET = Scheme("velocity-verlet", 2.0)
 
+
+def _verlet_stable(
+    law: ImplementedLaw, v0: float, dt: float, q_max: float, tol: dict, scheme: Scheme = _VERLET
+) -> tuple[bool, str]:
     n = int(math.ceil(_DTCRIT_BUDGET * q_max / (v0 * dt))) + _EXTRA_STEPS
-    t, q, v, f = law_trajectory(law, v0, dt, n)
+    t, q, v, f = scheme_trajectory(law, scheme, v0, dt, n)
     return _verdict(measure(Trajectory(t, q, v, f), v0), tol)
 
 
-def dt_crit(call, ascene: AdapterScene, law: ImplementedLaw, tol: dict) -> dict:
-    """Critical step on the code and on textbook Verlet with the same law, over dt_safe.
+def dt_crit(
+    call, ascene: AdapterScene, law: ImplementedLaw, tol: dict, scheme: Scheme = _VERLET
+) -> dict:
+    """Critical step on the code and on its declared scheme with the same law, over dt_safe.
 
     ``call(method, ascene) -> Outcome`` runs the code (the scene run's adapter call);
-    ``tol`` the tolerances (``[dt_crit]`` resolution and gain_tol).
+    ``tol`` the tolerances (``[dt_crit]`` resolution and gain_tol); ``scheme`` the
+    code's declared scheme, whose critical step is the baseline (a correct explicit
+    Euler is unstable far below Verlet's, and is judged against its own). The result
+    keeps its keys ``verlet_*`` (the JSON's) for the baseline, whichever scheme it is.
     """
     pot, m, v0 = law.potential, law.mass, ascene.v0
     try:
@@ -79,12 +88,15 @@ def dt_crit(call, ascene: AdapterScene, law: ImplementedLaw, tol: dict) -> dict:
         runs=code["runs"],
     )
     try:
-        verlet = _search(lambda f: _verlet_stable(law, v0, f * ref, q_max, tol), res)
+        verlet = _search(lambda f: _verlet_stable(law, v0, f * ref, q_max, tol, scheme), res)
         out.update(verlet_dt_crit=verlet["ratio"] * ref, verlet_ratio=verlet["ratio"])
+        out["baseline_scheme"] = scheme.name
     except TypeError as exc:  # a damping the reference Verlet cannot run: no baseline
         out["verlet_error"] = f"textbook Verlet cannot run the declared law ({_one_line(exc)})"
     except Exception as exc:  # ours, not the code's
-        out["internal"] = f"textbook Verlet with the implemented law failed: {_one_line(exc)}"
+        out["internal"] = f"the {scheme.name} baseline with the implemented law failed: " + (
+            _one_line(exc)
+        )
     return out
 
 

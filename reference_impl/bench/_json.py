@@ -64,6 +64,8 @@ def result_to_dict(result) -> dict:
                 "speeds": [r.to_dict() for r in c.speeds],
                 "convergence_order": c.order,
                 "convergence_error": c.order_error,
+                "scheme": c.scheme.to_json() if c.scheme is not None else None,
+                "extrapolated": c.extrapolated,
                 "sustained": c.sustained,
             }
         )

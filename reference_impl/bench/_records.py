@@ -158,8 +158,15 @@ class SceneContext:
     sustained: dict | None = None
     internal: str = ""  # the suite's own reference failed on this scene
     order_internal: str = ""  # ... on the speed table only
-    textbook_order: float | None = None  # textbook Verlet's order on the same table
+    textbook_order: float | None = None  # the declared scheme's order on the same table
     textbook_order_error: str = ""
+    scheme: object = None  # the variant's declared `Scheme` (None: velocity Verlet)
+    # the step-refinement study's extrapolated answer: {"error", "quantity", "allowance",
+    # "order", "steps"} (`reference_impl.bench._textbook.extrapolated_error`)
+    extrapolated: dict | None = None
+    # why the scene's metrics but restitution_asked do not apply: the code reported no
+    # penetration (a rigid, impulse-based contact; issue 40, §3); "" otherwise
+    rigid: str = ""
 
 
 # Gate exit status when no metric failed but the suite's own reference could not decide one.

@@ -40,9 +40,14 @@ class Metric:
     magnitude = True  # the value is a size (>= 0) compared with the limit from below
     verdict = "implementation"  # or "delivery" (`reference_impl.bench._records.VERDICTS`)
 
+    # the one metric a code that reports no penetration is judged on (issue 40, §3)
+    rigid_applies = False
+
     def applies(self, ctx: SceneContext) -> str | None:
         if self.impact_only and ctx.kind != "impact":
             return f"impact metric; scene kind is {ctx.kind}"
+        if getattr(ctx, "rigid", "") and not self.rigid_applies:
+            return ctx.rigid
         return None
 
     def _result(

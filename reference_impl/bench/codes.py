@@ -8,14 +8,15 @@ speeds four decades apart. Each row keeps the delivered restitution (q = 0 end),
 the tensile force at the end of contact (max pull / peak push) and the exact
 restitution of the law the code declares.
 
-Each asked e is typed into the code's own e input as is (`typed_spec`), as a user
-does: LAMMPS coeff_restitution / tsuji ``restitution=e``, LIGGGHTS
-``coefficientRestitution``, Kratos ``COEFFICIENT_OF_RESTITUTION``, YADE ``en`` (and, for
+Each asked e is typed into the code's own e input as is, as a user does: LAMMPS
+coeff_restitution / tsuji and LIGGGHTS ``coefficientRestitution`` by their adapters
+themselves (the mapping ``hcv bench`` runs, so the gate and this table answer one
+question), Kratos ``COEFFICIENT_OF_RESTITUTION``, YADE ``en`` (and, for
 ViscElMat, the tc = sqrt((pi^2 + ln^2 e) m / k) and cn = 2 (2 zeta sqrt(m k)) of
-Pournin's linear law of that e at q = 0), MuJoCo's ``dampratio`` = that zeta. The
-adapters' own mapping (protocol ``hcv-adapter/2``: the input that delivers the asked e
-at the end the code delivers it) would hide what the code does with e typed in, which
-is the table's point; an option given in the spec is kept. Codes that are not installed give one
+Pournin's linear law of that e at q = 0), MuJoCo's ``dampratio`` = that zeta, by
+`typed_spec` (those adapters still type the input that delivers the asked e at the end
+the code delivers it, which would hide what the code does with e typed in, the table's
+point); an option given in the spec is kept. Codes that are not installed give one
 row saying so. Runs go through the benchmark's executors (a worker process per
 isolated adapter, its timeout), so a crashing code fails its rows only.
 
@@ -35,7 +36,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from reference_impl.adapters.base import AdapterScene
-from reference_impl.adapters.registry import parse_spec
+from reference_impl.adapters.registry import builtin_codes, parse_spec
 from reference_impl.bench.calibrate import calibrate
 from reference_impl.bench.measure import exact_reference, measure
 from reference_impl.bench.worker import make_executor
@@ -61,27 +62,17 @@ HOOKE_K = 1.0e6  # N/m: the bench's linear scene
 ASKED = (0.9, 0.5, 0.2)
 STEPS_PER_CONTACT = (200, 20)
 SPEEDS = (0.01, 100.0)  # m/s, four decades apart
-# (code, adapter spec, p): the variants users run, on a wall.
-CODES = (
-    ("LAMMPS", "lammps[damping=coeff_restitution,geometry=wall]", 1.5),
-    ("LAMMPS", "lammps[damping=coeff_restitution,geometry=wall,limit_damping=true]", 1.5),
-    ("LAMMPS", "lammps[damping=tsuji,geometry=wall]", 1.5),
-    ("LIGGGHTS", "liggghts[hertz,wall]", 1.5),
-    ("LIGGGHTS", "liggghts[hertz,wall,limit_force=true]", 1.5),
-    ("Kratos DEM", "kratos[law=hertz,scheme=verlet]", 1.5),
-    ("YADE", "yade[en,wall]", 1.5),
-    ("YADE", "yade[tc,wall]", 1.0),
-    ("YADE", "yade[kn,wall]", 1.0),
-    ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0),
-)
 _TIMEOUT = 120.0  # s per run
-# (code, adapter spec with its keys, p, option searched): the input that delivers e.
-CALIBRATED = (
-    ("LIGGGHTS", "liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
-    ("Kratos DEM", "kratos[law=hertz,scheme=verlet]", 1.5, "restitution"),
-    ("YADE", "yade[input=en,geometry=wall]", 1.5, "en"),
-    ("YADE", "yade[input=tc,geometry=wall]", 1.0, "en"),
-    ("MuJoCo", "mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0, "dampratio"),
+# (code, adapter spec, p): the variants users run, on a wall, and (code, adapter spec with
+# its keys, p, option searched): the input that delivers e. Both from the registry: each
+# built-in adapter declares them (`CodeInfo.report_variants`, `CodeInfo.calibrated`).
+CODES = tuple(
+    (info.code, spec, p) for info in builtin_codes().values() for spec, p in info.report_variants
+)
+CALIBRATED = tuple(
+    (info.code, spec, p, option)
+    for info in builtin_codes().values()
+    for spec, p, option in info.calibrated
 )
 
 
@@ -124,12 +115,9 @@ def _typed_options(spec: str, e: float, p: float) -> dict:
     k = HERTZ_K if p == 1.5 else HOOKE_K
     zeta = float(zeta_from_restitution(e)) if e < 1.0 else 0.0  # linear law's e at q = 0
     typed: dict = {}
-    if name in ("liggghts", "kratos"):
-        typed = {"restitution": e}
-    elif name == "lammps" and pick("damping", ("tsuji", "coeff_restitution")) in (
-        "tsuji",
-        "coeff_restitution",
-    ):
+    # LAMMPS (tsuji, coeff_restitution) and LIGGGHTS type the asked e as is themselves
+    # (their adapters' mapping, the one the gate runs: issue 40, §2)
+    if name == "kratos":
         typed = {"restitution": e}
     elif name == "yade":
         inp = pick("input", ("en", "betan", "tc", "kn"))
@@ -191,6 +179,7 @@ def _scene(p: float, e: float, v0: float, spc: int) -> AdapterScene:
         v0=v0,
         damping="universal",
         zeta=zeta,
+        restitution_asked=e,  # the asked e itself (zeta's round trip may differ by an ulp)
         dt=t_c / spc,
         n_steps=4 * spc + 64,
         velocities=SPEEDS,

@@ -80,6 +80,32 @@ def check_conventions(tr: Trajectory, v0: float) -> str | None:
     return None
 
 
+def rigid_bounce(tr: Trajectory, v0: float) -> dict | None:
+    """The restitution of a run that reports no penetration (a rigid, impulse-based
+    contact: q never > 0), else None (issue 40, §3).
+
+    Such a code bounces within a step without overlapping: q stays <= 0 and the velocity
+    turns from approaching (v0 > 0) to leaving (< 0). Its restitution is -v / v0 at the
+    last sample; nothing else (penetration, contact time, force) exists to compare.
+    """
+    q, v = tr.q, tr.v
+    with np.errstate(invalid="ignore"):
+        if not np.all(np.isfinite(q)) or np.nanmax(q) > 0.0:
+            return None
+        leaving = np.nonzero(np.isfinite(v) & (v < 0.0))[0]
+    if not leaving.size:
+        return None
+    e = float(-v[-1] / v0)
+    return {
+        "restitution": e,
+        "restitution_zero_force": e,
+        "samples": int(q.size),
+        "separated": True,
+        "finite": bool(np.isfinite(e)),
+        "rigid": True,
+    }
+
+
 def measure(tr: Trajectory, v0: float) -> dict:
     """Restitution (at q = 0 and at zero force), contact time, max penetration, tensile peak.
 

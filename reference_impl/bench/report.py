@@ -150,6 +150,8 @@ def _summary_lines(result) -> list[str]:
         for ctx in result.contexts:
             if ctx.variant == variant and ctx.skipped:
                 lines.append(f"    SKIPPED {ctx.scene}: {ctx.skipped}")
+            if ctx.variant == variant and getattr(ctx, "rigid", ""):
+                lines.append(f"    NO PENETRATION {ctx.scene}: {ctx.rigid}; the rest n/a")
         for m in items:
             if m.status == "error":
                 lines.append(f"    {_OURS} {m.scene} / {m.metric}: {m.explanation}")
@@ -254,7 +256,8 @@ def _legend_lines(result, show_skipped: bool) -> list[str]:
     if lines:
         lines = [
             "rules (v0 in m/s; error is what the limit bounds; implementation: tolerance = "
-            "base + factor x textbook Verlet's error at the same step; delivery: a fixed "
+            "base + factor x the error of the code's declared scheme (textbook Verlet unless "
+            "it declares another) at the same step; delivery: a fixed "
             "tolerance, error = |model + step|, both signed: model = declared law's exact - "
             "asked (recalibrate), step = measured - declared law's exact (refine the step), "
             "over asked):"

@@ -1,0 +1,159 @@
+"""What an adapter declares for the bench (contract items 12 and 13): its time-stepping
+scheme and the order it claims (`Scheme`, read by `scheme_of`), and, for a built-in code,
+how the code takes a restitution, which variants the report shows, its install extra
+and pytest marker (`CodeInfo`).
+
+The bench judges a code's implementation against the error its *declared* scheme makes
+on the declared law (`reference_impl.bench._schemes` runs that scheme on the exact law),
+so a first-order implicit code is not held to velocity Verlet's error (issue 40, §1).
+The registry (`reference_impl.adapters.registry.builtin_codes`) makes every list of
+codes (the report's side-by-side variants, the install lines, the markers) from the
+`CodeInfo` of the registered built-in adapters.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from reference_impl.errors import HCVInputError
+
+__all__ = ["SCHEMES", "CodeInfo", "Scheme", "offset_refusal", "scheme_of"]
+
+# name -> (nominal order, one line). The nominal order is the scheme's order on a smooth
+# force; on a contact with a dashpot evaluated explicitly, velocity Verlet is first
+# order (the bench measures the scheme's own order on each scene). None: a
+# variable-step, error-controlled code, whose dt is its sampling, not its step.
+SCHEMES: dict[str, tuple[float | None, str]] = {
+    "velocity-verlet": (2.0, "velocity (explicit) Verlet, kick-drift-kick"),
+    "symplectic-euler": (1.0, "symplectic (semi-implicit) Euler: v then q"),
+    "explicit-euler": (1.0, "explicit (forward) Euler"),
+    "implicit-euler": (1.0, "implicit (backward) Euler, q and v at the new step"),
+    "rk4": (4.0, "classical fourth-order Runge-Kutta (a higher-order method)"),
+    "variable-step": (None, "variable-step, error-controlled (dt is its sampling)"),
+}
+
+
+@dataclass(frozen=True)
+class Scheme:
+    """A declared time-stepping scheme.
+
+    Parameters
+    ----------
+    name : str
+        A key of `SCHEMES`.
+    order : float or None
+        The order the code claims (> 0); None for a variable-step scheme.
+    rtol : float or None
+        A variable-step scheme's relative error tolerance (dimensionless, in (0, 1));
+        None for a fixed-step scheme.
+    """
+
+    name: str
+    order: float | None
+    rtol: float | None = None
+
+    @property
+    def variable(self) -> bool:
+        """The code chooses its own steps: ``dt`` is only its sampling."""
+        return self.name == "variable-step"
+
+    @property
+    def description(self) -> str:
+        text = SCHEMES[self.name][1]
+        if self.variable:
+            return f"{text}, rtol {self.rtol:g}"
+        return f"{text}, order {self.order:g}"
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "order": self.order, "rtol": self.rtol}
+
+
+def scheme_of(adapter) -> Scheme:
+    """The scheme an adapter (or variant) declares, checked (contract item 12).
+
+    Reads ``time_scheme`` (a key of `SCHEMES`; default velocity Verlet), ``claimed_order``
+    (default: the scheme's nominal order) and, for ``variable-step``, ``scheme_rtol``.
+
+    Raises
+    ------
+    HCVInputError
+        An unknown scheme, an order that is not a positive number, or a variable-step
+        scheme without its tolerance (one line naming the value).
+    """
+    name = getattr(adapter, "time_scheme", "velocity-verlet")
+    label = getattr(adapter, "label", type(adapter).__name__)
+    if name not in SCHEMES:
+        raise HCVInputError(
+            f"adapter {label!r}: time_scheme {name!r} is not one of {', '.join(SCHEMES)}"
+        )
+    nominal = SCHEMES[name][0]
+    if nominal is None:
+        rtol = getattr(adapter, "scheme_rtol", None)
+        if not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
+            raise HCVInputError(
+                f"adapter {label!r}: a variable-step scheme declares scheme_rtol in (0, 1), "
+                f"got {rtol!r}"
+            )
+        return Scheme(name, None, float(rtol))
+    order = getattr(adapter, "claimed_order", None)
+    if order is None:
+        order = nominal
+    if not (isinstance(order, (int, float)) and math.isfinite(order) and order > 0):
+        raise HCVInputError(
+            f"adapter {label!r}: claimed_order must be a positive number, got {order!r}"
+        )
+    return Scheme(name, float(order))
+
+
+def offset_refusal(adapter) -> str | None:
+    """Why a code that declares a force offset cannot be scored, else None.
+
+    A code whose contact force starts before the bodies overlap (``force_offset`` > 0,
+    in m: PyBullet's contactSlop, a skin) integrates U(q + offset), which no law of the
+    suite describes (every U starts at q = 0): its scenes are skipped with this reason,
+    naming the offset, rather than scored against a law it does not integrate.
+    """
+    offset = getattr(adapter, "force_offset", 0.0)
+    if offset in (0, 0.0, None):
+        return None
+    return (
+        f"declares a force offset of {offset!r} m (the force starts at q = -offset), which "
+        "no contact law of the suite describes (U(q) starts at q = 0): set it to 0 to be scored"
+    )
+
+
+@dataclass(frozen=True)
+class CodeInfo:
+    """What the registry, the report and CI need to know of a built-in code (item 13).
+
+    Parameters
+    ----------
+    code : str
+        The code's name as the report prints it ("LAMMPS").
+    restitution_input : str
+        How the code takes a restitution, in the words of its own documentation (the
+        input the user types, e.g. "pair_style granular ... damping tsuji: e").
+    report_variants : tuple of (str, float)
+        (adapter spec, exponent p of the scene's power law: 1.5 Hertz, 1 Hooke) of the
+        variants the report's "codes side by side" section runs.
+    calibrated : tuple of (str, float, str)
+        (adapter spec, p, option searched) of the variants ``hcv calibrate`` is shown for.
+    extra : str or None
+        The pip extra of pyproject.toml that installs the code (None: not from pip).
+    apt : str or None
+        The Debian package that installs it (None: not from apt).
+    marker : str
+        The pytest marker of its tests (declared in pyproject.toml).
+    test_module : str
+        Its test module, relative to the repository root.
+    """
+
+    code: str
+    restitution_input: str
+    report_variants: tuple = ()
+    calibrated: tuple = ()
+    extra: str | None = None
+    apt: str | None = None
+    marker: str = ""
+    test_module: str = ""
