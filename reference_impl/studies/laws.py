@@ -20,10 +20,11 @@ from functools import cache
 import numpy as np
 from scipy.optimize import brentq
 
-from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact.solve import solve_impact
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.api import solve
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.theory.laws import law_family
 
 __all__ = [
     "laws_results",
@@ -58,31 +59,26 @@ def hertz():
 
 
 def law_from_strength(name: str, g: float, pot, m: float) -> dict:
-    """The law ``name`` with strength g (its one scale parameter; shapes fixed here).
+    """The law ``name`` with strength g (its registered strength parameter,
+    `reference_impl.theory.laws.LawFamily.strength`; the study's shapes fixed here).
 
-    ``polynomial`` is c = [g, g / q_ref] with q_ref the elastic overlap at V_CAL
-    (equal constant and linear parts there).
+    ``power`` has exponent `POWER_EXPONENT`; ``polynomial`` is c = [g, g / q_ref] with
+    q_ref the elastic overlap at V_CAL (equal constant and linear parts there).
     """
-    if name == "universal":
-        return {"law": "universal", "zeta": g}
-    if name == "linear":
-        return {"law": "linear", "c": g}
+    fam = law_family(name)
     if name == "power":
         return {"law": "power", "c": g, "exponent": POWER_EXPONENT}
     if name == "polynomial":
         q_ref = pot.turning_point(0.5 * m * V_CAL**2)
         return {"law": "polynomial", "c": [g, g / q_ref]}
-    if name == "viscoelastic":
-        return {"law": "viscoelastic", "A": g}
-    if name == "hunt-crossley":
-        return {"law": "hunt-crossley", "alpha": g}
-    raise ValueError(name)
+    if fam.strength is None:
+        raise HCVInputError(f"damping law {name!r} has no strength to calibrate")
+    return {"law": name, fam.strength: g}
 
 
 def _e(name, g, pot, m, v0):
-    if name == "universal":
-        return solve_impact(pot, m, v0, g).restitution
-    return solve_law_impact(pot, m, v0, law_from_strength(name, g, pot, m)).restitution
+    # the one entry point: the strategy from the law's registry entry
+    return solve(pot, m, v0, law=law_from_strength(name, g, pot, m)).restitution
 
 
 @cache
@@ -112,10 +108,7 @@ def restitution_curves(speeds=SPEEDS) -> dict:
     for name, law in laws.items():
         ov, zf, ret = [], [], []
         for v in speeds:
-            if name == "universal":
-                s = solve_impact(pot, m, float(v), law["zeta"])
-            else:
-                s = solve_law_impact(pot, m, float(v), law)
+            s = solve(pot, m, float(v), law=law)
             ov.append(s.restitution)
             zf.append(s.restitution_zero_force)
             ret.append(bool(math.isfinite(s.contact_time)))
