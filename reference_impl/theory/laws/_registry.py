@@ -142,8 +142,12 @@ class LawFamily:
 
     @classmethod
     def keys(cls) -> tuple[str, ...]:
-        """The parameter keys, in order."""
-        return tuple(p.key for p in cls.params)
+        """The parameter keys, in order (formed once per class: asked on every law value)."""
+        keys = cls.__dict__.get("_keys")
+        if keys is None or keys[0] is not cls.params:
+            keys = (cls.params, tuple(p.key for p in cls.params))
+            cls._keys = keys
+        return keys[1]
 
     @classmethod
     def clean(cls, params: dict) -> dict[str, Any]:

@@ -7,7 +7,6 @@ about it; this value only holds the name and the checked parameters and asks the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -41,16 +40,21 @@ class DampingLaw:
         if not isinstance(self.params, dict):
             raise HCVInputError(f"damping law parameters must be a table, got {self.params!r}")
         want = fam.keys()
-        extra = sorted(set(self.params).difference(want))
-        if extra:
-            raise HCVInputError(
-                f"damping law {self.name!r} takes {', '.join(want) or 'no parameters'}; "
-                f"got unknown {extra[0]!r}"
-            )
-        missing = [k for k in want if k not in self.params]
-        if missing:
+        if len(self.params) != len(want) or not all(k in self.params for k in want):
+            extra = sorted(set(self.params).difference(want))
+            if extra:
+                raise HCVInputError(
+                    f"damping law {self.name!r} takes {', '.join(want) or 'no parameters'}; "
+                    f"got unknown {extra[0]!r}"
+                )
+            missing = [k for k in want if k not in self.params]
             raise HCVInputError(f"damping law {self.name!r} needs {missing[0]!r}")
-        object.__setattr__(self, "params", fam.clean(self.params))
+        params = fam.clean(self.params)
+        object.__setattr__(self, "params", params)
+        # Asked several times per solve (the kernels' arrays, the creep test, the linear
+        # case): formed once per law value, which is frozen. Not a field (eq, repr).
+        d = fam.decompose(params)
+        object.__setattr__(self, "_decomposition", _NO_TERMS if d is None else d)
 
     @property
     def family(self) -> type[LawFamily]:
@@ -66,13 +70,6 @@ class DampingLaw:
     def harmonic_zeta(self) -> float | None:
         """The universal law's zeta when the harmonic map solves this law, else None."""
         return self.family.harmonic_zeta(self.params) if self.route == "harmonic map" else None
-
-    @cached_property
-    def _decomposition(self) -> Decomposition:
-        # Asked several times per solve (the kernels' arrays, the creep test, the linear
-        # case): formed once per law value (a frozen value: it cannot change).
-        d = self.family.decompose(self.params)
-        return _NO_TERMS if d is None else d
 
     def decomposition(self) -> Decomposition:
         """C(q) in the kernels' terms (empty for a "generic" law)."""
@@ -128,7 +125,7 @@ def law_from_dict(table: dict, *, where: str = "damping") -> DampingLaw:
         raise HCVInputError(f"{where}.law must be a string, got {name!r}")
     params = {k: v for k, v in table.items() if k != "law"}
     fam = LAWS.get(name)
-    want = [p.key for p in fam.params] if fam is not None else None
+    want = fam.keys() if fam is not None else None
     extra = sorted(set(params) - set(want)) if want is not None else []
     if extra:
         # Named by its full path ('implemented_law.damping.c'), as every scene and protocol
