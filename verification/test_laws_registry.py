@@ -357,3 +357,25 @@ def test_hcv_scenes_lists_every_registered_law(tmp_path):
         claim="tool",
         call="hcv scenes --laws",
     )
+
+
+@pytest.mark.parametrize(
+    "law", [{"law": "linear", "c": 1.0}, {"law": "universal", "zeta": 0.1}], ids=lambda t: t["law"]
+)
+def test_the_damping_given_twice_is_refused_for_every_law(law):
+    """zeta beside a law: refused whatever the law (on main, solve_impact(law=linear,
+    zeta=0.3) returned the linear law's solution and silently dropped zeta)."""
+    for call in (lambda: solve(HERTZ, M, V0, 0.3, law=law),
+                 lambda: solve_batch(HERTZ, M, [V0], 0.3, law=law)):  # fmt: skip
+        with pytest.raises(HCVInputError, match="give the damping once"):
+            call()
+
+
+def test_a_generic_law_is_refused_where_only_c_of_q_is_evaluated(drag):
+    """The reference Verlet's damping evaluates C(q) alone: a law of q' says why it cannot."""
+    from reference_impl.errors import UnsupportedError
+    from reference_impl.theory.laws import law_C
+
+    law = law_from_dict({"law": "test-quadratic-drag", "b": 1.0})
+    with pytest.raises(UnsupportedError, match="depends on the speed"):
+        law_C(law, HERTZ, M, np.array([1e-5]))

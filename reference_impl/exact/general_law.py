@@ -354,7 +354,7 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull], float)
     if law.A and n < 2.0:
         raise HCVInputError(
-            f"damping law 'viscoelastic' needs U'' finite at contact (leading exponent n >= 2, "
+            f"damping law {law.name!r} needs U'' finite at contact (leading exponent n >= 2, "
             f"force exponent p >= 1); got n = {n:.6g}, where C = A U'' is infinite at q = 0"
         )
     return cs, es, sc
