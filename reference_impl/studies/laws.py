@@ -18,13 +18,12 @@ import math
 from functools import cache
 
 import numpy as np
-from scipy.optimize import brentq
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.api import solve
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.damping import zeta_from_restitution
-from reference_impl.theory.laws import law_family
+from reference_impl.scenes import law_for_restitution
+from reference_impl.theory.laws import law_family, law_from_dict
 
 __all__ = [
     "laws_results",
@@ -47,9 +46,6 @@ STUDY_LAWS = ("universal", "linear", "power", "polynomial", "viscoelastic", "hun
 # Exponent of the `power` law row (C = c q): Tsuji's q^(1/4) is the universal law itself.
 POWER_EXPONENT = 1.0
 SPEEDS = np.logspace(-3, 2, 26)  # m/s
-# Relative tolerance of the calibration root: far below the 1e-3 resolution of the figure,
-# far above the solver's ~1e-14.
-_CAL_RTOL = 1e-12
 
 
 def hertz():
@@ -76,27 +72,18 @@ def law_from_strength(name: str, g: float, pot, m: float) -> dict:
     return {"law": name, fam.strength: g}
 
 
-def _e(name, g, pot, m, v0):
-    # the one entry point: the strategy from the law's registry entry
-    return solve(pot, m, v0, law=law_from_strength(name, g, pot, m)).restitution
-
-
 @cache
 def calibrated_laws(e_cal: float = E_CAL, v_cal: float = V_CAL) -> dict[str, dict]:
-    """Each study law with its strength set so that e(v_cal) = e_cal at the overlap end."""
+    """Each study law with its strength set so that e(v_cal) = e_cal at the overlap end,
+    by the one solve-to-restitution of a law (`reference_impl.scenes.law_for_restitution`:
+    closed form for the universal law, else a root on log(strength) to |e - e_cal| <= 1e-9)
+    from the law at strength 1 in the study's shape (`law_from_strength`)."""
     pot, m = hertz()
-    out = {"universal": {"law": "universal", "zeta": zeta_from_restitution(e_cal)}}
-    for name in STUDY_LAWS[1:]:
-        g_hi = 1e-12
-        while _e(name, g_hi, pot, m, v_cal) > e_cal:
-            g_hi *= 4.0
-        g = brentq(
-            lambda g, name=name: _e(name, g, pot, m, v_cal) - e_cal,
-            g_hi / 4.0,
-            g_hi,
-            rtol=_CAL_RTOL,
-        )
-        out[name] = law_from_strength(name, g, pot, m)
+    out = {}
+    for name in STUDY_LAWS:
+        unit = law_from_dict(law_from_strength(name, 1.0, pot, m))
+        solved, _ = law_for_restitution(pot, m, unit, e_cal, v_cal, "overlap")
+        out[name] = solved.to_dict()
     return out
 
 
