@@ -47,7 +47,12 @@ _COMPILED_SOURCES = (
     "potentials/_families.py", "potentials/_near_zero.py", "potentials/_rising.py",
     "potentials/_terms.py", "potentials/base.py", "potentials/expression.py",
     "potentials/power.py", "potentials/saturating.py",
-    "theory/damping.py", "theory/harmonic_map.py", "theory/laws.py",
+    "exact/_route.py", "exact/_generic_law.py",
+    "theory/damping.py", "theory/harmonic_map.py",
+    "theory/laws/__init__.py", "theory/laws/_registry.py", "theory/laws/_value.py",
+    "theory/laws/none.py", "theory/laws/universal.py", "theory/laws/linear.py",
+    "theory/laws/power.py", "theory/laws/polynomial.py", "theory/laws/viscoelastic.py",
+    "theory/laws/hunt_crossley.py",
 )  # fmt: skip
 _PACKAGE = Path(__file__).resolve().parent
 # numba/<_KEY_PREFIX><hex>: the keyed directories; numba/<name>_<40 hex>: numba's own

@@ -14,6 +14,7 @@ __all__ = [
     "ExpressionError",
     "SceneError",
     "UnsupportedError",
+    "one_line",
 ]
 
 
@@ -43,3 +44,11 @@ class SceneError(HCVInputError):
 
 class UnsupportedError(HCVInputError):
     """A valid input outside what the solver computes reliably: refused, never guessed."""
+
+
+def one_line(exc: BaseException) -> str:
+    """``Type: first line of the message`` (the type alone for an empty message): an
+    exception as one line of a record or a report (the bench's workers, the sweep)."""
+    text = str(exc).strip().splitlines()
+    head = text[0] if text else ""
+    return f"{type(exc).__name__}: {head}" if head else type(exc).__name__

@@ -10,8 +10,7 @@ from __future__ import annotations
 import math
 
 from reference_impl.errors import HCVInputError
-from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact.solve import solve_impact
+from reference_impl.exact.api import solve
 from reference_impl.stability.bound import dt_safe
 from reference_impl.stability.result import DtCritResult
 from reference_impl.theory.action import action, period
@@ -33,21 +32,19 @@ def solve_scene(scene) -> list[dict]:
     "zero-force" end, where U' + C q' first vanishes after q_max, as in codes that
     forbid tension), action J(E) and period T(E) with the paper's definitions
     (section 4) at E = m v0^2 / 2, and the error bound of the contact time
-    (quadrature_error, s). The universal law and ``none`` are solved by the exact
-    quadrature, the other laws by `reference_impl.exact.general_law`.
+    (quadrature_error, s). Each law is solved where its registry entry says
+    (`reference_impl.exact.api.solve`): the universal law and ``none`` by the exact
+    quadrature, the others by `reference_impl.exact.general_law` (or the generic route).
     """
 
     law = scene.law
-    exact = law.name in ("none", "universal")
-    zeta = (scene.zeta or 0.0) if exact else None
+    # the universal law's zeta when the harmonic map solves the law, else None
+    zeta = law.harmonic_zeta
     rows = []
     for v0 in scene.velocities:
-        if exact:
-            sol = solve_impact(scene.potential, scene.mass, v0, zeta)
-            err_t = sol.quadrature_error
-        else:
-            sol = solve_law_impact(scene.potential, scene.mass, v0, law)
-            err_t = sol.error_time
+        # the one entry point chooses the strategy from the law's registry entry
+        sol = solve(scene.potential, scene.mass, v0, law=law)
+        err_t = sol.quadrature_error if zeta is not None else sol.error_time
         safe = dt_safe(scene.potential, scene.mass, v0)
         E = 0.5 * scene.mass * v0 * v0
         rows.append(
@@ -106,7 +103,7 @@ def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> l
     """
     from reference_impl.stability.search import default_criterion, parse_criterion, search_scene
 
-    if scene.damping_law not in ("none", "universal"):
+    if scene.law.harmonic_zeta is None:
         # The Verlet lanes integrate the universal law only; running the scene undamped
         # would answer another question.
         raise HCVInputError(

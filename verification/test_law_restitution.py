@@ -20,7 +20,7 @@ from reference_impl.errors import SceneError
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.scenes import load_scene, parse_scene, scene_from_dict
 
-from .assertions import assert_true
+from .assertions import assert_less, assert_true
 from .strategies import log_uniform
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -264,3 +264,17 @@ def test_equivalent_universal_zeta_of_other_laws(family, law, want):
         claim=CLAIM,
         call=f"Scene({family}, {law}).equivalent_universal_zeta",
     )
+
+
+def test_the_laws_study_is_calibrated_to_its_restitution():
+    """Every law of the restitution-against-speed study has e(V_CAL) = E_CAL (the one
+    solve-to-restitution). On main the study's own search stopped at brentq's absolute
+    xtol (2e-12) on A ~ 1.2e-6 s: the viscoelastic law's e was 0.80000001557."""
+    from reference_impl.exact.api import solve
+    from reference_impl.studies.laws import E_CAL, V_CAL, calibrated_laws, hertz
+
+    pot, m = hertz()
+    for name, law in calibrated_laws().items():
+        e = solve(pot, m, V_CAL, law=law).restitution
+        assert_less(abs(e - E_CAL), E_TOL, claim="tool", call=f"calibrated_laws()[{name!r}]",
+                    what="|e(V_CAL) - E_CAL|")  # fmt: skip

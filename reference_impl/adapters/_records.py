@@ -18,6 +18,7 @@ from reference_impl.theory.damping import (
     restitution_from_zeta,
     restitution_zero_force_from_zeta,
 )
+from reference_impl.theory.laws import is_harmonic
 
 __all__ = [
     "AdapterDeclined",
@@ -162,7 +163,7 @@ class AdapterScene:
     def universal_only(self, who: str) -> str | None:
         """Why a code that integrates the universal law only (or none) declines this
         scene (one line naming the law), or None when the scene's law is one of them."""
-        if self.damping in ("none", "universal"):
+        if is_harmonic(self.damping):
             return None
         params = ", ".join(f"{k} = {v!r}" for k, v in self.law.items() if k != "law")
         asked = (
@@ -222,7 +223,7 @@ class AdapterScene:
         name = scene.damping_law
         zeta = float(scene.zeta or 0.0) if name == "universal" else 0.0
         eq = getattr(scene, "equivalent_universal_zeta", None)
-        if name not in ("none", "universal") and eq is not None:
+        if not is_harmonic(name) and eq is not None:
             # The scene's law is the universal law at zeta = eq (a constant C on Hooke, or
             # a law at strength 0): sent as such, so a code that maps only the universal
             # law runs it instead of declining (`Scene.equivalent_universal_zeta`).
@@ -234,7 +235,7 @@ class AdapterScene:
         speed = cal.get("restitution_speed")
         if "restitution" in cal:
             asked = float(cal["restitution"])
-        elif name in ("none", "universal"):
+        elif is_harmonic(name):
             asked = None  # from zeta at the asked end (`__post_init__`)
         else:
             # a law given by its parameters: its e depends on the speed; what it asks

@@ -168,11 +168,11 @@ class ContactAdapter:
     Class attributes
     ----------------
     name : str
-    # Constructor arguments a spec may give by value alone (``kratos[hertz,verlet]``):
-    # key -> accepted values; a ``True`` flag key is given by its own name
-    # (``lammps[tsuji,limit_damping]``). Listed by ``hcv bench --help``.
-    spec_values: dict = {}
         Registry-style name of the code ("lammps", "reference", ...).
+    spec_values : dict
+        Constructor arguments a spec may give by value alone (``kratos[hertz,verlet]``):
+        key -> accepted values; a ``True`` flag key is given by its own name
+        (``lammps[tsuji,limit_damping]``). Listed by ``hcv bench --help``.
     isolate : bool
         Run this adapter in a worker process (crash and hang isolation). True by
         default for third-party code; adapters that are themselves isolated (the
@@ -191,6 +191,7 @@ class ContactAdapter:
     """
 
     name: str = "adapter"
+    spec_values: Mapping = {}
     isolate: bool = True
     supports_sustained: bool = False
     staggering: Mapping = {}

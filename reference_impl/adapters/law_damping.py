@@ -14,7 +14,7 @@ import numpy as np
 
 from reference_impl.adapters._records import AdapterScene, ImplementedLaw, PowerDamping
 from reference_impl.potentials.base import Potential
-from reference_impl.theory.laws import DampingLaw, law_C, law_from_dict
+from reference_impl.theory.laws import DampingLaw, is_harmonic, law_C, law_from_dict
 
 __all__ = ["LawDamping", "implemented_law_from_table", "scene_law"]
 
@@ -55,8 +55,8 @@ def implemented_law_from_table(pot: Potential, mass: float, table, **kw) -> Impl
     others are a `LawDamping`.
     """
     law = law_from_dict(table, where="implemented_law.damping")
-    if law.name in ("none", "universal"):
-        return ImplementedLaw(pot, float(mass), zeta=law.zeta, **kw)
+    if law.harmonic_zeta is not None:
+        return ImplementedLaw(pot, float(mass), zeta=law.harmonic_zeta, **kw)
     if law.name == "power":
         return ImplementedLaw(
             pot, float(mass), C=PowerDamping(law.params["c"], law.params["exponent"]), **kw
@@ -83,6 +83,6 @@ def law_of(damping) -> DampingLaw | None:
 def scene_law(scene: AdapterScene, **kw) -> ImplementedLaw:
     """The law an `AdapterScene` asks, as an `ImplementedLaw` (any law of the table, with
     its solved parameters; keywords such as ``description`` go to `ImplementedLaw`)."""
-    if scene.damping in ("none", "universal"):
+    if is_harmonic(scene.damping):
         return ImplementedLaw(scene.potential, scene.mass, zeta=scene.zeta, **kw)
     return implemented_law_from_table(scene.potential, scene.mass, dict(scene.law), **kw)

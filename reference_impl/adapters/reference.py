@@ -17,6 +17,7 @@ from reference_impl.adapters.base import (
 )
 from reference_impl.adapters.law_damping import LawDamping, scene_law
 from reference_impl.integrators.verlet_path import verlet_trajectory
+from reference_impl.theory.laws import is_harmonic
 
 __all__ = ["ReferenceAdapter", "law_trajectory", "verlet_trajectory"]
 
@@ -80,7 +81,7 @@ class ReferenceAdapter(ContactAdapter):
 
     def _damping(self, scene: AdapterScene) -> dict:
         """verlet_trajectory's damping keywords for the scene's law."""
-        if scene.damping in ("none", "universal"):
+        if is_harmonic(scene.damping):
             return {"zeta": scene.zeta}
         C = scene_law(scene).C
         if isinstance(C, PowerDamping):

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from reference_impl.adapters.base import AdapterScene
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import Scene, load_scene
+from reference_impl.theory.laws import is_harmonic
 
 __all__ = [
     "DEFAULT_SCENES",
@@ -88,7 +89,7 @@ def scene_damped(scene: Scene) -> bool:
 def speed_dependent_law(scene: Scene) -> str:
     """The scene's law name when its restitution depends on the impact speed (every
     damped law but the universal one, Theorem 3), else ""."""
-    if scene.damping_law in ("none", "universal") or not scene_damped(scene):
+    if is_harmonic(scene.damping_law) or not scene_damped(scene):
         return ""
     return scene.damping_law
 

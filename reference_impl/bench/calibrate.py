@@ -56,6 +56,7 @@ from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.scenes import Scene, load_scene
+from reference_impl.theory.laws import is_harmonic
 
 __all__ = [
     "ENDS",
@@ -210,7 +211,7 @@ def _universal_scene(scene) -> Scene:
     """The scene, refused (one line) when its damping law is not 'none' or 'universal':
     the calibration's references (contact time, the scene as asked) are the harmonic map's."""
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    if sc.damping_law not in ("none", "universal"):
+    if not is_harmonic(sc.damping_law):
         raise HCVInputError(
             f"scene {sc.name!r}: hcv calibrate runs scenes of damping law 'none' or "
             f"'universal' (got {sc.damping_law!r}); hcv bench runs every law"

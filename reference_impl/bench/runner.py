@@ -80,8 +80,9 @@ from reference_impl.bench.report import machine_info, write_json, write_junit
 from reference_impl.bench.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 from reference_impl.errors import HCVInputError
-from reference_impl.exact.solve import solve_impact
+from reference_impl.exact.api import solve
 from reference_impl.scenes import Scene, potential_to_dict
+from reference_impl.theory.laws import is_harmonic
 
 __all__ = [
     "DEFAULT_SCENES",
@@ -154,12 +155,8 @@ class _SceneRun:
         law's solved parameters."""
         sc = self.scene
         try:
-            if sc.damping_law in ("none", "universal"):
-                sol = solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0)
-            else:
-                from reference_impl.exact.general_law import solve_law_impact
-
-                sol = solve_law_impact(sc.potential, sc.mass, v0, sc.law)
+            # the one entry point: the strategy from the law's registry entry
+            sol = solve(sc.potential, sc.mass, v0, law=sc.law)
             t_c = _horizon(float(sol.contact_time), float(sol.contact_time_zero_force))
         except Exception as exc:
             raise _Ours(
@@ -182,7 +179,7 @@ class _SceneRun:
         damped = scene_damped(self.scene)
         e = sol.restitution_zero_force if end == "zero-force" and damped else sol.restitution
         sc = self.scene
-        if sc.damping_law in ("none", "universal"):
+        if is_harmonic(sc.damping_law):
             law = ImplementedLaw(sc.potential, sc.mass, zeta=float(sc.zeta or 0.0))
         else:
             law = implemented_law_from_table(sc.potential, sc.mass, sc.law.to_dict())
@@ -276,7 +273,7 @@ class _SceneRun:
             return False
         if not (same_pot and law.mass == sc.mass):
             return False
-        if sc.damping_law in ("none", "universal"):
+        if is_harmonic(sc.damping_law):
             return law.C is None and float(law.zeta or 0.0) == float(sc.zeta or 0.0)
         # another law of the table: the same law with the same (solved) parameters
         declared = law_of(law.C) if law.C is not None else None

@@ -30,6 +30,7 @@ from typing import Any
 from reference_impl.adapters.base import ContactAdapter
 from reference_impl.adapters.registry import get_adapter
 from reference_impl.errors import HCVInputError
+from reference_impl.errors import one_line as _one_line
 
 __all__ = ["InProcessExecutor", "Outcome", "WorkerExecutor", "make_executor"]
 
@@ -70,12 +71,6 @@ class Outcome:
     seconds: float = 0.0
     timed_out: bool = False
     declined: str = ""
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    head = text[0] if text else ""
-    return f"{type(exc).__name__}: {head}" if head else type(exc).__name__
 
 
 def _tail(text: str) -> str:

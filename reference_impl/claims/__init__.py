@@ -80,7 +80,24 @@ class Claim:
         return getattr(self.home, "PRINTED", None)
 
     def corrected(self, measured: dict, results: dict) -> tuple[str, str] | None:
-        """(corrected statement, decisive numbers) from the claim's module, or None."""
+        """The corrected statement and the decisive numbers, from a results.json claim
+        entry, by the claim module's ``corrected(m, r)`` (present where the claim does not
+        hold as printed), or None.
+
+        Parameters
+        ----------
+        measured : dict
+            The claim's ``measured`` figures as written to results.json (the module's
+            ``m``).
+        results : dict
+            The whole results dict (the module's ``r``; the erratum of section 6 reads
+            the critical-step map).
+
+        Returns
+        -------
+        (str, str) or None
+            The corrected statement and the numbers it rests on (read, never typed).
+        """
         fn = getattr(self.home, "corrected", None)
         return None if fn is None else fn(measured, results)
 

@@ -181,20 +181,7 @@ def measure(quick: bool = False) -> Measurement:
 
 
 def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
-    """The corrected statement and the decisive numbers, from a results.json claim entry.
-
-    Parameters
-    ----------
-    m : dict
-        The claim's ``measured`` figures as written to results.json.
-    r : dict
-        The whole results dict (the erratum of section 6 reads the critical-step map).
-
-    Returns
-    -------
-    (str, str)
-        The corrected statement and the numbers it rests on (read, never typed).
-    """
+    """This claim's erratum: the contract is `reference_impl.claims.Claim.corrected`."""
     cons = [x for x in m["runs"] if x["C0"] == 0]
     diss = [x for x in m["runs"] if x["C0"] > 0]
     ident = max(x["identity_err"] for x in m["runs"])

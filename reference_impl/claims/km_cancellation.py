@@ -160,20 +160,7 @@ def measure(quick: bool = False) -> Measurement:
 
 
 def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
-    """The corrected statement and the decisive numbers, from a results.json claim entry.
-
-    Parameters
-    ----------
-    m : dict
-        The claim's ``measured`` figures as written to results.json.
-    r : dict
-        The whole results dict (the erratum of section 6 reads the critical-step map).
-
-    Returns
-    -------
-    (str, str)
-        The corrected statement and the numbers it rests on (read, never typed).
-    """
+    """This claim's erratum: the contract is `reference_impl.claims.Claim.corrected`."""
     (k1, e1), (k2, e2) = m["restitution_fixed_C0"].items()
     return (
         "K and M cancel when the damping is given by ζ = C0/(2√(KM)); at fixed C0, the law of "

@@ -285,20 +285,7 @@ def measure(quick: bool = False) -> Measurement:
 
 
 def corrected(m: dict, r: dict) -> tuple[str, str]:
-    """The corrected statement and the decisive numbers, from a results.json claim entry.
-
-    Parameters
-    ----------
-    m : dict
-        The claim's ``measured`` figures as written to results.json.
-    r : dict
-        The whole results dict (the erratum of section 6 reads the critical-step map).
-
-    Returns
-    -------
-    (str, str)
-        The corrected statement and the numbers it rests on (read, never typed).
-    """
+    """This claim's erratum: the contract is `reference_impl.claims.Claim.corrected`."""
     w, k = m.get("worst_runaway") or {}, m["per_kind"]
     lin = m.get("linear_two_sided", {})
     rows = r.get("dt_crit_map", [])

@@ -105,20 +105,7 @@ def measure(quick: bool = False) -> Measurement:
 
 
 def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
-    """The corrected statement and the decisive numbers, from a results.json claim entry.
-
-    Parameters
-    ----------
-    m : dict
-        The claim's ``measured`` figures as written to results.json.
-    r : dict
-        The whole results dict (the erratum of section 6 reads the critical-step map).
-
-    Returns
-    -------
-    (str, str)
-        The corrected statement and the numbers it rests on (read, never typed).
-    """
+    """This claim's erratum: the contract is `reference_impl.claims.Claim.corrected`."""
     cells = []
     for row in m["rows"]:
         for col, name in (

@@ -115,20 +115,7 @@ def measure(quick: bool = False) -> Measurement:
 
 
 def corrected(m: dict, r: dict | None = None) -> tuple[str, str]:
-    """The corrected statement and the decisive numbers, from a results.json claim entry.
-
-    Parameters
-    ----------
-    m : dict
-        The claim's ``measured`` figures as written to results.json.
-    r : dict
-        The whole results dict (the erratum of section 6 reads the critical-step map).
-
-    Returns
-    -------
-    (str, str)
-        The corrected statement and the numbers it rests on (read, never typed).
-    """
+    """This claim's erratum: the contract is `reference_impl.claims.Claim.corrected`."""
     dev2 = max(r["abs_ratio_minus_2"] for r in m.values())
     dtc = max(r["abs_tc_over_2pi_dJdE_minus_1"] for r in m.values())
     cases = ", ".join(f"{n} {r['T_over_2pi_dJdE'][:12]}" for n, r in m.items())

@@ -17,7 +17,9 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
 
 
-def _one_line(text: str) -> str:
+def _joined(text) -> str:
+    """The message on one line: its lines and runs of blanks joined by one space (not
+    `reference_impl.errors.one_line`, which keeps the type and the first line)."""
     return " ".join(str(text).split())
 
 
@@ -26,7 +28,7 @@ def run_command(args) -> int:
     try:
         return args.func(args)
     except HCVInputError as exc:
-        print(f"hcv: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"hcv: error: {_joined(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         return interrupted()
@@ -46,7 +48,7 @@ def run_command(args) -> int:
         # Paths are checked before work starts; this is the backstop for one the file
         # system still refuses (a name too long, a permission changed meanwhile).
         where = f"{_short_path(exc.filename)}: " if exc.filename else ""
-        print(f"hcv: error: {where}{exc.strerror or _one_line(exc)}", file=sys.stderr)
+        print(f"hcv: error: {where}{exc.strerror or _joined(exc)}", file=sys.stderr)
         return EXIT_USAGE
 
 

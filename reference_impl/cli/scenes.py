@@ -1,4 +1,5 @@
-"""``hcv scenes [--show NAME]``: the scene catalogue, or one scene as TOML."""
+"""``hcv scenes [--show NAME | --laws]``: the scene catalogue, one scene as TOML, or the
+damping laws a scene may name (the registry, `reference_impl.theory.laws`)."""
 
 from __future__ import annotations
 
@@ -15,11 +16,17 @@ def add_parser(subparsers) -> None:
         help="list the scene catalogue (the same names work in every command); "
         "--show NAME prints one as TOML",
     )
-    ls.add_argument(
+    which = ls.add_mutually_exclusive_group()
+    which.add_argument(
         "--show",
         metavar="NAME",
         help="print this scene's TOML (a catalogue name or a file), and the strength solved "
         "for a restitution asked at a speed",
+    )
+    which.add_argument(
+        "--laws",
+        action="store_true",
+        help="list the damping laws a scene's [damping] law may name, with their parameters",
     )
     ls.set_defaults(func=run)
 
@@ -28,6 +35,13 @@ def run(args) -> int:
     """Print the catalogue, one scene a line, or with ``--show`` one scene's TOML (and,
     for a law solved from a restitution at a speed, a ``# solved:`` line after it)."""
 
+    if getattr(args, "laws", False):
+        from reference_impl.theory.laws import LAWS
+
+        for fam in LAWS.values():
+            name, params, formula, how = (c.replace("`", "") for c in fam.docs_row())
+            print(f"{name:14s} C = {formula}; parameters: {params or 'none'}; {how}")
+        return EXIT_OK
     if args.show:
         from reference_impl.scenes import scene_show
 

@@ -271,7 +271,7 @@ def solve_law_impact_mp(
     # Hunt-Crossley: F = U' (1 + alpha w) with 1 + alpha w > 0 until q = 0 (it decays like
     # exp(-(alpha/m) int U' dt), ~1e-70 at alpha v0 = 160), so the two ends coincide; a
     # search would find the working precision's round-off instead.
-    search_zf = law.name != "hunt-crossley"
+    search_zf = not law.decomposition().never_pulls
     terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
     if not all(type(t) is PowerLaw for t in terms):
         raise HCVInputError("general-law truth: power-law potentials (and sums of them) only")

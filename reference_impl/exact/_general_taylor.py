@@ -238,30 +238,6 @@ def _horner(c, x):
     return acc
 
 
-@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
-def _dot(a, oa, b, ob, n):
-    """sum_{i=0}^{n} a[oa + i] b[ob + n - i], a Cauchy product's coefficient n. The
-    recurrences are a chain of such sums: letting the compiler reorder each one (and
-    fuse its multiply-adds) splits it over vector lanes instead of waiting on each add;
-    the sum then rounds differently, by ~1 ulp of its terms."""
-    s = 0.0
-    for i in range(n + 1):
-        s += a[oa + i] * b[ob + n - i]
-    return s
-
-
-@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
-def _sq(a, oa, n):
-    """sum_{i=0}^{n} a[oa + i] a[oa + n - i] (a square's coefficient n), each cross term once."""
-    s = 0.0
-    for i in range((n + 1) // 2):
-        s += a[oa + i] * a[oa + n - i]
-    s *= 2.0
-    if n % 2 == 0:
-        s += a[oa + n // 2] * a[oa + n // 2]
-    return s
-
-
 @numba.njit(cache=True, error_model="numpy")
 def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;

@@ -30,9 +30,9 @@ from reference_impl.exact._branches import (
     _jacobi_pair,
     _pow_split,
 )
-from reference_impl.exact._law_batch import solve_law_batch
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._power_kernel import _POWER_ROWS
+from reference_impl.exact._route import batch_other, route
 from reference_impl.exact._sums import GJ_OK
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.prepared import prepare
@@ -157,7 +157,7 @@ def _gj_batch(zetas, u, W, beta, zeta_max, rtol, factors, with_factors):  # prag
 def solve_impacts(
     potential: Potential, m: float, v0s, zetas=0.0, *, law=None
 ) -> dict[str, np.ndarray]:
-    """Solve many impacts of one potential and mass.
+    """Solve many impacts of one potential and mass (``reference_impl.solve_batch``).
 
     Parameters
     ----------
@@ -170,10 +170,11 @@ def solve_impacts(
     zetas : array_like
         Damping ratios (as accepted by `solve_impact`), broadcast against ``v0s``.
     law : DampingLaw or dict, optional
-        A damping law of `reference_impl.theory.laws` other than ``universal`` / ``none``
-        (then ``zetas`` must stay 0): every speed is solved as by
-        `reference_impl.exact.general_law.solve_law_impact` (bit for bit; the integrations
-        on every core, `_law_batch`), and the arrays are its fields
+        A registered damping law (then ``zetas`` must stay 0). One the harmonic map
+        solves (universal, none) runs as its zeta; the others go where their registry
+        entry says (`reference_impl.exact._route`): a "general" law's speeds are solved as
+        by `reference_impl.exact.general_law.solve_law_impact` (bit for bit; the
+        integrations on every core, `_law_batch`), and the arrays are its fields
         (max_penetration, max_force, peak_force, contact_time, restitution,
         contact_time_zero_force, restitution_zero_force, returns_to_q0,
         error_time, error_restitution).
@@ -194,16 +195,11 @@ def solve_impacts(
         zeta = 1 and above are solved (critical and overdamped closed forms).
     """
     if law is not None:
-        from reference_impl.theory.laws import law_from_dict
-
-        dl = law_from_dict(law)
-        if np.any(np.asarray(zetas, dtype=float) != 0):
-            raise HCVInputError(f"give the damping once: zetas and law = {dl.to_dict()} both set")
-        if dl.name in ("universal", "none"):
-            zetas = dl.zeta
-        else:
-            # Every core: the compiled integrations in a prange loop (`_law_batch`).
-            return solve_law_batch(potential, m, v0s, dl, BATCH_MAX)
+        # The law's registry entry chooses the strategy (`_route`, the one place).
+        r = route(law, zetas, "zetas")
+        if r.kind != "harmonic map":
+            return batch_other(r, potential, m, v0s, BATCH_MAX)
+        zetas = r.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impacts")

@@ -348,12 +348,13 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     creeps = 1.0 if never else 0.0
     # C q' outweighs U' as q -> 0 (a < n - 1): the force pulls just before q = 0.
     pulls = 1.0 if leads and min(leads) < n - 1.0 - 1e-12 else 0.0
-    # Pure Hunt-Crossley: F = U' (1 + alpha q') never vanishes before q = 0 (_general_kernel).
-    nopull = 1.0 if law.name == "hunt-crossley" else 0.0
+    # The law says the force never vanishes before q = 0 (Hunt-Crossley: F = U' (1 + alpha
+    # q'), _general_kernel): no zero-force event is searched.
+    nopull = 1.0 if law.decomposition().never_pulls else 0.0
     sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull], float)
     if law.A and n < 2.0:
         raise HCVInputError(
-            f"damping law 'viscoelastic' needs U'' finite at contact (leading exponent n >= 2, "
+            f"damping law {law.name!r} needs U'' finite at contact (leading exponent n >= 2, "
             f"force exponent p >= 1); got n = {n:.6g}, where C = A U'' is infinite at q = 0"
         )
     return cs, es, sc

@@ -39,6 +39,7 @@ from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import family_call, family_constants, power_call
+from reference_impl.exact._route import prepare_other, route
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _TOPS_KEPT, _check_exponent, _validated_top
@@ -54,7 +55,7 @@ from reference_impl.potentials._checks import is_real_number, positive
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
 
-__all__ = ["PreparedImpact", "prepare"]
+__all__ = ["PreparedAt", "PreparedImpact", "prepare"]
 
 _INF = math.inf
 
@@ -259,10 +260,11 @@ def _solution(v0, m, zeta, pot, out):
     )
 
 
-def prepare(potential: Potential, m: float) -> PreparedImpact:
+def prepare(potential: Potential, m: float, *, law=None):
     """A solver of many impacts of ``potential`` and mass ``m``: ``prepare(pot, m)(v0, zeta)``
     equals ``solve_impact(pot, m, v0, zeta)`` bit for bit, with the potential checked and
-    the path planned once (see the module docstring).
+    the path planned once (see the module docstring); ``prepare(pot, m, law=L)(v0)``
+    equals ``solve_impact(pot, m, v0, law=L)`` (the strategy chosen once, `_route`).
 
     Parameters
     ----------
@@ -270,14 +272,41 @@ def prepare(potential: Potential, m: float) -> PreparedImpact:
         Contact potential U(q) (J, q in m).
     m : float
         Mass (kg), > 0.
+    law : DampingLaw or dict, optional
+        A registered damping law; the solver then takes the speed alone.
 
     Returns
     -------
-    PreparedImpact
+    PreparedImpact, or with ``law`` a callable ``(v0) -> solution``
+        `PreparedImpact` (or `PreparedAt` for a law the harmonic map solves), or the
+        prepared solver of the law's strategy (`reference_impl.exact.general_law.PreparedLaw`).
 
     Raises
     ------
     HCVInputError
-        As `solve_impact` for the potential and the mass, at once.
+        As `solve_impact` for the potential, the mass and the law, at once.
     """
-    return PreparedImpact(potential, m)
+    if law is None:
+        return PreparedImpact(potential, m)
+    r = route(law, 0.0)
+    if r.kind == "harmonic map":
+        return PreparedAt(PreparedImpact(potential, m), r.zeta)
+    return prepare_other(r, potential, m)
+
+
+class PreparedAt:
+    """A `PreparedImpact` at one damping ratio: ``(v0) -> solve_impact(pot, m, v0, zeta)``."""
+
+    __slots__ = ("_prepared", "zeta")
+
+    def __init__(self, prepared: PreparedImpact, zeta: float):
+        self._prepared = prepared
+        self.zeta = zeta
+
+    def __call__(self, v0: float) -> ImpactSolution:
+        """The impact at approach speed ``v0`` (m/s, > 0)."""
+        return self._prepared(v0, self.zeta)
+
+    def __repr__(self) -> str:
+        p = self._prepared
+        return f"prepare({p.potential!r}, {p.m!r}, law={{'law': 'universal', 'zeta': {self.zeta!r}}})"

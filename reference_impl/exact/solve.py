@@ -34,6 +34,7 @@ from reference_impl.exact._one_call import conditioning_at as _conditioning_at
 from reference_impl.exact._one_call import curvature
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
+from reference_impl.exact._route import route, solve_other
 from reference_impl.exact._strategies import Job, choose
 from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
@@ -354,7 +355,11 @@ def solve_impact(
     law=None,
     level: int | None = None,
 ):
-    """Solve one normal impact exactly through the harmonic map.
+    """Solve one normal impact exactly: the entry point ``reference_impl.solve``.
+
+    The universal law (``zeta``, or ``law`` of route "harmonic map") is solved through
+    the harmonic map here; any other registered law goes where its registry entry says
+    (`reference_impl.exact._route`, the one place the strategy is chosen).
 
     Parameters
     ----------
@@ -369,10 +374,11 @@ def solve_impact(
         narrow band just below 1 where the theory's end of contact leaves float64
         range (see `reference_impl.exact._oscillator.S_END_MAX`); 0 is conservative.
     law : DampingLaw or dict, optional
-        Any damping law of `reference_impl.theory.laws`, e.g. ``{"law": "linear", "c": 3.0}``.
-        ``universal`` (give ``zeta`` there, not both) and ``none`` use this exact
-        quadrature; the other laws are integrated by `reference_impl.exact.general_law`
-        and return its `LawImpactSolution` (same field names, plus ``peak_force``).
+        Any registered damping law (`reference_impl.theory.laws`), e.g.
+        ``{"law": "linear", "c": 3.0}``. A law the harmonic map solves (``universal``:
+        give ``zeta`` there, not both; ``none``) uses this exact quadrature; the others
+        go to the strategy their registry entry names (`reference_impl.exact._route`) and
+        return a `LawImpactSolution` (same field names, plus ``peak_force``).
     level : int, optional
         Level of the tanh-sinh rules (accuracy); default: Gauss-Jacobi rules
         (power laws, and compiled families whose exponents have small
@@ -397,17 +403,11 @@ def solve_impact(
         it met the stated accuracy.
     """
     if law is not None:
-        from reference_impl.exact.general_law import solve_law_impact
-        from reference_impl.theory.laws import law_from_dict
-
-        dl = law_from_dict(law)
-        if dl.name not in ("universal", "none"):
-            return solve_law_impact(potential, m, v0, dl)
-        if zeta:
-            raise HCVInputError(
-                f"give the damping once: zeta = {zeta!r} and law = {dl.to_dict()} both set"
-            )
-        zeta = dl.zeta
+        # The law's registry entry chooses the strategy (`_route`, the one place).
+        r = route(law, zeta)
+        if r.kind != "harmonic map":
+            return solve_other(r, potential, m, v0)
+        zeta = r.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     m = positive("m", m, "solve_impact")

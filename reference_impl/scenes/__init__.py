@@ -21,6 +21,7 @@ _FROM_SCENE = (
 __all__ = [
     "Scene",
     "embedded_scenes",
+    "law_for_restitution",
     "load_scene",
     "parse_scene",
     "potential_to_dict",
@@ -31,6 +32,10 @@ __all__ = [
 
 
 def __getattr__(name: str):
+    if name == "law_for_restitution":  # the one solve-to-restitution of a damping law
+        from reference_impl.scenes._law_restitution import law_for_restitution
+
+        return law_for_restitution
     if name in _FROM_SCENE:
         from reference_impl.scenes import _scene
 

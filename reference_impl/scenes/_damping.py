@@ -11,15 +11,16 @@ import sys
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes._fields import _keys, _number, _string, _table, _Where
-from reference_impl.scenes._law_restitution import STRENGTH, law_for_restitution
+from reference_impl.scenes._law_restitution import law_for_restitution, speed_dependent_laws
 from reference_impl.theory.damping import zeta_from_restitution
-from reference_impl.theory.laws import LAWS, DampingLaw, law_from_dict
+from reference_impl.theory.laws import LAWS, DampingLaw, law_family, law_from_dict
 
 __all__: list[str] = []  # private to the scenes package
 
 _LAWS = LAWS
 _ENDS = ("overlap", "zero-force")
-_DAMPING_KEYS = (
+# The keys of ``[damping]`` besides the laws' own parameters (`_damping_keys`).
+_FORM_KEYS = (
     "law",
     "zeta",
     "restitution",
@@ -28,18 +29,23 @@ _DAMPING_KEYS = (
     "C0",
     "K",
     "M",
-    "c",
-    "exponent",
-    "A",
-    "alpha",
 )
+
+
+def _law_keys() -> tuple[str, ...]:
+    """Every parameter key of every registered law, in registration order."""
+    return tuple(dict.fromkeys(p.key for f in LAWS.values() for p in f.params))
+
+
+def _damping_keys() -> tuple[str, ...]:
+    return tuple(dict.fromkeys((*_FORM_KEYS, *_law_keys())))
 
 
 def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw, dict | None]:
     """(law name, zeta of the universal law or None, DampingLaw, restitution request or
     None) from ``[damping]``; a request is solved by `_solve_strength` once U and m are known."""
     table = _table(err, table, "damping")
-    _keys(err, table, "damping.", _DAMPING_KEYS)
+    _keys(err, table, "damping.", _damping_keys())
     law = _string(err, table.get("law", "none"), "damping.law", _LAWS)
     if law != "universal":
         return _other_law(err, law, table)
@@ -48,7 +54,7 @@ def _damping(err: _Where, table) -> tuple[str, float | None, DampingLaw, dict | 
             "damping.restitution_speed: the universal law's restitution does not depend on "
             "the impact speed (Theorem 3); remove it"
         )
-    other = [k for k in ("c", "exponent", "A", "alpha") if k in table]
+    other = [k for k in _law_keys() if k in table and k not in _FORM_KEYS]
     if other:
         raise err(f"damping.{other[0]} does not belong to law = 'universal'; remove it")
     forms = [k for k in ("zeta", "restitution", "C0") if k in table]
@@ -97,7 +103,8 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
         raise err(
             f"damping.{asked_keys[0]}: damping.law is 'none', which takes no restitution (e = 1); "
             "for a restitution choose law = 'universal' (restitution, optional "
-            f"restitution_end) or a speed-dependent law ({', '.join(STRENGTH)}: restitution "
+            f"restitution_end) or a speed-dependent law ({', '.join(speed_dependent_laws())}: "
+            "restitution "
             "with restitution_speed), or remove it"
         )
     if only_universal:
@@ -113,14 +120,20 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
     rest = {k: v for k, v in table.items() if k not in asked}
     request = None
     if asked:
-        key = STRENGTH[law]
+        fam = law_family(law)
+        if law not in speed_dependent_laws():
+            raise err(
+                f"damping.restitution: law = {law!r} has no strength to solve from a "
+                f"restitution; choose one of {', '.join(speed_dependent_laws())} or remove it"
+            )
+        key = fam.strength
         if "restitution_speed" not in asked:
             raise err(
                 f"damping.restitution with law = {law!r} needs damping.restitution_speed = v "
                 "[m/s]: this law's restitution depends on the impact speed (only 'universal' "
                 "does not)"
             )
-        if key in rest and law != "polynomial":
+        if key in rest and not fam.shape_scaled:
             raise err(
                 f"damping.{key} and damping.restitution both set the strength of law = "
                 f"{law!r}; give one of them"
@@ -130,11 +143,11 @@ def _other_law(err: _Where, law: str, table: dict) -> tuple[str, None, DampingLa
         end = _string(
             err, asked.get("restitution_end", "overlap"), "damping.restitution_end", _ENDS
         )
-        if law != "polynomial":
+        if not fam.shape_scaled:
             rest[key] = 1.0  # unit strength, solved below once U and m are known
         elif key not in rest:
             raise err(
-                "damping.restitution with law = 'polynomial' needs damping.c = [c0, c1, ...]: "
+                f"damping.restitution with law = {law!r} needs damping.{key} = [c0, c1, ...]: "
                 "its shape (all coefficients are scaled to give the restitution)"
             )
         request = {"restitution": e, "restitution_speed": v, "restitution_end": end}
@@ -159,10 +172,11 @@ def _solve_strength(err: _Where, potential, mass: float, dlaw: DampingLaw, reque
         )
     except HCVInputError as exc:
         raise err(f"damping.restitution = {request['restitution']!r}: {exc}") from None
-    key = STRENGTH[dlaw.name]
-    value = list(solved.params[key]) if dlaw.name == "polynomial" else solved.params[key]
+    fam = dlaw.family
+    key = fam.strength
+    value = list(solved.params[key]) if fam.shape_scaled else solved.params[key]
     record = {**request, "parameter": key, "value": value}
-    if dlaw.name == "polynomial":
+    if fam.shape_scaled:
         record["scale"] = s
     return solved, record
 
@@ -198,17 +212,19 @@ def _universal_zeta(potential, mass: float, law: DampingLaw) -> float | None:
     A U'' = A k) is the universal law at zeta = c / (2 sqrt(m k)), exactly. Other potentials
     (a sum or an expression that happens to be Hooke included) are not recognised.
     """
-    if law.name == "universal":
-        return law.zeta
+    if law.harmonic_zeta is not None:
+        return law.harmonic_zeta
+    if law.route != "general":
+        return None  # a generic C(q, q'): not recognised
     if law.is_zero():
         return 0.0
     if type(potential) is not PowerLaw or potential.p != 1.0:
         return None
     k = potential.k
-    if law.name == "viscoelastic":
-        c = law.A * k
-    elif law.terms() and all(e == 0.0 for _, e in law.terms()):
-        c = sum(c for c, _ in law.terms())
-    else:
+    d = law.decomposition()
+    # constant terms and A U'' = A k only (alpha U' and a universal part are not constant)
+    if d.alpha or d.zeta or not all(e == 0.0 for _, e in d.terms):
         return None
+    # (bit for bit the sums of before: A k alone, or the constant terms + 0.0)
+    c = d.A * k if not d.terms else sum(c for c, _ in d.terms) + d.A * k
     return c / (2.0 * math.sqrt(mass * k))

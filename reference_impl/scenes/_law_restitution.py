@@ -1,13 +1,14 @@
-"""A damping law's strength solved from a restitution asked at one speed (issue 26, item 2).
+"""A damping law's strength solved from a restitution asked at one speed (issues 26, 37).
 
-A DEM user thinks in e. Every speed-dependent law of `reference_impl.theory.laws`
-(``linear``, ``power``, ``polynomial``, ``viscoelastic``, ``hunt-crossley``) has one
-strength parameter that scales C(q): ``c`` (linear, power), ``A`` (viscoelastic),
-``alpha`` (hunt-crossley), and for a polynomial a factor on all its coefficients (the
-given ``c`` is the shape). `law_for_restitution` finds the strength s at which the exact
-restitution of the law at the asked speed v, at the asked end, equals the asked e:
-the exact solution is `reference_impl.exact.general_law.solve_law_impact` (~1e-14), the
-root a bracketing search on log s (e falls monotonically as the damping grows).
+A DEM user thinks in e. Every registered law with a strength (`LawFamily.strength`,
+`reference_impl.theory.laws`) has one parameter that scales C: ``c`` (linear, power),
+``A`` (viscoelastic), ``alpha`` (hunt-crossley), and for a shape-scaled law (polynomial)
+a factor on all its coefficients (the given ``c`` is the shape). `law_for_restitution`
+finds the strength s at which the exact restitution of the law at the asked speed v, at
+the asked end, equals the asked e: for a law the harmonic map solves (universal) in
+closed form (Theorem 3: e does not depend on v), else through the exact solution
+`reference_impl.exact.api.solve` (~1e-14) and a bracketing search on log s (e falls
+monotonically as the damping grows). This is the one solve-to-restitution of a law.
 """
 
 from __future__ import annotations
@@ -17,27 +18,19 @@ import math
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.laws import DampingLaw, law_C
+from reference_impl.theory.laws import LAWS, DampingLaw, law_C, law_family
 
-__all__ = ["STRENGTH", "law_for_restitution", "strength_text"]
+__all__ = ["law_for_restitution", "speed_dependent_laws", "strength_text"]
 
-# The one strength parameter of each law ("c" of a polynomial: all coefficients scaled).
-STRENGTH = {
-    "linear": "c",
-    "power": "c",
-    "polynomial": "c",
-    "viscoelastic": "A",
-    "hunt-crossley": "alpha",
-}
-# Units of each strength (as `reference_impl.theory.laws` documents them; a power law's
-# c is in N s m^-(1+exponent), its exponent filled in by `strength_text`).
-_STRENGTH_UNITS = {
-    "linear": "N s/m",
-    "power": "N s m^-{}",
-    "polynomial": "N s m^-(1+i)",
-    "viscoelastic": "s",
-    "hunt-crossley": "s/m",
-}
+
+def speed_dependent_laws() -> tuple[str, ...]:
+    """The registered laws whose strength a restitution asked at a speed solves (every law
+    with a strength but those of the harmonic map, whose e does not depend on the speed)."""
+    return tuple(
+        n for n, f in LAWS.items() if f.strength is not None and f.route != "harmonic map"
+    )
+
+
 # The exact restitution is good to ~1e-14 (`ERROR_SAFETY` bound of the general-law solver);
 # the root is accepted when the law's e at the strength found is this close to the asked one.
 _E_TOL = 1e-9
@@ -49,21 +42,12 @@ _GROW = 4.0
 _MAX_STEPS = 40
 
 
-def _with_strength(law: DampingLaw, s: float) -> DampingLaw:
-    params = dict(law.params)
-    if law.name == "polynomial":
-        params["c"] = tuple(s * c for c in law.params["c"])
-    else:
-        params[STRENGTH[law.name]] = s
-    return DampingLaw(law.name, params)
-
-
 def _guess(potential, mass: float, v: float, unit: DampingLaw) -> float:
     """A strength of order 'critical damping': C(q_max / 2) ~ m / t_c of the elastic impact."""
-    from reference_impl.exact.solve import solve_impact
+    from reference_impl.exact.api import solve
 
     try:
-        el = solve_impact(potential, mass, v, 0.0)
+        el = solve(potential, mass, v, 0.0)
         q_mid = np.array([0.5 * float(el.max_penetration)])
         with np.errstate(all="ignore"):
             c1 = float(law_C(unit, potential, mass, q_mid)[0])
@@ -85,7 +69,8 @@ def law_for_restitution(
     mass : float
         Reduced mass (kg).
     law : DampingLaw
-        The law (any strength; for ``polynomial`` its coefficients give the shape).
+        The law (any strength; for a shape-scaled law, e.g. ``polynomial``, its
+        coefficients give the shape).
     e : float
         Restitution asked, 0 < e <= 1 (e = 1: strength 0).
     v : float
@@ -96,22 +81,29 @@ def law_for_restitution(
     Returns
     -------
     (DampingLaw, float)
-        The solved law and its strength (``c`` in its law's units, ``A`` in s, ``alpha``
-        in s/m; for ``polynomial`` the factor applied to the given coefficients).
+        The solved law and its strength (in its unit, `LawFamily.strength_unit`; for a
+        shape-scaled law the factor applied to the given coefficients).
 
     Raises
     ------
     HCVInputError
         One line when no strength gives ``e`` (e.g. the body stops returning first).
     """
-    from reference_impl.exact.general_law import solve_law_impact
+    from reference_impl.exact.api import solve
 
-    if law.name not in STRENGTH:
+    fam = law_family(law.name)
+    if fam.strength is None:
         raise HCVInputError(f"damping law {law.name!r} has no strength to solve from a restitution")
     if e >= 1.0:
-        return _with_strength(law, 0.0), 0.0
-    # the law at strength 1 (a polynomial's given coefficients are its shape: scale 1)
-    unit = law if law.name == "polynomial" else _with_strength(law, 1.0)
+        return law.with_strength(0.0), 0.0
+    if fam.route == "harmonic map":
+        # Theorem 3: the restitution does not depend on v; its zeta in closed form
+        from reference_impl.theory.damping import zeta_from_restitution
+
+        z = zeta_from_restitution(e, end=end)
+        return law.with_strength(z), z
+    # the law at strength 1 (a shape-scaled law's given coefficients are its shape: scale 1)
+    unit = law if fam.shape_scaled else law.with_strength(1.0)
     if unit.is_zero():
         raise HCVInputError(
             f"damping law {law.name!r}: its coefficients are all 0, so no scale of them "
@@ -119,7 +111,7 @@ def law_for_restitution(
         )
 
     def f(s: float) -> float:
-        sol = solve_law_impact(potential, mass, v, _with_strength(unit, s))
+        sol = solve(potential, mass, v, law=unit.with_strength(s))
         got = sol.restitution if end == "overlap" else sol.restitution_zero_force
         return float(got) - e
 
@@ -158,7 +150,7 @@ def law_for_restitution(
             f"reached: the restitution jumps past it at strength {s:.6g} (the body stops "
             f"returning to q = 0 there); ask for a larger e or another law"
         )
-    return _with_strength(unit, s), s
+    return unit.with_strength(s), s
 
 
 def strength_text(law: DampingLaw, calibration: dict) -> str:
@@ -174,11 +166,10 @@ def strength_text(law: DampingLaw, calibration: dict) -> str:
         ``restitution_end``, ``parameter``; ``scale`` for a polynomial).
     """
     key = calibration["parameter"]
-    unit = _STRENGTH_UNITS[law.name]
-    if law.name == "power":
-        unit = unit.format(f"{1.0 + law.params['exponent']:g}")
+    fam = law.family
+    unit = fam.strength_unit(law.params)
     value = law.params[key]
-    if law.name == "polynomial":
+    if fam.shape_scaled:
         shown = "[" + ", ".join(f"{c:.6g}" for c in value) + "]"
         how = f"the given c scaled by {calibration['scale']:.6g}; "
     else:

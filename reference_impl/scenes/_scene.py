@@ -15,8 +15,8 @@ A scene is a small TOML document::
     Kn = 1e8
     alpha = 0.5
     [damping]                       # optional; default law = "none"
-    law = "universal"               # none | universal | linear | power | polynomial |
-                                    # viscoelastic | hunt-crossley (reference_impl.theory.laws)
+    law = "universal"               # a registered law (reference_impl.theory.laws.LAWS;
+                                    # hcv scenes --laws lists them)
     zeta = 0.2                      # or restitution = 0.8 (+ restitution_end), or C0 with K and M
 
 Every problem raises `SceneError` (or, for a potential that breaks the
@@ -95,9 +95,8 @@ class Scene:
     potential : Potential
         The contact potential U(q).
     damping_law : str
-        ``"none"``, ``"universal"`` (Theorem 3) or another law of
-        `reference_impl.theory.laws` (``linear``, ``power``, ``polynomial``,
-        ``viscoelastic``, ``hunt-crossley``).
+        ``"none"``, ``"universal"`` (Theorem 3) or another registered law
+        (`reference_impl.theory.laws.LAWS`).
     zeta : float or None
         Damping ratio zeta = C0 / (2 sqrt(K M)) of the universal law; None
         for every other law (use `law`).
@@ -321,7 +320,7 @@ def scene_from_dict(
     if dlaw.A and float(potential.leading_exponent) < 2.0:
         # checked here, not first at solve time, so the message names the scene file
         raise err(
-            "damping law 'viscoelastic' needs U'' finite at contact (leading exponent "
+            f"damping law {dlaw.name!r} needs U'' finite at contact (leading exponent "
             "n >= 2, force exponent p >= 1); got n = "
             f"{float(potential.leading_exponent):.6g}, where C = A U'' is infinite at q = 0"
         )

@@ -18,12 +18,12 @@ import math
 from functools import cache
 
 import numpy as np
-from scipy.optimize import brentq
 
-from reference_impl.exact.general_law import solve_law_impact
-from reference_impl.exact.solve import solve_impact
+from reference_impl.errors import HCVInputError
+from reference_impl.exact.api import solve
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.theory.damping import zeta_from_restitution
+from reference_impl.scenes import law_for_restitution
+from reference_impl.theory.laws import law_family, law_from_dict
 
 __all__ = [
     "laws_results",
@@ -46,9 +46,6 @@ STUDY_LAWS = ("universal", "linear", "power", "polynomial", "viscoelastic", "hun
 # Exponent of the `power` law row (C = c q): Tsuji's q^(1/4) is the universal law itself.
 POWER_EXPONENT = 1.0
 SPEEDS = np.logspace(-3, 2, 26)  # m/s
-# Relative tolerance of the calibration root: far below the 1e-3 resolution of the figure,
-# far above the solver's ~1e-14.
-_CAL_RTOL = 1e-12
 
 
 def hertz():
@@ -58,49 +55,35 @@ def hertz():
 
 
 def law_from_strength(name: str, g: float, pot, m: float) -> dict:
-    """The law ``name`` with strength g (its one scale parameter; shapes fixed here).
+    """The law ``name`` with strength g (its registered strength parameter,
+    `reference_impl.theory.laws.LawFamily.strength`; the study's shapes fixed here).
 
-    ``polynomial`` is c = [g, g / q_ref] with q_ref the elastic overlap at V_CAL
-    (equal constant and linear parts there).
+    ``power`` has exponent `POWER_EXPONENT`; ``polynomial`` is c = [g, g / q_ref] with
+    q_ref the elastic overlap at V_CAL (equal constant and linear parts there).
     """
-    if name == "universal":
-        return {"law": "universal", "zeta": g}
-    if name == "linear":
-        return {"law": "linear", "c": g}
+    fam = law_family(name)
     if name == "power":
         return {"law": "power", "c": g, "exponent": POWER_EXPONENT}
     if name == "polynomial":
         q_ref = pot.turning_point(0.5 * m * V_CAL**2)
         return {"law": "polynomial", "c": [g, g / q_ref]}
-    if name == "viscoelastic":
-        return {"law": "viscoelastic", "A": g}
-    if name == "hunt-crossley":
-        return {"law": "hunt-crossley", "alpha": g}
-    raise ValueError(name)
-
-
-def _e(name, g, pot, m, v0):
-    if name == "universal":
-        return solve_impact(pot, m, v0, g).restitution
-    return solve_law_impact(pot, m, v0, law_from_strength(name, g, pot, m)).restitution
+    if fam.strength is None:
+        raise HCVInputError(f"damping law {name!r} has no strength to calibrate")
+    return {"law": name, fam.strength: g}
 
 
 @cache
 def calibrated_laws(e_cal: float = E_CAL, v_cal: float = V_CAL) -> dict[str, dict]:
-    """Each study law with its strength set so that e(v_cal) = e_cal at the overlap end."""
+    """Each study law with its strength set so that e(v_cal) = e_cal at the overlap end,
+    by the one solve-to-restitution of a law (`reference_impl.scenes.law_for_restitution`:
+    closed form for the universal law, else a root on log(strength) to |e - e_cal| <= 1e-9)
+    from the law at strength 1 in the study's shape (`law_from_strength`)."""
     pot, m = hertz()
-    out = {"universal": {"law": "universal", "zeta": zeta_from_restitution(e_cal)}}
-    for name in STUDY_LAWS[1:]:
-        g_hi = 1e-12
-        while _e(name, g_hi, pot, m, v_cal) > e_cal:
-            g_hi *= 4.0
-        g = brentq(
-            lambda g, name=name: _e(name, g, pot, m, v_cal) - e_cal,
-            g_hi / 4.0,
-            g_hi,
-            rtol=_CAL_RTOL,
-        )
-        out[name] = law_from_strength(name, g, pot, m)
+    out = {}
+    for name in STUDY_LAWS:
+        unit = law_from_dict(law_from_strength(name, 1.0, pot, m))
+        solved, _ = law_for_restitution(pot, m, unit, e_cal, v_cal, "overlap")
+        out[name] = solved.to_dict()
     return out
 
 
@@ -112,10 +95,7 @@ def restitution_curves(speeds=SPEEDS) -> dict:
     for name, law in laws.items():
         ov, zf, ret = [], [], []
         for v in speeds:
-            if name == "universal":
-                s = solve_impact(pot, m, float(v), law["zeta"])
-            else:
-                s = solve_law_impact(pot, m, float(v), law)
+            s = solve(pot, m, float(v), law=law)
             ov.append(s.restitution)
             zf.append(s.restitution_zero_force)
             ret.append(bool(math.isfinite(s.contact_time)))

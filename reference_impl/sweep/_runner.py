@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from reference_impl.errors import HCVInputError
+from reference_impl.errors import one_line as _one_line
 
 __all__ = [
     "CaseFailed",
@@ -133,11 +134,6 @@ def dask_available() -> bool:
     except ImportError:
         return False
     return True
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
 def _call(fn: Callable, item: Any) -> tuple[bool, Any, str, float, str, float]:

@@ -1,0 +1,102 @@
+"""The one place where an exact solve chooses its strategy from the damping law (issue 37).
+
+`route` asks the law's registry entry (`reference_impl.theory.laws.LawFamily.route`)
+how it is solved exactly; `solve_impact`, `solve_impacts` and `prepare`
+(`reference_impl.exact.api` names them `solve`, `solve_batch`, `prepare`) call it and,
+for the laws the harmonic map does not solve, hand the law to the strategy it names
+here (`solve_other`, `batch_other`, `prepare_other`):
+
+- "harmonic map": the exact quadrature at the law's zeta (`reference_impl.exact.solve`);
+- "general": `reference_impl.exact.general_law` (closed form on the linear oscillator,
+  the Taylor kernel on sums of powers, the extrapolation elsewhere; ~1e-14);
+- "generic": `reference_impl.exact._generic_law` (any C(q, q'); scipy, bound ~1e-8).
+
+The solvers are imported where a law needs them, so a universal-law solve loads neither.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from reference_impl.errors import HCVInputError
+from reference_impl.theory.laws import DampingLaw, law_from_dict
+
+__all__ = ["Route", "batch_other", "prepare_other", "route", "solve_other"]
+
+
+class Route(NamedTuple):
+    """The strategy of a solve: ``kind`` (one of `reference_impl.theory.laws.ROUTES`), the
+    universal law's ``zeta`` (harmonic map), the law (None when none was given)."""
+
+    kind: str
+    zeta: object
+    law: DampingLaw | None
+
+
+def route(law, zeta, what: str = "zeta") -> Route:
+    """The strategy for ``law`` (a `DampingLaw`, a table or None) and ``zeta``.
+
+    Parameters
+    ----------
+    law : DampingLaw, dict or None
+        The damping law; None: the universal law at ``zeta``.
+    zeta : float or array_like
+        Damping ratio(s) of the universal law given beside it (must be 0 with a law).
+    what : str
+        The name of ``zeta`` in the caller's signature, for the message.
+
+    Raises
+    ------
+    HCVInputError
+        An unknown law or parameter (one line naming it), or the damping given twice.
+    """
+    if law is None:
+        return Route("harmonic map", zeta, None)
+    dl = law_from_dict(law)
+    if np.any(np.asarray(zeta, dtype=float) != 0):
+        if what == "zeta":
+            raise HCVInputError(
+                f"give the damping once: zeta = {zeta!r} and law = {dl.to_dict()} both set"
+            )
+        raise HCVInputError(f"give the damping once: {what} and law = {dl.to_dict()} both set")
+    hz = dl.harmonic_zeta
+    if hz is not None:
+        return Route("harmonic map", hz, dl)
+    return Route(dl.route, 0.0, dl)
+
+
+def solve_other(r: Route, potential, m: float, v0: float):
+    """One impact of a law the harmonic map does not solve (`LawImpactSolution`)."""
+    if r.kind == "general":
+        from reference_impl.exact.general_law import solve_law_impact
+
+        return solve_law_impact(potential, m, v0, r.law)
+    from reference_impl.exact._generic_law import solve_generic_law
+
+    return solve_generic_law(potential, m, v0, r.law)
+
+
+def batch_other(r: Route, potential, m: float, v0s, batch_max: int) -> dict[str, np.ndarray]:
+    """Many speeds of such a law: arrays of the `LawImpactSolution` fields
+    (`reference_impl.exact._law_batch.LAW_FIELDS`)."""
+    if r.kind == "general":
+        # Every core: the compiled integrations in a prange loop (`_law_batch`).
+        from reference_impl.exact._law_batch import solve_law_batch
+
+        return solve_law_batch(potential, m, v0s, r.law, batch_max)
+    from reference_impl.exact._generic_law import solve_generic_batch
+
+    return solve_generic_batch(potential, m, v0s, r.law, batch_max)
+
+
+def prepare_other(r: Route, potential, m: float):
+    """A solver ``(v0) -> LawImpactSolution`` of such a law, checked once."""
+    if r.kind == "general":
+        from reference_impl.exact.general_law import prepare_law
+
+        return prepare_law(potential, m, r.law)
+    from reference_impl.exact._generic_law import PreparedGeneric
+
+    return PreparedGeneric(potential, m, r.law)
