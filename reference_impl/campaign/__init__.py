@@ -149,7 +149,8 @@ def _carry(out: Path, adapters) -> tuple[dict | None, str]:
             return None, ""
         figures = [f for f in old["figures"] if Path(f).name.startswith(("bench_", "steps_"))]
         for rel in figures:
-            read_report_file(out, rel, f"previous report: {rel}", head_only=True)
+            where = f"previous report {str(prev)!r}: $.figures[{old['figures'].index(rel)}]"
+            read_report_file(out, rel, where, head_only=True)
     except HCVInputError as exc:
         return None, f"the previous report's code sections are not carried: {exc}"
     env = old["environment"]
