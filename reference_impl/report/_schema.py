@@ -135,6 +135,16 @@ def _json_path(path) -> str:
     return out
 
 
+def _wanted(want: dict) -> str:
+    """The entry a ``contains`` asks for, in words: ``'x'`` or ``with id 'x'``."""
+    if "const" in want:
+        return _quote(want["const"])
+    consts = [(k, v["const"]) for k, v in want.get("properties", {}).items() if "const" in v]
+    if len(consts) == 1:
+        return f"with {consts[0][0]} {_quote(consts[0][1])}"
+    return json.dumps(want, ensure_ascii=False)[:120]
+
+
 def _describe(err) -> str:
     """What is wrong, in words, without repeating a large value (jsonschema's messages do)."""
     kind, want, x = err.validator, err.validator_value, err.instance
@@ -150,17 +160,30 @@ def _describe(err) -> str:
     if kind == "pattern":
         if want.startswith("^figures/"):
             return f"{_quote(x)} is not figures/NAME.png inside the report"
+        if want.startswith("^steps_"):
+            return f"{_quote(x)} is not steps_NAME.png (a figure of the report, in figures/)"
         return f"{_quote(x)} does not match {want}"
     if kind in ("minItems", "maxItems", "minProperties", "maxProperties"):
         word = "at least" if kind.startswith("min") else "at most"
         return f"has {len(x)} entries, should have {word} {want}"
     if kind == "contains":
-        return f"has no entry {json.dumps(want, ensure_ascii=False)[:120]}"
+        return f"has no entry {_wanted(want)}"
     if kind in ("exclusiveMinimum", "minimum"):
         return f"is {_quote(x)}, should be {'>' if kind == 'exclusiveMinimum' else '>='} {want}"
     if kind in ("oneOf", "anyOf"):
         return f"is {_kind(x)} not of the form the report reads"
     return " ".join(err.message.split())[:200]
+
+
+def _first_error(results):
+    """The error to name, or None: the deepest bad field (the most precise: a bad entry
+    rather than the list lacking a good one), the first found among equals; within a
+    oneOf or anyOf, jsonschema's best match of its branches."""
+    errors = list(_validator().iter_errors(results))
+    if not errors:
+        return None
+    err = max(errors, key=lambda e: len(e.absolute_path))  # max keeps the first of equals
+    return best_match(err.context) if err.validator in ("oneOf", "anyOf") and err.context else err
 
 
 def _cross_checks(r: dict) -> tuple[str, str] | None:
@@ -222,7 +245,7 @@ def check_results(results, source: str = "results", base=None) -> dict:
         raise HCVInputError(
             f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
         )
-    err = best_match(_validator().iter_errors(results))
+    err = _first_error(results)
     if err is not None:
         raise HCVInputError(
             f"{source}: {_json_path(err.absolute_path)}: {_describe(err)} ({SCHEMA})"
