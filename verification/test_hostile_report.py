@@ -165,6 +165,7 @@ def _poison(case: str, doc: dict, src: Path, outside: Path) -> str:
         "steps figure ../x.png": "../x.png",
         "steps figure absolute": str(outside / "secret.png"),
         "steps figure not listed": "steps_nowhere.png",
+        "steps figure with a final newline": "steps_lammps.png\n",
     }
     if case in figure:
         doc["steps_per_contact"][0]["figure"] = figure[case]
@@ -209,6 +210,7 @@ PATH_CASES = [
     "steps figure ../x.png",
     "steps figure absolute",
     "steps figure not listed",
+    "steps figure with a final newline",
     "figures entry absolute",
     "figure a link out",
     "figures/ a link out",

@@ -6,8 +6,8 @@ embeds the figures. A results file is shared and may come from anyone (a pull re
 so every such read goes through `read_report_file`, which refuses, in one line naming the
 field it came from:
 
-* a path that is not ``DIR/NAME`` with DIR ``figures`` or ``bench`` and NAME of letters,
-  digits and ``. _ -`` (no ``..``, no absolute path, no leading dot);
+* a path that is not ``DIR/NAME`` with DIR ``figures`` or ``bench`` and NAME of word
+  characters, ``.`` and ``-`` (no ``/``, no ``..``, no absolute path, no leading dot);
 * DIR or NAME a symbolic link (both are opened with ``O_NOFOLLOW``, the file relative to
   the directory's descriptor, so nothing outside the report is ever opened);
 * anything but a regular file (``/dev/zero``, a FIFO: opened non-blocking, checked on the
@@ -35,8 +35,10 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 MAX_BYTES = 20 * 2**20
 # A report's own sub-directories that a results document may name files in.
 _DIRS = ("figures", "bench")
-# NAME of DIR/NAME: the names the report writes (figures/fig1.png, bench/lammps.json).
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
+# NAME of DIR/NAME: the names the report writes (figures/fig1.png, bench/lammps.json): word
+# characters (letters of any script, as an adapter's name keeps them), "." and "-", not
+# starting with "." (so never "..", a hidden file or a path).
+_NAME = re.compile(r"\w[\w.-]{0,99}")
 
 
 def _refuse(field: str, rel: str, why: str, own: bool = True) -> HCVInputError:
