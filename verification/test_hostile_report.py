@@ -455,6 +455,31 @@ def test_a_malformed_document_is_one_line_naming_its_json_path(
     _refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
 
 
+@pytest.mark.parametrize(
+    "where, literal",
+    [
+        ("confirm_horizon", "1e999"),  # parses to inf; the renderer takes int() of it
+        ("v0", "1" + "0" * 400),  # an integer no float can hold; the renderer formats it
+    ],
+)
+def test_a_number_out_of_range_is_one_line_naming_its_json_path(
+    committed, tmp_path, capsys, where, literal
+):
+    doc = copy.deepcopy(committed)
+    if where == "confirm_horizon":
+        i = next(i for i, x in enumerate(doc["dt_crit_sensitivity"]) if x["scene"] != "impact")
+        doc["dt_crit_sensitivity"][i]["confirm_horizon"] = "@BIG@"
+        needle = f"$.dt_crit_sensitivity[{i}].confirm_horizon"
+    else:
+        doc["fig1"]["runs"][0]["v0"] = "@BIG@"
+        needle = "$.fig1.runs[0].v0"
+    src = _source(tmp_path, doc)
+    (src / "results.json").write_text(json.dumps(doc).replace('"@BIG@"', literal))
+    out = tmp_path / "out"
+    code, err, _ = _run_from(src, out, capsys)
+    _refused(code, err, out, needle, [], [], f"hcv report --from ({where} = {literal[:8]}...)")
+
+
 @settings(
     max_examples=40,
     deadline=None,

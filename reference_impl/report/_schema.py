@@ -72,9 +72,11 @@ from __future__ import annotations
 import errno
 import functools
 import json
+import math
 import os
 import re
 import stat
+import sys
 from pathlib import Path
 
 from jsonschema import Draft202012Validator
@@ -186,6 +188,26 @@ def _first_error(results):
     return best_match(err.context) if err.validator in ("oneOf", "anyOf") and err.context else err
 
 
+def _out_of_range(doc) -> tuple[str, object] | None:
+    """(JSON path, value) of the first number that is not a finite double, or None.
+
+    Strict JSON has no infinity, but ``1e999`` parses to one and a 400-digit integer
+    cannot become a float: the renderer formats numbers as floats, so both are refused
+    here (a results file writes infinities as the strings "inf" and "-inf")."""
+    stack = [((), doc)]
+    while stack:
+        path, x = stack.pop()
+        if isinstance(x, dict):
+            stack += [((*path, k), v) for k, v in reversed(x.items())]
+        elif isinstance(x, list):
+            stack += [((*path, i), v) for i, v in reversed(list(enumerate(x)))]
+        elif isinstance(x, float) and not math.isfinite(x):
+            return _json_path(path), x
+        elif isinstance(x, int) and not isinstance(x, bool) and abs(x) > sys.float_info.max:
+            return _json_path(path), x
+    return None
+
+
 def _cross_checks(r: dict) -> tuple[str, str] | None:
     """(JSON path, what is wrong) of the first reference the schema cannot express, or None."""
     listed = set(r["figures"])
@@ -245,6 +267,10 @@ def check_results(results, source: str = "results", base=None) -> dict:
         raise HCVInputError(
             f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
         )
+    big = _out_of_range(results)
+    if big is not None:
+        shown = f"a {len(str(abs(big[1])))}-digit integer" if isinstance(big[1], int) else big[1]
+        raise HCVInputError(f"{source}: {big[0]}: is {shown}, not a finite number ({SCHEMA})")
     err = _first_error(results)
     if err is not None:
         raise HCVInputError(
