@@ -7,6 +7,7 @@ bad-input tests build their violating cases explicitly).
 
 from __future__ import annotations
 
+import copy
 import math
 
 from hypothesis import strategies as st
@@ -459,3 +460,54 @@ def universal_asks(draw):
 
 
 __all__ += ["universal_asks"]
+
+
+# -- malformed results documents (hcv report --from: verification/test_hostile_report.py) --
+# What a field becomes when its type is swapped: each JSON type, empty and not, and text
+# that a renderer could take for markup.
+_JSON_SWAPS = (None, True, 0, -1.5, 0.0, "", "x", "<b>x</b>", [], [1], {}, {"a": 1})
+
+
+def _json_paths(doc, path=(), width=2):
+    """Paths (tuples of keys and indices) of ``doc``'s values, the first ``width`` items of
+    each list only (a list's items share one form)."""
+    out = [path] if path else []
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            out += _json_paths(v, (*path, k), width)
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc[:width]):
+            out += _json_paths(v, (*path, i), width)
+    return out
+
+
+def _mutated(doc, edits):
+    """A copy of ``doc`` with each (path, swap) applied in turn: swap None deletes the key
+    or item, else replaces the value; a path that an earlier edit removed is skipped."""
+    doc = copy.deepcopy(doc)
+    for path, (delete, value) in edits:
+        parent = doc
+        try:
+            for k in path[:-1]:
+                parent = parent[k]
+            if delete:
+                del parent[path[-1]]
+            else:
+                parent[path[-1]] = copy.deepcopy(value)
+        except (KeyError, IndexError, TypeError):
+            continue
+    return doc
+
+
+def json_mutations(doc, max_edits: int = 3) -> st.SearchStrategy:
+    """``doc`` (a JSON document) with 1 to ``max_edits`` random deletions or type swaps of
+    its fields, at any depth (a malformed results.json made from the committed one)."""
+    paths = _json_paths(doc)
+    edit = st.tuples(
+        st.sampled_from(paths),
+        st.one_of(st.just((True, None)), st.tuples(st.just(False), st.sampled_from(_JSON_SWAPS))),
+    )
+    return st.lists(edit, min_size=1, max_size=max_edits).map(lambda e: _mutated(doc, e))
+
+
+__all__ += ["json_mutations"]

@@ -129,10 +129,11 @@ def test_both_pages_show_it_and_the_html_table_is_wrapped(committed, tmp_path):
 @pytest.mark.parametrize(
     "case, message",
     [
-        ("no delivered", "rows[0] lacks delivered"),
-        ("no speeds", "settings lack speeds"),
-        ("one speed", "two speeds"),
-        ("rows not a list", "'rows' is missing or not a list"),
+        # One line naming the JSON path of the first bad field (issue 36).
+        ("no delivered", "$.codes_side_by_side.rows[0]: 'delivered' is missing"),
+        ("no speeds", "$.codes_side_by_side.settings: 'speeds' is missing"),
+        ("one speed", "$.codes_side_by_side.settings.speeds: has 1 entries, should have at least 2"),
+        ("rows not a list", "$.codes_side_by_side.rows: is an object, should be array"),
     ],
 )
 def test_the_schema_accepts_the_section_and_refuses_it_broken(committed, case, message):

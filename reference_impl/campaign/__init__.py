@@ -28,7 +28,6 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import os
-import shutil
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -56,10 +55,12 @@ from reference_impl.report import (
     _laws,
     _wp,
     bench_json_name,
+    check_results,
     read_results,
     write_pages,
 )
 from reference_impl.report._files import scripts_href, swap_in, validate_report_args
+from reference_impl.report._inputs import read_report_file
 from reference_impl.report.readme_table import ROOT, readme_block, rewrite_readme
 from reference_impl.stability.recommend import RECOMMEND_FACTOR, RECOMMEND_FACTOR_SINGULAR
 from reference_impl.stability.search import SearchGrid
@@ -143,16 +144,16 @@ def _carry(out: Path, adapters) -> tuple[dict | None, str]:
     prev = out / "results.json"
     if adapters or not prev.is_file():
         return None, ""
-    try:
-        old = read_results(prev)
+    try:  # the whole document, and the figures carried as files (the only ones read)
+        old = read_results(prev, "previous report", files=False)
+        if not old["adapters"] and not old["steps_per_contact"]:
+            return None, ""
+        figures = [f for f in old["figures"] if Path(f).name.startswith(("bench_", "steps_"))]
+        for rel in figures:
+            where = f"previous report {str(prev)!r}: $.figures[{old['figures'].index(rel)}]"
+            read_report_file(out, rel, where, head_only=True)
     except HCVInputError as exc:
         return None, f"the previous report's code sections are not carried: {exc}"
-    if not old["adapters"] and not old["steps_per_contact"]:
-        return None, ""
-    figures = [f for f in old["figures"] if Path(f).name.startswith(("bench_", "steps_"))]
-    gone = [f for f in figures if not (out / f).is_file()]
-    if gone:
-        return None, f"the previous report's code sections are not carried: {gone[0]} is missing"
     env = old["environment"]
     source = old["carried"] or {
         "git_commit": env.get("git_commit"),
@@ -237,8 +238,8 @@ def build_report(
     with swap_in(out) as tmp:
         if carried is not None:  # the carried figures move in again with the new report
             (tmp / "figures").mkdir()
-            for rel in carried["figures"]:
-                shutil.copyfile(out / rel, tmp / rel)
+            for rel in carried["figures"]:  # checked again as they are read: never a link
+                (tmp / rel).write_bytes(read_report_file(out, rel, f"previous report: {rel}"))
         results = _build(tmp, quick, progress, adapters, env, workers, carried, scripts_href(out))
     if readme_path is not None:
         # The speed block follows the committed benchmark (nox -s bench), when present.
@@ -484,6 +485,9 @@ def _build(
     _environment.record_end(results["environment"], say)
     say("writing results.json, index.html, index.md, erratum.md")
     results = jsonable(results)
+    # The renderer reads only checked documents, this run's too: a study writing a field
+    # the schema (report/results.schema.json) does not describe fails here, in one line.
+    check_results(results, "results.json of this run", base=out)
     (out / "results.json").write_text(
         json.dumps(results, indent=1, allow_nan=False, ensure_ascii=False) + "\n"
     )

@@ -18,10 +18,10 @@ renderer are the paper's own (quoted by the claim modules) and the wording aroun
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
-from reference_impl.errors import HCVInputError
 from reference_impl.report import _erratum, _render
 from reference_impl.report._files import (
     _adapter_json,
@@ -29,6 +29,7 @@ from reference_impl.report._files import (
     swap_in,
     validate_report_args,
 )
+from reference_impl.report._inputs import read_report_file
 from reference_impl.report._schema import SCHEMA, check_results, read_results
 
 __all__ = [
@@ -96,27 +97,25 @@ def render_from(results_path, out_dir="reports", force: bool = False) -> dict:
     Raises
     ------
     HCVInputError
-        An unreadable or malformed results.json, a figure it names that is missing, or a
-        bad output directory; before anything is written.
+        An unreadable or malformed results.json, a figure it names that is missing or not
+        a regular PNG file inside its directory, a scorecard that is a link or not a
+        regular file, or a bad output directory; before anything is written.
     """
     src = Path(results_path)
-    results = read_results(src)
+    results = read_results(src)  # the document and every figure it names, checked
     base = src.resolve().parent
-    missing = [f for f in results["figures"] if not (base / f).is_file()]
-    if missing:
-        raise HCVInputError(
-            f"--from {str(src)!r}: figure {missing[0]} is not beside it ({base / missing[0]})"
-        )
+    name = f"--from {str(src)!r}"
     out, _ = validate_report_args(out_dir, (), force=force)
     with swap_in(out) as tmp:
         (tmp / "figures").mkdir()
         shutil.copyfile(src, tmp / "results.json")
-        for rel in results["figures"]:
-            shutil.copyfile(base / rel, tmp / rel)
-        for doc in results["adapters"]:
-            rel = bench_json_name(doc.get("adapter", ""))
-            if (base / rel).is_file():
+        for i, rel in enumerate(results["figures"]):
+            (tmp / rel).write_bytes(read_report_file(base, rel, f"{name}: $.figures[{i}]"))
+        for i, doc in enumerate(results["adapters"]):
+            rel = bench_json_name(doc["adapter"])
+            if os.path.lexists(base / rel):  # a scorecard is optional; a link is refused
+                data = read_report_file(base, rel, f"{name}: $.adapters[{i}].adapter", png=False)
                 (tmp / "bench").mkdir(exist_ok=True)
-                shutil.copyfile(base / rel, tmp / rel)
+                (tmp / rel).write_bytes(data)
         write_pages(results, tmp, tmp / "figures", scripts_href(out))
     return results

@@ -9,6 +9,7 @@ from __future__ import annotations
 import html
 
 from reference_impl.report._common import g
+from reference_impl.report._text import markdown_text as _t
 
 
 # ----------------------------------------------------------------------------------
@@ -48,7 +49,7 @@ def _num(x, d=4):
 
 
 def _md_cell(s) -> str:
-    return str(s).replace("|", "\\|").replace("\n", " ")
+    return _t(str(s).replace("|", "\\|").replace("\n", " "))
 
 
 def markdown_lines(blocks, out: list[str]) -> None:
@@ -56,9 +57,9 @@ def markdown_lines(blocks, out: list[str]) -> None:
     for b in blocks:
         kind = b[0]
         if kind == "h":
-            out.append(f"{'#' * b[1]} {b[2]}\n")
+            out.append(f"{'#' * b[1]} {_t(b[2])}\n")
         elif kind == "p":
-            out.append(("> " if b[2] == "warn" else "") + b[1] + "\n")
+            out.append(("> " if b[2] == "warn" else "") + _t(b[1]) + "\n")
         elif kind == "table":
             _, headers, rows, flags, _cls = b
             out.append("| " + " | ".join(_md_cell(h) for h in headers) + " |")
@@ -72,9 +73,9 @@ def markdown_lines(blocks, out: list[str]) -> None:
                 out.append("| " + " | ".join(cells) + " |")
             out.append("")
         elif kind == "img":
-            out.append(f"![{b[2]}](figures/{b[1]})\n\n*{b[2]}*\n")
+            out.append(f"![{_t(b[2])}](figures/{b[1]})\n\n*{_t(b[2])}*\n")
         elif kind == "ul":
-            out += [f"- {it}" for it in b[1]] + [""]
+            out += [f"- {_t(it)}" for it in b[1]] + [""]
         elif kind == "details":
             out.append(f"<details><summary>{html.escape(b[1])}</summary>\n")
             markdown_lines(b[2], out)

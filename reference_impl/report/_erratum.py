@@ -20,8 +20,11 @@ import sys
 from pathlib import Path
 
 from reference_impl.claims import CLAIMS, Claim, get_claim
+from reference_impl.errors import HCVInputError
 from reference_impl.report._blocks import UL, H, P
 from reference_impl.report._blocks import markdown_lines as _md
+from reference_impl.report._schema import read_results
+from reference_impl.report._text import markdown_text as _t
 
 __all__ = ["entries", "markdown", "blocks", "plain", "printed", "script_path"]
 
@@ -104,19 +107,22 @@ def blocks(results: dict, level: int = 2) -> list:
 def markdown(results: dict) -> str:
     """reports/erratum.md."""
 
-    out = ["# Erratum: " + results["title"].split(": ", 1)[-1] + "\n"]
+    out = ["# Erratum: " + _t(results["title"].split(": ", 1)[-1]) + "\n"]
     _md(blocks(results, level=2)[1:], out)
     return "\n".join(out) + "\n"
 
 
 def main(argv=None) -> int:
-    import json
-
     ap = argparse.ArgumentParser(description="write the erratum from a results.json")
     ap.add_argument("results", nargs="?", default="reports/results.json")
     ap.add_argument("-o", "--out", help="output file (default: stdout)")
     a = ap.parse_args(argv)
-    results = json.loads(Path(a.results).read_text())
+    try:  # checked as hcv report --from: the erratum renders only a checked document
+        results = read_results(a.results, "erratum of")
+    except HCVInputError as exc:
+        print(f"erratum: error: {exc}", file=sys.stderr)
+        return 2
+    results["repro_scripts"] = None  # never a link the document itself names
     if a.out:  # the scripts are linked only when they lie beside the file written
         from reference_impl.report._files import scripts_href
 

@@ -18,10 +18,13 @@ from reference_impl.report._codes import codes_blocks
 from reference_impl.report._common import g
 from reference_impl.report._erratum import blocks as _erratum_blocks
 from reference_impl.report._erratum import script_path as _script_path
+from reference_impl.report._inputs import figure_bytes
 from reference_impl.report._laws import laws_blocks
 from reference_impl.report._render_adapters import _adapters
 from reference_impl.report._render_sec6 import dtmap_blocks
 from reference_impl.report._steps import resolution_blocks
+from reference_impl.report._text import markdown_text as _md_text
+from reference_impl.report._text import safe_href
 
 VERDICT_MARK = {"verified": "✔ verified", "refuted": "✘ refuted", "inconclusive": "? inconclusive"}
 TABLE1_NAMES = {"delta_max": "δmax", "max_force": "U'(δmax)", "dt_safe": "Δt_safe"}
@@ -429,7 +432,7 @@ def _sections(r) -> list:
 # Markdown
 # ----------------------------------------------------------------------------------
 def markdown(r: dict) -> str:
-    out = [f"# {r['title']}\n"]
+    out = [f"# {_md_text(r['title'])}\n"]
     _md(_sections(r), out)
     return "\n".join(out) + "\n"
 
@@ -460,12 +463,17 @@ code{background:#f4f4f4;padding:0 .2em}nav a{margin-right:1em}
 _LINK = re.compile(r"\[([^\[\]]+)\]\(([^()\s]+)\)")
 
 
+def _anchor(m: re.Match) -> str:
+    """An escaped [text](target) as a link when the target is safe, else left as text."""
+    return f'<a href="{m[2]}">{m[1]}</a>' if safe_href(html.unescape(m[2])) else m[0]
+
+
 def _inline(text: str) -> str:
-    """Escape, then render `code` spans and [text](target) links (outside code spans)."""
+    """Escape, then render `code` spans and [text](target) links (outside code spans);
+    a link whose target is not `safe_href` (javascript:, data:, ...) stays plain text."""
     parts = html.escape(text).split("`")
     return "".join(
-        f"<code>{p}</code>" if i % 2 else _LINK.sub(r'<a href="\2">\1</a>', p)
-        for i, p in enumerate(parts)
+        f"<code>{p}</code>" if i % 2 else _LINK.sub(_anchor, p) for i, p in enumerate(parts)
     )
 
 
@@ -495,7 +503,9 @@ def _html(blocks, fig_dir: Path, out: list[str]) -> None:
                 out.append("<tr>" + "".join(tds) + "</tr>")
             out.append("</tbody></table>")
         elif kind == "img":
-            data = base64.b64encode((fig_dir / b[1]).read_bytes()).decode("ascii")
+            # Only the report's own regular PNG files, whatever name reached the block.
+            png = figure_bytes(fig_dir, b[1], f"figure of the section {b[2][:40]!r}")
+            data = base64.b64encode(png).decode("ascii")
             out.append(
                 f'<figure><img src="data:image/png;base64,{data}" '
                 f'alt="{html.escape(b[2])}"><figcaption>{_inline(b[2])}</figcaption>'

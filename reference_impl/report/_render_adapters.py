@@ -149,7 +149,7 @@ def _adapters(r) -> list:
         ]
         safe = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in str(d["adapter"]))[:60]
         fig = f"bench_{safe}.png"
-        if any(f.endswith(fig) for f in r.get("figures", [])):
+        if f"figures/{fig}" in r.get("figures", []):  # listed, so checked as a file
             blocks.append(
                 IMG(fig, f"Speed against error of {d['adapter']} against the exact solution.")
             )

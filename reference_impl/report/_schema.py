@@ -59,71 +59,184 @@ refuses a version it does not know. Fields (SI units; times in s, speeds in m/s)
     ``generated_utc`` and ``adapters`` of the run they come from, ``reason``.
 ``timings_seconds`` (dict)
     Wall time of each stage; ``total``.
+
+The file is checked as a whole before anything reads it (`check_results`, issue 36): against
+the JSON Schema ``results.schema.json`` shipped beside this module (Draft 2020-12, with the
+maintained ``jsonschema`` validator), which describes every field the renderer and the
+campaign's carrying of the code sections read, then against the files: every figure it
+names must be ``figures/NAME.png`` inside the report directory, a regular file (not a
+link), at most 20 MiB, with the PNG signature (`reference_impl.report._inputs`). A document
+that fails is refused in one line naming the JSON path of the first bad field
+(``$.claims[0].verdict``); the renderer only ever sees a checked document.
 """
 
 from __future__ import annotations
 
+import errno
+import functools
 import json
+import math
+import os
+import re
+import stat
+import sys
 from pathlib import Path
 
-from reference_impl.claims import VERDICTS
-from reference_impl.errors import HCVInputError
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import best_match
 
-__all__ = ["SCHEMA", "check_results", "read_results"]
+from reference_impl.errors import HCVInputError
+from reference_impl.report._inputs import read_report_file
+
+__all__ = ["FIELDS", "RESULTS_MAX_BYTES", "SCHEMA", "SCHEMA_FILE", "check_results", "read_results"]
 
 SCHEMA = "hcv-results/1"
-
-# Field -> the JSON type the renderer needs (`check_results`).
-FIELDS: dict[str, type | tuple[type, ...]] = {
-    "schema": str,
-    "title": str,
-    "generated_utc": str,
-    "mode": str,
-    "quick_drops": list,
-    "claims": list,
-    "table1": list,
-    "fig1": dict,
-    "dt_crit_map": list,
-    "dt_crit_sensitivity": list,
-    "dt_crit_map_coverage": list,
-    "dt_crit_settings": dict,
-    "work_precision": list,
-    "work_precision_summary": list,
-    "work_precision_settings": str,
-    "work_precision_scenes": dict,
-    "work_precision_families": dict,
-    "hard_cases": dict,
-    "damping_laws": dict,
-    "figures": list,
-    "figure_captions": dict,
-    "environment": dict,
-    "adapters": list,
-    "steps_per_contact": list,
-    "steps_per_contact_settings": (dict, type(None)),
-    "codes_side_by_side": (dict, type(None)),
-    "carried": (dict, type(None)),
-    "timings_seconds": dict,
-}
-# Fields an hcv-results/1 file written before they existed lacks (read as null).
-OPTIONAL = ("codes_side_by_side",)
-# What the renderer reads of ``codes_side_by_side`` (`reference_impl.report._codes`).
-CODES_SETTINGS = ("asked", "steps_per_contact", "speeds", "mass", "hertz_k", "hooke_k",
-                  "speed_tolerance", "asked_tolerance", "calibration_asked",
-                  "calibration_steps_per_contact", "calibration_v0")  # fmt: skip
-CODES_ROW = ("code", "variant", "spec", "match", "asked", "steps_per_contact", "v0",
-             "delivered", "tensile", "declared_exact", "error")  # fmt: skip
-CODES_CALIBRATION = ("code", "spec", "match", "option", "asked")
-CLAIM_FIELDS = ("id", "section", "statement", "verdict", "evidence", "rule", "measured", "headline")
+# The one schema file of the document, shipped with the package (package-data).
+SCHEMA_FILE = Path(__file__).with_name("results.schema.json")
+# The committed results.json, with five codes, is 2.4 MB; 64 MiB keeps a 25x margin and
+# bounds what --from reads into memory (a results file may come from anyone).
+RESULTS_MAX_BYTES = 64 * 2**20
+# A refusal quotes at most this many characters of a value (one readable line).
+_QUOTE = 80
 
 
-def _figure_ok(rel) -> bool:
-    """A figure path the renderer may read: figures/NAME.png, nothing above or outside."""
-    p = Path(rel) if isinstance(rel, str) else None
-    return p is not None and len(p.parts) == 2 and p.parts[0] == "figures" and p.suffix == ".png"
+@functools.cache
+def _validator() -> Draft202012Validator:
+    schema = json.loads(SCHEMA_FILE.read_text(encoding="utf-8"))
+    Draft202012Validator.check_schema(schema)  # a broken schema file fails here, not silently
+    return Draft202012Validator(schema)
 
 
-def check_results(results, source: str = "results") -> dict:
-    """Refuse a document the renderer cannot read, in one line naming what is wrong.
+# The top-level fields of hcv-results/1, in the order written (documented above).
+FIELDS: tuple[str, ...] = tuple(_validator().schema["properties"])
+
+
+def _quote(x) -> str:
+    """A short one-line rendering of a JSON value for a refusal."""
+    if isinstance(x, dict):
+        return "an object"
+    if isinstance(x, list):
+        return "an array"
+    text = repr(x)  # escapes newlines and control characters: the refusal stays one line
+    return text if len(text) <= _QUOTE else text[: _QUOTE - 3] + "..."
+
+
+def _kind(x) -> str:
+    names = {dict: "an object", list: "an array", str: "a string", bool: "a boolean",
+             int: "a number", float: "a number", type(None): "null"}  # fmt: skip
+    return names.get(type(x), type(x).__name__)
+
+
+def _json_path(path) -> str:
+    """``$.claims[0].verdict`` of a jsonschema error's absolute path (keys quoted when odd)."""
+    out = "$"
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif re.fullmatch(r"[A-Za-z_][A-Za-z0-9_-]*", part):
+            out += f".{part}"
+        else:
+            out += f"[{_quote(part)}]"
+    return out
+
+
+def _wanted(want: dict) -> str:
+    """The entry a ``contains`` asks for, in words: ``'x'`` or ``with id 'x'``."""
+    if "const" in want:
+        return _quote(want["const"])
+    consts = [(k, v["const"]) for k, v in want.get("properties", {}).items() if "const" in v]
+    if len(consts) == 1:
+        return f"with {consts[0][0]} {_quote(consts[0][1])}"
+    return json.dumps(want, ensure_ascii=False)[:120]
+
+
+def _describe(err) -> str:
+    """What is wrong, in words, without repeating a large value (jsonschema's messages do)."""
+    kind, want, x = err.validator, err.validator_value, err.instance
+    if kind == "required":
+        missing = next((k for k in want if isinstance(x, dict) and k not in x), want[0])
+        return f"{missing!r} is missing"
+    if kind == "type":
+        want = [want] if isinstance(want, str) else want
+        return f"is {_kind(x)}, should be {' or '.join(want)}"
+    if kind in ("enum", "const"):
+        allowed = want if kind == "enum" else [want]
+        return f"is {_quote(x)}, should be {' or '.join(_quote(a) for a in allowed)}"
+    if kind == "pattern":
+        if want.startswith("^figures/"):
+            return f"{_quote(x)} is not figures/NAME.png inside the report"
+        if want.startswith("^steps_"):
+            return f"{_quote(x)} is not steps_NAME.png (a figure of the report, in figures/)"
+        return f"{_quote(x)} does not match {want}"
+    if kind in ("minItems", "maxItems", "minProperties", "maxProperties"):
+        word = "at least" if kind.startswith("min") else "at most"
+        return f"has {len(x)} entries, should have {word} {want}"
+    if kind == "contains":
+        return f"has no entry {_wanted(want)}"
+    if kind in ("exclusiveMinimum", "minimum"):
+        return f"is {_quote(x)}, should be {'>' if kind == 'exclusiveMinimum' else '>='} {want}"
+    if kind in ("oneOf", "anyOf"):
+        return f"is {_kind(x)} not of the form the report reads"
+    return " ".join(err.message.split())[:200]
+
+
+def _first_error(results):
+    """The error to name, or None: the deepest bad field (the most precise: a bad entry
+    rather than the list lacking a good one), the first found among equals; within a
+    oneOf or anyOf, jsonschema's best match of its branches."""
+    errors = list(_validator().iter_errors(results))
+    if not errors:
+        return None
+    err = max(errors, key=lambda e: len(e.absolute_path))  # max keeps the first of equals
+    return best_match(err.context) if err.validator in ("oneOf", "anyOf") and err.context else err
+
+
+def _out_of_range(doc) -> tuple[str, object] | None:
+    """(JSON path, value) of the first number that is not a finite double, or None.
+
+    Strict JSON has no infinity, but ``1e999`` parses to one and a 400-digit integer
+    cannot become a float: the renderer formats numbers as floats, so both are refused
+    here (a results file writes infinities as the strings "inf" and "-inf")."""
+    stack = [((), doc)]
+    while stack:
+        path, x = stack.pop()
+        if isinstance(x, dict):
+            stack += [((*path, k), v) for k, v in reversed(x.items())]
+        elif isinstance(x, list):
+            stack += [((*path, i), v) for i, v in reversed(list(enumerate(x)))]
+        elif isinstance(x, float) and not math.isfinite(x):
+            return _json_path(path), x
+        elif isinstance(x, int) and not isinstance(x, bool) and abs(x) > sys.float_info.max:
+            return _json_path(path), x
+    return None
+
+
+def _cross_checks(r: dict) -> tuple[str, str] | None:
+    """(JSON path, what is wrong) of the first reference the schema cannot express, or None."""
+    listed = set(r["figures"])
+    needed = [("$.fig1.figure", r["fig1"].get("figure"))]
+    if r["damping_laws"]:
+        needed.append(("$.damping_laws", "figures/damping_laws.png"))
+    for i, code in enumerate(r["steps_per_contact"]):
+        if code.get("figure"):
+            needed.append((f"$.steps_per_contact[{i}].figure", f"figures/{code['figure']}"))
+    for where, rel in needed:
+        if rel is not None and rel not in listed:
+            return where, f"its figure {rel} is not listed in $.figures"
+    summary = r["work_precision_summary"]
+    targets = [k for k in summary[0] if k.startswith("fastest to")]
+    for i, row in enumerate(summary):
+        missing = [k for k in targets if k not in row]
+        if missing:
+            return (
+                f"$.work_precision_summary[{i}]",
+                f"{missing[0]!r} is missing (the first row has it)",
+            )
+    return None
+
+
+def check_results(results, source: str = "results", base=None) -> dict:
+    """Refuse a document the renderer cannot read, in one line naming the first bad field.
 
     Parameters
     ----------
@@ -131,6 +244,10 @@ def check_results(results, source: str = "results") -> dict:
         A parsed results.json.
     source : str
         How to name it in the error (the file's path).
+    base : str or Path, optional
+        The report directory the document's figures lie in (its results.json's): every
+        figure is then checked as a file (`reference_impl.report._inputs`); None checks
+        the document alone.
 
     Returns
     -------
@@ -140,77 +257,82 @@ def check_results(results, source: str = "results") -> dict:
     Raises
     ------
     HCVInputError
-        Not an object, no or another ``schema``, a missing or mistyped field, a claim
-        without its fields or with an unknown verdict, a figure path outside ``figures/``.
+        Not an object, no or another ``schema``; a field the schema ``results.schema.json``
+        refuses (its JSON path named), a figure the document uses but does not list, or
+        (given ``base``) a figure that is not a regular PNG file of at most 20 MiB inside
+        ``base``.
     """
     if not isinstance(results, dict):
-        raise HCVInputError(f"{source}: not a JSON object (got {type(results).__name__})")
+        raise HCVInputError(f"{source}: not a JSON object (got {_kind(results)})")
     version = results.get("schema")
     if version != SCHEMA:
-        what = "has no schema field" if version is None else f"has schema {version!r}"
+        what = "has no schema field" if version is None else f"has schema {_quote(version)}"
         raise HCVInputError(
             f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
         )
-    for key, typ in FIELDS.items():
-        if key not in results and key in OPTIONAL:
-            continue
-        if key not in results:
-            raise HCVInputError(f"{source}: field {key!r} is missing ({SCHEMA})")
-        if not isinstance(results[key], typ):
-            raise HCVInputError(
-                f"{source}: field {key!r} is a {type(results[key]).__name__}, not as {SCHEMA} has it"
-            )
-    for i, c in enumerate(results["claims"]):
-        missing = [k for k in CLAIM_FIELDS if not isinstance(c, dict) or k not in c]
-        if missing:
-            raise HCVInputError(f"{source}: claims[{i}] lacks {', '.join(missing)}")
-        if c["verdict"] not in VERDICTS:
-            raise HCVInputError(
-                f"{source}: claim {c['id']!r} has verdict {c['verdict']!r}, not one of {VERDICTS}"
-            )
-    _check_codes(results.get("codes_side_by_side"), source)
-    bad = [f for f in results["figures"] if not _figure_ok(f)]
-    if bad:
-        raise HCVInputError(f"{source}: figure {bad[0]!r} is not figures/NAME.png")
+    big = _out_of_range(results)
+    if big is not None:
+        shown = f"a {len(str(abs(big[1])))}-digit integer" if isinstance(big[1], int) else big[1]
+        raise HCVInputError(f"{source}: {big[0]}: is {shown}, not a finite number ({SCHEMA})")
+    err = _first_error(results)
+    if err is not None:
+        raise HCVInputError(
+            f"{source}: {_json_path(err.absolute_path)}: {_describe(err)} ({SCHEMA})"
+        )
+    bad = _cross_checks(results)
+    if bad is not None:
+        raise HCVInputError(f"{source}: {bad[0]}: {bad[1]} ({SCHEMA})")
+    if base is not None:
+        for i, rel in enumerate(results["figures"]):
+            read_report_file(Path(base), rel, f"{source}: $.figures[{i}]", head_only=True)
     return results
 
 
-def _check_codes(sec, source: str) -> None:
-    """``codes_side_by_side``: the settings and the fields of each row the renderer reads."""
-    if sec is None:
-        return
-    where = f"{source}: codes_side_by_side"
-    parts = {"settings": dict, "rows": list, "calibration": list, "seconds": dict}
-    for key, typ in parts.items():
-        if not isinstance(sec.get(key), typ):
-            raise HCVInputError(f"{where}: {key!r} is missing or not a {typ.__name__}")
-    missing = [k for k in CODES_SETTINGS if k not in sec["settings"]]
-    if missing:
-        raise HCVInputError(f"{where}: settings lack {', '.join(missing)}")
-    if len(sec["settings"]["speeds"]) < 2 or not sec["settings"]["steps_per_contact"]:
-        raise HCVInputError(f"{where}: settings need two speeds and a steps per contact")
-    for name, fields in (("rows", CODES_ROW), ("calibration", CODES_CALIBRATION)):
-        for i, row in enumerate(sec[name]):
-            lacks = [k for k in fields if not isinstance(row, dict) or k not in row]
-            if lacks:
-                raise HCVInputError(f"{where}: {name}[{i}] lacks {', '.join(lacks)}")
+def _refuse_constant(token):
+    raise ValueError(f"non-standard JSON constant {token}")
 
 
-def read_results(path) -> dict:
-    """Read and check a results.json (strict JSON); one-line HCVInputError otherwise."""
+def read_results(path, label: str = "--from", files: bool = True) -> dict:
+    """Read and check a results.json (strict JSON, its figures beside it); one line otherwise.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file; its figures are checked in its directory (`check_results`).
+    label : str
+        How the refusal names where the path came from (the option, the command).
+    files : bool
+        Check every figure it names as a file beside it (False: the document alone; the
+        caller checks the files it reads).
+
+    Raises
+    ------
+    HCVInputError
+        Not a regular readable file, over `RESULTS_MAX_BYTES`, not UTF-8 strict JSON, or a
+        document `check_results` refuses.
+    """
     path = Path(path)
-
-    def refuse(token):
-        raise ValueError(f"non-standard JSON constant {token}")
-
-    try:
-        text = path.read_text(encoding="utf-8")
+    name = f"{label} {str(path)!r}"
+    try:  # non-blocking: a FIFO given as the file must not hang the open
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except OSError as exc:
-        raise HCVInputError(f"--from {str(path)!r}: cannot be read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise HCVInputError(f"--from {str(path)!r}: not UTF-8 text") from None
+        why = "is a directory" if exc.errno == errno.EISDIR else f"cannot be read ({exc.strerror})"
+        raise HCVInputError(f"{name}: {why}") from None
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(f.fileno())
+        if not stat.S_ISREG(st.st_mode):
+            raise HCVInputError(f"{name}: not a regular file")
+        data = f.read(RESULTS_MAX_BYTES + 1)
+    if len(data) > RESULTS_MAX_BYTES:
+        raise HCVInputError(f"{name}: over {RESULTS_MAX_BYTES} bytes, not a results.json of hcv")
     try:
-        data = json.loads(text, parse_constant=refuse)
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise HCVInputError(f"{name}: not UTF-8 text") from None
+    try:
+        doc = json.loads(text, parse_constant=_refuse_constant)
     except ValueError as exc:
-        raise HCVInputError(f"--from {str(path)!r}: not JSON ({exc})") from None
-    return check_results(data, f"--from {str(path)!r}")
+        raise HCVInputError(f"{name}: not JSON ({' '.join(str(exc).split())[:200]})") from None
+    except RecursionError:
+        raise HCVInputError(f"{name}: not JSON this hcv reads (nested too deeply)") from None
+    return check_results(doc, name, base=path.resolve().parent if files else None)

@@ -20,6 +20,8 @@ import sys
 from pathlib import Path
 
 from reference_impl.errors import HCVInputError
+from reference_impl.report._schema import read_results
+from reference_impl.report._text import markdown_text
 
 __all__ = [
     "START",
@@ -45,24 +47,27 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _cell(text: str) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
+    """A table cell: no column break, no line break, no raw HTML or unsafe link (`_text`)."""
+    return markdown_text(str(text).replace("|", "\\|").replace("\n", " "))
 
 
 def verdict_table(results: dict) -> str:
     """Markdown table: claim | section | verdict | in one line (refuted in bold)."""
     lines = ["| claim | section | verdict | in one line (measured) |", "|---|---|---|---|"]
     for c in results["claims"]:
-        verdict = f"**{c['verdict']}**" if c["verdict"] != "verified" else c["verdict"]
+        verdict = f"**{_cell(c['verdict'])}**" if c["verdict"] != "verified" else c["verdict"]
         headline = c.get("headline") or c["evidence"].split(";")[0]
-        lines.append(f"| {c['id']} | {_cell(c['section'])} | {verdict} | {_cell(headline)} |")
+        lines.append(f"| {_cell(c['id'])} | {_cell(c['section'])} | {verdict} | {_cell(headline)} |")
     env = results.get("environment", {})
     commit = (env.get("git_commit") or "unknown")[:12]
     dirty = " (uncommitted changes)" if env.get("git_dirty") else ""
     lines += [
         "",
-        f"Generated from `reports/results.json` ({results.get('mode', '?')} run of "
-        f"{results.get('generated_utc', '?')}, commit {commit}{dirty}{_run_cost(results)}) "
-        f"by `python -m reference_impl.report.readme_table`.",
+        markdown_text(
+            f"Generated from `reports/results.json` ({results.get('mode', '?')} run of "
+            f"{results.get('generated_utc', '?')}, commit {commit}{dirty}{_run_cost(results)}) "
+            f"by `python -m reference_impl.report.readme_table`."
+        ),
     ]
     return "\n".join(lines)
 
@@ -278,7 +283,7 @@ def main(argv=None) -> int:
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
     args = ap.parse_args(argv)
     try:
-        results = json.loads(Path(args.results).read_text())
+        results = read_results(args.results, "--results")  # checked as hcv report --from
         readme = Path(args.readme).read_text()
         bench_path = Path(args.bench)
         bench = json.loads(bench_path.read_text()) if bench_path.is_file() else None

@@ -1,0 +1,525 @@
+"""Hostile results files: the report embeds only its own figures and trusts no string (issue 36).
+
+A results.json is the file users share, and ``hcv report`` carries the previous one's
+code sections, so it may come from anyone (a pull request). Three classes, each refused
+in one line naming the JSON path of the field, exit status 2, nothing written, and no
+file outside the report opened:
+
+1. paths: a figure that is not ``figures/NAME.png`` inside the report, a regular file
+   (not a link), at most 20 MiB, with the PNG signature (``/proc/self/environ``,
+   ``/dev/zero``, ``../x.png``, absolute paths, links out, a text file named .png, an
+   oversized file, a FIFO), through ``hcv report --from`` and through the carry;
+2. links and markup: only relative links inside the report and http(s) links survive;
+   raw ``<script>``/``<iframe>`` shows as text in index.html, index.md, erratum.md and
+   the README's verdict table (the Markdown is rendered by markdown-it, CommonMark, with
+   raw HTML on and every link allowed, so what a Markdown viewer would make of it shows);
+3. the schema: malformed documents (empty claims, ``adapters: [1]``, missing keys, wrong
+   types) and random deletions and type swaps of the committed document's fields
+   (Hypothesis) give one line or a rendered report, never a traceback.
+
+Fast: nothing is measured; each case renders the committed results at most once.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import shutil
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from markdown_it import MarkdownIt
+
+from reference_impl.campaign import _carry
+from reference_impl.cli import main
+from reference_impl.errors import HCVInputError
+from reference_impl.report import _erratum, _render, check_results, read_results, render_from
+from reference_impl.report._inputs import MAX_BYTES, PNG_SIGNATURE
+from reference_impl.report._text import safe_href
+from reference_impl.report.readme_table import verdict_table
+from verification.assertions import assert_true
+from verification.strategies import json_mutations
+
+ROOT = Path(__file__).resolve().parents[1]
+REPORTS = ROOT / "reports"
+CLAIM = "report"
+
+# ----------------------------------------------------------------------------------
+# What the process opens (audit hook "open": open(), os.open(), io; inert unless recording)
+# ----------------------------------------------------------------------------------
+_OPENED: list[tuple[str, bool]] | None = None
+
+
+def _audit(event: str, args) -> None:
+    """Record (path, follows its last link) of each open: open(), io, os.open."""
+    if _OPENED is not None and event == "open" and isinstance(args[0], (str, bytes, os.PathLike)):
+        flags = args[2] if len(args) > 2 and isinstance(args[2], int) else 0
+        _OPENED.append((os.fsdecode(args[0]), not flags & os.O_NOFOLLOW))
+
+
+sys.addaudithook(_audit)
+
+
+def _opened_outside(opened, outside: list[str]) -> list[str]:
+    """The absolute paths opened that are, or lie in, one of ``outside``: the links of the
+    path resolved, its last one too unless opened with O_NOFOLLOW (which refuses a link).
+
+    A path opened relative to a directory descriptor (the report's own reads) is relative
+    to a directory opened, and checked here, before it."""
+    roots = {os.path.realpath(p) for p in outside} | set(outside)
+    hits = []
+    for p, follows in opened:
+        if not os.path.isabs(p):
+            continue
+        head, tail = os.path.split(p)
+        where = os.path.realpath(p) if follows else os.path.join(os.path.realpath(head), tail)
+        if any(c == r or c.startswith(r.rstrip("/") + "/") for c in (p, where) for r in roots):
+            hits.append(p)
+    return hits
+
+
+def _trimmed(doc: dict) -> dict:
+    """The committed document with every list cut to its first 3 items (the claims and
+    the figures whole: the renderer looks claims up by id and figures by name), so that a
+    case validates and renders in milliseconds; it is a valid document all the same."""
+
+    def cut(x):
+        if isinstance(x, dict):
+            return {k: cut(v) for k, v in x.items()}
+        return [cut(v) for v in x[:3]] if isinstance(x, list) else x
+
+    return {k: (v if k in ("claims", "figures") else cut(v)) for k, v in doc.items()}
+
+
+_COMMITTED = REPORTS / "results.json"
+_BASE = _trimmed(json.loads(_COMMITTED.read_text())) if _COMMITTED.is_file() else {"schema": "x"}
+
+
+@pytest.fixture
+def committed():
+    """A fresh copy of the (trimmed) committed results."""
+    if not _COMMITTED.is_file():
+        pytest.skip("reports/results.json not generated")
+    return copy.deepcopy(_BASE)
+
+
+@pytest.fixture
+def outside(tmp_path_factory):
+    """A directory outside every report, holding a secret PNG and a secret scorecard."""
+    d = tmp_path_factory.mktemp("outside")
+    (d / "secret.png").write_bytes(PNG_SIGNATURE + b"SECRET-PNG")
+    (d / "secret.json").write_text('{"SECRET": 1}')
+    return d
+
+
+def _source(tmp_path: Path, doc: dict) -> Path:
+    """A report directory ``in/`` holding ``doc`` as results.json and the committed figures."""
+    src = tmp_path / "in"
+    (src / "figures").mkdir(parents=True)
+    for rel in doc["figures"] if isinstance(doc.get("figures"), list) else []:
+        if isinstance(rel, str) and (REPORTS / rel).is_file() and rel.startswith("figures/"):
+            shutil.copyfile(REPORTS / rel, src / rel)
+    (src / "results.json").write_text(json.dumps(doc))
+    return src
+
+
+def _run_from(src: Path, out: Path, capsys) -> tuple[int, list[str], list[str]]:
+    """``hcv report --from src/results.json --out out``: exit status, stderr lines, files opened."""
+    global _OPENED
+    _OPENED = []
+    try:
+        code = main(["report", "--from", str(src / "results.json"), "--out", str(out)])
+    finally:
+        opened, _OPENED = _OPENED, None
+    return code, capsys.readouterr().err.strip().splitlines(), opened
+
+
+def _refused(code, err, out: Path, needle: str, opened, outside, call: str) -> None:
+    leaked = _opened_outside(opened, outside)
+    assert_true(
+        code == 2 and len(err) == 1 and needle in err[0] and not out.exists() and not leaked,
+        got=f"exit {code}, stderr {err}, output written: {out.exists()}, opened outside: {leaked}",
+        should=f"exit 2, one line naming {needle!r}, nothing written, nothing outside opened",
+        claim=CLAIM,
+        call=call,
+    )
+
+
+# ----------------------------------------------------------------------------------
+# 1. paths
+# ----------------------------------------------------------------------------------
+def _steps_index(doc, name="steps_lammps.png") -> int:
+    return doc["figures"].index(f"figures/{name}")
+
+
+def _poison(case: str, doc: dict, src: Path, outside: Path) -> str:
+    """Make ``case`` in the document or the files; return the needle the refusal must name."""
+    steps = "$.steps_per_contact[0].figure"
+    figure = {
+        "steps figure /proc/self/environ": "/proc/self/environ",
+        "steps figure /dev/zero": "/dev/zero",
+        "steps figure ../x.png": "../x.png",
+        "steps figure absolute": str(outside / "secret.png"),
+        "steps figure not listed": "steps_nowhere.png",
+        "steps figure with a final newline": "steps_lammps.png\n",
+    }
+    if case in figure:
+        doc["steps_per_contact"][0]["figure"] = figure[case]
+        return steps
+    if case == "figures entry absolute":
+        doc["figures"].append(str(outside / "secret.png"))
+        return f"$.figures[{len(doc['figures']) - 1}]"
+    i = _steps_index(doc)
+    target = src / "figures" / "steps_lammps.png"
+    if case == "figure a link out":
+        target.unlink()
+        target.symlink_to(outside / "secret.png")
+        return f"$.figures[{i}]"
+    if case == "figures/ a link out":
+        shutil.copytree(src / "figures", outside / "figs")
+        shutil.rmtree(src / "figures")
+        (src / "figures").symlink_to(outside / "figs")
+        return "$.figures[0]"
+    if case == "text file named .png":
+        target.write_text("SECRET text, not an image")
+        return "no PNG signature"
+    if case == "oversized figure":
+        with open(target, "r+b") as f:  # sparse: cheap to make, 1 byte over the bound
+            f.truncate(MAX_BYTES + 1)
+        return "over the bound"
+    if case == "FIFO as a figure":
+        target.unlink()
+        os.mkfifo(target)
+        return "not a regular file"
+    if case == "scorecard a link out":
+        (src / "bench").mkdir()
+        (src / "bench" / f"{doc['adapters'][0]['adapter']}.json").symlink_to(
+            outside / "secret.json"
+        )
+        return "$.adapters[0].adapter"
+    raise AssertionError(case)
+
+
+PATH_CASES = [
+    "steps figure /proc/self/environ",
+    "steps figure /dev/zero",
+    "steps figure ../x.png",
+    "steps figure absolute",
+    "steps figure not listed",
+    "steps figure with a final newline",
+    "figures entry absolute",
+    "figure a link out",
+    "figures/ a link out",
+    "text file named .png",
+    "oversized figure",
+    "FIFO as a figure",
+    "scorecard a link out",
+]
+
+
+@pytest.mark.parametrize("case", PATH_CASES)
+def test_a_path_outside_the_rule_is_refused_and_nothing_outside_is_read(
+    committed, tmp_path, outside, capsys, case
+):
+    if not committed["steps_per_contact"]:
+        pytest.skip("the committed report has no contact codes")
+    doc = copy.deepcopy(committed)
+    src = _source(tmp_path, doc)
+    needle = _poison(case, doc, src, outside)
+    (src / "results.json").write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    code, err, opened = _run_from(src, out, capsys)
+    targets = [str(outside), "/proc/self/environ", f"/proc/{os.getpid()}/environ", "/dev/zero"]
+    _refused(code, err, out, needle, opened, targets, f"hcv report --from ({case})")
+
+
+@pytest.mark.parametrize("case", ["steps figure /proc/self/environ", "figure a link out"])
+def test_a_poisoned_previous_report_is_not_carried(committed, tmp_path, outside, case):
+    """The carry reads the previous results.json as --from does: nothing is carried (so
+    nothing is embedded in the next report), and the line says which field."""
+    if not committed["adapters"]:
+        pytest.skip("the committed report has no contact codes")
+    doc = copy.deepcopy(committed)
+    out = _source(tmp_path, doc)
+    needle = _poison(case, doc, out, outside)
+    (out / "results.json").write_text(json.dumps(doc))
+    global _OPENED
+    _OPENED = []
+    try:
+        data, note = _carry(out, [])
+    finally:
+        opened, _OPENED = _OPENED, None
+    leaked = _opened_outside(
+        opened, [str(outside), "/proc/self/environ", f"/proc/{os.getpid()}/environ"]
+    )
+    assert_true(
+        data is None and needle in note and "\n" not in note and not leaked,
+        got=f"carried {None if data is None else sorted(data)}; note {note!r}; opened {leaked}",
+        should=f"nothing carried, the note naming {needle!r}, nothing outside opened",
+        claim=CLAIM,
+        call=f"campaign._carry ({case})",
+    )
+
+
+# ----------------------------------------------------------------------------------
+# 2. links and markup
+# ----------------------------------------------------------------------------------
+_SAFE = "[ok](https://example.org/a) [rel](figures/fig1.png#x)"
+_HOSTILE = (
+    "[a](javascript:alert(1)) [b](JaVaScRiPt:alert%281%29) [c](data:text/html;base64,PHM+) "
+    "[d](file:///etc/passwd) [e](vbscript:msgbox) [f](//evil.example/x) [g](&#106;avascript:x) "
+    "[h](/etc/passwd) [i](../../x) [j]( javascript:x) [k](<javascript:x>) <javascript:x> "
+    "<script>alert(1)</script> <iframe src=x></iframe> <img src=x onerror=alert(1)> "
+    "<a href='javascript:x'>l</a> " + _SAFE
+)
+# The hrefs a page may hold: its own anchors and the two safe links of _HOSTILE.
+_ALLOWED_HREFS = {"https://example.org/a", "figures/fig1.png#x"}
+
+
+def _hostile_doc(committed) -> dict:
+    doc = copy.deepcopy(committed)
+    doc["title"] = "Report: " + _HOSTILE
+    for c in doc["claims"]:
+        for key in ("section", "statement", "rule", "headline"):
+            c[key] = f"{c[key]} {_HOSTILE}"
+        c["evidence"] = f"{c['evidence']} {_HOSTILE}"
+    doc["figure_captions"] = {k: _HOSTILE for k in doc["figure_captions"]}
+    doc["hard_cases"]["accuracy"] = [_HOSTILE] + doc["hard_cases"]["accuracy"]
+    doc["environment"]["python"] = _HOSTILE
+    return doc
+
+
+class _Tags(HTMLParser):
+    """Every start tag of a page with its attributes (entities decoded), as a browser sees it."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.tags: list[tuple[str, list]] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append((tag, attrs))
+
+
+def _markup(page_html: str) -> list[str]:
+    """What in an HTML page would run or leave the report: a script or iframe element, an
+    event attribute (on...), an href other than the page's anchors and the allowed links."""
+    parser = _Tags()
+    parser.feed(page_html)
+    bad = []
+    for tag, attrs in parser.tags:
+        if tag in ("script", "iframe"):
+            bad.append(f"<{tag}>")
+        bad += [f"{tag} {k}=" for k, _ in attrs if k.startswith("on")]
+        bad += [f"{tag} href={v!r}" for k, v in attrs
+                if k == "href" and not (v or "").startswith("#") and v not in _ALLOWED_HREFS]  # fmt: skip
+    return bad
+
+
+def _markdown_html(text: str) -> str:
+    """CommonMark with raw HTML on and every link allowed: what a lax viewer shows."""
+    md = MarkdownIt("commonmark", {"html": True})
+    md.validateLink = lambda url: True
+    return md.render(text)
+
+
+def test_links_and_markup_of_a_results_file_are_neutralised(committed, tmp_path):
+    doc = _hostile_doc(committed)
+    src = _source(tmp_path, doc)
+    out = tmp_path / "out"
+    render_from(src / "results.json", out)
+    pages = {
+        "index.html": (out / "index.html").read_text(),
+        "index.md": _markdown_html((out / "index.md").read_text()),
+        "erratum.md": _markdown_html((out / "erratum.md").read_text()),
+        "README verdict table": _markdown_html(verdict_table(doc)),
+    }
+    found = {name: _markup(page)[:4] for name, page in pages.items() if _markup(page)}
+    # The strings did reach every page, shown as text, and the safe links survived.
+    shown = {name: "&lt;script&gt;" in page and 'href="https://example.org/a"' in page
+             for name, page in pages.items()}  # fmt: skip
+    assert_true(
+        not found and all(shown.values()),
+        got=f"live markup or links {found}; hostile text shown and safe link kept: {shown}",
+        should="no script/iframe/event attribute, only relative links inside the report "
+        "and http(s) links, the hostile text visible as text",
+        claim=CLAIM,
+        call="render_from(hostile results.json), verdict_table",
+    )
+
+
+@pytest.mark.parametrize(
+    "target, safe",
+    [
+        ("repro/thm1_period.py", True),
+        ("figures/fig1.png#x", True),
+        ("#claims", True),
+        ("https://example.org/a?b=1", True),
+        ("http://example.org", True),
+        ("javascript:alert(1)", False),
+        ("JAVASCRIPT:x", False),
+        ("data:text/html,x", False),
+        ("file:///etc/passwd", False),
+        ("vbscript:x", False),
+        ("//evil.example/x", False),
+        ("/etc/passwd", False),
+        ("../x", False),
+        ("a/../../x", False),
+        ("&#106;avascript:x", False),
+        ("java\tscript:x", False),
+        ("https://", False),
+        ("", False),
+    ],
+)
+def test_safe_href_allows_relative_inside_and_http_only(target, safe):
+    assert_true(
+        safe_href(target) is safe,
+        got=f"safe_href({target!r}) = {safe_href(target)}",
+        should=str(safe),
+        claim=CLAIM,
+        call="report._text.safe_href",
+    )
+
+
+# ----------------------------------------------------------------------------------
+# 3. the schema
+# ----------------------------------------------------------------------------------
+def _malform(case: str, d: dict) -> None:
+    if case == "claims: []":
+        d["claims"] = []
+    elif case == "adapters: [1]":
+        d["adapters"] = [1]
+    elif case == "table1: []":
+        d["table1"] = []
+    elif case == "a drift as text":
+        d["fig1"]["runs"][0]["drift"] = "x"
+    elif case == "work_precision_summary: []":
+        d["work_precision_summary"] = []
+    elif case == "no damping-law speeds":
+        d["damping_laws"]["speeds"] = []
+    elif case == "no total time":
+        d["timings_seconds"] = {}
+    elif case == "no packages":
+        del d["environment"]["packages"]
+    elif case == "a code without variants":
+        d["steps_per_contact"][0] = {"adapter": "x"}
+    elif case == "a claim without tests":
+        del d["claims"][0]["tests"]
+    elif case == "a caption as a number":
+        d["figure_captions"] = {"work_precision_families.png": 5}
+    elif case == "a hard case as a number":
+        d["hard_cases"]["cases"][0] = 1
+    elif case == "a scene as a list":
+        d["dt_crit_map"][0]["scene"] = ["x"]
+    elif case == "an asked e as text":
+        d["codes_side_by_side"]["calibration"][0]["asked"] = "x"
+    elif case == "no fig1 claim":
+        d["claims"] = [c for c in d["claims"] if c["id"] != "fig1"]
+    else:
+        raise AssertionError(case)
+
+
+MALFORMED = [
+    ("claims: []", "$.claims"),
+    ("adapters: [1]", "$.adapters[0]"),
+    ("table1: []", "$.table1"),
+    ("a drift as text", "$.fig1.runs[0].drift"),
+    ("work_precision_summary: []", "$.work_precision_summary"),
+    ("no damping-law speeds", "$.damping_laws.speeds"),
+    ("no total time", "$.timings_seconds: 'total' is missing"),
+    ("no packages", "$.environment: 'packages' is missing"),
+    ("a code without variants", "$.steps_per_contact[0]: 'variants' is missing"),
+    ("a claim without tests", "$.claims[0]: 'tests' is missing"),
+    ("a caption as a number", "$.figure_captions"),
+    ("a hard case as a number", "$.hard_cases.cases[0]"),
+    ("a scene as a list", "$.dt_crit_map[0].scene"),
+    ("an asked e as text", "$.codes_side_by_side.calibration[0].asked"),
+    ("no fig1 claim", "$.claims: has no entry"),
+]
+
+
+@pytest.mark.parametrize("case, needle", MALFORMED)
+def test_a_malformed_document_is_one_line_naming_its_json_path(
+    committed, tmp_path, capsys, case, needle
+):
+    if not committed["steps_per_contact"] or not committed.get("codes_side_by_side"):
+        pytest.skip("the committed report has no contact codes")
+    doc = copy.deepcopy(committed)
+    _malform(case, doc)
+    src = _source(tmp_path, doc)
+    out = tmp_path / "out"
+    code, err, _ = _run_from(src, out, capsys)
+    _refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
+
+
+@pytest.mark.parametrize(
+    "where, literal",
+    [
+        ("confirm_horizon", "1e999"),  # parses to inf; the renderer takes int() of it
+        ("v0", "1" + "0" * 400),  # an integer no float can hold; the renderer formats it
+    ],
+)
+def test_a_number_out_of_range_is_one_line_naming_its_json_path(
+    committed, tmp_path, capsys, where, literal
+):
+    doc = copy.deepcopy(committed)
+    if where == "confirm_horizon":
+        i = next(i for i, x in enumerate(doc["dt_crit_sensitivity"]) if x["scene"] != "impact")
+        doc["dt_crit_sensitivity"][i]["confirm_horizon"] = "@BIG@"
+        needle = f"$.dt_crit_sensitivity[{i}].confirm_horizon"
+    else:
+        doc["fig1"]["runs"][0]["v0"] = "@BIG@"
+        needle = "$.fig1.runs[0].v0"
+    src = _source(tmp_path, doc)
+    (src / "results.json").write_text(json.dumps(doc).replace('"@BIG@"', literal))
+    out = tmp_path / "out"
+    code, err, _ = _run_from(src, out, capsys)
+    _refused(code, err, out, needle, [], [], f"hcv report --from ({where} = {literal[:8]}...)")
+
+
+@settings(
+    max_examples=40,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(doc=json_mutations(_BASE))
+def test_random_deletions_and_type_swaps_are_refused_or_rendered(doc):
+    """Each example: one line (HCVInputError) or a rendered report, never another error."""
+    if not _COMMITTED.is_file():
+        pytest.skip("reports/results.json not generated")
+    try:
+        check_results(doc)
+    except HCVInputError as exc:
+        assert_true(
+            "\n" not in str(exc) and str(exc).startswith("results"),
+            got=repr(str(exc))[:300],
+            should="one line",
+            claim=CLAIM,
+            call="check_results(mutated document)",
+        )
+        return
+    pages = {**doc, "repro_scripts": None}
+    try:
+        _render.markdown(pages)
+        _erratum.markdown(pages)
+        _render.html_page(pages, REPORTS / "figures")
+        verdict_table(doc)
+    except Exception as exc:  # the test's point: a checked document always renders
+        pytest.fail(f"got {type(exc).__name__}: {exc} rendering a document check_results "
+                    "accepted, should render [report, check_results + renderers]")  # fmt: skip
+
+
+def test_the_committed_document_validates_with_its_files(committed):
+    back = read_results(REPORTS / "results.json")
+    assert_true(
+        back == json.loads(_COMMITTED.read_text()),
+        got="read_results(reports/results.json) refused or changed it",
+        should="the committed results.json valid against results.schema.json, figures checked",
+        claim=CLAIM,
+        call="read_results",
+    )
