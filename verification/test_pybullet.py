@@ -35,6 +35,7 @@ pytestmark = [
 from reference_impl.adapters import get_adapter  # noqa: E402
 from reference_impl.adapters.base import offset_refusal, scheme_of  # noqa: E402
 from reference_impl.adapters.pybullet import _pybullet  # noqa: E402
+from reference_impl.bench.report import scorecard_text  # noqa: E402
 from reference_impl.bench.runner import run_bench  # noqa: E402
 from reference_impl.errors import HCVInputError  # noqa: E402
 from reference_impl.scenes import scene_from_dict  # noqa: E402
@@ -137,7 +138,15 @@ def test_rigid_contact_gets_a_delivery_verdict_on_e():
     res = run_bench(get_adapter("pybullet[rigid]"), scenes=[_rigid_scene(1.0)], tolerances=FAST)
     by = {m.metric: m for m in res.metrics}
     judged = {k: m.status for k, m in by.items() if m.status != "n/a"}
-    ok = judged == {"restitution_asked": "pass"} and abs(by["restitution_asked"].measured - 0.5) < 1e-12
+    ok = (
+        judged == {"restitution_asked": "pass"}
+        and abs(by["restitution_asked"].measured - 0.5) < 1e-12
+    )
+    ok = (
+        ok
+        and "NO PENETRATION" in scorecard_text(res)
+        and "sign convention" not in scorecard_text(res)
+    )
     assert_true(ok, got=judged, should="restitution_asked pass, the rest n/a", claim=CLAIM,
                 call="run_bench(pybullet[rigid], e = 0.5 at 1 m/s)")  # fmt: skip
 
@@ -173,6 +182,20 @@ def test_declines_and_bad_input():
         msg = str(exc.value)
         assert_true("\n" not in msg and word in msg, got=msg, should=f"one line naming {word}",
                     claim=CLAIM, call=f"get_adapter({spec!r})")  # fmt: skip
+
+
+def test_calibrate_finds_the_damping_that_delivers_e():
+    """``hcv calibrate "pybullet[soft]" --param damping``: the contactDamping found delivers
+    e = 0.5 at the scene's speed (the clipped contact needs more than the scene's c)."""
+    from reference_impl.bench.calibrate import calibrate
+
+    scene = _soft_scene()
+    c_scene = 2.0 * scene.zeta * np.sqrt(scene.mass * scene.potential.k)
+    res = calibrate("pybullet[soft]", "hooke-damped", param="damping", target=0.5,
+                    steps_per_contact=50)  # fmt: skip
+    ok = res.found and abs(res.achieved - 0.5) < 1e-6 and res.value > c_scene
+    assert_true(ok, got=(res.found, res.achieved, res.value), should=f"found, e = 0.5, c > {c_scene:.4g}",
+                claim=CLAIM, call=res.message)  # fmt: skip
 
 
 def test_import_banner_stays_off_stdout():
