@@ -99,6 +99,10 @@ def test_continuous_force_is_the_declared_law_at_sampled_states():
 def test_discrete_step_force_is_the_declared_law_at_the_new_state(mode, universal):
     """Each step applies the declared law at the state it ends at (implicit Euler), read
     from the impulse over the whole trajectory of an impact."""
+    from pydrake.multibody.plant import DiscreteContactApproximation
+
+    if not hasattr(DiscreteContactApproximation, f"k{mode.capitalize()}"):
+        pytest.skip(f"this Drake has no {mode} approximation (TAMSI: removed after 2026-09-01)")
     adapter = get_adapter(f"drake[{mode}]")
     scene = _ascene(spc=40, universal=universal)
     law = adapter.implemented_law(scene)
