@@ -55,9 +55,9 @@ def _missing(name: str, info: CodeInfo) -> list[str]:
     return out
 
 
-def test_registry_names_the_five_codes():
+def test_registry_names_the_codes():
     got = list(builtin_codes())
-    want = ["lammps", "liggghts", "kratos", "yade", "mujoco"]
+    want = ["lammps", "liggghts", "kratos", "yade", "mujoco", "drake", "pybullet"]
     assert_true(got == want, got=got, should=want, claim=_CLAIM, call=_CALL)
 
 
@@ -93,8 +93,8 @@ def test_side_by_side_variants_come_from_the_registry():
 
 def test_install_lists_from_the_registry():
     extras, apt = registry.install_extras(), registry.apt_packages()
-    assert_true(extras == ["lammps", "kratos", "mujoco"] and apt == ["liggghts", "yade"],
-                got=(extras, apt), should="(lammps kratos mujoco, liggghts yade)", claim=_CLAIM,
+    assert_true(extras == ["lammps", "kratos", "mujoco", "drake", "pybullet"] and apt == ["liggghts", "yade"],
+                got=(extras, apt), should="(lammps kratos mujoco drake pybullet, liggghts yade)", claim=_CLAIM,
                 call="install_extras(), apt_packages()")  # fmt: skip
     nox = (ROOT / "noxfile.py").read_text()
     for name in builtin_codes():

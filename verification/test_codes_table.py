@@ -87,6 +87,8 @@ _INSTALLED = {
     "liggghts": ("reference_impl.adapters.liggghts", "liggghts_available"),
     "yade": ("reference_impl.adapters.yade", "yade_available"),
     "mujoco": ("reference_impl.adapters.mujoco", "mujoco_available"),
+    "drake": ("reference_impl.adapters.drake", "drake_available"),
+    "pybullet": ("reference_impl.adapters.pybullet", "pybullet_available"),
 }
 
 
@@ -126,6 +128,10 @@ def _typed_input(law, p: float, e: float) -> list[tuple[str, float, float]]:
                 ("YADE ViscElMat tc", par["material"]["tc"], tc)]  # fmt: skip
     if par.get("input") == "kn":
         return [("YADE ViscElMat cn", par["material"]["cn"], 4.0 * zeta * math.sqrt(MASS * k))]
+    if "relaxation_time" in par:  # Drake SAP: the dashpot of e at q = 0 over the spring
+        return [("Drake relaxation_time", par["relaxation_time"], 2.0 * zeta * math.sqrt(MASS / k))]
+    if "contactDamping" in par:  # PyBullet soft: the dashpot of e at q = 0, half per body
+        return [("PyBullet contactDamping", sum(par["contactDamping"]), 2.0 * zeta * math.sqrt(MASS * k))]
     return [("MuJoCo dampratio", par["solref"][1], zeta)]
 
 

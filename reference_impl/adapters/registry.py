@@ -68,6 +68,8 @@ _REGISTRY: dict[str, str | type] = {
     "kratos": "reference_impl.adapters.kratos:KratosAdapter",
     "yade": "reference_impl.adapters.yade:YadeAdapter",
     "mujoco": "reference_impl.adapters.mujoco:MujocoAdapter",
+    "drake": "reference_impl.adapters.drake:DrakeAdapter",
+    "pybullet": "reference_impl.adapters.pybullet:PybulletAdapter",
     "subprocess": "reference_impl.adapters.subprocess:SubprocessAdapter",
 }
 _BUILTIN = tuple(_REGISTRY)  # names registered at import, before any `register` call

@@ -130,6 +130,10 @@ def _typed_options(spec: str, e: float, p: float) -> dict:
             typed = {"cn": 2.0 * 2.0 * zeta * math.sqrt(MASS * k)}
     elif name == "mujoco" and "damping" not in opts:
         typed = {"dampratio": zeta}
+    elif name == "drake" and pick("mode", ("sap",)) == "sap":  # SAP's dashpot c = 2 zeta sqrt(m k) typed as tau = c / k
+        typed = {"relaxation_time": 2.0 * zeta * math.sqrt(MASS / k)}
+    elif name == "pybullet" and pick("mode", ("soft",)) == "soft" and "damping" not in opts:
+        typed = {"damping": 2.0 * zeta * math.sqrt(MASS * k)}  # contactDamping, a dashpot
     return {key: float(v) for key, v in typed.items() if key not in opts}
 
 
