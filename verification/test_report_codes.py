@@ -112,13 +112,13 @@ def test_both_pages_show_it_and_the_html_table_is_wrapped(committed, tmp_path):
     html = _render.html_page(r, REPORTS / "figures")
     table = re.search(r"<table><thead><tr><th>code: variant</th>.*?</table>", html, re.S)
     assert_true(
-        "Five codes side by side" in md
+        "Three codes side by side" in md  # the heading counts the section's codes (A, B, C)
         and table is not None
         and '<td class="bad">0.5500 / 0.5500 †</td>' in table.group(0)
         and "table{display:block;overflow-x:auto;max-width:100%}" in html
         and '<a href="#codes">' in html
         and '<h3 id="codes">' in html,
-        got=f"section in index.md: {'Five codes side by side' in md}, HTML table: "
+        got=f"section in index.md: {'Three codes side by side' in md}, HTML table: "
         f"{table.group(0)[:300] if table else None}",
         should="the section in both pages, its table in the box that scrolls by itself",
         claim=CLAIM,

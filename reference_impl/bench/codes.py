@@ -1,4 +1,4 @@
-"""Five codes side by side: asked restitution -> delivered restitution (issue 28).
+"""The codes side by side: asked restitution -> delivered restitution (issue 28).
 
 For every built-in code (LAMMPS, LIGGGHTS, Kratos DEM, YADE, MuJoCo) and the
 variants users run, the impact of issue 28's sphere (m = 4.1103 g; Hertz

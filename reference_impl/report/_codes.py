@@ -93,6 +93,12 @@ def _match(rows, spec: str) -> str:
     return next(r["match"] for r in rows if r["spec"] == spec)
 
 
+def _count(n: int) -> str:
+    """``n`` as a capitalised word for small counts ("Five"), else digits."""
+    words = ("One", "Two", "Three", "Four", "Five", "Six", "Seven", "Eight", "Nine", "Ten")
+    return words[n - 1] if 1 <= n <= len(words) else str(n)
+
+
 def codes_blocks(r: dict) -> list:
     """The section's blocks; none when the results have no ``codes_side_by_side``."""
     sec = r.get("codes_side_by_side")
@@ -110,8 +116,10 @@ def codes_blocks(r: dict) -> list:
             "warn",
         )
     ] if c else []  # fmt: skip
+    # The heading counts the codes the section holds (the registry grows: issue 40 §5).
+    n_codes = len({row["code"] for row in sec["rows"]})
     blocks = [
-        H(3, "Five codes side by side: asked e against delivered e", "codes"),
+        H(3, f"{_count(n_codes)} codes side by side: asked e against delivered e", "codes"),
         *carried,
         P(
             f"A sphere of m = {st['mass'] * 1e3:.4g} g on a wall: Hertz k = {st['hertz_k']:.5g} "
