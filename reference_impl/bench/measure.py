@@ -94,8 +94,13 @@ def rigid_bounce(tr: Trajectory, v0: float) -> dict | None:
             return None
         leaving = np.nonzero(np.isfinite(v) & (v < 0.0))[0]
     if not leaving.size:
-        return None
-    e = float(-v[-1] / v0)
+        # Stopped dead at the wall (PyBullet below its restitutionVelocityThreshold):
+        # approaching at the start, at rest at the end, never overlapping: a rigid
+        # contact that delivers e = 0, not "never in contact".
+        stopped = v.size > 1 and np.isfinite(v[-1]) and v[-1] == 0.0 and v[0] > 0.0
+        if not stopped:
+            return None
+    e = float(-v[-1] / v0) if leaving.size else 0.0
     return {
         "restitution": e,
         "restitution_zero_force": e,
