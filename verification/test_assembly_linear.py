@@ -157,16 +157,18 @@ _HERTZ = PowerLaw(1.0879e10, 1.5)
 _MASS, _GAP, _V0 = 4.1103e-3, 1.0e-4, 1.0
 
 
-def _one_body() -> AssemblyModel:
+def _one_body(zeta: float = 0.0) -> AssemblyModel:
     asm = geometry.chain([_MASS], "both", _GAP)
-    return AssemblyModel(asm, _HERTZ, False, 0.0, 0.0, np.array([[_V0]]), np.zeros((1, 0)))
+    return AssemblyModel(asm, _HERTZ, False, zeta, 0.0, np.array([[_V0]]), np.zeros((1, 0)))
 
 
-def test_one_body_between_walls_runs_bit_for_bit_as_the_single_contact_lanes():
+@pytest.mark.parametrize("zeta", [0.0, 0.1])
+def test_one_body_between_walls_runs_bit_for_bit_as_the_single_contact_lanes(zeta):
+    """Undamped and with the universal dashpot (c = 2 zeta sqrt(m) at a wall)."""
     dts = np.linspace(2e-7, 3e-6, 24)
     n = dts.size
     crit = dict(factor=100.0, confirm_level=1e6, n_steps=3000, confirm_steps=30000)
-    got = run_lanes(_one_body(), dts, 1.0, **crit)
+    got = run_lanes(_one_body(zeta), dts, 1.0, **crit)
     E0 = 0.5 * _MASS * _V0**2
     batch = LaneBatch(
         dt=dts, y0=np.full(n, _GAP), v0=np.full(n, _V0), gap=np.full(n, _GAP),
@@ -174,7 +176,7 @@ def test_one_body_between_walls_runs_bit_for_bit_as_the_single_contact_lanes():
         max_steps=np.full(n, 3000), group=np.zeros(n, dtype=np.int64),
         e_confirm=np.full(n, 1e6 * E0), confirm_steps=np.full(n, 30000),
     )  # fmt: skip
-    want = single_lanes(_HERTZ, _MASS, SCENE_WALLS, batch)
+    want = single_lanes(_HERTZ, _MASS, SCENE_WALLS, batch, zeta=zeta)
     same = (
         np.array_equal(got.status, want.status)
         and np.array_equal(got.steps, want.steps)
