@@ -47,11 +47,15 @@ ST_RUNNING = _RUNNING
 
 
 @numba.njit(cache=True, inline="always")
-def _contact_forces(u, v, th, F, T, ci, cj, nrm, off, radius, kt, c_damp, bonded, q_sup, fam, par):
+def _contact_forces(
+    u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par
+):
     """Forces F (N), torques T (N m), potential energy (J), largest overlap (m), state.
 
-    ``v`` holds the half-step velocities (the dashpot's); state is `_BEYOND` when an
-    overlap leaves the potential's domain or is nan (forces then incomplete).
+    ``v`` holds the half-step velocities (the dashpot's); ``tangential`` says whether any
+    contact has a tangential spring (one test per step instead of one per contact); state
+    is `_BEYOND` when an overlap leaves the potential's domain or is nan (forces then
+    incomplete).
     """
     n, d = u.shape
     r = th.shape[1]
@@ -97,7 +101,7 @@ def _contact_forces(u, v, th, F, T, ci, cj, nrm, off, radius, kt, c_damp, bonded
                     if j >= 0:
                         F[j, k] += fd * nrm[c, k]
             state = _CONTACT
-        if kt[c] > 0.0:
+        if tangential and kt[c] > 0.0:
             U += _tangential(u, th, F, T, i, j, nrm, c, d, r, radius, kt[c])
     return U, qmax, state
 
@@ -167,14 +171,15 @@ def _tangential(u, th, F, T, i, j, nrm, c, d, r, radius, kt):
 
 @numba.njit(cache=True, inline="always")
 def _assembly_kdk(
-    u, v, th, w, F, T, half, half_i, dt, ci, cj, nrm, off, radius, kt, c_damp, bonded, q_sup,
-    fam, par,
+    u, v, th, w, F, T, half, half_i, dt, ci, cj, nrm, off, radius, kt, tangential, c_damp,
+    bonded, q_sup, fam, par, mass, inertia,
 ):  # fmt: skip
     """One velocity-Verlet step of every body: half kick, drift, forces, half kick.
 
     Updates ``u``, ``v`` (m, m/s, shape (n, dim)), ``th``, ``w`` (rad, rad/s, shape (n,
     rot_dim)), ``F``, ``T`` in place; ``half`` = dt / (2 m) (s/kg), ``half_i`` = dt / (2 I).
-    Returns (U (J) at the new position, largest overlap (m), contact state).
+    Returns (U (J) at the new position, kinetic energy (J) at the new velocities, summed
+    in the second kick's pass as `_kinetic` sums it, largest overlap (m), contact state).
     """
     n, d = u.shape
     r = th.shape[1]
@@ -186,16 +191,21 @@ def _assembly_kdk(
             w[b, k] = w[b, k] + half_i[b] * T[b, k]
             th[b, k] = th[b, k] + dt * w[b, k]
     U, qmax, state = _contact_forces(
-        u, v, th, F, T, ci, cj, nrm, off, radius, kt, c_damp, bonded, q_sup, fam, par
+        u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par
     )
+    ke = 0.0
     if state == _BEYOND:
-        return U, qmax, state
+        return U, ke, qmax, state
     for b in range(n):
         for k in range(d):
-            v[b, k] = v[b, k] + half[b] * F[b, k]
+            vk = v[b, k] + half[b] * F[b, k]
+            v[b, k] = vk
+            ke += 0.5 * mass[b] * vk * vk
         for k in range(r):
-            w[b, k] = w[b, k] + half_i[b] * T[b, k]
-    return U, qmax, state
+            wk = w[b, k] + half_i[b] * T[b, k]
+            w[b, k] = wk
+            ke += 0.5 * inertia[b] * wk * wk
+    return U, ke, qmax, state
 
 
 @numba.njit(cache=True, inline="always")
@@ -230,6 +240,10 @@ def _lanes(
     """
     n_lanes = dt.shape[0]
     n = mass.shape[0]
+    tangential = False
+    for c in range(kt.shape[0]):
+        if kt[c] > 0.0:
+            tangential = True
     half = np.empty((n_lanes, n))
     half_i = np.empty((n_lanes, n))
     for L in numba.prange(n_lanes):
@@ -254,8 +268,9 @@ def _lanes(
                     w[b, k] = vscale[L] * w0[b, k]
                     th[b, k] = 0.0
             U, qm, state = _contact_forces(
-                u, v, th, F, T, ci, cj, nrm, off, radius, kt, c_damp, bonded, q_sup, fam, par
-            )
+                u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded,
+                q_sup, fam, par,
+            )  # fmt: skip
             e = _kinetic(v, w, mass, inertia) + U
             e0[L] = e
             emax[L] = e
@@ -270,15 +285,15 @@ def _lanes(
         lim = confirm_level * e0[L] if tripped[L] else factor * e0[L]
         nmax = confirm_steps if tripped[L] else n_steps
         for _ in range(budget):
-            U, qm, state = _assembly_kdk(
+            U, ke, qm, state = _assembly_kdk(
                 u, v, th, w, F, T, half[L], half_i[L], h, ci, cj, nrm, off, radius, kt,
-                c_damp, bonded, q_sup, fam, par,
+                tangential, c_damp, bonded, q_sup, fam, par, mass, inertia,
             )  # fmt: skip
             steps[L] += 1
             if qm > qmax[L]:
                 qmax[L] = qm
             status = -1
-            e = _kinetic(v, w, mass, inertia) + U
+            e = ke + U
             if state == _BEYOND or not e < math.inf:
                 status = _ST_BLOWN
             else:
