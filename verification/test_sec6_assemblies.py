@@ -28,8 +28,12 @@ def _two_bodies_run_away(dt_over_safe: float) -> tuple[bool, int]:
     k, p, m, _, v0 = claim_mod.HERTZ
     e0 = 0.5 * m * v0 * v0
     q_max = (e0 * (p + 1) / k) ** (1 / (p + 1))  # U(q_max) = E_0, U = k q^(p+1) / (p+1)
-    dt = dt_over_safe * 2 * math.sqrt(m) * math.sqrt(2 * k * q_max ** (p + 1) / (p + 1)) / (
-        k * q_max**p
+    dt = (
+        dt_over_safe
+        * 2
+        * math.sqrt(m)
+        * math.sqrt(2 * k * q_max ** (p + 1) / (p + 1))
+        / (k * q_max**p)
     )  # stiffening: the supremum of U'/sqrt(2U) is at q_max
 
     def forces(x0, x1):

@@ -25,7 +25,6 @@ __all__ = [
     "ULP_SCALE",
     "AssemblyModel",
     "LaneOutcome",
-    "describe_status",
     "initial_energy",
     "run_lanes",
 ]
@@ -33,6 +32,9 @@ __all__ = [
 # Contact updates (lanes x steps x contacts) of one kernel call: ~0.1 s at ~5e7 updates/s
 # per core, so Ctrl-C and the progress line get through between calls.
 _CALL_UPDATES = 1 << 23
+# The ensemble's perturbation: lane k scales every initial velocity by 1 + k ULP_SCALE,
+# one unit in the last place of 1 (dimensionless).
+ULP_SCALE = math.ldexp(1.0, -52)
 # Lanes x bodies held at once (the per-lane state, ~100 B per body and lane).
 MAX_LANE_BODIES = 1 << 22
 
@@ -213,12 +215,3 @@ def initial_energy(model: AssemblyModel) -> float:
     q = np.abs(q) if model.bonded else q
     q = q[q > 0]
     return ke + (float(np.sum(model.potential._U(q))) if q.size else 0.0)
-
-
-def describe_status(code: int) -> str:
-    """The name of a lane status (`STATUS_NAMES`)."""
-    return STATUS_NAMES[int(code)] if 0 <= code < len(STATUS_NAMES) else f"status {code}"
-
-
-# a lane scale that changes the last bits of every initial velocity (dimensionless)
-ULP_SCALE = math.ldexp(1.0, -52)

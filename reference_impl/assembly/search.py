@@ -24,6 +24,7 @@ import numpy as np
 from reference_impl.assembly.lanes import ULP_SCALE, AssemblyModel, initial_energy, run_lanes
 from reference_impl.assembly.safe import dt_safe_conventions, tangent_step
 from reference_impl.errors import HCVInputError
+from reference_impl.integrators.verlet_kernel import STATUS_NAMES
 from reference_impl.stability.bound import dt_safe_shortcut
 from reference_impl.stability.criteria import EnergyGrowth, SearchGrid
 from reference_impl.stability.steps import search_steps
@@ -147,7 +148,7 @@ def search_ensemble(
         stable = ~failed
         if np.any(stable):
             work["q_run"] = max(work["q_run"], float(np.max(out.q_max[stable])))
-        blown = out.status == 4  # STATUS_NAMES.index("blown")
+        blown = out.status == STATUS_NAMES.index("blown")
         rows: dict = {i: [] for i in need}
         for k, i in enumerate(owners):
             peak = float(out.e_max[k] / out.e0[k]) if bounded[k] else None

@@ -88,8 +88,8 @@ out("chain N=2: 5 % point of dt_crit / dt_safe", ratio_5, row + ["ratio_5"], 1.0
 # the linear prediction sqrt(d / (2 Z)) with textbook coordination numbers
 for case, d, z in (("chain N=2, walls both", 1, 2), ("square 4x4, periodic", 2, 4),
                    ("triangular 4x4, periodic", 2, 6), ("honeycomb 4x4, periodic", 2, 3),
-                   ("fcc 2x2x2, periodic", 3, 12), ("bcc 2x2x2, periodic", 3, 8),
-                   ("simple-cubic 2x2x2, periodic", 3, 6)):
+                   ("fcc 1 cell, walled", 3, 12), ("bcc 1 cell, walled", 3, 8),
+                   ("simple-cubic 1 cell, walled", 3, 6)):
     path = ["claims", {"id": "sec6-assemblies"}, "measured", "rows", {"case": case}]
     out(f"{case}: sqrt(d/2Z)", math.sqrt(d / (2 * z)), path + ["linear_prediction"], 1e-12, "rel",
         "the linear lattice's 2/omega_max over the single contact's 2 sqrt(m/k)")
