@@ -177,13 +177,18 @@ def test_hcv_dt_crit_json_on_a_chain(tmp_path):
     )  # fmt: skip
 
 
-@pytest.mark.parametrize("bad", ["0", "1.5", "1e9", "nan", "x,1"])
-def test_bad_horizons_are_one_line_exit_2(tmp_path, bad):
-    r = hcv(["dt-crit", "chain-linear", "--horizons", bad], cwd=tmp_path)
+@pytest.mark.parametrize(
+    "args, needle",
+    [(["--horizons", bad], "--horizons") for bad in ("0", "1.5", "1e9", "nan", "x,1")]
+    + [(["--lanes", "0"], "n_lanes"), (["--criterion", "n_steps=10"], "--horizons")],
+)
+def test_bad_ensemble_options_are_one_line_exit_2(tmp_path, args, needle):
+    r = hcv(["dt-crit", "chain-linear", "--horizons", "100", *args], cwd=tmp_path)
     assert_true(
-        r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "--horizons" in r.stderr,
+        r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and needle in r.stderr
+        and not r.stdout,
         got=f"exit {r.returncode}, stderr {r.stderr!r}",
-        should="exit 2, one line naming --horizons",
+        should=f"exit 2, one line naming {needle}, no output",
         claim=_TOOL,
-        call=f"hcv dt-crit chain-linear --horizons {bad}",
-    )
+        call=f"hcv dt-crit chain-linear {' '.join(args)}",
+    )  # fmt: skip

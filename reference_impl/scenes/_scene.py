@@ -6,6 +6,7 @@ A scene is a small TOML document::
     mass = 0.05                     # kg
     velocities = [0.50, 0.99, 1.50] # m/s, impact speeds (> 0)
     kind = "impact"                 # "impact" | "two-sided" | "two-walls"
+                                    # ("chain" | "lattice": assemblies, see `_assembly`)
     # gap = 0.01                    # m, two-walls only: free-flight gap between the walls
     [potential]
     family = "ellipsoid"            # power | ellipsoid | sphere | expression | sum | saturating
