@@ -42,7 +42,8 @@ def add_parser(subparsers) -> None:
     d.add_argument(
         "--horizons",
         help="assembly scenes (chain, lattice): steps of each ensemble, comma-separated "
-        "(default 1e4,1e5,1e6; the longest takes minutes)",
+        "(default 1e4,1e5,1e6; the 1e6 ensemble of a ten-body chain is ~2e10 contact updates, "
+        "about ten minutes on one core)",
     )
     d.add_argument(
         "--lanes",
