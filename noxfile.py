@@ -76,6 +76,9 @@ def bench(session: nox.Session) -> None:
     _install_with_codes(session, "sweep")
     session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
+    session.run(
+        "python", "-m", "benchmarks.bench_assembly", "--json", "reports/bench/assembly.json"
+    )
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
     session.run("python", "-m", "benchmarks.bench_sweep", "--json", "reports/bench/sweep.json")
     session.run("python", "-m", "benchmarks.bench_startup", "--json", "reports/bench/startup.json")

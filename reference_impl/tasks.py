@@ -15,7 +15,11 @@ from reference_impl.stability.bound import dt_safe
 from reference_impl.stability.result import DtCritResult
 from reference_impl.theory.action import action, period
 
-__all__ = ["restitution_spread", "search_loaded_scene", "solve_scene"]
+__all__ = ["restitution_spread", "search_assembly_scene", "search_loaded_scene", "solve_scene"]
+
+# Scene kinds that are assemblies (`reference_impl.scenes._assembly`): no single impact to
+# solve; ``hcv dt-crit`` runs `search_assembly_scene` on them.
+_ASSEMBLY_KINDS = ("chain", "lattice")
 
 
 def solve_scene(scene) -> list[dict]:
@@ -37,6 +41,11 @@ def solve_scene(scene) -> list[dict]:
     quadrature, the others by `reference_impl.exact.general_law` (or the generic route).
     """
 
+    if scene.kind in _ASSEMBLY_KINDS:
+        raise HCVInputError(
+            f"scene {scene.name!r} is a {scene.kind} (an assembly): it has no single impact to "
+            "solve; run hcv dt-crit on it"
+        )
     law = scene.law
     # the universal law's zeta when the harmonic map solves the law, else None
     zeta = law.harmonic_zeta
@@ -103,6 +112,11 @@ def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> l
     """
     from reference_impl.stability.search import default_criterion, parse_criterion, search_scene
 
+    if scene.kind in _ASSEMBLY_KINDS:
+        raise HCVInputError(
+            f"scene {scene.name!r} is a {scene.kind} (an assembly): its search is "
+            "search_assembly_scene"
+        )
     if scene.law.harmonic_zeta is None:
         # The Verlet lanes integrate the universal law only; running the scene undamped
         # would answer another question.
@@ -124,4 +138,49 @@ def search_loaded_scene(scene, criterion: str | None = None, progress=None) -> l
         zeta=scene.zeta if scene.damping_law == "universal" else None,
         criterion=crit,
         progress=progress,
+    )
+
+
+def search_assembly_scene(
+    scene, horizons=None, n_lanes: int = 32, criterion: str | None = None, progress=None
+) -> dict:
+    """The critical step of an assembly scene as a distribution (``hcv dt-crit`` on a chain
+    or lattice): `reference_impl.assembly.search.assembly_report` of its model.
+
+    Parameters
+    ----------
+    scene : reference_impl.scenes.AssemblyScene
+        A chain or lattice scene.
+    horizons : sequence of int, optional
+        Steps of each ensemble (default `reference_impl.assembly.search.HORIZONS`).
+    n_lanes : int
+        Lanes of each ensemble (their initial velocities differ in the last bits).
+    criterion : str, optional
+        ``factor=...,confirm_factor=...,confirm_horizon=...`` (`parse_criterion` of a
+        sustained scene); its ``n_steps`` is refused: the horizons set it.
+    progress : callable, optional
+        ``progress(completed, total)``.
+    """
+    from reference_impl.assembly.model import assembly_model
+    from reference_impl.assembly.search import HORIZONS, assembly_report
+    from reference_impl.stability.search import parse_criterion
+
+    kw = {}
+    if criterion is not None:
+        if "n_steps" in criterion:
+            raise HCVInputError(
+                f"criterion {criterion!r}: an assembly's horizons are set by --horizons, "
+                "not n_steps"
+            )
+        c = parse_criterion(criterion, "two-walls")
+        kw = dict(
+            factor=c.factor, confirm_factor=c.confirm_factor, confirm_horizon=c.confirm_horizon
+        )
+    model = assembly_model(scene)
+    return assembly_report(
+        model,
+        horizons=HORIZONS if horizons is None else horizons,
+        n_lanes=n_lanes,
+        progress=progress,
+        **kw,
     )

@@ -32,6 +32,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         {"integrators"},
         {"exact"},
         {"stability"},
+        {"assembly"},
         {"scenes"},
         {"tasks"},
         {"studies"},

@@ -36,6 +36,7 @@ _MODULES = (
     "km_cancellation",
     "thm3_damping_iff",
     "sec6_dt_safe_bound",
+    "sec6_assemblies",
     "sec7_effective_mass",
     "sec9_power_law",
     "sec10_stiffening_domain",

@@ -53,5 +53,6 @@ def run(args) -> int:
         print(
             f"{r['name']:24s} {r['kind']:10s} {r['family']:11s} m={r['mass']:.4g} kg  "
             f"v0={r['velocities']} m/s  damping {r['damping']}" + (f" {params}" if params else "")
+            + (f"  [{r['assembly']}]" if r.get("assembly") else "")
         )
     return EXIT_OK

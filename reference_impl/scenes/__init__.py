@@ -9,6 +9,7 @@ from reference_impl.scenes._catalogue import embedded_scenes
 # The scene parser imports the potentials (sympy); it loads on first use of its names
 # (PEP 562), so listing the catalogue (`hcv scenes`) imports nothing numerical.
 _FROM_SCENE = (
+    "AssemblyScene",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -19,6 +20,7 @@ _FROM_SCENE = (
 )
 
 __all__ = [
+    "AssemblyScene",
     "Scene",
     "embedded_scenes",
     "law_for_restitution",

@@ -6,6 +6,7 @@ A scene is a small TOML document::
     mass = 0.05                     # kg
     velocities = [0.50, 0.99, 1.50] # m/s, impact speeds (> 0)
     kind = "impact"                 # "impact" | "two-sided" | "two-walls"
+                                    # ("chain" | "lattice": assemblies, see `_assembly`)
     # gap = 0.01                    # m, two-walls only: free-flight gap between the walls
     [potential]
     family = "ellipsoid"            # power | ellipsoid | sphere | expression | sum | saturating
@@ -36,6 +37,7 @@ from typing import Any
 
 from reference_impl.errors import HCVInputError, SceneError
 from reference_impl.potentials import FAMILIES, Potential
+from reference_impl.scenes._assembly import ASSEMBLY_KINDS, AssemblyFields, assembly_fields
 from reference_impl.scenes._catalogue import embedded_scenes
 from reference_impl.scenes._damping import _ENDS, _damping, _solve_strength, _universal_zeta
 from reference_impl.scenes._fields import (
@@ -50,6 +52,7 @@ from reference_impl.scenes._law_restitution import strength_text
 from reference_impl.theory.laws import DampingLaw
 
 __all__ = [
+    "AssemblyScene",
     "Scene",
     "load_scene",
     "parse_scene",
@@ -72,6 +75,9 @@ _MAX_PARAMS = 64
 _MAX_TERMS = 64
 _MAX_DEPTH = 8
 _KINDS = ("impact", "two-sided", "two-walls")
+# Assembly kinds (chains and lattices, `reference_impl.scenes._assembly`): listed in the
+# message of an unknown kind, parsed by `_assembly_scene`.
+_ALL_KINDS = _KINDS + ASSEMBLY_KINDS
 _TOP_KEYS = ("name", "mass", "velocities", "kind", "gap", "potential", "damping")
 
 
@@ -171,6 +177,51 @@ class Scene:
             # how the law's strength was found (not read back: the law's value decides)
             out["calibration"] = dict(self.calibration)
         return out
+
+
+@dataclass(frozen=True)
+class AssemblyScene(Scene):
+    """A chain or lattice scene (``kind = "chain"`` or ``"lattice"``): a `Scene` whose
+    ``mass`` and ``velocities`` are the striker's (body 0) and whose ``assembly`` holds the
+    rest (`reference_impl.scenes._assembly.AssemblyFields`); ``gap`` is every contact's
+    gap at the start (m). ``reference_impl.scenes._assembly.assembly_model`` builds what
+    the kernel runs."""
+
+    assembly: AssemblyFields | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene in the schema of the TOML file, plus ``source`` (JSON-safe)."""
+        out: dict[str, Any] = {"name": self.name, "kind": self.kind}
+        out.update(self.assembly.to_dict(self.kind, float(self.gap or 0.0)))
+        out.setdefault("velocities", self.velocities[0])
+        out["potential"] = potential_to_dict(self.potential)
+        out["damping"] = self.law.to_dict()
+        out["source"] = self.source
+        return out
+
+
+def _assembly_scene(err: _Where, data: dict, source: str, potentials: dict | None) -> Scene:
+    """The `AssemblyScene` of a chain or lattice table (see `reference_impl.scenes._assembly`)."""
+    kind = data["kind"]
+    name = _string(err, data.get("name", Path(source).stem or "scene"), "name")
+    fields, potential, mass, v0, gap = assembly_fields(
+        err, data, kind, lambda table: _cached_potential(err, table, potentials)[0]
+    )
+    law, zeta, dlaw, _ = _damping(err, data.get("damping", {}))
+    if law not in ("none", "universal"):
+        raise err(f"damping.law = {law!r}: an assembly runs 'none' or 'universal' only")
+    # every contact of the assembly must have a turning point at the whole initial
+    # kinetic energy (the largest load one contact can take)
+    vs = fields.body_velocities or (v0,)
+    ms = (fields.masses * len(vs))[: len(vs)] if fields.body_velocities else (mass,)
+    energy = 0.5 * sum(m * v * v for m, v in zip(ms, vs, strict=False))
+    try:
+        potential.turning_point(energy)
+    except HCVInputError as exc:
+        raise _with_context(exc, f"scene {source}: initial energy E = {energy:.6g} J") from exc
+    return AssemblyScene(
+        name, mass, (v0,), kind, gap, potential, law, zeta, source, dlaw, "overlap", None, fields
+    )
 
 
 def potential_to_dict(pot: Potential) -> dict[str, Any]:
@@ -298,6 +349,8 @@ def scene_from_dict(
     """
     err = _Where(source)
     data = _table(err, data, "the scene")
+    if data.get("kind") in ASSEMBLY_KINDS:
+        return _assembly_scene(err, data, source, potentials)
     _keys(err, data, "", _TOP_KEYS, ("mass", "velocities", "potential"))
     name = _string(err, data.get("name", Path(source).stem or "scene"), "name")
     mass = _number(err, data["mass"], "mass", low=0.0)
@@ -307,7 +360,7 @@ def scene_from_dict(
     if len(vels) > _MAX_SPEEDS:
         raise err(f"velocities has {len(vels)} speeds; at most {_MAX_SPEEDS}")
     velocities = tuple(_number(err, v, f"velocities[{i}]", low=0.0) for i, v in enumerate(vels))
-    kind = _string(err, data.get("kind", "impact"), "kind", _KINDS)
+    kind = _string(err, data.get("kind", "impact"), "kind", _ALL_KINDS)
     gap = None
     if kind == "two-walls":
         if "gap" not in data:

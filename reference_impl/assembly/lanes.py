@@ -1,0 +1,217 @@
+"""Lanes of one assembly: many (time step, initial state) runs of velocity Verlet at once.
+
+`AssemblyModel` is what the kernel needs of an assembly: its contact network
+(`reference_impl.assembly.geometry`), the normal law (a `Potential` with a term table),
+whether the springs are bonded, the dashpot and the tangential springs, and the initial
+velocities; `run_lanes` drives `reference_impl.integrators.assembly_kernel._lanes` in
+calls of a bounded amount of work until every lane has finished.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from reference_impl.assembly.geometry import Assembly
+from reference_impl.errors import HCVInputError
+from reference_impl.integrators.assembly_kernel import ST_PENDING, ST_RUNNING, _lanes
+from reference_impl.integrators.verlet_kernel import STATUS_NAMES, kernel_terms
+from reference_impl.potentials.base import Potential
+
+__all__ = [
+    "ULP_SCALE",
+    "AssemblyModel",
+    "LaneOutcome",
+    "initial_energy",
+    "run_lanes",
+]
+
+# Contact updates (lanes x steps x contacts) of one kernel call: ~0.1 s at ~5e7 updates/s
+# per core, so Ctrl-C and the progress line get through between calls.
+_CALL_UPDATES = 1 << 23
+# The ensemble's perturbation: lane k scales every initial velocity by 1 + k ULP_SCALE,
+# one unit in the last place of 1 (dimensionless).
+ULP_SCALE = math.ldexp(1.0, -52)
+# Lanes x bodies held at once (the per-lane state, ~100 B per body and lane).
+MAX_LANE_BODIES = 1 << 22
+
+
+@dataclass(frozen=True)
+class AssemblyModel:
+    """An assembly with its contact law and initial state, ready for the kernel.
+
+    Attributes
+    ----------
+    assembly : Assembly
+        Bodies and contacts.
+    potential : Potential
+        The normal contact law U(q) of every contact (term table required).
+    bonded : bool
+        Springs that pull as well as push (U(|q|), never open).
+    zeta : float
+        Damping ratio of the universal law on every contact, c = 2 zeta sqrt(m_red)
+        (m_red the contact's reduced mass; a wall's body mass); 0 for none.
+    k_tangential : float
+        Tangential spring stiffness k_t (N/m), 0 for none.
+    v_init : numpy.ndarray
+        Initial velocities (m/s), shape (n, dim).
+    w_init : numpy.ndarray
+        Initial angular velocities (rad/s), shape (n, rot_dim).
+    """
+
+    assembly: Assembly
+    potential: Potential
+    bonded: bool
+    zeta: float
+    k_tangential: float
+    v_init: np.ndarray
+    w_init: np.ndarray
+
+    def contact_damping(self) -> np.ndarray:
+        """c_c = 2 zeta sqrt(m_red) of each contact (kg^(1/2))."""
+        a = self.assembly
+        mi = a.mass[a.ci]
+        mj = a.mass[np.maximum(a.cj, 0)]
+        m_red = np.where(a.cj >= 0, mi * mj / (mi + mj), mi)
+        return 2.0 * self.zeta * np.sqrt(m_red)
+
+
+@dataclass(frozen=True)
+class LaneOutcome:
+    """What each lane did (arrays over the lanes).
+
+    Attributes
+    ----------
+    status : numpy.ndarray
+        Index into `STATUS_NAMES` (completed, over-limit, blown, bounded).
+    steps : numpy.ndarray
+        Steps run.
+    e0, e_end, e_max : numpy.ndarray
+        Initial, last and largest energy (J); e_end nan for a blown lane.
+    q_max : numpy.ndarray
+        Largest overlap of any contact over the run (m).
+    contact_updates : int
+        Lanes x steps x contacts integrated (the work done).
+    """
+
+    status: np.ndarray
+    steps: np.ndarray
+    e0: np.ndarray
+    e_end: np.ndarray
+    e_max: np.ndarray
+    q_max: np.ndarray
+    contact_updates: int
+
+    @property
+    def failed(self) -> np.ndarray:
+        """A runaway: over the confirmation level, or blown."""
+        return (self.status == STATUS_NAMES.index("over-limit")) | (
+            self.status == STATUS_NAMES.index("blown")
+        )
+
+    @property
+    def bounded(self) -> np.ndarray:
+        """Crossed the first energy level, stayed below the confirmation one."""
+        return self.status == STATUS_NAMES.index("bounded")
+
+
+def _terms(pot: Potential):
+    terms = kernel_terms(pot)
+    if terms is None:
+        raise HCVInputError(
+            f"assemblies run a contact law with a term table (reference_impl.potentials._terms); "
+            f"{type(pot).__name__} {pot!r} has none"
+        )
+    return terms
+
+
+def run_lanes(
+    model: AssemblyModel,
+    dt,
+    vscale,
+    *,
+    factor: float,
+    confirm_level: float,
+    n_steps: int,
+    confirm_steps: int,
+    progress: Callable[[int], None] | None = None,
+) -> LaneOutcome:
+    """Run velocity Verlet on every lane (``dt[L]``, initial velocities ``vscale[L]`` v_init).
+
+    Parameters
+    ----------
+    model : AssemblyModel
+        The assembly, its law and its initial state.
+    dt, vscale : array_like
+        Time step (s) and initial-velocity scale (dimensionless) of each lane.
+    factor, confirm_level : float
+        A lane whose energy crosses factor E_0 is followed on: a runaway if it also
+        crosses confirm_level E_0 within ``confirm_steps`` steps, else bounded
+        (`reference_impl.stability.criteria.EnergyGrowth`).
+    n_steps, confirm_steps : int
+        Horizon of a lane, and of a lane followed on to its confirmation.
+    progress : callable, optional
+        Called with the contact updates done so far after each kernel call.
+    """
+    a = model.assembly
+    fam, par = _terms(model.potential)
+    dt = np.ascontiguousarray(np.atleast_1d(np.asarray(dt, dtype=float)))
+    vs = np.ascontiguousarray(np.broadcast_to(np.asarray(vscale, dtype=float), dt.shape))
+    nl, n, d, r = dt.size, a.n_bodies, a.dim, a.rot_dim
+    if nl * n > MAX_LANE_BODIES:
+        raise HCVInputError(f"{nl} lanes of {n} bodies is more than {MAX_LANE_BODIES} at once")
+    if not np.all(np.isfinite(dt) & (dt > 0)):
+        raise HCVInputError(f"time steps must be finite and > 0 (s), got {dt[~(dt > 0)][:3]}")
+    us, vv = np.zeros((nl, n, d)), np.zeros((nl, n, d))
+    ths, ws = np.zeros((nl, n, r)), np.zeros((nl, n, r))
+    Fs, Ts = np.zeros((nl, n, d)), np.zeros((nl, n, r))
+    st = np.full(nl, ST_PENDING, dtype=np.int64)
+    steps = np.zeros(nl, dtype=np.int64)
+    e0, eend, emax, qmax = (np.zeros(nl) for _ in range(4))
+    tripped = np.zeros(nl, dtype=np.bool_)
+    kt = np.full(a.n_contacts, float(model.k_tangential))
+    cd = np.ascontiguousarray(model.contact_damping())
+    inertia = a.inertia if r else np.zeros(n)
+    v0 = np.ascontiguousarray(model.v_init, dtype=float).reshape(n, d)
+    w0 = np.ascontiguousarray(model.w_init, dtype=float).reshape(n, r)
+    q_sup = float(model.potential.q_sup)
+    while True:
+        live = np.count_nonzero((st == ST_PENDING) | (st == ST_RUNNING))
+        if live == 0:
+            break
+        budget = max(1, _CALL_UPDATES // (live * max(a.n_contacts, 1)))
+        _lanes(
+            fam, par, q_sup, bool(model.bonded), a.mass, inertia, a.ci, a.cj,
+            np.ascontiguousarray(a.normal), a.off, a.radius, kt, cd,
+            dt, vs, np.ascontiguousarray(a.u0, dtype=float), v0, w0,
+            float(factor), float(confirm_level), int(n_steps), int(confirm_steps), int(budget),
+            us, vv, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped,
+        )  # fmt: skip
+        if progress is not None:
+            progress(int(steps.sum()) * a.n_contacts)
+    return LaneOutcome(
+        status=st,
+        steps=steps,
+        e0=e0,
+        e_end=eend,
+        e_max=emax,
+        q_max=qmax,
+        contact_updates=int(steps.sum()) * a.n_contacts,
+    )
+
+
+def initial_energy(model: AssemblyModel) -> float:
+    """E_0 (J): kinetic energy of the initial velocities plus U of the initial overlaps
+    (bonded springs: U(|q|); tangential springs start unstretched)."""
+    a = model.assembly
+    ke = 0.5 * float(np.sum(a.mass[:, None] * model.v_init**2))
+    if a.rot_dim:
+        ke += 0.5 * float(np.sum(a.inertia[:, None] * model.w_init**2))
+    uj = np.where(a.cj[:, None] >= 0, a.u0[np.maximum(a.cj, 0)], 0.0)
+    q = a.off + np.sum((a.u0[a.ci] - uj) * a.normal, axis=1)
+    q = np.abs(q) if model.bonded else q
+    q = q[q > 0]
+    return ke + (float(np.sum(model.potential._U(q))) if q.size else 0.0)
