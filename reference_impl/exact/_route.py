@@ -11,7 +11,7 @@ here (`solve_other`, `batch_other`, `prepare_other`):
   the Taylor kernel on sums of powers, the extrapolation elsewhere; ~1e-14);
 - "generic": `reference_impl.exact._generic_law` (any C(q, q'); scipy, bound ~1e-8).
 
-The solvers are imported where a law needs them, so a universal-law solve loads neither.
+The general-law solver is imported where a law needs it, so a universal-law solve does not load its kernels.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+import reference_impl.exact._generic_law as _generic_law
 from reference_impl.errors import HCVInputError
 from reference_impl.theory.laws import DampingLaw, law_from_dict
 
@@ -67,36 +68,40 @@ def route(law, zeta, what: str = "zeta") -> Route:
     return Route(dl.route, 0.0, dl)
 
 
+def _solvers(kind: str):
+    """The solver modules of a route that is not the harmonic map, imported on first use
+    (so that a universal-law solve does not load the general-law kernels; `_generic_law`
+    is light: it loads scipy only when it runs): ``(general_law, _law_batch)`` for the
+    general-law solver, else ``(_generic_law, _generic_law)``."""
+    if kind == "general":
+        import reference_impl.exact._law_batch as law_batch
+        import reference_impl.exact.general_law as general_law
+
+        return general_law, law_batch
+    return _generic_law, _generic_law
+
+
 def solve_other(r: Route, potential, m: float, v0: float):
     """One impact of a law the harmonic map does not solve (`LawImpactSolution`)."""
+    one, _ = _solvers(r.kind)
     if r.kind == "general":
-        from reference_impl.exact.general_law import solve_law_impact
-
-        return solve_law_impact(potential, m, v0, r.law)
-    from reference_impl.exact._generic_law import solve_generic_law
-
-    return solve_generic_law(potential, m, v0, r.law)
+        return one.solve_law_impact(potential, m, v0, r.law)
+    return one.solve_generic_law(potential, m, v0, r.law)
 
 
 def batch_other(r: Route, potential, m: float, v0s, batch_max: int) -> dict[str, np.ndarray]:
     """Many speeds of such a law: arrays of the `LawImpactSolution` fields
     (`reference_impl.exact._law_batch.LAW_FIELDS`)."""
+    _, many = _solvers(r.kind)
     if r.kind == "general":
         # Every core: the compiled integrations in a prange loop (`_law_batch`).
-        from reference_impl.exact._law_batch import solve_law_batch
-
-        return solve_law_batch(potential, m, v0s, r.law, batch_max)
-    from reference_impl.exact._generic_law import solve_generic_batch
-
-    return solve_generic_batch(potential, m, v0s, r.law, batch_max)
+        return many.solve_law_batch(potential, m, v0s, r.law, batch_max)
+    return many.solve_generic_batch(potential, m, v0s, r.law, batch_max)
 
 
 def prepare_other(r: Route, potential, m: float):
     """A solver ``(v0) -> LawImpactSolution`` of such a law, checked once."""
+    one, _ = _solvers(r.kind)
     if r.kind == "general":
-        from reference_impl.exact.general_law import prepare_law
-
-        return prepare_law(potential, m, r.law)
-    from reference_impl.exact._generic_law import PreparedGeneric
-
-    return PreparedGeneric(potential, m, r.law)
+        return one.prepare_law(potential, m, r.law)
+    return one.PreparedGeneric(potential, m, r.law)
