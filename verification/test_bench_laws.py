@@ -32,7 +32,7 @@ from reference_impl.adapters.mujoco import mujoco_available
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory
 from reference_impl.adapters.registry import builtin_codes
 from reference_impl.adapters.subprocess import PROTOCOL
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
 from reference_impl.theory.damping import restitution_from_zeta

@@ -53,7 +53,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
 RENDER_ONLY = (
     "reference_impl.report",
     "reference_impl.claims",
-    "reference_impl.bench.report",
+    "reference_impl.bench.scorecard.report",
     "reference_impl.adapters.registry",
     "reference_impl._format",
     "reference_impl.errors",

@@ -13,7 +13,7 @@
 * `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
   `render_speed_error`: the speed-against-error table.
 * `scorecard_markdown`: for ``hcv report``; `side_by_side` and `plot_speed_error`
-  (home: `reference_impl.bench.compare`, re-exported here) as well.
+  (home: `reference_impl.bench.scorecard.compare`, re-exported here) as well.
 
 Metric statuses: "pass", "fail", "skip", "error" (the suite's reference failed) and
 "n/a" (the metric does not apply to the scene's kind, damping or speeds). Every output
@@ -21,8 +21,8 @@ above knows all five (`STATUSES`). Every metric belongs to one of two verdicts
 ("implementation", "delivery"), shown in its own column and summed per code.
 
 Here: the scorecard for people (plain text, rich, markdown). The JSON and JUnit
-documents are written by `reference_impl.bench._json` and `reference_impl.bench._junit`,
-the compared values of a metric read by `reference_impl.bench._cells.metric_columns`;
+documents are written by `reference_impl.bench.scorecard._json` and `reference_impl.bench.scorecard._junit`,
+the compared values of a metric read by `reference_impl.bench.scorecard._cells.metric_columns`;
 every one of their public names is importable from here.
 """
 
@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import (
+from reference_impl.bench.scorecard._cells import (
     _OURS,
     _PLAIN_STATUS,
     _UNITS,
@@ -39,9 +39,9 @@ from reference_impl.bench._cells import (
     _fmt_v,
     metric_columns,
 )
-from reference_impl.bench._json import SCHEMA, machine_info, result_to_dict, write_json
-from reference_impl.bench._junit import junit_tree, write_junit
-from reference_impl.bench._records import NA, VERDICTS
+from reference_impl.bench.scorecard._json import SCHEMA, machine_info, result_to_dict, write_json
+from reference_impl.bench.scorecard._junit import junit_tree, write_junit
+from reference_impl.bench.scorecard._records import NA, VERDICTS
 
 __all__ = [
     "SCHEMA",
@@ -439,8 +439,8 @@ def write_markdown(result, path) -> None:
     atomic_write(path, scorecard_markdown(result))
 
 
-# Kept importable from here (their home is `reference_impl.bench.compare`).
-from reference_impl.bench.compare import (  # noqa: E402
+# Kept importable from here (their home is `reference_impl.bench.scorecard.compare`).
+from reference_impl.bench.scorecard.compare import (  # noqa: E402
     json_number,
     plot_speed_error,
     side_by_side,

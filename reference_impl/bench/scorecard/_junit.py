@@ -1,12 +1,12 @@
 """The JUnit XML report of a benchmark run (`junit_tree`, `write_junit`). Importable from
-`reference_impl.bench.report`, whose docstring describes the document."""
+`reference_impl.bench.scorecard.report`, whose docstring describes the document."""
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import _fmt, _fmt_v, metric_columns
+from reference_impl.bench.scorecard._cells import _fmt, _fmt_v, metric_columns
 
 __all__ = ["junit_tree", "write_junit"]
 

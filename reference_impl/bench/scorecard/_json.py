@@ -1,6 +1,6 @@
 """The JSON report of a benchmark run: schema ``hcv-bench/1`` (`result_to_dict`,
 `write_json`), with machine and commit info (`machine_info`). Importable from
-`reference_impl.bench.report`, whose docstring describes the document."""
+`reference_impl.bench.scorecard.report`, whose docstring describes the document."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import json
 import math
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import metric_columns
+from reference_impl.bench.scorecard._cells import metric_columns
 from reference_impl.provenance import machine_info as _machine_info
 
 __all__ = ["SCHEMA", "machine_info", "result_to_dict", "write_json"]
