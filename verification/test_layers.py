@@ -383,3 +383,23 @@ def test_planted_deferred_imports_are_counted(tmp_path):
     _write(root, "b.py", "class C:\n    def m(self):\n        from . import a\n")
     got = sorted(deferred_imports(root, "pkg"))
     assert got == ["pkg.a:5", "pkg.b:3"], f"got {got}, should be ['pkg.a:5', 'pkg.b:3']"
+
+
+def test_the_run_writes_its_json_without_importing_the_renderer():
+    # Issue 37 item 4: the renderer only renders. Every module the runner imports, directly
+    # or through others (read from the source, deferred imports too), is checked.
+    graph: dict[str, set[str]] = {}
+    for a, b, _ in import_edges(ROOT):
+        graph.setdefault(a, set()).add(b)
+    seen, todo = set(), ["reference_impl.bench.scorecard.runner"]
+    while todo:
+        for nxt in graph.get(todo.pop(), ()):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    renderer, writer = "reference_impl.bench.scorecard.report", "reference_impl.bench.scorecard._json"
+    reached = sorted(m for m in seen if m.startswith(renderer))
+    assert not reached and writer in seen, (
+        f"got the runner reaching {reached} (and {writer}: {writer in seen}), should be no "
+        "renderer and the JSON writer reached [layers, import_edges(bench.scorecard.runner)]"
+    )

@@ -34,7 +34,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from reference_impl._format import g, jsonable
-from reference_impl.bench.scorecard.report import plot_speed_error, result_to_dict
+from reference_impl.bench.scorecard._json import result_to_dict
+from reference_impl.bench.scorecard.compare import plot_speed_error
 from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.campaign import _codes, _environment, _map, _steps
 from reference_impl.claims import (

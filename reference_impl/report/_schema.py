@@ -1,15 +1,21 @@
-"""results.json, version ``hcv-results/1``: what a report run writes and the renderer reads.
+"""results.json, version ``hcv-results/1.1``: what a report run writes and the renderer reads.
 
 `reference_impl.campaign.build_report` runs the studies and writes ``results.json``; the
 report's pages (``index.md``, ``index.html``, ``erratum.md``) are rendered from it and
 from the figures beside it only, so ``hcv report --from results.json`` re-renders them
 without running anything. The document is one JSON object (strict JSON: no NaN or
 Infinity; NaN is written as null, infinities as the strings ``"inf"`` and ``"-inf"``),
-versioned by ``"schema"`` as pytest-benchmark versions its JSON: a reader
-refuses a version it does not know. Fields (SI units; times in s, speeds in m/s):
+versioned by ``"schema"`` as pytest-benchmark versions its JSON. Versions are
+``hcv-results/M.N`` (``hcv-results/M`` is minor 0): a new field is a new minor version,
+documented here with the minor that added it; a field removed, renamed or changing meaning
+is a new major. A reader (``hcv report --from``) accepts its own version and every older
+minor of the same major (a field added since is then absent, read as null); it refuses
+another major and a newer minor, in one line. ``hcv-results/1.1`` added
+``codes_side_by_side``; the same rule holds for the bench's ``hcv-bench/1``
+(`reference_impl.bench.scorecard._json`). Fields (SI units; times in s, speeds in m/s):
 
 ``schema`` (str)
-    ``"hcv-results/1"``.
+    ``"hcv-results/1.1"`` (``"hcv-results/1"`` before ``codes_side_by_side``).
 ``title``, ``generated_utc`` (str), ``mode`` (``"full"`` or ``"quick"``), ``quick_drops`` (list of str)
     What was run, when, and what ``--quick`` left out.
 ``claims`` (list of dict)
@@ -64,6 +70,7 @@ refuses a version it does not know. Fields (SI units; times in s, speeds in m/s)
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 from reference_impl.claims import VERDICTS
@@ -71,7 +78,7 @@ from reference_impl.errors import HCVInputError
 
 __all__ = ["SCHEMA", "check_results", "read_results"]
 
-SCHEMA = "hcv-results/1"
+SCHEMA = "hcv-results/1.1"
 
 # Field -> the JSON type the renderer needs (`check_results`).
 FIELDS: dict[str, type | tuple[type, ...]] = {
@@ -104,7 +111,7 @@ FIELDS: dict[str, type | tuple[type, ...]] = {
     "carried": (dict, type(None)),
     "timings_seconds": dict,
 }
-# Fields an hcv-results/1 file written before they existed lacks (read as null).
+# Fields added in a minor version, which a file of an older minor lacks (read as null).
 OPTIONAL = ("codes_side_by_side",)
 # What the renderer reads of ``codes_side_by_side`` (`reference_impl.report._codes`).
 CODES_SETTINGS = ("asked", "steps_per_contact", "speeds", "mass", "hertz_k", "hooke_k",
@@ -114,6 +121,15 @@ CODES_ROW = ("code", "variant", "spec", "match", "asked", "steps_per_contact", "
              "delivered", "tensile", "declared_exact", "error")  # fmt: skip
 CODES_CALIBRATION = ("code", "spec", "match", "option", "asked")
 CLAIM_FIELDS = ("id", "section", "statement", "verdict", "evidence", "rule", "measured", "headline")
+
+
+def _version(schema) -> tuple[int, int] | None:
+    """(major, minor) of ``hcv-results/M`` or ``hcv-results/M.N``; None for anything else."""
+    prefix = SCHEMA.split("/")[0] + "/"
+    if not isinstance(schema, str) or not schema.startswith(prefix):
+        return None
+    m = re.fullmatch(r"(\d+)(?:\.(\d+))?", schema[len(prefix) :], re.ASCII)
+    return None if m is None else (int(m[1]), int(m[2] or 0))
 
 
 def _figure_ok(rel) -> bool:
@@ -146,10 +162,12 @@ def check_results(results, source: str = "results") -> dict:
     if not isinstance(results, dict):
         raise HCVInputError(f"{source}: not a JSON object (got {type(results).__name__})")
     version = results.get("schema")
-    if version != SCHEMA:
+    got, ours = _version(version), _version(SCHEMA)
+    if got is None or got[0] != ours[0] or got[1] > ours[1]:
         what = "has no schema field" if version is None else f"has schema {version!r}"
         raise HCVInputError(
-            f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
+            f"{source} {what}; this hcv reads {SCHEMA!r} and older minors of major "
+            f"{ours[0]} (regenerate it with hcv report)"
         )
     for key, typ in FIELDS.items():
         if key not in results and key in OPTIONAL:

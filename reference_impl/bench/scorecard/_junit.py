@@ -1,5 +1,10 @@
-"""The JUnit XML report of a benchmark run (`junit_tree`, `write_junit`). Importable from
-`reference_impl.bench.scorecard.report`, whose docstring describes the document."""
+"""The JUnit XML report of a benchmark run (`junit_tree`, `write_junit`).
+
+One testsuite per adapter variant, one testcase per scene x metric (``classname`` =
+``hcv.bench.<variant>.<scene>``), failures with the one-line explanation as message and
+the details as text, skips with their reason, and an ``<error>`` for a metric our own
+reference could not decide (status "error": an internal error, never the code's failure).
+"""
 
 from __future__ import annotations
 

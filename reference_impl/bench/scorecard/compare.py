@@ -2,7 +2,7 @@
 
 * `side_by_side` / `side_by_side_markdown`: one table with a row per (scene,
   metric) and a column per adapter variant, from the JSON documents of
-  `reference_impl.bench.scorecard.report.result_to_dict` (e.g. LAMMPS and Kratos).
+  `reference_impl.bench.scorecard._json.result_to_dict` (e.g. LAMMPS and Kratos).
 * `plot_speed_error`: error against wall time per impact (needs matplotlib).
 
 Both are re-exported by `reference_impl.bench.scorecard.report`.

@@ -76,7 +76,8 @@ from reference_impl.bench.measure import (
     rigid_bounce,
 )
 from reference_impl.bench.scorecard.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
-from reference_impl.bench.scorecard.report import machine_info, write_json, write_junit
+from reference_impl.bench.scorecard._json import machine_info, write_json
+from reference_impl.bench.scorecard._junit import write_junit
 from reference_impl.bench.scorecard.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 from reference_impl.errors import HCVInputError
