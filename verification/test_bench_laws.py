@@ -169,9 +169,7 @@ def test_a_correct_code_passes_both_verdicts_on_a_restitution_scene(data):
 # Every built-in code, from the registry; each case carries its code's mark (issue 41), and
 # `_builtin` skips it with the install line where the code is missing (with only [test]
 # installed they raised).
-_BUILTINS = tuple(
-    pytest.param(n, id=n, marks=getattr(pytest.mark, n)) for n in builtin_codes()
-)
+_BUILTINS = tuple(pytest.param(n, id=n, marks=getattr(pytest.mark, n)) for n in builtin_codes())
 
 
 def _builtin(name: str):

@@ -466,4 +466,3 @@ def test_a_failed_row_names_the_same_v0_as_its_fail_line():
         claim=CLAIM,
         call="scorecard_text(two codes)",
     )
-

@@ -397,7 +397,10 @@ def test_the_run_writes_its_json_without_importing_the_renderer():
             if nxt not in seen:
                 seen.add(nxt)
                 todo.append(nxt)
-    renderer, writer = "reference_impl.bench.scorecard.report", "reference_impl.bench.scorecard._json"
+    renderer, writer = (
+        "reference_impl.bench.scorecard.report",
+        "reference_impl.bench.scorecard._json",
+    )
     reached = sorted(m for m in seen if m.startswith(renderer))
     assert not reached and writer in seen, (
         f"got the runner reaching {reached} (and {writer}: {writer in seen}), should be no "

@@ -9,7 +9,11 @@ They are kept apart from the scene (`Case.code`) and checked here.
 from __future__ import annotations
 
 from reference_impl.adapters.registry import get_adapter
-from reference_impl.bench.calibration._options import check_option, check_settings, spec_with_options
+from reference_impl.bench.calibration._options import (
+    check_option,
+    check_settings,
+    spec_with_options,
+)
 from reference_impl.errors import HCVInputError
 
 __all__ = ["SweepSpecError"]

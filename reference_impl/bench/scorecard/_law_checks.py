@@ -11,7 +11,14 @@ from __future__ import annotations
 
 import math
 
-from reference_impl.bench.scorecard._rules import Metric, _allowance, _Internal, _Missing, _need, _Skip
+from reference_impl.bench.scorecard._rules import (
+    Metric,
+    _allowance,
+    _Internal,
+    _Missing,
+    _need,
+    _Skip,
+)
 
 __all__ = ["Extrapolated", "ForceLaw"]
 

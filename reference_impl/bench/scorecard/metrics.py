@@ -33,7 +33,12 @@ import math
 
 import numpy as np
 
-from reference_impl.bench.scorecard._delivery import ContactTimeAsked, PeakForceAsked, RestitutionAsked
+from reference_impl.bench.measure import check_conventions, exact_reference, measure
+from reference_impl.bench.scorecard._delivery import (
+    ContactTimeAsked,
+    PeakForceAsked,
+    RestitutionAsked,
+)
 from reference_impl.bench.scorecard._law_checks import Extrapolated, ForceLaw
 from reference_impl.bench.scorecard._records import MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.scorecard._rules import (
@@ -44,7 +49,6 @@ from reference_impl.bench.scorecard._rules import (
     _need,
     _Skip,
 )
-from reference_impl.bench.measure import check_conventions, exact_reference, measure
 
 __all__ = [
     "METRICS",

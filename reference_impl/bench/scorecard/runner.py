@@ -41,8 +41,20 @@ from reference_impl.adapters.base import (
     scheme_of,
 )
 from reference_impl.adapters.law_damping import implemented_law_from_table, law_of
+from reference_impl.bench.measure import (
+    check_conventions,
+    check_declared_law,
+    contact_sample_times,
+    exact_peak_force,
+    exact_reference,
+    exact_tensile_on_samples,
+    measure,
+    rigid_bounce,
+)
 from reference_impl.bench.scorecard._dtcrit import _EXTRA_STEPS, dt_crit
 from reference_impl.bench.scorecard._errors import DeclaredLawError, _Declined, _Ours
+from reference_impl.bench.scorecard._json import machine_info, write_json
+from reference_impl.bench.scorecard._junit import write_junit
 from reference_impl.bench.scorecard._plan import (
     DEFAULT_SCENES,
     MAX_SCENES,
@@ -65,19 +77,7 @@ from reference_impl.bench.scorecard._textbook import (
     textbook_order,
     worst_table_error,
 )
-from reference_impl.bench.measure import (
-    check_conventions,
-    check_declared_law,
-    contact_sample_times,
-    exact_peak_force,
-    exact_reference,
-    exact_tensile_on_samples,
-    measure,
-    rigid_bounce,
-)
 from reference_impl.bench.scorecard.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
-from reference_impl.bench.scorecard._json import machine_info, write_json
-from reference_impl.bench.scorecard._junit import write_junit
 from reference_impl.bench.scorecard.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 from reference_impl.errors import HCVInputError
@@ -559,9 +559,7 @@ def run_bench(
                     for m in METRICS
                 )
             else:
-                ctx = _SceneRun(executor, i, var.label, sc, tol, schemes[i]).run(
-                    result.speed_error
-                )
+                ctx = _SceneRun(executor, i, var.label, sc, tol, schemes[i]).run(result.speed_error)
                 result.metrics.extend(m.evaluate(ctx, tol) for m in METRICS)
             result.contexts.append(ctx)
             result.seconds = time.perf_counter() - t0
