@@ -4,7 +4,7 @@
 speed-against-error study, the hard cases, the damping laws and, with ``--adapter``, the
 contact codes; it writes into ``out_dir``:
 
-* ``results.json`` -- every result, schema ``hcv-results/1``
+* ``results.json`` -- every result, schema ``hcv-results/1.1``
   (`reference_impl.report._schema`);
 * ``figures/*.png`` -- drawn from the same results;
 * ``index.html``, ``index.md``, ``erratum.md`` -- rendered from results.json by
@@ -217,7 +217,7 @@ def build_report(
     Returns
     -------
     dict
-        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1``).
+        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.1``).
 
     Raises
     ------
