@@ -406,3 +406,29 @@ def test_the_run_writes_its_json_without_importing_the_renderer():
         f"got the runner reaching {reached} (and {writer}: {writer in seen}), should be no "
         "renderer and the JSON writer reached [layers, import_edges(bench.scorecard.runner)]"
     )
+
+
+# The rooms of bench/ (issue 37 item 4), bottom to top: the ground every study stands on,
+# the scorecard and calibration side by side (neither imports the other), the codes study
+# (which calibrates). bench/__init__.py, the face, re-exports and stands above them all.
+BENCH_ROOMS: tuple[frozenset[str], ...] = tuple(
+    frozenset(x) for x in ({"measure", "worker"}, {"scorecard", "calibration"}, {"codes"})
+)
+
+
+def test_the_rooms_of_bench_import_only_downward():
+    def room(mod: str) -> str | None:
+        parts = mod.split(".")
+        return parts[2] if parts[:2] == [PKG, "bench"] and len(parts) > 2 else None
+
+    bad = []
+    for a, b, line in import_edges(ROOT):
+        ra, rb = room(a), room(b)
+        if ra is None or rb is None or ra == rb:
+            continue
+        la, lb = _layer(ra, BENCH_ROOMS), _layer(rb, BENCH_ROOMS)
+        if lb >= la:
+            bad.append(f"{a}:{line} -> {b}")
+    assert not bad, (
+        f"got bench rooms importing sideways or up: {bad}, should be none [layers, bench/]"
+    )
