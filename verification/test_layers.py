@@ -26,7 +26,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         {"_version", "_atomic"},
         {"errors", "_numba_dir"},
         {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
-        {"_stored"},
+        {"_stored", "_expr_cache"},
         {"potentials"},
         {"theory"},
         {"integrators"},
