@@ -32,7 +32,7 @@ __all__ = ["numba_key", "prune_numba_dirs"]
 # a fresh directory instead. verification/test_cache_key.py checks the list against the
 # imports (AST), so a new compiled module cannot be left out.
 _COMPILED_SOURCES = (
-    "_atomic.py", "_cache.py", "_jit.py", "_numba_dir.py", "_stored.py", "_version.py",
+    "_atomic.py", "_cache.py", "_expr_cache.py", "_jit.py", "_numba_dir.py", "_stored.py", "_version.py",
     "errors.py",
     "exact/_branches.py", "exact/_cap_nodes.py", "exact/_general_kernel.py", "exact/_general_step.py",
     "exact/_general_taylor.py", "exact/_law_batch.py",

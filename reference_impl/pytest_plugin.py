@@ -111,8 +111,8 @@ class ContactAdapterCollector(pytest.Collector):
     def collect(self):
         from reference_impl.adapters.base import AdapterScene
         from reference_impl.adapters.registry import get_adapter
-        from reference_impl.bench.metrics import metric_names
-        from reference_impl.bench.runner import resolve_scenes
+        from reference_impl.bench.scorecard.metrics import metric_names
+        from reference_impl.bench.scorecard.runner import resolve_scenes
         from reference_impl.errors import HCVInputError
 
         spec = self.config.getoption("contact_adapter")
@@ -141,7 +141,7 @@ class ContactAdapterCollector(pytest.Collector):
 def _bench(config):
     result = config.stash.get(_RESULT_KEY, None)
     if result is None:
-        from reference_impl.bench.runner import run_bench
+        from reference_impl.bench.scorecard.runner import run_bench
         from reference_impl.errors import HCVInputError
 
         try:

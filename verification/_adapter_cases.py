@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from reference_impl.adapters import AdapterScene
-from reference_impl.bench.runner import resolve_scenes
+from reference_impl.bench.scorecard.runner import resolve_scenes
 from reference_impl.exact.solve import solve_impact
 from reference_impl.scenes import parse_scene
 

@@ -17,7 +17,7 @@ import numpy as np
 from reference_impl.adapters import AdapterScene, ContactAdapter, Trajectory
 from reference_impl.adapters.base import ImplementedLaw, Scheme
 from reference_impl.adapters.law_damping import scene_law
-from reference_impl.bench._schemes import scheme_trajectory
+from reference_impl.bench.scorecard._schemes import scheme_trajectory
 
 _IMPLICIT = Scheme("implicit-euler", 1.0)
 

@@ -35,7 +35,7 @@ from reference_impl.adapters.reference import ReferenceAdapter, verlet_trajector
 from reference_impl.adapters.registry import builtin_codes, parse_spec
 from reference_impl.adapters.subprocess import SubprocessAdapter
 from reference_impl.bench import load_tolerances, metric_names, run_bench
-from reference_impl.bench.metrics import exact_reference, measure
+from reference_impl.bench.scorecard.metrics import exact_reference, measure
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.verlet import SCENE_IMPACT, LaneBatch, run_lanes
 from reference_impl.potentials import PowerLaw

@@ -14,7 +14,7 @@ import pytest
 
 from reference_impl.adapters.reference import ReferenceAdapter
 from reference_impl.bench import run_bench
-from reference_impl.bench.report import scorecard_text
+from reference_impl.bench.scorecard.report import scorecard_text
 from verification._adapter_cases import FAST, scene
 
 from .assertions import assert_true

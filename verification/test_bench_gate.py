@@ -1,7 +1,7 @@
 """The gate never fails a correct code, and fails known-wrong codes on their fault (issue 17).
 
 Two hypothesis tests over generated scenes, run through `run_bench` with the shipped
-tolerances (reference_impl/bench/tolerances.toml), so that widening a tolerance until
+tolerances (reference_impl/bench/scorecard/tolerances.toml), so that widening a tolerance until
 a wrong code passes fails `test_wrong_codes_fail_on_their_fault`:
 
 * correct codes (the suite's reference adapter, a velocity Verlet, and the C example
@@ -29,7 +29,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from reference_impl.adapters.reference import ReferenceAdapter
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.scenes import scene_from_dict
 
 from .assertions import assert_true
@@ -246,7 +246,7 @@ def test_a_gate_that_measured_nothing_does_not_pass():
     ],
 )
 def test_an_invalid_declared_law_is_the_codes_configuration_error(which, field):
-    from reference_impl.bench.runner import DeclaredLawError
+    from reference_impl.bench.scorecard.runner import DeclaredLawError
 
     with pytest.raises(DeclaredLawError, match=field) as info:
         run_bench(wrong.DeclaresLaw(which=which), ["hertz-damped"])

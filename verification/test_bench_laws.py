@@ -32,7 +32,7 @@ from reference_impl.adapters.mujoco import mujoco_available
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory
 from reference_impl.adapters.registry import builtin_codes
 from reference_impl.adapters.subprocess import PROTOCOL
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
 from reference_impl.theory.damping import restitution_from_zeta
@@ -169,9 +169,7 @@ def test_a_correct_code_passes_both_verdicts_on_a_restitution_scene(data):
 # Every built-in code, from the registry; each case carries its code's mark (issue 41), and
 # `_builtin` skips it with the install line where the code is missing (with only [test]
 # installed they raised).
-_BUILTINS = tuple(
-    pytest.param(n, id=n, marks=getattr(pytest.mark, n)) for n in builtin_codes()
-)
+_BUILTINS = tuple(pytest.param(n, id=n, marks=getattr(pytest.mark, n)) for n in builtin_codes())
 
 
 def _builtin(name: str):

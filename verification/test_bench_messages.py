@@ -19,8 +19,8 @@ import numpy as np
 from reference_impl.adapters import AdapterScene, ContactAdapter, Trajectory
 from reference_impl.adapters.base import ImplementedLaw
 from reference_impl.adapters.law_damping import scene_law
-from reference_impl.bench.report import scorecard_text
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard.report import scorecard_text
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.scenes import scene_from_dict
 
 from .assertions import assert_true
@@ -74,7 +74,7 @@ class Clipped(codes.ImplicitEuler):
         return ImplementedLaw(law.potential, law.mass, zeta=law.zeta, clips_tension=True)
 
     def _impact_impl(self, scene):
-        from reference_impl.bench._schemes import scheme_trajectory
+        from reference_impl.bench.scorecard._schemes import scheme_trajectory
 
         t, q, v, f = scheme_trajectory(
             self.implemented_law(scene), codes._IMPLICIT, scene.v0, scene.dt, scene.n_steps

@@ -110,7 +110,7 @@ def test_a_scene_asking_e_at_the_zero_force_end_of_an_overdamped_law_is_benchmar
     time; the reference code delivers the asked e (Verlet at t_c/200: 0.27 % measured,
     inside the 2 % asked) and no contact time is asked (n/a)."""
     from reference_impl.adapters.reference import ReferenceAdapter
-    from reference_impl.bench.runner import run_bench
+    from reference_impl.bench.scorecard.runner import run_bench
     from reference_impl.scenes import scene_from_dict
 
     scene = {

@@ -29,14 +29,14 @@ from reference_impl.adapters.base import (
     Trajectory,
     trajectory_from_mapping,
 )
-from reference_impl.bench.metrics import MetricResult, SceneContext, SpeedRecord
-from reference_impl.bench.report import (
+from reference_impl.bench.scorecard.metrics import MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.scorecard.report import (
     metric_columns,
     render_scorecard,
     scorecard_markdown,
     scorecard_text,
 )
-from reference_impl.bench.runner import BenchResult
+from reference_impl.bench.scorecard.runner import BenchResult
 
 from .assertions import assert_true
 
@@ -195,7 +195,7 @@ def test_force_realignment_shifts_every_sample(n, lag, seed):
 
 
 def test_json_metrics_carry_the_separate_columns():
-    from reference_impl.bench.report import result_to_dict
+    from reference_impl.bench.scorecard._json import result_to_dict
 
     doc = result_to_dict(_result())
     m = doc["metrics"][0]
@@ -245,7 +245,8 @@ def test_c_example_adapter_reaches_a_passing_scorecard(tmp_path):
 
 def test_side_by_side_puts_codes_in_columns():
     """Two codes' JSON scorecards become one table, a column per variant (for the report)."""
-    from reference_impl.bench.report import result_to_dict, side_by_side, side_by_side_markdown
+    from reference_impl.bench.scorecard._json import result_to_dict
+    from reference_impl.bench.scorecard.report import side_by_side, side_by_side_markdown
 
     a = result_to_dict(_result())
     b = result_to_dict(_result())
@@ -277,7 +278,8 @@ def _result_with_error() -> BenchResult:
 def test_error_status_in_every_scorecard_output():
     from rich.console import Console
 
-    from reference_impl.bench.report import junit_tree, result_to_dict
+    from reference_impl.bench.scorecard._json import result_to_dict
+    from reference_impl.bench.scorecard._junit import junit_tree
 
     res = _result_with_error()
     lines = _piped(res).splitlines()
@@ -311,7 +313,9 @@ def test_report_files_get_the_mode_of_a_new_file(tmp_path, umask):
     """--json / --junit / --markdown: 0666 less the umask, not mkstemp's 0600 (issue 10 §8)."""
     import stat
 
-    from reference_impl.bench.report import write_json, write_junit, write_markdown
+    from reference_impl.bench.scorecard._json import write_json
+    from reference_impl.bench.scorecard._junit import write_junit
+    from reference_impl.bench.scorecard.report import write_markdown
 
     old = os.umask(umask)
     try:
@@ -396,7 +400,7 @@ def test_a_failed_runs_summary_line_says_why():
 
 
 def test_junit_failure_text_shows_measured_and_expected():
-    from reference_impl.bench.report import junit_tree
+    from reference_impl.bench.scorecard._junit import junit_tree
 
     res = _result()
     res.metrics[0].measured, res.metrics[0].expected, res.metrics[0].at_v0 = 0.70, 0.7292, 5.0
@@ -412,8 +416,8 @@ def test_junit_failure_text_shows_measured_and_expected():
 
 
 def test_metrics_that_do_not_apply_are_na_not_skipped():
-    from reference_impl.bench.metrics import METRICS
-    from reference_impl.bench.tolerances import default_tolerances
+    from reference_impl.bench.scorecard.metrics import METRICS
+    from reference_impl.bench.scorecard.tolerances import default_tolerances
 
     ctx = SceneContext("code", "hertz", "impact", False, speeds=[SpeedRecord(v0=1.0)])
     by = {m.name: m.evaluate(ctx, default_tolerances()) for m in METRICS}

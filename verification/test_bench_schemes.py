@@ -21,9 +21,9 @@ import pytest
 
 from reference_impl.adapters.base import ImplementedLaw, Scheme, Trajectory, scheme_of
 from reference_impl.adapters.reference import law_trajectory
-from reference_impl.bench._schemes import force_mismatch, scheme_trajectory
 from reference_impl.bench.measure import exact_reference, measure
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard._schemes import force_mismatch, scheme_trajectory
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.scenes import scene_from_dict

@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from reference_impl.adapters.reference import ReferenceAdapter
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.scenes import scene_from_dict
 
 from ._sweeps import cli, needs_dask

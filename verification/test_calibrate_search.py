@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from reference_impl.adapters.mujoco import mujoco_available
-from reference_impl.bench.calibrate import calibrate, delivered
+from reference_impl.bench.calibration.calibrate import calibrate, delivered
 from reference_impl.cli import main as hcv_main
 from reference_impl.errors import HCVInputError
 from verification._calibrate_codes import gain_for
@@ -161,7 +161,7 @@ def test_a_spec_written_with_bare_values_takes_an_option():
     option added with every value under its key (was: AttributeError in the registry)."""
     pytest.importorskip("mujoco", reason="pip install -e '.[mujoco]'")
     from reference_impl.adapters.registry import get_adapter
-    from reference_impl.bench._calibrate_options import spec_with_options
+    from reference_impl.bench.calibration._options import spec_with_options
 
     spec = spec_with_options("mujoco[timeconst,constant,Euler]", {"dampratio": 0.5})
     for value in ("timeconst", "constant", "Euler", "dampratio=0.5"):

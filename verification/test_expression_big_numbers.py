@@ -5,7 +5,7 @@ multiply them: k = 1e9 with exp(q / 1e-4) gives U''' a coefficient 1e21, which s
 prints as the integer literal 1000000000000000000000 and numba refused to type ("Int
 value is too large"): `solve_impact` raised numba's TypingError instead of solving, and
 the Verlet lanes fell back to the numpy engine. Such numbers are now printed as floats
-(`reference_impl._cache.numba_numbers`).
+(`reference_impl._expr_cache.numba_numbers`).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import sympy as sp
 
 from reference_impl import Expression, prepare, solve_impact
-from reference_impl._cache import numba_numbers
+from reference_impl._expr_cache import numba_numbers
 from reference_impl.exact.solve import solve_impact_mp
 from verification.assertions import assert_true
 

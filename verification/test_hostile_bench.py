@@ -29,7 +29,7 @@ from reference_impl.adapters.base import ImplementedLaw
 from reference_impl.adapters.registry import parse_spec
 from reference_impl.adapters.subprocess import AdapterDeclined
 from reference_impl.bench import run_bench
-from reference_impl.bench.metrics import METRICS, SceneContext, SpeedRecord
+from reference_impl.bench.scorecard.metrics import METRICS, SceneContext, SpeedRecord
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes import parse_scene
@@ -48,7 +48,7 @@ _WALLS = (
 # ----------------------------------------------------------------------------
 def test_reference_failure_is_an_internal_error_not_a_metric_failure():
     """The exact solver raising on the implemented law: status "error", gate exit 3."""
-    from reference_impl.bench import metrics, runner
+    from reference_impl.bench.scorecard import metrics, runner
 
     real = metrics.exact_reference
 
@@ -73,7 +73,7 @@ def test_reference_failure_is_an_internal_error_not_a_metric_failure():
 
 _BROKEN_REFERENCE_CLI = """
 import sys
-from reference_impl.bench import runner
+from reference_impl.bench.scorecard import runner
 
 
 def broken(law, v0, **kw):
@@ -208,7 +208,7 @@ def test_cmd_declares_sustained_scenes_in_its_spec():
 
 def test_one_scene_catalogue():
     """The bench's default scenes are ordinary embedded scenes (contract point 2)."""
-    from reference_impl.bench.runner import DEFAULT_SCENES
+    from reference_impl.bench.scorecard.runner import DEFAULT_SCENES
     from reference_impl.scenes import embedded_scenes
 
     assert set(DEFAULT_SCENES) <= set(embedded_scenes())
@@ -289,7 +289,7 @@ def _ctx(quantity: str, value: float, exact: float) -> SceneContext:
 def test_a_signed_or_nan_value_never_passes(metric, quantity, value, exact):
     """Every magnitude metric: a negative (wrong sign) or NaN measurement fails (point 5)."""
     m = next(x for x in METRICS if x.name == metric)
-    from reference_impl.bench.tolerances import default_tolerances
+    from reference_impl.bench.scorecard.tolerances import default_tolerances
 
     res = m.evaluate(_ctx(quantity, value, exact), default_tolerances())
     assert res.status == "fail", (metric, res)

@@ -237,7 +237,7 @@ def test_a_gate_value_that_is_no_verdict_is_one_line(capsys, argv, needle):
 
 
 def test_the_gate_kinds_of_the_parser_are_the_verdicts():
-    from reference_impl.bench._records import GATES
+    from reference_impl.bench.scorecard._records import GATES
     from reference_impl.cli.bench import _GATE_KINDS
 
     assert set(_GATE_KINDS) == set(GATES), (

@@ -18,7 +18,7 @@ import pytest
 from reference_impl import solve_impact
 from reference_impl.adapters import AdapterScene, get_adapter
 from reference_impl.adapters.base import AdapterOutputError
-from reference_impl.bench.runner import resolve_scenes
+from reference_impl.bench.scorecard.runner import resolve_scenes
 
 from .assertions import assert_true
 

@@ -35,7 +35,7 @@ pytestmark = [
 ]
 
 from reference_impl.adapters import get_adapter  # noqa: E402
-from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
+from reference_impl.bench.scorecard.metrics import exact_reference, measure  # noqa: E402
 from verification._adapter_cases import scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402

@@ -39,7 +39,7 @@ from reference_impl.adapters import get_adapter  # noqa: E402
 from reference_impl.adapters.lammps import tsuji_alpha  # noqa: E402
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory  # noqa: E402
 from reference_impl.bench import run_bench  # noqa: E402
-from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
+from reference_impl.bench.scorecard.metrics import exact_reference, measure  # noqa: E402
 from reference_impl.theory.damping import (  # noqa: E402
     restitution_from_zeta,
     zeta_from_restitution,
@@ -326,7 +326,7 @@ def test_calibrate_eta_n0_delivers_the_target():
     The search's root tolerance (1e-9 relative on eta_n0) leaves the achieved value
     within 1e-6 of the target; LAMMPS does not clip, so its zero-force end differs.
     """
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
 
     res = calibrate("lammps[damping=velocity]", "hooke-damped", param="eta_n0", target=0.5,
                     steps_per_contact=50, bracket=(1.0, 100.0))  # fmt: skip

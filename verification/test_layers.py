@@ -26,7 +26,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
         {"_version", "_atomic"},
         {"errors", "_numba_dir"},
         {"provenance", "_format", "_jit", "_cache", "_procs", "_userfiles"},
-        {"_stored"},
+        {"_stored", "_expr_cache"},
         {"potentials"},
         {"theory"},
         {"integrators"},
@@ -54,7 +54,7 @@ LAYERS: tuple[frozenset[str], ...] = tuple(
 RENDER_ONLY = (
     "reference_impl.report",
     "reference_impl.claims",
-    "reference_impl.bench.report",
+    "reference_impl.bench.scorecard.report",
     "reference_impl.adapters.registry",
     "reference_impl._format",
     "reference_impl.errors",
@@ -384,3 +384,52 @@ def test_planted_deferred_imports_are_counted(tmp_path):
     _write(root, "b.py", "class C:\n    def m(self):\n        from . import a\n")
     got = sorted(deferred_imports(root, "pkg"))
     assert got == ["pkg.a:5", "pkg.b:3"], f"got {got}, should be ['pkg.a:5', 'pkg.b:3']"
+
+
+def test_the_run_writes_its_json_without_importing_the_renderer():
+    # Issue 37 item 4: the renderer only renders. Every module the runner imports, directly
+    # or through others (read from the source, deferred imports too), is checked.
+    graph: dict[str, set[str]] = {}
+    for a, b, _ in import_edges(ROOT):
+        graph.setdefault(a, set()).add(b)
+    seen, todo = set(), ["reference_impl.bench.scorecard.runner"]
+    while todo:
+        for nxt in graph.get(todo.pop(), ()):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    renderer, writer = (
+        "reference_impl.bench.scorecard.report",
+        "reference_impl.bench.scorecard._json",
+    )
+    reached = sorted(m for m in seen if m.startswith(renderer))
+    assert not reached and writer in seen, (
+        f"got the runner reaching {reached} (and {writer}: {writer in seen}), should be no "
+        "renderer and the JSON writer reached [layers, import_edges(bench.scorecard.runner)]"
+    )
+
+
+# The rooms of bench/ (issue 37 item 4), bottom to top: the ground every study stands on,
+# the scorecard and calibration side by side (neither imports the other), the codes study
+# (which calibrates). bench/__init__.py, the face, re-exports and stands above them all.
+BENCH_ROOMS: tuple[frozenset[str], ...] = tuple(
+    frozenset(x) for x in ({"measure", "worker"}, {"scorecard", "calibration"}, {"codes"})
+)
+
+
+def test_the_rooms_of_bench_import_only_downward():
+    def room(mod: str) -> str | None:
+        parts = mod.split(".")
+        return parts[2] if parts[:2] == [PKG, "bench"] and len(parts) > 2 else None
+
+    bad = []
+    for a, b, line in import_edges(ROOT):
+        ra, rb = room(a), room(b)
+        if ra is None or rb is None or ra == rb:
+            continue
+        la, lb = _layer(ra, BENCH_ROOMS), _layer(rb, BENCH_ROOMS)
+        if lb >= la:
+            bad.append(f"{a}:{line} -> {b}")
+    assert not bad, (
+        f"got bench rooms importing sideways or up: {bad}, should be none [layers, bench/]"
+    )

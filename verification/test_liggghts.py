@@ -30,8 +30,8 @@ from reference_impl.adapters.base import AdapterRunError  # noqa: E402
 from reference_impl.adapters.liggghts import _run_liggghts  # noqa: E402
 from reference_impl.adapters.reference import ReferenceAdapter, law_trajectory  # noqa: E402
 from reference_impl.bench import run_bench  # noqa: E402
-from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
-from reference_impl.bench.runner import resolve_scenes  # noqa: E402
+from reference_impl.bench.scorecard.metrics import exact_reference, measure  # noqa: E402
+from reference_impl.bench.scorecard.runner import resolve_scenes  # noqa: E402
 from reference_impl.potentials.power import PowerLaw  # noqa: E402
 from reference_impl.scenes import scene_from_dict  # noqa: E402
 from reference_impl.theory.damping import zeta_from_restitution  # noqa: E402

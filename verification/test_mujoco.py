@@ -40,8 +40,8 @@ pytestmark = [
 
 from reference_impl import solve_impact  # noqa: E402
 from reference_impl.adapters import AdapterDeclined, AdapterScene, get_adapter  # noqa: E402
-from reference_impl.bench.metrics import exact_reference, measure  # noqa: E402
-from reference_impl.bench.runner import resolve_scenes  # noqa: E402
+from reference_impl.bench.scorecard.metrics import exact_reference, measure  # noqa: E402
+from reference_impl.bench.scorecard.runner import resolve_scenes  # noqa: E402
 from verification._adapter_cases import scene_at as _scene_at  # noqa: E402
 
 from .assertions import assert_close, assert_true  # noqa: E402
@@ -366,7 +366,7 @@ def test_calibrate_dampratio_meets_the_fine_step_closed_form():
     first-order error moves the answer by O(1/N): measured 0.3 % at N = 200, so 0.2 %
     at N = 800 bounds it with room.
     """
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
 
     res = calibrate(_EULER, "hooke-damped", param="dampratio", target=0.5,
                     steps_per_contact=800)  # fmt: skip
@@ -377,7 +377,7 @@ def test_calibrate_dampratio_meets_the_fine_step_closed_form():
 
 
 def test_calibrate_out_of_reach_and_bad_input(capsys):
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
     from reference_impl.cli import main as hcv_main
 
     res = calibrate(_EULER, "hooke-damped", param="dampratio", target=0.999,
@@ -455,7 +455,7 @@ def test_declared_scheme_is_what_mujoco_integrates(integrator, scheme):
     (e and q_max at 200 steps per contact: 1e-12, ~200 steps of round-off), so the
     implementation allowance is the error MuJoCo itself makes, not Verlet's."""
     from reference_impl.adapters.base import Trajectory, scheme_of
-    from reference_impl.bench._schemes import scheme_trajectory
+    from reference_impl.bench.scorecard._schemes import scheme_trajectory
 
     a = get_adapter(f"mujoco[solref=direct,impedance=constant,integrator={integrator}]")
     s = _scene_at("hooke-damped", 1.0)

@@ -20,7 +20,7 @@ from reference_impl import solve_impact
 from reference_impl.adapters import AdapterScene, get_adapter
 from reference_impl.adapters.base import AdapterOutputError, AdapterRunError
 from reference_impl.adapters.subprocess import SubprocessAdapter
-from reference_impl.bench.runner import resolve_scenes
+from reference_impl.bench.scorecard.runner import resolve_scenes
 
 from .assertions import assert_close, assert_true
 
@@ -124,7 +124,7 @@ def test_calibrate_a_cmd_program_through_an_option():
     no option"). The program integrates zeta_scale x the asked zeta, so the option that
     delivers the asked restitution is 1, to the calibration's tolerance plus the first-order
     step error of the half-step dashpot at 200 steps per contact (measured 1e-3)."""
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
 
     res = calibrate(
         f"cmd[persistent=true]:{SCRIPT}",

@@ -40,7 +40,7 @@ _FAST = "[dt_crit]\nresolution = 0.05\n[run]\nspeed_error_steps = [50, 100, 200]
 _CONFTEST = """
 import pytest
 
-from reference_impl.bench import runner
+from reference_impl.bench.scorecard import runner
 
 
 def _broken(law, v0, **kw):

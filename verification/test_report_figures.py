@@ -6,7 +6,7 @@ under it), and every axis that carries data is labelled with its unit in bracket
 each figure function of the report is run on the committed ``reports/results.json`` (the
 Fig. 1 runs are recomputed, about 2 s) with ``Figure.savefig`` caught, and the figure is
 drawn once so that legends have their place; the codes' speed-against-error figures
-(``bench_*.png``, `reference_impl.bench.compare.plot_speed_error`) included.
+(``bench_*.png``, `reference_impl.bench.scorecard.compare.plot_speed_error`) included.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import pandas as pd  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from reference_impl.bench.compare import plot_speed_error  # noqa: E402
+from reference_impl.bench.scorecard.compare import plot_speed_error  # noqa: E402
 from reference_impl.claims import fig1 as fig1_claim  # noqa: E402
 from reference_impl.report import _dtmap, _fig1, _hardcases, _laws, _steps, _wp  # noqa: E402
 from reference_impl.studies.paper import FIG1  # noqa: E402

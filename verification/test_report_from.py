@@ -118,6 +118,10 @@ def _bad(committed, case):
         del r["schema"]
     elif case == "other schema":
         r["schema"] = "hcv-results/99"
+    elif case == "other major":
+        r["schema"] = "hcv-results/2.0"
+    elif case == "newer minor":
+        r["schema"] = "hcv-results/1.99"
     elif case == "missing field":
         del r["dt_crit_map"]
     elif case == "bad verdict":
@@ -132,6 +136,8 @@ def _bad(committed, case):
     [
         ("no schema", "has no schema field"),
         ("other schema", "hcv-results/99"),
+        ("other major", "hcv-results/2.0"),
+        ("newer minor", "hcv-results/1.99"),
         ("missing field", "'dt_crit_map' is missing"),
         ("bad verdict", "'maybe'"),
         ("figure outside", "../../etc/passwd"),
@@ -266,4 +272,25 @@ def test_the_final_line_names_every_file_written(into_checkout, tmp_path, monkey
         + (", and README.md" if into_checkout else ", not README.md"),
         claim="report",
         call=f"hcv report --out {'reports' if into_checkout else 'DIR'} (stub build)",
+    )
+
+
+def test_a_document_of_the_previous_minor_renders(committed, tmp_path, capsys):
+    # Issue 37 item 4: a new field is a minor version; --from reads every older minor of
+    # its major. The committed document relabelled "hcv-results/1" (1.0, before 1.1's
+    # codes_side_by_side) without that field is what an older report wrote.
+    old = copy.deepcopy(committed)
+    old["schema"] = "hcv-results/1"
+    old.pop("codes_side_by_side", None)
+    src = tmp_path / "in" / "results.json"
+    src.parent.mkdir()
+    shutil.copytree(REPORTS / "figures", src.parent / "figures")
+    src.write_text(json.dumps(old))
+    code = main(["report", "--from", str(src), "--out", str(tmp_path / "out")])
+    assert_true(
+        code == 0 and (tmp_path / "out" / "index.html").is_file(),
+        got=f"exit {code}, stderr {capsys.readouterr().err!r}",
+        should="exit 0 and the pages written",
+        claim="report",
+        call="hcv report --from results.json (schema hcv-results/1)",
     )

@@ -119,7 +119,7 @@ def test_bench_task_sweeps_the_step_and_keeps_measured_columns():
 
 def test_spec_with_options_composes_adapter_specs():
     from reference_impl.adapters.registry import parse_spec as parse_adapter
-    from reference_impl.bench.calibrate import spec_with_options
+    from reference_impl.bench.calibration.calibrate import spec_with_options
 
     s = spec_with_options("mujoco[solref=direct]", {"dampratio": 0.25, "integrator": "RK4"})
     assert parse_adapter(s) == ("mujoco", {"solref": "direct", "dampratio": 0.25,

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from reference_impl import _cache
+from reference_impl import _cache, _expr_cache
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -32,14 +32,14 @@ _DEGRADE = textwrap.dedent(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         import reference_impl
-        from reference_impl import _cache
+        from reference_impl import _cache, _expr_cache
         if len(sys.argv) > 1:  # "full": the same directory, but too little free space
             _cache.MIN_FREE_BYTES = 2**62
             _cache._state["usable"] = None
             import os; os.environ.pop("NUMBA_CACHE_DIR", None)
         usable = _cache.configure_numba_cache()
         usable_again = _cache.configure_numba_cache()
-        module = _cache.expression_module("probe", "canonical", "X = 1\\n")
+        module = _expr_cache.expression_module("probe", "canonical", "X = 1\\n")
         import numba
 
         @numba.njit(cache=True)
@@ -120,9 +120,9 @@ def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
 
 def test_entries_are_keyed_by_their_canonical_form(monkeypatch, tmp_path):
     monkeypatch.setenv("HCV_CACHE_DIR", str(tmp_path))
-    a = _cache.expression_module("keytest", "Symbol('q')", "VALUE = 'a'\n")
-    a_again = _cache.expression_module("keytest", "Symbol('q')", "VALUE = 'a'\n")
-    b = _cache.expression_module("keytest", "Pow(Symbol('q'), Integer(2))", "VALUE = 'b'\n")
+    a = _expr_cache.expression_module("keytest", "Symbol('q')", "VALUE = 'a'\n")
+    a_again = _expr_cache.expression_module("keytest", "Symbol('q')", "VALUE = 'a'\n")
+    b = _expr_cache.expression_module("keytest", "Pow(Symbol('q'), Integer(2))", "VALUE = 'b'\n")
     assert_true(
         a is a_again and a is not b and (a.VALUE, b.VALUE) == ("a", "b"),
         got=f"{a.__name__}, {a_again.__name__}, {b.__name__}",
@@ -135,8 +135,8 @@ def test_entries_are_keyed_by_their_canonical_form(monkeypatch, tmp_path):
 _WRITER = textwrap.dedent(
     """
     import sys
-    from reference_impl import _cache
-    m = _cache.expression_module("race", "one entry", "DATA = 'x' * 200000\\n")
+    from reference_impl import _expr_cache
+    m = _expr_cache.expression_module("race", "one entry", "DATA = 'x' * 200000\\n")
     print(len(m.DATA))
     """
 )
@@ -147,13 +147,19 @@ def test_processes_writing_one_entry_all_import_a_whole_file(tmp_path):
     env.update(HCV_CACHE_DIR=str(tmp_path), PYTHONPATH=str(ROOT))
     procs = [
         subprocess.Popen(
-            [sys.executable, "-c", _WRITER], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True
+            [sys.executable, "-c", _WRITER],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env=env,
+            text=True,
         )
         for _ in range(4)
     ]
     outs = [p.communicate(timeout=300) for p in procs]
     codes = [p.returncode for p in procs]
-    leftovers = sorted(p.name for p in (tmp_path / "expressions").iterdir() if p.name.endswith(".tmp"))
+    leftovers = sorted(
+        p.name for p in (tmp_path / "expressions").iterdir() if p.name.endswith(".tmp")
+    )
     assert_true(
         codes == [0] * 4 and all(o.strip() == "200000" for o, _ in outs) and not leftovers,
         got=f"exits {codes}, outputs {[o.strip() for o, _ in outs]}, temporary files {leftovers}",
@@ -184,7 +190,7 @@ def test_least_recently_used_entries_are_evicted_with_their_numba_files(monkeypa
     numba_dir.mkdir()
     mods = []
     for i in range(4):
-        m = _cache.expression_module("lru", f"entry {i}", f"PAD = {'1' * 1000!r}\n")
+        m = _expr_cache.expression_module("lru", f"entry {i}", f"PAD = {'1' * 1000!r}\n")
         stem = Path(m.__file__).stem
 
         def kernel():
@@ -193,7 +199,7 @@ def test_least_recently_used_entries_are_evicted_with_their_numba_files(monkeypa
         kernel.__code__ = kernel.__code__.replace(co_filename=str(numba_dir / f"{stem}.py"))
         kernel.__qualname__ = "kernel"
         extra = _numba_file_of(stem, numba_dir)
-        _cache.record_files(stem, [_FakeDispatcher(numba_dir, kernel)])
+        _expr_cache.record_files(stem, [_FakeDispatcher(numba_dir, kernel)])
         mods.append((m, extra))
         os.utime(m.__file__, (1e9 + i, 1e9 + i))  # entry i used at time i
     alive = [Path(m.__file__).is_file() for m, _ in mods]

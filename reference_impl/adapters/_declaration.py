@@ -4,7 +4,7 @@ how the code takes a restitution, which variants the report shows, its install e
 and pytest marker (`CodeInfo`).
 
 The bench judges a code's implementation against the error its *declared* scheme makes
-on the declared law (`reference_impl.bench._schemes` runs that scheme on the exact law),
+on the declared law (`reference_impl.bench.scorecard._schemes` runs that scheme on the exact law),
 so a first-order implicit code is not held to velocity Verlet's error (issue 40, §1).
 The registry (`reference_impl.adapters.registry.builtin_codes`) makes every list of
 codes (the report's side-by-side variants, the install lines, the markers) from the

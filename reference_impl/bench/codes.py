@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass
 
 from reference_impl.adapters.base import AdapterScene
 from reference_impl.adapters.registry import builtin_codes, parse_spec
-from reference_impl.bench.calibrate import calibrate
+from reference_impl.bench.calibration.calibrate import calibrate
 from reference_impl.bench.measure import exact_reference, measure
 from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
@@ -252,7 +252,7 @@ def _typed_rows(code: str, spec: str, p: float, e: float, steps, speeds) -> list
 
 
 def calibration_table(codes=CALIBRATED, asked=ASKED, steps_per_contact: int = 200, v0=1.0):
-    """The input that delivers each asked e (`reference_impl.bench.calibrate`), per code.
+    """The input that delivers each asked e (`reference_impl.bench.calibration.calibrate`), per code.
 
     ``codes`` items are (code, adapter spec, p, option[, (lo, hi)]): the range is the
     adapter's ``calibration_range`` unless given. Returns dicts with the code,

@@ -4,7 +4,7 @@
 reads restitution, contact time, max penetration and tensile peak off a
 trajectory; `exact_reference` solves the law the code implements exactly (the
 harmonic-map solver for the universal law, else DOP853 at rtol 1e-12). The
-scorecard rules are in `reference_impl.bench.metrics`.
+scorecard rules are in `reference_impl.bench.scorecard.metrics`.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 speed-against-error study, the hard cases, the damping laws and, with ``--adapter``, the
 contact codes; it writes into ``out_dir``:
 
-* ``results.json`` -- every result, schema ``hcv-results/1``
+* ``results.json`` -- every result, schema ``hcv-results/1.1``
   (`reference_impl.report._schema`);
 * ``figures/*.png`` -- drawn from the same results;
 * ``index.html``, ``index.md``, ``erratum.md`` -- rendered from results.json by
@@ -33,8 +33,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from reference_impl._format import g, jsonable
-from reference_impl.bench.report import plot_speed_error, result_to_dict
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.scorecard._json import result_to_dict
+from reference_impl.bench.scorecard.compare import plot_speed_error
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.campaign import _codes, _environment, _map, _steps
 from reference_impl.claims import (
     CLAIMS,
@@ -217,7 +218,7 @@ def build_report(
     Returns
     -------
     dict
-        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1``).
+        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.1``).
 
     Raises
     ------

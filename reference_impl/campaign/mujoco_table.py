@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 
 from reference_impl.adapters.mujoco import zeta_zero_force
-from reference_impl.bench.calibrate import calibrate, delivered
+from reference_impl.bench.calibration.calibrate import calibrate, delivered
 from reference_impl.scenes import load_scene
 
 __all__ = ["END", "START", "calibration_rows", "markdown_table", "rewrite_readme"]

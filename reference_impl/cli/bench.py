@@ -41,7 +41,7 @@ EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 _MAX_SCENE_ARGS = 100_000
 
 
-# What --gate may name (`reference_impl.bench._records.GATES`, repeated here: parsing the
+# What --gate may name (`reference_impl.bench.scorecard._records.GATES`, repeated here: parsing the
 # arguments imports nothing numerical, issue 20; verification/test_hostile_bench_usage.py checks
 # the two agree).
 _GATE_KINDS = ("both", "implementation", "delivery")
@@ -135,7 +135,7 @@ def _tolerances(args):
     ``[run] steps_per_contact``; refused (one line naming N) by the tolerances' own rule."""
     if args.steps_per_contact is None:
         return args.tolerances
-    from reference_impl.bench.tolerances import load_tolerances
+    from reference_impl.bench.scorecard.tolerances import load_tolerances
 
     tol = load_tolerances(args.tolerances)
     tol["run"]["steps_per_contact"] = args.steps_per_contact
@@ -299,13 +299,13 @@ def run(args) -> int:
     """Run the benchmark for parsed ``hcv bench`` arguments; returns the exit status."""
     from rich.console import Console
 
-    from reference_impl.bench.report import (
+    from reference_impl.bench.scorecard.report import (
         plot_speed_error,
         render_scorecard,
         render_speed_error,
         write_markdown,
     )
-    from reference_impl.bench.runner import run_bench
+    from reference_impl.bench.scorecard.runner import run_bench
 
     args.adapter = _adapter(args)
     scenes = _scene_args(args.scenes)
@@ -351,7 +351,7 @@ def run(args) -> int:
         raise KeyboardInterrupt
     status = result.exit_status(args.gate)
     if args.gate:
-        from reference_impl.bench.report import gate_lines
+        from reference_impl.bench.scorecard.report import gate_lines
 
         print("\n".join(gate_lines(result, args.gate)))
     return status

@@ -1,4 +1,4 @@
-"""``hcv calibrate``: the parser and the printout of `reference_impl.bench.calibrate`."""
+"""``hcv calibrate``: the parser and the printout of `reference_impl.bench.calibration.calibrate`."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def _fmt(x) -> str:
 
 def run(args) -> int:
     """Run ``hcv calibrate``; exit 0 found, 1 out of reach, 2 bad input."""
-    from reference_impl.bench.calibrate import EXIT_OK, EXIT_UNREACHABLE, calibrate
+    from reference_impl.bench.calibration.calibrate import EXIT_OK, EXIT_UNREACHABLE, calibrate
 
     quantity, target = _target(args.target)
     res = calibrate(

@@ -54,7 +54,7 @@ if TYPE_CHECKING:
 # sympy itself is imported where an expression is handled: a potential of another family
 # solves without it (issue 20: start-up).
 
-from reference_impl._cache import (
+from reference_impl._expr_cache import (
     expression_module,
     numba_numbers,
     printed_function,

@@ -205,7 +205,7 @@ def _kernels_for(nodes, cache: bool, entry: str | None = None):
     gauss_jacobi = specialise(_gauss_jacobi, cache, _NODES=nodes, _PEAK=peak)
     tanh_sinh = specialise(_tanh_sinh, cache, _NODES=nodes, _PEAK=peak)
     if entry is not None:
-        from reference_impl._cache import record_files
+        from reference_impl._expr_cache import record_files
 
         record_files(entry, [peak, gauss_jacobi, tanh_sinh])
     return gauss_jacobi, tanh_sinh

@@ -216,7 +216,7 @@ def _family_impact(v0, zeta, q_top, K):  # pragma: no cover - compiled
 def _family_entry(gauss_jacobi, tanh_sinh, ev, entry: str | None, cache: bool):
     fn = specialise(_family_impact, cache, _GJ=gauss_jacobi, _TS=tanh_sinh, _EV=ev)
     if entry is not None:
-        from reference_impl._cache import record_files
+        from reference_impl._expr_cache import record_files
 
         record_files(entry, [fn])
     return fn

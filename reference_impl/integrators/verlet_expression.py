@@ -14,7 +14,7 @@ import numba
 import numpy as np
 import sympy as sp
 
-from reference_impl._cache import (
+from reference_impl._expr_cache import (
     expression_module,
     numba_numbers,
     printed_function,

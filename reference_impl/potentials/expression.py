@@ -224,7 +224,7 @@ class Expression(Potential):
         self.d2expr = sp.diff(self.dexpr, _Q)
         exprs = (self.expr, self.dexpr, self.d2expr)
         # The kernels differentiate once more (the third derivative, `exact._nodes`) and
-        # print every form (`_cache.numba_numbers`, lambdify): no number beyond Python's
+        # print every form (`_expr_cache.numba_numbers`, lambdify): no number beyond Python's
         # 4300-digit int-to-str limit may reach them.
         d3expr = sp.diff(self.d2expr, _Q)
         for what, e in (("U'", self.dexpr), ("U''", self.d2expr), ("U'''", d3expr)):

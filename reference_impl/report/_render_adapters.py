@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from reference_impl.bench.report import UNITS as _UNITS
-from reference_impl.bench.report import format_value as _fmt
-from reference_impl.bench.report import format_with_unit as _fmt_v
-from reference_impl.bench.report import json_number as _bench_num
-from reference_impl.bench.report import side_by_side
+from reference_impl.bench.scorecard.report import UNITS as _UNITS
+from reference_impl.bench.scorecard.report import format_value as _fmt
+from reference_impl.bench.scorecard.report import format_with_unit as _fmt_v
+from reference_impl.bench.scorecard.report import json_number as _bench_num
+from reference_impl.bench.scorecard.report import side_by_side
 from reference_impl.report._blocks import IMG, H, P, T
 
 # Column headers of each code's own table (`_adapter_rows`).
@@ -28,7 +28,7 @@ def _adapter_rows(d: dict) -> tuple[list, list]:
     """One code's metrics (skips left out) as rows of `_CODE_COLUMNS`, with cell flags.
 
     ``measured`` / ``expected`` are the compared quantities (with their unit), ``error``
-    what the tolerance bounds (`reference_impl.bench.report.metric_columns`).
+    what the tolerance bounds (`reference_impl.bench.scorecard.report.metric_columns`).
     """
 
     rows, flags = [], []
@@ -91,7 +91,7 @@ def _carried(r) -> list:
 
 def _adapters(r) -> list:
     """Scorecards of the contact codes given with ``hcv report --adapter``: first all codes
-    side by side (`reference_impl.bench.report.side_by_side`), then each code's own table."""
+    side by side (`reference_impl.bench.scorecard.report.side_by_side`), then each code's own table."""
 
     docs = r.get("adapters") or []
     if not docs:
@@ -112,7 +112,7 @@ def _adapters(r) -> list:
             "Each code ran the bench scenes through its adapter; every metric is compared "
             "with its reference (the exact solution of the law the code declares it "
             "integrates, or the restitution it was asked for) under the tolerance shown "
-            "(`hcv bench`, reference_impl/bench/tolerances.toml)."
+            "(`hcv bench`, reference_impl/bench/scorecard/tolerances.toml)."
         ),
         H(3, "Side by side"),
         P(

@@ -1,15 +1,21 @@
-"""results.json, version ``hcv-results/1``: what a report run writes and the renderer reads.
+"""results.json, version ``hcv-results/1.1``: what a report run writes and the renderer reads.
 
 `reference_impl.campaign.build_report` runs the studies and writes ``results.json``; the
 report's pages (``index.md``, ``index.html``, ``erratum.md``) are rendered from it and
 from the figures beside it only, so ``hcv report --from results.json`` re-renders them
 without running anything. The document is one JSON object (strict JSON: no NaN or
 Infinity; NaN is written as null, infinities as the strings ``"inf"`` and ``"-inf"``),
-versioned by ``"schema"`` as pytest-benchmark versions its JSON: a reader
-refuses a version it does not know. Fields (SI units; times in s, speeds in m/s):
+versioned by ``"schema"`` as pytest-benchmark versions its JSON. Versions are
+``hcv-results/M.N`` (``hcv-results/M`` is minor 0): a new field is a new minor version,
+documented here with the minor that added it; a field removed, renamed or changing meaning
+is a new major. A reader (``hcv report --from``) accepts its own version and every older
+minor of the same major (a field added since is then absent, read as null); it refuses
+another major and a newer minor, in one line. ``hcv-results/1.1`` added
+``codes_side_by_side``; the same rule holds for the bench's ``hcv-bench/1``
+(`reference_impl.bench.scorecard._json`). Fields (SI units; times in s, speeds in m/s):
 
 ``schema`` (str)
-    ``"hcv-results/1"``.
+    ``"hcv-results/1.1"`` (``"hcv-results/1"`` before ``codes_side_by_side``).
 ``title``, ``generated_utc`` (str), ``mode`` (``"full"`` or ``"quick"``), ``quick_drops`` (list of str)
     What was run, when, and what ``--quick`` left out.
 ``claims`` (list of dict)
@@ -90,7 +96,7 @@ from reference_impl.report._inputs import read_report_file
 
 __all__ = ["FIELDS", "RESULTS_MAX_BYTES", "SCHEMA", "SCHEMA_FILE", "check_results", "read_results"]
 
-SCHEMA = "hcv-results/1"
+SCHEMA = "hcv-results/1.1"
 # The one schema file of the document, shipped with the package (package-data).
 SCHEMA_FILE = Path(__file__).with_name("results.schema.json")
 # The committed results.json, with five codes, is 2.4 MB; 64 MiB keeps a 25x margin and
@@ -105,6 +111,19 @@ def _validator() -> Draft202012Validator:
     schema = json.loads(SCHEMA_FILE.read_text(encoding="utf-8"))
     Draft202012Validator.check_schema(schema)  # a broken schema file fails here, not silently
     return Draft202012Validator(schema)
+
+
+def _version(schema) -> tuple[int, int] | None:
+    """(major, minor) of ``hcv-results/M`` or ``hcv-results/M.N``; None for anything else.
+
+    The version rule: a new field is a new minor version; ``--from`` reads every older
+    minor of the same major (the fields it lacks are optional in the schema file) and
+    refuses another major or a newer minor."""
+    prefix = SCHEMA.split("/")[0] + "/"
+    if not isinstance(schema, str) or not schema.startswith(prefix):
+        return None
+    m = re.fullmatch(r"(\d+)(?:\.(\d+))?", schema[len(prefix) :], re.ASCII)
+    return None if m is None else (int(m[1]), int(m[2] or 0))
 
 
 # The top-level fields of hcv-results/1, in the order written (documented above).
@@ -265,10 +284,12 @@ def check_results(results, source: str = "results", base=None) -> dict:
     if not isinstance(results, dict):
         raise HCVInputError(f"{source}: not a JSON object (got {_kind(results)})")
     version = results.get("schema")
-    if version != SCHEMA:
+    got, ours = _version(version), _version(SCHEMA)
+    if got is None or got[0] != ours[0] or got[1] > ours[1]:
         what = "has no schema field" if version is None else f"has schema {_quote(version)}"
         raise HCVInputError(
-            f"{source} {what}; this hcv reads {SCHEMA!r} (regenerate it with hcv report)"
+            f"{source} {what}; this hcv reads {SCHEMA!r} and older minors of major "
+            f"{ours[0]} (regenerate it with hcv report)"
         )
     big = _out_of_range(results)
     if big is not None:

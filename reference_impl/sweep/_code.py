@@ -9,7 +9,11 @@ They are kept apart from the scene (`Case.code`) and checked here.
 from __future__ import annotations
 
 from reference_impl.adapters.registry import get_adapter
-from reference_impl.bench._calibrate_options import check_option, check_settings, spec_with_options
+from reference_impl.bench.calibration._options import (
+    check_option,
+    check_settings,
+    spec_with_options,
+)
 from reference_impl.errors import HCVInputError
 
 __all__ = ["SweepSpecError"]
@@ -82,13 +86,13 @@ def _check_code(code: dict, task: str, built: dict | None = None) -> None:
         if not (val is None or isinstance(val, (bool, int, float, str))):
             raise HCVInputError(f"adapter option {key} = {val!r} must be a number or a string")
     if task.startswith("bench:") and code.get("run"):
-        from reference_impl.bench.tolerances import load_tolerances
+        from reference_impl.bench.scorecard.tolerances import load_tolerances
 
         load_tolerances({"run": dict(code["run"])})
     if task.startswith("calibrate:"):
         _check_calibration(code, adapter)
     if adapter and options:
-        from reference_impl.bench._calibrate_options import check_option
+        from reference_impl.bench.calibration._options import check_option
 
         for key in options:
             check_option(adapter, key)

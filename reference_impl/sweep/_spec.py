@@ -25,7 +25,7 @@ adapter, any variant key, e.g. ``"adapter.dampratio" = [0.1, 0.2]``) and
 also ``"calibrate.target"`` and ``"calibrate.end"``. A ``calibrate:ADAPTER`` task
 needs a ``[calibrate]`` table: ``param`` (the option searched), ``target``
 (restitution), optionally ``end``, ``range = [LO, HI]``, ``v0``,
-``steps_per_contact`` (see `reference_impl.bench.calibrate`).
+``steps_per_contact`` (see `reference_impl.bench.calibration.calibrate`).
 
 The sweep is the Cartesian product of the ``[sweep]`` lists, in the order the
 keys are written (the last key varies fastest). Spec-level problems (syntax,

@@ -20,8 +20,8 @@ import threading
 import time
 from dataclasses import replace
 
-from reference_impl.bench.calibrate import calibrate, spec_with_options
-from reference_impl.bench.runner import run_bench
+from reference_impl.bench.calibration.calibrate import calibrate, spec_with_options
+from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
 from reference_impl.tasks import search_loaded_scene, solve_scene

@@ -2,18 +2,18 @@
 
 * `side_by_side` / `side_by_side_markdown`: one table with a row per (scene,
   metric) and a column per adapter variant, from the JSON documents of
-  `reference_impl.bench.report.result_to_dict` (e.g. LAMMPS and Kratos).
+  `reference_impl.bench.scorecard._json.result_to_dict` (e.g. LAMMPS and Kratos).
 * `plot_speed_error`: error against wall time per impact (needs matplotlib).
 
-Both are re-exported by `reference_impl.bench.report`.
+Both are re-exported by `reference_impl.bench.scorecard.report`.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from reference_impl.bench._cells import _PLAIN_STATUS, _UNITS, _fmt_v
-from reference_impl.bench._textbook import worst_table_error
+from reference_impl.bench.scorecard._cells import _PLAIN_STATUS, _UNITS, _fmt_v
+from reference_impl.bench.scorecard._textbook import worst_table_error
 
 __all__ = ["plot_speed_error", "side_by_side", "side_by_side_markdown"]
 

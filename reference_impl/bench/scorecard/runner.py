@@ -9,7 +9,7 @@ For every adapter variant and scene, and every impact speed of the scene:
 
 then, at the middle speed, the speed-against-error table (several dt, wall time
 of each run, errors against the exact solution), and for two-walls scenes one
-long elastic run (energy drift). The metrics of `reference_impl.bench.metrics`
+long elastic run (energy drift). The metrics of `reference_impl.bench.scorecard.metrics`
 are evaluated on the records.
 
 Isolation: every adapter call goes through an executor
@@ -20,7 +20,7 @@ rewritten after every scene (and on interruption), so nothing computed is lost.
 
 Here: the run of one variant on one scene (`_SceneRun`) and the loop over the cells
 (`run_bench`). Elsewhere, importable from here: the scenes and the cells
-(`reference_impl.bench._plan`), the records (`reference_impl.bench._records`). Private:
+(`reference_impl.bench.scorecard._plan`), the records (`reference_impl.bench.scorecard._records`). Private:
 the critical-step search (`_dtcrit`), textbook Verlet's baselines (`_textbook`), the
 early ends of a scene run (`_errors`).
 """
@@ -41,30 +41,6 @@ from reference_impl.adapters.base import (
     scheme_of,
 )
 from reference_impl.adapters.law_damping import implemented_law_from_table, law_of
-from reference_impl.bench._dtcrit import _EXTRA_STEPS, dt_crit
-from reference_impl.bench._errors import DeclaredLawError, _Declined, _Ours
-from reference_impl.bench._plan import (
-    DEFAULT_SCENES,
-    MAX_SCENES,
-    MAX_SPEEDS,
-    bench_scene_names,
-    plan_cells,
-    resolve_scenes,
-    scene_damped,
-    speed_dependent_law,
-)
-from reference_impl.bench._records import EXIT_INTERNAL, BenchResult
-from reference_impl.bench._schemes import force_mismatch
-from reference_impl.bench._textbook import (
-    _ORDER_FLOOR,
-    VERLET,
-    extrapolated_error,
-    table_errors,
-    textbook_drift,
-    textbook_errors,
-    textbook_order,
-    worst_table_error,
-)
 from reference_impl.bench.measure import (
     check_conventions,
     check_declared_law,
@@ -75,9 +51,34 @@ from reference_impl.bench.measure import (
     measure,
     rigid_bounce,
 )
-from reference_impl.bench.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
-from reference_impl.bench.report import machine_info, write_json, write_junit
-from reference_impl.bench.tolerances import load_tolerances
+from reference_impl.bench.scorecard._dtcrit import _EXTRA_STEPS, dt_crit
+from reference_impl.bench.scorecard._errors import DeclaredLawError, _Declined, _Ours
+from reference_impl.bench.scorecard._json import machine_info, write_json
+from reference_impl.bench.scorecard._junit import write_junit
+from reference_impl.bench.scorecard._plan import (
+    DEFAULT_SCENES,
+    MAX_SCENES,
+    MAX_SPEEDS,
+    bench_scene_names,
+    plan_cells,
+    resolve_scenes,
+    scene_damped,
+    speed_dependent_law,
+)
+from reference_impl.bench.scorecard._records import EXIT_INTERNAL, BenchResult
+from reference_impl.bench.scorecard._schemes import force_mismatch
+from reference_impl.bench.scorecard._textbook import (
+    _ORDER_FLOOR,
+    VERLET,
+    extrapolated_error,
+    table_errors,
+    textbook_drift,
+    textbook_errors,
+    textbook_order,
+    worst_table_error,
+)
+from reference_impl.bench.scorecard.metrics import METRICS, MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.scorecard.tolerances import load_tolerances
 from reference_impl.bench.worker import Outcome, _one_line, make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.api import solve
@@ -558,9 +559,7 @@ def run_bench(
                     for m in METRICS
                 )
             else:
-                ctx = _SceneRun(executor, i, var.label, sc, tol, schemes[i]).run(
-                    result.speed_error
-                )
+                ctx = _SceneRun(executor, i, var.label, sc, tol, schemes[i]).run(result.speed_error)
                 result.metrics.extend(m.evaluate(ctx, tol) for m in METRICS)
             result.contexts.append(ctx)
             result.seconds = time.perf_counter() - t0

@@ -6,15 +6,15 @@ of textbook velocity Verlet with the implemented law at the same step (`_allowan
 The verdict is read at the worst speed (`Metric._worst`). A metric that cannot decide
 ends as "fail" (a run it needs failed: `_Missing`), "error" (our reference failed:
 `_Internal`) or "skip" (no reference can be run for the declared law: `_Skip`).
-The metrics themselves are in `reference_impl.bench.metrics` (the delivery metrics in
-`reference_impl.bench._delivery`).
+The metrics themselves are in `reference_impl.bench.scorecard.metrics` (the delivery metrics in
+`reference_impl.bench.scorecard._delivery`).
 """
 
 from __future__ import annotations
 
 import math
 
-from reference_impl.bench._records import NA, MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.scorecard._records import NA, MetricResult, SceneContext, SpeedRecord
 
 __all__ = ["Metric"]
 
@@ -38,7 +38,7 @@ class Metric:
     unit = ""  # unit of the measured and expected values ("" for ratios)
     impact_only = True
     magnitude = True  # the value is a size (>= 0) compared with the limit from below
-    verdict = "implementation"  # or "delivery" (`reference_impl.bench._records.VERDICTS`)
+    verdict = "implementation"  # or "delivery" (`reference_impl.bench.scorecard._records.VERDICTS`)
 
     # the one metric a code that reports no penetration is judged on (issue 40, §3)
     rigid_applies = False

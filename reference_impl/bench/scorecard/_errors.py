@@ -2,7 +2,7 @@
 (`_Declined`, a skip), our own reference failed (`_Ours`, an internal error), or the code
 declared a law no reference can be computed for (`DeclaredLawError`, exit status 2).
 
-`DeclaredLawError` is importable from `reference_impl.bench.runner` as well.
+`DeclaredLawError` is importable from `reference_impl.bench.scorecard.runner` as well.
 """
 
 from __future__ import annotations

@@ -5,15 +5,15 @@ code delivers with what the scene asks (its own law solved exactly) under a fixe
 tolerance, never scaled by the step, and split each error into a signed model part
 (the declared law's exact answer against the asked one) and a signed step part (the
 code against the declared law's exact answer). The scorecard's list of metrics, and
-the implementation metrics, are `reference_impl.bench.metrics`.
+the implementation metrics, are `reference_impl.bench.scorecard.metrics`.
 """
 
 from __future__ import annotations
 
 import math
 
-from reference_impl.bench._records import SpeedRecord
-from reference_impl.bench._rules import Metric, _Internal, _need
+from reference_impl.bench.scorecard._records import SpeedRecord
+from reference_impl.bench.scorecard._rules import Metric, _Internal, _need
 
 __all__ = ["ContactTimeAsked", "PeakForceAsked", "RestitutionAsked"]
 

@@ -1,6 +1,17 @@
 """The JSON report of a benchmark run: schema ``hcv-bench/1`` (`result_to_dict`,
-`write_json`), with machine and commit info (`machine_info`). Importable from
-`reference_impl.bench.report`, whose docstring describes the document."""
+`write_json`), with machine and commit info (`machine_info`).
+
+The document: ``schema``, machine and commit info, the tolerances, every metric, the
+per-speed records (runs, implemented laws, exact references, critical steps) and the
+speed-against-error rows. Written atomically (temporary file, then rename), so a reader
+never sees half a file, with the mode of a new file (0666 less the umask, not mkstemp's
+0600). The run (`reference_impl.bench.scorecard.runner`) writes it without the renderer.
+
+Versions (the rule of ``hcv-results`` too, `reference_impl.report._schema`): ``hcv-bench/M``
+or ``hcv-bench/M.N``, ``M`` alone meaning minor 0. A new field is a minor version (``/1.1``),
+and a reader accepts every older minor of its major (the new field is then absent); a
+field removed, renamed or changing meaning is a new major, which a reader refuses.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +19,7 @@ import json
 import math
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import metric_columns
+from reference_impl.bench.scorecard._cells import metric_columns
 from reference_impl.provenance import machine_info as _machine_info
 
 __all__ = ["SCHEMA", "machine_info", "result_to_dict", "write_json"]

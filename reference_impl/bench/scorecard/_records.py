@@ -2,8 +2,8 @@
 and scene (`SceneContext`), each metric's outcome (`MetricResult`), and the whole run
 (`BenchResult`, with its gate exit status).
 
-The first three are importable from `reference_impl.bench.metrics`, `BenchResult` and
-`EXIT_INTERNAL` from `reference_impl.bench.runner`.
+The first three are importable from `reference_impl.bench.scorecard.metrics`, `BenchResult` and
+`EXIT_INTERNAL` from `reference_impl.bench.scorecard.runner`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import math
 from dataclasses import asdict, dataclass, field
 
 from reference_impl.adapters.base import ImplementedLaw
-from reference_impl.bench._json import result_to_dict
+from reference_impl.bench.scorecard._json import result_to_dict
 
 __all__ = [
     "DELIVERY_METRICS",
@@ -35,7 +35,7 @@ GATES = ("both", *VERDICTS)
 # Status of a metric that does not apply to the scene (its kind, damping or number of
 # speeds): not a test at all, unlike "skip" (a test that could not be run).
 NA = "n/a"
-# The delivery metrics (`reference_impl.bench._delivery`); every other metric is implementation.
+# The delivery metrics (`reference_impl.bench.scorecard._delivery`); every other metric is implementation.
 DELIVERY_METRICS = ("restitution_asked", "contact_time_asked", "peak_force_asked")
 
 
@@ -162,7 +162,7 @@ class SceneContext:
     textbook_order_error: str = ""
     scheme: object = None  # the variant's declared `Scheme` (None: velocity Verlet)
     # the step-refinement study's extrapolated answer: {"error", "quantity", "allowance",
-    # "order", "steps"} (`reference_impl.bench._textbook.extrapolated_error`)
+    # "order", "steps"} (`reference_impl.bench.scorecard._textbook.extrapolated_error`)
     extrapolated: dict | None = None
     # why the scene's metrics but restitution_asked do not apply: the code reported no
     # penetration (a rigid, impulse-based contact; issue 40, §3); "" otherwise
@@ -175,7 +175,7 @@ EXIT_INTERNAL = 3
 
 @dataclass
 class BenchResult:
-    """Everything one `run_bench` call measured (see `reference_impl.bench.report` for output).
+    """Everything one `run_bench` call measured (see `reference_impl.bench.scorecard.report` for output).
 
     Attributes
     ----------

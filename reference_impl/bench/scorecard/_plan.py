@@ -1,7 +1,7 @@
 """What ``hcv bench`` runs: the scenes, checked before any work, and the cells (one per
 adapter variant and scene, with the reason a variant declines the scene).
 
-Importable from `reference_impl.bench.runner` as well.
+Importable from `reference_impl.bench.scorecard.runner` as well.
 """
 
 from __future__ import annotations

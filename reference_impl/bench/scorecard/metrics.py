@@ -8,7 +8,7 @@ on failure, a one-line explanation naming the worst speed.
 
 Two verdicts (issue 26; ``Metric.verdict``): the *delivery* metrics
 (``restitution_asked``, ``contact_time_asked``, ``peak_force_asked``, in
-`reference_impl.bench._delivery`) compare the code with what the scene asks (its own
+`reference_impl.bench.scorecard._delivery`) compare the code with what the scene asks (its own
 law solved exactly) under a fixed tolerance, and split each error into a model part
 and a step part; every other metric is an *implementation* metric, defined here.
 
@@ -22,9 +22,9 @@ references are taken at that end (restitution_zero_force), then free flight to
 q = 0.
 
 The rule every metric follows (limit = base + factor x allowance, read at the worst
-speed) is `reference_impl.bench._rules.Metric`; the records they read
+speed) is `reference_impl.bench.scorecard._rules.Metric`; the records they read
 (`SpeedRecord`, `SceneContext`) and write (`MetricResult`) are in
-`reference_impl.bench._records`, importable from here.
+`reference_impl.bench.scorecard._records`, importable from here.
 """
 
 from __future__ import annotations
@@ -33,10 +33,15 @@ import math
 
 import numpy as np
 
-from reference_impl.bench._delivery import ContactTimeAsked, PeakForceAsked, RestitutionAsked
-from reference_impl.bench._law_checks import Extrapolated, ForceLaw
-from reference_impl.bench._records import MetricResult, SceneContext, SpeedRecord
-from reference_impl.bench._rules import (
+from reference_impl.bench.measure import check_conventions, exact_reference, measure
+from reference_impl.bench.scorecard._delivery import (
+    ContactTimeAsked,
+    PeakForceAsked,
+    RestitutionAsked,
+)
+from reference_impl.bench.scorecard._law_checks import Extrapolated, ForceLaw
+from reference_impl.bench.scorecard._records import MetricResult, SceneContext, SpeedRecord
+from reference_impl.bench.scorecard._rules import (
     Metric,
     _allowance,
     _Internal,
@@ -44,7 +49,6 @@ from reference_impl.bench._rules import (
     _need,
     _Skip,
 )
-from reference_impl.bench.measure import check_conventions, exact_reference, measure
 
 __all__ = [
     "METRICS",

@@ -1,6 +1,6 @@
 """Tolerances of the benchmark: the shipped defaults, overridden key by key by a user file.
 
-The defaults are ``reference_impl/bench/tolerances.toml`` (read it for what each
+The defaults are ``reference_impl/bench/scorecard/tolerances.toml`` (read it for what each
 key means). A user TOML file may set any subset of the same tables and keys;
 anything else is refused with one line (`HCVInputError`, exit status 2).
 """

@@ -13,8 +13,8 @@ import math
 from collections.abc import Callable
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Scheme, Trajectory
-from reference_impl.bench._schemes import scheme_trajectory
 from reference_impl.bench.measure import measure
+from reference_impl.bench.scorecard._schemes import scheme_trajectory
 from reference_impl.bench.worker import _one_line
 from reference_impl.stability.bound import dt_safe as _dt_safe
 

@@ -26,7 +26,7 @@ scan points the adapter declines are skipped (see `calibrate`); both are noted. 
 target outside what the option delivers over its range is said so, with the span
 of every restitution measured (exit status 1). A code whose output is noisy (two
 runs at one value differ) is answered within its noise (repeats where the search
-misses the target, `reference_impl.bench._calibrate_noise`): "delivers 0.50003 ±
+misses the target, `reference_impl.bench.calibration._noise`): "delivers 0.50003 ±
 8e-05", or, when the mean misses it all the same, "noisy: ±x". Bad input (`check_settings`, shared
 with ``hcv sweep``): one line, exit status 2.
 
@@ -44,8 +44,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw
-from reference_impl.bench._calibrate_noise import SIGMAS, spread_at, within_noise
-from reference_impl.bench._calibrate_options import (
+from reference_impl.bench.calibration._noise import SIGMAS, spread_at, within_noise
+from reference_impl.bench.calibration._options import (
     ENDS,
     check_option,
     check_settings,

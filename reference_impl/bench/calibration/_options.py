@@ -3,7 +3,7 @@
 
 `check_settings` validates a calibration's target, end, steps per contact, speed and
 range; `check_option` that the adapter has the option searched; `spec_with_options`
-writes options into an adapter spec. `reference_impl.bench.calibrate` applies them to
+writes options into an adapter spec. `reference_impl.bench.calibration.calibrate` applies them to
 one search, `reference_impl.sweep` to every case of a ``calibrate:`` task before any
 cluster starts, so a value is refused the same way by both.
 """

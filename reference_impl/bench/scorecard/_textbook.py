@@ -5,7 +5,7 @@ At the run's own step (`textbook_errors`: the allowance of every accuracy limit,
 tolerances.toml ``[allowance]``), on the speed-against-error table (`textbook_order`: the
 order the code is compared with, and the scheme's own extrapolated answer) and on the
 two-walls run (`textbook_drift`, velocity Verlet). The schemes themselves are
-`reference_impl.bench._schemes`.
+`reference_impl.bench.scorecard._schemes`.
 """
 
 from __future__ import annotations
@@ -15,13 +15,13 @@ import math
 import numpy as np
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw, Scheme, Trajectory
-from reference_impl.bench._errors import _Ours
-from reference_impl.bench._schemes import force_mismatch, scheme_trajectory
 from reference_impl.bench.measure import (
     contact_sample_times,
     exact_tensile_on_samples,
     measure,
 )
+from reference_impl.bench.scorecard._errors import _Ours
+from reference_impl.bench.scorecard._schemes import force_mismatch, scheme_trajectory
 from reference_impl.bench.worker import _one_line
 from reference_impl.scenes import Scene
 
@@ -69,7 +69,9 @@ def worst_table_error(errs: dict) -> float:
 
 
 def _who(scheme: Scheme) -> str:
-    return "textbook Verlet" if scheme.name == VERLET.name else f"the declared scheme ({scheme.name})"
+    return (
+        "textbook Verlet" if scheme.name == VERLET.name else f"the declared scheme ({scheme.name})"
+    )
 
 
 def textbook_errors(
@@ -98,13 +100,11 @@ def textbook_errors(
     if not math.isfinite(exact["contact_time"]):
         # an overdamped law never returns to q = 0: only the maximum penetration has a
         # reference (the metrics of the overlap end compare "no return" with no step
-        # allowance, `reference_impl.bench.metrics`)
+        # allowance, `reference_impl.bench.scorecard.metrics`)
         got = m.get("max_penetration", math.nan)
         err = abs(got - exact["max_penetration"]) / exact["max_penetration"]
         if not math.isfinite(err):
-            return {
-                "internal": f"{who} at dt = {ascene.dt:.4g} s gave no finite max_penetration"
-            }
+            return {"internal": f"{who} at dt = {ascene.dt:.4g} s gave no finite max_penetration"}
         force = force_mismatch(tr, law)["error"]
         if not math.isfinite(force):
             return {"internal": f"{who} at dt = {ascene.dt:.4g} s gave no finite force"}

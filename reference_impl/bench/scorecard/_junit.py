@@ -1,12 +1,17 @@
-"""The JUnit XML report of a benchmark run (`junit_tree`, `write_junit`). Importable from
-`reference_impl.bench.report`, whose docstring describes the document."""
+"""The JUnit XML report of a benchmark run (`junit_tree`, `write_junit`).
+
+One testsuite per adapter variant, one testcase per scene x metric (``classname`` =
+``hcv.bench.<variant>.<scene>``), failures with the one-line explanation as message and
+the details as text, skips with their reason, and an ``<error>`` for a metric our own
+reference could not decide (status "error": an internal error, never the code's failure).
+"""
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import _fmt, _fmt_v, metric_columns
+from reference_impl.bench.scorecard._cells import _fmt, _fmt_v, metric_columns
 
 __all__ = ["junit_tree", "write_junit"]
 

@@ -2,7 +2,7 @@
 
 A code whose output carries noise (a random initial state, threads summing in any order)
 answers the same option value with a different restitution each run. The bracketed
-search of `reference_impl.bench.calibrate` then stops where the noisy sign of
+search of `reference_impl.bench.calibration.calibrate` then stops where the noisy sign of
 ``measured - target`` changes, which misses the target by about the noise, not by the
 root tolerance: read as a jump of the response, that was "out of reach". `spread_at`
 repeats the run at such a point and measures the noise; `within_noise` says whether the

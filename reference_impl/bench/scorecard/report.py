@@ -1,29 +1,22 @@
-"""Outputs of the benchmark: JSON, JUnit XML, the rich scorecard, markdown and the plot.
+"""The benchmark's scorecard rendered for people: the rich scorecard, markdown and the plot.
 
-* JSON (`write_json`): schema ``hcv-bench/1``, with machine and commit info,
-  the tolerances, every metric, the per-speed records (runs, implemented laws,
-  exact references, critical steps) and the speed-against-error rows. Written
-  atomically (temporary file, then rename), so a reader never sees half a file,
-  with the mode of a new file (0666 less the umask, not mkstemp's 0600).
-* JUnit XML (`write_junit`): one testsuite per adapter variant, one testcase per
-  scene x metric (``classname`` = ``hcv.bench.<variant>.<scene>``), failures
-  with the one-line explanation as message and the details as text, skips
-  with their reason, and an ``<error>`` for a metric our own reference could not
-  decide (status "error": an internal error, never the code's failure).
+This module only renders: the run (`reference_impl.bench.scorecard.runner`) writes its
+JSON (`reference_impl.bench.scorecard._json.write_json`, schema ``hcv-bench/1``) and JUnit
+XML (`reference_impl.bench.scorecard._junit.write_junit`) without importing it.
+
 * `render_scorecard`: the scorecard as a rich table (what ``hcv bench`` prints);
   `render_speed_error`: the speed-against-error table.
 * `scorecard_markdown`: for ``hcv report``; `side_by_side` and `plot_speed_error`
-  (home: `reference_impl.bench.compare`, re-exported here) as well.
+  (home: `reference_impl.bench.scorecard.compare`, re-exported here) as well.
 
 Metric statuses: "pass", "fail", "skip", "error" (the suite's reference failed) and
 "n/a" (the metric does not apply to the scene's kind, damping or speeds). Every output
 above knows all five (`STATUSES`). Every metric belongs to one of two verdicts
 ("implementation", "delivery"), shown in its own column and summed per code.
 
-Here: the scorecard for people (plain text, rich, markdown). The JSON and JUnit
-documents are written by `reference_impl.bench._json` and `reference_impl.bench._junit`,
-the compared values of a metric read by `reference_impl.bench._cells.metric_columns`;
-every one of their public names is importable from here.
+Here: the scorecard for people (plain text, rich, markdown); the compared values of a
+metric are read by `reference_impl.bench.scorecard._cells.metric_columns` (importable from
+here).
 """
 
 from __future__ import annotations
@@ -31,7 +24,7 @@ from __future__ import annotations
 import math
 
 from reference_impl._atomic import atomic_write
-from reference_impl.bench._cells import (
+from reference_impl.bench.scorecard._cells import (
     _OURS,
     _PLAIN_STATUS,
     _UNITS,
@@ -39,31 +32,23 @@ from reference_impl.bench._cells import (
     _fmt_v,
     metric_columns,
 )
-from reference_impl.bench._json import SCHEMA, machine_info, result_to_dict, write_json
-from reference_impl.bench._junit import junit_tree, write_junit
-from reference_impl.bench._records import NA, VERDICTS
+from reference_impl.bench.scorecard._records import NA, VERDICTS
 
 __all__ = [
-    "SCHEMA",
     "STATUSES",
     "UNITS",
     "format_value",
     "format_with_unit",
     "gate_lines",
     "json_number",
-    "junit_tree",
-    "machine_info",
     "metric_columns",
     "plot_speed_error",
     "render_scorecard",
     "render_speed_error",
-    "result_to_dict",
     "scorecard_markdown",
     "scorecard_text",
     "side_by_side",
     "side_by_side_markdown",
-    "write_json",
-    "write_junit",
     "verdict_text",
     "write_markdown",
 ]
@@ -439,8 +424,8 @@ def write_markdown(result, path) -> None:
     atomic_write(path, scorecard_markdown(result))
 
 
-# Kept importable from here (their home is `reference_impl.bench.compare`).
-from reference_impl.bench.compare import (  # noqa: E402
+# Kept importable from here (their home is `reference_impl.bench.scorecard.compare`).
+from reference_impl.bench.scorecard.compare import (  # noqa: E402
     json_number,
     plot_speed_error,
     side_by_side,

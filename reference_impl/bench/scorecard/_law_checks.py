@@ -2,16 +2,23 @@
 declares (``force_law``), and the step-refinement study's extrapolated answer against the
 declared law's exact one (``extrapolated``).
 
-Both follow the rule of every implementation metric (`reference_impl.bench._rules`): limit
+Both follow the rule of every implementation metric (`reference_impl.bench.scorecard._rules`): limit
 = base + factor x the same quantity of the code's *declared* scheme run on the exact law
-(`reference_impl.bench._schemes`), the error a correct code of that scheme makes.
+(`reference_impl.bench.scorecard._schemes`), the error a correct code of that scheme makes.
 """
 
 from __future__ import annotations
 
 import math
 
-from reference_impl.bench._rules import Metric, _allowance, _Internal, _Missing, _need, _Skip
+from reference_impl.bench.scorecard._rules import (
+    Metric,
+    _allowance,
+    _Internal,
+    _Missing,
+    _need,
+    _Skip,
+)
 
 __all__ = ["Extrapolated", "ForceLaw"]
 
