@@ -187,11 +187,11 @@ def test_issue_28_table_viscelmat_tc_on_a_wall(yade):
     high. Against the exact e of the declared (halved, clipped) law within 1 %: first
     order in the damping plus YADE's dashpot acting at q = 0 on the first step (measured
     0.6 % at e = 0.2, 200 steps per contact); against the issue's table within its
-    digits. The scene asks at the zero-force end, so the inputs are the user's tc, en
+    digits. The asked e is typed as is (issue 40 §2): the inputs are the user's tc, en
     for e (`issue_scene`)."""
     adapter = yade["yade[tc,wall]"]
     for e, table in TC_TABLE.items():
-        s = issue_scene(1.0e6, 1.0, e, 1.0, end="zero-force")
+        s = issue_scene(1.0e6, 1.0, e, 1.0)
         en = adapter.mapping(s)["scene"]["material"]["en"]
         # round trip e -> zeta -> e at q = 0: a few ulps
         assert_close(en, e, rtol=1e-14, claim=CLAIM, call=f"tc wall: en written for e = {e}")
@@ -279,7 +279,7 @@ def _leapfrog_q(law, scene: AdapterScene, n: int, force_at_depth_zero: bool) -> 
 @pytest.mark.parametrize("label", ["yade[kn,wall]", "yade[tc,pair]"])
 def test_viscelmat_counts_depth_zero_as_contact(yade, label):
     """Issue 40 §4: why yade[kn,wall] and yade[tc,pair] fail implementation on
-    max_penetration (0.0068 against 0.0054 on hooke-damped) though their law is the asked
+    max_penetration (0.0056 against 0.0049 on hooke-damped) though their law is the asked
     one: ViscElMat applies its force at a depth of exactly 0, so the onset step already
     carries the dashpot's c v0. YADE's positions are the leapfrog of the declared law with
     that rule to round-off, and differ from the textbook rule (no force at depth 0) by a
