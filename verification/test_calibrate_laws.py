@@ -80,3 +80,26 @@ def test_hunt_crossley_strength_converges_to_the_exact_one_at_verlets_order():
     # a search that does not converge to the law (a wrong reference) shrinks by ~1 or grows
     assert_true(ratio > 3.0, got=f"error ratio {ratio:.3g} (errors {errs})", should="> 3",
                 claim=CLAIM, call=f"alpha found at N = 20 and 40 vs exact {exact:.6g}")  # fmt: skip
+
+
+def test_an_unknown_param_names_the_law_strength_in_one_line(tmp_path, capsys):
+    """``hcv calibrate reference --param beta`` on a Hunt-Crossley scene: exit 2, one line
+    naming the value and the strength it could have been (nothing run)."""
+    from reference_impl.cli import main as hcv_main
+
+    scene = tmp_path / "hc.toml"
+    scene.write_text(
+        'name = "hc"\nmass = 4.1103e-3\nvelocities = [1.0]\nkind = "impact"\n'
+        '[potential]\nfamily = "power"\nk = 1.0879e10\np = 1.5\n'
+        '[damping]\nlaw = "hunt-crossley"\nrestitution = 0.5\nrestitution_speed = 1.0\n'
+    )
+    code = hcv_main(["calibrate", "reference", "--scene", str(scene), "--target",
+                     "restitution=0.5", "--param", "beta"])  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert_true(
+        code == 2 and len(err.splitlines()) == 1 and "'beta'" in err and "'alpha'" in err,
+        got=f"exit {code}: {err!r}",
+        should="exit 2 and one line naming 'beta' and the strength 'alpha'",
+        claim=CLAIM,
+        call="hcv calibrate reference --param beta",
+    )
