@@ -17,14 +17,15 @@ import inspect
 import math
 
 from reference_impl.adapters.registry import parse_spec, resolve_class
+from reference_impl.bench._calibrate_options import check_option
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
 from reference_impl.scenes import Scene, load_scene
 from reference_impl.scenes._law_restitution import law_for_restitution
 from reference_impl.theory.laws import law_family
 
-__all__ = ["contact_time", "impact_scene", "scene_at_strength", "searches_strength",
-           "strength_range"]  # fmt: skip
+__all__ = ["contact_time", "impact_scene", "option_class", "scene_at_strength",
+           "searches_strength", "strength_range"]  # fmt: skip
 
 # Default range of a strength search: this factor either side of the strength at which the
 # exact law delivers the target (the code's error at the bench's resolutions moves e by a
@@ -69,6 +70,18 @@ def searches_strength(adapter: str, param: str, sc: Scene) -> bool:
     except (TypeError, ValueError):
         return True
     return param not in params
+
+
+def option_class(adapter: str, param: str, sc: Scene) -> type:
+    """The adapter class when ``param`` is one of its options; else one line naming the
+    option and the scene law's strength it could have been (`check_option`)."""
+    try:
+        return check_option(adapter, param)
+    except HCVInputError as exc:
+        msg = str(exc) + ("none" if str(exc).endswith("its options: ") else "")
+        key = law_family(sc.law.name).strength
+        also = f"; nor is it the scene law's strength {key!r}" if key else ""
+        raise HCVInputError(f"{msg}{also} (scene {sc.name!r}, law {sc.law.name!r})") from None
 
 
 def scene_at_strength(sc: Scene, s: float) -> Scene:

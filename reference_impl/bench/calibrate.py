@@ -51,6 +51,7 @@ from reference_impl.adapters.base import AdapterScene, ImplementedLaw
 from reference_impl.bench._calibrate_law import (
     contact_time,
     impact_scene,
+    option_class,
     scene_at_strength,
     searches_strength,
     strength_range,
@@ -66,7 +67,6 @@ from reference_impl.bench.measure import _restitution_zero_force, exact_referenc
 from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
-from reference_impl.theory.laws import law_family
 
 __all__ = [
     "ENDS",
@@ -389,14 +389,7 @@ def calibrate(
     if strength:
         lo, hi = bracket if bracket is not None else strength_range(sc, target, v0, end)
     else:
-        try:
-            cls = check_option(adapter, param)
-        except HCVInputError as exc:
-            msg = str(exc) + ("none" if str(exc).endswith("its options: ") else "")
-            key = law_family(sc.law.name).strength
-            also = f"; nor is it the scene law's strength {key!r}" if key else ""
-            raise HCVInputError(f"{msg}{also} (scene {sc.name!r}, law {sc.law.name!r})") from None
-        lo, hi = _range(cls, param, sc, bracket)
+        lo, hi = _range(option_class(adapter, param, sc), param, sc, bracket)
     t_c = contact_time(sc, v0)
     dt = t_c / steps_per_contact
     n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
