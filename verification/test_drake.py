@@ -33,7 +33,7 @@ pytestmark = [
 from reference_impl.adapters import AdapterScene, get_adapter  # noqa: E402
 from reference_impl.adapters._drake_model import combine  # noqa: E402
 from reference_impl.adapters.base import scheme_of  # noqa: E402
-from reference_impl.bench.runner import run_bench  # noqa: E402
+from reference_impl.bench.scorecard.runner import run_bench  # noqa: E402
 from reference_impl.errors import HCVInputError  # noqa: E402
 from reference_impl.exact.solve import solve_impact  # noqa: E402
 from reference_impl.scenes import scene_from_dict  # noqa: E402
@@ -205,7 +205,7 @@ def test_lagged_passes_implementation_at_order_one_and_delivery_follows_the_step
 def test_calibrate_finds_the_dissipation_that_delivers_e():
     """``hcv calibrate drake[lagged] --param dissipation`` on a universal scene: the d
     found delivers e = 0.5 at the scene's speed, to the root's tolerance."""
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
 
     res = calibrate("drake[lagged]", "hooke-damped", param="dissipation", target=0.5,
                     steps_per_contact=50)  # fmt: skip

@@ -35,8 +35,8 @@ pytestmark = [
 from reference_impl.adapters import get_adapter  # noqa: E402
 from reference_impl.adapters.base import offset_refusal, scheme_of  # noqa: E402
 from reference_impl.adapters.pybullet import _pybullet  # noqa: E402
-from reference_impl.bench.report import scorecard_text  # noqa: E402
-from reference_impl.bench.runner import run_bench  # noqa: E402
+from reference_impl.bench.scorecard.report import scorecard_text  # noqa: E402
+from reference_impl.bench.scorecard.runner import run_bench  # noqa: E402
 from reference_impl.errors import HCVInputError  # noqa: E402
 from reference_impl.scenes import scene_from_dict  # noqa: E402
 from verification._adapter_cases import FAST  # noqa: E402
@@ -187,7 +187,7 @@ def test_declines_and_bad_input():
 def test_calibrate_finds_the_damping_that_delivers_e():
     """``hcv calibrate "pybullet[soft]" --param damping``: the contactDamping found delivers
     e = 0.5 at the scene's speed (the clipped contact needs more than the scene's c)."""
-    from reference_impl.bench.calibrate import calibrate
+    from reference_impl.bench.calibration.calibrate import calibrate
 
     scene = _soft_scene()
     c_scene = 2.0 * scene.zeta * np.sqrt(scene.mass * scene.potential.k)

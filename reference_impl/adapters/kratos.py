@@ -36,14 +36,14 @@ The adapter reads gamma from Kratos' own functions, so the declared law is the
 law Kratos integrates; whether its restitution is the asked one is what the
 scorecard's ``restitution_asked`` tells.
 
-What is asked (protocol ``hcv-adapter/2``): the e Kratos is given is chosen so that
-its gamma delivers the scene's ``restitution_asked`` at the scene's
-``restitution_end`` (`kratos_restitution`): the contact is clipped, so the target is
-the universal law's zeta whose zero-force restitution is the asked e, at either end.
-Linear: Kratos' own closed form at that zeta (gamma then within Kratos' bisection
-interval, 16 / 2^18 = 6.1e-5, of it). Hertz: Thornton's fit inverted (to round-off);
-e near 1 (zeta below gamma(0.999) sqrt(6/5) = 0.0051) gets gamma = 0 or 0.0047,
-whichever is nearer. The ``restitution`` option bypasses this (Kratos' input as given).
+What is typed (protocol ``hcv-adapter/2``; issue 40, §2): COEFFICIENT_OF_RESTITUTION
+is the scene's ``restitution_asked`` itself, as Kratos documents it and a user types it
+(`kratos_restitution`); Kratos' own functions turn it into gamma. Both laws clip tension,
+so the contact delivers the zero-force restitution of that gamma (to Thornton's fit for
+Hertz, to the bisection's 1e-4 on gamma for the linear law): a scene asking e at the
+overlap end gets more than e, and the delivery verdict says by how much. The input that
+would deliver the asked e is ``hcv calibrate kratos[...] --param restitution``, a
+separate, labelled answer; the ``restitution`` option types a given value instead.
 
 Time schemes and staggering
 ---------------------------
@@ -76,7 +76,6 @@ from importlib import metadata
 
 import numpy as np
 
-from reference_impl.adapters._asked import asked_universal_zeta, delivery_end, invert_decreasing
 from reference_impl.adapters._codes_common import (
     default_radius,
     positive_option,
@@ -86,7 +85,6 @@ from reference_impl.adapters._codes_common import (
 from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters.base import AdapterScene, ContactAdapter, ImplementedLaw, Trajectory
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.damping import restitution_zero_force_from_zeta
 
 __all__ = [
     "GEOMETRIES",
@@ -191,25 +189,17 @@ def kratos_gamma(law: str, e: float) -> float:
 
 
 def kratos_restitution(law: str, scene: AdapterScene) -> float:
-    """COEFFICIENT_OF_RESTITUTION whose Kratos gamma delivers the scene's asked e.
+    """The COEFFICIENT_OF_RESTITUTION a user types: the asked e itself (1 without
+    damping), as Kratos documents it (issue 40, §2), for either ``law``.
 
-    Kratos clips tension, so its restitution is the universal law's zero-force one
-    at either end: the target is zeta_a = the zero-force inverse of the asked e
-    (`reference_impl.adapters._asked`). Linear law: Kratos' gamma is the root of the
-    closed form exp(-2 gamma arccos(gamma) / sqrt(1 - gamma^2)) = e, so e is that
-    closed form at zeta_a (Kratos' bisection then finds gamma to its 1e-4 interval).
-    Hertz: Thornton's fit gamma(e) x sqrt(6/5) is inverted on Kratos' range
-    [0.001, 0.999], where it decreases (14.2 to 0.0047); a zeta_a below its range
-    (e above ~0.99) gets 1 (gamma = 0), one above it 0.001 (Kratos' own floor).
+    Kratos turns it into gamma with its own functions (`kratos_gamma`): Hertz by
+    Thornton's fit, linear by bisection of the zero-force closed form. Both contacts
+    clip tension, so what is delivered is the zero-force restitution of that gamma,
+    which differs from the asked e when the scene asks it at the overlap end (or by the
+    fit's error for Hertz): the delivery verdict says by how much, and ``hcv calibrate
+    kratos[...] --param restitution`` finds the input that would deliver it.
     """
-    zeta = asked_universal_zeta(scene, delivery_end(scene, clips_tension=True))
-    if not zeta:
-        return 1.0
-    if law == "linear":
-        return restitution_zero_force_from_zeta(zeta)
-    scale = math.sqrt(1.2)  # zeta = gamma sqrt(6/5) for Hertz (module docstring)
-    e = invert_decreasing(lambda x: kratos_gamma("hertz", x) * scale, zeta, *_E_RANGE)
-    return 1.0 if e == _E_RANGE[1] and zeta < 0.5 * kratos_gamma("hertz", e) * scale else e
+    return float(scene.restitution_asked) if scene.damping != "none" else 1.0
 
 
 class KratosAdapter(ContactAdapter):

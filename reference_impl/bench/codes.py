@@ -9,14 +9,14 @@ the tensile force at the end of contact (max pull / peak push) and the exact
 restitution of the law the code declares.
 
 Each asked e is typed into the code's own e input as is, as a user does: LAMMPS
-coeff_restitution / tsuji and LIGGGHTS ``coefficientRestitution`` by their adapters
-themselves (the mapping ``hcv bench`` runs, so the gate and this table answer one
-question), Kratos ``COEFFICIENT_OF_RESTITUTION``, YADE ``en`` (and, for
-ViscElMat, the tc = sqrt((pi^2 + ln^2 e) m / k) and cn = 2 (2 zeta sqrt(m k)) of
-Pournin's linear law of that e at q = 0), MuJoCo's ``dampratio`` = that zeta, by
-`typed_spec` (those adapters still type the input that delivers the asked e at the end
-the code delivers it, which would hide what the code does with e typed in, the table's
-point); an option given in the spec is kept. Codes that are not installed give one
+coeff_restitution / tsuji, LIGGGHTS ``coefficientRestitution``, Kratos
+``COEFFICIENT_OF_RESTITUTION`` and YADE ``en`` (and, for ViscElMat, the tc = sqrt((pi^2
++ ln^2 e) m / k) and cn = 2 (2 zeta sqrt(m k)) of Pournin's linear law of that e at
+q = 0) by their adapters themselves (the mapping ``hcv bench`` runs, so the gate and
+this table answer one question); MuJoCo's ``dampratio`` = that zeta by `typed_spec`
+(its adapter still types the input that delivers the asked e at the end MuJoCo
+delivers it, which would hide what the code does with e typed in, the table's point);
+an option given in the spec is kept. Codes that are not installed give one
 row saying so. Runs go through the benchmark's executors (a worker process per
 isolated adapter, its timeout), so a crashing code fails its rows only.
 
@@ -109,28 +109,19 @@ def _typed_options(spec: str, e: float, p: float) -> dict:
         return {}  # make_executor says why, in the rows
     bare = set(map(str, opts.pop("__bare__", [])))
 
-    def pick(key: str, allowed: tuple) -> str | None:  # keyed (input=en) or bare (en)
+    def pick(key: str, allowed: tuple) -> str | None:  # keyed (mode=sap) or bare (sap)
         return opts.get(key) or next((b for b in bare if b in allowed), None)
 
     k = HERTZ_K if p == 1.5 else HOOKE_K
     zeta = float(zeta_from_restitution(e)) if e < 1.0 else 0.0  # linear law's e at q = 0
     typed: dict = {}
-    # LAMMPS (tsuji, coeff_restitution) and LIGGGHTS type the asked e as is themselves
+    # LAMMPS (tsuji, coeff_restitution), LIGGGHTS, Kratos (COEFFICIENT_OF_RESTITUTION) and
+    # YADE (en; ViscElMat's tc / en and kn / cn of e) type the asked e as is themselves
     # (their adapters' mapping, the one the gate runs: issue 40, §2)
-    if name == "kratos":
-        typed = {"restitution": e}
-    elif name == "yade":
-        inp = pick("input", ("en", "betan", "tc", "kn"))
-        if inp == "en":
-            typed = {"en": e}
-        elif inp == "tc":  # Pournin 2001: the tc and en a user sets for k, m and e
-            tc = math.sqrt((math.pi**2 + math.log(e) ** 2) * MASS / k)
-            typed = {"en": e, "tc": tc}
-        elif inp == "kn":  # per material, two in series: cn = 2 c, c = 2 zeta sqrt(m k)
-            typed = {"cn": 2.0 * 2.0 * zeta * math.sqrt(MASS * k)}
-    elif name == "mujoco" and "damping" not in opts:
+    if name == "mujoco" and "damping" not in opts:
         typed = {"dampratio": zeta}
-    elif name == "drake" and pick("mode", ("sap",)) == "sap":  # SAP's dashpot c = 2 zeta sqrt(m k) typed as tau = c / k
+    elif name == "drake" and pick("mode", ("sap",)) == "sap":
+        # SAP's dashpot c = 2 zeta sqrt(m k), typed as its relaxation time tau = c / k
         typed = {"relaxation_time": 2.0 * zeta * math.sqrt(MASS / k)}
     elif name == "pybullet" and pick("mode", ("soft",)) == "soft" and "damping" not in opts:
         typed = {"damping": 2.0 * zeta * math.sqrt(MASS * k)}  # contactDamping, a dashpot

@@ -9,8 +9,12 @@ dt = t_c / N (t_c the exact contact time of the scene as asked, N = 200 by
 default, as ``hcv bench``), this finds by a bracketed root search (a scan of the
 range, then `scipy.optimize.brentq`) the value of the adapter option KEY (a
 constructor argument, e.g. ``mujoco``'s ``dampratio`` or ``damping``, LAMMPS'
-``eta_n0``, Kratos' ``gamma``) for which the code's measured restitution at the
-chosen end equals the target:
+``eta_n0``, Kratos' ``gamma``), or else the strength of the scene's damping law
+(``zeta``, ``c``, ``A``, ``alpha``, a polynomial's factor on its coefficients; the code
+is sent the scene with its law at each strength, `reference_impl.bench.calibration._law`),
+for which the code's measured restitution at the chosen end equals the target. The
+scene may have any registered damping law: t_c and the scene as asked are its law's
+exact solution:
 
 * ``overlap``: -v / v0 at the first sample with q <= 0 (what the scene's
   ``restitution`` means);
@@ -44,6 +48,14 @@ import numpy as np
 from scipy.optimize import brentq
 
 from reference_impl.adapters.base import AdapterScene, ImplementedLaw
+from reference_impl.bench.calibration._law import (
+    contact_time,
+    impact_scene,
+    option_class,
+    scene_at_strength,
+    searches_strength,
+    strength_range,
+)
 from reference_impl.bench.calibration._noise import SIGMAS, spread_at, within_noise
 from reference_impl.bench.calibration._options import (
     ENDS,
@@ -55,8 +67,6 @@ from reference_impl.bench.measure import _restitution_zero_force, exact_referenc
 from reference_impl.bench.worker import make_executor
 from reference_impl.errors import HCVInputError
 from reference_impl.exact.solve import solve_impact
-from reference_impl.scenes import Scene, load_scene
-from reference_impl.theory.laws import is_harmonic
 
 __all__ = [
     "ENDS",
@@ -207,18 +217,6 @@ def _run(spec: str, ascene: AdapterScene, timeout: float, isolate: bool):
         executor.close()
 
 
-def _universal_scene(scene) -> Scene:
-    """The scene, refused (one line) when its damping law is not 'none' or 'universal':
-    the calibration's references (contact time, the scene as asked) are the harmonic map's."""
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    if not is_harmonic(sc.damping_law):
-        raise HCVInputError(
-            f"scene {sc.name!r}: hcv calibrate runs scenes of damping law 'none' or "
-            f"'universal' (got {sc.damping_law!r}); hcv bench runs every law"
-        )
-    return sc
-
-
 def _quantity(tr, v0: float, end: str) -> tuple[float, bool]:
     """(restitution at ``end``, read): NaN for a run that blew up or never touched;
     ``read`` is False for a run without rebound counted as 0.
@@ -263,10 +261,11 @@ def _metrics(tr, law: ImplementedLaw | None, scene, v0: float) -> dict:
             "contact_time": ex["contact_time"],
             "max_penetration": ex["max_penetration"],
         }
-    sol = solve_impact(scene.potential, scene.mass, v0, scene.zeta or 0.0)
+    # the scene's own law, whatever it is (the harmonic map, the general-law solver)
+    sol = solve_impact(scene.potential, scene.mass, v0, law=scene.law)
     out["scene_as_asked"] = {
         "restitution": sol.restitution,
-        "restitution_zero_force": sol.restitution_zero_force if scene.zeta else 1.0,
+        "restitution_zero_force": sol.restitution_zero_force,
         "contact_time": sol.contact_time,
         "max_penetration": sol.max_penetration,
     }
@@ -336,7 +335,9 @@ def calibrate(
     scene : str or Scene
         Scene name, TOML path or `reference_impl.scenes.Scene` (an impact).
     param : str
-        Constructor option of the adapter searched.
+        Constructor option of the adapter searched, or the strength of the scene's law
+        (`LawFamily.strength`) when the adapter has no option of that name; its default
+        range is then x1/4 to x4 the strength at which the exact law delivers ``target``.
     target : float
         Restitution to deliver (dimensionless, in (0, 1]).
     quantity : str
@@ -380,17 +381,25 @@ def calibrate(
         bracket=bracket,
     )
     target, v0, bracket = settings["target"], settings["v0"], settings["bracket"]
-    sc = _universal_scene(scene)
-    if sc.kind != "impact":
-        raise HCVInputError(f"scene {sc.name!r}: calibrate runs impact scenes, not {sc.kind!r}")
+    sc = impact_scene(scene)
     if v0 is None:
         v0 = float(sorted(sc.velocities)[len(sc.velocities) // 2])
-    cls = check_option(adapter, param)
-    lo, hi = _range(cls, param, sc, bracket)
-    t_c = float(solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time)
+    # the scene law's strength (zeta, c, A, alpha, ...) when the adapter has no such option
+    strength = searches_strength(adapter, param, sc)
+    if strength:
+        lo, hi = bracket if bracket is not None else strength_range(sc, target, v0, end)
+    else:
+        lo, hi = _range(option_class(adapter, param, sc), param, sc, bracket)
+    t_c = contact_time(sc, v0)
     dt = t_c / steps_per_contact
     n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
     ascene = AdapterScene.from_scene(sc, v0, dt, n)
+
+    def setup(x: float) -> tuple[str, AdapterScene]:
+        """The spec and the scene of one run at value ``x`` of the option searched."""
+        if strength:
+            return adapter, AdapterScene.from_scene(scene_at_strength(sc, x), v0, dt, n)
+        return spec_with_options(adapter, {param: x}), ascene
     res = CalibrationResult(
         adapter, sc.name, param, end, quantity, target, steps_per_contact, v0, dt, (lo, hi)
     )
@@ -402,8 +411,7 @@ def calibrate(
             if progress is not None:
                 progress()
             try:
-                tr, _law, err = _run(spec_with_options(adapter, {param: x}), ascene, timeout,
-                                     isolate)  # fmt: skip
+                tr, _law, err = _run(*setup(x), timeout, isolate)
             except _Declined as exc:
                 seen[x], why[x] = (math.nan, _DECLINED), str(exc)
                 return math.nan
@@ -516,7 +524,7 @@ def calibrate(
         )
         return res
     root = min(roots)
-    tr, law, err = _run(spec_with_options(adapter, {param: root}), ascene, timeout, isolate)
+    tr, law, err = _run(*setup(root), timeout, isolate)
     res.evaluations += 1
     if tr is None:
         res.message = f"the run at the root {param} = {root!r} failed: {err}"
@@ -583,13 +591,18 @@ def delivered(
     NaN when the run gives none.
     """
 
-    sc = _universal_scene(scene)
+    sc = impact_scene(scene)
     if v0 is None:
         v0 = float(sorted(sc.velocities)[len(sc.velocities) // 2])
-    t_c = float(solve_impact(sc.potential, sc.mass, v0, sc.zeta or 0.0).contact_time)
+    t_c = contact_time(sc, v0)
     n = int(math.ceil(_BUDGET * steps_per_contact)) + _EXTRA_STEPS
+    spec = adapter
+    if searches_strength(adapter, param, sc):
+        sc = scene_at_strength(sc, value)
+    else:
+        spec = spec_with_options(adapter, {param: value})
     ascene = AdapterScene.from_scene(sc, v0, t_c / steps_per_contact, n)
-    tr, _law, _err = _run(spec_with_options(adapter, {param: value}), ascene, 60.0, isolate)
+    tr, _law, _err = _run(spec, ascene, 60.0, isolate)
     return _quantity(tr, v0, end)[0] if tr is not None else math.nan
 
 
