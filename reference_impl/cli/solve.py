@@ -72,8 +72,9 @@ def _no_collection_while_loading():
     automatic collection traverses again while the heap grows: measured 0.1 s of the
     ~0.9 s CPU of ``hcv solve hertz-damped`` (issue 38, goal 7). Collection resumes
     afterwards (not ``gc.freeze``, which would keep for good the garbage of a caller that
-    runs the command in its own process, a test); the few cycles made meanwhile by one
-    scene's impacts are collected then.
+    runs the command in its own process, a test); cycles made meanwhile by the impacts
+    would be collected then (measured: none, 100 solves of hertz-damped,
+    expression-damped and paper-ellipsoid-damped leave 0 unreachable objects).
     """
     was_enabled = gc.isenabled()
     gc.disable()
