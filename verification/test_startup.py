@@ -344,30 +344,3 @@ def test_the_command_table_gives_each_commands_own_help():
         claim="tool",
         call="hcv --help (cli.COMMANDS against each command's add_parser)",
     )
-
-
-@pytest.mark.parametrize("enabled", [True, False])
-@pytest.mark.parametrize("scene, status", [("hertz-damped", 0), ("hertz-walls", 2)])
-def test_solve_leaves_the_garbage_collector_as_it_found_it(enabled, scene, status, capsys):
-    """`hcv solve` runs its start-up without the cyclic collector (issue 38, goal 7); run
-    in a caller's process, it gives the collector back as it was, also when it refuses the
-    scene (hertz-walls is a sustained scene: exit status 2)."""
-    import gc
-
-    from reference_impl.cli import main
-
-    was = gc.isenabled()
-    (gc.enable if enabled else gc.disable)()
-    try:
-        code = main(["solve", scene, "--json"])
-        after = gc.isenabled()
-    finally:
-        (gc.enable if was else gc.disable)()
-    capsys.readouterr()
-    assert_true(
-        code == status and after == enabled,
-        got=f"exit {code}, collector enabled {after}",
-        should=f"exit {status}, collector enabled {enabled}",
-        claim="tool",
-        call=f"hcv solve {scene} --json (collector enabled {enabled} before)",
-    )

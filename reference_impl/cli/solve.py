@@ -6,8 +6,6 @@ outside [0, 1]) is refused with one line and exit status 2, never printed.
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import json
 import math
 import sys
@@ -64,40 +62,18 @@ def _json_safe(value):
     return value
 
 
-@contextlib.contextmanager
-def _no_collection_while_loading():
-    """Run the start-up (imports, numba's first call) without the cyclic garbage collector.
-
-    Start-up allocates ~800 modules and numba's registries, long-lived objects that each
-    automatic collection traverses again while the heap grows: measured 0.1 s of the
-    ~0.9 s CPU of ``hcv solve hertz-damped`` (issue 38, goal 7). Collection resumes
-    afterwards (not ``gc.freeze``, which would keep for good the garbage of a caller that
-    runs the command in its own process, a test); cycles made meanwhile by the impacts
-    would be collected then (measured: none, 100 solves of hertz-damped,
-    expression-damped and paper-ellipsoid-damped leave 0 unreachable objects).
-    """
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            gc.enable()
-
-
 def run(args) -> int:
     """Solve the scene's impacts and print them (a table, or JSON with ``--json``)."""
-    with _no_collection_while_loading():
-        from reference_impl.scenes import load_scene
-        from reference_impl.tasks import restitution_spread, solve_scene
+    from reference_impl.scenes import load_scene
+    from reference_impl.tasks import restitution_spread, solve_scene
 
-        scene = load_scene(args.scene)
-        if scene.kind != "impact":
-            raise HCVInputError(
-                f"scene {scene.name!r} has kind = {scene.kind!r}; 'hcv solve' solves single "
-                "impacts (kind = \"impact\"); use 'hcv dt-crit' for sustained scenes"
-            )
-        rows = solve_scene(scene)
+    scene = load_scene(args.scene)
+    if scene.kind != "impact":
+        raise HCVInputError(
+            f"scene {scene.name!r} has kind = {scene.kind!r}; 'hcv solve' solves single impacts "
+            "(kind = \"impact\"); use 'hcv dt-crit' for sustained scenes"
+        )
+    rows = solve_scene(scene)
     _require_finite(rows, scene)
     spread = restitution_spread(rows)
     if args.json:
