@@ -223,7 +223,18 @@ def test_a_float_solve_loads_no_truth_or_optimiser_library(tmp_path):
     only the mpmath truth (mpmath), the mixed-geometry refinement (scipy.optimize), the
     Gauss-Jacobi rules' first computation (scipy.special) need. (The bench's entry-point
     scan cannot be seen this way: numba imports importlib.metadata itself.)"""
-    not_needed = ["mpmath", "scipy.optimize", "scipy.special", "sympy"]
+    # and nothing of the report's or the sweep's libraries (issue 38, goal 7: numba and
+    # numpy are most of its second of CPU; these would add 0.3-2 s each)
+    not_needed = [
+        "mpmath",
+        "scipy.optimize",
+        "scipy.special",
+        "scipy.integrate",
+        "sympy",
+        "pandas",
+        "matplotlib",
+        "dask",
+    ]
     env = {**os.environ, "HCV_CACHE_DIR": str(tmp_path)}
     loaded = None
     for _ in range(2):  # the first run computes and stores the rules and compiles
