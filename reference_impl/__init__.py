@@ -87,7 +87,6 @@ _EXPORTS = {
 }
 
 __all__ = [
-
     "DomainError",
     "Ellipsoid",
     "Expression",

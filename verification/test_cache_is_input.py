@@ -170,7 +170,9 @@ _RUN = textwrap.dedent(
 def _run(tmp_path: Path, cache: Path, **extra: str) -> dict:
     script = tmp_path / "cached.py"
     script.write_text(_RUN)
-    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "_HCV_NUMBA_CACHE_DIR")}
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "_HCV_NUMBA_CACHE_DIR")
+    }
     env.update(HCV_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT), **extra)
     r = subprocess.run(
         [sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300
@@ -189,7 +191,9 @@ def test_a_damaged_numba_file_is_recompiled_with_one_warning(tmp_path, damage):
     (victim,) = [p for p in (cache / "numba").rglob(f"*{suffix}") if "cached" in p.name]
     raw = victim.read_bytes()
     victim.write_bytes(
-        raw[: len(raw) // 3] if damage.startswith("truncated") else b"\x80\x04garbage" + os.urandom(64)
+        raw[: len(raw) // 3]
+        if damage.startswith("truncated")
+        else b"\x80\x04garbage" + os.urandom(64)
     )
     second = _run(tmp_path, cache)
     third = _run(tmp_path, cache)  # the entry was rewritten: no warning now

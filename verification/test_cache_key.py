@@ -30,7 +30,9 @@ PACKAGE = ROOT / "reference_impl"
 
 
 def _python(script: Path, env_extra: dict, pythonpath: Path) -> str:
-    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "_HCV_NUMBA_CACHE_DIR")}
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "_HCV_NUMBA_CACHE_DIR")
+    }
     env.update(env_extra, PYTHONPATH=str(pythonpath))
     r = subprocess.run(
         [sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=300

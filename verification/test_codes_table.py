@@ -131,7 +131,13 @@ def _typed_input(law, p: float, e: float) -> list[tuple[str, float, float]]:
     if "relaxation_time" in par:  # Drake SAP: the dashpot of e at q = 0 over the spring
         return [("Drake relaxation_time", par["relaxation_time"], 2.0 * zeta * math.sqrt(MASS / k))]
     if "contactDamping" in par:  # PyBullet soft: the dashpot of e at q = 0, half per body
-        return [("PyBullet contactDamping", sum(par["contactDamping"]), 2.0 * zeta * math.sqrt(MASS * k))]
+        return [
+            (
+                "PyBullet contactDamping",
+                sum(par["contactDamping"]),
+                2.0 * zeta * math.sqrt(MASS * k),
+            )
+        ]
     return [("MuJoCo dampratio", par["solref"][1], zeta)]
 
 

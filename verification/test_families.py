@@ -113,9 +113,9 @@ def _catalogue_example(family: str):
 # One example per registered family, read from the scene catalogue (a new family is
 # tested once it has a scene there, and fails below until it has one), plus a sum whose
 # terms are of two families.
-_ROUND_TRIP = [
-    pytest.param(_catalogue_example(name), id=name) for name in sorted(FAMILIES)
-] + [pytest.param(PowerLaw(1.0, 1.0) + Expression("q**3"), id="sum of power and expression")]
+_ROUND_TRIP = [pytest.param(_catalogue_example(name), id=name) for name in sorted(FAMILIES)] + [
+    pytest.param(PowerLaw(1.0, 1.0) + Expression("q**3"), id="sum of power and expression")
+]
 
 
 @pytest.mark.parametrize("pot", _ROUND_TRIP)

@@ -391,13 +391,21 @@ def test_report_links_only_files_that_are_there(report):
     import re
 
     out, _, _ = report
-    for name, pattern in (("index.md", r"\]\(([^)\s]+)\)"), ("erratum.md", r"\]\(([^)\s]+)\)"),
-                          ("index.html", r'(?:href|src)="([^"]+)"')):
+    for name, pattern in (
+        ("index.md", r"\]\(([^)\s]+)\)"),
+        ("erratum.md", r"\]\(([^)\s]+)\)"),
+        ("index.html", r'(?:href|src)="([^"]+)"'),
+    ):
         links = re.findall(pattern, (out / name).read_text())
         local = [t for t in links if not t.startswith(("#", "http:", "https:", "data:", "mailto:"))]
         missing = sorted({t for t in local if not (out / t.split("#")[0]).exists()})
-        assert_true(not missing, got=f"links to missing {missing[:5]}", should="only existing files",
-                    claim="report", call=f"{CALL}: {name}")
+        assert_true(
+            not missing,
+            got=f"links to missing {missing[:5]}",
+            should="only existing files",
+            claim="report",
+            call=f"{CALL}: {name}",
+        )
 
 
 def test_markdown_links_existing_figures(report):

@@ -132,7 +132,10 @@ def test_both_pages_show_it_and_the_html_table_is_wrapped(committed, tmp_path):
         # One line naming the JSON path of the first bad field (issue 36).
         ("no delivered", "$.codes_side_by_side.rows[0]: 'delivered' is missing"),
         ("no speeds", "$.codes_side_by_side.settings: 'speeds' is missing"),
-        ("one speed", "$.codes_side_by_side.settings.speeds: has 1 entries, should have at least 2"),
+        (
+            "one speed",
+            "$.codes_side_by_side.settings.speeds: has 1 entries, should have at least 2",
+        ),
         ("rows not a list", "$.codes_side_by_side.rows: is an object, should be array"),
     ],
 )

@@ -137,7 +137,9 @@ def test_a_manifest_entry_that_is_not_a_file_in_dir_is_refused_before_any_work(
 
 
 @pytest.mark.parametrize("force", [False, True])
-def test_a_report_subdirectory_linked_outside_is_never_written_through(tmp_path, fake, capsys, force):
+def test_a_report_subdirectory_linked_outside_is_never_written_through(
+    tmp_path, fake, capsys, force
+):
     """DIR/figures -> ~/sub: the report would write its figures outside DIR."""
     home = _outside(tmp_path)
     out = _report_dir(tmp_path)

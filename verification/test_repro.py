@@ -92,19 +92,34 @@ def test_every_claim_has_a_script():
 @pytest.mark.parametrize("path", sorted(REPRO.glob("*.py")), ids=lambda p: p.name)
 def test_script_imports_only_numpy_scipy_mpmath(path):
     bad = foreign_imports(path.read_text())
-    assert_true(not bad, got=f"imports {bad}", should="numpy, scipy, mpmath and the standard "
-                "library only", claim=path.stem, call=str(path.relative_to(ROOT)))
+    assert_true(
+        not bad,
+        got=f"imports {bad}",
+        should="numpy, scipy, mpmath and the standard library only",
+        claim=path.stem,
+        call=str(path.relative_to(ROOT)),
+    )
 
 
 @pytest.mark.parametrize(
     "source",
-    ["import reference_impl", "from reference_impl.claims import table1", "import pandas",
-     "import importlib\nimportlib.import_module('reference_impl')", "__import__('reference_impl')",
-     "from . import x"],
+    [
+        "import reference_impl",
+        "from reference_impl.claims import table1",
+        "import pandas",
+        "import importlib\nimportlib.import_module('reference_impl')",
+        "__import__('reference_impl')",
+        "from . import x",
+    ],
 )
 def test_the_import_check_catches_foreign_imports(source):
-    assert_true(bool(foreign_imports(source)), got="no foreign import found", should="flagged",
-                claim="meta", call=repr(source))
+    assert_true(
+        bool(foreign_imports(source)),
+        got="no foreign import found",
+        should="flagged",
+        claim="meta",
+        call=repr(source),
+    )
 
 
 def test_compare_modes_can_fail():
@@ -119,32 +134,51 @@ def test_compare_modes_can_fail():
 @pytest.mark.parametrize("claim", claim_ids())
 def test_script_agrees_with_the_measurement(claim, outcomes, results):
     if claim not in outcomes:
-        pytest.fail(f"got no script, should be reports/repro/{claim.replace('-', '_')}.py [{claim}, run_all]")
+        pytest.fail(
+            f"got no script, should be reports/repro/{claim.replace('-', '_')}.py [{claim}, run_all]"
+        )
     call = f"reports/repro/{claim.replace('-', '_')}.py"
     rows = run_all.check(results, {claim: outcomes[claim]})
     failed = [r for r in rows if r["verdict"] == "FAILED"]
-    assert_true(not failed, got=f"script failed: {failed[0]['diff'] if failed else ''}",
-                should="a clean run printing REPRO lines", claim=claim, call=call)
+    assert_true(
+        not failed,
+        got=f"script failed: {failed[0]['diff'] if failed else ''}",
+        should="a clean run printing REPRO lines",
+        claim=claim,
+        call=call,
+    )
     measured = [r for r in rows if r["verdict"] != "not measured"]
     if not measured:
         pytest.skip(f"results.json holds none of {claim}'s numbers (a --quick report?)")
     bad = [r for r in measured if r["verdict"] in ("DISAGREES", "UNUSABLE")]
     assert_true(
         not bad,
-        got="; ".join(f"{r['name']}: script {r['theirs']} vs results.json {r['ours']} "
-                      f"({r['mode']} diff {r['diff']})" for r in bad),
+        got="; ".join(
+            f"{r['name']}: script {r['theirs']} vs results.json {r['ours']} "
+            f"({r['mode']} diff {r['diff']})"
+            for r in bad
+        ),
         should="within each script's stated tolerance",
         claim=claim,
         call=call,
     )
     known = [r for r in measured if r["verdict"] == "known difference"]
     gone = [k for k in KNOWN if k[0] == claim and not any(r["name"] == k[1] for r in known)]
-    assert_true(not gone, got=f"known disagreement(s) {gone} now agree (or are no longer printed)",
-                should=f"removed from {run_all.KNOWN_FILE.name}", claim=claim, call=call)
+    assert_true(
+        not gone,
+        got=f"known disagreement(s) {gone} now agree (or are no longer printed)",
+        should=f"removed from {run_all.KNOWN_FILE.name}",
+        claim=claim,
+        call=call,
+    )
     if known:
-        pytest.xfail("; ".join(f"{r['name']}: script {r['theirs']} vs results.json {r['ours']} "
-                               f"({r['mode']} diff {r['diff']} > {r['tol']}): {r['cause']}"
-                               for r in known))
+        pytest.xfail(
+            "; ".join(
+                f"{r['name']}: script {r['theirs']} vs results.json {r['ours']} "
+                f"({r['mode']} diff {r['diff']} > {r['tol']}): {r['cause']}"
+                for r in known
+            )
+        )
 
 
 def test_a_wrong_measurement_is_caught(outcomes, results):
@@ -159,8 +193,13 @@ def test_a_wrong_measurement_is_caught(outcomes, results):
     rows = run_all.check(bad, {k: outcomes[k] for k in ("thm1-period", "table1")})
     caught = {r["name"] for r in rows if r["verdict"] == "DISAGREES"}
     for name in ("T/(2 pi dJ/dE), Hertz", "max_force at v0 = 0.99, rounded to the printed digits"):
-        assert_true(name in caught, got=f"{name!r} not flagged", should="a disagreement",
-                    claim="meta", call="run_all.check(modified results)")
+        assert_true(
+            name in caught,
+            got=f"{name!r} not flagged",
+            should="a disagreement",
+            claim="meta",
+            call="run_all.check(modified results)",
+        )
 
 
 def _fig1_results(results, drifts):
@@ -180,21 +219,38 @@ def test_every_verdict_bearing_number_agrees(outcomes, results):
     rests on, the largest C0 = 0 drift against the printed 3e-13, agrees."""
     rows = run_all.check(results, outcomes)
     status, line = run_all.outcome(rows)
-    assert_true(status == 0, got=f"exit {status}: {line}", should="exit 0", claim="all",
-                call="run_all.outcome(run_all.check(results.json))")
+    assert_true(
+        status == 0,
+        got=f"exit {status}: {line}",
+        should="exit 0",
+        claim="all",
+        call="run_all.outcome(run_all.check(results.json))",
+    )
     side = [r for r in rows if r["claim"] == "fig1" and r["mode"] == "side"]
-    assert_true(len(side) == 1 and side[0]["verdict"] == "agrees", got=str(side),
-                should="the verdict-bearing drift compared and agreeing", claim="fig1", call="run_all.check")
+    assert_true(
+        len(side) == 1 and side[0]["verdict"] == "agrees",
+        got=str(side),
+        should="the verdict-bearing drift compared and agreeing",
+        claim="fig1",
+        call="run_all.check",
+    )
 
 
 def test_the_verdict_bearing_drift_can_disagree(outcomes, results):
     """Drifts all below the printed bound in results.json (the claim would hold) against the
     script's (above it) fail the run: the known differences do not hide the verdict."""
-    rows = run_all.check(_fig1_results(results, [1e-13, 2e-13, 2.9e-13]), {"fig1": outcomes["fig1"]})
+    rows = run_all.check(
+        _fig1_results(results, [1e-13, 2e-13, 2.9e-13]), {"fig1": outcomes["fig1"]}
+    )
     status, line = run_all.outcome(rows)
     bad = [r["name"] for r in rows if r["verdict"] == "DISAGREES"]
-    assert_true(status == 1 and len(bad) == 1 and "largest" in bad[0], got=f"exit {status}, {bad}",
-                should="exit 1 on the largest-drift line", claim="fig1", call="run_all.check")
+    assert_true(
+        status == 1 and len(bad) == 1 and "largest" in bad[0],
+        got=f"exit {status}, {bad}",
+        should="exit 1 on the largest-drift line",
+        claim="fig1",
+        call="run_all.check",
+    )
 
 
 @pytest.mark.parametrize("text", ["{}", "[]", "null", '{"claims": []}', "not json"])
@@ -204,23 +260,38 @@ def test_run_all_refuses_results_holding_nothing(tmp_path, capsys, text):
     f.write_text(text)
     status = run_all.main(["--results", str(f)])
     out, err = capsys.readouterr()
-    assert_true(status == 2 and not out and len(err.strip().splitlines()) == 1 and str(f) in err,
-                got=f"exit {status}, stdout {out[:200]!r}, stderr {err[:300]!r}",
-                should="exit 2, one line on stderr naming the file", claim="meta", call=f"run_all {text}")
+    assert_true(
+        status == 2 and not out and len(err.strip().splitlines()) == 1 and str(f) in err,
+        got=f"exit {status}, stdout {out[:200]!r}, stderr {err[:300]!r}",
+        should="exit 2, one line on stderr naming the file",
+        claim="meta",
+        call=f"run_all {text}",
+    )
 
 
 def test_claims_without_measurements_compare_nothing(outcomes):
     """Claims without measurements: every number 'not measured', and that is not a pass."""
     rows = run_all.check({"claims": [{"id": c} for c in outcomes]}, outcomes)
     status, line = run_all.outcome(rows)
-    assert_true(status == 2 and "nothing compared" in line, got=f"exit {status}: {line}",
-                should="exit 2: nothing compared", claim="meta", call="run_all.outcome")
+    assert_true(
+        status == 2 and "nothing compared" in line,
+        got=f"exit {status}: {line}",
+        should="exit 2: nothing compared",
+        claim="meta",
+        call="run_all.outcome",
+    )
 
 
 @pytest.mark.parametrize(
     ("value", "verdict", "named"),
-    [(0, "DISAGREES", "0"), (0.0, "DISAGREES", "0"), ("abc", "UNUSABLE", "abc"), (None, "UNUSABLE", "None"),
-     ([1.0], "UNUSABLE", "[1.0]"), (True, "UNUSABLE", "True")],
+    [
+        (0, "DISAGREES", "0"),
+        (0.0, "DISAGREES", "0"),
+        ("abc", "UNUSABLE", "abc"),
+        (None, "UNUSABLE", "None"),
+        ([1.0], "UNUSABLE", "[1.0]"),
+        (True, "UNUSABLE", "True"),
+    ],
 )
 def test_a_bad_value_in_results_is_one_line(outcomes, results, value, verdict, named):
     """0 where a relative number is compared (a ZeroDivisionError before), or a non-number:
@@ -234,13 +305,22 @@ def test_a_bad_value_in_results_is_one_line(outcomes, results, value, verdict, n
     rows = run_all.check(bad, {"table1": outcomes["table1"]})
     row = next(r for r in rows if r["name"] == number["name"])
     status, line = run_all.outcome(rows)
-    assert_true(row["verdict"] == verdict and named in (row["diff"] + str(row["ours"])),
-                got=f"{row['verdict']}: {row['diff']}", should=f"{verdict} naming {named}",
-                claim="meta", call="run_all.check")
+    assert_true(
+        row["verdict"] == verdict and named in (row["diff"] + str(row["ours"])),
+        got=f"{row['verdict']}: {row['diff']}",
+        should=f"{verdict} naming {named}",
+        claim="meta",
+        call="run_all.check",
+    )
     if verdict == "UNUSABLE":
         where = run_all.path_text(number["ours"])
-        assert_true(status == 2 and where in line, got=f"exit {status}: {line}",
-                    should=f"exit 2 naming {where}", claim="meta", call="run_all.outcome")
+        assert_true(
+            status == 2 and where in line,
+            got=f"exit {status}: {line}",
+            should=f"exit 2 naming {where}",
+            claim="meta",
+            call="run_all.outcome",
+        )
 
 
 def test_side_mode_and_max_path_can_fail():
@@ -258,19 +338,35 @@ def test_run_all_prints_on_an_ascii_terminal(tmp_path):
     import os
     import subprocess
 
-    canned = {"fig1": ([{"name": "\u03b6 = 0.3", "value": 1.0, "ours": ["x"], "tol": 1e-9, "mode": "rel"}],
-                       0.1, None)}
-    code = (f"import importlib.util, sys, json; spec = importlib.util.spec_from_file_location('r', "
-            f"{str(REPRO / 'run_all.py')!r}); r = importlib.util.module_from_spec(spec); "
-            f"spec.loader.exec_module(r); canned = json.loads({json.dumps(canned)!r}); "
-            f"r.scripts = lambda: {{'fig1': None}}; r.run_script = lambda p: canned['fig1']; "
-            f"sys.exit(r.main(['--results', {str(tmp_path / 'r.json')!r}]))")
+    canned = {
+        "fig1": (
+            [{"name": "\u03b6 = 0.3", "value": 1.0, "ours": ["x"], "tol": 1e-9, "mode": "rel"}],
+            0.1,
+            None,
+        )
+    }
+    code = (
+        f"import importlib.util, sys, json; spec = importlib.util.spec_from_file_location('r', "
+        f"{str(REPRO / 'run_all.py')!r}); r = importlib.util.module_from_spec(spec); "
+        f"spec.loader.exec_module(r); canned = json.loads({json.dumps(canned)!r}); "
+        f"r.scripts = lambda: {{'fig1': None}}; r.run_script = lambda p: canned['fig1']; "
+        f"sys.exit(r.main(['--results', {str(tmp_path / 'r.json')!r}]))"
+    )
     (tmp_path / "r.json").write_text(json.dumps({"claims": [{"id": "fig1"}], "x": 1.0}))
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env={**os.environ, "PYTHONIOENCODING": "ascii"})
-    assert_true(p.returncode == 0 and "Traceback" not in p.stderr and "\\u03b6" in p.stdout,
-                got=f"exit {p.returncode}: {p.stdout[-300:]!r} {p.stderr[-500:]!r}",
-                should="exit 0, the name escaped", claim="meta", call="PYTHONIOENCODING=ascii run_all")
+    p = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "PYTHONIOENCODING": "ascii"},
+    )
+    assert_true(
+        p.returncode == 0 and "Traceback" not in p.stderr and "\\u03b6" in p.stdout,
+        got=f"exit {p.returncode}: {p.stdout[-300:]!r} {p.stderr[-500:]!r}",
+        should="exit 0, the name escaped",
+        claim="meta",
+        call="PYTHONIOENCODING=ascii run_all",
+    )
 
 
 def test_lint_covers_the_repro_scripts():
@@ -280,13 +376,30 @@ def test_lint_covers_the_repro_scripts():
 
     tree = ast.parse((ROOT / "noxfile.py").read_text())
     lint = next(n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == "lint")
-    paths = {c.value for c in ast.walk(lint) if isinstance(c, ast.Constant) and isinstance(c.value, str)}
-    assert_true("reports/repro" in paths or "reports" in paths, got=f"lint paths {sorted(paths)}",
-                should="reports/repro among them", claim="meta", call="noxfile.py lint")
+    paths = {
+        c.value for c in ast.walk(lint) if isinstance(c, ast.Constant) and isinstance(c.value, str)
+    }
+    assert_true(
+        "reports/repro" in paths or "reports" in paths,
+        got=f"lint paths {sorted(paths)}",
+        should="reports/repro among them",
+        claim="meta",
+        call="noxfile.py lint",
+    )
     ruff = shutil.which("ruff") or shutil.which("ruff", path=str(Path(sys.executable).parent))
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e .[dev])")
-    p = subprocess.run([ruff, "check", "--no-cache", str(REPRO)], capture_output=True, text=True,
-                       timeout=60, cwd=ROOT)
-    assert_true(p.returncode == 0, got=p.stdout[-800:], should="no ruff finding", claim="meta",
-                call="ruff check reports/repro")
+    p = subprocess.run(
+        [ruff, "check", "--no-cache", str(REPRO)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=ROOT,
+    )
+    assert_true(
+        p.returncode == 0,
+        got=p.stdout[-800:],
+        should="no ruff finding",
+        claim="meta",
+        call="ruff check reports/repro",
+    )

@@ -57,9 +57,11 @@ _SCRIPT = textwrap.dedent(
 def test_two_bindings_never_share_a_cached_kernel(tmp_path):
     (tmp_path / "jitmod.py").write_text(_MODULE)
     (tmp_path / "run.py").write_text(_SCRIPT.format())
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=os.pathsep.join(
-        [str(tmp_path), os.getcwd(), os.environ.get("PYTHONPATH", "")]
-    ))
+    env = dict(
+        os.environ,
+        NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+        PYTHONPATH=os.pathsep.join([str(tmp_path), os.getcwd(), os.environ.get("PYTHONPATH", "")]),
+    )
     got = []
     for order in ("plus_one,plus_two", "plus_two,plus_one"):  # second run loads from disk
         r = subprocess.run(

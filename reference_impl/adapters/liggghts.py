@@ -181,9 +181,7 @@ class LiggghtsAdapter(ContactAdapter):
             ("liggghts[hertz,wall]", 1.5),
             ("liggghts[hertz,wall,limit_force=true]", 1.5),
         ),
-        calibrated=(
-            ("liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),
-        ),
+        calibrated=(("liggghts[model=hertz,geometry=wall,limit_force=true]", 1.5, "restitution"),),
         apt="liggghts",
         marker="liggghts",
         test_module="verification/test_liggghts.py",

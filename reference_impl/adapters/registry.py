@@ -46,6 +46,7 @@ def _base():
 
     return ContactAdapter
 
+
 __all__ = [
     "ENTRY_POINT_GROUP",
     "adapter_help",
@@ -287,7 +288,9 @@ def adapter_help() -> str:
         values = getattr(cls, "spec_values", {}) or {}
         keys = "; ".join(_values_text(k, a) for k, a in values.items())
         lines.append(f"  {name}: {keys}" if keys else f"  {name}")
-    lines.append("  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,OPTION=V]:COMMAND")
+    lines.append(
+        "  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,OPTION=V]:COMMAND"
+    )
     return "\n".join(lines)
 
 

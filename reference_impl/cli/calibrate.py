@@ -39,7 +39,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "impedance=constant,integrator=Euler]")  # fmt: skip
     p.add_argument("--scene", required=True, help="scene name or TOML file (an impact)")
     p.add_argument("--target", required=True, help="QUANTITY=VALUE, e.g. restitution=0.5")
-    p.add_argument("--param", required=True, help="adapter option searched (e.g. dampratio), or the scene law's strength (e.g. alpha)")
+    p.add_argument(
+        "--param",
+        required=True,
+        help="adapter option searched (e.g. dampratio), or the scene law's strength (e.g. alpha)",
+    )
     p.add_argument("--end", default="overlap", choices=_ENDS,
                    help="end of contact the restitution is read at (default: overlap)")  # fmt: skip
     p.add_argument("--steps-per-contact", type=int, default=200, metavar="N",

@@ -52,7 +52,8 @@ def run(args) -> int:
                           for k, v in r["damping_params"].items())  # fmt: skip
         print(
             f"{r['name']:24s} {r['kind']:10s} {r['family']:11s} m={r['mass']:.4g} kg  "
-            f"v0={r['velocities']} m/s  damping {r['damping']}" + (f" {params}" if params else "")
+            f"v0={r['velocities']} m/s  damping {r['damping']}"
+            + (f" {params}" if params else "")
             + (f"  [{r['assembly']}]" if r.get("assembly") else "")
         )
     return EXIT_OK

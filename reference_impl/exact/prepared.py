@@ -309,4 +309,6 @@ class PreparedAt:
 
     def __repr__(self) -> str:
         p = self._prepared
-        return f"prepare({p.potential!r}, {p.m!r}, law={{'law': 'universal', 'zeta': {self.zeta!r}}})"
+        return (
+            f"prepare({p.potential!r}, {p.m!r}, law={{'law': 'universal', 'zeta': {self.zeta!r}}})"
+        )

@@ -41,8 +41,18 @@ def printed() -> dict[str, tuple[str, int | None, str]]:
     """claim id -> (where, equation number or None, LaTeX as printed), from each claim module."""
     return {c.id: c.printed for c in CLAIMS if c.printed is not None}
 
-_TEX = [(r"\Delta t", "Δt"), (r"\frac{dJ}{dE}", "dJ/dE"), (r"\pi", "π"), (r"\,", " "), (r"\Delta", "Δ"), (r"\le", "≤"),
-        (r"_{\text{safe}}", "_safe"), (r"\times 10^{-13}", "× 10^-13"), ("$", "")]
+
+_TEX = [
+    (r"\Delta t", "Δt"),
+    (r"\frac{dJ}{dE}", "dJ/dE"),
+    (r"\pi", "π"),
+    (r"\,", " "),
+    (r"\Delta", "Δ"),
+    (r"\le", "≤"),
+    (r"_{\text{safe}}", "_safe"),
+    (r"\times 10^{-13}", "× 10^-13"),
+    ("$", ""),
+]
 
 
 def plain(tex: str) -> str:
@@ -64,17 +74,25 @@ def _commands(c: dict, repro: str | None = None) -> str:
     files = sorted({t.split("::")[0] for t in c.get("tests", [])})
     name = Path(script_path(c["id"])).name
     link = f", [{name}]({repro}/{name})" if repro else ""
-    return (f"`python {script_path(c['id'])}` (independent{link}); `python reports/repro/run_all.py` "
-            f"(compares with results.json); measurement: `hcv report`"
-            + (f", `pytest {' '.join('verification/' + f for f in files)}`" if files else ""))
+    return (
+        f"`python {script_path(c['id'])}` (independent{link}); `python reports/repro/run_all.py` "
+        f"(compares with results.json); measurement: `hcv report`"
+        + (f", `pytest {' '.join('verification/' + f for f in files)}`" if files else "")
+    )
 
 
 def entries(results: dict) -> list[dict]:
     """One entry per claim: id, verdict, section, printed quote, corrected, numbers, commands."""
     out = []
     for c in results["claims"]:
-        e = {"id": c["id"], "verdict": c["verdict"], "section": c["section"],
-             "script": script_path(c["id"]), "commands": _commands(c, results.get("repro_scripts")), "headline": c["headline"]}
+        e = {
+            "id": c["id"],
+            "verdict": c["verdict"],
+            "section": c["section"],
+            "script": script_path(c["id"]),
+            "commands": _commands(c, results.get("repro_scripts")),
+            "headline": c["headline"],
+        }
         if c["verdict"] != "verified":
             claim = _claim(c["id"])
             quote = claim.printed if claim else None
@@ -90,17 +108,36 @@ def blocks(results: dict, level: int = 2) -> list:
     """The erratum as report blocks (heading, one list per claim)."""
     es = entries(results)
     bad = [e for e in es if e["verdict"] != "verified"]
-    out = [H(level, "Erratum", "erratum"),
-           P(f"{len(bad)} of {len(es)} claims do not hold as printed. Numbers from the run of "
-             f"{results['generated_utc']} ({results['mode']}); each claim's independent script "
-             "(numpy, scipy, mpmath only) is named with it.")]
+    out = [
+        H(level, "Erratum", "erratum"),
+        P(
+            f"{len(bad)} of {len(es)} claims do not hold as printed. Numbers from the run of "
+            f"{results['generated_utc']} ({results['mode']}); each claim's independent script "
+            "(numpy, scipy, mpmath only) is named with it."
+        ),
+    ]
     for e in bad:
         out.append(H(level + 1, f"{e['id']} ({e['section']}): {e['verdict']}"))
-        out.append(UL([f"Printed: {e['printed']}", f"Corrected: {e['corrected']}",
-                       f"Measured: {e['numbers']}", f"Reproduce: {e['commands']}"]))
+        out.append(
+            UL(
+                [
+                    f"Printed: {e['printed']}",
+                    f"Corrected: {e['corrected']}",
+                    f"Measured: {e['numbers']}",
+                    f"Reproduce: {e['commands']}",
+                ]
+            )
+        )
     out.append(H(level + 1, "Claims that hold"))
-    out.append(UL([f"{e['id']} ({e['section']}): verified: {e['headline']}; script `{e['script']}`"
-                   for e in es if e["verdict"] == "verified"]))
+    out.append(
+        UL(
+            [
+                f"{e['id']} ({e['section']}): verified: {e['headline']}; script `{e['script']}`"
+                for e in es
+                if e["verdict"] == "verified"
+            ]
+        )
+    )
     return out
 
 

@@ -113,6 +113,8 @@ def _leaves(out: Path, rel: str) -> str | None:
     if os.path.commonpath([root, where]) != root:
         return f"whose directory is {where!r} (through a symbolic link), outside the directory"
     return None
+
+
 def _files(root: Path) -> list[str]:
     """Relative paths of the files and symlinks below ``root`` (not following links)."""
     out = []
@@ -175,7 +177,13 @@ def _check_owned(out: Path, adapters, force: bool) -> None:
             )
         return
     present = [f for f in _files(out) if f != MANIFEST]
-    ours = {"index.html", "index.md", "erratum.md", "results.json", *(_adapter_json(a) for a in adapters)}
+    ours = {
+        "index.html",
+        "index.md",
+        "erratum.md",
+        "results.json",
+        *(_adapter_json(a) for a in adapters),
+    }
     clash = [f for f in present if f not in owned and (f in ours or Path(f).parts[0] == "figures")]
     if clash:
         raise HCVInputError(
@@ -293,7 +301,9 @@ def _move_in(tmp: Path, out: Path) -> None:
     for rel in new:
         why = _leaves(out, rel)
         if why is not None:
-            raise HCVInputError(f"report directory {str(out)!r}: {rel!r} is {why}; nothing was moved in")
+            raise HCVInputError(
+                f"report directory {str(out)!r}: {rel!r} is {why}; nothing was moved in"
+            )
     umask = os.umask(0)
     os.umask(umask)
     for rel in new:

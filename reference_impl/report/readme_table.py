@@ -57,7 +57,9 @@ def verdict_table(results: dict) -> str:
     for c in results["claims"]:
         verdict = f"**{_cell(c['verdict'])}**" if c["verdict"] != "verified" else c["verdict"]
         headline = c.get("headline") or c["evidence"].split(";")[0]
-        lines.append(f"| {_cell(c['id'])} | {_cell(c['section'])} | {verdict} | {_cell(headline)} |")
+        lines.append(
+            f"| {_cell(c['id'])} | {_cell(c['section'])} | {verdict} | {_cell(headline)} |"
+        )
     env = results.get("environment", {})
     commit = (env.get("git_commit") or "unknown")[:12]
     dirty = " (uncommitted changes)" if env.get("git_dirty") else ""

@@ -51,6 +51,8 @@ def _assembly_summary(data: dict) -> str | None:
         box = "periodic" if data.get("periodic", True) else "walled"
         extra = ""
         if data.get("tangential_ratio"):
-            extra = f" kt/k={data['tangential_ratio']}" + (" rotation" if data.get("rotation") else "")
+            extra = f" kt/k={data['tangential_ratio']}" + (
+                " rotation" if data.get("rotation") else ""
+            )
         return f"{data.get('lattice')} cells={data.get('cells')} {box}{bonded}{extra}"
     return None

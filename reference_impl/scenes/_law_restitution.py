@@ -26,9 +26,7 @@ __all__ = ["law_for_restitution", "speed_dependent_laws", "strength_text"]
 def speed_dependent_laws() -> tuple[str, ...]:
     """The registered laws whose strength a restitution asked at a speed solves (every law
     with a strength but those of the harmonic map, whose e does not depend on the speed)."""
-    return tuple(
-        n for n, f in LAWS.items() if f.strength is not None and f.route != "harmonic map"
-    )
+    return tuple(n for n, f in LAWS.items() if f.strength is not None and f.route != "harmonic map")
 
 
 # The exact restitution is good to ~1e-14 (`ERROR_SAFETY` bound of the general-law solver);

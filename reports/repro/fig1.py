@@ -7,6 +7,7 @@ rtol = atol = 1e-13, from q = 0 to the return to q = 0. H = M x'^2/2 + K x^2/2 w
 sqrt(2U/K) (Eq. 4) and x' = q' sqrt(m/M) (proof of Theorem 2), at the solver's steps.
 Only numpy/scipy/mpmath.
 """
+
 import json
 
 import numpy as np
@@ -20,7 +21,9 @@ dU = lambda d: Kn * np.sqrt(V(d)) * g0 * (2 * a * d - d**2)  # noqa: E731
 
 
 def out(name, value, ours, tol, mode, why):
-    print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
+    print(
+        "REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why))
+    )
 
 
 def run(v0, C0):
@@ -35,7 +38,11 @@ def run(v0, C0):
     q, v = np.maximum(r.y[0], 0.0), r.y[1]
     H = 0.5 * M * (v * np.sqrt(m / M)) ** 2 + 0.5 * K * (2 * U(q) / K)
     E = 0.5 * m * v**2 + U(q)
-    return float(np.max(np.abs(H / H[0] - 1))), float(H[-1] / H[0]), float(np.max(np.abs(H / E - 1)))
+    return (
+        float(np.max(np.abs(H / H[0] - 1))),
+        float(H[-1] / H[0]),
+        float(np.max(np.abs(H / E - 1))),
+    )
 
 
 CLAIMED = 3e-13  # the printed bound on the relative drift (Fig. 1 text)
@@ -49,18 +56,47 @@ for C0 in (0.0, 0.5):
         sel = path + [{"v0": v0, "C0": C0}]
         if C0 == 0:
             drifts.append(drift)
-            out(f"C0 = 0, v0 = {v0}: max |H/H0 - 1| (RK45, 1e-13)", drift, sel + ["drift"], 0.5, "rel",
-                "the same method and tolerances; a factor 1.5 allows for a different step history")
+            out(
+                f"C0 = 0, v0 = {v0}: max |H/H0 - 1| (RK45, 1e-13)",
+                drift,
+                sel + ["drift"],
+                0.5,
+                "rel",
+                "the same method and tolerances; a factor 1.5 allows for a different step history",
+            )
         else:
-            out(f"C0 = 0.5, v0 = {v0}: H_end/H0 (= e^2 = {e * e:.10f})", end, sel + ["H_end_over_H0"], 1e-9, "abs",
-                "RK45 at 1e-13: e to ~1e-11")
-        out(f"C0 = {C0}, v0 = {v0}: max |H/E_phys - 1|", ident, sel + ["identity_err"], 1e-13, "below",
-            "H = M x'^2/2 + K x^2/2 is m q'^2/2 + U identically: round-off")
+            out(
+                f"C0 = 0.5, v0 = {v0}: H_end/H0 (= e^2 = {e * e:.10f})",
+                end,
+                sel + ["H_end_over_H0"],
+                1e-9,
+                "abs",
+                "RK45 at 1e-13: e to ~1e-11",
+            )
+        out(
+            f"C0 = {C0}, v0 = {v0}: max |H/E_phys - 1|",
+            ident,
+            sel + ["identity_err"],
+            1e-13,
+            "below",
+            "H = M x'^2/2 + K x^2/2 is m q'^2/2 + U identically: round-off",
+        )
 # What the verdict rests on: a C0 = 0 run drifting >= the printed bound refutes the claim,
 # so the largest of the three drifts must lie on the same side of 3e-13 in both codes
 # (the drifts themselves depend on the state scaling: see known_differences.json).
-out("the printed bound on the relative drift", CLAIMED, path[:-1] + ["claimed"], None, "equal",
-    "the threshold both verdicts use")
-out(f"C0 = 0: largest max |H/H0 - 1| of the three runs, against the printed {CLAIMED:g}", max(drifts),
-    path + [{"$max": "drift", "where": {"C0": 0.0}}], CLAIMED, "side",
-    "the claim is refuted iff a C0 = 0 run drifts >= the printed bound: both on the same side of it")
+out(
+    "the printed bound on the relative drift",
+    CLAIMED,
+    path[:-1] + ["claimed"],
+    None,
+    "equal",
+    "the threshold both verdicts use",
+)
+out(
+    f"C0 = 0: largest max |H/H0 - 1| of the three runs, against the printed {CLAIMED:g}",
+    max(drifts),
+    path + [{"$max": "drift", "where": {"C0": 0.0}}],
+    CLAIMED,
+    "side",
+    "the claim is refuted iff a C0 = 0 run drifts >= the printed bound: both on the same side of it",
+)

@@ -26,6 +26,7 @@ a number disagrees or a script fails; 2 when the results file cannot be used (un
 not a results.json of ``hcv report``, holding none of the numbers, or a value at a
 compared path that is not a number), with one line naming what.
 """
+
 import argparse
 import json
 import subprocess
@@ -50,8 +51,11 @@ class Unusable(ValueError):
 
 def scripts(directory=HERE):
     """claim id -> script path, for every reproduction script in ``directory``."""
-    return {p.stem.replace("_", "-"): p for p in sorted(directory.glob("*.py"))
-            if p.name != "run_all.py" and not p.name.startswith("_")}
+    return {
+        p.stem.replace("_", "-"): p
+        for p in sorted(directory.glob("*.py"))
+        if p.name != "run_all.py" and not p.name.startswith("_")
+    }
 
 
 def known_differences(path=KNOWN_FILE):
@@ -64,8 +68,13 @@ def run_script(path):
     """Run one script in a new process: (numbers, seconds, error text or None)."""
     t0 = time.perf_counter()
     try:
-        p = subprocess.run([sys.executable, str(path)], capture_output=True, text=True,
-                           errors="backslashreplace", timeout=TIMEOUT_S)
+        p = subprocess.run(
+            [sys.executable, str(path)],
+            capture_output=True,
+            text=True,
+            errors="backslashreplace",
+            timeout=TIMEOUT_S,
+        )
     except subprocess.TimeoutExpired:
         return [], time.perf_counter() - t0, f"timed out after {TIMEOUT_S} s"
     dt = time.perf_counter() - t0
@@ -73,7 +82,11 @@ def run_script(path):
         nums = [json.loads(line[6:]) for line in p.stdout.splitlines() if line.startswith("REPRO ")]
     except ValueError as exc:
         return [], dt, f"a REPRO line is not JSON ({exc})"
-    err = None if p.returncode == 0 and nums else f"exit {p.returncode}: {p.stderr.strip()[-800:] or 'no REPRO line'}"
+    err = (
+        None
+        if p.returncode == 0 and nums
+        else f"exit {p.returncode}: {p.stderr.strip()[-800:] or 'no REPRO line'}"
+    )
     return nums, dt, err
 
 
@@ -106,14 +119,24 @@ def resolve(results, path):
     for key in path:
         if isinstance(key, dict) and "$max" in key:
             where = key.get("where", {})
-            hits = [e for e in node if isinstance(e, dict) and all(e.get(k) == v for k, v in where.items())]
+            hits = [
+                e
+                for e in node
+                if isinstance(e, dict) and all(e.get(k) == v for k, v in where.items())
+            ]
             if not hits or any(key["$max"] not in e for e in hits):
                 raise KeyError(f"no entry {where} with {key['$max']}")
-            values = [(number(e[key["$max"]], f"results.json at {path_text(path)}"), e[key["$max"]])
-                      for e in hits]
+            values = [
+                (number(e[key["$max"]], f"results.json at {path_text(path)}"), e[key["$max"]])
+                for e in hits
+            ]
             node = max(values, key=lambda v: v[0])[1]
         elif isinstance(key, dict):
-            hits = [e for e in node if isinstance(e, dict) and all(e.get(k) == v for k, v in key.items())]
+            hits = [
+                e
+                for e in node
+                if isinstance(e, dict) and all(e.get(k) == v for k, v in key.items())
+            ]
             if not hits:
                 raise KeyError(f"no entry {key}")
             node = hits[0]
@@ -157,17 +180,43 @@ def check(results, outcomes, known=None):
     rows = []
     for claim, (nums, _dt, err) in outcomes.items():
         if err:
-            rows.append(dict(claim=claim, name="(script)", ours="", theirs="", tol="", mode="", verdict="FAILED", diff=err))
+            rows.append(
+                dict(
+                    claim=claim,
+                    name="(script)",
+                    ours="",
+                    theirs="",
+                    tol="",
+                    mode="",
+                    verdict="FAILED",
+                    diff=err,
+                )
+            )
         for n in nums:
-            row = dict(claim=claim, name=str(n.get("name", "")), theirs=n.get("value"), tol=n.get("tol"),
-                       mode=n.get("mode", ""), why=n.get("why", ""))
+            row = dict(
+                claim=claim,
+                name=str(n.get("name", "")),
+                theirs=n.get("value"),
+                tol=n.get("tol"),
+                mode=n.get("mode", ""),
+                why=n.get("why", ""),
+            )
             if row["mode"] == "self":
                 try:
-                    ok = abs(number(row["theirs"], "the script's value")) <= number(row["tol"], "the script's tolerance")
+                    ok = abs(number(row["theirs"], "the script's value")) <= number(
+                        row["tol"], "the script's tolerance"
+                    )
                 except Unusable as exc:
                     rows.append({**row, "ours": "-", "verdict": "FAILED", "diff": str(exc)})
                     continue
-                rows.append({**row, "ours": "-", "verdict": "agrees" if ok else "DISAGREES", "diff": "own check"})
+                rows.append(
+                    {
+                        **row,
+                        "ours": "-",
+                        "verdict": "agrees" if ok else "DISAGREES",
+                        "diff": "own check",
+                    }
+                )
                 continue
             where = f"results.json at {path_text(n.get('ours'))}"
             try:
@@ -185,7 +234,14 @@ def check(results, outcomes, known=None):
                 rows.append({**row, "verdict": verdict, "diff": str(exc)})
                 continue
             if not ok and (claim, row["name"]) in known:
-                rows.append({**row, "verdict": "known difference", "diff": diff, "cause": known[(claim, row["name"])]})
+                rows.append(
+                    {
+                        **row,
+                        "verdict": "known difference",
+                        "diff": diff,
+                        "cause": known[(claim, row["name"])],
+                    }
+                )
                 continue
             rows.append({**row, "verdict": "agrees" if ok else "DISAGREES", "diff": diff})
     return rows
@@ -193,22 +249,30 @@ def check(results, outcomes, known=None):
 
 def outcome(rows):
     """(exit status, one summary line) of the rows: what the run concludes."""
-    count = {v: sum(r["verdict"] == v for r in rows) for v in
-             ("agrees", "known difference", "not measured", *FAILING)}
+    count = {
+        v: sum(r["verdict"] == v for r in rows)
+        for v in ("agrees", "known difference", "not measured", *FAILING)
+    }
     # A script's own checks ("self") compare nothing with results.json.
-    compared = sum(r["mode"] != "self" and r["verdict"] in ("agrees", "known difference", "DISAGREES")
-                   for r in rows)
-    line = (f"{count['agrees']} of {len(rows)} numbers agree, {count['known difference']} known "
-            f"differences (cause above), {count['not measured']} not measured, {count['DISAGREES']} "
-            f"disagree, {count['UNUSABLE']} unusable in results.json, {count['FAILED']} failed")
+    compared = sum(
+        r["mode"] != "self" and r["verdict"] in ("agrees", "known difference", "DISAGREES")
+        for r in rows
+    )
+    line = (
+        f"{count['agrees']} of {len(rows)} numbers agree, {count['known difference']} known "
+        f"differences (cause above), {count['not measured']} not measured, {count['DISAGREES']} "
+        f"disagree, {count['UNUSABLE']} unusable in results.json, {count['FAILED']} failed"
+    )
     if count["UNUSABLE"]:
         first = next(r for r in rows if r["verdict"] == "UNUSABLE")
         return 2, f"{line}: {first['claim']}, {first['name']}: {first['diff']}"
     if count["DISAGREES"] or count["FAILED"]:
         return 1, line
     if compared == 0:
-        return 2, (f"nothing compared: results.json holds none of the {len(rows)} numbers the "
-                   "scripts print (a results.json of hcv report holds them)")
+        return 2, (
+            f"nothing compared: results.json holds none of the {len(rows)} numbers the "
+            "scripts print (a results.json of hcv report holds them)"
+        )
     return 0, line
 
 
@@ -226,10 +290,15 @@ def _load_results(name):
     except ValueError as exc:
         return None, f"--results {name}: not JSON ({exc})"
     if not isinstance(results, dict):
-        return None, f"--results {name}: holds a {type(results).__name__}, should be the object hcv report writes"
+        return (
+            None,
+            f"--results {name}: holds a {type(results).__name__}, should be the object hcv report writes",
+        )
     if not isinstance(results.get("claims"), list) or not results["claims"]:
-        return None, (f"--results {name}: holds no list of claims (keys {sorted(results)[:6]}); "
-                      "nothing to compare")
+        return None, (
+            f"--results {name}: holds no list of claims (keys {sorted(results)[:6]}); "
+            "nothing to compare"
+        )
     return results, None
 
 
@@ -256,10 +325,14 @@ def main(argv=None):
     if status == 2 and not any(r["verdict"] == "UNUSABLE" for r in rows):
         print(f"run_all: --results {args.results}: {line}", file=sys.stderr)
         return status
-    print(f"{'claim':24} {'number':70} {'ours (results.json)':26} {'theirs (script)':26} {'tol':8} agreement")
+    print(
+        f"{'claim':24} {'number':70} {'ours (results.json)':26} {'theirs (script)':26} {'tol':8} agreement"
+    )
     for r in rows:
-        print(f"{r['claim']:24} {r['name'][:70]:70} {_short(r['ours']):26} {_short(r['theirs']):26} "
-              f"{r['mode']} {r['tol']!s:8} {r['verdict']} {r['diff']}")
+        print(
+            f"{r['claim']:24} {r['name'][:70]:70} {_short(r['ours']):26} {_short(r['theirs']):26} "
+            f"{r['mode']} {r['tol']!s:8} {r['verdict']} {r['diff']}"
+        )
     causes = {}  # cause -> the numbers it explains (one cause often explains several)
     for r in rows:
         if r["verdict"] == "known difference":
@@ -270,8 +343,13 @@ def main(argv=None):
             print(f"  {claim}, {'; '.join(names)}: {cause}")
     print("\nruntime per script: " + ", ".join(f"{c} {o[1]:.1f} s" for c, o in outcomes.items()))
     if args.json:
-        Path(args.json).write_text(json.dumps({"rows": rows, "seconds": {c: o[1] for c, o in outcomes.items()}},
-                                              indent=1, default=str))
+        Path(args.json).write_text(
+            json.dumps(
+                {"rows": rows, "seconds": {c: o[1] for c, o in outcomes.items()}},
+                indent=1,
+                default=str,
+            )
+        )
     print(line)
     return status
 

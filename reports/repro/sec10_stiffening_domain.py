@@ -7,6 +7,7 @@ Eq. 14 and u = delta/a, alpha = 1/2: 4 V S' = S^2  <=>  5u^2 - 20u + 12 = 0, u =
 (independent of b, c, Kn). The indicator (2UU''-U'^2)/U'^2 = ((alpha-1)S^2 + 2VS')/((alpha+1)S^2).
 Only numpy/scipy/mpmath.
 """
+
 import json
 
 import mpmath as mp
@@ -16,15 +17,29 @@ mp.mp.dps = 30
 
 
 def out(name, value, ours, tol, mode, why):
-    print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
+    print(
+        "REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why))
+    )
 
 
 u_star = 2 - 2 * mp.sqrt(10) / 5
 path = ["claims", {"id": "sec10-stiffening-domain"}, "measured"]
-out("root of 2UU'' - U'^2 in units of a", mp.nstr(u_star, 25), path + ["root_over_a"], 1e-18, "rel",
-    "ours is a 30-digit root printed to 20 digits")
-out("root truncated to the printed 3 decimals", f"{float(mp.floor(u_star * 1000)) / 1000:.3f}", path + ["printed"], None, "equal",
-    "the paper prints 0.735 a")
+out(
+    "root of 2UU'' - U'^2 in units of a",
+    mp.nstr(u_star, 25),
+    path + ["root_over_a"],
+    1e-18,
+    "rel",
+    "ours is a 30-digit root printed to 20 digits",
+)
+out(
+    "root truncated to the printed 3 decimals",
+    f"{float(mp.floor(u_star * 1000)) / 1000:.3f}",
+    path + ["printed"],
+    None,
+    "equal",
+    "the paper prints 0.735 a",
+)
 
 
 def indicator(u, alpha=0.5):  # in units of a; the common factor pi b c / a^2 cancels
@@ -33,8 +48,20 @@ def indicator(u, alpha=0.5):  # in units of a; the common factor pi b c / a^2 ca
 
 
 inside = indicator(np.linspace(1e-6, 0.735, 2001))
-out("min of (2UU''-U'^2)/U'^2 on (0, 0.735 a]", float(inside.min()), path + ["min_indicator_inside"], 1e-9, "rel",
-    "a difference of O(1) terms: absolute round-off ~1e-16 on 7.8e-5")
+out(
+    "min of (2UU''-U'^2)/U'^2 on (0, 0.735 a]",
+    float(inside.min()),
+    path + ["min_indicator_inside"],
+    1e-9,
+    "rel",
+    "a difference of O(1) terms: absolute round-off ~1e-16 on 7.8e-5",
+)
 for i, u in enumerate([float(u_star) + 1e-3, 1.0, 1.5, 1.9]):
-    out(f"(2UU''-U'^2)/U'^2 at {u:.6g} a", float(indicator(u)), path + ["indicator_beyond", i], 1e-9, "rel",
-        "round-off of a dozen operations (relative ~1e-12 near the root)")
+    out(
+        f"(2UU''-U'^2)/U'^2 at {u:.6g} a",
+        float(indicator(u)),
+        path + ["indicator_beyond", i],
+        1e-9,
+        "rel",
+        "round-off of a dozen operations (relative ~1e-12 near the root)",
+    )

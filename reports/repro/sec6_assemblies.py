@@ -13,6 +13,7 @@ The linear prediction sqrt(d / (2 Z)) is the textbook coordination of each latti
 bonded linear chain between walls checks this loop against 2 / omega_max, omega_max =
 2 sqrt(k/m) sin(N pi / (2N + 2)). Only numpy.
 """
+
 import json
 import math
 
@@ -22,7 +23,9 @@ K, P, M, V0 = 1.0879e10, 1.5, 4.1103e-3, 1.0
 
 
 def out(name, value, ours, tol, mode, why):
-    print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
+    print(
+        "REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why))
+    )
 
 
 def runs_away(force, n_bodies, dt, v_init, horizon, confirm):
@@ -82,17 +85,34 @@ for _ in range(5):  # bisect each lane's bracket
     lo = np.where(f, lo, mid)
 ratio_5 = float(np.quantile(hi, 0.05, method="lower"))
 row = ["claims", {"id": "sec6-assemblies"}, "measured", "rows", {"case": "chain N=2, walls both"}]
-out("chain N=2: 5 % point of dt_crit / dt_safe", ratio_5, row + ["ratio_5"], 1.0, "side",
-    "below 1: the bound fails in the chain (horizons differ; the step falls with the horizon)")
+out(
+    "chain N=2: 5 % point of dt_crit / dt_safe",
+    ratio_5,
+    row + ["ratio_5"],
+    1.0,
+    "side",
+    "below 1: the bound fails in the chain (horizons differ; the step falls with the horizon)",
+)
 
 # the linear prediction sqrt(d / (2 Z)) with textbook coordination numbers
-for case, d, z in (("chain N=2, walls both", 1, 2), ("square 4x4, periodic", 2, 4),
-                   ("triangular 4x4, periodic", 2, 6), ("honeycomb 4x4, periodic", 2, 3),
-                   ("fcc 1 cell, walled", 3, 12), ("bcc 1 cell, walled", 3, 8),
-                   ("simple-cubic 1 cell, walled", 3, 6)):
+for case, d, z in (
+    ("chain N=2, walls both", 1, 2),
+    ("square 4x4, periodic", 2, 4),
+    ("triangular 4x4, periodic", 2, 6),
+    ("honeycomb 4x4, periodic", 2, 3),
+    ("fcc 1 cell, walled", 3, 12),
+    ("bcc 1 cell, walled", 3, 8),
+    ("simple-cubic 1 cell, walled", 3, 6),
+):
     path = ["claims", {"id": "sec6-assemblies"}, "measured", "rows", {"case": case}]
-    out(f"{case}: sqrt(d/2Z)", math.sqrt(d / (2 * z)), path + ["linear_prediction"], 1e-12, "rel",
-        "the linear lattice's 2/omega_max over the single contact's 2 sqrt(m/k)")
+    out(
+        f"{case}: sqrt(d/2Z)",
+        math.sqrt(d / (2 * z)),
+        path + ["linear_prediction"],
+        1e-12,
+        "rel",
+        "the linear lattice's 2/omega_max over the single contact's 2 sqrt(m/k)",
+    )
 
 # this loop on a bonded linear chain: its critical step is 2 / omega_max
 k_lin, n_lin = 1e6, 5
@@ -108,6 +128,11 @@ def linear_chain(x):
 omega = 2 * math.sqrt(k_lin / M) * math.sin(n_lin * math.pi / (2 * n_lin + 2))
 dts = 2 / omega * np.array([0.999, 1.001])
 f = runs_away(linear_chain, n_lin, dts, np.full(2, 0.1), 20000, 200000)
-out("linear chain: stable at 0.999, runaway at 1.001 of 2/omega_max",
-    float(abs(int(f[0]) - 0) + abs(int(f[1]) - 1)), None, 0, "self",
-    "the loop reproduces Verlet's linear stability boundary")
+out(
+    "linear chain: stable at 0.999, runaway at 1.001 of 2/omega_max",
+    float(abs(int(f[0]) - 0) + abs(int(f[1]) - 1)),
+    None,
+    0,
+    "self",
+    "the loop reproduces Verlet's linear stability boundary",
+)

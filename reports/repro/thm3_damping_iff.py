@@ -7,6 +7,7 @@ overlap); e = -q'_end / v0. Cases and the two non-universal laws (C(q)(1 + q/q_r
 the constant C(q_ref), q_ref the turning point at the middle speed) as in
 reference_impl/claims/thm3_damping_iff.py. Only numpy/scipy/mpmath.
 """
+
 import json
 
 import numpy as np
@@ -17,13 +18,18 @@ ZETA, m = 0.3, 0.05
 
 
 def out(name, value, ours, tol, mode, why):
-    print("REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why)))
+    print(
+        "REPRO " + json.dumps(dict(name=name, value=value, ours=ours, tol=tol, mode=mode, why=why))
+    )
 
 
 hertz = (lambda q: 1e6 * q**2.5 / 2.5, lambda q: 1e6 * q**1.5)
 g0, a0 = np.pi * 0.008**2 / 0.015**2, 0.015
 V = lambda d: g0 * (a0 * d**2 - d**3 / 3)  # noqa: E731  Eq. 14
-ell = (lambda d: 1e8 / 1.5 * V(d) ** 1.5, lambda d: 1e8 * V(d) ** 0.5 * g0 * (2 * a0 * d - d**2))  # Eq. 13
+ell = (
+    lambda d: 1e8 / 1.5 * V(d) ** 1.5,
+    lambda d: 1e8 * V(d) ** 0.5 * g0 * (2 * a0 * d - d**2),
+)  # Eq. 13
 SETUPS = [("Hertz", hertz, (0.1, 1.0, 10.0)), ("paper ellipsoid", ell, (0.15, 1.5))]
 
 
@@ -34,8 +40,15 @@ def restitution(U, dU, C, v0, qs):
 
     ev = lambda t, y: y[0] if t > 0 else 1.0  # noqa: E731
     ev.terminal, ev.direction = True, -1
-    r = solve_ivp(rhs, (0, 1000 * qs / v0), [0.0, v0], method="DOP853", rtol=1e-12,
-                  atol=[1e-12 * qs, 1e-12 * v0], events=ev)
+    r = solve_ivp(
+        rhs,
+        (0, 1000 * qs / v0),
+        [0.0, v0],
+        method="DOP853",
+        rtol=1e-12,
+        atol=[1e-12 * qs, 1e-12 * v0],
+        events=ev,
+    )
     return -r.y_events[0][0][1] / v0 if r.status == 1 else 0.0  # 0: never left (creep)
 
 
@@ -49,19 +62,40 @@ def laws_case(case, U, dU, speeds):
     q_ref = qmax(speeds[len(speeds) // 2])
     uni = lambda q: 2 * ZETA * np.sqrt(m) * dU(q) / np.sqrt(2 * U(q))  # noqa: E731
     c_ref = uni(q_ref)
-    laws = {"universal": uni, "perturbed C(q)(1+q/q_ref)": lambda q: uni(q) * (1 + q / q_ref),
-            "constant C": lambda q: c_ref}
+    laws = {
+        "universal": uni,
+        "perturbed C(q)(1+q/q_ref)": lambda q: uni(q) * (1 + q / q_ref),
+        "constant C": lambda q: c_ref,
+    }
     for law, C in laws.items():
         es = [restitution(U, dU, C, v, qmax(v)) for v in speeds]
         sel = path + [{"case": case, "law": law}]
         for i, (v, e) in enumerate(zip(speeds, es, strict=True)):
-            out(f"restitution, {case}, {law}, v0 = {v} m/s", e, sel + ["restitution", i], 1e-8, "abs",
-                "DOP853 at rtol 1e-12: e to ~1e-10")
+            out(
+                f"restitution, {case}, {law}, v0 = {v} m/s",
+                e,
+                sel + ["restitution", i],
+                1e-8,
+                "abs",
+                "DOP853 at rtol 1e-12: e to ~1e-10",
+            )
         if law == "universal":
-            out(f"restitution spread over v0, {case}, universal", max(es) - min(es), sel + ["spread"], 1e-8, "below",
-                "ODE error; the rule's E_TOL")
-            out(f"max |e - exp(-pi zeta/sqrt(1-zeta^2))|, {case}", max(abs(e - e_th) for e in es),
-                sel + ["max_dev_from_theory"], 1e-8, "below", "ODE error; the rule's E_TOL")
+            out(
+                f"restitution spread over v0, {case}, universal",
+                max(es) - min(es),
+                sel + ["spread"],
+                1e-8,
+                "below",
+                "ODE error; the rule's E_TOL",
+            )
+            out(
+                f"max |e - exp(-pi zeta/sqrt(1-zeta^2))|, {case}",
+                max(abs(e - e_th) for e in es),
+                sel + ["max_dev_from_theory"],
+                1e-8,
+                "below",
+                "ODE error; the rule's E_TOL",
+            )
 
 
 for case, (U, dU), speeds in SETUPS:

@@ -336,6 +336,7 @@ def calibrate(
         if strength:
             return adapter, AdapterScene.from_scene(scene_at_strength(sc, x), v0, dt, n)
         return spec_with_options(adapter, {param: x}), ascene
+
     res = CalibrationResult(
         adapter, sc.name, param, end, quantity, target, steps_per_contact, v0, dt, (lo, hi)
     )

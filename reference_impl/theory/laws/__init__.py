@@ -17,6 +17,7 @@ from __future__ import annotations
 from reference_impl.theory.laws import none, universal  # noqa: F401
 from reference_impl.theory.laws import linear, power, polynomial  # noqa: F401
 from reference_impl.theory.laws import viscoelastic, hunt_crossley  # noqa: F401
+
 # isort: on
 from reference_impl.theory.laws._registry import (
     LAWS,

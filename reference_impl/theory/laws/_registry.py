@@ -193,9 +193,7 @@ class LawFamily:
             raise HCVInputError(f"damping law {cls.name!r} has no strength")
         out = dict(params)
         key = cls.strength
-        out[key] = (
-            tuple(s * c for c in params[key]) if cls.shape_scaled else float(s)
-        )
+        out[key] = tuple(s * c for c in params[key]) if cls.shape_scaled else float(s)
         return out
 
     @classmethod
@@ -204,9 +202,7 @@ class LawFamily:
         return next(p.unit for p in cls.params if p.key == cls.strength)
 
     @classmethod
-    def example(
-        cls, c_ref: float, q_ref: float, K: float, m: float, u: tuple[float, ...]
-    ) -> dict:
+    def example(cls, c_ref: float, q_ref: float, K: float, m: float, u: tuple[float, ...]) -> dict:
         """Parameters with C ~ ``c_ref`` kg/s at overlap ``q_ref`` (m) for a mass ``m``
         (kg) on a contact of secant stiffness ``K`` (N/m); ``u``: four numbers in [0, 1)
         choosing a shape. The default: the strength at which C(q_ref, 0) on the spring
@@ -294,9 +290,7 @@ def law_family(name) -> type[LawFamily]:
         else []
     )
     hint = f" (did you mean {near[0]!r}?)" if near else ""
-    raise HCVInputError(
-        f"unknown damping law {name!r}; choose one of {', '.join(LAWS)}{hint}"
-    )
+    raise HCVInputError(f"unknown damping law {name!r}; choose one of {', '.join(LAWS)}{hint}")
 
 
 def register_law(cls: type[LawFamily]) -> type[LawFamily]:
