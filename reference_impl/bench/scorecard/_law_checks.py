@@ -20,7 +20,31 @@ from reference_impl.bench.scorecard._rules import (
     _Skip,
 )
 
-__all__ = ["Extrapolated", "ForceLaw"]
+__all__ = ["Extrapolated", "ForceLaw", "StepRefinementMetric"]
+
+
+class StepRefinementMetric(Metric):
+    """A metric read from the step-refinement study (the speed-against-error table): n/a
+    for a variable-step code, whose dt is its sampling; `_study_ready` raises what the
+    study's own failures mean for it."""
+
+    def applies(self, ctx):
+        base = super().applies(ctx)
+        if base:
+            return base
+        if ctx.scheme is not None and ctx.scheme.variable:
+            return "a variable-step code: its dt is its sampling, not a step to refine"
+        return None
+
+    @staticmethod
+    def _study_ready(ctx, missing_baseline: str) -> None:
+        """Raise when the study did not give this code's table or the declared scheme's."""
+        if ctx.order_internal:
+            raise _Internal(ctx.order_internal)
+        if ctx.order_error:
+            raise _Missing(ctx.order_error)
+        if ctx.textbook_order_error:
+            raise _Skip(f"{ctx.textbook_order_error}: {missing_baseline}")
 
 
 class ForceLaw(Metric):
@@ -60,7 +84,7 @@ class ForceLaw(Metric):
         return res
 
 
-class Extrapolated(Metric):
+class Extrapolated(StepRefinementMetric):
     name = key = "extrapolated"
     field = "rtol"
     description = (
@@ -71,21 +95,8 @@ class Extrapolated(Metric):
         "speed table (X: e, t_c, q_max), at the declared scheme's order, <= limit"
     )
 
-    def applies(self, ctx):
-        base = super().applies(ctx)
-        if base:
-            return base
-        if ctx.scheme is not None and ctx.scheme.variable:
-            return "a variable-step code: its dt is its sampling, not a step to refine"
-        return None
-
     def _evaluate(self, ctx, base, factor):
-        if ctx.order_internal:
-            raise _Internal(ctx.order_internal)
-        if ctx.order_error:
-            raise _Missing(ctx.order_error)
-        if ctx.textbook_order_error:
-            raise _Skip(f"{ctx.textbook_order_error}: no extrapolation to compare with")
+        self._study_ready(ctx, "no extrapolation to compare with")
         x = ctx.extrapolated
         if x is None:
             raise _Internal("the step-refinement study was not extrapolated")

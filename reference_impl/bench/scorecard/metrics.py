@@ -39,7 +39,11 @@ from reference_impl.bench.scorecard._delivery import (
     PeakForceAsked,
     RestitutionAsked,
 )
-from reference_impl.bench.scorecard._law_checks import Extrapolated, ForceLaw
+from reference_impl.bench.scorecard._law_checks import (
+    Extrapolated,
+    ForceLaw,
+    StepRefinementMetric,
+)
 from reference_impl.bench.scorecard._records import MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.scorecard._rules import (
     Metric,
@@ -343,7 +347,7 @@ def _baseline(d: dict) -> str:
     return "textbook Verlet" if name == "velocity-verlet" else f"the declared scheme ({name})"
 
 
-class SpeedError(Metric):
+class SpeedError(StepRefinementMetric):
     name = key = "speed_error"
     field = "order_slack"
     magnitude = False  # an order, compared from above
@@ -355,21 +359,8 @@ class SpeedError(Metric):
         "min(the declared scheme's order on the same table, its declared order) - order_slack"
     )
 
-    def applies(self, ctx):
-        base = super().applies(ctx)
-        if base:
-            return base
-        if ctx.scheme is not None and ctx.scheme.variable:
-            return "a variable-step code: its dt is its sampling, not a step to refine"
-        return None
-
     def _evaluate(self, ctx, base, factor):
-        if ctx.order_internal:
-            raise _Internal(ctx.order_internal)
-        if ctx.order_error:
-            raise _Missing(ctx.order_error)
-        if ctx.textbook_order_error:
-            raise _Skip(f"{ctx.textbook_order_error}: no order to compare with")
+        self._study_ready(ctx, "no order to compare with")
         if ctx.textbook_order is None:
             raise _Internal("the declared scheme's order was not measured")
         if ctx.order is None or not math.isfinite(ctx.order) and not ctx.order > 0:
