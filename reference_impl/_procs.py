@@ -29,6 +29,7 @@ __all__ = [
     "descendants",
     "kill_descendants",
     "kill_group",
+    "raise_if_terminated",
     "sigterm_as_interrupt",
 ]
 
@@ -47,6 +48,18 @@ _state = {"terminated": None}
 def terminated() -> int | None:
     """The signal that ended the command (SIGTERM), or None."""
     return _state["terminated"]
+
+
+def raise_if_terminated() -> None:
+    """Raise KeyboardInterrupt if SIGTERM arrived: call at a long job's stage boundaries.
+
+    The handler's KeyboardInterrupt can be lost: raised while the main thread runs a
+    finaliser (``__del__``, a weakref callback, the garbage collector), it is printed as
+    "Exception ignored" and the run goes on, and a second SIGTERM is ignored by design.
+    The flag stays set, so the next boundary ends the run as the signal asked.
+    """
+    if _state["terminated"] is not None:
+        raise KeyboardInterrupt
 
 
 def _on_term(signum, frame):

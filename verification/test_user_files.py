@@ -181,6 +181,23 @@ def test_sigterm_to_report_leaves_no_temporary_directory(tmp_path):
     assert left == [], f"got {left} left behind, should be nothing [issue 22, SIGTERM report]"
 
 
+def test_a_sigterm_whose_interrupt_was_swallowed_still_ends_the_report(tmp_path, monkeypatch):
+    """The handler's KeyboardInterrupt, raised inside a finaliser, is printed and lost; a
+    second SIGTERM is ignored by design. The flag it set must end the run at the next
+    stage, with nothing written (CI run of 5fb9875: SIGTERM at 0.5 s, exit 0 at 46 s).
+    """
+    from reference_impl import _procs
+
+    monkeypatch.setitem(_procs._state, "terminated", signal.SIGTERM)  # as _on_term leaves it
+    out = tmp_path / "rep"
+    messages: list[str] = []
+    with pytest.raises(KeyboardInterrupt):
+        build_report(out, quick=True, progress=messages.append)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == [], f"got {left} left behind, should be nothing [SIGTERM flag, build_report]"
+    assert not any("stage" in m for m in messages), f"got {messages}, should stop before stage 1"
+
+
 # ----------------------------------------------------------------------------
 # hcv sweep --out DIR
 # ----------------------------------------------------------------------------

@@ -32,6 +32,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from reference_impl import _procs
 from reference_impl._format import g, jsonable
 from reference_impl.bench.scorecard._json import result_to_dict
 from reference_impl.bench.scorecard.compare import plot_speed_error
@@ -304,6 +305,7 @@ def _build(
     sec6 = sec6_dt_safe_bound
 
     def say(text: str) -> None:
+        _procs.raise_if_terminated()  # a SIGTERM whose interrupt a finaliser swallowed
         if progress is not None:
             progress(text)
 
@@ -333,11 +335,11 @@ def _build(
     # error study runs afterwards, alone.
     # With workers > 0 the map runs on a local Dask cluster after the claims instead.
     background = _map.start_map(quick) if workers == 0 else None
-    if background is not None:
-        say(f"critical-step map: started in {_map.MAP_WORKERS} background processes")
 
     measured: dict = {}
     try:
+        if background is not None:
+            say(f"critical-step map: started in {_map.MAP_WORKERS} background processes")
         for c in CLAIMS:
             if c.id != sec6.ID:  # section 6 is measured on the map below
                 measured[c.id] = timed(f"claim {c.id}", c.measure, quick)
