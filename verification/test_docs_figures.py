@@ -171,3 +171,8 @@ def test_a_page_without_its_markers_is_refused():
     records = docs_blocks.load_records(ROOT)
     with pytest.raises(HCVInputError, match="smoke-time"):
         docs_blocks.rewrite_page("no markers here", "README.md", records)
+
+
+def test_a_missing_record_is_named(tmp_path):
+    with pytest.raises(HCVInputError, match=r"reports/bench/codes\.json"):
+        docs_blocks.load_records(tmp_path)
