@@ -89,6 +89,13 @@ def bench(session: nox.Session) -> None:
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
     session.run("python", "-m", "benchmarks.bench_sweep", "--json", "reports/bench/sweep.json")
     session.run("python", "-m", "benchmarks.bench_startup", "--json", "reports/bench/startup.json")
+    # The records of the docs' other figures (issue 41), then the pages' blocks from them.
+    session.run(
+        "python", "-m", "benchmarks.bench_startup", "--docs", "--repeats", "1",
+        "--json", "reports/bench/commands.json",
+    )  # fmt: skip
+    session.run("python", "-m", "benchmarks.bench_codes", "--json", "reports/bench/codes.json")
+    session.run("python", "-m", "reference_impl.report.docs_blocks")
 
 
 @nox.session(python="3.11")

@@ -12,18 +12,21 @@ interleaved in one process so that the machine's load hits all alike:
 * ``liggghts[hertz,wall]``: one LIGGGHTS for all runs (runs separated by ``clear``);
 * ``liggghts[hertz,wall,persistent=false]``: a LIGGGHTS process per run (~0.6 s).
 
-Reported: seconds per run of each, the ratio one-shot / persistent, and the gate
-time it implies for the default scenes (93 runs per variant). Goal (issue 28): a
+Reported: seconds per run of each (the fastest of N: the least disturbed by the load), the
+ratio one-shot / persistent, the gate time it implies for the default scenes (93 runs per
+variant: an extrapolation, not a gate's time; ``bench_startup --docs`` times the gates),
+and the 1-minute load before and after (issue 41: every timing with its load). Goal (issue 28): a
 YADE gate over the default scenes <= 180 s (from 654 s with a YADE per run).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import time
 
 from benchmarks._machine import machine_info
+from benchmarks._record import write_json
 from reference_impl import solve_impact
 from reference_impl.adapters import AdapterScene, get_adapter
 from reference_impl.scenes import load_scene
@@ -43,6 +46,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--json")
     args = ap.parse_args(argv)
+    load_before = os.getloadavg()[0]
     scene = _scene()
     specs = [
         "yade[en,wall]",
@@ -68,7 +72,15 @@ def main(argv=None) -> dict:
             seconds[spec].append(time.perf_counter() - t0)
     for ad in adapters.values():
         ad.close()
-    out = {"machine": machine_info(), "runs": args.runs, "per_run_s": {}, "gate_s": {}}
+    out = {
+        "benchmark": "codes",
+        "machine": machine_info(),
+        "runs": args.runs,
+        "per_run_s": {},
+        "gate_s": {},
+        "load_average_1min": {"before": load_before, "after": os.getloadavg()[0]},
+        "generated_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
     for spec, s in seconds.items():
         per = min(s)
         out["per_run_s"][spec] = per
@@ -82,8 +94,7 @@ def main(argv=None) -> dict:
             out["ratio_one_shot_over_persistent"][code] = ratio
             print(f"{code}: one-shot / persistent {ratio:.0f} x")
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        write_json(args.json, out)
     return out
 
 

@@ -3,18 +3,24 @@
 A stated figure is a number followed by a unit of time or size (s, min, ms, µs, MB) in
 README.md or docs/*.md, outside fenced code and outside a generated block (``<!--
 NAME:start -->`` ... ``<!-- NAME:end -->``, rewritten from a record with its commit,
-load and cache state). Outside those, a figure is either no measurement (a limit, a
-default, a goal, a physical quantity of an example: `_NOT_MEASURED`, each with what it
-is) or a measurement still typed by hand (`_TO_MOVE`, each naming the record that
-should generate it: the rest of issue 41 section 2). A new figure in neither list
-fails, and so does an entry no page states any more (the lists only shrink).
+load and cache state: `reference_impl.report.readme_table` and
+`reference_impl.report.docs_blocks`). Outside those, a figure is no measurement (a limit,
+a default, a goal, a physical quantity of an example: `_NOT_MEASURED`, each with what it
+is). A new figure outside that list fails (a measured one goes into a generated block),
+and so does an entry no page states any more (the list only shrinks). Each block of
+`docs_blocks` is the text its committed record gives (a stale block fails).
 """
 
 from __future__ import annotations
 
+import copy
 import re
 from pathlib import Path
 
+import pytest
+
+from reference_impl.errors import HCVInputError
+from reference_impl.report import docs_blocks
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,41 +49,6 @@ _NOT_MEASURED = {
     ("performance.md", "8 µs"): "issue 27's goal",
 }
 
-# (page, figure as written): the record that should generate it. Measured by hand, left
-# for a generated block (issue 41 section 2, not done in its first pass).
-_TO_MOVE = {
-    ("README.md", "15 s"): "the smoke command's wall time (a bench_startup row)",
-    ("README.md", "26 s"): "the smoke command's CPU time (a bench_startup row)",
-    ("getting-started.md", "9 s"): "hcv report --from's wall time (a bench_startup row)",
-    ("getting-started.md", "1.8 s"): "hcv report --from's CPU time (a bench_startup row)",
-    ("getting-started.md", "0.1 s"): "scipy.special's import (bench_startup)",
-    ("getting-started.md", "1-3 ms"): "the cache key's cost (bench_startup)",
-    ("getting-started.md", "0.5 s"): "numba's import (bench_startup)",
-    ("adapter-protocol.md", "8.2 s"): "the YADE gate (a bench_codes record: none committed)",
-    ("adapter-protocol.md", "7.4 s"): "a YADE variant's gate (bench_codes)",
-    ("adapter-protocol.md", "240 s"): "a one-shot YADE gate (bench_codes)",
-    ("adapter-protocol.md", "4.0 s"): "a one-shot YADE run (bench_codes)",
-    ("adapter-protocol.md", "25 s"): "the LIGGGHTS gate (bench_codes; 78 s measured at a similar load)",
-    ("adapter-protocol.md", "0.6 s"): "a LIGGGHTS start (bench_codes)",
-    ("adapter-protocol.md", "155 s"): "a one-shot LIGGGHTS gate (bench_codes)",
-    ("adapter-protocol.md", "654 s"): "issue 28's one-shot YADE gate (its own measurement)",
-    ("benchmarking.md", "8 s"): "the YADE gate (bench_codes)",
-    ("benchmarking.md", "4 s"): "a one-shot YADE run (bench_codes)",
-    ("benchmarking.md", "25 s"): "the LIGGGHTS gate (bench_codes)",
-    ("benchmarking.md", "155 s"): "a one-shot LIGGGHTS gate (bench_codes)",
-    ("verdicts.md", "10 s"): "run_all.py's CPU time (no record)",
-    ("verdicts.md", "6 s"): "run_all.py's wall time at load 5 (no record)",
-    ("verdicts.md", "40 s"): "run_all.py's wall time at load 12 (no record)",
-    **{
-        ("performance.md", f): "reports/bench/sweep.json or device_scaling.json"
-        for f in (
-            "0.2–8 ms", "0.17 s", "83 s", "45 s", "0.39 ms", "6.4 ms", "5 ms", "1.2–1.5 s",
-            "3 s", "1.5 s", "170 ms", "42 s", "22 s", "136.6 s", "71.4 s", "43.7 s",
-            "18.5 s", "13.5 s", "11.1 s", "0.10–0.13 µs", "0.3 s", "6 ms",
-        )
-    },
-}  # fmt: skip
-
 
 def stated_figures(text: str) -> list[str]:
     """The figures ``text`` states outside fenced code and generated blocks."""
@@ -90,7 +61,7 @@ def _found() -> set[tuple[str, str]]:
 
 
 def test_every_stated_figure_has_a_home():
-    homeless = sorted(_found() - set(_NOT_MEASURED) - set(_TO_MOVE))
+    homeless = sorted(_found() - set(_NOT_MEASURED))
     assert_true(
         not homeless,
         got=f"figures outside a generated block: {homeless}",
@@ -102,11 +73,11 @@ def test_every_stated_figure_has_a_home():
 
 
 def test_the_lists_name_only_figures_still_stated():
-    gone = sorted((set(_NOT_MEASURED) | set(_TO_MOVE)) - _found())
+    gone = sorted(set(_NOT_MEASURED) - _found())
     assert_true(
         not gone,
         got=f"listed but no longer stated: {gone}",
-        should="each entry of _NOT_MEASURED and _TO_MOVE stated on its page (drop the rest)",
+        should="each entry of _NOT_MEASURED stated on its page (drop the rest)",
         claim="docs",
         call="test_docs_figures lists",
     )
@@ -125,3 +96,83 @@ def test_the_scan_finds_figures_and_skips_blocks_and_code():
         claim="docs",
         call="stated_figures(a planted text)",
     )
+
+
+def _pages() -> dict[str, str]:
+    return {b.page: (ROOT / b.page).read_text() for b in docs_blocks.BLOCKS}
+
+
+def test_every_generated_block_is_its_record():
+    stale = docs_blocks.stale_blocks(_pages(), docs_blocks.load_records(ROOT))
+    assert_true(
+        not stale,
+        got=f"blocks differing from their record: {stale}",
+        should="none (run python -m reference_impl.report.docs_blocks)",
+        claim="docs",
+        call="docs_blocks.stale_blocks(committed pages, reports/bench/*.json)",
+    )
+
+
+def test_every_block_states_its_commit_and_load():
+    records = docs_blocks.load_records(ROOT)
+    missing = [
+        b.name
+        for b in docs_blocks.BLOCKS
+        if not re.search(r"(commit|tree) [0-9a-f]{7}", body := docs_blocks.render(b, records))
+        or not re.search(r"load \d", body)
+    ]
+    assert_true(
+        not missing,
+        got=f"blocks without a commit or a load: {missing}",
+        should="each block names its record's commit and the load beside its timings",
+        claim="docs",
+        call="docs_blocks.render(every block)",
+    )
+
+
+def test_a_stale_block_fails_and_is_rewritten():
+    records = docs_blocks.load_records(ROOT)
+    pages = _pages()
+    body = docs_blocks.render(docs_blocks.BLOCKS[0], records)
+    planted = dict(pages)
+    page = docs_blocks.BLOCKS[0].page
+    planted[page] = pages[page].replace(body, body.replace(" s wall", " s  wall", 1))
+    stale = docs_blocks.stale_blocks(planted, records)
+    fixed = docs_blocks.rewrite_page(planted[page], page, records)
+    assert_true(
+        stale == [f"{page}: {docs_blocks.BLOCKS[0].name}"] and fixed == pages[page],
+        got=f"stale {stale}, rewritten back: {fixed == pages[page]}",
+        should=f"['{page}: {docs_blocks.BLOCKS[0].name}'], True",
+        claim="docs",
+        call="docs_blocks.stale_blocks(a page with one block edited by hand)",
+    )
+
+
+def test_a_timing_at_a_load_above_the_cores_says_so():
+    records = docs_blocks.load_records(ROOT)
+    busy, quiet = copy.deepcopy(records), copy.deepcopy(records)
+    for rec, load in ((busy, 15.0), (quiet, 0.5)):
+        for row in rec["commands.json"]["cases"]:
+            for run in [row["cold_run"], *row["warm_runs"]]:
+                run["load_before"] = run["load_after"] = load
+        rec["commands.json"]["machine"]["cpu_count"] = 2
+    warn = "exceeded the 2 cores"
+    got = (warn in docs_blocks.smoke_time(busy), warn in docs_blocks.smoke_time(quiet))
+    assert_true(
+        got == (True, False),
+        got=f"warning at load 15, at load 0.5: {got}",
+        should="(True, False): a warning only where the load exceeds the cores",
+        claim="docs",
+        call="docs_blocks.smoke_time(planted loads on 2 cores)",
+    )
+
+
+def test_a_page_without_its_markers_is_refused():
+    records = docs_blocks.load_records(ROOT)
+    with pytest.raises(HCVInputError, match="smoke-time"):
+        docs_blocks.rewrite_page("no markers here", "README.md", records)
+
+
+def test_a_missing_record_is_named(tmp_path):
+    with pytest.raises(HCVInputError, match=r"reports/bench/codes\.json"):
+        docs_blocks.load_records(tmp_path)

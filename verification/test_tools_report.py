@@ -523,6 +523,8 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/device_scaling.json",  # benchmarks/device_scaling.py (16-core machine)
         "bench/verlet.json",  # python -m benchmarks.bench_verlet
         "bench/startup.json",  # python -m benchmarks.bench_startup
+        "bench/commands.json",  # python -m benchmarks.bench_startup --docs (docs_blocks)
+        "bench/codes.json",  # python -m benchmarks.bench_codes (docs_blocks)
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
     }
     stray = [
