@@ -152,3 +152,13 @@ def test_cli_refuses_a_bad_declaration_with_exit_2(tmp_path):
     assert_true(run.returncode == 2 and len(err.splitlines()) == 1 and "nan" in err and not out.exists(),
                 got=(run.returncode, err, out.exists()), should="exit 2, one line naming nan, no file",
                 claim="issue 40 §1", call="hcv bench cmd[claimed_order=nan]")  # fmt: skip
+
+
+def test_a_huge_label_is_cut_in_the_error_line():
+    """The label (``label=`` of 3000 characters) is named, not echoed whole."""
+    with pytest.raises(HCVInputError) as exc:
+        get_adapter(f"cmd[label={_HUGE},time_scheme=leapfrog2]:{_PROGRAM}")
+    text = str(exc.value)
+    assert_true("'leapfrog2'" in text and len(text) < 300, got=text[:400],
+                should="one short line naming 'leapfrog2'", claim="issue 40 §1",
+                call="get_adapter(cmd[label=3000 x, time_scheme=leapfrog2])")  # fmt: skip

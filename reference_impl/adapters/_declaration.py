@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 from reference_impl.errors import HCVInputError
 
@@ -101,14 +102,14 @@ def scheme_of(adapter) -> Scheme:
     label = getattr(adapter, "label", type(adapter).__name__)
     if not isinstance(name, str) or name not in SCHEMES:
         raise HCVInputError(
-            f"adapter {label!r}: time_scheme {_shown(name)} is not one of {', '.join(SCHEMES)}"
+            f"adapter {_shown(label)}: time_scheme {_shown(name)} is not one of {', '.join(SCHEMES)}"
         )
     nominal = SCHEMES[name][0]
     if nominal is None:
         rtol = getattr(adapter, "scheme_rtol", None)
         if not (_number(rtol) and 0.0 < rtol < 1.0):
             raise HCVInputError(
-                f"adapter {label!r}: a variable-step scheme declares scheme_rtol in (0, 1), "
+                f"adapter {_shown(label)}: a variable-step scheme declares scheme_rtol in (0, 1), "
                 f"got {_shown(rtol)}"
             )
         return Scheme(name, None, float(rtol))
@@ -117,7 +118,7 @@ def scheme_of(adapter) -> Scheme:
         order = nominal
     if not (_number(order) and math.isfinite(order) and order > 0):
         raise HCVInputError(
-            f"adapter {label!r}: claimed_order must be a positive number, got {_shown(order)}"
+            f"adapter {_shown(label)}: claimed_order must be a positive number, got {_shown(order)}"
         )
     return Scheme(name, float(order))
 
@@ -157,20 +158,21 @@ def declared_scheme(label: str, time_scheme=None, claimed_order=None, scheme_rto
         return None
     if time_scheme is None:
         raise HCVInputError(
-            f"adapter {label!r}: claimed_order and scheme_rtol need time_scheme (one of "
+            f"adapter {_shown(label)}: claimed_order and scheme_rtol need time_scheme (one of "
             f"{', '.join(SCHEMES)})"
         )
-    given = {"label": label, "time_scheme": time_scheme, "claimed_order": claimed_order,
-             "scheme_rtol": scheme_rtol}  # fmt: skip
-    scheme = scheme_of(type("_Declared", (), given)())
+    scheme = scheme_of(
+        SimpleNamespace(label=label, time_scheme=time_scheme, claimed_order=claimed_order,
+                        scheme_rtol=scheme_rtol)
+    )  # fmt: skip
     if scheme.variable and claimed_order is not None:
         raise HCVInputError(
-            f"adapter {label!r}: a variable-step scheme claims no order (its dt is its "
+            f"adapter {_shown(label)}: a variable-step scheme claims no order (its dt is its "
             f"sampling), got claimed_order={_shown(claimed_order)}"
         )
     if not scheme.variable and scheme_rtol is not None:
         raise HCVInputError(
-            f"adapter {label!r}: scheme_rtol is a variable-step scheme's tolerance, got "
+            f"adapter {_shown(label)}: scheme_rtol is a variable-step scheme's tolerance, got "
             f"scheme_rtol={_shown(scheme_rtol)} with time_scheme {scheme.name!r}"
         )
     return scheme
