@@ -14,7 +14,8 @@ start costs no numpy.
 
 Option ``damping_scale`` (in the request's ``"options"``) multiplies the dashpot it
 integrates and reports while the law it declares stays the scene's: a code 10 % too
-damped is ``damping_scale = 1.1``. Any other option is answered ``{"error": ...}``,
+damped is ``damping_scale = 1.1``; ``force_scale`` multiplies the force it reports (a
+units bug: ``force_scale = 2``), not the one it integrates. Any other option is answered ``{"error": ...}``,
 as the protocol asks. Scenes other than an impact on a ``power`` potential with p = 1
 and the universal law (or none) read at the overlap end are declined.
 """
@@ -26,7 +27,7 @@ import math
 import sys
 
 
-def integrate(scene: dict, damping_scale: float) -> dict:
+def integrate(scene: dict, damping_scale: float, force_scale: float = 1.0) -> dict:
     """The response (t, q, v, force) of one impact request's scene."""
     pot, damp = scene["potential"], scene["damping"]
     k, m, v0 = float(pot["k"]), float(scene["mass"]), float(scene["v0"])
@@ -50,7 +51,8 @@ def integrate(scene: dict, damping_scale: float) -> dict:
         v.append(w)
         if q[-1] <= 0.0:
             break
-    return {"t": t, "q": q, "v": v, "force": [force(a, b) for a, b in zip(q, v, strict=True)],
+    reported = [force_scale * force(a, b) for a, b in zip(q, v, strict=True)]
+    return {"t": t, "q": q, "v": v, "force": reported,
             "meta": {"code": "implicit-euler script"}}  # fmt: skip
 
 
@@ -58,6 +60,7 @@ def answer(request: dict) -> dict:
     """The response to one request: a trajectory, a decline or an error."""
     options = dict(request.get("options", {}))
     scale = options.pop("damping_scale", 1.0)
+    force_scale = options.pop("force_scale", 1.0)
     if options:
         return {"error": f"unknown option {sorted(options)[0]}"}
     scene = request["scene"]
@@ -68,7 +71,7 @@ def answer(request: dict) -> dict:
         return {"unsupported": "a linear (p = 1) power contact only"}
     if damp.get("law") not in ("universal", "none") or damp.get("restitution_end") != "overlap":
         return {"unsupported": "the universal law read at the overlap end only"}
-    return integrate(scene, float(scale))
+    return integrate(scene, float(scale), float(force_scale))
 
 
 def main(argv: list[str]) -> int:

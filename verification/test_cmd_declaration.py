@@ -80,6 +80,17 @@ def test_declared_program_damped_10pc_too_much_fails_implementation(steps):
                     claim="issue 40 §1", call=f"10 % damping error at {steps} steps per contact")  # fmt: skip
 
 
+def test_declared_program_reporting_twice_its_force_fails_implementation():
+    """The same program reporting twice the force it integrates (a units bug) fails
+    implementation on ``force_law``, naming the force."""
+    tol = {"run": {"speed_error_steps": [50, 100, 200]}}  # the study is not what fails here
+    res = run_bench(f"cmd[{_IMPLICIT},force_scale=2]:{_SERVER}", scenes=[_SCENE], tolerances=tol)
+    m = next(m for m in res.metrics if m.metric == "force_law")
+    assert_true(m.status == "fail" and m.explanation.startswith("force "),
+                got=(m.status, m.explanation), should="fail, naming the force",
+                claim="issue 40 §1", call="cmd[force_scale=2] force_law")  # fmt: skip
+
+
 def test_undeclared_program_is_judged_as_velocity_verlet():
     """Without the declaration the program is judged as today: against velocity Verlet's
     error, which a correct first-order code exceeds at 200 steps per contact."""
