@@ -15,10 +15,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["SCHEMES", "CodeInfo", "Scheme", "offset_refusal", "scheme_of"]
+__all__ = ["SCHEMES", "CodeInfo", "Scheme", "declared_scheme", "offset_refusal", "scheme_of"]
+
+# Characters of a refused value shown in its one-line error: a hostile declaration (a
+# 4000-character scheme name in a cmd[...] spec) is named, not echoed whole.
+_SHOWN = 60
+
+
+def _shown(value) -> str:
+    """``repr(value)``, cut to `_SHOWN` characters (the error line stays one short line)."""
+    text = repr(value)
+    return text if len(text) <= _SHOWN else text[: _SHOWN - 3] + "..."
+
+
+def _number(value) -> bool:
+    """A real number, never a boolean (``claimed_order=true`` is no order of 1)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
 
 # name -> (nominal order, one line). The nominal order is the scheme's order on a smooth
 # force; on a contact with a dashpot evaluated explicitly, velocity Verlet is first
@@ -83,27 +100,82 @@ def scheme_of(adapter) -> Scheme:
     """
     name = getattr(adapter, "time_scheme", "velocity-verlet")
     label = getattr(adapter, "label", type(adapter).__name__)
-    if name not in SCHEMES:
+    if not isinstance(name, str) or name not in SCHEMES:
         raise HCVInputError(
-            f"adapter {label!r}: time_scheme {name!r} is not one of {', '.join(SCHEMES)}"
+            f"adapter {_shown(label)}: time_scheme {_shown(name)} is not one of {', '.join(SCHEMES)}"
         )
     nominal = SCHEMES[name][0]
     if nominal is None:
         rtol = getattr(adapter, "scheme_rtol", None)
-        if not (isinstance(rtol, (int, float)) and 0.0 < rtol < 1.0):
+        if not (_number(rtol) and 0.0 < rtol < 1.0):
             raise HCVInputError(
-                f"adapter {label!r}: a variable-step scheme declares scheme_rtol in (0, 1), "
-                f"got {rtol!r}"
+                f"adapter {_shown(label)}: a variable-step scheme declares scheme_rtol in (0, 1), "
+                f"got {_shown(rtol)}"
             )
         return Scheme(name, None, float(rtol))
     order = getattr(adapter, "claimed_order", None)
     if order is None:
         order = nominal
-    if not (isinstance(order, (int, float)) and math.isfinite(order) and order > 0):
+    if not (_number(order) and math.isfinite(order) and order > 0):
         raise HCVInputError(
-            f"adapter {label!r}: claimed_order must be a positive number, got {order!r}"
+            f"adapter {_shown(label)}: claimed_order must be a positive number, got {_shown(order)}"
         )
     return Scheme(name, float(order))
+
+
+def declared_scheme(label: str, time_scheme=None, claimed_order=None, scheme_rtol=None):
+    """The scheme a ``cmd:`` program declares in its ``cmd[...]`` arguments, checked.
+
+    The same declaration as a Python adapter's attributes (contract item 12), given as
+    ``cmd[time_scheme=implicit-euler,claimed_order=1]:COMMAND`` (as ``sustained=true``
+    declares two-walls scenes): read before anything runs, so a bad one stops the bench
+    with exit status 2 and nothing executed. Stricter than `scheme_of` on what the
+    scheme does not use: an order given to a variable-step scheme or a tolerance to a
+    fixed-step one is refused (a typo of the scheme would otherwise drop it silently).
+
+    Parameters
+    ----------
+    label : str
+        The adapter's label, for the error line.
+    time_scheme : str or None
+        A key of `SCHEMES`; None: nothing declared (velocity Verlet, as before).
+    claimed_order : float or None
+        The order claimed (> 0, finite; default the scheme's nominal order).
+    scheme_rtol : float or None
+        A variable-step scheme's relative tolerance (dimensionless, in (0, 1)).
+
+    Returns
+    -------
+    Scheme or None
+        None when none of the three is given.
+
+    Raises
+    ------
+    HCVInputError
+        One line naming the offending value.
+    """
+    if time_scheme is None and claimed_order is None and scheme_rtol is None:
+        return None
+    if time_scheme is None:
+        raise HCVInputError(
+            f"adapter {_shown(label)}: claimed_order and scheme_rtol need time_scheme (one of "
+            f"{', '.join(SCHEMES)})"
+        )
+    scheme = scheme_of(
+        SimpleNamespace(label=label, time_scheme=time_scheme, claimed_order=claimed_order,
+                        scheme_rtol=scheme_rtol)
+    )  # fmt: skip
+    if scheme.variable and claimed_order is not None:
+        raise HCVInputError(
+            f"adapter {_shown(label)}: a variable-step scheme claims no order (its dt is its "
+            f"sampling), got claimed_order={_shown(claimed_order)}"
+        )
+    if not scheme.variable and scheme_rtol is not None:
+        raise HCVInputError(
+            f"adapter {_shown(label)}: scheme_rtol is a variable-step scheme's tolerance, got "
+            f"scheme_rtol={_shown(scheme_rtol)} with time_scheme {scheme.name!r}"
+        )
+    return scheme
 
 
 def offset_refusal(adapter) -> str | None:

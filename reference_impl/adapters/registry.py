@@ -289,7 +289,8 @@ def adapter_help() -> str:
         keys = "; ".join(_values_text(k, a) for k, a in values.items())
         lines.append(f"  {name}: {keys}" if keys else f"  {name}")
     lines.append(
-        "  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,OPTION=V]:COMMAND"
+        "  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,"
+        "time_scheme=S,claimed_order=N,scheme_rtol=R,OPTION=V]:COMMAND"
     )
     return "\n".join(lines)
 

@@ -73,7 +73,11 @@ force one step late; ``{"v": 0.5}``: half-step velocities), contract item 11 of
 
 Sustained (two-walls) scenes are sent only to commands declared with
 ``cmd[sustained=true]:COMMAND`` (other ``cmd[...]`` arguments: ``timeout``,
-``label``, ``cwd``, ``persistent``).
+``label``, ``cwd``, ``persistent``). The time-stepping scheme is declared the same
+way, ``cmd[time_scheme=implicit-euler,claimed_order=1]:COMMAND`` (``scheme_rtol``
+for ``variable-step``; contract item 12, checked before any run by
+`reference_impl.adapters._declaration.declared_scheme`); without it the program is
+judged as velocity Verlet.
 
 Options: any other ``cmd[key=value,...]`` argument is an *option of the code*,
 passed in every request as ``"options": {"key": value}`` (numbers, true/false or
@@ -117,6 +121,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from reference_impl._procs import kill_group
+from reference_impl.adapters._declaration import declared_scheme
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -161,7 +166,10 @@ _POLL = 0.5
 
 
 # The adapter's own cmd[...] arguments (every other key is an option of the code).
-_OWN_ARGUMENTS = ("command", "timeout", "cwd", "label", "sustained", "persistent")
+_OWN_ARGUMENTS = (
+    "command", "timeout", "cwd", "label", "sustained", "persistent",
+    "time_scheme", "claimed_order", "scheme_rtol",
+)  # fmt: skip
 
 
 def response_limit(n_steps: int) -> int:
@@ -260,6 +268,10 @@ class SubprocessAdapter(ContactAdapter):
     persistent : bool
         Start the command once and send it every run as a JSON line (persistent
         mode, see the module docstring).
+    time_scheme, claimed_order, scheme_rtol : optional
+        The program's time-stepping scheme, the order it claims and, for
+        ``variable-step``, its relative tolerance (contract item 12; none given:
+        velocity Verlet, order 2).
     **options
         Options of the code, sent in each request as ``"options"`` (numbers,
         booleans or text): what ``hcv calibrate`` / ``hcv sweep`` vary.
@@ -276,6 +288,9 @@ class SubprocessAdapter(ContactAdapter):
         label: str | None = None,
         sustained: bool = False,
         persistent: bool = False,
+        time_scheme: str | None = None,
+        claimed_order: float | None = None,
+        scheme_rtol: float | None = None,
         **options,
     ):
         if isinstance(command, str):
@@ -339,6 +354,10 @@ class SubprocessAdapter(ContactAdapter):
         if self.options and label is None:  # calibration and sweep points are told apart
             self._label += "[" + ",".join(f"{k}={v!r}" for k, v in self.options.items()) + "]"
         self.supports_sustained = bool(sustained)
+        scheme = declared_scheme(self._label, time_scheme, claimed_order, scheme_rtol)
+        if scheme is not None:  # instance attributes, read by scheme_of as a class's are
+            self.time_scheme, self.claimed_order = scheme.name, scheme.order
+            self.scheme_rtol = scheme.rtol
         self._n_steps = 0
         self._laws: dict[tuple, ImplementedLaw] = {}
 
@@ -355,6 +374,9 @@ class SubprocessAdapter(ContactAdapter):
             "protocol": PROTOCOL,
             "persistent": self.persistent,
             "options": dict(self.options),
+            "time_scheme": self.time_scheme,
+            "claimed_order": self.claimed_order,
+            "scheme_rtol": self.scheme_rtol,
         }
 
     def _exchange(self, payload: bytes, limit: int) -> tuple[int, bytes, str]:

@@ -4,19 +4,26 @@
 task's adapter, ``"run.steps_per_contact"`` the resolution of its runs (dt =
 exact contact time / N), ``"calibrate.KEY"`` a setting of a ``calibrate:`` task.
 They are kept apart from the scene (`Case.code`) and checked here.
+
+A ``calibrate:`` task's ``param`` is an option of the adapter or, as in ``hcv
+calibrate``, the strength of the case's scene law (`LawFamily.strength`: Hunt-Crossley's
+``alpha``, a linear dashpot's ``c``): which one depends on each case's scene, so a name
+that is some law's strength is checked against every case's law by `check_case_param`.
 """
 
 from __future__ import annotations
 
 from reference_impl.adapters.registry import get_adapter
+from reference_impl.bench.calibration._law import option_class, searches_strength
 from reference_impl.bench.calibration._options import (
     check_option,
     check_settings,
     spec_with_options,
 )
 from reference_impl.errors import HCVInputError
+from reference_impl.theory.laws import LAWS
 
-__all__ = ["SweepSpecError"]
+__all__ = ["SweepSpecError", "check_case_param"]
 
 
 class SweepSpecError(HCVInputError):
@@ -106,7 +113,15 @@ def _check_calibration(code: dict, adapter: str) -> None:
     param = cal.get("param")
     if not (isinstance(param, str) and param.isidentifier()):
         raise HCVInputError(f"calibrate.param must be an option name, got {param!r}")
-    check_option(adapter, param)
+    strengths = sorted({f.strength for f in LAWS.values() if f.strength})
+    if param not in strengths:  # no law's strength: an option of the code, or a typo
+        try:
+            check_option(adapter, param)
+        except HCVInputError as exc:
+            listed = str(exc) + ("none" if str(exc).endswith("its options: ") else "")
+            raise HCVInputError(
+                f"{listed}; nor is it a damping law's strength ({', '.join(strengths)})"
+            ) from None
     if param in code.get("adapter", {}):
         raise HCVInputError(
             f"adapter.{param} is the option being calibrated (calibrate.param = {param!r}): "
@@ -120,6 +135,28 @@ def _check_calibration(code: dict, adapter: str) -> None:
         v0=cal.get("v0"),
         bracket=cal.get("range"),
     )
+
+
+def check_case_param(task: str, code: dict, sc) -> None:
+    """A ``calibrate:`` case's ``param`` is an option of its adapter or the strength of
+    the case's scene law, as ``hcv calibrate`` takes it (`searches_strength`); else
+    HCVInputError, one line naming the option, the adapter's options and the strength
+    the law has (`option_class`). Other tasks: nothing to check.
+
+    Parameters
+    ----------
+    task : str
+        The spec's task.
+    code : dict
+        The case's code settings (``calibrate.param``).
+    sc : Scene
+        The case's validated scene.
+    """
+    if not task.startswith("calibrate:"):
+        return
+    adapter, param = task.partition(":")[2], code["calibrate"]["param"]
+    if not searches_strength(adapter, param, sc):
+        option_class(adapter, param, sc)
 
 
 def _build(adapter: str, options: dict, built: dict) -> None:

@@ -23,7 +23,8 @@ sweep what belongs to the code: ``"adapter.KEY"`` (a constructor option of the
 adapter, any variant key, e.g. ``"adapter.dampratio" = [0.1, 0.2]``) and
 ``"run.steps_per_contact"`` (dt = exact contact time / N); a ``calibrate:`` task
 also ``"calibrate.target"`` and ``"calibrate.end"``. A ``calibrate:ADAPTER`` task
-needs a ``[calibrate]`` table: ``param`` (the option searched), ``target``
+needs a ``[calibrate]`` table: ``param`` (the option searched, or the strength of
+the case's scene law, as ``hcv calibrate`` takes it), ``target``
 (restitution), optionally ``end``, ``range = [LO, HI]``, ``v0``,
 ``steps_per_contact`` (see `reference_impl.bench.calibration.calibrate`).
 
@@ -60,6 +61,7 @@ from reference_impl.sweep._code import (  # noqa: F401
     SweepSpecError,
     _check_codes,
     _code_key,
+    check_case_param,
 )
 
 __all__ = [
@@ -459,7 +461,7 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
     for done, index in enumerate(order):
         if progress is not None:
             progress(done, len(order))
-        params, case_scene, _code = expanded[index]
+        params, case_scene, code = expanded[index]
         ctext = ctexts[index]
         try:
             sc = scene_from_dict(
@@ -490,6 +492,12 @@ def _validate_cases(src, task, expanded, ctexts, progress) -> list[str]:
                     raise SweepSpecError(
                         f"spec {src}: criterion {ctext!r} for kind {sc.kind!r}: {exc}"
                     ) from None
+            try:  # calibrate.param: an option, or the strength of this case's law
+                check_case_param(task, code, sc)
+            except HCVInputError as exc:
+                raise SweepSpecError(
+                    f"spec {src}: case {index} ({_label(params)}): {exc}"
+                ) from None
     if progress is not None:
         progress(len(order), len(order))
     return errors

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from reference_impl.bench.scorecard._records import SpeedRecord
-from reference_impl.bench.scorecard._rules import Metric, _Internal, _need
+from reference_impl.bench.scorecard._rules import _NO_CONVERGENCE, Metric, _Internal, _need
 
 __all__ = ["ContactTimeAsked", "PeakForceAsked", "RestitutionAsked"]
 
@@ -35,6 +35,9 @@ class _Delivered(Metric):
     quantity = ""  # key of `SpeedRecord.asked` and of the exact reference
     measured_key = ""  # key of the measured dict
     label = ""
+    # what tension clipping does to this quantity, said in a FAIL line when the declared
+    # law clips and the scene asks the overlap end ("" where clipping changes nothing)
+    clip_note = ""
 
     @property
     def rule(self):
@@ -98,7 +101,7 @@ class _Delivered(Metric):
             err,
             worst["expected"],
             base,
-            "" if ok else self._why(worst, lim),
+            "" if ok else self._why(worst, lim, ctx.order),
             error=err,
             limit=lim,
             at_v0=worst["v0"],
@@ -115,35 +118,45 @@ class _Delivered(Metric):
             res.with_tolerance(f"{self.field} {base:g}, atol {atol:g}: limit {lim:.3g}")
         return res
 
-    def _why(self, r, lim) -> str:
+    def _why(self, r, lim, order=None) -> str:
+        """The FAIL line: measured against asked, the model and step parts with their
+        remedies (``order``: the speed table's measured order, None when not run), and what
+        tension clipping does to this quantity."""
         u = self.unit
         split = (
-            "; " + _split_advice(r, lim, u)
+            "; " + _split_advice(r, lim, u, order)
             if math.isfinite(r["declared"])
             else "; no exact answer of the declared law to split the error"
         )
-        law = r["rec"].law
-        clip = (
-            "; the code clips tension: its contact ends at the zero-force end, where the "
-            "body leaves faster than at q = 0"
-            if law is not None and law.clips_tension
-            else ""
-        )
+        law, asked = r["rec"].law, r["rec"].asked or {}
+        clipped = law is not None and law.clips_tension and asked.get("end") != "zero-force"
+        clip = f"; the code clips tension: {self.clip_note}" if clipped and self.clip_note else ""
         return (
             f"{self.label} {r['measured']:.6g}{u} at v0 = {r['v0']:g} m/s but "
             f"{r['expected']:.6g}{u} was asked: error {r['error']:.3g} > {lim:.3g}{split}{clip}"
         )
 
 
-def _split_advice(r: dict, lim: float, unit: str) -> str:
+def _split_advice(r: dict, lim: float, unit: str, order: float | None = None) -> str:
     """The model and step parts, each with its remedy only where it matters: "recalibrate"
     when the model part alone exceeds half the limit (a model part of 0 needs no
-    recalibration: issue 40, §4), "refine the step" likewise for the step part."""
+    recalibration: issue 40, §4), "refine the step" likewise for the step part, unless
+    the speed table measured that the code's error does not shrink with the step (order
+    ``order`` < `_NO_CONVERGENCE`): refining then removes nothing, and the line says the
+    code does not converge to the law it declares (issue 40, §4)."""
     model, step = r["model_error"], r["step_error"]
     m = f"model {model:+.2g} (the declared law's exact answer is {r['declared']:.6g}{unit}"
     m += ": recalibrate)" if abs(model) > 0.5 * lim else ")"
     s = f"step {step:+.2g}"
-    s += " (refine the step)" if abs(step) > 0.5 * lim else ""
+    if abs(step) > 0.5 * lim:
+        if order is not None and math.isfinite(order) and order < _NO_CONVERGENCE:
+            s += (
+                f" (does not converge: the speed table's error falls like dt^{order:.2f}, so "
+                "refining the step will not remove it; check the law the code integrates "
+                "against the one it declares)"
+            )
+        else:
+            s += " (refine the step)"
     return f"{m}, {s}"
 
 
@@ -164,12 +177,14 @@ class RestitutionAsked(_Delivered):
             "step = (measured - declared law's exact) / asked"
         )
 
-    def _why(self, r, lim) -> str:
+    clip_note = "its contact ends at the zero-force end, where the body leaves faster than at q = 0"
+
+    def _why(self, r, lim, order=None) -> str:
         """The asked e at the asked speed first, then this speed's own target (a law whose
         e depends on the speed was asked e at one speed: issue 40, §3)."""
         asked = r["rec"].asked or {}
         speed, e = asked.get("scene_speed"), asked.get("scene_restitution")
-        text = super()._why(r, lim)
+        text = super()._why(r, lim, order)
         if speed is None or e is None or speed == r["v0"]:
             return text
         return (
@@ -190,6 +205,7 @@ class ContactTimeAsked(_Delivered):
     label = "contact time"
     unit = " s"
     description = "contact duration against the scene's own law solved exactly"
+    clip_note = "its contact ends at the zero-force end, then the body flies freely back to q = 0"
 
     def applies(self, ctx):
         base = super().applies(ctx)
@@ -212,3 +228,4 @@ class PeakForceAsked(_Delivered):
     label = "peak force"
     unit = " N"
     description = "peak total contact force against the scene's own law solved exactly"
+    # clip_note stays "": clipping acts after the peak (the force is positive up to it)

@@ -18,6 +18,12 @@ from reference_impl.bench.scorecard._records import NA, MetricResult, SceneConte
 
 __all__ = ["Metric"]
 
+# A measured order below this is no convergence at all: the error does not shrink with
+# the step (said so, instead of "refine the step", by speed_error and by a delivery FAIL
+# line's step part). Half of the lowest order a scheme declares (1), well above the
+# scatter of a fit over six doublings (~0.1).
+_NO_CONVERGENCE = 0.5
+
 
 class Metric:
     """Base of the scorecard metrics (see the module docstring).

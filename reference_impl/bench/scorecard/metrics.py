@@ -46,6 +46,7 @@ from reference_impl.bench.scorecard._law_checks import (
 )
 from reference_impl.bench.scorecard._records import MetricResult, SceneContext, SpeedRecord
 from reference_impl.bench.scorecard._rules import (
+    _NO_CONVERGENCE,
     Metric,
     _allowance,
     _Internal,
@@ -69,12 +70,6 @@ __all__ = [
 # ----------------------------------------------------------------------------
 # metrics
 # ----------------------------------------------------------------------------
-# A measured order below this is no convergence at all: the error does not shrink with
-# the step (said so, instead of "refine the step"). Half of the lowest order a scheme
-# declares (1), well above the scatter of a fit over six doublings (~0.1).
-_NO_CONVERGENCE = 0.5
-
-
 class _RelativeToExact(Metric):
     """|measured - exact| / exact of one quantity, worst speed."""
 
