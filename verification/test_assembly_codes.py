@@ -1,0 +1,246 @@
+"""The contact codes on chain scenes (issue 39, section 4; contract item 14).
+
+Without a code: the contract's default declines in one line, a malformed chain run is
+refused, the suite's energy of a chain and its runaway verdict on a series. With LIGGGHTS
+and YADE (marked with their codes' markers, skipped with the install line where absent):
+the code's positions after a few hundred steps are those of an independent velocity
+Verlet of the scene's law (which checks the mapping of k on the walls and between the
+spheres, and the scheme), its measured Delta t_crit lies within the suite's own ensemble
+of the same scene, horizon, rule and grid, and its advice is what the code computes
+whatever step it is asked at. ``hcv dt-crit SCENE --adapter CODE``: the decline and a
+lattice are one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from reference_impl.adapters._assembly_request import chain_energy, chain_run_from_mapping
+from reference_impl.adapters.base import (
+    AdapterDeclined,
+    AdapterOutputError,
+    ChainRequest,
+    ChainRun,
+    ContactAdapter,
+)
+from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
+from reference_impl.adapters.liggghts import liggghts_available
+from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
+from reference_impl.adapters.yade import yade_available
+from reference_impl.assembly.lanes import initial_energy
+from reference_impl.assembly.model import assembly_model
+from reference_impl.assembly.safe import dt_safe_conventions
+from reference_impl.assembly.search import search_ensemble
+from reference_impl.bench.assembly_codes import (
+    CODE_GRID,
+    chain_scene,
+    code_dt_crit,
+    judge_energy,
+)
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.stability.criteria import EnergyGrowth
+from verification._hcv_run import hcv
+
+from .assertions import assert_close, assert_true
+
+CLAIM = "assembly-codes"  # the codes on chain scenes (issue 39 section 4), not a paper claim
+K, M, R = 1.0879e10, 4.1103e-3, 5e-3  # chain-hertz: N/m^1.5, kg, m
+# Short runs of the position check: 300 steps at 0.05 Delta t_safe cover the striker's
+# contact, the pulse through the chain and the right wall's contact.
+STEPS, DT_FRACTION = 300, 0.05
+# Positions agree to 1e-12 m: the codes print 15 significant digits (x ~ 1e-2 m: 1e-17 m)
+# and round-off grows over 300 steps to ~1e-15 m; a wrong k on the walls (Hertz on a wall
+# of the spheres' material is sqrt(2) stiffer) moves them by ~1e-6 m.
+X_TOL = 1e-12
+
+
+def _request(n: int, dt: float, steps: int, walls: str = "both") -> ChainRequest:
+    return ChainRequest("t", PowerLaw(K, 1.5), (M,) * n, R, walls, (1.0,) + (0.0,) * (n - 1),
+                        dt, steps)  # fmt: skip
+
+
+def _dt_safe(n: int) -> float:
+    model = assembly_model(chain_scene(n))
+    return dt_safe_conventions(model, initial_energy(model))["paper"]
+
+
+def _verlet(req: ChainRequest) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Independent velocity Verlet of the chain: positions, on-step and half-step velocities."""
+    m = np.asarray(req.masses)
+    x, v = req.x0().copy(), np.asarray(req.velocities, dtype=float).copy()
+
+    def force(x):
+        f = np.zeros_like(x)
+        q = 2 * R - np.diff(x)  # sphere-sphere overlaps
+        fc = np.where(q > 0, K * np.maximum(q, 0) ** 1.5, 0.0)
+        f[:-1] -= fc
+        f[1:] += fc
+        for plane, side in req.wall_planes():
+            i = 0 if side < 0 else -1
+            qw = R - side * (plane - x[i])
+            f[i] -= side * (K * qw**1.5 if qw > 0 else 0.0)
+        return f
+
+    xs, vs, hs = [x.copy()], [v.copy()], [v.copy()]
+    a = force(x) / m
+    for _ in range(req.n_steps):
+        half = v + 0.5 * req.dt * a
+        x = x + req.dt * half
+        a = force(x) / m
+        v = half + 0.5 * req.dt * a
+        xs.append(x.copy())
+        vs.append(v.copy())
+        hs.append(half.copy())
+    return np.array(xs), np.array(vs), np.array(hs)
+
+
+# -- the contract, without a code ---------------------------------------------------------
+
+
+def test_default_adapter_declines_assembly_in_one_line():
+    class Plain(ContactAdapter):
+        name = "plain"
+
+    with pytest.raises(AdapterDeclined) as exc:
+        Plain().assembly(_request(2, 1e-7, 10))
+    assert_true(exc.value.declined == "plain does not run assembly scenes",
+                got=repr(exc.value.declined), should="'plain does not run assembly scenes'",
+                claim=CLAIM, call="ContactAdapter.assembly")  # fmt: skip
+
+
+def test_malformed_chain_run_is_refused():
+    req = _request(3, 1e-7, 10)
+    with pytest.raises(AdapterOutputError, match=r"shape \(samples, 3\)"):
+        chain_run_from_mapping({"x": np.zeros((5, 2)), "v": np.zeros((5, 2))}, req, "c")
+    with pytest.raises(AdapterOutputError, match="returned 12 samples"):
+        chain_run_from_mapping({"x": np.zeros((12, 3)), "v": np.zeros((12, 3))}, req, "c")
+
+
+def test_chain_energy_is_kinetic_plus_hertz_of_every_contact():
+    req = _request(2, 1e-7, 1)  # walls at x = 0 and x = 4 R
+    q_left, q_mid = 1e-6, 2e-6  # overlaps (m); the right wall then has a gap of their sum
+    x0 = R - q_left
+    x1 = x0 + 2 * R - q_mid
+    x = np.array([req.x0(), [x0, x1]])
+    v = np.array([[1.0, 0.0], [0.5, -0.25]])
+    e = chain_energy(req, ChainRun(x, v))
+    u = K / 2.5 * (q_left**2.5 + q_mid**2.5)  # U = k q^(5/2) / (5/2); a gap has none
+    # 1e-9: the overlaps come from differences of positions ~1e-2 m (round-off 1e-18 m
+    # on overlaps of 1e-6 m: 1e-12), to the power 5/2
+    assert_close(e[1], 0.5 * M * (0.5**2 + 0.25**2) + u, rtol=1e-9, claim=CLAIM,
+                 call="chain_energy (3 contacts)")  # fmt: skip
+    assert_close(e[0], 0.5 * M, rtol=1e-15, claim=CLAIM, call="chain_energy (start)")
+
+
+def test_judge_energy_follows_the_kernels_rule():
+    crit = EnergyGrowth(factor=100.0, n_steps=10, confirm_factor=10.0, confirm_horizon=3)
+    flat = np.ones(11)
+    assert judge_energy(flat, crit)[:2] == (False, None)
+    runaway = np.concatenate([np.ones(5), [200.0, 2e3, 2e4], np.ones(3)])
+    assert judge_energy(runaway, crit)[:2] == (True, "confirmed")
+    blown = np.concatenate([np.ones(5), [np.nan] * 6])
+    assert judge_energy(blown, crit)[:2] == (True, "domain")
+    # crossed once within the horizon: undecided until the confirmation horizon is run
+    crossed = np.concatenate([np.ones(5), [200.0], np.ones(5)])
+    assert judge_energy(crossed, crit)[3] is True
+    bounded = np.concatenate([np.ones(5), [200.0], np.ones(25)])
+    failed, evidence, peak, more = judge_energy(bounded, crit)
+    assert (failed, evidence, more) == (False, None, False)
+    assert_close(peak, 200.0, rtol=0, claim=CLAIM, call="judge_energy (bounded peak)")
+
+
+@pytest.mark.parametrize(
+    ("scene", "words"),
+    [("chain-hertz", "reference does not run assembly scenes"),
+     ("lattice-hertz-triangular", "--adapter runs chain scenes only"),
+     ("hertz", "--adapter runs chain scenes only")],
+)  # fmt: skip
+def test_hcv_dt_crit_adapter_refusals_are_one_line_exit_2(scene, words, tmp_path):
+    r = hcv(["dt-crit", scene, "--adapter", "reference"], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr!r}, stdout {r.stdout[:80]!r}",
+                should=f"exit 2 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit {scene} --adapter reference")  # fmt: skip
+
+
+# -- the codes ----------------------------------------------------------------------------
+
+
+def _positions_match(adapter, half_step_v: bool):
+    for n, walls in ((2, "both"), (3, "one")):
+        req = _request(n, DT_FRACTION * _dt_safe(2), STEPS, walls)
+        run = adapter.assembly(req)
+        x, v, h = _verlet(req)
+        err = float(np.max(np.abs(run.x - x)))
+        assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m",
+                    should=f"<= {X_TOL:g} m", claim=CLAIM,
+                    call=f"{adapter.label} chain n={n} walls={walls}")  # fmt: skip
+        want = h if half_step_v else v
+        # 1e-9 m/s of speeds ~1 m/s: 15 printed digits and the round-off of 300 steps
+        assert_close(run.v[1:], want[1:], rtol=0, atol=1e-9, claim=CLAIM,
+                     call=f"{adapter.label} chain n={n} walls={walls} velocities")  # fmt: skip
+
+
+def _dt_crit_in_suite_ensemble(adapter):
+    sc = chain_scene(2)
+    safe = _dt_safe(2)
+    crit = EnergyGrowth(n_steps=2000)
+    found = code_dt_crit(adapter, sc, safe, criterion=crit)
+    ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
+    # Contacts open and close: the run is chaotic, round-off of the code (or of the last bits
+    # of the start) moves the smallest failing step within the ensemble's spread (0.50-0.52
+    # Delta t_safe at N = 2); two grid resolutions (0.02 Delta t_safe) more on either side
+    # for the k-section's bracket of each.
+    slack = 2 * CODE_GRID.resolution * safe
+    lo, hi = float(ens.dt_crit.min()) - slack, float(ens.dt_crit.max()) + slack
+    assert_true(lo <= found.dt_crit <= hi and found.evidence in ("confirmed", "domain"),
+                got=f"dt_crit {found.dt_crit:.6g} s ({found.evidence})",
+                should=f"in [{lo:.6g}, {hi:.6g}] s, the suite's ensemble", claim=CLAIM,
+                call=f"code_dt_crit {adapter.label} chain-hertz n=2")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def liggghts():
+    from reference_impl.adapters.liggghts import LiggghtsAdapter
+
+    a = LiggghtsAdapter(model="hertz")
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def yade():
+    from reference_impl.adapters.yade import YadeAdapter
+
+    a = YadeAdapter(input="en")
+    yield a
+    a.close()
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_chain_is_velocity_verlet_of_the_scene(liggghts):
+    _positions_match(liggghts, half_step_v=False)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_chain_is_leapfrog_of_the_scene(yade):
+    # leapfrog: the positions of velocity Verlet, the velocity of the half step
+    _positions_match(yade, half_step_v=True)
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_dt_crit_lies_in_the_suites_ensemble(liggghts):
+    _dt_crit_in_suite_ensemble(liggghts)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_dt_crit_lies_in_the_suites_ensemble(yade):
+    _dt_crit_in_suite_ensemble(yade)
