@@ -13,6 +13,8 @@ lattice are one line and exit status 2.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -24,6 +26,7 @@ from reference_impl.adapters.base import (
     ChainRun,
     ContactAdapter,
 )
+from reference_impl.adapters.lammps import lammps_available
 from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
 from reference_impl.adapters.liggghts import liggghts_available
 from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
@@ -211,6 +214,15 @@ def liggghts():
 
 
 @pytest.fixture(scope="module")
+def lammps():
+    from reference_impl.adapters.lammps import LammpsAdapter
+
+    a = LammpsAdapter()
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
 def yade():
     from reference_impl.adapters.yade import YadeAdapter
 
@@ -244,3 +256,70 @@ def test_liggghts_dt_crit_lies_in_the_suites_ensemble(liggghts):
 @pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
 def test_yade_dt_crit_lies_in_the_suites_ensemble(yade):
     _dt_crit_in_suite_ensemble(yade)
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_chain_is_velocity_verlet_of_the_scene(lammps):
+    _positions_match(lammps, half_step_v=False)
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_dt_crit_lies_in_the_suites_ensemble_and_it_gives_no_advice(lammps):
+    _dt_crit_in_suite_ensemble(lammps)
+    advice = lammps.step_advice(_request(2, 1e-8, 10))
+    assert_true(advice == {}, got=repr(advice), should="{} (LAMMPS computes no step advice)",
+                claim=CLAIM, call="LammpsAdapter.step_advice")  # fmt: skip
+
+
+def _advice_is_the_codes_whatever_the_step(adapter, names):
+    """The advice is a property of the chain, not of the step it is asked at: LIGGGHTS'
+    times are dt over the fractions it prints, YADE's PWaveTimeStep reads the material."""
+    safe = _dt_safe(2)
+    a1 = adapter.step_advice(_request(2, 1e-3 * safe, 200))
+    a2 = adapter.step_advice(_request(2, 2e-3 * safe, 200))
+    assert_true(set(a1) == set(names), got=repr(sorted(a1)), should=repr(sorted(names)),
+                claim=CLAIM, call=f"{adapter.label}.step_advice")  # fmt: skip
+    for name in names:
+        assert_true(0 < a1[name] < math.inf, got=f"{name} = {a1[name]!r} s",
+                    should="a finite step > 0 s", claim=CLAIM,
+                    call=f"{adapter.label}.step_advice")  # fmt: skip
+    # 1e-6: the fractions are printed to 15 digits; LIGGGHTS' Hertz time reads the speeds
+    # after its one step, which differ by ~dt k q / m (1e-3 of the start's) between the two
+    # steps: the Rayleigh and P-wave times, which read no speed, are compared
+    for name in set(names) - {"hertz", "GlobalStiffnessTimeStepper"}:
+        assert_close(a2[name], a1[name], rtol=1e-6, claim=CLAIM,
+                     call=f"{adapter.label}.step_advice {name} at two steps")  # fmt: skip
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_advice_is_its_rayleigh_and_hertz_times(liggghts):
+    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"))
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_advice_is_pwave_and_global_stiffness(yade):
+    _advice_is_the_codes_whatever_the_step(yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"))
+
+
+def test_docs_block_is_the_generators_table():
+    """docs/assemblies.md types the codes' table only inside its generated block, in the
+    generator's columns (`python -m reference_impl.campaign.assembly_codes_doc` rewrites it)."""
+    from pathlib import Path
+
+    from reference_impl.bench.assembly_codes import CODES
+    from reference_impl.campaign.assembly_codes_doc import END, HEADER, START
+
+    page = (Path(__file__).resolve().parent.parent / "docs" / "assemblies.md").read_text()
+    assert_true(START in page and END in page, got="no generated block",
+                should=f"{START} ... {END}", claim=CLAIM, call="docs/assemblies.md")  # fmt: skip
+    block = page.split(START, 1)[1].split(END, 1)[0].strip().splitlines()
+    assert_true(block and block[0] == HEADER, got=repr(block[:1]), should=repr(HEADER),
+                claim=CLAIM, call="docs/assemblies.md block header")  # fmt: skip
+    codes = {ln.split("|")[1].strip() for ln in block[2:] if ln.startswith("| ")}
+    assert_true(codes == set(CODES), got=repr(sorted(codes)), should=repr(sorted(CODES)),
+                claim=CLAIM, call="docs/assemblies.md block rows")  # fmt: skip

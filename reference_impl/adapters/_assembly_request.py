@@ -55,6 +55,10 @@ class ChainRequest:
         The time step (s).
     n_steps : int
         Steps to run (the code returns n_steps + 1 samples, the first the start).
+    stop_energy : float
+        The code may end the run after the first step whose kinetic energy exceeds this
+        (J; that sample included): the suite has decided a runaway by then (its
+        confirmation level). Infinite: run every step.
     """
 
     name: str
@@ -65,6 +69,7 @@ class ChainRequest:
     velocities: tuple
     dt: float
     n_steps: int
+    stop_energy: float = math.inf
 
     def __post_init__(self):
         n = len(self.masses)
@@ -92,6 +97,13 @@ class ChainRequest:
         ):
             raise HCVInputError(f"chain request {self.name!r}: n_steps must be an integer in "
                                 f"[1, {MAX_CODE_STEPS}], got {steps!r}")  # fmt: skip
+
+    def stop_kinetic(self, cap: float) -> float:
+        """The kinetic energy (J) at which a code stops: `stop_energy`, and at most ``cap``
+        times the initial kinetic energy (a code's own bound on a runaway's run)."""
+        m = np.asarray(self.masses, dtype=float)
+        ke0 = 0.5 * float(np.sum(m * np.asarray(self.velocities, dtype=float) ** 2))
+        return min(self.stop_energy, cap * ke0)
 
     @property
     def n_bodies(self) -> int:

@@ -477,8 +477,10 @@ class YadeAdapter(ContactAdapter):
     def _assembly_impl(self, request):
         sc = chain_scene(request)
         n = request.n_bodies * (int(request.n_steps) + 1)
+        # a runaway ends at its stop energy, at most 1e12 E_0 (the suite's MAX_FACTOR)
+        stop = request.stop_kinetic(1e12)
         ans = self._ask({"op": "chain", "scene": sc, "dt": request.dt,
-                         "n_steps": int(request.n_steps)}, n)  # fmt: skip
+                         "n_steps": int(request.n_steps), "stop": stop}, n)  # fmt: skip
         return parse_chain(ans, request, {"code": "YADE", "young": sc["young"],
                                           "density": sc["density"]})  # fmt: skip
 

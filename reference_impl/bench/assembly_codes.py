@@ -97,8 +97,11 @@ def chain_scene(n: int, base: str = "chain-hertz"):
     return scene_from_dict(d)
 
 
-def chain_request(scene, dt: float, n_steps: int, radius: float = RADIUS) -> ChainRequest:
-    """The `ChainRequest` of a chain scene at step ``dt`` (s) for ``n_steps`` steps.
+def chain_request(
+    scene, dt: float, n_steps: int, radius: float = RADIUS, stop_energy: float = math.inf
+) -> ChainRequest:
+    """The `ChainRequest` of a chain scene at step ``dt`` (s) for ``n_steps`` steps
+    (``stop_energy``: J, where the code may end a runaway; `ChainRequest`).
 
     Raises
     ------
@@ -123,6 +126,7 @@ def chain_request(scene, dt: float, n_steps: int, radius: float = RADIUS) -> Cha
         velocities=tuple(float(v) for v in model.v_init[:, 0]),
         dt=float(dt),
         n_steps=int(n_steps),
+        stop_energy=float(stop_energy),
     )
 
 
@@ -215,9 +219,11 @@ def code_dt_crit(
     crit = EnergyGrowth(n_steps=CODE_HORIZON) if criterion is None else criterion
     work = {"runs": 0, "steps": 0}
     t0 = time.perf_counter()
+    # a run over the confirmation level is a confirmed runaway: the code may stop there
+    stop = crit.confirm_level * initial_energy(assembly_model(scene))
 
     def run(dt: float, steps: int):
-        req = chain_request(scene, dt, steps, radius)
+        req = chain_request(scene, dt, steps, radius, stop)
         out = adapter.assembly(req)
         work["runs"] += 1
         work["steps"] += out.x.shape[0] - 1
