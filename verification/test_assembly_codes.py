@@ -13,6 +13,7 @@ lattice are one line and exit status 2.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -43,6 +44,7 @@ from reference_impl.bench.assembly_codes import (
 )
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.stability.criteria import EnergyGrowth
+from verification._chain_codes import verlet_chain
 from verification._hcv_run import hcv
 
 from .assertions import assert_close, assert_true
@@ -66,36 +68,6 @@ def _request(n: int, dt: float, steps: int, walls: str = "both") -> ChainRequest
 def _dt_safe(n: int) -> float:
     model = assembly_model(chain_scene(n))
     return dt_safe_conventions(model, initial_energy(model))["paper"]
-
-
-def _verlet(req: ChainRequest) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Independent velocity Verlet of the chain: positions, on-step and half-step velocities."""
-    m = np.asarray(req.masses)
-    x, v = req.x0().copy(), np.asarray(req.velocities, dtype=float).copy()
-
-    def force(x):
-        f = np.zeros_like(x)
-        q = 2 * R - np.diff(x)  # sphere-sphere overlaps
-        fc = np.where(q > 0, K * np.maximum(q, 0) ** 1.5, 0.0)
-        f[:-1] -= fc
-        f[1:] += fc
-        for plane, side in req.wall_planes():
-            i = 0 if side < 0 else -1
-            qw = R - side * (plane - x[i])
-            f[i] -= side * (K * qw**1.5 if qw > 0 else 0.0)
-        return f
-
-    xs, vs, hs = [x.copy()], [v.copy()], [v.copy()]
-    a = force(x) / m
-    for _ in range(req.n_steps):
-        half = v + 0.5 * req.dt * a
-        x = x + req.dt * half
-        a = force(x) / m
-        v = half + 0.5 * req.dt * a
-        xs.append(x.copy())
-        vs.append(v.copy())
-        hs.append(half.copy())
-    return np.array(xs), np.array(vs), np.array(hs)
 
 
 # -- the contract, without a code ---------------------------------------------------------
@@ -154,18 +126,62 @@ def test_judge_energy_follows_the_kernels_rule():
 
 
 @pytest.mark.parametrize(
-    ("scene", "words"),
-    [("chain-hertz", "reference does not run assembly scenes"),
-     ("lattice-hertz-triangular", "--adapter runs chain scenes only"),
-     ("hertz", "--adapter runs chain scenes only")],
+    ("args", "words"),
+    [
+        (["chain-hertz", "--adapter", "reference"], "reference does not run assembly scenes"),
+        (["lattice-hertz-triangular", "--adapter", "reference"],
+         "--adapter runs chain scenes only; scene 'lattice-hertz-triangular' is a lattice"),
+        (["hertz", "--adapter", "reference"], "--adapter runs chain scenes only"),
+        (["chain-hertz", "--adapter", "reference", "--horizons", "10,20"],
+         "--adapter takes one horizon, got --horizons [10, 20]"),
+        (["chain-hertz", "--adapter", "nosuchcode"], "nosuchcode"),
+    ],
 )  # fmt: skip
-def test_hcv_dt_crit_adapter_refusals_are_one_line_exit_2(scene, words, tmp_path):
-    r = hcv(["dt-crit", scene, "--adapter", "reference"], cwd=tmp_path)
+def test_hcv_dt_crit_adapter_refusals_are_one_line_exit_2(args, words, tmp_path):
+    r = hcv(["dt-crit", *args], cwd=tmp_path)
     lines = r.stderr.strip().splitlines()
     assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
                 got=f"exit {r.returncode}, stderr {r.stderr!r}, stdout {r.stdout[:80]!r}",
                 should=f"exit 2 and one line with {words!r}", claim=CLAIM,
-                call=f"hcv dt-crit {scene} --adapter reference")  # fmt: skip
+                call=f"hcv dt-crit {' '.join(args)}")  # fmt: skip
+
+
+def test_hcv_dt_crit_runs_a_third_party_chain_code(tmp_path):
+    spec = "verification._chain_codes:VerletChainCode"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--json", "--horizons", "500"],
+            cwd=tmp_path)  # fmt: skip
+    assert_true(
+        r.returncode == 0,
+        got=f"exit {r.returncode}: {r.stderr[-300:]!r}",
+        should="exit 0",
+        claim=CLAIM,
+        call=f"hcv dt-crit chain-hertz --adapter {spec}",
+    )
+    rep = json.loads(r.stdout)["code"]
+    (advice,) = rep["advice"]
+    # the verdict is the comparison it says: safe when the advice is <= dt_crit, and the
+    # factor dt_crit / advice (to round-off of the division)
+    assert_true(advice["safe"] == (advice["dt"] <= rep["dt_crit"])
+                and 0 < rep["dt_crit"] < math.inf and rep["evidence"] == "confirmed",
+                got=repr(rep), should="a confirmed finite dt_crit and the advice's verdict",
+                claim=CLAIM, call=f"hcv dt-crit --adapter {spec}")  # fmt: skip
+    assert_close(advice["factor"], rep["dt_crit"] / advice["dt"], rtol=1e-15, claim=CLAIM,
+                 call=f"hcv dt-crit --adapter {spec} factor")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("cls", "words"),
+    [("CrashingChainCode", "segmentation fault (simulated)"),
+     ("MalformedChainCode", "shape (samples, 10)")],
+)  # fmt: skip
+def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_path):
+    spec = f"verification._chain_codes:{cls}"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert_true(r.returncode == 1 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 1 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
 
 
 # -- the codes ----------------------------------------------------------------------------
@@ -175,7 +191,7 @@ def _positions_match(adapter, half_step_v: bool):
     for n, walls in ((2, "both"), (3, "one")):
         req = _request(n, DT_FRACTION * _dt_safe(2), STEPS, walls)
         run = adapter.assembly(req)
-        x, v, h = _verlet(req)
+        x, v, h = verlet_chain(req)
         err = float(np.max(np.abs(run.x - x)))
         assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m",
                     should=f"<= {X_TOL:g} m", claim=CLAIM,

@@ -5,7 +5,8 @@ Issue 39 section 4: the code runs the chain scene (contract item 14 of
 step (`reference_impl.bench.assembly_codes.code_report`), and the code's own step advice
 gets a verdict. Loaded only when ``--adapter`` is given (it loads the codes' adapters).
 A code that does not run assembly scenes, a scene that is no chain, or a code that
-declines the scene is one line and exit status 2.
+declines the scene is one line and exit status 2; a code that fails (crash, malformed
+output) is one line and exit status 1.
 """
 
 from __future__ import annotations
@@ -13,10 +14,10 @@ from __future__ import annotations
 import json
 import sys
 
-from reference_impl.adapters.base import AdapterDeclined
+from reference_impl.adapters.base import AdapterDeclined, AdapterError
 from reference_impl.adapters.registry import get_adapter
 from reference_impl.bench.assembly_codes import CODE_HORIZON, code_report
-from reference_impl.cli._run import EXIT_OK
+from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
 from reference_impl.cli._tables import fmt
 from reference_impl.errors import HCVInputError
 
@@ -55,6 +56,10 @@ def run_code(args, scene, horizons: list[int] | None) -> int:
             rep = code_report(adapter, scene, horizons[0])
         except AdapterDeclined as exc:
             raise HCVInputError(exc.declined) from None
+        except AdapterError as exc:  # the code failed (crash, malformed output): not the input
+            print(f"hcv: error: {adapter.label} failed: {' '.join(str(exc).split())}",
+                  file=sys.stderr)  # fmt: skip
+            return EXIT_FAIL
     finally:
         adapter.close()
     if args.json:
