@@ -14,6 +14,11 @@ protocol, see `reference_impl.adapters._persistent`):
 * ``{"id": n, "op": "probe", "scene": {...}, "states": [[q, dq/dt], ...]}``
   -> ``{"id": n, "f": [...], "phys": {...}}``: the force YADE computes with the
   body placed at each state (one step from it).
+* ``{"id": n, "op": "chain", "scene": {...}, "dt": s, "n_steps": N}`` -> ``{"id": n,
+  "x": [[...], ...], "v": [[...], ...]}``: a chain of spheres on the x axis (contract item
+  14, `_chain`), positions and velocities after each step; ``"op": "chain_advice"``
+  -> ``{"pwave": s, "gst": s, "gst_steps": n}``: ``utils.PWaveTimeStep()`` and the
+  smallest step ``GlobalStiffnessTimeStepper`` chose along a run it drove (`_chain_advice`).
 * anything that fails -> ``{"id": n, "error": "one line"}``; the server goes on.
 
 Traps this script avoids (found by maintainers wiring YADE by hand):
@@ -143,6 +148,103 @@ def _probe(req):
     return {"f": forces, "phys": phys}
 
 
+# A chain run ends after the first step whose kinetic energy exceeds the request's "stop"
+# (J): the suite has decided a runaway by then (ChainRequest.stop_energy).
+
+
+def _build_chain(sc, gst=None):
+    """Reset YADE to the chain of a request (spheres on x, walls, no gravity, no damping)."""
+    from yade import O, utils
+    from yade.wrapper import (
+        Bo1_Sphere_Aabb,
+        Bo1_Wall_Aabb,
+        ForceResetter,
+        FrictMat,
+        Ig2_Sphere_Sphere_ScGeom,
+        Ig2_Wall_Sphere_ScGeom,
+        InsertionSortCollider,
+        InteractionLoop,
+        Ip2_FrictMat_FrictMat_MindlinPhys,
+        Law2_ScGeom_MindlinPhys_Mindlin,
+        NewtonIntegrator,
+    )
+
+    O.reset()
+    radius = float(sc["R"])
+    mat = O.materials.append(
+        FrictMat(young=sc["young"], poisson=0.0, frictionAngle=0.0, density=sc["density"])
+    )
+    for x, side in sc["walls"]:
+        O.bodies.append(utils.wall(float(x), axis=0, sense=-int(side), material=mat))
+    ids = []
+    for x, m, v in zip(sc["x0"], sc["masses"], sc["velocities"], strict=True):
+        b = utils.sphere((float(x), 0.0, 0.0), radius, material=mat)
+        ids.append(O.bodies.append(b))
+        b.state.mass = float(m)  # the density gave it to round-off; the scene's exactly
+        b.state.vel = (float(v), 0.0, 0.0)
+    engines = [
+        ForceResetter(),
+        InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()], verletDist=0.0),
+        InteractionLoop(
+            [Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
+            [Ip2_FrictMat_FrictMat_MindlinPhys()],
+            [Law2_ScGeom_MindlinPhys_Mindlin()],
+        ),
+    ]
+    if gst is not None:
+        engines.append(gst)
+    # damping=0: NewtonIntegrator's default 0.2 numerical damping would change the law
+    engines.append(NewtonIntegrator(damping=0.0, gravity=(0.0, 0.0, 0.0)))
+    O.engines = engines
+    return O, ids
+
+
+def _chain(req):
+    sc = req["scene"]
+    O, ids = _build_chain(sc)
+    O.dt = float(req["dt"])
+    masses = [float(m) for m in sc["masses"]]
+    stop = float(req["stop"])
+    xs = [[float(x) for x in sc["x0"]]]
+    vs = [[float(v) for v in sc["velocities"]]]
+    for _ in range(int(req["n_steps"])):
+        O.step()
+        x = [O.bodies[i].state.pos[0] for i in ids]
+        v = [O.bodies[i].state.vel[0] for i in ids]
+        ke = sum(0.5 * m * u * u for m, u in zip(masses, v, strict=True))
+        xs.append(x)
+        vs.append(v)
+        if not all(math.isfinite(a) for a in x + v) or ke > stop:
+            break
+    return {"x": xs, "v": vs}
+
+
+def _chain_advice(req):
+    from yade import utils
+    from yade.wrapper import GlobalStiffnessTimeStepper
+
+    sc = req["scene"]
+    O, _ids = _build_chain(sc)
+    pwave = float(utils.PWaveTimeStep())
+    # the stepper as a user adds it: active, its default safety coefficient, updating each
+    # step; it sets O.dt itself, the smallest it set along the run is its advice
+    gst = GlobalStiffnessTimeStepper(active=True, timeStepUpdateInterval=1,
+                                     defaultDt=float(req["dt"]))  # fmt: skip
+    O, _ids = _build_chain(sc, gst)
+    O.dt = float(req["dt"])
+    chosen = []
+    for _ in range(int(req["n_steps"])):
+        O.step()
+        if O.interactions.countReal():
+            chosen.append(float(O.dt))
+    return {
+        "pwave": pwave,
+        "gst": min(chosen) if chosen else None,
+        "gst_steps": len(chosen),
+        "gst_safety": float(gst.timestepSafetyCoefficient),
+    }
+
+
 def _finite(obj):
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
@@ -156,7 +258,7 @@ def _finite(obj):
 def main():
     out = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever YADE prints from now on goes to stderr
-    handlers = {"impact": _impact, "probe": _probe}
+    handlers = {"impact": _impact, "probe": _probe, "chain": _chain, "chain_advice": _chain_advice}
     for line in sys.stdin:
         if not line.strip():
             continue

@@ -111,12 +111,27 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     module. The registry makes every list of codes from it, and
     ``verification/test_code_registry.py`` fails for a registered built-in adapter
     whose test module, marker, install line or docs row is missing.
+14. Optional, assembly scenes (issue 39, a chain of spheres on a line: `ChainRequest`,
+    geometry in `reference_impl.adapters._assembly_request`). Set
+    ``supports_assembly = True`` and implement ``_assembly_impl(request) -> ChainRun``:
+    the positions and velocities along x after every one of ``request.n_steps`` steps of
+    ``request.dt`` (the suite computes the energy with the scene's law and decides a
+    runaway with its own criterion). ``step_advice(request) -> dict`` gives the code's
+    own time-step advice as the code computes it (name -> dt in s; empty: the code gives
+    none). Undeclared, `ContactAdapter.assembly` declines in one line ("<code> does not
+    run assembly scenes"), which ``hcv dt-crit SCENE --adapter CODE`` prints with exit
+    status 2. Python adapters only (a ``cmd:`` program declines).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 
+from reference_impl.adapters._assembly_request import (
+    ChainRequest,
+    ChainRun,
+    chain_run_from_mapping,
+)
 from reference_impl.adapters._declaration import (
     SCHEMES,
     CodeInfo,
@@ -147,6 +162,8 @@ __all__ = [
     "AdapterOutputError",
     "AdapterRunError",
     "AdapterScene",
+    "ChainRequest",
+    "ChainRun",
     "CodeInfo",
     "ContactAdapter",
     "ImplementedLaw",
@@ -179,6 +196,8 @@ class ContactAdapter:
         subprocess adapter) or trusted (the reference) set it False.
     supports_sustained : bool
         Implements `_sustained_impl` (contract item 9).
+    supports_assembly : bool
+        Implements `_assembly_impl` (contract item 14: chain scenes).
     staggering : dict
         Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
         when the force is stored one step late; `impact` re-aligns them. Empty:
@@ -194,6 +213,7 @@ class ContactAdapter:
     spec_values: Mapping = {}
     isolate: bool = True
     supports_sustained: bool = False
+    supports_assembly: bool = False
     staggering: Mapping = {}
     time_scheme: str = "velocity-verlet"
     claimed_order: float | None = None
@@ -212,6 +232,14 @@ class ContactAdapter:
 
     def _sustained_impl(self, scene: AdapterScene):
         raise NotImplementedError(f"{type(self).__name__} does not implement sustained scenes")
+
+    def _assembly_impl(self, request: ChainRequest):
+        raise NotImplementedError(f"{type(self).__name__} does not implement assembly scenes")
+
+    def step_advice(self, request: ChainRequest) -> dict:
+        """The code's own time-step advice for a chain (name -> dt in s), as the code itself
+        computes it (contract item 14); empty when the code gives none."""
+        return {}
 
     def supports(self, scene: AdapterScene) -> str | None:
         """None when the scene can be run, else a one-line reason (the scene is skipped)."""
@@ -248,6 +276,21 @@ class ContactAdapter:
         """Run one sustained scene (two-walls) and return the validated trajectory."""
         out = self._sustained_impl(scene)
         return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
+
+    def assembly(self, request: ChainRequest) -> ChainRun:
+        """Run one chain (contract item 14) and return the validated positions and velocities.
+
+        Raises
+        ------
+        AdapterDeclined
+            The code does not run assembly scenes ("<code> does not run assembly scenes").
+        AdapterOutputError
+            The output breaks the contract (one-line reason).
+        """
+        if not self.supports_assembly:
+            raise AdapterDeclined(f"{self.label} does not run assembly scenes")
+        out = self._assembly_impl(request)
+        return chain_run_from_mapping(out, request, who=self.label)
 
     def close(self) -> None:
         """Release resources (called once at the end of a benchmark)."""

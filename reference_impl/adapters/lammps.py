@@ -87,6 +87,7 @@ from reference_impl.adapters._codes_common import (
     split_option,
 )
 from reference_impl.adapters._declaration import CodeInfo
+from reference_impl.adapters._lammps_chain import chain_script, chain_vectors
 from reference_impl.adapters._lammps_damping import (
     calibrate_constant,
     constant_from_eta_n0,
@@ -208,6 +209,7 @@ class LammpsAdapter(ContactAdapter):
 
     name = "lammps"
     isolate = True
+    supports_assembly = True  # contract item 14: Hertz chains (`_lammps_chain`); no advice
     spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
     # contract item 13: what the registry, the report and CI know of LAMMPS
     code_info = CodeInfo(
@@ -533,6 +535,11 @@ class LammpsAdapter(ContactAdapter):
                 "R": lam["R"],
             },
         )
+
+    def _assembly_impl(self, request):
+        module = load_lammps()
+        lmp = self._run_script(chain_script(request))
+        return chain_vectors(lmp, module, request, {"code": f"LAMMPS {self.version}"})
 
     def probe_force(self, scene: AdapterScene, delta: float, rate: float) -> float:
         """Total normal force (N, + repulsive) LAMMPS applies at overlap delta and rate dq/dt.

@@ -93,6 +93,13 @@ from reference_impl.adapters._codes_common import (
     split_option,
 )
 from reference_impl.adapters._declaration import CodeInfo
+from reference_impl.adapters._liggghts_chain import (
+    chain_advice_script,
+    chain_mapping,
+    chain_script,
+    parse_advice,
+    parse_chain,
+)
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -172,6 +179,7 @@ class LiggghtsAdapter(ContactAdapter):
 
     name = "liggghts"
     isolate = True
+    supports_assembly = True  # contract item 14: Hertz chains (`_liggghts_chain`)
     spec_values = {"model": MODELS, "geometry": GEOMETRIES, "limit_force": True}
     # contract item 13: what the registry, the report and CI know of LIGGGHTS
     code_info = CodeInfo(
@@ -468,6 +476,16 @@ class LiggghtsAdapter(ContactAdapter):
             f[:k],
             {"code": f"LIGGGHTS {self.version}", "steps": int(k - 1), **self.mapping(scene)},
         )
+
+    def _assembly_impl(self, request):
+        mp = chain_mapping(request)
+        meta = {"code": f"LIGGGHTS {self.version}", **mp, "v_staggering": 0.0}
+        return parse_chain(self._run(chain_script(request, mp)), request, meta)
+
+    def step_advice(self, request) -> dict:
+        """``fix check/timestep/gran``'s Rayleigh and Hertz times (s) of the chain's start."""
+        return parse_advice(self._run(chain_advice_script(request, chain_mapping(request))),
+                            request.dt)  # fmt: skip
 
     def probe_forces(self, scene: AdapterScene, states) -> np.ndarray:
         """Total normal force (N, + repulsive) LIGGGHTS applies at each (overlap, dq/dt) state.

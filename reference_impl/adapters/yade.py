@@ -104,6 +104,7 @@ from reference_impl.adapters._codes_common import (
 )
 from reference_impl.adapters._declaration import CodeInfo
 from reference_impl.adapters._persistent import PersistentProcess
+from reference_impl.adapters._yade_chain import chain_scene, parse_advice, parse_chain
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterRunError,
@@ -206,6 +207,7 @@ class YadeAdapter(ContactAdapter):
 
     name = "yade"
     isolate = False  # YADE runs in its own process, bounded by `PersistentProcess`
+    supports_assembly = True  # contract item 14: Hertz chains (`_yade_chain`)
     spec_values = {"input": INPUTS, "geometry": GEOMETRIES}
     # contract item 13: what the registry, the report and CI know of YADE
     code_info = CodeInfo(
@@ -471,6 +473,22 @@ class YadeAdapter(ContactAdapter):
             **mp["scene"],
         }
         return Trajectory(t, arr["q"], arr["v"], arr["f"], meta)
+
+    def _assembly_impl(self, request):
+        sc = chain_scene(request)
+        n = request.n_bodies * (int(request.n_steps) + 1)
+        # a runaway ends at its stop energy, at most 1e12 E_0 (the suite's MAX_FACTOR)
+        stop = request.stop_kinetic(1e12)
+        ans = self._ask({"op": "chain", "scene": sc, "dt": request.dt,
+                         "n_steps": int(request.n_steps), "stop": stop}, n)  # fmt: skip
+        return parse_chain(ans, request, {"code": "YADE", "young": sc["young"],
+                                          "density": sc["density"]})  # fmt: skip
+
+    def step_advice(self, request) -> dict:
+        """``PWaveTimeStep()`` and ``GlobalStiffnessTimeStepper``'s smallest step (s)."""
+        ans = self._ask({"op": "chain_advice", "scene": chain_scene(request),
+                         "dt": request.dt, "n_steps": int(request.n_steps)}, 4)  # fmt: skip
+        return parse_advice(ans)
 
     def probe_forces(self, scene: AdapterScene, states) -> tuple[np.ndarray, dict]:
         """Force (N, + repulsive) YADE computes at each (overlap, dq/dt) state, and its

@@ -53,6 +53,13 @@ def add_parser(subparsers) -> None:
         "last bits (default 32)",
     )
     d.add_argument(
+        "--adapter",
+        metavar="CODE",
+        help="chain scenes: run the scene in a contact code (liggghts, yade) instead: its "
+        "measured dt_crit by the suite's search and criterion at --horizons steps (one value, "
+        "default 2000) and a verdict on the code's own step advice",
+    )
+    d.add_argument(
         "--gate",
         action="store_true",
         help="exit 1 when the dt_safe bound fails at any speed (a step-size check for CI)",
@@ -63,11 +70,16 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     """Search the scene's critical steps and print them (a table, or JSON with ``--json``)."""
     from reference_impl.scenes import load_scene
-    from reference_impl.tasks import search_loaded_scene
+    from reference_impl.tasks import search_assembly_scene, search_loaded_scene
 
     scene = load_scene(args.scene)
+    if getattr(args, "adapter", None) is not None:
+        # a contact code on a chain (issue 39 section 4), in its own module: it loads the codes
+        from reference_impl.cli._dt_crit_code import run_code
+
+        return run_code(args, scene, _horizons(args.horizons))
     if scene.kind in ("chain", "lattice"):
-        return _run_assembly(args, scene)
+        return _run_assembly(args, scene, search_assembly_scene)
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
     # Any given --criterion is parsed, so an empty one is refused rather than defaulted.
     with _progress(sys.stderr.isatty()) as progress:
@@ -104,10 +116,9 @@ def _horizons(text: str | None) -> list[int] | None:
     return out
 
 
-def _run_assembly(args, scene) -> int:
-    """``hcv dt-crit`` on a chain or lattice: the ensemble's distribution, per horizon."""
-    from reference_impl.tasks import search_assembly_scene
-
+def _run_assembly(args, scene, search_assembly_scene) -> int:
+    """``hcv dt-crit`` on a chain or lattice: the ensemble's distribution, per horizon
+    (``search_assembly_scene``: `reference_impl.tasks.search_assembly_scene`)."""
     horizons = _horizons(args.horizons)
     with _progress(sys.stderr.isatty()) as progress:
         rep = search_assembly_scene(scene, horizons, args.lanes, args.criterion, progress)

@@ -1,0 +1,86 @@
+"""``hcv dt-crit SCENE --adapter CODE``: a contact code's Delta t_crit on a chain, and its advice.
+
+Issue 39 section 4: the code runs the chain scene (contract item 14 of
+`reference_impl.adapters.base`), the suite's search and criterion measure its critical
+step (`reference_impl.bench.assembly_codes.code_report`), and the code's own step advice
+gets a verdict. Loaded only when ``--adapter`` is given (it loads the codes' adapters).
+A code that does not run assembly scenes, a scene that is no chain, or a code that
+declines the scene is one line and exit status 2; a code that fails (crash, malformed
+output) is one line and exit status 1.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from reference_impl.adapters.base import AdapterDeclined, AdapterError
+from reference_impl.adapters.registry import get_adapter
+from reference_impl.bench.assembly_codes import CODE_HORIZON, code_report
+from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
+from reference_impl.cli._tables import fmt
+from reference_impl.errors import HCVInputError
+
+__all__ = ["run_code"]
+
+
+def run_code(args, scene, horizons: list[int] | None) -> int:
+    """Run ``args.adapter`` on the chain ``scene`` at one horizon (steps) and print the verdicts.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``adapter`` (a registry spec), ``json``.
+    scene : AssemblyScene
+        The scene named (a chain; anything else is refused).
+    horizons : list of int or None
+        ``--horizons`` parsed: one value, or None for `CODE_HORIZON`.
+
+    Raises
+    ------
+    HCVInputError
+        One line: not a chain, more than one horizon, the code declines.
+    """
+    if scene.kind != "chain":
+        raise HCVInputError(
+            f"--adapter runs chain scenes only; scene {scene.name!r} is a {scene.kind}"
+        )
+    horizons = horizons or [CODE_HORIZON]
+    if len(horizons) != 1:
+        raise HCVInputError(f"--adapter takes one horizon, got --horizons {horizons!r}")
+    adapter = get_adapter(args.adapter)
+    try:
+        if not adapter.supports_assembly:
+            raise HCVInputError(f"{adapter.label} does not run assembly scenes")
+        try:
+            rep = code_report(adapter, scene, horizons[0])
+        except AdapterDeclined as exc:
+            raise HCVInputError(exc.declined) from None
+        except AdapterError as exc:  # the code failed (crash, malformed output): not the input
+            print(f"hcv: error: {adapter.label} failed: {' '.join(str(exc).split())}",
+                  file=sys.stderr)  # fmt: skip
+            return EXIT_FAIL
+    finally:
+        adapter.close()
+    if args.json:
+        json.dump({"scene": scene.to_dict(), "code": rep}, sys.stdout, indent=2, default=str)
+        sys.stdout.write("\n")
+        return EXIT_OK
+    print(
+        f"dt-crit: {scene.name} in {rep['code']} ({rep['n_bodies']} bodies, "
+        f"{rep['horizon']} steps, {rep['runs']} runs, {fmt(rep['wall_s'])} s)"
+    )
+    print(f"  dt_safe (paper) [s]: {fmt(rep['dt_safe'])}")
+    print(
+        f"  measured dt_crit (smallest failing) [s]: {fmt(rep['dt_crit'])} "
+        f"({rep['evidence']}); the suite's: {fmt(rep['dt_crit_suite'])}"
+    )
+    for a in rep["advice"]:
+        verdict = "safe" if a["safe"] else "NOT safe"
+        print(
+            f"  advice {a['name']} [s]: {fmt(a['dt'])}: {verdict}, "
+            f"dt_crit / advice = {fmt(a['factor'])}"
+        )
+    if not rep["advice"]:
+        print(f"  advice: none ({rep['advice_note']})")
+    return EXIT_OK

@@ -1,0 +1,341 @@
+"""The contact codes on chain scenes (issue 39, section 4; contract item 14).
+
+Without a code: the contract's default declines in one line, a malformed chain run is
+refused, the suite's energy of a chain and its runaway verdict on a series. With LIGGGHTS
+and YADE (marked with their codes' markers, skipped with the install line where absent):
+the code's positions after a few hundred steps are those of an independent velocity
+Verlet of the scene's law (which checks the mapping of k on the walls and between the
+spheres, and the scheme), its measured Delta t_crit lies within the suite's own ensemble
+of the same scene, horizon, rule and grid, and its advice is what the code computes
+whatever step it is asked at. ``hcv dt-crit SCENE --adapter CODE``: the decline and a
+lattice are one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from reference_impl.adapters._assembly_request import chain_energy, chain_run_from_mapping
+from reference_impl.adapters.base import (
+    AdapterDeclined,
+    AdapterOutputError,
+    ChainRequest,
+    ChainRun,
+    ContactAdapter,
+)
+from reference_impl.adapters.lammps import lammps_available
+from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
+from reference_impl.adapters.liggghts import liggghts_available
+from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
+from reference_impl.adapters.yade import yade_available
+from reference_impl.assembly.lanes import initial_energy
+from reference_impl.assembly.model import assembly_model
+from reference_impl.assembly.safe import dt_safe_conventions
+from reference_impl.assembly.search import search_ensemble
+from reference_impl.bench.assembly_codes import (
+    CODE_GRID,
+    chain_scene,
+    code_dt_crit,
+    judge_energy,
+)
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.stability.criteria import EnergyGrowth
+from verification._chain_codes import verlet_chain
+from verification._hcv_run import hcv
+
+from .assertions import assert_close, assert_true
+
+CLAIM = "assembly-codes"  # the codes on chain scenes (issue 39 section 4), not a paper claim
+K, M, R = 1.0879e10, 4.1103e-3, 5e-3  # chain-hertz: N/m^1.5, kg, m
+# Short runs of the position check: 300 steps at 0.05 Delta t_safe cover the striker's
+# contact, the pulse through the chain and the right wall's contact.
+STEPS, DT_FRACTION = 300, 0.05
+# Positions agree to 1e-12 m: the codes print 15 significant digits (x ~ 1e-2 m: 1e-17 m)
+# and round-off grows over 300 steps to ~1e-15 m; a wrong k on the walls (Hertz on a wall
+# of the spheres' material is sqrt(2) stiffer) moves them by ~1e-6 m.
+X_TOL = 1e-12
+
+
+def _request(n: int, dt: float, steps: int, walls: str = "both") -> ChainRequest:
+    return ChainRequest("t", PowerLaw(K, 1.5), (M,) * n, R, walls, (1.0,) + (0.0,) * (n - 1),
+                        dt, steps)  # fmt: skip
+
+
+def _dt_safe(n: int) -> float:
+    model = assembly_model(chain_scene(n))
+    return dt_safe_conventions(model, initial_energy(model))["paper"]
+
+
+# -- the contract, without a code ---------------------------------------------------------
+
+
+def test_default_adapter_declines_assembly_in_one_line():
+    class Plain(ContactAdapter):
+        name = "plain"
+
+    with pytest.raises(AdapterDeclined) as exc:
+        Plain().assembly(_request(2, 1e-7, 10))
+    assert_true(exc.value.declined == "plain does not run assembly scenes",
+                got=repr(exc.value.declined), should="'plain does not run assembly scenes'",
+                claim=CLAIM, call="ContactAdapter.assembly")  # fmt: skip
+
+
+def test_malformed_chain_run_is_refused():
+    req = _request(3, 1e-7, 10)
+    with pytest.raises(AdapterOutputError, match=r"shape \(samples, 3\)"):
+        chain_run_from_mapping({"x": np.zeros((5, 2)), "v": np.zeros((5, 2))}, req, "c")
+    with pytest.raises(AdapterOutputError, match="returned 12 samples"):
+        chain_run_from_mapping({"x": np.zeros((12, 3)), "v": np.zeros((12, 3))}, req, "c")
+
+
+def test_chain_energy_is_kinetic_plus_hertz_of_every_contact():
+    req = _request(2, 1e-7, 1)  # walls at x = 0 and x = 4 R
+    q_left, q_mid = 1e-6, 2e-6  # overlaps (m); the right wall then has a gap of their sum
+    x0 = R - q_left
+    x1 = x0 + 2 * R - q_mid
+    x = np.array([req.x0(), [x0, x1]])
+    v = np.array([[1.0, 0.0], [0.5, -0.25]])
+    e = chain_energy(req, ChainRun(x, v))
+    u = K / 2.5 * (q_left**2.5 + q_mid**2.5)  # U = k q^(5/2) / (5/2); a gap has none
+    # 1e-9: the overlaps come from differences of positions ~1e-2 m (round-off 1e-18 m
+    # on overlaps of 1e-6 m: 1e-12), to the power 5/2
+    assert_close(e[1], 0.5 * M * (0.5**2 + 0.25**2) + u, rtol=1e-9, claim=CLAIM,
+                 call="chain_energy (3 contacts)")  # fmt: skip
+    assert_close(e[0], 0.5 * M, rtol=1e-15, claim=CLAIM, call="chain_energy (start)")
+
+
+def test_judge_energy_follows_the_kernels_rule():
+    crit = EnergyGrowth(factor=100.0, n_steps=10, confirm_factor=10.0, confirm_horizon=3)
+    flat = np.ones(11)
+    assert judge_energy(flat, crit)[:2] == (False, None)
+    runaway = np.concatenate([np.ones(5), [200.0, 2e3, 2e4], np.ones(3)])
+    assert judge_energy(runaway, crit)[:2] == (True, "confirmed")
+    blown = np.concatenate([np.ones(5), [np.nan] * 6])
+    assert judge_energy(blown, crit)[:2] == (True, "domain")
+    # crossed once within the horizon: undecided until the confirmation horizon is run
+    crossed = np.concatenate([np.ones(5), [200.0], np.ones(5)])
+    assert judge_energy(crossed, crit)[3] is True
+    bounded = np.concatenate([np.ones(5), [200.0], np.ones(25)])
+    failed, evidence, peak, more = judge_energy(bounded, crit)
+    assert (failed, evidence, more) == (False, None, False)
+    assert_close(peak, 200.0, rtol=0, claim=CLAIM, call="judge_energy (bounded peak)")
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["chain-hertz", "--adapter", "reference"], "reference does not run assembly scenes"),
+        (["lattice-hertz-triangular", "--adapter", "reference"],
+         "--adapter runs chain scenes only; scene 'lattice-hertz-triangular' is a lattice"),
+        (["hertz", "--adapter", "reference"], "--adapter runs chain scenes only"),
+        (["chain-hertz", "--adapter", "reference", "--horizons", "10,20"],
+         "--adapter takes one horizon, got --horizons [10, 20]"),
+        (["chain-hertz", "--adapter", "nosuchcode"], "nosuchcode"),
+    ],
+)  # fmt: skip
+def test_hcv_dt_crit_adapter_refusals_are_one_line_exit_2(args, words, tmp_path):
+    r = hcv(["dt-crit", *args], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr!r}, stdout {r.stdout[:80]!r}",
+                should=f"exit 2 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit {' '.join(args)}")  # fmt: skip
+
+
+def test_hcv_dt_crit_runs_a_third_party_chain_code(tmp_path):
+    spec = "verification._chain_codes:VerletChainCode"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--json", "--horizons", "500"],
+            cwd=tmp_path)  # fmt: skip
+    assert_true(
+        r.returncode == 0,
+        got=f"exit {r.returncode}: {r.stderr[-300:]!r}",
+        should="exit 0",
+        claim=CLAIM,
+        call=f"hcv dt-crit chain-hertz --adapter {spec}",
+    )
+    rep = json.loads(r.stdout)["code"]
+    (advice,) = rep["advice"]
+    # the verdict is the comparison it says: safe when the advice is <= dt_crit, and the
+    # factor dt_crit / advice (to round-off of the division)
+    assert_true(advice["safe"] == (advice["dt"] <= rep["dt_crit"])
+                and 0 < rep["dt_crit"] < math.inf and rep["evidence"] == "confirmed",
+                got=repr(rep), should="a confirmed finite dt_crit and the advice's verdict",
+                claim=CLAIM, call=f"hcv dt-crit --adapter {spec}")  # fmt: skip
+    assert_close(advice["factor"], rep["dt_crit"] / advice["dt"], rtol=1e-15, claim=CLAIM,
+                 call=f"hcv dt-crit --adapter {spec} factor")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("cls", "words"),
+    [("CrashingChainCode", "segmentation fault (simulated)"),
+     ("MalformedChainCode", "shape (samples, 10)")],
+)  # fmt: skip
+def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_path):
+    spec = f"verification._chain_codes:{cls}"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert_true(r.returncode == 1 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 1 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
+
+
+# -- the codes ----------------------------------------------------------------------------
+
+
+def _positions_match(adapter, half_step_v: bool):
+    for n, walls in ((2, "both"), (3, "one")):
+        req = _request(n, DT_FRACTION * _dt_safe(2), STEPS, walls)
+        run = adapter.assembly(req)
+        x, v, h = verlet_chain(req)
+        err = float(np.max(np.abs(run.x - x)))
+        assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m",
+                    should=f"<= {X_TOL:g} m", claim=CLAIM,
+                    call=f"{adapter.label} chain n={n} walls={walls}")  # fmt: skip
+        want = h if half_step_v else v
+        # 1e-9 m/s of speeds ~1 m/s: 15 printed digits and the round-off of 300 steps
+        assert_close(run.v[1:], want[1:], rtol=0, atol=1e-9, claim=CLAIM,
+                     call=f"{adapter.label} chain n={n} walls={walls} velocities")  # fmt: skip
+
+
+def _dt_crit_in_suite_ensemble(adapter):
+    sc = chain_scene(2)
+    safe = _dt_safe(2)
+    crit = EnergyGrowth(n_steps=2000)
+    found = code_dt_crit(adapter, sc, safe, criterion=crit)
+    ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
+    # Contacts open and close: the run is chaotic, round-off of the code (or of the last bits
+    # of the start) moves the smallest failing step within the ensemble's spread (0.50-0.52
+    # Delta t_safe at N = 2); two grid resolutions (0.02 Delta t_safe) more on either side
+    # for the k-section's bracket of each.
+    slack = 2 * CODE_GRID.resolution * safe
+    lo, hi = float(ens.dt_crit.min()) - slack, float(ens.dt_crit.max()) + slack
+    assert_true(lo <= found.dt_crit <= hi and found.evidence in ("confirmed", "domain"),
+                got=f"dt_crit {found.dt_crit:.6g} s ({found.evidence})",
+                should=f"in [{lo:.6g}, {hi:.6g}] s, the suite's ensemble", claim=CLAIM,
+                call=f"code_dt_crit {adapter.label} chain-hertz n=2")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def liggghts():
+    from reference_impl.adapters.liggghts import LiggghtsAdapter
+
+    a = LiggghtsAdapter(model="hertz")
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def lammps():
+    from reference_impl.adapters.lammps import LammpsAdapter
+
+    a = LammpsAdapter()
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def yade():
+    from reference_impl.adapters.yade import YadeAdapter
+
+    a = YadeAdapter(input="en")
+    yield a
+    a.close()
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_chain_is_velocity_verlet_of_the_scene(liggghts):
+    _positions_match(liggghts, half_step_v=False)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_chain_is_leapfrog_of_the_scene(yade):
+    # leapfrog: the positions of velocity Verlet, the velocity of the half step
+    _positions_match(yade, half_step_v=True)
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_dt_crit_lies_in_the_suites_ensemble(liggghts):
+    _dt_crit_in_suite_ensemble(liggghts)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_dt_crit_lies_in_the_suites_ensemble(yade):
+    _dt_crit_in_suite_ensemble(yade)
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_chain_is_velocity_verlet_of_the_scene(lammps):
+    _positions_match(lammps, half_step_v=False)
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_dt_crit_lies_in_the_suites_ensemble_and_it_gives_no_advice(lammps):
+    _dt_crit_in_suite_ensemble(lammps)
+    advice = lammps.step_advice(_request(2, 1e-8, 10))
+    assert_true(advice == {}, got=repr(advice), should="{} (LAMMPS computes no step advice)",
+                claim=CLAIM, call="LammpsAdapter.step_advice")  # fmt: skip
+
+
+def _advice_is_the_codes_whatever_the_step(adapter, names):
+    """The advice is a property of the chain, not of the step it is asked at: LIGGGHTS'
+    times are dt over the fractions it prints, YADE's PWaveTimeStep reads the material."""
+    safe = _dt_safe(2)
+    a1 = adapter.step_advice(_request(2, 1e-3 * safe, 200))
+    a2 = adapter.step_advice(_request(2, 2e-3 * safe, 200))
+    assert_true(set(a1) == set(names), got=repr(sorted(a1)), should=repr(sorted(names)),
+                claim=CLAIM, call=f"{adapter.label}.step_advice")  # fmt: skip
+    for name in names:
+        assert_true(0 < a1[name] < math.inf, got=f"{name} = {a1[name]!r} s",
+                    should="a finite step > 0 s", claim=CLAIM,
+                    call=f"{adapter.label}.step_advice")  # fmt: skip
+    # 1e-6: the fractions are printed to 15 digits; LIGGGHTS' Hertz time reads the speeds
+    # after its one step, which differ by ~dt k q / m (1e-3 of the start's) between the two
+    # steps: the Rayleigh and P-wave times, which read no speed, are compared
+    for name in set(names) - {"hertz", "GlobalStiffnessTimeStepper"}:
+        assert_close(a2[name], a1[name], rtol=1e-6, claim=CLAIM,
+                     call=f"{adapter.label}.step_advice {name} at two steps")  # fmt: skip
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_advice_is_its_rayleigh_and_hertz_times(liggghts):
+    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"))
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_advice_is_pwave_and_global_stiffness(yade):
+    _advice_is_the_codes_whatever_the_step(yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"))
+
+
+def test_docs_block_is_the_generators_table():
+    """docs/assemblies.md types the codes' table only inside its generated block, in the
+    generator's columns (`python -m reference_impl.campaign.assembly_codes_doc` rewrites it)."""
+    from pathlib import Path
+
+    from reference_impl.bench.assembly_codes import CODES
+    from reference_impl.campaign.assembly_codes_doc import END, HEADER, START
+
+    page = (Path(__file__).resolve().parent.parent / "docs" / "assemblies.md").read_text()
+    assert_true(START in page and END in page, got="no generated block",
+                should=f"{START} ... {END}", claim=CLAIM, call="docs/assemblies.md")  # fmt: skip
+    block = page.split(START, 1)[1].split(END, 1)[0].strip().splitlines()
+    assert_true(block and block[0] == HEADER, got=repr(block[:1]), should=repr(HEADER),
+                claim=CLAIM, call="docs/assemblies.md block header")  # fmt: skip
+    codes = {ln.split("|")[1].strip() for ln in block[2:] if ln.startswith("| ")}
+    assert_true(codes == set(CODES), got=repr(sorted(codes)), should=repr(sorted(CODES)),
+                claim=CLAIM, call="docs/assemblies.md block rows")  # fmt: skip
