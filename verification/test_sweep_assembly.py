@@ -173,3 +173,48 @@ def test_hcv_sweep_writes_lane_rows_and_the_ensembles_table(tmp_path, capsys):
         call="hcv sweep (chain, 2 horizons, 4 lanes in groups of 2) --workers 1",
     )  # fmt: skip
 
+
+# ------------------------------------------------------------------ progress (issue 39 §5)
+def test_hcv_dt_crit_says_each_horizon_off_a_terminal(capsys):
+    """A log (stderr not a terminal) gets a line as each horizon starts, naming it, and one
+    at the end: not only the result."""
+    code = main(["dt-crit", "chain-hertz", "--horizons", "500,1000", "--lanes", "2", "--json"])
+    err = capsys.readouterr().err.strip().splitlines()
+    starts = [x for x in err if x.startswith("dt-crit: horizon ")]
+    assert_true(
+        code == 0
+        and any("horizon 1 of 2 (500 steps)" in x for x in starts)
+        and any("horizon 2 of 2 (1,000 steps)" in x for x in starts)
+        and err[-1].startswith("dt-crit: all 2 horizons done"),
+        got=f"exit {code}, stderr {err}",
+        should="exit 0, a line for horizon 1 of 2 (500 steps), one for 2 of 2 (1,000 steps), "
+        "and 'all 2 horizons done' last",
+        claim=CLAIM,
+        call="hcv dt-crit chain-hertz --horizons 500,1000 --lanes 2 --json",
+    )
+
+
+def test_a_round_reports_progress_between_kernel_calls(monkeypatch):
+    """Within a round (all lanes run one horizon) the search calls back between the kernel's
+    calls, not only when the round ends: a long horizon shows progress and a sweep case's
+    deadline is checked. Kernel calls are made small here so that a round takes many."""
+    from reference_impl.assembly import lanes as lanes_mod
+    from reference_impl.assembly.model import assembly_model
+    from reference_impl.assembly.search import reference_step, search_ensemble
+    from reference_impl.scenes import load_scene
+    from reference_impl.stability.criteria import EnergyGrowth
+
+    model = assembly_model(load_scene("chain-hertz"))
+    _, _, ref = reference_step(model)
+    calls = []
+    monkeypatch.setattr(lanes_mod, "_CALL_UPDATES", 1 << 12)  # ~4000 updates a call
+    crit = EnergyGrowth(factor=100.0, n_steps=2000, confirm_factor=1e4, confirm_horizon=2)
+    search_ensemble(model, ref, n_lanes=2, criterion=crit, progress=lambda d, t: calls.append(d))
+    repeats = sum(a == b for a, b in zip(calls, calls[1:], strict=False))
+    assert_true(
+        repeats > 10 and calls[-1] == 2.0,
+        got=f"{len(calls)} calls, {repeats} repeating the round's value, last {calls[-1:]}",
+        should="many calls between kernel calls (> 10 repeats), the last 2.0 (both lanes done)",
+        claim=CLAIM,
+        call="search_ensemble(chain-hertz, 2 lanes, 2000 steps, small kernel calls)",
+    )

@@ -117,7 +117,9 @@ def search_ensemble(
     grid : SearchGrid
         Scan and refinement in units of ``dt_ref``.
     progress : callable, optional
-        ``progress(completed, total)`` after each round.
+        ``progress(completed, total)`` after each round, and again with the same values
+        between the kernel's calls within a round (a long horizon's round is minutes: the
+        progress line and a sweep case's deadline get through).
     first_lane : int
         Index of the first lane in its ensemble (>= 0): lanes first_lane .. first_lane +
         n_lanes - 1 of a larger ensemble, each as it is there (a sweep runs an ensemble in
@@ -138,6 +140,16 @@ def search_ensemble(
         raise HCVInputError(f"first_lane must be an integer >= 0, got {first_lane!r}")
     scale = 1.0 + ULP_SCALE * np.arange(first_lane, first_lane + n_lanes)
     work = {"updates": 0, "q_run": 0.0}
+    last = [0.0, float(n_lanes)]  # the latest (completed, total) of the rounds
+
+    def rounds(done: float, total: float) -> None:
+        last[:] = [done, total]
+        if progress is not None:
+            progress(done, total)
+
+    def between_calls(_updates: int) -> None:
+        if progress is not None:
+            progress(*last)
 
     def evaluate(need: dict) -> dict:
         owners = np.concatenate([np.full(d.size, i) for i, d in need.items()])
@@ -150,6 +162,7 @@ def search_ensemble(
             confirm_level=crit.confirm_level,
             n_steps=int(crit.n_steps),
             confirm_steps=crit.confirm_steps,
+            progress=between_calls,
         )
         work["updates"] += out.contact_updates
         failed, bounded = out.failed, out.bounded
@@ -164,7 +177,7 @@ def search_ensemble(
             rows[int(i)].append((float(dts[k]), bool(failed[k]), ev, peak))
         return rows
 
-    searches = search_steps(evaluate, [dt_ref] * n_lanes, grid, progress)
+    searches = search_steps(evaluate, [dt_ref] * n_lanes, grid, rounds)
     brackets = [s.bracket() for s in searches]
     dt_crit = np.array([f for _, f in brackets])
     return Ensemble(
