@@ -81,7 +81,7 @@ def assemblies_figures(rows: list[dict], fig_dir) -> list[str]:
     ax.set_title("Undamped Hertz assemblies: fraction of the ensemble's lanes that run away")
     ax.set_xlim(left=0.0)
     ax.set_ylim(0.0, 1.02)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.grid(True, alpha=0.3)
     fig.savefig(fig_dir / FIGURES["p_fail"], dpi=130)
 
