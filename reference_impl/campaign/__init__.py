@@ -109,6 +109,9 @@ def quick_drops() -> list[str]:
         f"({', '.join(gone_cases)}); fewer speeds for {', '.join(fewer_speeds)}",
         f"hard cases: {len(hardcases.case_labels(True))} of {len(hardcases.case_labels(False))} "
         "cases, shorter sweeps",
+        f"assemblies: the linear closed forms on {len(_assembly.linear_cases(True))} of "
+        f"{len(_assembly.linear_cases(False))} cases (the table's claim states its own quick "
+        "cases and horizon)",
     ]
 
 
