@@ -88,6 +88,10 @@ def bench(session: nox.Session) -> None:
     )
     session.run("python", "-m", "benchmarks.bench_lammps", "--json", "reports/bench/lammps.json")
     session.run("python", "-m", "benchmarks.bench_sweep", "--json", "reports/bench/sweep.json")
+    session.run(
+        "python", "-m", "benchmarks.bench_sweep_assembly", "--json",
+        "reports/bench/sweep_assembly.json",
+    )  # fmt: skip
     session.run("python", "-m", "benchmarks.bench_startup", "--json", "reports/bench/startup.json")
     # The records of the docs' other figures (issue 41), then the pages' blocks from them.
     session.run(

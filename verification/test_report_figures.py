@@ -27,7 +27,16 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from reference_impl.bench.scorecard.compare import plot_speed_error  # noqa: E402
 from reference_impl.claims import fig1 as fig1_claim  # noqa: E402
-from reference_impl.report import _dtmap, _fig1, _hardcases, _laws, _steps, _wp  # noqa: E402
+from reference_impl.claims import sec6_assemblies  # noqa: E402
+from reference_impl.report import (  # noqa: E402
+    _assemblies,
+    _dtmap,
+    _fig1,
+    _hardcases,
+    _laws,
+    _steps,
+    _wp,
+)
 from reference_impl.studies.paper import FIG1  # noqa: E402
 from verification.assertions import assert_true  # noqa: E402
 
@@ -37,7 +46,10 @@ MIN_PT = 8.0
 UNIT = re.compile(r"\[[^\]]+\]")
 # Points drawn between two data points of a line (a legend must not cover a segment).
 _PER_SEGMENT = 16
-FIGURES = ("fig1", "dt_crit_map", "hard_cases", "damping_laws", "work_precision", "steps", "bench")
+FIGURES = (
+    "fig1", "dt_crit_map", "hard_cases", "damping_laws", "work_precision", "steps", "bench",
+    "assemblies",
+)  # fmt: skip
 
 
 def _finite(x):
@@ -80,6 +92,13 @@ def _draw(name: str, r: dict, tmp: Path, monkeypatch) -> list[Figure]:
             pytest.skip("the committed report has no contact codes")
         for code in r["steps_per_contact"]:
             _steps.plot_steps(code, tmp / "x.png", r["steps_per_contact_settings"]["scenes"])
+    elif name == "assemblies":
+        # The claim's rows; a report written before hcv-results/1.2 has no P_fail curves in
+        # them: the quick measurement's (a few seconds) are drawn instead.
+        rows = next(c for c in r["claims"] if c["id"] == sec6_assemblies.ID)["measured"]["rows"]
+        if "p_fail_by_horizon" not in rows[0]:
+            rows = sec6_assemblies.measure(quick=True).figures["rows"]
+        _assemblies.assemblies_figures(rows, tmp)
     elif name == "bench":
         if not r["adapters"]:
             pytest.skip("the committed report has no contact codes")

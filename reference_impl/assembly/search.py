@@ -35,6 +35,7 @@ __all__ = [
     "QUANTILES",
     "Ensemble",
     "assembly_report",
+    "reference_step",
     "search_ensemble",
 ]
 
@@ -99,6 +100,7 @@ def search_ensemble(
     criterion: EnergyGrowth | None = None,
     grid: SearchGrid = ENSEMBLE_GRID,
     progress: Callable[[float, float], None] | None = None,
+    first_lane: int = 0,
 ) -> Ensemble:
     """Delta t_crit of ``n_lanes`` lanes whose initial velocities differ in their last bits.
 
@@ -115,7 +117,13 @@ def search_ensemble(
     grid : SearchGrid
         Scan and refinement in units of ``dt_ref``.
     progress : callable, optional
-        ``progress(completed, total)`` after each round.
+        ``progress(completed, total)`` after each round, and again with the same values
+        between the kernel's calls within a round (a long horizon's round is minutes: the
+        progress line and a sweep case's deadline get through).
+    first_lane : int
+        Index of the first lane in its ensemble (>= 0): lanes first_lane .. first_lane +
+        n_lanes - 1 of a larger ensemble, each as it is there (a sweep runs an ensemble in
+        groups of lanes, `reference_impl.sweep._assembly`).
     """
     if (
         not isinstance(n_lanes, int)
@@ -128,8 +136,20 @@ def search_ensemble(
     crit = EnergyGrowth() if criterion is None else criterion
     if not isinstance(crit, EnergyGrowth):
         raise HCVInputError(f"an assembly needs an EnergyGrowth criterion, got {crit!r}")
-    scale = 1.0 + ULP_SCALE * np.arange(n_lanes)
+    if isinstance(first_lane, bool) or not isinstance(first_lane, int) or first_lane < 0:
+        raise HCVInputError(f"first_lane must be an integer >= 0, got {first_lane!r}")
+    scale = 1.0 + ULP_SCALE * np.arange(first_lane, first_lane + n_lanes)
     work = {"updates": 0, "q_run": 0.0}
+    last = [0.0, float(n_lanes)]  # the latest (completed, total) of the rounds
+
+    def rounds(done: float, total: float) -> None:
+        last[:] = [done, total]
+        if progress is not None:
+            progress(done, total)
+
+    def between_calls(_updates: int) -> None:
+        if progress is not None:
+            progress(*last)
 
     def evaluate(need: dict) -> dict:
         owners = np.concatenate([np.full(d.size, i) for i, d in need.items()])
@@ -142,6 +162,7 @@ def search_ensemble(
             confirm_level=crit.confirm_level,
             n_steps=int(crit.n_steps),
             confirm_steps=crit.confirm_steps,
+            progress=between_calls,
         )
         work["updates"] += out.contact_updates
         failed, bounded = out.failed, out.bounded
@@ -156,7 +177,7 @@ def search_ensemble(
             rows[int(i)].append((float(dts[k]), bool(failed[k]), ev, peak))
         return rows
 
-    searches = search_steps(evaluate, [dt_ref] * n_lanes, grid, progress)
+    searches = search_steps(evaluate, [dt_ref] * n_lanes, grid, rounds)
     brackets = [s.bracket() for s in searches]
     dt_crit = np.array([f for _, f in brackets])
     return Ensemble(
@@ -207,9 +228,7 @@ def assembly_report(
             factor=factor, n_steps=h, confirm_factor=confirm_factor, confirm_horizon=confirm_horizon
         )
         if safe is None:
-            e0 = initial_energy(model)
-            safe = dt_safe_conventions(model, e0)
-        ref = safe["paper"] if safe["paper"] > 0 else _fallback_ref(model, e0)
+            e0, safe, ref = reference_step(model)
 
         def sub(done: float, tot: float, k=k) -> None:
             if progress is not None:
@@ -258,6 +277,15 @@ def assembly_report(
         "holds": bool(all(r["dt_crit_quantiles"]["5"] >= paper for r in out_rows)),
         "factor": (last["5"] / paper) if paper > 0 else math.inf,
     }
+
+
+def reference_step(model: AssemblyModel) -> tuple[float, dict[str, float], float]:
+    """(E_0 (J), Delta t_safe under each convention (s), the search's reference step (s)):
+    the paper's Delta t_safe, or where it is 0 the endpoint shortcut (`_fallback_ref`)."""
+    e0 = initial_energy(model)
+    safe = dt_safe_conventions(model, e0)
+    ref = safe["paper"] if safe["paper"] > 0 else _fallback_ref(model, e0)
+    return e0, safe, ref
 
 
 def _fallback_ref(model: AssemblyModel, e0: float) -> float:

@@ -4,7 +4,7 @@
 speed-against-error study, the hard cases, the damping laws and, with ``--adapter``, the
 contact codes; it writes into ``out_dir``:
 
-* ``results.json`` -- every result, schema ``hcv-results/1.1``
+* ``results.json`` -- every result, schema ``hcv-results/1.2``
   (`reference_impl.report._schema`);
 * ``figures/*.png`` -- drawn from the same results;
 * ``index.html``, ``index.md``, ``erratum.md`` -- rendered from results.json by
@@ -37,11 +37,12 @@ from reference_impl._format import g, jsonable
 from reference_impl.bench.scorecard._json import result_to_dict
 from reference_impl.bench.scorecard.compare import plot_speed_error
 from reference_impl.bench.scorecard.runner import run_bench
-from reference_impl.campaign import _codes, _environment, _map, _steps
+from reference_impl.campaign import _assembly, _codes, _environment, _map, _steps
 from reference_impl.claims import (
     CLAIMS,
     VERDICTS,
     _scan,
+    sec6_assemblies,
     sec6_dt_safe_bound,
     sec10_stiffening_domain,
     table1,
@@ -51,6 +52,7 @@ from reference_impl.claims import fig1 as fig1_claim
 from reference_impl.errors import HCVInputError
 from reference_impl.report import (
     SCHEMA,
+    _assemblies,
     _dtmap,
     _fig1,
     _hardcases,
@@ -107,6 +109,9 @@ def quick_drops() -> list[str]:
         f"({', '.join(gone_cases)}); fewer speeds for {', '.join(fewer_speeds)}",
         f"hard cases: {len(hardcases.case_labels(True))} of {len(hardcases.case_labels(False))} "
         "cases, shorter sweeps",
+        f"assemblies: the linear closed forms on {len(_assembly.linear_cases(True))} of "
+        f"{len(_assembly.linear_cases(False))} cases (the table's claim states its own quick "
+        "cases and horizon)",
     ]
 
 
@@ -219,7 +224,7 @@ def build_report(
     Returns
     -------
     dict
-        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.1``).
+        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.2``).
 
     Raises
     ------
@@ -250,6 +255,9 @@ def build_report(
         startup_json = Path(out) / "bench" / "startup.json"
         startup = json.loads(startup_json.read_text()) if startup_json.is_file() else None
         readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup))
+        docs = ROOT / "docs" / "assemblies.md"  # its generated block, beside the README's
+        if readme_path == ROOT / "README.md" and docs.is_file():
+            docs.write_text(_assemblies.rewrite_docs(results, docs.read_text()))
     return results
 
 
@@ -317,9 +325,9 @@ def _build(
     # The stages `timed` announces, so that a log shows "stage k of n" (claims but
     # section 6, Fig. 1, hard cases, sweeps, their figure, the map, its figure, the
     # criterion study, speed against error and its figures, one per adapter).
-    # 9 fixed stages, 2 of the damping-law study, one per adapter and the steps study
-    # and the codes side by side
-    n_stages = len(CLAIMS) - 1 + 9 + 2 + len(adapters) + (2 if adapters else 0)
+    # 9 fixed stages, 2 of the damping-law study, 2 of the assemblies (linear checks,
+    # figures), one per adapter and the steps study and the codes side by side
+    n_stages = len(CLAIMS) - 1 + 9 + 2 + 2 + len(adapters) + (2 if adapters else 0)
     stage = [0]
 
     def timed(name: str, fn, *args, **kw):
@@ -390,6 +398,11 @@ def _build(
     )
     law_rows = timed("damping laws: restitution against speed", laws.laws_results, quick)
     timed("damping laws: figure", _laws.laws_figure, law_rows, fig_dir / _laws.FIGURE)
+    # Assemblies: the nonlinear table and P_fail curves are the claim's measurement (run
+    # with the claims above); this stage adds the linear closed forms and the figures.
+    asm_linear = timed("assemblies: linear closed forms", _assembly.linear_checks, quick)
+    asm_rows = measured[sec6_assemblies.ID].figures["rows"]
+    asm_figs = timed("assemblies: figures", _assemblies.assemblies_figures, asm_rows, fig_dir)
 
     tests = _scan.claim_tests()
     claims = []
@@ -424,6 +437,7 @@ def _build(
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures.append(_laws.FIGURE)
+    figures += [f.split("/")[-1] for f in asm_figs]
     figures += [b["figure"] for b in bench if b.get("figure")]
     figures += [c["figure"] for c in steps if c.get("figure")]
     figures = [f"figures/{n}" for n in figures]
@@ -478,6 +492,13 @@ def _build(
             "settings": hardcases.SETTINGS,
         },
         "damping_laws": law_rows,
+        "assemblies": {
+            "claim": sec6_assemblies.ID,
+            "linear": asm_linear,
+            "figures": dict(zip(("p_fail", "factor"), asm_figs, strict=True)),
+            # Hook of issue 39 section 4: the codes' step advice (a list), filled by that study.
+            "code_advice": None,
+        },
         "figures": figures,
         "figure_captions": {n: cap for n, cap in wp_figs},
         "environment": env,

@@ -117,6 +117,8 @@ def measure(quick: bool = False) -> Measurement:
                 "ratio_by_horizon": {
                     str(r["horizon"]): r["dt_crit_over_dt_safe"] for r in rep["by_horizon"]
                 },
+                # P_fail(dt) per horizon: (dt (s), fraction of lanes failed), the report's curves
+                "p_fail_by_horizon": {str(r["horizon"]): r["p_fail"] for r in rep["by_horizon"]},
                 "ratio_5": last["dt_crit_over_dt_safe"]["5"],
                 "ratio_50": last["dt_crit_over_dt_safe"]["50"],
                 "ratio_95": last["dt_crit_over_dt_safe"]["95"],

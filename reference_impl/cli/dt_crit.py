@@ -4,12 +4,17 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 
 from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
 from reference_impl.cli._tables import fmt, print_transposed, scene_title
 from reference_impl.errors import HCVInputError
 
 __all__ = ["add_parser", "run"]
+
+# Plain progress lines of an assembly's ensembles (not a terminal): at most one per this
+# many seconds within a horizon (a line at each horizon's start and at the end regardless).
+_PLAIN_EVERY = 10.0
 
 _FIELDS = (
     ("kind", "scene kind"),
@@ -120,7 +125,8 @@ def _run_assembly(args, scene, search_assembly_scene) -> int:
     """``hcv dt-crit`` on a chain or lattice: the ensemble's distribution, per horizon
     (``search_assembly_scene``: `reference_impl.tasks.search_assembly_scene`)."""
     horizons = _horizons(args.horizons)
-    with _progress(sys.stderr.isatty()) as progress:
+    labels = sorted(set(horizons)) if horizons else None
+    with _EnsembleProgress(sys.stderr.isatty(), labels, args.lanes) as progress:
         rep = search_assembly_scene(scene, horizons, args.lanes, args.criterion, progress)
     if args.json:
         json.dump({"scene": scene.to_dict(), "assembly": rep}, sys.stdout, indent=2, default=str)
@@ -210,4 +216,62 @@ class _progress:
     def __exit__(self, *exc):
         if self._bar is not None:
             self._bar.__exit__(*exc)
+        return False
+
+
+class _EnsembleProgress:
+    """Progress of an assembly's ensembles, per horizon and per round of the lanes' searches.
+
+    The callback gets ``(completed, total)`` from `assembly_report`: ``total`` horizons,
+    the integer part of ``completed`` the horizon running and its fraction the share of
+    that horizon's search done (updated after each round and between the kernel's calls
+    within a round, so a long horizon shows its progress too). On a terminal a rich bar
+    whose text names the horizon; else plain stderr lines: one as each horizon starts, then
+    at most one per `_PLAIN_EVERY` seconds, and one at the end.
+    """
+
+    def __init__(self, tty: bool, horizons: list[int] | None, lanes: int):
+        self.tty, self.horizons, self.lanes = tty, horizons, lanes
+        self.bar, self.k, self.t0, self.last = None, -1, time.monotonic(), 0.0
+
+    def __enter__(self):
+        if self.tty:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self.bar = Progress(
+                TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn(),
+                console=Console(stderr=True), transient=True,
+            )  # fmt: skip
+            self.bar.__enter__()
+            self.task = self.bar.add_task("dt-crit", total=None)
+        return self.update
+
+    def _name(self, k: int, n: int) -> str:
+        steps = f" ({self.horizons[k]:,} steps)" if self.horizons and k < len(self.horizons) else ""
+        return f"horizon {k + 1} of {n}{steps}, {self.lanes} lanes"
+
+    def update(self, done: float, total: float) -> None:
+        n = max(int(total), 1)
+        k = min(int(done), n - 1)
+        now = time.monotonic()
+        share = 1.0 if done >= total else done - k
+        if self.bar is not None:
+            self.bar.update(self.task, completed=done, total=total,
+                            description=f"dt-crit: {self._name(k, n)}")  # fmt: skip
+            return
+        if k != self.k or done >= total or now - self.last >= _PLAIN_EVERY:
+            what = "done" if done >= total else f"{100 * share:.0f} % of its search"
+            if done >= total:
+                line = f"dt-crit: all {n} horizon{'s' if n > 1 else ''} done"
+            else:
+                line = f"dt-crit: {self._name(k, n)}: {what}"
+            if done >= total and self.k == n:  # the end, already said
+                return
+            print(f"{line} ({now - self.t0:.0f} s)", file=sys.stderr, flush=True)
+            self.k, self.last = (n if done >= total else k), now
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.__exit__(*exc)
         return False

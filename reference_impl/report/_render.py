@@ -11,6 +11,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from reference_impl.report._assemblies import assemblies_blocks
 from reference_impl.report._blocks import DETAILS, IMG, UL, H, P, T, _num
 from reference_impl.report._blocks import markdown_lines as _md
 from reference_impl.report._codes import codes_blocks
@@ -423,6 +424,7 @@ def _sections(r) -> list:
         + _table1(r)
         + _fig1(r)
         + dtmap_blocks(r)
+        + assemblies_blocks(r)
         + _wp(r)
         + laws_blocks(r)
         + _hard(r)
@@ -456,6 +458,7 @@ def html_page(r: dict, fig_dir: Path) -> str:
                 ("table1", "Table 1"),
                 ("fig1", "Fig. 1"),
                 ("dtcrit", "Critical step"),
+                *([("assemblies", "Assemblies")] if r.get("assemblies") else []),
                 ("wp", "Speed vs error"),
                 ("hard", "Hard cases"),
                 *([("adapters", "Contact codes")] if r.get("adapters") else []),

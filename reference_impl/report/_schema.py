@@ -1,4 +1,4 @@
-"""results.json, version ``hcv-results/1.1``: what a report run writes and the renderer reads.
+"""results.json, version ``hcv-results/1.2``: what a report run writes and the renderer reads.
 
 `reference_impl.campaign.build_report` runs the studies and writes ``results.json``; the
 report's pages (``index.md``, ``index.html``, ``erratum.md``) are rendered from it and
@@ -11,11 +11,12 @@ documented here with the minor that added it; a field removed, renamed or changi
 is a new major. A reader (``hcv report --from``) accepts its own version and every older
 minor of the same major (a field added since is then absent, read as null); it refuses
 another major and a newer minor, in one line. ``hcv-results/1.1`` added
-``codes_side_by_side``; the same rule holds for the bench's ``hcv-bench/1``
-(`reference_impl.bench.scorecard._json`). Fields (SI units; times in s, speeds in m/s):
+``codes_side_by_side``, ``hcv-results/1.2`` added ``assemblies``; the same rule holds for
+the bench's ``hcv-bench/1`` (`reference_impl.bench.scorecard._json`). Fields (SI units; times in s, speeds in m/s):
 
 ``schema`` (str)
-    ``"hcv-results/1.1"`` (``"hcv-results/1"`` before ``codes_side_by_side``).
+    ``"hcv-results/1.2"`` (``"hcv-results/1.1"`` before ``assemblies``, ``"hcv-results/1"``
+    before ``codes_side_by_side``).
 ``title``, ``generated_utc`` (str), ``mode`` (``"full"`` or ``"quick"``), ``quick_drops`` (list of str)
     What was run, when, and what ``--quick`` left out.
 ``claims`` (list of dict)
@@ -38,6 +39,16 @@ another major and a newer minor, in one line. ``hcv-results/1.1`` added
     (``ode_rtol``, ``verlet_steps``, ``mp_dps``).
 ``damping_laws`` (dict)
     Restitution against speed per damping law.
+``assemblies`` (dict or null; absent from files written before ``hcv-results/1.2``)
+    Section 6 in chains and packings (issue 39; `reference_impl.campaign._assembly`):
+    ``claim`` (the id of the claim whose ``measured.rows`` hold the nonlinear table, the
+    P_fail curves and the ``horizon_dependent`` flags: one home for that measurement),
+    ``linear`` (the search against 2/omega_max on bonded linear springs: ``rtol``,
+    ``criterion``, ``k``, ``m``, ``rows`` of ``case``, ``reference``, ``dt_search``,
+    ``dt_reference``, ``rel_diff``, ``holds``), ``figures`` (``p_fail``, ``factor``: paths
+    listed in ``figures``) and ``code_advice`` (optional list: the codes' step advice on
+    the scenes, one row per code and rule: ``code``, ``advice``, ``verdict``, optionally
+    ``scene``, ``dt_advice``, ``dt_crit``, ``factor``, ``note``).
 ``figures`` (list of str), ``figure_captions`` (dict)
     Figure files relative to the results file's directory (``figures/NAME.png``).
 ``environment`` (dict)
@@ -96,7 +107,7 @@ from reference_impl.report._inputs import read_report_file
 
 __all__ = ["FIELDS", "RESULTS_MAX_BYTES", "SCHEMA", "SCHEMA_FILE", "check_results", "read_results"]
 
-SCHEMA = "hcv-results/1.1"
+SCHEMA = "hcv-results/1.2"
 # The one schema file of the document, shipped with the package (package-data).
 SCHEMA_FILE = Path(__file__).with_name("results.schema.json")
 # The committed results.json, with five codes, is 2.4 MB; 64 MiB keeps a 25x margin and
@@ -239,6 +250,12 @@ def _cross_checks(r: dict) -> tuple[str, str] | None:
     for i, code in enumerate(r["steps_per_contact"]):
         if code.get("figure"):
             needed.append((f"$.steps_per_contact[{i}].figure", f"figures/{code['figure']}"))
+    asm = r.get("assemblies")
+    if asm:
+        ids = [c["id"] for c in r["claims"]]
+        if asm["claim"] not in ids:
+            return "$.assemblies.claim", f"names claim {asm['claim']!r}, which $.claims lacks"
+        needed += [(f"$.assemblies.figures.{k}", rel) for k, rel in asm["figures"].items()]
     for where, rel in needed:
         if rel is not None and rel not in listed:
             return where, f"its figure {rel} is not listed in $.figures"

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from reference_impl.sweep._assembly import ensemble_rows
+
 __all__ = ["CaseStore", "consolidate", "replacing", "write_parquet", "write_summary"]
 
 # Rows of the table printed in summary.md (the full table is results.parquet).
@@ -359,6 +361,17 @@ def write_summary(
             + " (runaway: an instability; accuracy: a tolerance limit that moves with tol)"
         )  # fmt: skip
     lines.append("")
+    if fam == "dt-crit" and "lane" in df.columns and len(df):
+        # Assembly scenes: the lanes of each ensemble, run in groups, gathered again.
+        lines += [
+            "## Ensembles (chain and lattice scenes)",
+            "",
+            "Per scene and horizon: lanes found, the 5 / 50 / 95 % points of Δt_crit [s] "
+            "and of Δt_crit / Δt_safe (paper) over the lanes.",
+            "",
+            _markdown_table(ensemble_rows(df, list(spec.sweep))),
+            "",
+        ]
     drawn = False
     if len(df):
         try:

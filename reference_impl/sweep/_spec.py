@@ -18,6 +18,11 @@ A spec is a TOML document::
     "potential.p" = [1.0, 1.5, 2.0, 3.0]
     "kind" = ["two-sided", "impact"]
 
+A dt-crit sweep of chain or lattice scenes (assemblies) may carry an ``[assembly]`` table
+(``horizons``, ``lanes``, ``lane_group``): each scene's ensemble then runs as one case per
+horizon and group of lanes (`reference_impl.sweep._assembly`), so that the Dask tasks are
+large and even.
+
 Besides dotted paths into ``[scene]``, a ``bench:`` or ``calibrate:`` task may
 sweep what belongs to the code: ``"adapter.KEY"`` (a constructor option of the
 adapter, any variant key, e.g. ``"adapter.dampratio" = [0.1, 0.2]``) and
@@ -55,6 +60,7 @@ from reference_impl._userfiles import check_path
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
 from reference_impl.stability.search import KINDS, parse_criterion
+from reference_impl.sweep._assembly import ASSEMBLY_KINDS, check_assembly_table, lane_groups
 from reference_impl.sweep._code import (  # noqa: F401
     _CALIBRATE_KEYS,
     _CODE_PREFIXES,
@@ -86,7 +92,7 @@ DEFAULT_TIMEOUT = 600.0
 # A spec is a few lines; refusing large files keeps a wrong path from being read whole.
 _MAX_SPEC_BYTES = 1_000_000
 TASKS = ("dt-crit", "solve", "bench:ADAPTER", "calibrate:ADAPTER")
-_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep", "calibrate")
+_TOP_KEYS = ("task", "criterion", "timeout", "scene", "sweep", "calibrate", "assembly")
 
 
 @dataclass(frozen=True)
@@ -340,6 +346,7 @@ def spec_from_dict(
             f"spec {src}: timeout must be a number of seconds > 0, got {timeout!r}"
         )
     scene, sweep = data["scene"], data["sweep"]
+    asm = check_assembly_table(src, task, data.get("assembly"))
     calib = data.get("calibrate")
     if task.startswith("calibrate:"):
         if not isinstance(calib, dict):
@@ -406,6 +413,7 @@ def spec_from_dict(
                     f"spec {src}: case {index} ({_label(params)}): {exc}"
                 ) from None
         expanded.append((params, case_scene, code))
+    expanded = _assembly_groups(src, task, asm, expanded)
     if task.startswith(("bench:", "calibrate:")):  # the code's settings: before any scene
         _check_codes(src, task, ((i, _label(p), c) for i, (p, _s, c) in enumerate(expanded)))
     ctexts = [_case_criterion(crit, cs) for _, cs, _code in expanded]
@@ -428,6 +436,28 @@ def spec_from_dict(
     if all(c.error for c in spec.cases):
         raise SweepSpecError(f"spec {src}: every case is invalid; first: {spec.cases[0].error}")
     return spec
+
+
+def _assembly_groups(src: str, task: str, asm: dict | None, expanded: list) -> list:
+    """Each dt-crit case of a chain or lattice scene as its groups of lanes, one case per
+    horizon and group (`reference_impl.sweep._assembly`); other cases as they are."""
+    out, found = [], False
+    for params, case_scene, code in expanded:
+        if task != "dt-crit" or case_scene.get("kind") not in ASSEMBLY_KINDS:
+            out.append((params, case_scene, code))
+            continue
+        found = True
+        for g in lane_groups(asm):
+            where = {"assembly.horizon": g["horizon"], "assembly.first_lane": g["first_lane"]}
+            out.append(({**params, **where}, case_scene, {**code, "assembly": g}))
+    if asm is not None and not found:
+        raise SweepSpecError(f"spec {src}: [assembly] applies to chain and lattice scenes only")
+    if len(out) > MAX_CASES:
+        raise SweepSpecError(
+            f"spec {src}: {len(out)} cases (groups of lanes included) is more than the maximum "
+            f"{MAX_CASES}; split the sweep into several specs"
+        )
+    return out
 
 
 def _case_criterion(crit: dict, case_scene: dict) -> str | None:

@@ -24,6 +24,7 @@ from reference_impl.bench.calibration.calibrate import calibrate, spec_with_opti
 from reference_impl.bench.scorecard.runner import run_bench
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import scene_from_dict
+from reference_impl.sweep._assembly import assembly_rows
 from reference_impl.tasks import search_loaded_scene, solve_scene
 
 __all__ = ["CaseTimeout", "bench_status", "check_deadline", "deadline", "run_case"]
@@ -205,6 +206,9 @@ def run_case(payload: dict) -> list[dict]:
     scene = scene_from_dict(payload["scene"], f"case {payload['key']}")
     task = payload["task"]
     with deadline(payload.get("timeout")):
+        group = (payload.get("code") or {}).get("assembly")
+        if task == "dt-crit" and group is not None:  # a group of lanes of an ensemble
+            return assembly_rows(scene, group, check_deadline)
         if task == "dt-crit":
             return _dt_crit_rows(scene, payload.get("criterion"))
         if task == "solve":
