@@ -219,3 +219,43 @@ def test_docs_block_of_a_report_with_the_section_links_its_figures(doc):
         claim=CLAIM,
         call="docs_block(results with assemblies)",
     )
+
+
+def test_the_report_runs_the_advice_of_the_chain_codes_it_is_given():
+    """`hcv report --adapter` specs select the codes that run chains, once each, in order;
+    the reference adapter and codes without chains select none (no stage)."""
+    got = _assembly.advice_codes(["reference", "yade[en,wall]", "liggghts", "yade", "mujoco"])
+    assert_true(
+        got == ("yade", "liggghts") and _assembly.advice_codes(["reference"]) == (),
+        got=f"{got}",
+        should="('yade', 'liggghts'), and () for the reference adapter alone",
+        claim=CLAIM,
+        call="advice_codes(adapters)",
+    )
+
+
+@pytest.mark.liggghts
+def test_liggghts_advice_rows_are_valid_report_rows(doc):
+    """The study's rows (LIGGGHTS on chains of 2-5) go into results.json as the schema
+    asks and are rendered; Rayleigh safe, Hertz time unsafe (issue 39 section 4)."""
+    from reference_impl.adapters.liggghts import liggghts_available
+
+    why = liggghts_available()  # None when installed, else the install line
+    if why is not None:
+        pytest.skip(why)
+    _, r = doc
+    rows = _assembly.code_advice(("liggghts",))
+    with_rows = copy.deepcopy(r)
+    with_rows["assemblies"]["code_advice"] = jsonable(rows)
+    check_results(with_rows, "test document with LIGGGHTS's advice")
+    shown = _render.markdown(with_rows)
+    verdicts = {(x["advice"], x["verdict"]) for x in rows}
+    assert_true(
+        len(rows) == 8
+        and verdicts == {("rayleigh", "safe"), ("hertz", "unsafe")}
+        and all(f"| liggghts | {x['scene']} | {x['advice']} |" in shown for x in rows),
+        got=f"{len(rows)} rows, verdicts {sorted(verdicts)}",
+        should="8 rows (2 advices x N = 2..5): rayleigh safe, hertz unsafe, each rendered",
+        claim=CLAIM,
+        call="code_advice(('liggghts',))",
+    )

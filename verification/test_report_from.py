@@ -225,6 +225,9 @@ def test_a_run_without_codes_carries_their_sections_marked(committed, tmp_path, 
     ok = (
         c is not None
         and c["adapters"] == committed["adapters"]
+        # the codes' step advice on chains (issue 39 section 4) goes with them
+        and c["code_advice"] == (committed.get("assemblies") or {}).get("code_advice")
+        and "assemblies.code_advice" in c["carried"]["sections"]
         and c["carried"]["git_commit"] == commit
         and "Contact codes benchmarked" in md
         and f"commit {commit[:12]}" in md

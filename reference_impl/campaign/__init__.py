@@ -170,11 +170,12 @@ def _carry(out: Path, adapters) -> tuple[dict | None, str]:
     }
     source = {
         **source,
-        "sections": list(CARRIED),
+        "sections": [*CARRIED, "assemblies.code_advice"],
         "reason": "no --adapter given",  # the notice says "not run by this report" itself
     }
     data = {k: old.get(k) for k in CARRIED}  # codes_side_by_side: absent from older files
     data.update(figures=figures, carried=source)
+    data["code_advice"] = (old.get("assemblies") or {}).get("code_advice")  # 1.2 and later
     names = ", ".join(str(a) for a in source["adapters"])
     return data, (
         f"contact codes ({names}): not run; their sections are carried from the report of "
@@ -327,7 +328,9 @@ def _build(
     # criterion study, speed against error and its figures, one per adapter).
     # 9 fixed stages, 2 of the damping-law study, 2 of the assemblies (linear checks,
     # figures), one per adapter and the steps study and the codes side by side
+    chain_codes = _assembly.advice_codes(adapters)
     n_stages = len(CLAIMS) - 1 + 9 + 2 + 2 + len(adapters) + (2 if adapters else 0)
+    n_stages += 1 if chain_codes else 0
     stage = [0]
 
     def timed(name: str, fn, *args, **kw):
@@ -434,6 +437,11 @@ def _build(
     side = (
         timed("codes side by side", _codes.codes_side_by_side, adapters, say) if adapters else None
     )
+    advice = (  # issue 39 section 4: None when no code that runs chains is asked
+        timed("assemblies: the codes' step advice", _assembly.code_advice, chain_codes)
+        if chain_codes
+        else None
+    )
 
     figures = ["fig1.png", "dt_crit_map.png"] + [n for n, _ in wp_figs] + ["hard_cases.png"]
     figures.append(_laws.FIGURE)
@@ -451,6 +459,7 @@ def _build(
     if carried is not None:
         codes = {k: carried[k] for k in (*CARRIED, "carried")}
         figures += carried["figures"]
+        advice = carried["code_advice"]
     results = {
         "schema": SCHEMA,
         "title": "Verification report: Hidden Harmonic Structure, Universal Damping, and "
@@ -496,8 +505,9 @@ def _build(
             "claim": sec6_assemblies.ID,
             "linear": asm_linear,
             "figures": dict(zip(("p_fail", "factor"), asm_figs, strict=True)),
-            # Hook of issue 39 section 4: the codes' step advice (a list), filled by that study.
-            "code_advice": None,
+            # Issue 39 section 4: the codes' step advice on chains (a list), run with the
+            # codes or carried from the previous report with their other sections.
+            "code_advice": advice,
         },
         "figures": figures,
         "figure_captions": {n: cap for n, cap in wp_figs},

@@ -24,14 +24,17 @@ from __future__ import annotations
 
 import math
 
+from reference_impl.adapters.registry import parse_spec
 from reference_impl.assembly.linear import dt_crit_linear
 from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.search import search_ensemble
+from reference_impl.bench.assembly_codes import CODES, assembly_codes_table
 from reference_impl.scenes import parse_scene
 from reference_impl.stability.criteria import EnergyGrowth, SearchGrid
 
 __all__ = [
-    "K", "LINEAR_CRITERION", "LINEAR_GRID", "LINEAR_RTOL", "M", "body_speeds", "linear_cases",
+    "K", "LINEAR_CRITERION", "LINEAR_GRID", "LINEAR_RTOL", "M", "body_speeds", "advice_codes",
+    "code_advice", "linear_cases",
     "linear_checks", "linear_search", "scene_text",
 ]  # fmt: skip
 
@@ -143,3 +146,48 @@ def linear_checks(quick: bool = False) -> dict:
         "m": M,
         "rows": rows,
     }
+
+
+def _verdict(row: dict) -> str:
+    """The report's word for one advice row: safe, unsafe, or why there is none."""
+    if row["safe"] is True:
+        return "safe"
+    if row["safe"] is False:
+        return "unsafe"
+    return "no advice" if row["advice"] == "none" and row["dt_crit"] is not None else "not run"
+
+
+def advice_codes(adapters) -> tuple[str, ...]:
+    """The codes among ``adapters`` (specs given to ``hcv report``) that run chains
+    (`reference_impl.bench.assembly_codes.CODES`: LIGGGHTS, YADE, LAMMPS), in order."""
+    names: list[str] = []
+    for spec in adapters:
+        target, _ = parse_spec(str(spec))
+        if target in CODES and target not in names:
+            names.append(target)
+    return tuple(names)
+
+
+def code_advice(names) -> list[dict]:
+    """The codes' own step advice on Hertz chains (issue 39 section 4).
+
+    Runs `reference_impl.bench.assembly_codes.assembly_codes_table` for the codes
+    ``names`` (each code's measured Delta t_crit on chains of 2-5 bodies and the advice it
+    computes) and returns the rows as the report's ``assemblies.code_advice`` takes them
+    (schema ``$defs/code_advice_row``: code, scene, advice, verdict, dt_advice and dt_crit
+    in s, factor = dt_crit / dt_advice, note). Seconds per code and size.
+    """
+    rows = [r.to_dict() for r in assembly_codes_table(codes=tuple(names))]
+    return [
+        {
+            "code": r["code"],
+            "scene": r["scene"],
+            "advice": r["advice"],
+            "verdict": _verdict(r),
+            "dt_advice": r["advice_dt"],
+            "dt_crit": r["dt_crit"],
+            "factor": r["factor"],
+            "note": r.get("note") or None,
+        }
+        for r in rows
+    ]

@@ -253,7 +253,7 @@ def _code_advice(rows: list[dict]) -> list:
                 "scene",
                 "advice",
                 "Δt advised [s]",
-                "Δt_crit (5 %) [s]",
+                "measured Δt_crit [s]",
                 "Δt_crit / Δt advised",
                 "verdict",
                 "note",
