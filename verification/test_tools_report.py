@@ -494,7 +494,7 @@ def test_speed_block_names_the_strongest_peer_and_both_calls():
         f"a `prepare(pot, m)` call {fam['prepared_us']:.1f} µs (the peer "
         f"{fam['prepared_ratio']:.1f}× as long)",
         "the fastest at equal error of Sundman DOP853 (numba DOP853 on the Sundman",
-        "(reports/bench/workprecision.png)",
+        "](reports/bench/workprecision.png)",
         "a check that it runs, not a measurement",
     ):
         assert_true(
@@ -557,6 +557,8 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/device_scaling.json",  # benchmarks/device_scaling.py (16-core machine)
         "bench/verlet.json",  # python -m benchmarks.bench_verlet
         "bench/startup.json",  # python -m benchmarks.bench_startup
+        "bench/workprecision.json",  # python -m benchmarks.bench_workprecision --json
+        "bench/workprecision.png",  # python -m benchmarks.bench_workprecision --png
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
     }
     stray = [

@@ -188,7 +188,7 @@ def workprecision_text(wp: dict) -> str:
         "error achieved over random impacts, from 1e-6 to 1e-15, for the one-shot and the "
         "prepared call at each `rtol` and for every peer over its tolerance ladder, per "
         "family (Hertz, a q^2 force, the sphere's cap) and law (universal, a linear "
-        "dashpot): [reports/bench/workprecision.png](reports/bench/workprecision.png) "
+        "dashpot), the figure below "
         f"(`python -m benchmarks.bench_workprecision`; at least {n} impacts a panel, "
         f"{wp.get('blocks', '?')} timing block(s), load {load}, commit "
         f"{str(mi.get('commit', '?'))[:12]}"
@@ -197,7 +197,10 @@ def workprecision_text(wp: dict) -> str:
             if wp.get("blocks", 0) < 3 or n < 1000
             else ""
         )
-        + "). On a cap, ours runs at full accuracy whatever rtol asks (one point)."
+        + "). On a cap, ours runs at full accuracy whatever rtol asks (one point).\n\n"
+        "![Work-precision: CPU time per impact against the largest relative error, ours "
+        "(one-shot and prepared) and each peer, per family and law]"
+        "(reports/bench/workprecision.png)"
     )
 
 
