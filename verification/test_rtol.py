@@ -207,6 +207,8 @@ def test_general_law_bound_is_honest(name, rtol):
         )
         steps_fast += a.n_steps
         steps_full += b.n_steps
+    # Measured (2026-11-29, 100 speeds): 0.55 of full accuracy's steps at rtol 1e-4, 0.67-0.70
+    # at 1e-8; a kernel that ignored rtol takes all of them (ratio 1).
     assert_true(
         steps_fast < 0.8 * steps_full,
         got=f"{steps_fast} Taylor steps against {steps_full} at full accuracy",

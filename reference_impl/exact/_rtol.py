@@ -53,7 +53,9 @@ POWER_RUNGS = (
 # `general_law.ERROR_SAFETY` (10) times the sum of the per-step estimates over at most
 # `_general_taylor.MAX_STEPS` (24) steps, in units of the scaled time (~1/3 of the
 # contact time for Hertz), so 1/1000 keeps the bound below rtol of the contact time
-# with a margin of ~1.4 for the longest contact.
+# with a margin of ~1.4 for the longest contact. Measured (2026-11-29, Hertz with a linear
+# dashpot and Hunt-Crossley, 100 speeds 0.01-10 m/s): bounds 3-4e-6 at rtol 1e-4, 3-5e-10
+# at 1e-8, in 0.55 and 0.7 of full accuracy's steps.
 _TAYLOR_SHARE = 1e-3
 
 
