@@ -82,6 +82,15 @@ def bench(session: nox.Session) -> None:
     """Speed against a baseline run in the same process; results as JSON in reports/bench/."""
     _install_with_codes(session, "sweep")
     session.run("python", "-m", "benchmarks.bench_exact", "--json", "reports/bench/exact.json")
+    session.run(
+        "python",
+        "-m",
+        "benchmarks.bench_workprecision",
+        "--json",
+        "reports/bench/workprecision.json",
+        "--png",
+        "reports/bench/workprecision.png",
+    )
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run(
         "python", "-m", "benchmarks.bench_assembly", "--json", "reports/bench/assembly.json"

@@ -37,7 +37,7 @@ _COMPILED_SOURCES = (
     "exact/_branches.py", "exact/_cap_nodes.py", "exact/_general_kernel.py", "exact/_general_step.py",
     "exact/_general_taylor.py", "exact/_law_batch.py",
     "exact/_nodes.py", "exact/_one_call.py", "exact/_oscillator.py", "exact/_power_kernel.py",
-    "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_split.py",
+    "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_rtol.py", "exact/_split.py",
     "exact/_strategies.py", "exact/_sums.py", "exact/_tail.py", "exact/_truth.py",
     "exact/_validate.py", "exact/batch.py", "exact/general_law.py", "exact/prepared.py",
     "exact/solve.py",

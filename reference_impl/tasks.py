@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from reference_impl.errors import HCVInputError
+from reference_impl.exact._rtol import checked_rtol
 from reference_impl.exact.api import solve
 from reference_impl.stability.bound import dt_safe
 from reference_impl.stability.result import DtCritResult
@@ -22,7 +23,7 @@ __all__ = ["restitution_spread", "search_assembly_scene", "search_loaded_scene",
 _ASSEMBLY_KINDS = ("chain", "lattice")
 
 
-def solve_scene(scene) -> list[dict]:
+def solve_scene(scene, rtol: float | None = None) -> list[dict]:
     """Solve every velocity of an impact scene; one dict per velocity.
 
     Fields (SI units): v0, damping_law, zeta (universal law only, else None),
@@ -39,6 +40,8 @@ def solve_scene(scene) -> list[dict]:
     (quadrature_error, s). Each law is solved where its registry entry says
     (`reference_impl.exact.api.solve`): the universal law and ``none`` by the exact
     quadrature, the others by `reference_impl.exact.general_law` (or the generic route).
+    ``rtol`` is the solver's accuracy argument (None: full accuracy; see
+    `reference_impl.exact.api.solve`).
     """
 
     if scene.kind in _ASSEMBLY_KINDS:
@@ -46,13 +49,14 @@ def solve_scene(scene) -> list[dict]:
             f"scene {scene.name!r} is a {scene.kind} (an assembly): it has no single impact to "
             "solve; run hcv dt-crit on it"
         )
+    rtol = checked_rtol(rtol, "hcv solve --rtol")  # refused before any impact is solved
     law = scene.law
     # the universal law's zeta when the harmonic map solves the law, else None
     zeta = law.harmonic_zeta
     rows = []
     for v0 in scene.velocities:
         # the one entry point chooses the strategy from the law's registry entry
-        sol = solve(scene.potential, scene.mass, v0, law=law)
+        sol = solve(scene.potential, scene.mass, v0, law=law, rtol=rtol)
         err_t = sol.quadrature_error if zeta is not None else sol.error_time
         safe = dt_safe(scene.potential, scene.mass, v0)
         E = 0.5 * scene.mass * v0 * v0

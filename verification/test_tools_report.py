@@ -462,14 +462,48 @@ def test_readme_speed_block_is_the_committed_benchmark():
         claim="report",
         call="readme_table",
     )
-    want = speed_table(json.loads(bench_json.read_text()))
+    wp_json = ROOT / "reports" / "bench" / "workprecision.json"
+    wp = json.loads(wp_json.read_text()) if wp_json.is_file() else None
+    want = speed_table(json.loads(bench_json.read_text()), wp)
     assert_true(
         readme_block(readme, SPEED_START, SPEED_END) == want,
-        got="README speed block differs from reports/bench/exact.json",
+        got="README speed block differs from reports/bench/exact.json (and workprecision.json)",
         should="identical (run python -m reference_impl.report.readme_table)",
         claim="report",
         call="readme_table",
     )
+
+
+def test_speed_block_names_the_strongest_peer_and_both_calls():
+    """Issue 38, goal 6: each row's one-shot and prepared figure, the fastest peer of the
+    row named (not only the plain DOP853), and the work-precision figure linked with what
+    its record says of the run."""
+    from reference_impl.report.readme_table import speed_table
+
+    bench = json.loads((ROOT / "reports" / "bench" / "exact.json").read_text())
+    fam = dict(
+        bench["families"][0],
+        peer_name="sundman",
+        peers={"sundman": {"label": "numba DOP853 on the Sundman-regularised equations"}},
+    )
+    wp = {"panels": [{"impacts": 200}], "blocks": 1, "load_average_1min": 4.2, "machine": {}}
+    text = speed_table({**bench, "families": [fam], "laws": []}, wp)
+    for want in (
+        f"| Sundman DOP853: {fam['peer_us']:.0f} µs |",
+        f"a one-shot `solve_impact` takes {fam['ours_us']:.1f} µs",
+        f"a `prepare(pot, m)` call {fam['prepared_us']:.1f} µs (the peer "
+        f"{fam['prepared_ratio']:.1f}× as long)",
+        "the fastest at equal error of Sundman DOP853 (numba DOP853 on the Sundman",
+        "](reports/bench/workprecision.png)",
+        "a check that it runs, not a measurement",
+    ):
+        assert_true(
+            want in text,
+            got=text,
+            should=f"a line containing {want!r}",
+            claim="report",
+            call="speed_table",
+        )
 
 
 def test_speed_block_says_by_how_much_a_goal_is_not_met():
@@ -526,6 +560,8 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/startup.json",  # python -m benchmarks.bench_startup
         "bench/commands.json",  # python -m benchmarks.bench_startup --docs (docs_blocks)
         "bench/codes.json",  # python -m benchmarks.bench_codes (docs_blocks)
+        "bench/workprecision.json",  # python -m benchmarks.bench_workprecision --json
+        "bench/workprecision.png",  # python -m benchmarks.bench_workprecision --png
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
     }
     stray = [

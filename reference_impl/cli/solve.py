@@ -1,4 +1,8 @@
-"""``hcv solve SCENE [--json]``: the exact impact solution for each velocity of a scene.
+"""``hcv solve SCENE [--json] [--rtol R]``: the exact impact solution for each velocity of a scene.
+
+``--rtol`` asks the solver for a relative error bound R on each time instead of its full
+accuracy (`reference_impl.exact._rtol`); a bad R is one line, exit status 2, before the
+scene is read.
 
 A result that is non-finite or outside its range (a negative time, a restitution
 outside [0, 1]) is refused with one line and exit status 2, never printed.
@@ -53,7 +57,23 @@ def add_parser(subparsers) -> None:
     s = subparsers.add_parser("solve", help="exact impact solution for each velocity of a scene")
     s.add_argument("scene", help="scene TOML file, or the name of an embedded scene (hcv scenes)")
     s.add_argument("--json", action="store_true", help="print one JSON object with a results list")
+    s.add_argument(
+        "--rtol",
+        metavar="R",
+        help="relative error bound asked of each time, 0 < R <= 0.1 (default: full accuracy)",
+    )
     s.set_defaults(func=run)
+
+
+def _rtol(text):
+    """The ``--rtol`` value as a float, or None (full accuracy); its range is checked by
+    `reference_impl.tasks.solve_scene` before any impact is solved."""
+    if text is None:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise HCVInputError(f"hcv solve: --rtol = {text!r} is not a number") from None
 
 
 def _json_safe(value):
@@ -67,13 +87,14 @@ def run(args) -> int:
     from reference_impl.scenes import load_scene
     from reference_impl.tasks import restitution_spread, solve_scene
 
+    rtol = _rtol(getattr(args, "rtol", None))
     scene = load_scene(args.scene)
     if scene.kind != "impact":
         raise HCVInputError(
             f"scene {scene.name!r} has kind = {scene.kind!r}; 'hcv solve' solves single impacts "
             "(kind = \"impact\"); use 'hcv dt-crit' for sustained scenes"
         )
-    rows = solve_scene(scene)
+    rows = solve_scene(scene, rtol=rtol)
     _require_finite(rows, scene)
     spread = restitution_spread(rows)
     if args.json:

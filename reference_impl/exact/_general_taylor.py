@@ -32,7 +32,8 @@ vanishing), and dF/ds through 0 from above (a peak of the force).
 Step and error. The radius of convergence r is estimated by the root test over the
 last `WIN` coefficients of rho, W and T, each relative to its size; the step is
 h = theta r with theta^(K+1) / (1 - theta) = `TOL`, the sum of a geometric tail of
-the series beyond order K: its truncation, relative to the state. The error sums
+the series beyond order K: its truncation, relative to the state (a looser truncation
+when the caller asks for less, ``rtol``: `SC_TOL`). The error sums
 reported (err_t, err_w, in the scaled units of `_general_kernel`) add these
 estimates over the steps (for N = 1, where dT/ds = 1 at the exit, plus the exit's
 shift e / |W|); `general_law` multiplies them by its safety factor and adds round-off.
@@ -44,7 +45,8 @@ The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk c
 this module is keyed by this file alone: a change of `_general_kernel` (or
 `_general_step`) leaves this module's cached machine code running the old kernel until
 this file changes too (measured: the hand-over tests then differ from the kernel), so
-such a change comes with a line here. Last: the near-critical error control (2026-11-26).
+such a change comes with a line here. Last: the near-critical error control (2026-11-26);
+the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29).
 """
 
 from __future__ import annotations
@@ -57,7 +59,18 @@ import numpy as np
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 
-__all__ = ["K", "MAX_STEPS", "N_MAX", "OUT_FIELDS", "TOL", "solve", "solve_taylor"]
+__all__ = [
+    "K",
+    "MAX_STEPS",
+    "N_MAX",
+    "OUT_FIELDS",
+    "SC_TOL",
+    "THETA",
+    "TOL",
+    "solve",
+    "solve_taylor",
+    "theta_for",
+]
 
 # Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
 # measured fewest operations near K = 30 (8-10 steps per Hertz impact).
@@ -95,15 +108,20 @@ _STATIONARY = 1e-9
 _ROOT_ITER = 120
 
 
-def _theta() -> float:
-    """theta with theta^(K+1) / (1 - theta) = TOL (fixed point; converges in a few rounds)."""
-    th = TOL ** (1.0 / (K + 1))
+def theta_for(tol: float) -> float:
+    """theta with theta^(K+1) / (1 - theta) = tol (fixed point; converges in a few rounds):
+    the step, a fraction of the radius of convergence, whose truncation is ``tol``."""
+    th = tol ** (1.0 / (K + 1))
     for _ in range(20):
-        th = (TOL * (1.0 - th)) ** (1.0 / (K + 1))
+        th = (tol * (1.0 - th)) ** (1.0 / (K + 1))
     return th
 
 
-THETA = _theta()
+THETA = theta_for(TOL)
+# Where the scalars ``sc`` of a solve carry a looser truncation and its theta (an ``rtol``
+# asked, `reference_impl.exact._rtol.taylor_tol`): sc[SC_TOL], sc[SC_TOL + 1]. An ``sc`` of
+# SC_TOL entries (no rtol) runs at TOL and THETA, bit for bit as before the argument.
+SC_TOL = 7
 _RECIP = 1.0 / np.arange(1.0, K + 1.0)  # 1 / (n + 1): a multiply, not a divide, in the recurrences
 
 
@@ -363,6 +381,9 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     """One impact into ``out`` (`OUT_FIELDS`); returns 0, or 1 when the case is not for
     this method (exponents, degree, no return within MAX_STEPS): ``out`` is then void."""
     m = sc[0]
+    tol, theta = TOL, THETA
+    if sc.shape[0] > SC_TOL:
+        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
     N = _common_n(ks, ps, cs, es, sc)
     if N == 0:
         return 1
@@ -457,8 +478,8 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         inv = _inv_radius(R, W, T, pw)
         if not (inv > 0.0 and inv < math.inf):
             return 1
-        h = THETA / inv
-        errsum += TOL * max(1.0, abs(t0))
+        h = theta / inv
+        errsum += tol * max(1.0, abs(t0))
         x_end = h
         x_from = 0.0
         exiting = False

@@ -120,7 +120,9 @@ def _fields(r, v0, q_e, col):  # pragma: no cover - compiled
     return _OK
 
 
-def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.ndarray]:
+def solve_law_batch(
+    potential, m, v0s, law, max_impacts: int, *, rtol: float | None = None
+) -> dict[str, np.ndarray]:
     """`solve_law_impact` of every speed of ``v0s``, as arrays of `LAW_FIELDS`.
 
     Parameters
@@ -135,6 +137,8 @@ def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.nd
         As for `solve_law_impact`.
     max_impacts : int
         Largest number of speeds accepted (`batch.BATCH_MAX`).
+    rtol : float, optional
+        As for `solve_law_impact` (None: full accuracy).
 
     Returns
     -------
@@ -149,7 +153,7 @@ def solve_law_batch(potential, m, v0s, law, max_impacts: int) -> dict[str, np.nd
     out = np.full((len(LAW_FIELDS), v.size), np.nan)
     if not v.size:
         return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
-    prepared = prepare_law(potential, m, law)
+    prepared = prepare_law(potential, m, law, rtol=rtol)
     plan = prepared._plan
     if plan.lin is not None or plan.pk is None:
         # Closed form, or a Python potential: no compiled loop to spread over the cores.

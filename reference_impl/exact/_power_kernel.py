@@ -4,7 +4,8 @@ For U = k q^n / n, dq/dx = c x^beta exactly and x(s) = s h(s) with h analytic, s
 dq/dx = c h^beta s^beta: Gauss-Jacobi with weight s^beta converges geometrically (rate set
 by the zero of h at s_end). `power_impact` is that whole impact in one compiled call: the
 oscillator, the branch rows, the sums (`_sums.gj_rows` bound to the closed form
-`_power_values`: two rule sizes, kept only when they agree to _GJ_RTOL on every row;
+`_power_values`: two rule sizes, kept only when they agree to _GJ_RTOL on every row, or
+to a looser ``agree`` on a smaller pair when the caller asked for less, `_rtol`;
 scipy's Jacobi rules lose accuracy for beta near -1, hence _GJ_BETA_MIN and _GJ_ZETA_MAX),
 and the peak. `_strategies.power_law` and `prepared` call it.
 """
@@ -38,9 +39,15 @@ __all__ = ["OUT_SIZE", "power_constants", "power_impact"]
 OUT_SIZE = 14
 
 
-def power_constants(pot: PowerLaw, m: float) -> tuple | None:
+def power_constants(
+    pot: PowerLaw, m: float, sizes: tuple[int, int] = _GJ_SIZES, agree: float = _GJ_RTOL
+) -> tuple | None:
     """The arguments of `power_impact` after (v0, zeta) for ``pot`` and mass m, or None
-    when its Gauss-Jacobi rule does not apply (beta = 2/n - 1 < _GJ_BETA_MIN)."""
+    when its Gauss-Jacobi rule does not apply (beta = 2/n - 1 < _GJ_BETA_MIN).
+
+    ``sizes`` are the two rule sizes compared and ``agree`` the agreement they must reach
+    on every row (relative); the defaults are the full-accuracy pair, a looser pair is a
+    rung of `reference_impl.exact._rtol` (``rtol=``)."""
     n = pot.leading_exponent
     beta = 2.0 / n - 1.0
     if beta < _GJ_BETA_MIN:
@@ -49,10 +56,10 @@ def power_constants(pot: PowerLaw, m: float) -> tuple | None:
     a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
     # power_law_scale's (m/k) (n m / 2k)^(-p/n), the factor of v0^beta left for the kernel.
     c_m = (m / k) * _pow_split(0.5 * n * m / k, a_hi, a_lo)
-    u, W = _jacobi_pair(beta)
-    round_rel = (_SUM_ULPS_PER_NODE * _GJ_SIZES[1] + _NODE_ULPS) * _EPS
+    u, W = _jacobi_pair(beta, sizes)
+    round_rel = (_SUM_ULPS_PER_NODE * sizes[1] + _NODE_ULPS) * _EPS
     q_scale = (0.5 * n * m / k) ** (1.0 / n)
-    return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p)
+    return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p, agree)
 
 
 # error_model "numpy": called inside `batch._gj_batch`'s prange loop (no exception there).
@@ -75,13 +82,29 @@ _POWER_ROWS = gj_rows(_power_values, cache=True)
 
 @numba.njit(cache=True, error_model="numpy")
 def power_impact(
-    v0, zeta, c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, two_n, k, p, rtol_stated, tiny, out
+    v0,
+    zeta,
+    c_m,
+    b_hi,
+    b_lo,
+    u,
+    W,
+    beta,
+    round_rel,
+    q_scale,
+    two_n,
+    k,
+    p,
+    agree,
+    rtol_stated,
+    tiny,
+    out,
 ):
     """One power-law impact by Gauss-Jacobi, as `solve_impact` computes it (pragma: compiled).
 
     The oscillator (`VirtualOscillator`), the branch rows (`_fill_rows`), the scale
     c v0^beta (`power_law_scale`: c_m = (m/k) (n m / 2k)^(-p/n)), the sums, their
-    agreement test and bounds (`_sums.gj_rows`), the peak (`_strategies.peak`), and,
+    agreement test to ``agree`` and bounds (`_sums.gj_rows`), the peak (`_strategies.peak`), and,
     given ``rtol_stated`` and ``tiny``, the bound and range checks (`solve._check_bound`,
     `_check_normal`; inf and 0 skip them): out[13] = 0 when any of them refuses.
     """  # pragma: no cover - compiled
@@ -99,7 +122,7 @@ def power_impact(
     fine = np.empty(3)
     err = np.empty(3)
     args = (zeta, wd, beta, c_pl)
-    if _POWER_ROWS(rows, nr, u, W, args, 0.0, _GJ_RTOL, round_rel, fine, err) != GJ_OK:
+    if _POWER_ROWS(rows, nr, u, W, args, 0.0, agree, round_rel, fine, err) != GJ_OK:
         return
     rise, e_rise = fine[0], err[0]
     if zeta == 0.0:

@@ -52,14 +52,14 @@ _LEVEL_UP = -1.0
 @numba.njit(cache=True, error_model="numpy")
 def power_call(v0, zeta, c, u, W):  # pragma: no cover - compiled
     """`power_impact` with the scalars after (v0, zeta) from ``c`` (see `power_constants`,
-    then RTOL_STATED and the smallest normal float), returned as the fields of
+    then the stated accuracy and the smallest normal float), returned as the fields of
     `ImpactSolution` in their order: q_max, U'(q_max), the contact time, restitution, the
     zero-force time and restitution, the two bounds; then the peak time, wd, s_peak,
     s_end and 1.0 (0.0 when a check refused; the rest is then meaningless). A tuple
     comes back to Python cheaper than an output array read by ``tolist``."""
     o = np.empty(OUT_SIZE)
     power_impact(
-        v0, zeta, c[0], c[1], c[2], u, W, c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], o
+        v0, zeta, c[0], c[1], c[2], u, W, c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], o
     )
     rise, e_rise, mid, e_mid, fall, e_fall = o[0], o[1], o[2], o[3], o[4], o[5]
     return (

@@ -81,27 +81,43 @@ def _solvers(kind: str):
     return _generic_law, _generic_law
 
 
-def solve_other(r: Route, potential, m: float, v0: float):
-    """One impact of a law the harmonic map does not solve (`LawImpactSolution`)."""
+def _no_rtol_for_generic(r: Route, rtol) -> None:
+    """Refuse an ``rtol`` for the generic route: its bound is an estimate from two scipy
+    tolerances (~1e-8), which no rtol tightens or trades (one line naming it)."""
+    if rtol is not None:
+        raise HCVInputError(
+            f"rtol = {rtol!r} does not apply to damping law {r.law.to_dict()} (route "
+            f"{r.kind!r}: scipy at fixed tolerances, an estimated bound ~1e-8); leave rtol unset"
+        )
+
+
+def solve_other(r: Route, potential, m: float, v0: float, rtol=None):
+    """One impact of a law the harmonic map does not solve (`LawImpactSolution`); ``rtol``
+    as `reference_impl.exact._rtol` (None: full accuracy)."""
     one, _ = _solvers(r.kind)
     if r.kind == "general":
-        return one.solve_law_impact(potential, m, v0, r.law)
+        return one.solve_law_impact(potential, m, v0, r.law, rtol=rtol)
+    _no_rtol_for_generic(r, rtol)
     return one.solve_generic_law(potential, m, v0, r.law)
 
 
-def batch_other(r: Route, potential, m: float, v0s, batch_max: int) -> dict[str, np.ndarray]:
+def batch_other(
+    r: Route, potential, m: float, v0s, batch_max: int, rtol=None
+) -> dict[str, np.ndarray]:
     """Many speeds of such a law: arrays of the `LawImpactSolution` fields
     (`reference_impl.exact._law_batch.LAW_FIELDS`)."""
     _, many = _solvers(r.kind)
     if r.kind == "general":
         # Every core: the compiled integrations in a prange loop (`_law_batch`).
-        return many.solve_law_batch(potential, m, v0s, r.law, batch_max)
+        return many.solve_law_batch(potential, m, v0s, r.law, batch_max, rtol=rtol)
+    _no_rtol_for_generic(r, rtol)
     return many.solve_generic_batch(potential, m, v0s, r.law, batch_max)
 
 
-def prepare_other(r: Route, potential, m: float):
+def prepare_other(r: Route, potential, m: float, rtol=None):
     """A solver ``(v0) -> LawImpactSolution`` of such a law, checked once."""
     one, _ = _solvers(r.kind)
     if r.kind == "general":
-        return one.prepare_law(potential, m, r.law)
+        return one.prepare_law(potential, m, r.law, rtol=rtol)
+    _no_rtol_for_generic(r, rtol)
     return one.PreparedGeneric(potential, m, r.law)

@@ -3,8 +3,9 @@
 Each strategy is a function ``plan(job) -> Answer | None`` with one contract:
 
 1. ``job`` is a `Job`: the potential, mass, speed, `VirtualOscillator`, the validated
-   turning point q_top (every overlap of the impact lies in (0, q_top]) and the
-   requested tanh-sinh level (None: the solver's choice).
+   turning point q_top (every overlap of the impact lies in (0, q_top]), the
+   requested tanh-sinh level (None: the solver's choice) and the requested accuracy
+   ``rtol`` (None: full; `_rtol`, read by `power_law` alone).
 2. It returns None when it does not apply to the job, or when it refuses it (e.g. its
    two rule sizes disagree), and has then changed nothing.
 3. Otherwise it returns an `Answer`: the `Branches` (three times and bounds on their
@@ -35,6 +36,7 @@ from reference_impl.exact._branches import (
 from reference_impl.exact._one_call import fused_impact, gauss_jacobi_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import OUT_SIZE, power_constants, power_impact
+from reference_impl.exact._rtol import power_rungs
 from reference_impl.exact._split import needs_split, split_impact
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -53,11 +55,11 @@ class Answer(NamedTuple):
 class Job:
     """One impact to integrate (item 1 of the contract); ``split`` is decided on first use."""
 
-    __slots__ = ("potential", "m", "v0", "osc", "q_top", "level", "_split")
+    __slots__ = ("potential", "m", "v0", "osc", "q_top", "level", "rtol", "_split")
 
-    def __init__(self, potential, m, v0, osc: VirtualOscillator, q_top: float, level):
+    def __init__(self, potential, m, v0, osc: VirtualOscillator, q_top: float, level, rtol=None):
         self.potential, self.m, self.v0, self.osc = potential, m, v0, osc
-        self.q_top, self.level = q_top, level
+        self.q_top, self.level, self.rtol = q_top, level, rtol
         self._split = None
 
     @property
@@ -103,14 +105,26 @@ def peak(pot: Potential, m: float, osc: VirtualOscillator, q_top: float) -> tupl
 
 def power_law(job: Job) -> Answer | None:
     """A power law by Gauss-Jacobi in one compiled call (`_power_kernel`), whatever the
-    tanh-sinh level asked (the level is that of `general`'s rules, used when this refuses)."""
+    tanh-sinh level asked (the level is that of `general`'s rules, used when this refuses);
+    with ``job.rtol``, the smaller pairs that reach it first (`_rtol`)."""
     pot, osc = job.potential, job.osc
     if type(pot) is not PowerLaw or osc.zeta >= _GJ_ZETA_MAX:
         return None
+    out = np.empty(OUT_SIZE)
+    if job.rtol is not None:
+        # Smaller rule pairs first (`_rtol.power_rungs`), each kept only when every bound
+        # is within rtol of its time; then the full-accuracy pair below.
+        for sizes in power_rungs(job.rtol):
+            consts = power_constants(pot, job.m, sizes, job.rtol)
+            if consts is None:
+                break
+            power_impact(job.v0, osc.zeta, *consts, job.rtol, 0.0, out)
+            if out[13] == 1.0:
+                v = out.tolist()
+                return Answer(Branches(*v[:6]), v[6], v[7])
     consts = power_constants(pot, job.m)
     if consts is None:
         return None
-    out = np.empty(OUT_SIZE)
     # inf and 0: no bound or range refusal here; solve_impact checks (and names) them.
     power_impact(job.v0, osc.zeta, *consts, math.inf, 0.0, out)
     if out[13] != 1.0:

@@ -12,6 +12,11 @@ chosen in one place, from the law's registry entry (`reference_impl.exact._route
 - any other C(q, q'): the generic route `reference_impl.exact._generic_law` (an
   estimated bound ~1e-8), `LawImpactSolution`.
 
+Each also takes ``rtol`` (None, the default: full accuracy, bit for bit): a relative error
+bound asked of each time, which a power law's quadrature (fewer Gauss-Jacobi nodes) and the
+general-law Taylor kernel (longer steps) trade for time, the bound still reported
+(`reference_impl.exact._rtol`).
+
 The older names are the same functions: `solve_impact` is `solve`, `solve_impacts` is
 `solve_batch`, and `reference_impl.exact.prepared.prepare` is `prepare`;
 `solve_law_impact` / `prepare_law` call the general-law strategy directly (which also

@@ -33,6 +33,7 @@ from reference_impl.exact._branches import (
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._power_kernel import _POWER_ROWS
 from reference_impl.exact._route import batch_other, route
+from reference_impl.exact._rtol import checked_rtol
 from reference_impl.exact._sums import GJ_OK
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.exact.prepared import prepare
@@ -155,7 +156,7 @@ def _gj_batch(zetas, u, W, beta, zeta_max, rtol, factors, with_factors):  # prag
 
 
 def solve_impacts(
-    potential: Potential, m: float, v0s, zetas=0.0, *, law=None
+    potential: Potential, m: float, v0s, zetas=0.0, *, law=None, rtol: float | None = None
 ) -> dict[str, np.ndarray]:
     """Solve many impacts of one potential and mass (``reference_impl.solve_batch``).
 
@@ -178,6 +179,12 @@ def solve_impacts(
         (max_penetration, max_force, peak_force, contact_time, restitution,
         contact_time_zero_force, restitution_zero_force, returns_to_q0,
         error_time, error_restitution).
+    rtol : float, optional
+        Relative error bound asked of each time (0 < rtol <= 0.1; None: full accuracy,
+        bit for bit), as `solve_impact`'s. It reaches a general law's integrations and
+        the impacts solved one by one (`prepare`); the compiled power-law loop keeps its
+        full-accuracy rules (its sums are per distinct zeta, not per impact, so a smaller
+        rule saves nothing there); every bound is reported either way.
 
     Returns
     -------
@@ -194,11 +201,12 @@ def solve_impacts(
         ZETA_MAX, or so close below 1 that s_end > S_END_MAX) is refused before any work.
         zeta = 1 and above are solved (critical and overdamped closed forms).
     """
+    rtol = checked_rtol(rtol, "solve_impacts")
     if law is not None:
         # The law's registry entry chooses the strategy (`_route`, the one place).
         r = route(law, zetas, "zetas")
         if r.kind != "harmonic map":
-            return batch_other(r, potential, m, v0s, BATCH_MAX)
+            return batch_other(r, potential, m, v0s, BATCH_MAX, rtol)
         zetas = r.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
@@ -232,7 +240,7 @@ def solve_impacts(
     else:
         rest = np.arange(v.size)
     # One impact at a time, checked and planned once (`prepare`: bit for bit solve_impact).
-    solver = prepare(potential, m) if rest.size else None
+    solver = prepare(potential, m, rtol=rtol) if rest.size else None
     for i in rest:
         sol: ImpactSolution = solver(float(v[i]), float(z[i]))
         for j, key in enumerate(_FIELDS):

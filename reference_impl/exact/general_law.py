@@ -35,7 +35,10 @@ from reference_impl.exact._general_kernel import (
     STOP_NO_RETURN_Q,
     python_solver,
 )
+from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
 from reference_impl.exact._general_taylor import solve as _compiled_solve
+from reference_impl.exact._general_taylor import theta_for
+from reference_impl.exact._rtol import checked_rtol, taylor_tol
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
@@ -360,7 +363,9 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     return cs, es, sc
 
 
-def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpactSolution:
+def solve_law_impact(
+    potential: Potential, m: float, v0: float, law, rtol: float | None = None
+) -> LawImpactSolution:
     """Solve one impact with the damping law ``law`` (a `DampingLaw` or a table).
 
     Parameters
@@ -375,6 +380,10 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
         E.g. ``{"law": "hunt-crossley", "alpha": 0.2}`` (see `reference_impl.theory.laws`).
         The universal law is accepted too (integrated like the others; the exact
         quadrature is `solve_impact`).
+    rtol : float, optional
+        Relative error bound asked (0 < rtol <= 0.1); None: full accuracy, bit for bit.
+        The Taylor kernel then takes longer steps (`reference_impl.exact._rtol`); the
+        other paths stay at full accuracy. ``error_time`` is reported either way.
 
     Returns
     -------
@@ -388,7 +397,7 @@ def solve_law_impact(potential: Potential, m: float, v0: float, law) -> LawImpac
         or a body that returns only after its overlap fell below 1e-10 of q_max (a
         near-critical tail of a nonlinear spring), out of the integrator's reach.
     """
-    return _solve_planned(_plan(potential, m, law), v0)
+    return _solve_planned(_plan(potential, m, law, rtol), v0)
 
 
 class _LawPlan(NamedTuple):
@@ -408,13 +417,20 @@ class _LawPlan(NamedTuple):
     pk: tuple | None  # (ks, ps) of a sum of power laws, for the compiled kernels
 
 
-def _plan(potential, m, law) -> _LawPlan:
+def _plan(potential, m, law, rtol=None) -> _LawPlan:
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     law = law_from_dict(law)
     m = positive("m", m, "solve_law_impact")
+    rtol = checked_rtol(rtol, "solve_law_impact")
     _check_exponent(potential)
     cs, es, sc = _law_arrays(law, m, potential)
+    if rtol is not None:
+        # The Taylor kernel's truncation per step for rtol, and its step fraction theta,
+        # after the scalars it reads (`_general_taylor.SC_TOL`); without them it runs at
+        # full accuracy, bit for bit.
+        tol = taylor_tol(rtol, TAYLOR_TOL)
+        sc = np.append(sc, [tol, theta_for(tol)])
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
     return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk)
@@ -488,12 +504,14 @@ class PreparedLaw:
         Mass in kg (reduced mass), > 0.
     law : DampingLaw or dict
         As for `solve_law_impact`.
+    rtol : float, optional
+        As for `solve_law_impact` (None: full accuracy).
     """
 
     __slots__ = ("_plan",)
 
-    def __init__(self, potential: Potential, m: float, law):
-        self._plan = _plan(potential, m, law)
+    def __init__(self, potential: Potential, m: float, law, rtol: float | None = None):
+        self._plan = _plan(potential, m, law, rtol)
 
     def __call__(self, v0: float) -> LawImpactSolution:
         """The impact at approach speed ``v0`` (m/s, > 0)."""
@@ -504,9 +522,10 @@ class PreparedLaw:
         return f"PreparedLaw({p.potential!r}, m={p.m!r}, law={p.table!r})"
 
 
-def prepare_law(potential: Potential, m: float, law) -> PreparedLaw:
+def prepare_law(potential: Potential, m: float, law, *, rtol: float | None = None) -> PreparedLaw:
     """A solver of `solve_law_impact` for repeated speeds of one (potential, m, law).
 
-    See `PreparedLaw`; invalid input is refused here, in one line, as by `solve_law_impact`.
+    See `PreparedLaw`; invalid input is refused here, in one line, as by `solve_law_impact`;
+    ``rtol`` as there.
     """
-    return PreparedLaw(potential, m, law)
+    return PreparedLaw(potential, m, law, rtol)

@@ -40,6 +40,7 @@ from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import family_call, family_constants, power_call
 from reference_impl.exact._route import prepare_other, route
+from reference_impl.exact._rtol import checked_rtol, power_rungs
 from reference_impl.exact._split import _INFO, _split_info, needs_split
 from reference_impl.exact._strategies import turning_point
 from reference_impl.exact._validate import _TOPS_KEPT, _check_exponent, _validated_top
@@ -78,13 +79,15 @@ class PreparedImpact:
         "_family",
         "_args",
         "_tops",
+        "_rtol",
     )
 
-    def __init__(self, potential: Potential, m: float):
+    def __init__(self, potential: Potential, m: float, rtol: float | None = None):
         if not isinstance(potential, Potential):
             raise HCVInputError(f"potential must be a Potential, got {potential!r}")
         self.potential = potential
         self.m = positive("m", m, "prepare")
+        self._rtol = checked_rtol(rtol, "prepare")
         _check_exponent(potential)
         self._c = self._u = self._W = self._family = self._args = None
         # Per speed: (its validated turning point, whether the split path takes it), as
@@ -98,10 +101,19 @@ class PreparedImpact:
         self._plan = None if type(potential) is PowerLaw else _plan(potential)
         self._split = per_potential(_INFO, _split_info, potential) is not None
         if type(potential) is PowerLaw:
-            consts = power_constants(potential, self.m)
+            # With rtol, the first rule pair `solve_impact` tries for it (`_rtol`), kept
+            # when its bounds are within rtol; a refusal goes to solve_impact, which climbs.
+            rungs = () if self._rtol is None else power_rungs(self._rtol)
+            if rungs:
+                consts, stated = (
+                    power_constants(potential, self.m, rungs[0], self._rtol),
+                    self._rtol,
+                )
+            else:
+                consts, stated = power_constants(potential, self.m), RTOL_STATED
             if consts is not None:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
-                self._c = np.array([c_m, b_hi, b_lo, *rest, RTOL_STATED, _TINY])
+                self._c = np.array([c_m, b_hi, b_lo, *rest, stated, _TINY])
         elif self._plan is not None:
             self._family = family_call(self._plan)
             if self._family is not None:
@@ -109,6 +121,8 @@ class PreparedImpact:
                 self._args = (family_constants(self.m, self._plan, RTOL_STATED, _TINY),)
 
     def __repr__(self) -> str:
+        if self._rtol is not None:
+            return f"prepare({self.potential!r}, {self.m!r}, rtol={self._rtol!r})"
         return f"prepare({self.potential!r}, {self.m!r})"
 
     def __call__(self, v0: float, zeta: float = 0.0) -> ImpactSolution:
@@ -116,17 +130,17 @@ class PreparedImpact:
         pot, m = self.potential, self.m
         if type(v0) is not float or type(zeta) is not float:
             if not (is_real_number(v0) and is_real_number(zeta)):
-                return solve_impact(pot, m, v0, zeta)
+                return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
             # numpy scalars and ints as `solve_impact`'s checks take them (float(value)).
             try:
                 v0, zeta = float(v0), float(zeta)
             except OverflowError:
-                return solve_impact(pot, m, v0, zeta)
+                return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         if not (0.0 < v0 < _INF and 0.0 <= zeta < _GJ_ZETA_MAX):
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         E = 0.5 * m * v0 * v0
         if not (E >= _TINY and E < _INF):
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         if self._c is not None:
             # A power law: its kernel does not use q_top, and an energy at most one
             # already validated passes `_validated_top` unchanged (no error, no new entry).
@@ -135,7 +149,7 @@ class PreparedImpact:
                 self._e_checked = E
             out = power_call(v0, zeta, self._c, self._u, self._W)
             if out[12] != 1.0:  # a check refused: solve_impact raises it (or solves otherwise)
-                return solve_impact(pot, m, v0, zeta)
+                return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
             return _solution(v0, m, zeta, pot, out)
         got = self._tops.get(v0)
         if got is None:
@@ -149,14 +163,14 @@ class PreparedImpact:
             got = self._tops[v0] = (q_top, off)
         q_top, off = got
         if off:
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         if self._family is not None:
             out = self._family(v0, zeta, q_top, *self._args)
             ok = out[12]
             if ok == 1.0:
                 return _solution(v0, m, zeta, pot, out)
             if ok != 0.0:  # a bound or range check refused: solve_impact raises it
-                return solve_impact(pot, m, v0, zeta)
+                return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         return self._fused(v0, zeta, q_top)
 
     def _family_result(self, v0: float, zeta: float, v: tuple) -> ImpactSolution:
@@ -198,7 +212,7 @@ class PreparedImpact:
             and f_max >= _TINY
             and t >= _TINY
         ):
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         return _solution(
             v0, m, zeta, pot, (q_max, f_max, t, rest, t_zf, rest_zf, e, e_zf, rise, wd, sp, s_end)
         )
@@ -210,11 +224,11 @@ class PreparedImpact:
         osc = VirtualOscillator(v0, zeta)
         fast = fused_impact(pot, m, osc, q_top)
         if fast is None:
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         br, q_max, f_max = fast
         d2 = curvature(pot, q_max)  # what `solve._conditioning` charges from
         if d2 is None:  # no compiled evaluator: solve_impact's numpy U''
-            return solve_impact(pot, m, v0, zeta)
+            return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         return self._family_result(
             v0,
             zeta,
@@ -260,7 +274,7 @@ def _solution(v0, m, zeta, pot, out):
     )
 
 
-def prepare(potential: Potential, m: float, *, law=None):
+def prepare(potential: Potential, m: float, *, law=None, rtol: float | None = None):
     """A solver of many impacts of ``potential`` and mass ``m``: ``prepare(pot, m)(v0, zeta)``
     equals ``solve_impact(pot, m, v0, zeta)`` bit for bit, with the potential checked and
     the path planned once (see the module docstring); ``prepare(pot, m, law=L)(v0)``
@@ -274,6 +288,9 @@ def prepare(potential: Potential, m: float, *, law=None):
         Mass (kg), > 0.
     law : DampingLaw or dict, optional
         A registered damping law; the solver then takes the speed alone.
+    rtol : float, optional
+        Relative error bound asked of each time, as `solve_impact`'s (None: full
+        accuracy); each call then equals ``solve_impact(..., rtol=rtol)`` bit for bit.
 
     Returns
     -------
@@ -287,11 +304,11 @@ def prepare(potential: Potential, m: float, *, law=None):
         As `solve_impact` for the potential, the mass and the law, at once.
     """
     if law is None:
-        return PreparedImpact(potential, m)
+        return PreparedImpact(potential, m, rtol)
     r = route(law, 0.0)
     if r.kind == "harmonic map":
-        return PreparedAt(PreparedImpact(potential, m), r.zeta)
-    return prepare_other(r, potential, m)
+        return PreparedAt(PreparedImpact(potential, m, rtol), r.zeta)
+    return prepare_other(r, potential, m, checked_rtol(rtol, "prepare"))
 
 
 class PreparedAt:

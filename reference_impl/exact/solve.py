@@ -35,6 +35,7 @@ from reference_impl.exact._one_call import curvature
 from reference_impl.exact._oscillator import S_END_MAX, ZETA_MAX, VirtualOscillator
 from reference_impl.exact._quadrature import integrate_left_singular
 from reference_impl.exact._route import route, solve_other
+from reference_impl.exact._rtol import checked_rtol
 from reference_impl.exact._strategies import Job, choose
 from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
@@ -332,16 +333,19 @@ def _check_normal(values: dict, m: float, v0: float) -> None:
             )
 
 
-def _check_bound(br, pot: Potential, m: float, v0: float, zeta: float) -> None:
-    """Refuse a result whose error bound exceeds RTOL_STATED of a finite reported time."""
+def _check_bound(
+    br, pot: Potential, m: float, v0: float, zeta: float, stated: float = RTOL_STATED
+) -> None:
+    """Refuse a result whose error bound exceeds ``stated`` (RTOL_STATED, or a larger
+    ``rtol`` asked) of a finite reported time."""
     for name, t, e in (
         ("contact_time", br.rise + br.fall, br.err_rise + br.err_fall),
         ("contact_time_zero_force", br.rise + br.mid, br.err_rise + br.err_mid),
     ):
-        if math.isfinite(t) and not e <= RTOL_STATED * t:
+        if math.isfinite(t) and not e <= stated * t:
             raise UnsupportedError(
                 f"{name} = {t:.16g} s has an error bound of {e:.2g} s ({e / t:.2g} relative), "
-                f"above the solver's stated accuracy {RTOL_STATED:g} (potential {pot!r}, m = {m!r}, "
+                f"above the solver's stated accuracy {stated:g} (potential {pot!r}, m = {m!r}, "
                 f"v0 = {v0!r}, zeta = {zeta!r}); not returned as if it met it: use solve_impact_mp"
             )
 
@@ -354,6 +358,7 @@ def solve_impact(
     *,
     law=None,
     level: int | None = None,
+    rtol: float | None = None,
 ):
     """Solve one normal impact exactly: the entry point ``reference_impl.solve``.
 
@@ -386,6 +391,13 @@ def solve_impact(
         level 5 (round-off) for the numpy path, 4 for the compiled families
         (errors <= ~1e-14, bounded by `ImpactSolution.quadrature_error`). A given
         level always uses tanh-sinh.
+    rtol : float, optional
+        Relative error bound asked of each reported time, in (0, 0.1]; None (default):
+        full accuracy, the same result bit for bit. A larger rtol lets the solver use
+        fewer quadrature nodes (a power law's Gauss-Jacobi pairs) or longer Taylor steps
+        (general laws), see `reference_impl.exact._rtol`; the reported bound
+        (``quadrature_error``, ``error_time``) is then at most rtol of the time, or the
+        full-accuracy bound where that is the smaller.
 
     Returns
     -------
@@ -402,11 +414,13 @@ def solve_impact(
         message names the bound): the result is refused, never returned as if
         it met the stated accuracy.
     """
+    if rtol is not None:
+        rtol = checked_rtol(rtol, "solve_impact")
     if law is not None:
         # The law's registry entry chooses the strategy (`_route`, the one place).
         r = route(law, zeta)
         if r.kind != "harmonic map":
-            return solve_other(r, potential, m, v0)
+            return solve_other(r, potential, m, v0, rtol)
         zeta = r.zeta
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
@@ -426,10 +440,12 @@ def solve_impact(
     # maximum penetration is smaller, so this covers every damped path too).
     q_top = _validated_top(potential, E)
     # The first strategy that answers integrates the impact (`_strategies`, one contract).
-    _, (br, q_max, max_force) = choose(Job(potential, m, v0, osc, q_top, level))
+    _, (br, q_max, max_force) = choose(Job(potential, m, v0, osc, q_top, level, rtol))
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
     br = _charge_conditioning(br, potential, m, osc, q_max, max_force)
-    _check_bound(br, potential, m, v0, zeta)
+    _check_bound(
+        br, potential, m, v0, zeta, RTOL_STATED if rtol is None else max(rtol, RTOL_STATED)
+    )
     if not (q_max >= _TINY and max_force >= _TINY and br.rise + br.fall >= _TINY):
         _check_normal(
             {"max_penetration": q_max, "max_force": max_force, "contact_time": br.rise + br.fall},

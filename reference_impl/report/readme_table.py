@@ -8,7 +8,9 @@ row per claim of results.json (id, section, verdict, headline), and, when
 ``<!-- speed:start -->`` and ``<!-- speed:end -->`` with the exact solver's speed
 and error per potential family as that benchmark measured them, and, when
 ``reports/bench/startup.json`` exists, the block between ``<!-- startup:start -->`` and
-``<!-- startup:end -->`` with the start-up times of `benchmarks.bench_startup`. ``--check``
+``<!-- startup:end -->`` with the start-up times of `benchmarks.bench_startup`; the speed
+block links the work-precision figure when ``reports/bench/workprecision.json`` exists
+(`benchmarks.bench_workprecision`). ``--check``
 writes nothing and exits 1 when a block differs from what the JSON files give.
 """
 
@@ -30,6 +32,7 @@ __all__ = [
     "SPEED_END",
     "verdict_table",
     "speed_table",
+    "workprecision_text",
     "STARTUP_START",
     "STARTUP_END",
     "startup_table",
@@ -99,10 +102,105 @@ def _run_cost(results: dict) -> str:
     return f"; {total:.0f} s wall{with_codes} on {env.get('cpu_count', '?')} cores{load}, {state}"
 
 
+# Short names of the peers of `benchmarks._peers` (a record's ``peer_name``), for the cells.
+_PEER_SHORT = {
+    "dop853": "DOP853",
+    "dop853_sqrt": "DOP853 q√q",
+    "sundman": "Sundman DOP853",
+    "numbalsoda": "numbalsoda",
+}
+
+
+def _peer_name(r: dict) -> str:
+    """The row's peer, short: a record before the peer columns (issue 38) had the plain
+    compiled DOP853 alone."""
+    return _PEER_SHORT.get(r.get("peer_name", "dop853"), str(r.get("peer_name")))
+
+
 def _peer_cell(r: dict) -> str:
     best = "" if r["peer_at_equal_error"] else ", its best"
     return (
-        f"{r['peer_us']:.0f} µs | {r['peer_max_rel_error']:.1e} (rtol {r['peer_rtol']:.0e}{best})"
+        f"{_peer_name(r)}: {r['peer_us']:.0f} µs | {r['peer_max_rel_error']:.1e} "
+        f"(rtol {r['peer_rtol']:.0e}{best})"
+    )
+
+
+def _peers_named(bench: dict) -> str:
+    """The sentence naming the peers the rows were ranked among (the strongest of each row
+    is its denominator), or saying that the record has the plain DOP853 alone."""
+    labels = {}
+    for r in (*bench.get("families", []), *bench.get("laws", [])):
+        for name, col in (r.get("peers") or {}).items():
+            labels.setdefault(name, col.get("label", name))
+    if not labels:
+        return (
+            "The peer is `benchmarks/peer_dop853.py` (numba, the published Dormand–Prince "
+            "8(5,3) tableau, events on its dense output, every output ours has), the only one "
+            "in this record: the stronger peers of `benchmarks/_peers.py` (q·√q, "
+            "Sundman-regularised) rank only from a rerun of `benchmarks.bench_exact`"
+        )
+    strongest = sorted({_peer_name(r) for r in (*bench["families"], *bench.get("laws", []))})
+    return (
+        "The peer of each row is the fastest at equal error of "
+        + "; ".join(f"{_PEER_SHORT.get(k, k)} ({v})" for k, v in labels.items())
+        + f" (the strongest here: {', '.join(strongest)})"
+    )
+
+
+def _row_sentences(bench: dict) -> list[str]:
+    """One line per row: its one-shot and its prepared figure, each against its peer."""
+    out = []
+    for r in bench.get("families", []):
+        prep = (
+            f"; a `prepare(pot, m)` call {r['prepared_us']:.1f} µs (the peer "
+            f"{r['prepared_ratio']:.1f}× as long)"
+            if "prepared_us" in r
+            else ""
+        )
+        out.append(
+            f"- {_cell(r['scene'])}: a one-shot `solve_impact` takes {r['ours_us']:.1f} µs "
+            f"({_peer_name(r)} at equal error takes {r['ratio']:.1f}× as long){prep}."
+        )
+    for r in bench.get("laws", []):
+        prep = (
+            f"; a `prepare_law` call {r['prepared_us']:.0f} µs (the peer "
+            f"{r['prepared_ratio']:.2f}× as long)"
+            if "prepared_us" in r
+            else ""
+        )
+        out.append(
+            f"- Hertz + {_cell(r['law'])}: a one-shot `solve_law_impact` takes "
+            f"{r['ours_us']:.0f} µs ({_peer_name(r)} at equal error takes {r['ratio']:.2f}× "
+            f"as long){prep}."
+        )
+    return out
+
+
+def workprecision_text(wp: dict) -> str:
+    """The paragraph linking `benchmarks.bench_workprecision`'s figure, with what its record
+    says of the run (impacts, blocks, load, commit)."""
+    mi = wp.get("machine", {})
+    n = min((p["impacts"] for p in wp.get("panels", [])), default=0)
+    load = wp.get("load_average_1min")
+    load = f"{load:.1f}" if isinstance(load, int | float) else "?"
+    return (
+        "Work-precision, ours as a curve: CPU time per impact against the largest relative "
+        "error achieved over random impacts, from 1e-6 to 1e-15, for the one-shot and the "
+        "prepared call at each `rtol` and for every peer over its tolerance ladder, per "
+        "family (Hertz, a q^2 force, the sphere's cap) and law (universal, a linear "
+        "dashpot), the figure below "
+        f"(`python -m benchmarks.bench_workprecision`; at least {n} impacts a panel, "
+        f"{wp.get('blocks', '?')} timing block(s), load {load}, commit "
+        f"{str(mi.get('commit', '?'))[:12]}"
+        + (
+            "; a check that it runs, not a measurement: rerun it on a quiet machine"
+            if wp.get("blocks", 0) < 3 or n < 1000
+            else ""
+        )
+        + "). On a cap, ours runs at full accuracy whatever rtol asks (one point).\n\n"
+        "![Work-precision: CPU time per impact against the largest relative error, ours "
+        "(one-shot and prepared) and each peer, per family and law]"
+        "(reports/bench/workprecision.png)"
     )
 
 
@@ -138,12 +236,14 @@ def _batch_goal(b: dict) -> str:
     return f"**not met**: Amdahl's serial part implied: {100 * s:.0f} % of the one-thread time"
 
 
-def speed_table(bench: dict) -> str:
+def speed_table(bench: dict, wp: dict | None = None) -> str:
     """Markdown tables of `benchmarks.bench_exact`'s JSON: the universal law per family, the
-    general laws, the batch; every ratio against the compiled DOP853 at equal error."""
+    general laws, the batch; every ratio against the fastest peer at equal error; one line
+    per row with its one-shot and prepared figures; given ``wp`` (the record of
+    `benchmarks.bench_workprecision`), the work-precision figure's paragraph."""
     lines = [
-        "| scene (universal law) | `solve_impact` | `prepare(pot, m)` call | its error | compiled "
-        "DOP853 at equal error | its error | ratio (DOP853 / prepared) | scipy DOP853 (rtol "
+        "| scene (universal law) | `solve_impact` | `prepare(pot, m)` call | its error | fastest "
+        "peer at equal error | its error | ratio (peer / prepared) | scipy DOP853 (rtol "
         "1e-12) | goal |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
@@ -160,8 +260,8 @@ def speed_table(bench: dict) -> str:
         lines += [
             "",
             "| Hertz + damping law | `solve_law_impact` | `prepare_law(pot, m, law)` call | its "
-            "error | compiled DOP853 at equal error | its error | ratio (DOP853 / one-shot) | "
-            "ratio (DOP853 / prepared) | scipy DOP853 (rtol 1e-12) | goal |",
+            "error | fastest peer at equal error | its error | ratio (peer / one-shot) | "
+            "ratio (peer / prepared) | scipy DOP853 (rtol 1e-12) | goal |",
             "|---|---|---|---|---|---|---|---|---|---|",
         ]
         for r in laws:
@@ -184,13 +284,15 @@ def speed_table(bench: dict) -> str:
         )
     mi = bench.get("machine", {})
     after = bench.get("load_average_1min_after")
+    lines += ["", "Each row, one-shot and prepared:", "", *_row_sentences(bench)]
+    if wp is not None:
+        lines += ["", workprecision_text(wp)]
     lines += [
         "",
         "Error = the largest relative error over both ends' contact time and restitution and "
         "q_max (and the peak force for the laws), against "
-        f"{bench.get('truth', '?')}. The peer is `benchmarks/peer_dop853.py` (numba, the "
-        "published Dormand–Prince 8(5,3) tableau, events on its dense output, every output "
-        "ours has), run over a tolerance ladder; shown at its cheapest rung with the "
+        f"{bench.get('truth', '?')}. {_peers_named(bench)}. A peer runs over a tolerance "
+        "ladder and is shown at its cheapest rung with the "
         f"{bench.get('equal_error', '?')}, or at its best rung when none gets there. "
         "Goals (issue 27): universal law ≤ 8 µs per prepared call and ≥ 20× the compiled "
         "DOP853 at ≤ 1e-14; general laws ≥ 3× (prepared call); `solve_impacts` ≥ 1.8× on 2 cores. "
@@ -262,13 +364,18 @@ def _replace(text: str, start: str, end: str, body: str) -> str:
 
 
 def rewrite_readme(
-    results: dict, readme_text: str, bench: dict | None = None, startup: dict | None = None
+    results: dict,
+    readme_text: str,
+    bench: dict | None = None,
+    startup: dict | None = None,
+    wp: dict | None = None,
 ) -> str:
-    """The README with only its verdict block (and, given ``bench``, its speed block; given
-    ``startup``, its start-up block) replaced."""
+    """The README with only its verdict block (and, given ``bench``, its speed block, with
+    the work-precision paragraph given ``wp``; given ``startup``, its start-up block)
+    replaced."""
     new = _replace(readme_text, START, END, verdict_table(results))
     if bench is not None:
-        new = _replace(new, SPEED_START, SPEED_END, speed_table(bench))
+        new = _replace(new, SPEED_START, SPEED_END, speed_table(bench, wp))
     if startup is not None:
         new = _replace(new, STARTUP_START, STARTUP_END, startup_table(startup))
     return new
@@ -282,6 +389,9 @@ def main(argv=None) -> int:
     ap.add_argument("--readme", default=str(ROOT / "README.md"))
     ap.add_argument("--bench", default=str(ROOT / "reports" / "bench" / "exact.json"))
     ap.add_argument("--startup", default=str(ROOT / "reports" / "bench" / "startup.json"))
+    ap.add_argument(
+        "--workprecision", default=str(ROOT / "reports" / "bench" / "workprecision.json")
+    )
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
     args = ap.parse_args(argv)
     try:
@@ -291,7 +401,9 @@ def main(argv=None) -> int:
         bench = json.loads(bench_path.read_text()) if bench_path.is_file() else None
         startup_path = Path(args.startup)
         startup = json.loads(startup_path.read_text()) if startup_path.is_file() else None
-        new = rewrite_readme(results, readme, bench, startup)
+        wp_path = Path(args.workprecision)
+        wp = json.loads(wp_path.read_text()) if wp_path.is_file() else None
+        new = rewrite_readme(results, readme, bench, startup, wp)
     except (OSError, ValueError, KeyError, HCVInputError) as exc:
         print(f"readme_table: error: {exc}", file=sys.stderr)
         return 2
