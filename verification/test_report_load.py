@@ -116,3 +116,49 @@ def test_a_run_records_the_load_at_its_end_and_warns(tmp_path, monkeypatch):
         claim="report",
         call="build_report (stub build) at load 15 on 2 cores",
     )
+
+
+@pytest.mark.parametrize(
+    "pair, cores, warns",
+    [([15.2, 14.8], 2, True), ([0.4, 1.1], 2, False), ([1.5, 2.5], 2, True)],
+)
+def test_every_timing_has_its_load_beside_it(pair, cores, warns):
+    """hcv-results/1.3: each stage's load at start and end is shown beside its time, and
+    the speed-against-error section says the load its timings ran at, warning over the
+    cores (issue 41: 'record the load beside every timing')."""
+    from reference_impl.report import _render, check_results
+
+    if not (REPORTS / "results.json").is_file():
+        pytest.skip("reports/results.json not generated")
+    r = json.loads((REPORTS / "results.json").read_text())
+    r["environment"]["cpu_count"] = cores
+    r["stage_loads"] = {k: list(pair) for k in r["timings_seconds"] if k != "total"}
+    r["stage_loads"]["speed against error"] = list(pair)
+    check_results(r, "test document with stage loads")
+    md = _render.markdown(r)
+    sentence = _render.wp_load_sentence(r)
+    rows = [ln for ln in md.splitlines() if ln.startswith("| speed against error |")]
+    flagged = f"over {cores} cores" in (rows[0] if rows else "")
+    assert_true(
+        sentence is not None
+        and sentence in md
+        and f"{pair[0]:g} to {pair[1]:g} on {cores} cores" in sentence
+        and ("above the cores" in sentence) == warns
+        and flagged == warns,
+        got=f"sentence {sentence!r}, timing row {rows[:1]}",
+        should=f"the load {pair} beside the timing, a warning {'' if warns else 'not '}given",
+        claim="report",
+        call="_render.markdown(results with stage_loads)",
+    )
+
+
+def test_a_stage_load_that_is_not_a_pair_of_loads_is_refused():
+    from reference_impl.errors import HCVInputError
+    from reference_impl.report import check_results
+
+    if not (REPORTS / "results.json").is_file():
+        pytest.skip("reports/results.json not generated")
+    r = json.loads((REPORTS / "results.json").read_text())
+    r["stage_loads"] = {"speed against error": [-1.0, "high"]}
+    with pytest.raises(HCVInputError, match=r"stage_loads"):
+        check_results(r, "test document")

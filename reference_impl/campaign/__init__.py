@@ -4,7 +4,7 @@
 speed-against-error study, the hard cases, the damping laws and, with ``--adapter``, the
 contact codes; it writes into ``out_dir``:
 
-* ``results.json`` -- every result, schema ``hcv-results/1.2``
+* ``results.json`` -- every result, schema ``hcv-results/1.3``
   (`reference_impl.report._schema`);
 * ``figures/*.png`` -- drawn from the same results;
 * ``index.html``, ``index.md``, ``erratum.md`` -- rendered from results.json by
@@ -225,7 +225,7 @@ def build_report(
     Returns
     -------
     dict
-        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.2``).
+        The content of ``results.json`` (JSON-ready, schema ``hcv-results/1.3``).
 
     Raises
     ------
@@ -333,12 +333,20 @@ def _build(
     n_stages += 1 if chain_codes else 0
     stage = [0]
 
+    loads: dict[str, list] = {}  # the load beside every timing (issue 41)
+
+    def load_1min() -> float | None:
+        avg = _environment.load_average()
+        return None if avg is None else avg[0]
+
     def timed(name: str, fn, *args, **kw):
         stage[0] += 1
         say(f"{name} (stage {min(stage[0], n_stages)} of {n_stages})")
+        start = load_1min()
         t0 = time.perf_counter()
         res = fn(*args, **kw)
         timings[name] = time.perf_counter() - t0
+        loads[name] = [start, load_1min()]
         return res
 
     # The critical-step map (pure computation, no timings) runs in background processes
@@ -516,6 +524,7 @@ def _build(
     }
     timings["total"] = time.perf_counter() - t_start
     results["timings_seconds"] = timings
+    results["stage_loads"] = loads
     _environment.record_end(results["environment"], say)
     say("writing results.json, index.html, index.md, erratum.md")
     results = jsonable(results)

@@ -278,6 +278,9 @@ def _wp(r) -> list:
         ),
         UL([f"{k}: {v}" for k, v in scenes.items()]),
     ]
+    load = wp_load_sentence(r)
+    if load:
+        blocks.append(P(load))
     fam = r["work_precision_families"]["rows"]
     blocks.append(
         P(
@@ -396,17 +399,56 @@ def _hard(r) -> list:
     ]
 
 
+def _load_cell(pair, cores) -> str:
+    """``start / end`` of one stage's 1-minute load, flagged when over the cores."""
+    if not pair:
+        return "–"
+    text = " / ".join("–" if x is None else f"{x:g}" for x in pair)
+    over = cores and any(x is not None and x > cores for x in pair)
+    return f"{text} (over {cores} cores)" if over else text
+
+
+def wp_load_sentence(r) -> str | None:
+    """The load while the speed-against-error timings ran, and a warning when it exceeded
+    the cores (issue 41: the main job re-measured them at load 15 without a word)."""
+    pair = (r.get("stage_loads") or {}).get("speed against error")
+    cores = r["environment"].get("cpu_count")
+    if not pair or any(x is None for x in pair):
+        return None
+    text = f"These timings ran at a 1-minute load of {pair[0]:g} to {pair[1]:g} on {cores} cores"
+    if cores and max(pair) > cores:
+        return text + ": above the cores, so other work slowed them; compare ratios, not times."
+    return text + "."
+
+
 def _env(r) -> list:
     env = r["environment"]
     rows = [[k, str(v)] for k, v in env.items() if k not in ("packages", "seeds")]
     rows += [[f"package {k}", str(v)] for k, v in env["packages"].items()]
     rows += [[f"seed {k}", str(v)] for k, v in env["seeds"].items()]
-    trows = [[k, f"{v:.2f}"] for k, v in r["timings_seconds"].items()]
+    loads = r.get("stage_loads") or {}  # hcv-results/1.3; older files: no column
+    cores = env.get("cpu_count")
+    if loads:
+        trows = [
+            [k, f"{v:.2f}", _load_cell(loads.get(k), cores)]
+            for k, v in r["timings_seconds"].items()
+        ]
+        theads = ["step", "seconds", "load (1 min) at start / end"]
+    else:
+        trows = [[k, f"{v:.2f}"] for k, v in r["timings_seconds"].items()]
+        theads = ["step", "seconds"]
     return [
         H(2, "7. Environment and provenance", "env"),
         T(["item", "value"], rows),
-        P("Wall time of each step of this run (s):"),
-        T(["step", "seconds"], trows),
+        P(
+            "Wall time of each step of this run (s)"
+            + (
+                f", with the load beside it (over the {cores} cores: slowed by other work):"
+                if loads
+                else ":"
+            )
+        ),
+        T(theads, trows),
         P(
             "Reproduce: `hcv report` (full) or `hcv report --quick`; the machine-readable "
             "results are in results.json next to this page. HYPOTHESIS_PROFILE and the "

@@ -1,4 +1,4 @@
-"""results.json, version ``hcv-results/1.2``: what a report run writes and the renderer reads.
+"""results.json, version ``hcv-results/1.3``: what a report run writes and the renderer reads.
 
 `reference_impl.campaign.build_report` runs the studies and writes ``results.json``; the
 report's pages (``index.md``, ``index.html``, ``erratum.md``) are rendered from it and
@@ -11,12 +11,14 @@ documented here with the minor that added it; a field removed, renamed or changi
 is a new major. A reader (``hcv report --from``) accepts its own version and every older
 minor of the same major (a field added since is then absent, read as null); it refuses
 another major and a newer minor, in one line. ``hcv-results/1.1`` added
-``codes_side_by_side``, ``hcv-results/1.2`` added ``assemblies``; the same rule holds for
+``codes_side_by_side``, ``hcv-results/1.2`` added ``assemblies``, ``hcv-results/1.3``
+``stage_loads``; the same rule holds for
 the bench's ``hcv-bench/1`` (`reference_impl.bench.scorecard._json`). Fields (SI units; times in s, speeds in m/s):
 
 ``schema`` (str)
-    ``"hcv-results/1.2"`` (``"hcv-results/1.1"`` before ``assemblies``, ``"hcv-results/1"``
-    before ``codes_side_by_side``).
+    ``"hcv-results/1.3"`` (``"hcv-results/1.2"`` before ``stage_loads``,
+    ``"hcv-results/1.1"`` before ``assemblies``, ``"hcv-results/1"`` before
+    ``codes_side_by_side``).
 ``title``, ``generated_utc`` (str), ``mode`` (``"full"`` or ``"quick"``), ``quick_drops`` (list of str)
     What was run, when, and what ``--quick`` left out.
 ``claims`` (list of dict)
@@ -76,6 +78,11 @@ the bench's ``hcv-bench/1`` (`reference_impl.bench.scorecard._json`). Fields (SI
     ``generated_utc`` and ``adapters`` of the run they come from, ``reason``.
 ``timings_seconds`` (dict)
     Wall time of each stage; ``total``.
+``stage_loads`` (dict, absent before ``hcv-results/1.3``)
+    The 1-minute load average as each stage of ``timings_seconds`` started and ended
+    (``[start, end]``; null where the platform has none), so that every timing has its
+    load beside it (issue 41): a stage whose load exceeded the cores is flagged where
+    its timings are shown.
 
 The file is checked as a whole before anything reads it (`check_results`, issue 36): against
 the JSON Schema ``results.schema.json`` shipped beside this module (Draft 2020-12, with the
@@ -107,7 +114,7 @@ from reference_impl.report._inputs import read_report_file
 
 __all__ = ["FIELDS", "RESULTS_MAX_BYTES", "SCHEMA", "SCHEMA_FILE", "check_results", "read_results"]
 
-SCHEMA = "hcv-results/1.2"
+SCHEMA = "hcv-results/1.3"
 # The one schema file of the document, shipped with the package (package-data).
 SCHEMA_FILE = Path(__file__).with_name("results.schema.json")
 # The committed results.json, with five codes, is 2.4 MB; 64 MiB keeps a 25x margin and
