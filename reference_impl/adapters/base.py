@@ -121,6 +121,11 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     none). Undeclared, `ContactAdapter.assembly` declines in one line ("<code> does not
     run assembly scenes"), which ``hcv dt-crit SCENE --adapter CODE`` prints with exit
     status 2. Python adapters only (a ``cmd:`` program declines).
+    The same hook takes a periodic lattice (`LatticeRequest`, in
+    `reference_impl.adapters._lattice_request`: 3-D positions in a rectangular box, the
+    contact list, normal contacts only) and returns a `LatticeRun` (positions and
+    velocities of shape (samples, N, 3)); a code that runs chains only declines a lattice
+    in one line from its ``_assembly_impl``.
 """
 
 from __future__ import annotations
@@ -138,6 +143,11 @@ from reference_impl.adapters._declaration import (
     Scheme,
     offset_refusal,
     scheme_of,
+)
+from reference_impl.adapters._lattice_request import (
+    LatticeRequest,
+    LatticeRun,
+    lattice_run_from_mapping,
 )
 from reference_impl.adapters._output import (
     align_staggered,
@@ -167,6 +177,8 @@ __all__ = [
     "CodeInfo",
     "ContactAdapter",
     "ImplementedLaw",
+    "LatticeRequest",
+    "LatticeRun",
     "PowerDamping",
     "SCHEMES",
     "Scheme",
@@ -277,8 +289,8 @@ class ContactAdapter:
         out = self._sustained_impl(scene)
         return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
-    def assembly(self, request: ChainRequest) -> ChainRun:
-        """Run one chain (contract item 14) and return the validated positions and velocities.
+    def assembly(self, request: ChainRequest | LatticeRequest) -> ChainRun | LatticeRun:
+        """Run one chain or lattice (contract item 14); the validated positions and velocities.
 
         Raises
         ------
@@ -290,6 +302,8 @@ class ContactAdapter:
         if not self.supports_assembly:
             raise AdapterDeclined(f"{self.label} does not run assembly scenes")
         out = self._assembly_impl(request)
+        if isinstance(request, LatticeRequest):
+            return lattice_run_from_mapping(out, request, who=self.label)
         return chain_run_from_mapping(out, request, who=self.label)
 
     def close(self) -> None:
