@@ -12,6 +12,8 @@ scene the suite searches); the code's Delta t_crit lies within the suite's ensem
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -33,8 +35,9 @@ from reference_impl.bench.assembly_codes import (
 )
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
-from reference_impl.scenes import scene_from_dict
+from reference_impl.scenes import scene_from_dict, scene_toml
 from reference_impl.stability.criteria import EnergyGrowth
+from verification._hcv_run import hcv
 from verification._lattice_codes import kernel_lattice, verlet_lattice
 
 from .assertions import assert_close, assert_true
@@ -143,6 +146,33 @@ def test_lattice_request_is_the_suites_scene():
                     call=f"lattice_request {sc.name}")  # fmt: skip
         assert_close(req.velocities[:, :d], model.v_init, rtol=0, atol=0, claim=CLAIM,
                      call=f"lattice_request {sc.name} velocities")  # fmt: skip
+
+
+def test_hcv_dt_crit_runs_a_third_party_lattice_code(tmp_path):
+    """``hcv dt-crit LATTICE --adapter CODE``: the code's Delta t_crit by the suite's search,
+    beside the suite's own (same scene, horizon, rule and grid)."""
+    text = scene_toml("lattice-hertz-triangular")  # the catalogue's, as a 4 x 4 square
+    for old, new in (('"triangular"', '"square"'), ("cells = 6", "cells = 4")):
+        assert old in text, f"got no {old!r} in the scene, should be one [{CLAIM}, scene_toml]"
+        text = text.replace(old, new)
+    path = tmp_path / "square.toml"
+    path.write_text(text)
+    spec = "verification._lattice_codes:VerletLatticeCode"
+    r = hcv(["dt-crit", str(path), "--adapter", spec, "--json", "--horizons", "500"],
+            cwd=tmp_path)  # fmt: skip
+    assert_true(r.returncode == 0, got=f"exit {r.returncode}: {r.stderr[-300:]!r}",
+                should="exit 0", claim=CLAIM, call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
+    rep = json.loads(r.stdout)["code"]
+    # the independent Verlet follows the actual lines of centres, the suite's kernel fixed
+    # normals: their Delta t_crit agree to the search's resolution, here two grid steps
+    # (0.02 Delta t_safe) for the k-section's bracket of each
+    slack = 2 * CODE_GRID.resolution * rep["dt_safe"]
+    assert_true(abs(rep["dt_crit"] - rep["dt_crit_suite"]) <= slack
+                and rep["n_bodies"] == 16 and rep["evidence"] in ("confirmed", "domain")
+                and rep["advice"] == [],
+                got=repr({k: rep[k] for k in ("dt_crit", "dt_crit_suite", "n_bodies", "advice")}),
+                should=f"dt_crit within {slack:.3g} s of the suite's, 16 bodies, no advice",
+                claim=CLAIM, call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
 
 
 # -- the codes ----------------------------------------------------------------------------
