@@ -19,8 +19,8 @@ from reference_impl.integrators.verlet_kernel import kernel_terms
 __all__ = ["VerletLatticeCode", "kernel_lattice", "verlet_lattice"]
 
 
-def verlet_lattice(req: LatticeRequest) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity Verlet of the lattice: positions and on-step velocities after every step.
+def verlet_lattice(req: LatticeRequest) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Velocity Verlet of the lattice: positions, on-step and half-step velocities per step.
 
     The law is the request's U'(q) = k q^p on every listed pair with q = 2 R - |x_j + s -
     x_i| > 0, along that line of centres (positions are never wrapped: the shifts hold).
@@ -40,17 +40,18 @@ def verlet_lattice(req: LatticeRequest) -> tuple[np.ndarray, np.ndarray]:
         np.add.at(f, j, fc)
         return f
 
-    xs, vs = [x.copy()], [v.copy()]
+    xs, vs, hs = [x.copy()], [v.copy()], [v.copy()]
     a = force(x) / m
     with np.errstate(all="ignore"):  # a runaway overflows: a result, not an error
         for _ in range(req.n_steps):
-            v = v + 0.5 * req.dt * a
-            x = x + req.dt * v
+            half = v + 0.5 * req.dt * a
+            x = x + req.dt * half
             a = force(x) / m
-            v = v + 0.5 * req.dt * a
+            v = half + 0.5 * req.dt * a
             xs.append(x.copy())
             vs.append(v.copy())
-    return np.array(xs), np.array(vs)
+            hs.append(half.copy())
+    return np.array(xs), np.array(vs), np.array(hs)
 
 
 def kernel_lattice(model, req: LatticeRequest) -> np.ndarray:
@@ -97,5 +98,5 @@ class VerletLatticeCode(ContactAdapter):
     def _assembly_impl(self, request):
         if not isinstance(request, LatticeRequest):
             raise AdapterDeclined("verlet-lattice runs lattices only")
-        x, v = verlet_lattice(request)
+        x, v, _ = verlet_lattice(request)
         return LatticeRun(x, v, {"code": "verlet-lattice"})

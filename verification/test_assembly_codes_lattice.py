@@ -2,12 +2,13 @@
 
 Without a code: the lattice request refuses bad input in one line, the suite's energy of a
 lattice run, the unwrapping of positions a code wrapped into its box, the scenes the codes
-decline. With LIGGGHTS and LAMMPS (marked with their codes' markers, skipped with the
+decline. With LIGGGHTS, LAMMPS and YADE (marked with their codes' markers, skipped with the
 install line where absent): on the 4 x 4 square layer and the 3 x 3 x 3 simple-cubic
 lattice the code's positions after 300 steps are those of an independent velocity Verlet
 along the actual lines of centres (the mapping of k, the periodic images, the scheme), and
 those of the suite's own assembly kernel to the kernel's fixed-normal approximation (the
-scene the suite searches); the code's Delta t_crit lies within the suite's ensemble.
+scene the suite searches); the code's Delta t_crit lies within the suite's ensemble, and
+its advice is what the code computes (LIGGGHTS, YADE).
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ from reference_impl.adapters.base import AdapterOutputError, LatticeRequest, Lat
 from reference_impl.adapters.lammps import lammps_available
 from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
 from reference_impl.adapters.liggghts import liggghts_available
+from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
+from reference_impl.adapters.yade import yade_available
 from reference_impl.assembly.lanes import initial_energy
 from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.safe import dt_safe_conventions
@@ -29,6 +32,7 @@ from reference_impl.assembly.search import search_ensemble
 from reference_impl.bench.assembly_codes import (
     CODE_GRID,
     LATTICE_SIZES,
+    assembly_codes_table,
     code_dt_crit,
     lattice_request,
     lattice_scene,
@@ -175,19 +179,36 @@ def test_hcv_dt_crit_runs_a_third_party_lattice_code(tmp_path):
                 claim=CLAIM, call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
 
 
+def test_codes_table_adds_the_lattices_only_when_asked():
+    """`assembly_codes_table`: chains alone by default (the report's rows), the lattices of
+    `LATTICE_SIZES` after them with ``lattices=True`` (a code that is not installed gives
+    its one-line row on each)."""
+    kw = {"codes": ("nosuchcode",), "sizes": (2,), "horizon": 200}
+    plain = assembly_codes_table(**kw)
+    both = assembly_codes_table(**kw, lattices=True)
+    got = [(r.scene, r.n_bodies, r.coordination) for r in both]
+    want = [("chain-hertz-n2", 2, 2.0), ("lattice-hertz-square-4", 16, 4.0),
+            ("lattice-hertz-simple-cubic-3", 27, 6.0)]  # fmt: skip
+    assert_true([r.scene for r in plain] == ["chain-hertz-n2"] and got == want
+                and all("nosuchcode" in r.note and r.dt_crit_suite > 0 for r in both),
+                got=repr((plain, got)), should=f"chains alone, then {want}", claim=CLAIM,
+                call="assembly_codes_table(lattices=True)")  # fmt: skip
+
+
 # -- the codes ----------------------------------------------------------------------------
 
 
-def _positions_match(adapter):
+def _positions_match(adapter, half_step_v: bool = False):
     for lattice, cells in LATTICE_SIZES:
         sc = _scene(lattice, cells)
         req = lattice_request(sc, DT_FRACTION * _dt_safe(sc), STEPS)
         run = adapter.assembly(req)
-        x, v = verlet_lattice(req)
+        x, v, h = verlet_lattice(req)
         err = float(np.max(np.abs(run.x - x)))
         assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m", should=f"<= {X_TOL:g} m",
                     claim=CLAIM, call=f"{adapter.label} {sc.name}")  # fmt: skip
-        assert_close(run.v[1:], v[1:], rtol=0, atol=V_TOL, claim=CLAIM,
+        want = h if half_step_v else v  # leapfrog: the velocity of the half step
+        assert_close(run.v[1:], want[1:], rtol=0, atol=V_TOL, claim=CLAIM,
                      call=f"{adapter.label} {sc.name} velocities")  # fmt: skip
         # the scene the suite searches: its kernel, to the fixed-normal approximation
         slow = _scene(lattice, cells, SLOW_STRIKER)
@@ -205,7 +226,8 @@ def _positions_match(adapter):
 def _dt_crit_in_suite_ensemble(adapter):
     sc = _scene("square", 4)
     safe = _dt_safe(sc)
-    crit = EnergyGrowth(n_steps=1000)
+    # 500 steps: ~28 code runs within seconds; the suite's ensemble has the same horizon
+    crit = EnergyGrowth(n_steps=500)
     found = code_dt_crit(adapter, sc, safe, criterion=crit)
     ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
     # Contacts open and close: round-off (or the kernel's fixed normals) moves the smallest
@@ -224,6 +246,15 @@ def liggghts():
     from reference_impl.adapters.liggghts import LiggghtsAdapter
 
     a = LiggghtsAdapter(model="hertz")
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def yade():
+    from reference_impl.adapters.yade import YadeAdapter
+
+    a = YadeAdapter(input="en")
     yield a
     a.close()
 
@@ -251,20 +282,48 @@ def test_liggghts_lattice_dt_crit_lies_in_the_suites_ensemble(liggghts):
     _dt_crit_in_suite_ensemble(liggghts)
 
 
+def _advice_is_the_codes_whatever_the_step(adapter, names, material):
+    """The advice on the simple-cubic lattice: every name the code gives, a finite step,
+    and the ones that read only the material (``material``) the same at two steps."""
+    sc = _scene("simple-cubic", 3)
+    safe = _dt_safe(sc)
+    a1 = adapter.step_advice(lattice_request(sc, 1e-3 * safe, 200))
+    a2 = adapter.step_advice(lattice_request(sc, 2e-3 * safe, 200))
+    assert_true(set(a1) == set(names) and all(0 < t < np.inf for t in a1.values()),
+                got=repr(a1), should=f"finite steps named {sorted(names)}", claim=CLAIM,
+                call=f"{adapter.label}.step_advice lattice")  # fmt: skip
+    # 1e-6: 15 printed digits; the Rayleigh and P-wave times read the material, not the
+    # step (the Hertz time and the stepper read the speeds and contacts of the run)
+    assert_close(a2[material], a1[material], rtol=1e-6, claim=CLAIM,
+                 call=f"{adapter.label}.step_advice lattice {material} at two steps")  # fmt: skip
+
+
 @pytest.mark.liggghts
 @pytest.mark.skipif(liggghts_available() is not None,
                     reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
 def test_liggghts_lattice_advice_is_its_rayleigh_and_hertz_times(liggghts):
-    sc = _scene("simple-cubic", 3)
-    safe = _dt_safe(sc)
-    a1 = liggghts.step_advice(lattice_request(sc, 1e-3 * safe, 10))
-    a2 = liggghts.step_advice(lattice_request(sc, 2e-3 * safe, 10))
-    assert_true(set(a1) == {"rayleigh", "hertz"} and all(0 < t < np.inf for t in a1.values()),
-                got=repr(a1), should="finite rayleigh and hertz times", claim=CLAIM,
-                call="LiggghtsAdapter.step_advice lattice")  # fmt: skip
-    # 1e-6: 15 printed digits; the Rayleigh time reads the material, not the step
-    assert_close(a2["rayleigh"], a1["rayleigh"], rtol=1e-6, claim=CLAIM,
-                 call="LiggghtsAdapter.step_advice lattice rayleigh at two steps")  # fmt: skip
+    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"), "rayleigh")
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_is_leapfrog_of_the_scene(yade):
+    # leapfrog: the positions of velocity Verlet, the velocity of the half step
+    _positions_match(yade, half_step_v=True)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_dt_crit_lies_in_the_suites_ensemble(yade):
+    _dt_crit_in_suite_ensemble(yade)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_advice_is_pwave_and_global_stiffness(yade):
+    _advice_is_the_codes_whatever_the_step(
+        yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"), "PWaveTimeStep"
+    )
 
 
 @pytest.mark.lammps

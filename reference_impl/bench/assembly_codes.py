@@ -453,9 +453,9 @@ def _rows_for(code: str, adapter, scene, horizon: int, radius: float, suite: flo
 
 def assembly_codes_table(
     codes=CODES, sizes=SIZES, *, horizon: int = CODE_HORIZON, radius: float = RADIUS,
-    base: str = "chain-hertz",
+    base: str = "chain-hertz", lattices: bool = False,
 ) -> list[AdviceRow]:  # fmt: skip
-    """Issue 39 section 4: each code's measured Delta t_crit and its advice, per chain size.
+    """Issue 39 section 4: each code's measured Delta t_crit and its advice, per scene.
 
     For each code (registry names; a code that is not installed, or that does not run
     assembly scenes, gives one row per size saying so) and each N in ``sizes``: the
@@ -463,7 +463,10 @@ def assembly_codes_table(
     ``horizon`` steps, the suite's own Delta t_crit of the same search, the paper's
     Delta t_safe, and one row per advice the code computes (`AdviceRow`: code, scene, N,
     Z, advice name, advice dt, measured dt_crit, factor, safe). Seconds per code and
-    size (LIGGGHTS ~1 s, YADE ~3 s with its start-up).
+    size (LIGGGHTS ~1 s, YADE ~3 s with its start-up). With ``lattices``, the same for
+    each periodic lattice of `LATTICE_SIZES` after the chains (`lattice_scene`: the
+    ``lattice-hertz-triangular`` scene's spheres, law and striker; ~15 s per code and
+    lattice); the default keeps the chains alone (the report's rows).
 
     Parameters
     ----------
@@ -477,9 +480,13 @@ def assembly_codes_table(
         Sphere radius (m).
     base : str
         The chain scene resized to each N (default ``chain-hertz``).
+    lattices : bool
+        Also the lattices of `LATTICE_SIZES` (default False: chains only).
     """
     crit = EnergyGrowth(n_steps=int(horizon))
     scenes = [chain_scene(n, base) for n in sizes]
+    if lattices:
+        scenes += [lattice_scene(name, cells) for name, cells in LATTICE_SIZES]
     refs = []
     for sc in scenes:
         model = assembly_model(sc)
