@@ -91,6 +91,7 @@ class VerletLatticeCode(ContactAdapter):
     name = "verlet-lattice"
     isolate = False
     supports_assembly = True
+    supports_lattice = True
 
     def _impact_impl(self, scene):  # pragma: no cover - lattices only
         raise AdapterDeclined("verlet-lattice runs lattices only")

@@ -81,6 +81,17 @@ def _dt_safe(sc) -> float:
     return dt_safe_conventions(model, initial_energy(model))["paper"]
 
 
+def _square_toml(tmp_path):
+    """The catalogue's triangular lattice scene written as a 4 x 4 square (a file for hcv)."""
+    text = scene_toml("lattice-hertz-triangular")
+    for old, new in (('"triangular"', '"square"'), ("cells = 6", "cells = 4")):
+        assert old in text, f"got no {old!r} in the scene, should be one [{CLAIM}, scene_toml]"
+        text = text.replace(old, new)
+    path = tmp_path / "square.toml"
+    path.write_text(text)
+    return path
+
+
 def _pair(box=(4 * R, 4 * R, 4 * R), x1=(3 * R, R, R)) -> LatticeRequest:
     """Two spheres along x in a periodic box, touching directly and across the box."""
     pos = np.array([[R, R, R], x1])
@@ -155,12 +166,7 @@ def test_lattice_request_is_the_suites_scene():
 def test_hcv_dt_crit_runs_a_third_party_lattice_code(tmp_path):
     """``hcv dt-crit LATTICE --adapter CODE``: the code's Delta t_crit by the suite's search,
     beside the suite's own (same scene, horizon, rule and grid)."""
-    text = scene_toml("lattice-hertz-triangular")  # the catalogue's, as a 4 x 4 square
-    for old, new in (('"triangular"', '"square"'), ("cells = 6", "cells = 4")):
-        assert old in text, f"got no {old!r} in the scene, should be one [{CLAIM}, scene_toml]"
-        text = text.replace(old, new)
-    path = tmp_path / "square.toml"
-    path.write_text(text)
+    path = _square_toml(tmp_path)
     spec = "verification._lattice_codes:VerletLatticeCode"
     r = hcv(["dt-crit", str(path), "--adapter", spec, "--json", "--horizons", "500"],
             cwd=tmp_path)  # fmt: skip
@@ -193,6 +199,20 @@ def test_codes_table_adds_the_lattices_only_when_asked():
                 and all("nosuchcode" in r.note and r.dt_crit_suite > 0 for r in both),
                 got=repr((plain, got)), should=f"chains alone, then {want}", claim=CLAIM,
                 call="assembly_codes_table(lattices=True)")  # fmt: skip
+
+
+def test_chain_code_is_never_handed_a_lattice(tmp_path):
+    """A code that sets supports_assembly but not supports_lattice (a chain code written
+    before lattices) declines a lattice in one line, exit status 2, nothing run."""
+    path = _square_toml(tmp_path)
+    spec = "verification._chain_codes:VerletChainCode"
+    r = hcv(["dt-crit", str(path), "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    words = "verlet-chain does not run lattice scenes"
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 2 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
 
 
 # -- the codes ----------------------------------------------------------------------------

@@ -124,8 +124,9 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     The same hook takes a periodic lattice (`LatticeRequest`, in
     `reference_impl.adapters._lattice_request`: 3-D positions in a rectangular box, the
     contact list, normal contacts only) and returns a `LatticeRun` (positions and
-    velocities of shape (samples, N, 3)); a code that runs chains only declines a lattice
-    in one line from its ``_assembly_impl``.
+    velocities of shape (samples, N, 3)) when the adapter also sets ``supports_lattice =
+    True``; else `ContactAdapter.assembly` declines it in one line ("<code> does not run
+    lattice scenes"), so a chain code written before lattices never sees one.
 """
 
 from __future__ import annotations
@@ -210,6 +211,8 @@ class ContactAdapter:
         Implements `_sustained_impl` (contract item 9).
     supports_assembly : bool
         Implements `_assembly_impl` (contract item 14: chain scenes).
+    supports_lattice : bool
+        Its `_assembly_impl` also takes a `LatticeRequest` (contract item 14).
     staggering : dict
         Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
         when the force is stored one step late; `impact` re-aligns them. Empty:
@@ -226,6 +229,7 @@ class ContactAdapter:
     isolate: bool = True
     supports_sustained: bool = False
     supports_assembly: bool = False
+    supports_lattice: bool = False
     staggering: Mapping = {}
     time_scheme: str = "velocity-verlet"
     claimed_order: float | None = None
@@ -248,8 +252,8 @@ class ContactAdapter:
     def _assembly_impl(self, request: ChainRequest):
         raise NotImplementedError(f"{type(self).__name__} does not implement assembly scenes")
 
-    def step_advice(self, request: ChainRequest) -> dict:
-        """The code's own time-step advice for a chain (name -> dt in s), as the code itself
+    def step_advice(self, request: ChainRequest | LatticeRequest) -> dict:
+        """The code's own time-step advice for an assembly (name -> dt in s), as the code
         computes it (contract item 14); empty when the code gives none."""
         return {}
 
@@ -301,6 +305,8 @@ class ContactAdapter:
         """
         if not self.supports_assembly:
             raise AdapterDeclined(f"{self.label} does not run assembly scenes")
+        if isinstance(request, LatticeRequest) and not self.supports_lattice:
+            raise AdapterDeclined(f"{self.label} does not run lattice scenes")
         out = self._assembly_impl(request)
         if isinstance(request, LatticeRequest):
             return lattice_run_from_mapping(out, request, who=self.label)

@@ -213,6 +213,7 @@ class LammpsAdapter(ContactAdapter):
     isolate = True
     # contract item 14: Hertz chains and periodic lattices (`_lammps_chain`, `_lammps_lattice`)
     supports_assembly = True  # no step advice
+    supports_lattice = True
     spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
     # contract item 13: what the registry, the report and CI know of LAMMPS
     code_info = CodeInfo(

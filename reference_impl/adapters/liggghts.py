@@ -188,6 +188,7 @@ class LiggghtsAdapter(ContactAdapter):
     isolate = True
     # contract item 14: Hertz chains and periodic lattices (`_liggghts_chain`, `_liggghts_lattice`)
     supports_assembly = True
+    supports_lattice = True
     spec_values = {"model": MODELS, "geometry": GEOMETRIES, "limit_force": True}
     # contract item 13: what the registry, the report and CI know of LIGGGHTS
     code_info = CodeInfo(

@@ -211,6 +211,7 @@ class YadeAdapter(ContactAdapter):
     isolate = False  # YADE runs in its own process, bounded by `PersistentProcess`
     # contract item 14: Hertz chains and periodic lattices (`_yade_chain`, `_yade_lattice`)
     supports_assembly = True
+    supports_lattice = True
     spec_values = {"input": INPUTS, "geometry": GEOMETRIES}
     # contract item 13: what the registry, the report and CI know of YADE
     code_info = CodeInfo(
