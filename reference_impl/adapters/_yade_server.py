@@ -19,6 +19,8 @@ protocol, see `reference_impl.adapters._persistent`):
   14, `_chain`), positions and velocities after each step; ``"op": "chain_advice"``
   -> ``{"pwave": s, "gst": s, "gst_steps": n}``: ``utils.PWaveTimeStep()`` and the
   smallest step ``GlobalStiffnessTimeStepper`` chose along a run it drove (`_chain_advice`).
+* ``"op": "lattice"`` and ``"lattice_advice"``: the same for a periodic lattice (`_lattice`,
+  `_lattice_advice`; ``x`` and ``v`` per step are [x, y, z] per body).
 * anything that fails -> ``{"id": n, "error": "one line"}``; the server goes on.
 
 Traps this script avoids (found by maintainers wiring YADE by hand):
@@ -245,6 +247,94 @@ def _chain_advice(req):
     }
 
 
+def _build_lattice(sc, gst=None):
+    """Reset YADE to the periodic lattice of a request (cell, spheres, no gravity or damping)."""
+    from yade import O, utils
+    from yade.wrapper import (
+        Bo1_Sphere_Aabb,
+        ForceResetter,
+        FrictMat,
+        Ig2_Sphere_Sphere_ScGeom,
+        InsertionSortCollider,
+        InteractionLoop,
+        Ip2_FrictMat_FrictMat_MindlinPhys,
+        Law2_ScGeom_MindlinPhys_Mindlin,
+        NewtonIntegrator,
+    )
+
+    O.reset()
+    O.periodic = True
+    O.cell.setBox(*[float(b) for b in sc["cell"]])
+    mat = O.materials.append(
+        FrictMat(young=sc["young"], poisson=0.0, frictionAngle=0.0, density=sc["density"])
+    )
+    ids = []
+    for x, m, v in zip(sc["x0"], sc["masses"], sc["velocities"], strict=True):
+        b = utils.sphere(tuple(float(a) for a in x), float(sc["R"]), material=mat)
+        ids.append(O.bodies.append(b))
+        b.state.mass = float(m)  # the density gave it to round-off; the scene's exactly
+        b.state.vel = tuple(float(a) for a in v)
+    engines = [
+        ForceResetter(),
+        InsertionSortCollider([Bo1_Sphere_Aabb()], verletDist=0.0),
+        InteractionLoop(
+            [Ig2_Sphere_Sphere_ScGeom()],
+            [Ip2_FrictMat_FrictMat_MindlinPhys()],
+            [Law2_ScGeom_MindlinPhys_Mindlin()],
+        ),
+    ]
+    if gst is not None:
+        engines.append(gst)
+    engines.append(NewtonIntegrator(damping=0.0, gravity=(0.0, 0.0, 0.0)))
+    O.engines = engines
+    return O, ids
+
+
+def _lattice(req):
+    sc = req["scene"]
+    O, ids = _build_lattice(sc)
+    O.dt = float(req["dt"])
+    masses = [float(m) for m in sc["masses"]]
+    stop = float(req["stop"])
+    xs = [[[float(a) for a in x] for x in sc["x0"]]]
+    vs = [[[float(a) for a in v] for v in sc["velocities"]]]
+    for _ in range(int(req["n_steps"])):
+        O.step()
+        x = [list(O.bodies[i].state.pos) for i in ids]
+        v = [list(O.bodies[i].state.vel) for i in ids]
+        ke = sum(0.5 * m * sum(a * a for a in u) for m, u in zip(masses, v, strict=True))
+        xs.append(x)
+        vs.append(v)
+        if not all(math.isfinite(a) for row in x + v for a in row) or ke > stop:
+            break
+    return {"x": xs, "v": vs}
+
+
+def _lattice_advice(req):
+    from yade import utils
+    from yade.wrapper import GlobalStiffnessTimeStepper
+
+    sc = req["scene"]
+    O, _ids = _build_lattice(sc)
+    pwave = float(utils.PWaveTimeStep())
+    # the stepper as for a chain (`_chain_advice`): its smallest step along a run it drove
+    gst = GlobalStiffnessTimeStepper(active=True, timeStepUpdateInterval=1,
+                                     defaultDt=float(req["dt"]))  # fmt: skip
+    O, _ids = _build_lattice(sc, gst)
+    O.dt = float(req["dt"])
+    chosen = []
+    for _ in range(int(req["n_steps"])):
+        O.step()
+        if O.interactions.countReal():
+            chosen.append(float(O.dt))
+    return {
+        "pwave": pwave,
+        "gst": min(chosen) if chosen else None,
+        "gst_steps": len(chosen),
+        "gst_safety": float(gst.timestepSafetyCoefficient),
+    }
+
+
 def _finite(obj):
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
@@ -258,7 +348,8 @@ def _finite(obj):
 def main():
     out = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever YADE prints from now on goes to stderr
-    handlers = {"impact": _impact, "probe": _probe, "chain": _chain, "chain_advice": _chain_advice}
+    handlers = {"impact": _impact, "probe": _probe, "chain": _chain, "chain_advice": _chain_advice,
+                "lattice": _lattice, "lattice_advice": _lattice_advice}  # fmt: skip
     for line in sys.stdin:
         if not line.strip():
             continue

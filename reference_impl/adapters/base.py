@@ -121,6 +121,12 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     none). Undeclared, `ContactAdapter.assembly` declines in one line ("<code> does not
     run assembly scenes"), which ``hcv dt-crit SCENE --adapter CODE`` prints with exit
     status 2. Python adapters only (a ``cmd:`` program declines).
+    The same hook takes a periodic lattice (`LatticeRequest`, in
+    `reference_impl.adapters._lattice_request`: 3-D positions in a rectangular box, the
+    contact list, normal contacts only) and returns a `LatticeRun` (positions and
+    velocities of shape (samples, N, 3)) when the adapter also sets ``supports_lattice =
+    True``; else `ContactAdapter.assembly` declines it in one line ("<code> does not run
+    lattice scenes"), so a chain code written before lattices never sees one.
 """
 
 from __future__ import annotations
@@ -138,6 +144,11 @@ from reference_impl.adapters._declaration import (
     Scheme,
     offset_refusal,
     scheme_of,
+)
+from reference_impl.adapters._lattice_request import (
+    LatticeRequest,
+    LatticeRun,
+    lattice_run_from_mapping,
 )
 from reference_impl.adapters._output import (
     align_staggered,
@@ -167,6 +178,8 @@ __all__ = [
     "CodeInfo",
     "ContactAdapter",
     "ImplementedLaw",
+    "LatticeRequest",
+    "LatticeRun",
     "PowerDamping",
     "SCHEMES",
     "Scheme",
@@ -198,6 +211,8 @@ class ContactAdapter:
         Implements `_sustained_impl` (contract item 9).
     supports_assembly : bool
         Implements `_assembly_impl` (contract item 14: chain scenes).
+    supports_lattice : bool
+        Its `_assembly_impl` also takes a `LatticeRequest` (contract item 14).
     staggering : dict
         Time shifts of the returned samples (contract item 11), e.g. {"force": 1}
         when the force is stored one step late; `impact` re-aligns them. Empty:
@@ -214,6 +229,7 @@ class ContactAdapter:
     isolate: bool = True
     supports_sustained: bool = False
     supports_assembly: bool = False
+    supports_lattice: bool = False
     staggering: Mapping = {}
     time_scheme: str = "velocity-verlet"
     claimed_order: float | None = None
@@ -236,8 +252,8 @@ class ContactAdapter:
     def _assembly_impl(self, request: ChainRequest):
         raise NotImplementedError(f"{type(self).__name__} does not implement assembly scenes")
 
-    def step_advice(self, request: ChainRequest) -> dict:
-        """The code's own time-step advice for a chain (name -> dt in s), as the code itself
+    def step_advice(self, request: ChainRequest | LatticeRequest) -> dict:
+        """The code's own time-step advice for an assembly (name -> dt in s), as the code
         computes it (contract item 14); empty when the code gives none."""
         return {}
 
@@ -277,8 +293,8 @@ class ContactAdapter:
         out = self._sustained_impl(scene)
         return trajectory_from_mapping(out, who=self.label, staggering=self.staggering)
 
-    def assembly(self, request: ChainRequest) -> ChainRun:
-        """Run one chain (contract item 14) and return the validated positions and velocities.
+    def assembly(self, request: ChainRequest | LatticeRequest) -> ChainRun | LatticeRun:
+        """Run one chain or lattice (contract item 14); the validated positions and velocities.
 
         Raises
         ------
@@ -289,7 +305,11 @@ class ContactAdapter:
         """
         if not self.supports_assembly:
             raise AdapterDeclined(f"{self.label} does not run assembly scenes")
+        if isinstance(request, LatticeRequest) and not self.supports_lattice:
+            raise AdapterDeclined(f"{self.label} does not run lattice scenes")
         out = self._assembly_impl(request)
+        if isinstance(request, LatticeRequest):
+            return lattice_run_from_mapping(out, request, who=self.label)
         return chain_run_from_mapping(out, request, who=self.label)
 
     def close(self) -> None:

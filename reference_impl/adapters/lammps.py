@@ -95,6 +95,8 @@ from reference_impl.adapters._lammps_damping import (
     tsuji_alpha,
     zeta_linear,
 )
+from reference_impl.adapters._lammps_lattice import lattice_script, lattice_vectors
+from reference_impl.adapters._lattice_request import LatticeRequest
 from reference_impl.adapters.base import (
     AdapterScene,
     ContactAdapter,
@@ -209,7 +211,9 @@ class LammpsAdapter(ContactAdapter):
 
     name = "lammps"
     isolate = True
-    supports_assembly = True  # contract item 14: Hertz chains (`_lammps_chain`); no advice
+    # contract item 14: Hertz chains and periodic lattices (`_lammps_chain`, `_lammps_lattice`)
+    supports_assembly = True  # no step advice
+    supports_lattice = True
     spec_values = {"damping": DAMPING_MODELS, "geometry": GEOMETRIES, "limit_damping": True}
     # contract item 13: what the registry, the report and CI know of LAMMPS
     code_info = CodeInfo(
@@ -538,6 +542,9 @@ class LammpsAdapter(ContactAdapter):
 
     def _assembly_impl(self, request):
         module = load_lammps()
+        if isinstance(request, LatticeRequest):  # periodic lattice (`_lammps_lattice`)
+            lmp = self._run_script(lattice_script(request))
+            return lattice_vectors(lmp, module, request, {"code": f"LAMMPS {self.version}"})
         lmp = self._run_script(chain_script(request))
         return chain_vectors(lmp, module, request, {"code": f"LAMMPS {self.version}"})
 

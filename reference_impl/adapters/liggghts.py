@@ -93,12 +93,19 @@ from reference_impl.adapters._codes_common import (
     split_option,
 )
 from reference_impl.adapters._declaration import CodeInfo
+from reference_impl.adapters._lattice_request import LatticeRequest
 from reference_impl.adapters._liggghts_chain import (
     chain_advice_script,
     chain_mapping,
     chain_script,
     parse_advice,
     parse_chain,
+)
+from reference_impl.adapters._liggghts_lattice import (
+    lattice_advice_script,
+    lattice_mapping,
+    lattice_script,
+    parse_lattice,
 )
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
@@ -179,7 +186,9 @@ class LiggghtsAdapter(ContactAdapter):
 
     name = "liggghts"
     isolate = True
-    supports_assembly = True  # contract item 14: Hertz chains (`_liggghts_chain`)
+    # contract item 14: Hertz chains and periodic lattices (`_liggghts_chain`, `_liggghts_lattice`)
+    supports_assembly = True
+    supports_lattice = True
     spec_values = {"model": MODELS, "geometry": GEOMETRIES, "limit_force": True}
     # contract item 13: what the registry, the report and CI know of LIGGGHTS
     code_info = CodeInfo(
@@ -478,12 +487,19 @@ class LiggghtsAdapter(ContactAdapter):
         )
 
     def _assembly_impl(self, request):
+        if isinstance(request, LatticeRequest):  # periodic lattice (`_liggghts_lattice`)
+            mp = lattice_mapping(request)
+            meta = {"code": f"LIGGGHTS {self.version}", **mp, "v_staggering": 0.0}
+            return parse_lattice(self._run(lattice_script(request, mp)), request, meta)
         mp = chain_mapping(request)
         meta = {"code": f"LIGGGHTS {self.version}", **mp, "v_staggering": 0.0}
         return parse_chain(self._run(chain_script(request, mp)), request, meta)
 
     def step_advice(self, request) -> dict:
-        """``fix check/timestep/gran``'s Rayleigh and Hertz times (s) of the chain's start."""
+        """``fix check/timestep/gran``'s Rayleigh and Hertz times (s) of the assembly's start."""
+        if isinstance(request, LatticeRequest):
+            script = lattice_advice_script(request, lattice_mapping(request))
+            return parse_advice(self._run(script), request.dt)
         return parse_advice(self._run(chain_advice_script(request, chain_mapping(request))),
                             request.dt)  # fmt: skip
 

@@ -103,8 +103,10 @@ from reference_impl.adapters._codes_common import (
     split_option,
 )
 from reference_impl.adapters._declaration import CodeInfo
+from reference_impl.adapters._lattice_request import LatticeRequest
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters._yade_chain import chain_scene, parse_advice, parse_chain
+from reference_impl.adapters._yade_lattice import lattice_scene, parse_lattice
 from reference_impl.adapters.base import (
     AdapterDeclined,
     AdapterRunError,
@@ -207,7 +209,9 @@ class YadeAdapter(ContactAdapter):
 
     name = "yade"
     isolate = False  # YADE runs in its own process, bounded by `PersistentProcess`
-    supports_assembly = True  # contract item 14: Hertz chains (`_yade_chain`)
+    # contract item 14: Hertz chains and periodic lattices (`_yade_chain`, `_yade_lattice`)
+    supports_assembly = True
+    supports_lattice = True
     spec_values = {"input": INPUTS, "geometry": GEOMETRIES}
     # contract item 13: what the registry, the report and CI know of YADE
     code_info = CodeInfo(
@@ -475,6 +479,14 @@ class YadeAdapter(ContactAdapter):
         return Trajectory(t, arr["q"], arr["v"], arr["f"], meta)
 
     def _assembly_impl(self, request):
+        if isinstance(request, LatticeRequest):  # periodic lattice (`_yade_lattice`)
+            sc = lattice_scene(request)
+            n = request.n_bodies * 3 * (int(request.n_steps) + 1)
+            ans = self._ask({"op": "lattice", "scene": sc, "dt": request.dt,
+                             "n_steps": int(request.n_steps),
+                             "stop": request.stop_kinetic(1e12)}, n)  # fmt: skip
+            return parse_lattice(ans, request, {"code": "YADE", "young": sc["young"],
+                                                "density": sc["density"]})  # fmt: skip
         sc = chain_scene(request)
         n = request.n_bodies * (int(request.n_steps) + 1)
         # a runaway ends at its stop energy, at most 1e12 E_0 (the suite's MAX_FACTOR)
@@ -486,6 +498,10 @@ class YadeAdapter(ContactAdapter):
 
     def step_advice(self, request) -> dict:
         """``PWaveTimeStep()`` and ``GlobalStiffnessTimeStepper``'s smallest step (s)."""
+        if isinstance(request, LatticeRequest):
+            ans = self._ask({"op": "lattice_advice", "scene": lattice_scene(request),
+                             "dt": request.dt, "n_steps": int(request.n_steps)}, 4)  # fmt: skip
+            return parse_advice(ans)
         ans = self._ask({"op": "chain_advice", "scene": chain_scene(request),
                          "dt": request.dt, "n_steps": int(request.n_steps)}, 4)  # fmt: skip
         return parse_advice(ans)

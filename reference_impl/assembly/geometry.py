@@ -35,7 +35,7 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["LATTICES", "WALLS", "Assembly", "chain", "coordination", "lattice"]
+__all__ = ["LATTICES", "WALLS", "Assembly", "chain", "coordination", "lattice", "lattice_sites"]
 
 WALLS = ("none", "one", "both")
 # name -> (dimension, conventional cell vectors in units of the nearest-neighbour
@@ -314,3 +314,36 @@ def lattice(
         tangential_ratio=float(tangential_ratio),
         rotation=bool(rotation),
     )
+
+
+def lattice_sites(name: str, cells, spacing: float) -> tuple[np.ndarray, np.ndarray | None]:
+    """Sites of the bodies of `lattice` (same order) and its periodic box, for the codes.
+
+    Parameters
+    ----------
+    name : str
+        One of `LATTICES`.
+    cells : int or sequence of int
+        Conventional cells along each lattice vector.
+    spacing : float
+        Nearest-neighbour distance (m), 2 R + gap.
+
+    Returns
+    -------
+    sites : numpy.ndarray
+        Shape (n, dim), in m, body k = cell index * basis size + basis index as `lattice`
+        numbers them, inside [0, box) along each axis.
+    box : numpy.ndarray or None
+        Edge lengths (m) of the periodic box, shape (dim,), when the conventional cell is
+        rectangular (square, simple-cubic, bcc, fcc); None for a skewed cell (triangular,
+        honeycomb), whose periodic box is no rectangle.
+    """
+    _check_name(name)
+    dim, cell, basis = _LATTICE_CELLS[name]
+    cells_t = (int(cells),) * dim if np.isscalar(cells) else tuple(int(c) for c in cells)
+    frac = [np.array(c, dtype=float) + b for c in itertools.product(*(range(m) for m in cells_t))
+            for b in basis]  # fmt: skip
+    sites = float(spacing) * (np.array(frac).reshape(-1, dim) @ cell)
+    rect = np.allclose(cell, np.diag(np.diag(cell)), rtol=0.0, atol=0.0)
+    box = float(spacing) * np.diag(cell) * np.array(cells_t, dtype=float) if rect else None
+    return sites, box

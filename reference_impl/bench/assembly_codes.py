@@ -1,4 +1,4 @@
-"""The contact codes on chain scenes: their measured Delta t_crit and their own step advice.
+"""The contact codes on chains and lattices: their measured Delta t_crit and their step advice.
 
 Issue 39, section 4. A code that runs assembly scenes (contract item 14 of
 `reference_impl.adapters.base`: LIGGGHTS, YADE) runs a Hertz chain of N spheres between
@@ -23,6 +23,14 @@ runs away, and it must be reduced by that factor). The Rayleigh and P-wave times
 meant to be used as a fraction (users take 10-50 % of them); the table gives the time
 itself and the factor says which fraction is safe.
 
+Lattices (``lattices=True`` in `assembly_codes_table`, `LATTICE_SIZES`): the periodic ones
+whose box is a rectangle (`CODE_LATTICES`), Hertz normal contacts only; `lattice_request`
+hands a code the suite's own bodies in the suite's order
+(`reference_impl.assembly.geometry.lattice_sites`), contact list and initial velocities
+(`reference_impl.assembly.model.assembly_model`; a 2-D lattice in one plane of the codes'
+3-D space), and refuses in one line a scene that asks more (tangential springs, rotation,
+bonds, a gap, damping, walls) or a skewed box (triangular, honeycomb).
+
 This lives in the bench layer because it runs adapters (the layering test keeps studies
 below adapters). `assembly_codes_table` is the study; `code_dt_crit` one search.
 """
@@ -36,8 +44,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from reference_impl.adapters._assembly_request import ChainRequest, chain_energy
+from reference_impl.adapters._lattice_request import LatticeRequest, lattice_energy
 from reference_impl.adapters.base import AdapterDeclined, ContactAdapter
 from reference_impl.adapters.registry import get_adapter
+from reference_impl.assembly.geometry import lattice_sites
 from reference_impl.assembly.lanes import initial_energy
 from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.safe import dt_safe_conventions
@@ -49,6 +59,7 @@ from reference_impl.stability.steps import search_steps
 
 __all__ = [
     "CODES",
+    "CODE_LATTICES",
     "CODE_GRID",
     "CODE_HORIZON",
     "NO_ADVICE",
@@ -57,10 +68,14 @@ __all__ = [
     "CodeSearch",
     "assembly_codes_table",
     "chain_request",
+    "code_energy",
+    "code_request",
     "code_report",
     "chain_scene",
     "code_dt_crit",
     "judge_energy",
+    "lattice_request",
+    "lattice_scene",
 ]
 
 # The codes of issue 39 (registry names) and the chain sizes of the table.
@@ -82,6 +97,14 @@ CODE_GRID = SearchGrid(lo=0.1, hi=2.0, step=0.1, resolution=0.01, refine_points=
 ADVICE_DT = 1e-3
 # What a code without step advice says (LAMMPS: its granular pair styles compute none).
 NO_ADVICE = {"lammps": "LAMMPS computes no time-step advice for granular contacts"}
+# The lattices the codes run (rectangular periodic box) and the cells of the table's
+# scenes: 4 x 4 squares (16 bodies, Z = 4) and 3 x 3 x 3 cubes (27 bodies, Z = 6), the
+# smallest boxes in which no body meets two images of one neighbour (cells >= 3), small
+# enough that a code prints every body every step within seconds.
+CODE_LATTICES = ("square", "simple-cubic", "bcc", "fcc")
+LATTICE_SIZES = (("square", 4), ("simple-cubic", 3))
+# Height of a 2-D layer's box (in R): not periodic, the spheres at its middle plane.
+_LAYER_HEIGHT = 4.0
 
 
 def chain_scene(n: int, base: str = "chain-hertz"):
@@ -95,6 +118,74 @@ def chain_scene(n: int, base: str = "chain-hertz"):
     if isinstance(d.get("velocities"), list):
         raise HCVInputError(f"scene {base!r}: give the striker's speed, not a list, to resize it")
     return scene_from_dict(d)
+
+
+def lattice_scene(lattice: str, cells: int, base: str = "lattice-hertz-triangular"):
+    """The lattice scene ``base`` as the lattice ``lattice`` of ``cells`` cells (its law,
+    mass, radius and striker as they are)."""
+    sc = load_scene(base)
+    if sc.kind != "lattice":
+        raise HCVInputError(f"scene {base!r} is a {sc.kind}; give a lattice scene to resize")
+    d = sc.to_dict()
+    d.pop("source", None)  # where it was read from, not a key of the scene table
+    d.update(lattice=lattice, cells=int(cells), name=f"lattice-hertz-{lattice}-{int(cells)}")
+    return scene_from_dict(d)
+
+
+def lattice_request(scene, dt: float, n_steps: int, stop_energy: float = math.inf):
+    """The `LatticeRequest` of a periodic lattice scene at step ``dt`` (s), ``n_steps`` steps.
+
+    Raises
+    ------
+    HCVInputError
+        One line: no lattice, a skewed box, walls, a gap, bonded springs, damping,
+        tangential springs or rotation (the codes run Hertz normal contacts only).
+    """
+    if scene.kind != "lattice":
+        raise HCVInputError(f"scene {scene.name!r} is a {scene.kind}, not a lattice")
+    f = scene.assembly
+    who = f"scene {scene.name!r}"
+    if f.lattice not in CODE_LATTICES:
+        raise HCVInputError(f"{who}: the codes run lattices with a rectangular periodic box "
+                            f"({', '.join(CODE_LATTICES)}), got {f.lattice!r}")  # fmt: skip
+    if f.tangential_ratio > 0 or f.rotation:
+        raise HCVInputError(f"{who}: the codes run normal contacts only; tangential_ratio "
+                            f"{f.tangential_ratio!r} and rotation {f.rotation!r} are declined "
+                            "(give 0 and false)")  # fmt: skip
+    if not f.periodic or f.bonded or (scene.gap or 0.0) != 0.0 or scene.damping_law != "none":
+        raise HCVInputError(f"{who}: the codes run periodic, touching, undamped, unbonded "
+                            "lattices (periodic true, gap 0, bonded false, no [damping])")  # fmt: skip
+    model = assembly_model(scene)
+    a = model.assembly
+    R = float(f.radius)
+    sites, box = lattice_sites(f.lattice, f.cells, 2.0 * R)
+    d = a.dim
+    pos = np.zeros((a.n_bodies, 3))
+    vel = np.zeros((a.n_bodies, 3))
+    pos[:, :d] = sites
+    vel[:, :d] = model.v_init
+    full = np.full(3, _LAYER_HEIGHT * R)
+    full[:d] = box
+    if d == 2:
+        pos[:, 2] = 0.5 * full[2]  # the layer's plane, in the middle of its slab
+    # the shift of each contact: x_j + s - x_i = 2 R n at the sites
+    shifts = np.zeros((a.n_contacts, 3))
+    shifts[:, :d] = sites[a.ci] + 2.0 * R * a.normal - sites[a.cj]
+    return LatticeRequest(
+        name=scene.name,
+        potential=scene.potential,
+        masses=tuple(float(m) for m in a.mass),
+        radius=R,
+        positions=pos,
+        velocities=vel,
+        box=tuple(full.tolist()),
+        periodic=(True, True, d == 3),
+        contacts=np.column_stack([a.ci, a.cj]),
+        shifts=shifts,
+        dt=float(dt),
+        n_steps=int(n_steps),
+        stop_energy=float(stop_energy),
+    )
 
 
 def chain_request(
@@ -128,6 +219,22 @@ def chain_request(
         n_steps=int(n_steps),
         stop_energy=float(stop_energy),
     )
+
+
+def code_request(scene, dt: float, n_steps: int, radius: float = RADIUS,
+                 stop_energy: float = math.inf) -> ChainRequest | LatticeRequest:  # fmt: skip
+    """The request of a chain (`chain_request`, spheres of ``radius``) or of a periodic
+    lattice (`lattice_request`, the scene's radius)."""
+    if scene.kind == "lattice":
+        return lattice_request(scene, dt, n_steps, stop_energy)
+    return chain_request(scene, dt, n_steps, radius, stop_energy)
+
+
+def code_energy(req, out) -> np.ndarray:
+    """The energy series (J) of a code's run with the scene's own law (chain or lattice)."""
+    if isinstance(req, LatticeRequest):
+        return lattice_energy(req, out)
+    return chain_energy(req, out)
 
 
 def judge_energy(e: np.ndarray, crit: EnergyGrowth) -> tuple[bool, str | None, float | None, bool]:
@@ -223,11 +330,11 @@ def code_dt_crit(
     stop = crit.confirm_level * initial_energy(assembly_model(scene))
 
     def run(dt: float, steps: int):
-        req = chain_request(scene, dt, steps, radius, stop)
+        req = code_request(scene, dt, steps, radius, stop)
         out = adapter.assembly(req)
         work["runs"] += 1
         work["steps"] += out.x.shape[0] - 1
-        return chain_energy(req, out)
+        return code_energy(req, out)
 
     def evaluate(need: dict) -> dict:
         rows: dict = {}
@@ -320,7 +427,7 @@ def _rows_for(code: str, adapter, scene, horizon: int, radius: float, suite: flo
         found = code_dt_crit(adapter, scene, safe, criterion=crit, radius=radius)
         # the advice of the start (LIGGGHTS reads its Hertz time from the speeds after its
         # one step): a step of ADVICE_DT Delta t_safe leaves the start unchanged to 1e-3
-        advice = adapter.step_advice(chain_request(scene, ADVICE_DT * safe, int(horizon), radius))
+        advice = adapter.step_advice(code_request(scene, ADVICE_DT * safe, int(horizon), radius))
     except AdapterDeclined as exc:
         note = "; ".join([exc.declined] + ([NO_ADVICE[code]] if code in NO_ADVICE else []))
         return [AdviceRow(**base, advice="none", advice_dt=math.nan, dt_crit=math.nan,
@@ -346,9 +453,9 @@ def _rows_for(code: str, adapter, scene, horizon: int, radius: float, suite: flo
 
 def assembly_codes_table(
     codes=CODES, sizes=SIZES, *, horizon: int = CODE_HORIZON, radius: float = RADIUS,
-    base: str = "chain-hertz",
+    base: str = "chain-hertz", lattices: bool = False,
 ) -> list[AdviceRow]:  # fmt: skip
-    """Issue 39 section 4: each code's measured Delta t_crit and its advice, per chain size.
+    """Issue 39 section 4: each code's measured Delta t_crit and its advice, per scene.
 
     For each code (registry names; a code that is not installed, or that does not run
     assembly scenes, gives one row per size saying so) and each N in ``sizes``: the
@@ -356,7 +463,10 @@ def assembly_codes_table(
     ``horizon`` steps, the suite's own Delta t_crit of the same search, the paper's
     Delta t_safe, and one row per advice the code computes (`AdviceRow`: code, scene, N,
     Z, advice name, advice dt, measured dt_crit, factor, safe). Seconds per code and
-    size (LIGGGHTS ~1 s, YADE ~3 s with its start-up).
+    size (LIGGGHTS ~1 s, YADE ~3 s with its start-up). With ``lattices``, the same for
+    each periodic lattice of `LATTICE_SIZES` after the chains (`lattice_scene`: the
+    ``lattice-hertz-triangular`` scene's spheres, law and striker; ~15 s per code and
+    lattice); the default keeps the chains alone (the report's rows).
 
     Parameters
     ----------
@@ -370,9 +480,13 @@ def assembly_codes_table(
         Sphere radius (m).
     base : str
         The chain scene resized to each N (default ``chain-hertz``).
+    lattices : bool
+        Also the lattices of `LATTICE_SIZES` (default False: chains only).
     """
     crit = EnergyGrowth(n_steps=int(horizon))
     scenes = [chain_scene(n, base) for n in sizes]
+    if lattices:
+        scenes += [lattice_scene(name, cells) for name, cells in LATTICE_SIZES]
     refs = []
     for sc in scenes:
         model = assembly_model(sc)
@@ -417,7 +531,7 @@ def code_report(adapter: ContactAdapter, scene, horizon: int = CODE_HORIZON,
     model = assembly_model(scene)
     safe = dt_safe_conventions(model, initial_energy(model))["paper"]
     found = code_dt_crit(adapter, scene, safe, criterion=crit, radius=radius)
-    advice = adapter.step_advice(chain_request(scene, ADVICE_DT * safe, int(horizon), radius))
+    advice = adapter.step_advice(code_request(scene, ADVICE_DT * safe, int(horizon), radius))
     out = {
         "code": adapter.label,
         "scene": scene.name,

@@ -1,8 +1,9 @@
-"""The codes' step advice on chains, as the generated table of ``docs/assemblies.md``.
+"""The codes' step advice on chains and lattices, as the generated table of ``docs/assemblies.md``.
 
 ``python -m reference_impl.campaign.assembly_codes_doc [--doc docs/assemblies.md] [--json FILE]``
-runs `reference_impl.bench.assembly_codes.assembly_codes_table` (LIGGGHTS, YADE, LAMMPS on
-the ``chain-hertz`` chain with N = 2 to 5 bodies) and rewrites the block between
+runs `reference_impl.bench.assembly_codes.assembly_codes_table` with its lattices (LIGGGHTS,
+YADE, LAMMPS on the ``chain-hertz`` chain with N = 2 to 5 bodies, then on the periodic
+lattices of `LATTICE_SIZES`) and rewrites the block between
 ``<!-- assembly-codes:start -->`` and ``<!-- assembly-codes:end -->`` of the page: every
 number of that section is typed here, by the study, never by hand. A code that is not
 installed gives a row saying so (the install line).
@@ -19,6 +20,7 @@ from pathlib import Path
 from reference_impl.bench.assembly_codes import (
     CODE_GRID,
     CODE_HORIZON,
+    LATTICE_SIZES,
     RADIUS,
     AdviceRow,
     assembly_codes_table,
@@ -57,9 +59,12 @@ def markdown_table(rows: list[AdviceRow]) -> str:
     for code, note in notes.items():
         lines.append(f"- {code}: {note}")
     dt_safe = sorted({_f(r.dt_safe) for r in rows})
+    lattices = ", ".join(f"{name} {' x '.join([str(c)] * (2 if name == 'square' else 3))}"
+                         for name, c in LATTICE_SIZES)  # fmt: skip
     lines += [
         "",
-        f"Hertz chains of N spheres (R = {RADIUS:g} m) between two walls, the striker at "
+        f"Hertz chains of N spheres (R = {RADIUS:g} m) between two walls, and periodic Hertz "
+        f"lattices of the same spheres ({lattices}; normal contacts only), the striker at "
         f"1 m/s; Delta t_safe (paper) = {', '.join(dt_safe)} s. Each dt_crit is the smallest "
         f"failing step of the suite's bracket search (scan {CODE_GRID.lo:g} to "
         f"{CODE_GRID.hi:g} Delta t_safe by {CODE_GRID.step:g}, refined to "
@@ -92,7 +97,7 @@ def main(argv=None) -> int:
     p.add_argument("--doc", default=str(ROOT / "docs" / "assemblies.md"))
     p.add_argument("--json", help="also write the rows as JSON here")
     args = p.parse_args(argv)
-    rows = assembly_codes_table()
+    rows = assembly_codes_table(lattices=True)
     block = markdown_table(rows)
     rewrite_block(Path(args.doc), block)
     if args.json:

@@ -1,11 +1,12 @@
-"""``hcv dt-crit SCENE --adapter CODE``: a contact code's Delta t_crit on a chain, and its advice.
+"""``hcv dt-crit SCENE --adapter CODE``: a code's Delta t_crit on a chain or lattice, its advice.
 
 Issue 39 section 4: the code runs the chain scene (contract item 14 of
 `reference_impl.adapters.base`), the suite's search and criterion measure its critical
 step (`reference_impl.bench.assembly_codes.code_report`), and the code's own step advice
 gets a verdict. Loaded only when ``--adapter`` is given (it loads the codes' adapters).
-A code that does not run assembly scenes, a scene that is no chain, or a code that
-declines the scene is one line and exit status 2; a code that fails (crash, malformed
+A code that does not run assembly scenes, a scene that is neither a chain nor a lattice the
+codes run (`reference_impl.bench.assembly_codes.lattice_request`: periodic, rectangular
+box, normal contacts only), or a code that declines the scene is one line and exit status 2; a code that fails (crash, malformed
 output) is one line and exit status 1.
 """
 
@@ -16,7 +17,7 @@ import sys
 
 from reference_impl.adapters.base import AdapterDeclined, AdapterError
 from reference_impl.adapters.registry import get_adapter
-from reference_impl.bench.assembly_codes import CODE_HORIZON, code_report
+from reference_impl.bench.assembly_codes import CODE_HORIZON, code_report, lattice_request
 from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
 from reference_impl.cli._tables import fmt
 from reference_impl.errors import HCVInputError
@@ -25,26 +26,28 @@ __all__ = ["run_code"]
 
 
 def run_code(args, scene, horizons: list[int] | None) -> int:
-    """Run ``args.adapter`` on the chain ``scene`` at one horizon (steps) and print the verdicts.
+    """Run ``args.adapter`` on the chain or lattice ``scene`` at one horizon and print the verdicts.
 
     Parameters
     ----------
     args : argparse.Namespace
         ``adapter`` (a registry spec), ``json``.
     scene : AssemblyScene
-        The scene named (a chain; anything else is refused).
+        The scene named (a chain or a lattice the codes run; anything else is refused).
     horizons : list of int or None
         ``--horizons`` parsed: one value, or None for `CODE_HORIZON`.
 
     Raises
     ------
     HCVInputError
-        One line: not a chain, more than one horizon, the code declines.
+        One line: no chain or runnable lattice, more than one horizon, the code declines.
     """
-    if scene.kind != "chain":
+    if scene.kind not in ("chain", "lattice"):
         raise HCVInputError(
-            f"--adapter runs chain scenes only; scene {scene.name!r} is a {scene.kind}"
+            f"--adapter runs chain and lattice scenes only; scene {scene.name!r} is a {scene.kind}"
         )
+    if scene.kind == "lattice":  # refused before any code starts (skewed box, tangential, ...)
+        lattice_request(scene, 1.0, 1)
     horizons = horizons or [CODE_HORIZON]
     if len(horizons) != 1:
         raise HCVInputError(f"--adapter takes one horizon, got --horizons {horizons!r}")

@@ -60,7 +60,8 @@ def add_parser(subparsers) -> None:
     d.add_argument(
         "--adapter",
         metavar="CODE",
-        help="chain scenes: run the scene in a contact code (liggghts, yade) instead: its "
+        help="chain and periodic lattice scenes: run the scene in a contact code (liggghts, "
+        "yade, lammps) instead: its "
         "measured dt_crit by the suite's search and criterion at --horizons steps (one value, "
         "default 2000) and a verdict on the code's own step advice",
     )
@@ -79,7 +80,7 @@ def run(args) -> int:
 
     scene = load_scene(args.scene)
     if getattr(args, "adapter", None) is not None:
-        # a contact code on a chain (issue 39 section 4), in its own module: it loads the codes
+        # a contact code on a chain or lattice (issue 39 §4), in its own module: it loads the codes
         from reference_impl.cli._dt_crit_code import run_code
 
         return run_code(args, scene, _horizons(args.horizons))

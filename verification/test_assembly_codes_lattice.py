@@ -1,0 +1,358 @@
+"""The contact codes on periodic lattices (issue 39, section 4; contract item 14).
+
+Without a code: the lattice request refuses bad input in one line, the suite's energy of a
+lattice run, the unwrapping of positions a code wrapped into its box, the scenes the codes
+decline. With LIGGGHTS, LAMMPS and YADE (marked with their codes' markers, skipped with the
+install line where absent): on the 4 x 4 square layer and the 3 x 3 x 3 simple-cubic
+lattice the code's positions after 300 steps are those of an independent velocity Verlet
+along the actual lines of centres (the mapping of k, the periodic images, the scheme), and
+those of the suite's own assembly kernel to the kernel's fixed-normal approximation (the
+scene the suite searches); the code's Delta t_crit lies within the suite's ensemble, and
+its advice is what the code computes (LIGGGHTS, YADE).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from reference_impl.adapters._lattice_request import lattice_energy, lattice_run_from_mapping
+from reference_impl.adapters.base import AdapterOutputError, LatticeRequest, LatticeRun
+from reference_impl.adapters.lammps import lammps_available
+from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
+from reference_impl.adapters.liggghts import liggghts_available
+from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
+from reference_impl.adapters.yade import yade_available
+from reference_impl.assembly.lanes import initial_energy
+from reference_impl.assembly.model import assembly_model
+from reference_impl.assembly.safe import dt_safe_conventions
+from reference_impl.assembly.search import search_ensemble
+from reference_impl.bench.assembly_codes import (
+    CODE_GRID,
+    LATTICE_SIZES,
+    assembly_codes_table,
+    code_dt_crit,
+    lattice_request,
+    lattice_scene,
+)
+from reference_impl.errors import HCVInputError
+from reference_impl.potentials.power import PowerLaw
+from reference_impl.scenes import scene_from_dict, scene_toml
+from reference_impl.stability.criteria import EnergyGrowth
+from verification._hcv_run import hcv
+from verification._lattice_codes import kernel_lattice, verlet_lattice
+
+from .assertions import assert_close, assert_true
+
+CLAIM = "assembly-codes"  # the codes on lattice scenes (issue 39 section 4), not a paper claim
+K, M, R = 1.0879e10, 4.1103e-3, 5e-3  # the lattice-hertz scenes: N/m^1.5, kg, m
+# 300 steps at 0.05 Delta t_safe: the striker's contacts and the pulse into its neighbours.
+STEPS, DT_FRACTION = 300, 0.05
+# Positions agree with the independent Verlet to 1e-12 m: 15 printed digits (x ~ 1e-2 m:
+# 1e-17 m) and the round-off of 300 steps (~1e-16 m measured); a wrong k (Hertz between
+# spheres of the wrong radius, sqrt(2)) moves them by ~1e-6 m.
+X_TOL = 1e-12
+# Velocities: 1e-9 m/s of ~1 m/s, 15 printed digits and 300 steps (measured 3e-12 m/s).
+V_TOL = 1e-9
+# The suite's kernel holds each contact's normal fixed (small displacements about the
+# sites, `reference_impl.assembly.geometry`): the line of centres turns by ~|u| / (2 R),
+# which changes the forces by a fraction of that order, so positions differ from the
+# codes' (actual lines of centres) by C |u|^2 / (2 R), |u| the largest displacement; C
+# measured 1.2-1.9 on these runs at 1e-4 to 1 m/s; 4 allows for it. At the 1e-2 m/s
+# striker of that check the bound is ~1e-9 m, while a wrong k moves positions by ~1e-7 m.
+FIXED_NORMAL_C = 4.0
+SLOW_STRIKER = 1e-2  # m/s
+
+
+def _scene(lattice: str, cells: int, speed: float | None = None):
+    sc = lattice_scene(lattice, cells)
+    if speed is None:
+        return sc
+    d = sc.to_dict()
+    d.pop("source", None)
+    d["velocities"] = float(speed)
+    return scene_from_dict(d)
+
+
+def _dt_safe(sc) -> float:
+    model = assembly_model(sc)
+    return dt_safe_conventions(model, initial_energy(model))["paper"]
+
+
+def _square_toml(tmp_path):
+    """The catalogue's triangular lattice scene written as a 4 x 4 square (a file for hcv)."""
+    text = scene_toml("lattice-hertz-triangular")
+    for old, new in (('"triangular"', '"square"'), ("cells = 6", "cells = 4")):
+        assert old in text, f"got no {old!r} in the scene, should be one [{CLAIM}, scene_toml]"
+        text = text.replace(old, new)
+    path = tmp_path / "square.toml"
+    path.write_text(text)
+    return path
+
+
+def _pair(box=(4 * R, 4 * R, 4 * R), x1=(3 * R, R, R)) -> LatticeRequest:
+    """Two spheres along x in a periodic box, touching directly and across the box."""
+    pos = np.array([[R, R, R], x1])
+    shifts = np.array([[0.0, 0.0, 0.0], [-box[0], 0.0, 0.0]])
+    return LatticeRequest("t", PowerLaw(K, 1.5), (M, M), R, pos, np.zeros((2, 3)), box,
+                          (True, True, True), np.array([[0, 1], [0, 1]]), shifts, 1e-7, 10)  # fmt: skip
+
+
+# -- the request, without a code ----------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [({"x1": (3.5 * R, R, R)}, "(0, 1) is 0.0025 m off touching at the start"),
+     ({"x1": (5 * R, R, R)}, "positions must lie in the box"),
+     ({"box": (4 * R, 4 * R, -1.0)}, "box must be 3 edges > 0 (m)")],
+)  # fmt: skip
+def test_lattice_request_refuses_bad_input_in_one_line(change, words):
+    with pytest.raises(HCVInputError) as exc:
+        _pair(**change)
+    msg = str(exc.value)
+    assert_true(words in msg and "\n" not in msg, got=repr(msg), should=f"one line with {words!r}",
+                claim=CLAIM, call=f"LatticeRequest {change}")  # fmt: skip
+
+
+def test_lattice_energy_counts_both_images_and_unwraps_a_wrapped_body():
+    req = _pair()
+    q = 1e-6  # body 1 moved left by q: overlap q with body 0, a gap q across the box
+    x1 = np.array([[R, R, R], [3 * R - q, R, R]])
+    # body 0 wrapped across x = 0 to the far side (moved left by 3q): a gap 2q directly,
+    # an overlap 2q with body 1's image across the box
+    x2 = np.array([[R - 3 * q + 4 * R, R, R], [3 * R - q, R, R]])
+    v = np.zeros((3, 2, 3))
+    v[1, 1, 0] = -0.5
+    run = lattice_run_from_mapping({"x": np.array([req.positions, x1, x2]), "v": v}, req, "c")
+    assert_close(run.x[2, 0, 0], R - 3 * q, rtol=1e-12, claim=CLAIM,
+                 call="lattice_run_from_mapping unwraps x")  # fmt: skip
+    e = lattice_energy(req, run)
+    # U = k q^(5/2) / (5/2) of each overlapping pair; 1e-9: overlaps are differences of
+    # positions ~1e-2 m (1e-18 m of round-off on 1e-6 m), to the power 5/2
+    assert_close(e[1], 0.5 * M * 0.25 + K / 2.5 * q**2.5, rtol=1e-9, claim=CLAIM,
+                 call="lattice_energy (one overlap)")  # fmt: skip
+    assert_close(e[2], K / 2.5 * (2 * q) ** 2.5, rtol=1e-9, claim=CLAIM,
+                 call="lattice_energy (overlap across the box)")  # fmt: skip
+
+
+def test_malformed_lattice_run_is_refused():
+    req = _pair()
+    with pytest.raises(AdapterOutputError, match=r"shape \(samples, 2, 3\)"):
+        lattice_run_from_mapping({"x": np.zeros((5, 2, 2)), "v": np.zeros((5, 2, 2))}, req, "c")
+    with pytest.raises(AdapterOutputError, match="returned 12 samples"):
+        lattice_run_from_mapping(LatticeRun(np.zeros((12, 2, 3)), np.zeros((12, 2, 3))), req, "c")
+
+
+def test_lattice_request_is_the_suites_scene():
+    """Same bodies, contacts and start as the suite's model: every listed pair touches, a
+    2-D layer is planar, the velocities are the model's."""
+    for lattice, cells in LATTICE_SIZES:
+        sc = _scene(lattice, cells)
+        model = assembly_model(sc)
+        req = lattice_request(sc, 1e-8, 10)
+        d = model.assembly.dim
+        assert_true(req.contacts.shape[0] == model.assembly.n_contacts
+                    and req.planar == (d == 2),
+                    got=f"{req.contacts.shape[0]} contacts, planar {req.planar}",
+                    should=f"{model.assembly.n_contacts}, planar {d == 2}", claim=CLAIM,
+                    call=f"lattice_request {sc.name}")  # fmt: skip
+        assert_close(req.velocities[:, :d], model.v_init, rtol=0, atol=0, claim=CLAIM,
+                     call=f"lattice_request {sc.name} velocities")  # fmt: skip
+
+
+def test_hcv_dt_crit_runs_a_third_party_lattice_code(tmp_path):
+    """``hcv dt-crit LATTICE --adapter CODE``: the code's Delta t_crit by the suite's search,
+    beside the suite's own (same scene, horizon, rule and grid)."""
+    path = _square_toml(tmp_path)
+    spec = "verification._lattice_codes:VerletLatticeCode"
+    r = hcv(["dt-crit", str(path), "--adapter", spec, "--json", "--horizons", "500"],
+            cwd=tmp_path)  # fmt: skip
+    assert_true(r.returncode == 0, got=f"exit {r.returncode}: {r.stderr[-300:]!r}",
+                should="exit 0", claim=CLAIM, call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
+    rep = json.loads(r.stdout)["code"]
+    # the independent Verlet follows the actual lines of centres, the suite's kernel fixed
+    # normals: their Delta t_crit agree to the search's resolution, here two grid steps
+    # (0.02 Delta t_safe) for the k-section's bracket of each
+    slack = 2 * CODE_GRID.resolution * rep["dt_safe"]
+    assert_true(abs(rep["dt_crit"] - rep["dt_crit_suite"]) <= slack
+                and rep["n_bodies"] == 16 and rep["evidence"] in ("confirmed", "domain")
+                and rep["advice"] == [],
+                got=repr({k: rep[k] for k in ("dt_crit", "dt_crit_suite", "n_bodies", "advice")}),
+                should=f"dt_crit within {slack:.3g} s of the suite's, 16 bodies, no advice",
+                claim=CLAIM, call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
+
+
+def test_codes_table_adds_the_lattices_only_when_asked():
+    """`assembly_codes_table`: chains alone by default (the report's rows), the lattices of
+    `LATTICE_SIZES` after them with ``lattices=True`` (a code that is not installed gives
+    its one-line row on each)."""
+    kw = {"codes": ("nosuchcode",), "sizes": (2,), "horizon": 200}
+    plain = assembly_codes_table(**kw)
+    both = assembly_codes_table(**kw, lattices=True)
+    got = [(r.scene, r.n_bodies, r.coordination) for r in both]
+    want = [("chain-hertz-n2", 2, 2.0), ("lattice-hertz-square-4", 16, 4.0),
+            ("lattice-hertz-simple-cubic-3", 27, 6.0)]  # fmt: skip
+    assert_true([r.scene for r in plain] == ["chain-hertz-n2"] and got == want
+                and all("nosuchcode" in r.note and r.dt_crit_suite > 0 for r in both),
+                got=repr((plain, got)), should=f"chains alone, then {want}", claim=CLAIM,
+                call="assembly_codes_table(lattices=True)")  # fmt: skip
+
+
+def test_chain_code_is_never_handed_a_lattice(tmp_path):
+    """A code that sets supports_assembly but not supports_lattice (a chain code written
+    before lattices) declines a lattice in one line, exit status 2, nothing run."""
+    path = _square_toml(tmp_path)
+    spec = "verification._chain_codes:VerletChainCode"
+    r = hcv(["dt-crit", str(path), "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    words = "verlet-chain does not run lattice scenes"
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 2 and one line with {words!r}", claim=CLAIM,
+                call=f"hcv dt-crit square --adapter {spec}")  # fmt: skip
+
+
+# -- the codes ----------------------------------------------------------------------------
+
+
+def _positions_match(adapter, half_step_v: bool = False):
+    for lattice, cells in LATTICE_SIZES:
+        sc = _scene(lattice, cells)
+        req = lattice_request(sc, DT_FRACTION * _dt_safe(sc), STEPS)
+        run = adapter.assembly(req)
+        x, v, h = verlet_lattice(req)
+        err = float(np.max(np.abs(run.x - x)))
+        assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m", should=f"<= {X_TOL:g} m",
+                    claim=CLAIM, call=f"{adapter.label} {sc.name}")  # fmt: skip
+        want = h if half_step_v else v  # leapfrog: the velocity of the half step
+        assert_close(run.v[1:], want[1:], rtol=0, atol=V_TOL, claim=CLAIM,
+                     call=f"{adapter.label} {sc.name} velocities")  # fmt: skip
+        # the scene the suite searches: its kernel, to the fixed-normal approximation
+        slow = _scene(lattice, cells, SLOW_STRIKER)
+        req = lattice_request(slow, DT_FRACTION * _dt_safe(slow), STEPS)
+        run = adapter.assembly(req)
+        xk = kernel_lattice(assembly_model(slow), req)
+        u = float(np.max(np.abs(xk - xk[0])))
+        tol = FIXED_NORMAL_C * u * u / (2 * R)
+        err = float(np.max(np.abs(run.x - xk)))
+        assert_true(err <= tol, got=f"max |x - x_kernel| = {err:.3g} m (|u| = {u:.3g} m)",
+                    should=f"<= {tol:.3g} m", claim=CLAIM,
+                    call=f"{adapter.label} {slow.name} at {SLOW_STRIKER} m/s")  # fmt: skip
+
+
+def _dt_crit_in_suite_ensemble(adapter):
+    sc = _scene("square", 4)
+    safe = _dt_safe(sc)
+    # 500 steps: ~28 code runs within seconds; the suite's ensemble has the same horizon
+    crit = EnergyGrowth(n_steps=500)
+    found = code_dt_crit(adapter, sc, safe, criterion=crit)
+    ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
+    # Contacts open and close: round-off (or the kernel's fixed normals) moves the smallest
+    # failing step within the ensemble's spread; two grid resolutions (0.02 Delta t_safe)
+    # more on either side for the k-section's bracket of each, as for a chain.
+    slack = 2 * CODE_GRID.resolution * safe
+    lo, hi = float(ens.dt_crit.min()) - slack, float(ens.dt_crit.max()) + slack
+    assert_true(lo <= found.dt_crit <= hi and found.evidence in ("confirmed", "domain"),
+                got=f"dt_crit {found.dt_crit:.6g} s ({found.evidence})",
+                should=f"in [{lo:.6g}, {hi:.6g}] s, the suite's ensemble", claim=CLAIM,
+                call=f"code_dt_crit {adapter.label} {sc.name}")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def liggghts():
+    from reference_impl.adapters.liggghts import LiggghtsAdapter
+
+    a = LiggghtsAdapter(model="hertz")
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def yade():
+    from reference_impl.adapters.yade import YadeAdapter
+
+    a = YadeAdapter(input="en")
+    yield a
+    a.close()
+
+
+@pytest.fixture(scope="module")
+def lammps():
+    from reference_impl.adapters.lammps import LammpsAdapter
+
+    a = LammpsAdapter()
+    yield a
+    a.close()
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_lattice_is_velocity_verlet_of_the_scene(liggghts):
+    _positions_match(liggghts)
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_lattice_dt_crit_lies_in_the_suites_ensemble(liggghts):
+    _dt_crit_in_suite_ensemble(liggghts)
+
+
+def _advice_is_the_codes_whatever_the_step(adapter, names, material):
+    """The advice on the simple-cubic lattice: every name the code gives, a finite step,
+    and the ones that read only the material (``material``) the same at two steps."""
+    sc = _scene("simple-cubic", 3)
+    safe = _dt_safe(sc)
+    a1 = adapter.step_advice(lattice_request(sc, 1e-3 * safe, 200))
+    a2 = adapter.step_advice(lattice_request(sc, 2e-3 * safe, 200))
+    assert_true(set(a1) == set(names) and all(0 < t < np.inf for t in a1.values()),
+                got=repr(a1), should=f"finite steps named {sorted(names)}", claim=CLAIM,
+                call=f"{adapter.label}.step_advice lattice")  # fmt: skip
+    # 1e-6: 15 printed digits; the Rayleigh and P-wave times read the material, not the
+    # step (the Hertz time and the stepper read the speeds and contacts of the run)
+    assert_close(a2[material], a1[material], rtol=1e-6, claim=CLAIM,
+                 call=f"{adapter.label}.step_advice lattice {material} at two steps")  # fmt: skip
+
+
+@pytest.mark.liggghts
+@pytest.mark.skipif(liggghts_available() is not None,
+                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+def test_liggghts_lattice_advice_is_its_rayleigh_and_hertz_times(liggghts):
+    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"), "rayleigh")
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_is_leapfrog_of_the_scene(yade):
+    # leapfrog: the positions of velocity Verlet, the velocity of the half step
+    _positions_match(yade, half_step_v=True)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_dt_crit_lies_in_the_suites_ensemble(yade):
+    _dt_crit_in_suite_ensemble(yade)
+
+
+@pytest.mark.yade
+@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+def test_yade_lattice_advice_is_pwave_and_global_stiffness(yade):
+    _advice_is_the_codes_whatever_the_step(
+        yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"), "PWaveTimeStep"
+    )
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_lattice_is_velocity_verlet_of_the_scene(lammps):
+    _positions_match(lammps)
+
+
+@pytest.mark.lammps
+@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+def test_lammps_lattice_dt_crit_lies_in_the_suites_ensemble(lammps):
+    _dt_crit_in_suite_ensemble(lammps)
