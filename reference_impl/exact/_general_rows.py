@@ -64,8 +64,10 @@ def table_arrays(pot) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cap(q, full, Kn, alpha, a, c0):
-    """(U, U', U'', U''') of one cap row at q (J, N, N/m, N/m^2); U''' only when ``full``.
+def _cap(q, need_U, need_2, need_3, Kn, alpha, a, c0):
+    """(U, U', U'', U''') of one cap row at q (J, N, N/m, N/m^2); U, U'' and U''' only
+    where asked (``need_*``, else 0: each costs a pow, and a step's right-hand side needs
+    U' alone for most laws).
 
     As `reference_impl.potentials.volumetric._VolumetricCap`: V = c0 (a q^2 - q^3 / 3),
     S = V' = c0 (2 a q - q^2), U = Kn V^(alpha+1) / (alpha+1), U' = Kn V^alpha S,
@@ -73,15 +75,20 @@ def _cap(q, full, Kn, alpha, a, c0):
     """
     V = c0 * (a * q**2 - q**3 / 3)
     S = c0 * (2 * a * q - q**2)
-    ap1 = alpha + 1
-    U = Kn * V**ap1 / ap1
-    Va = V**alpha
+    U = 0.0
+    if need_U:
+        ap1 = alpha + 1
+        U = Kn * V**ap1 / ap1
+    # numpy's power takes sqrt for the exponent 0.5 (the paper's alpha): the same here.
+    Va = math.sqrt(V) if alpha == 0.5 else V**alpha
     dU = Kn * Va * S
     s2v = c0 * (2 * a - q) ** 2 / (a - q / 3)
     dS = c0 * (2 * a - 2 * q)
-    d2U = Kn * Va * (alpha * s2v + dS)
+    d2U = 0.0
+    if need_2:
+        d2U = Kn * Va * (alpha * s2v + dS)
     d3U = 0.0
-    if full:
+    if need_3:
         # U''' = Kn [alpha V^(alpha-1) S ((alpha-1) S^2/V + 3 S') + V^alpha S''], S'' = -2 c0.
         # V^(alpha-1) S ~ q^(2 alpha - 1) at contact: where V underflows, its leading term
         # 2 (c0 a)^alpha q^(2 alpha - 1) (0, 1 or inf at q = 0, as alpha >, =, < 1/2).
@@ -115,6 +122,11 @@ def fc_rows(q, full, rows, lim, cs, es, sc):
     arrays (``cs``, ``es``: C = sum c q^e; ``sc``: m, alpha, A, zeta factor, ...; see
     `reference_impl.exact.general_law._law_arrays`). Units: J, N, N/m, N s/m, N s/m^2."""
     alpha, A, zf = sc[1], sc[2], sc[3]
+    # What the law reads besides U' (as `_general_step._fc_powers`): U for the zeta law
+    # and the full evaluation, U'' for A U'' and the full one, U''' for the full A U''.
+    need_U = full or zf != 0.0
+    need_2 = full or A != 0.0
+    need_3 = full and A != 0.0
     U = 0.0
     dU = 0.0
     d2U = 0.0
@@ -122,7 +134,7 @@ def fc_rows(q, full, rows, lim, cs, es, sc):
     for i in range(rows.shape[0]):
         if rows[i, 0] == TERM_CAP:
             u, d1, d2, d3 = _cap(
-                q, full and A != 0.0, rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
+                q, need_U, need_2, need_3, rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
             )
         else:  # TERM_POWER: U = k q^n / n, U' = k q^p
             k, n, p = rows[i, 1], rows[i, 2], rows[i, 3]
@@ -131,7 +143,7 @@ def fc_rows(q, full, rows, lim, cs, es, sc):
             d1 = k * qp
             d2 = k if p == 1.0 else k * p * _pow(q, p - 1.0)
             d3 = 0.0
-            if full and A != 0.0 and p != 1.0:
+            if need_3 and p != 1.0:
                 d3 = 2.0 * k if p == 2.0 else k * p * (p - 1.0) * _pow(q, p - 2.0)
         U += u
         dU += d1
