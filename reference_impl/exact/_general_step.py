@@ -5,7 +5,7 @@ Aitken-Neville in h^2; the order-14 result with the order-12 entry as its error)
 kernel's three variables (``mode``): 0, physical time with unknowns (q, w); 1, the end
 substitution q = q_s sigma^KSUB with unknowns (w, t); 2, the Hunt-Crossley log variable,
 (q, l = log(1 + alpha w)) in physical time. Also the force function ``fc`` of sums of
-power laws (the compiled path); `_general_kernel.python_solver` re-binds these functions'
+power laws and of term tables (`_general_rows`; the compiled path); `_general_kernel.python_solver` re-binds these functions'
 Python source to another ``fc``, so they read ``fc`` and the constants from the
 namespace they are bound to.
 """
@@ -16,6 +16,9 @@ import math
 
 import numba
 import numpy as np
+from numba.extending import overload
+
+from reference_impl.exact._general_rows import fc_rows
 
 __all__ = ["KCOL", "KSUB", "deriv", "fc", "gbs", "pw", "state"]
 
@@ -51,8 +54,34 @@ def pw(q, p):
     return q**p
 
 
-@numba.njit(cache=True, error_model="numpy")
 def fc(q, full, ks, ps, cs, es, sc):
+    """(U, U', U'', C, C') at overlap q: of a sum of power laws (``ks``, ``ps`` 1-D: the k
+    and p of U' = sum k q^p), or of a term table (``ks`` 2-D: its rows, ``ps``: the limit
+    of `_general_rows.table_arrays`). In compiled code the type of ``ks`` picks one at
+    compile time (the overload below), so each form has its own machine code in the one
+    algorithm of `_general_kernel`; called from Python, the same choice at run time."""
+    if np.ndim(ks) == 2:
+        return fc_rows(q, full, ks, ps, cs, es, sc)
+    return _fc_powers(q, full, ks, ps, cs, es, sc)
+
+
+@overload(fc, jit_options={"error_model": "numpy"})
+def _fc_overload(q, full, ks, ps, cs, es, sc):
+    if getattr(ks, "ndim", 1) == 2:
+
+        def rows_impl(q, full, ks, ps, cs, es, sc):
+            return fc_rows(q, full, ks, ps, cs, es, sc)
+
+        return rows_impl
+
+    def powers_impl(q, full, ks, ps, cs, es, sc):
+        return _fc_powers(q, full, ks, ps, cs, es, sc)
+
+    return powers_impl
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _fc_powers(q, full, ks, ps, cs, es, sc):
     alpha, A, zf = sc[1], sc[2], sc[3]
     need_U = full or zf != 0.0
     need_2 = full or A != 0.0 or (alpha != 0.0 and full)

@@ -5,8 +5,11 @@
 for every potential family and every law of `reference_impl.theory.laws`. The universal
 law keeps its exact quadrature (`reference_impl.exact.solve.solve_impact`); this module
 integrates the others (method: `reference_impl.exact._general_kernel`), compiled with
-numba for sums of power laws (Hooke, Hertz, power, sum) and in plain Python for
-the other families (sphere, ellipsoid, expression; ~100x slower, same method).
+numba for sums of power laws (Hooke, Hertz, power, sum: the Taylor kernel
+`_general_taylor`, else GBS) and for the other families with a term table of power
+and cap rows (sphere, ellipsoid, their sums: the GBS kernel on the table,
+`_general_rows`), and in plain Python for the rest (a saturating force, an expression
+without a table; ~300x slower than compiled, same method).
 
 Both ends of contact are reported (see `LawImpactSolution`), with an error bound
 that the suite checks against a 30-digit truth (`reference_impl.exact._general_law_mp`).
@@ -35,6 +38,8 @@ from reference_impl.exact._general_kernel import (
     STOP_NO_RETURN_Q,
     python_solver,
 )
+from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
 from reference_impl.exact._general_taylor import solve as _compiled_solve
 from reference_impl.exact._general_taylor import theta_for
@@ -415,6 +420,7 @@ class _LawPlan(NamedTuple):
     sc: np.ndarray
     lin: tuple | None  # (k, zeta^2) of the linear oscillator, solved in closed form
     pk: tuple | None  # (ks, ps) of a sum of power laws, for the compiled kernels
+    tab: tuple | None  # (rows, lim) of another term table, for the compiled GBS kernel
 
 
 def _plan(potential, m, law, rtol=None) -> _LawPlan:
@@ -433,7 +439,8 @@ def _plan(potential, m, law, rtol=None) -> _LawPlan:
         sc = np.append(sc, [tol, theta_for(tol)])
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
-    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk)
+    tab = table_arrays(potential) if lin is None and pk is None else None
+    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab)
 
 
 def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
@@ -448,6 +455,8 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
     cs, es, sc = plan.cs, plan.es, plan.sc
     if plan.pk is not None:
         out = _compiled_solve(v0, qE, plan.pk[0], plan.pk[1], cs, es, sc)
+    elif plan.tab is not None:  # the GBS kernel compiled on the term table (full accuracy)
+        out = _gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
     r = dict(zip(OUT_FIELDS, out.tolist(), strict=False))
