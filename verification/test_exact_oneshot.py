@@ -254,3 +254,87 @@ def test_threads_share_the_caches_safely():
         claim="oneshot cache",
         call="4 threads",
     )
+
+
+# -- integer p: the Gauss-Jacobi pair holds (issue 38: p = 2 fell back to tanh-sinh) ------
+
+
+@pytest.mark.parametrize("p", [1.5, 2.0, 3.0])
+def test_stored_rules_integrate_moments_to_round_off(p):
+    """Each rule of the pair integrates u^k u^beta on (0, 1), k <= 20 (exact for a Gauss
+    rule of >= 11 nodes), to 1/(beta + 1 + k) within round-off: scipy's rules missed by up to
+    4e-14 (p = 2, 3), which alone broke the pair's 1e-14 agreement."""
+    from reference_impl.exact._branches import _GJ_SIZES, _jacobi_pair
+
+    beta = 2.0 / (p + 1.0) - 1.0
+    u, W = _jacobi_pair(beta, _GJ_SIZES)
+    eps = np.finfo(float).eps
+    for col, size in enumerate(_GJ_SIZES):
+        for k in range(21):
+            got = float(np.sum(W[:, col] * u**k))
+            want = 1.0 / (beta + 1.0 + k)  # exact to 1 ulp (two roundings)
+            # Round-off: each node correctly rounded (u^k: k/2 ulps, its weight 1/2 ulp,
+            # the power and the product ~2 ulps) and a sum of 40 positive terms (40 ulps,
+            # zeros included): (k/2 + 45) ulps of the sum.
+            tol = (0.5 * k + 45.0) * eps
+            assert_true(
+                abs(got / want - 1.0) <= tol,
+                got=f"{got!r} (rel err {abs(got / want - 1.0):.2g})",
+                should=f"{want!r} within {tol:.2g}",
+                claim="tool",
+                call=f"_jacobi_pair({beta!r}) rule {size}, moment u^{k}",
+            )
+
+
+@pytest.mark.parametrize("p", [2.0, 3.0])
+def test_integer_p_stays_on_the_gauss_jacobi_pair(p):
+    """200 random impacts, zeta in [0, 0.85): every one on the power law's Gauss-Jacobi
+    strategy (main sent 6 % of p = 2 and 28 % of p = 3 to tanh-sinh)."""
+    from reference_impl.exact._oscillator import VirtualOscillator
+    from reference_impl.exact._strategies import Job, choose
+    from reference_impl.exact._validate import _validated_top
+
+    pot = PowerLaw(1e6, p)
+    off = []
+    for v0, zeta, m in _random_impacts(200, seed=int(p)):
+        zeta *= 0.85 / 0.95
+        q_top = _validated_top(pot, 0.5 * m * v0 * v0)
+        name, _ = choose(Job(pot, m, v0, VirtualOscillator(v0, zeta), q_top, None))
+        if name != "power_law":
+            off.append((v0, zeta, m, name))
+    assert_true(
+        not off,
+        got=f"{len(off)} of 200 impacts off the pair (first {off[:2]})",
+        should="all on power_law",
+        claim="tool",
+        call=f"_strategies.choose(PowerLaw(1e6, {p}))",
+    )
+
+
+@pytest.mark.parametrize("p", [2.0, 3.0])
+def test_integer_p_bound_holds_against_mpmath(p):
+    """The fast path's reported bound bounds the true error of both times against the
+    30-digit truth (`solve_impact_mp`), over random impacts up to zeta = 0.85."""
+    from reference_impl.exact.solve import solve_impact_mp
+
+    pot = PowerLaw(1e6, p)
+    for v0, zeta, m in _random_impacts(5, seed=100 + int(p)):
+        zeta *= 0.85 / 0.95
+        sol = ri.solve(pot, m, v0, zeta)
+        truth = solve_impact_mp(pot, m, v0, zeta)
+        for t, e, name in (
+            (sol.contact_time, sol.quadrature_error, "contact_time"),
+            (
+                sol.contact_time_zero_force,
+                sol.quadrature_error_zero_force,
+                "contact_time_zero_force",
+            ),
+        ):
+            err = abs(t - float(truth[name]))
+            assert_true(
+                err <= e,
+                got=f"error {err:.3g} s of {name} = {t!r}",
+                should=f"<= its bound {e:.3g} s",
+                claim="tool",
+                call=f"solve(PowerLaw(1e6, {p}), {m!r}, {v0!r}, {zeta!r}) vs solve_impact_mp",
+            )
