@@ -6,8 +6,9 @@ log-uniform in [0.05, 5] m/s, zeta uniform in [0, 0.85) for the universal law):
 
 * ``oneshot``: `reference_impl.solve` (the universal law) or `solve_law_impact`;
 * ``oneshot_uncached``: the same with the one-shot caches bypassed (the power constants'
-  `_constants.__wrapped__`, `general_law._new_plan`, `law_from_dict`): the code path of
-  main before them, for the before/after ratio (the same process and load);
+  `_constants.__wrapped__`, `general_law._new_plan`, `law_from_dict`), for the caches'
+  share in the same process and load; the lazy turning point (`_strategies.Job.q_top`)
+  stays on, so for the universal law this is faster than main's path;
 * ``prepared``: `prepare(pot, m, rtol=...)` / `prepare_law`;
 * ``sundman``: the Sundman-regularised compiled DOP853 (`benchmarks.peer_sundman`, the
   strongest peer of issue 38) at the cheapest rung of its ladder whose worst relative

@@ -338,3 +338,24 @@ def test_integer_p_bound_holds_against_mpmath(p):
                 claim="tool",
                 call=f"solve(PowerLaw(1e6, {p}), {m!r}, {v0!r}, {zeta!r}) vs solve_impact_mp",
             )
+
+
+def test_lazy_turning_point_gives_the_eager_result():
+    """A power law's impact below an energy validated already leaves its turning point to
+    the strategy that reads it (`_strategies.Job.q_top`): bit for bit the result of a fresh
+    potential object (nothing validated: computed eagerly), on the Gauss-Jacobi path and on
+    the tanh-sinh and overdamped paths (zeta >= 0.9) that read it."""
+    k, p, m = 1e6, 2.0, 0.3
+    warm = PowerLaw(k, p)
+    ri.solve(warm, m, 20.0, 0.1)  # validates every lower energy
+    for v0, zeta, _ in _random_impacts(12, seed=9):
+        for z in (zeta, 0.9 + 0.1 * zeta, 1.0 + zeta):
+            got = _bits(ri.solve(warm, m, v0, z))
+            want = _bits(ri.solve(PowerLaw(k, p), m, v0, z))
+            assert_true(
+                got == want,
+                got=f"{got}",
+                should=f"{want} (a fresh potential)",
+                claim="oneshot cache",
+                call=f"solve(PowerLaw({k}, {p}), {m}, {v0!r}, {z!r}) after a faster impact",
+            )
