@@ -75,8 +75,10 @@ _MAX_LEVEL = 7
 # unit time scale (the rates are zeta and sqrt(1 - zeta^2) <= 1 for zeta < 1).
 _PIECE = 1.0
 # Gauss-Jacobi fast path for power laws: rule sizes compared, the agreement required
-# (relative to the rising-branch time), and the range where scipy's rules and the
-# geometric convergence rate are good enough (measured: round-off for p <= 3, zeta <= 0.9).
+# (relative to the rising-branch time), and the range where the rules and the geometric
+# convergence rate are good enough (measured with scipy's rules: round-off for p <= 3,
+# zeta <= 0.9; with the correctly rounded rules of `_jacobi_rules` the pair agrees to
+# round-off up to zeta ~0.85 for p = 1-3, issue 38).
 _GJ_SIZES = (16, 24)
 _GJ_RTOL = 1e-14
 _GJ_BETA_MIN = -0.5

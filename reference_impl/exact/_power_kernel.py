@@ -6,7 +6,8 @@ by the zero of h at s_end). `power_impact` is that whole impact in one compiled 
 oscillator, the branch rows, the sums (`_sums.gj_rows` bound to the closed form
 `_power_values`: two rule sizes, kept only when they agree to _GJ_RTOL on every row, or
 to a looser ``agree`` on a smaller pair when the caller asked for less, `_rtol`;
-scipy's Jacobi rules lose accuracy for beta near -1, hence _GJ_BETA_MIN and _GJ_ZETA_MAX),
+_GJ_BETA_MIN and _GJ_ZETA_MAX bound where the pair converges fast enough, measured with
+scipy's rules; the rules are now mpmath's, correctly rounded, `_branches._jacobi_rules`),
 and the peak. `_strategies.power_law` and `prepared` call it.
 """
 
