@@ -75,8 +75,10 @@ _MAX_LEVEL = 7
 # unit time scale (the rates are zeta and sqrt(1 - zeta^2) <= 1 for zeta < 1).
 _PIECE = 1.0
 # Gauss-Jacobi fast path for power laws: rule sizes compared, the agreement required
-# (relative to the rising-branch time), and the range where scipy's rules and the
-# geometric convergence rate are good enough (measured: round-off for p <= 3, zeta <= 0.9).
+# (relative to the rising-branch time), and the range where the rules and the geometric
+# convergence rate are good enough (measured with scipy's rules: round-off for p <= 3,
+# zeta <= 0.9; with the correctly rounded rules of `_jacobi_rules` the pair agrees to
+# round-off up to zeta ~0.85 for p = 1-3, issue 38).
 _GJ_SIZES = (16, 24)
 _GJ_RTOL = 1e-14
 _GJ_BETA_MIN = -0.5
@@ -380,16 +382,44 @@ def _fill_rows(zeta, sp, s_end, lz, rows):  # pragma: no cover - compiled
     return 3
 
 
+# Working precision of the rules' computation (decimal digits): the nodes and weights are
+# then rounded once to float64, each correctly rounded (the eigenvalue problem of
+# Golub-Welsch at 40 digits loses far less than the 24 digits it has to spare).
+_RULE_DPS = 40
+
+
 def _jacobi_rules(beta: float, sizes: tuple[int, ...]) -> list[float]:
     """Nodes u in (0, 1) of the Gauss-Jacobi rules of each size for int_0^1 f(u) u^beta du,
-    then their weights, as one flat list (what `stored_floats` keeps)."""
-    from scipy.special import roots_jacobi  # here: 0.1 s to import; the rules are stored
+    then their weights, as one flat list (what `stored_floats` keeps), nodes ascending.
 
+    Computed in mpmath at `_RULE_DPS` digits (Golub-Welsch, ``mp.gauss_quadrature``) and
+    rounded once, so that every node and weight is correctly rounded. scipy's
+    ``roots_jacobi``, used before, gave nodes with relative errors up to 1.1e-14 and
+    weights up to 1.8e-13 (beta = -1/3, -1/2: p = 2, 3; also through u = (1 + y)/2 in
+    float, which cancels near y = -1): the 16- and 24-node rules then differed by
+    1e-15 - 3e-14 of a smooth integral on their own (moments of u^k, k <= 20, wrong by
+    up to 4e-14), which failed the pair's 1e-14 agreement for part of the damping range
+    and sent those impacts to the tanh-sinh rules (issue 38: p = 2 at 14-30 us, Hertz 5).
+    The correctly rounded rules integrate those moments to 1e-16 - 5e-16. Once per
+    machine: the store keeps them (`reference_impl._stored`), so a float solve does not
+    import mpmath after the first.
+    """
+    import mpmath  # here: the rules are stored, a float solve never imports it again
+
+    # Plain loops, no comprehension: `stored_floats` keys on this function's constants,
+    # and a nested code object's repr carries its address, a new key in every process.
     us, ws = [], []
-    for size in sizes:
-        y, w = roots_jacobi(size, 0.0, beta)
-        us.append((1.0 + y) / 2.0)
-        ws.append(w / 2.0 ** (beta + 1.0))
+    with mpmath.workdps(_RULE_DPS):
+        b = mpmath.mpf(beta)  # the float's exact value: the weight the kernel's values assume
+        scale = mpmath.power(2, b + 1)
+        for size in sizes:
+            y, w = mpmath.mp.gauss_quadrature(int(size), "jacobi", 0, b)
+            u, wk = np.empty(len(y)), np.empty(len(y))
+            for i in range(len(y)):
+                u[i], wk[i] = float((1 + y[i]) / 2), float(w[i] / scale)
+            order = np.argsort(u, kind="stable")  # nodes ascending, as scipy's were
+            us.append(u[order])
+            ws.append(wk[order])
     return [*np.concatenate(us), *np.concatenate(ws)]
 
 
@@ -399,7 +429,7 @@ def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
     int_0^1 f(u) u^beta du, concatenated, and a (nodes, 2) weight matrix whose
     columns give the two rules (zeros on the other rule's nodes).
 
-    Computed by scipy once per machine and read back from the table store
+    Computed in mpmath (`_jacobi_rules`) once per machine and read back from the table store
     (`reference_impl._stored`, bit for bit) in later processes.
     """
     n = sum(sizes)
@@ -409,7 +439,7 @@ def _jacobi_pair(beta: float, sizes: tuple[int, int] = _GJ_SIZES):
             (float(beta), tuple(int(s) for s in sizes)),
             _jacobi_rules,
             2 * n,
-            files=(("scipy", "version.py"),),
+            files=(("mpmath", "matrices/eigen_symmetric.py"),),
         )
     )
     u, w = flat[:n], flat[n:]

@@ -6,13 +6,15 @@ by the zero of h at s_end). `power_impact` is that whole impact in one compiled 
 oscillator, the branch rows, the sums (`_sums.gj_rows` bound to the closed form
 `_power_values`: two rule sizes, kept only when they agree to _GJ_RTOL on every row, or
 to a looser ``agree`` on a smaller pair when the caller asked for less, `_rtol`;
-scipy's Jacobi rules lose accuracy for beta near -1, hence _GJ_BETA_MIN and _GJ_ZETA_MAX),
+_GJ_BETA_MIN and _GJ_ZETA_MAX bound where the pair converges fast enough, measured with
+scipy's rules; the rules are now mpmath's, correctly rounded, `_branches._jacobi_rules`),
 and the peak. `_strategies.power_law` and `prepared` call it.
 """
 
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numba
 import numpy as np
@@ -47,19 +49,29 @@ def power_constants(
 
     ``sizes`` are the two rule sizes compared and ``agree`` the agreement they must reach
     on every row (relative); the defaults are the full-accuracy pair, a looser pair is a
-    rung of `reference_impl.exact._rtol` (``rtol=``)."""
-    n = pot.leading_exponent
+    rung of `reference_impl.exact._rtol` (``rtol=``).
+
+    Kept per exact value of (k, p, n, m, sizes, agree) (`_constants`): a one-shot
+    `solve_impact` recomputed them on every call (~12 % of its Python time, issue 38)."""
+    return _constants(pot.k, pot.p, pot.leading_exponent, m, sizes, agree)
+
+
+# typed: an int and a float of one value are different keys. Every argument is a checked
+# finite positive float (`PowerLaw`, `positive`, `_rtol.checked_rtol`), so float equality is
+# equality of bits (no -0.0, no nan): potentials one ulp apart get their own constants.
+# The arrays u, W returned are `_jacobi_pair`'s own (cached there too), never written to.
+@lru_cache(maxsize=64, typed=True)
+def _constants(k: float, p: float, n: float, m: float, sizes: tuple, agree: float):
     beta = 2.0 / n - 1.0
     if beta < _GJ_BETA_MIN:
         return None
-    k = pot.k
-    a_hi, a_lo, b_hi, b_lo = _exponent_splits(pot.p, n)
+    a_hi, a_lo, b_hi, b_lo = _exponent_splits(p, n)
     # power_law_scale's (m/k) (n m / 2k)^(-p/n), the factor of v0^beta left for the kernel.
     c_m = (m / k) * _pow_split(0.5 * n * m / k, a_hi, a_lo)
     u, W = _jacobi_pair(beta, sizes)
     round_rel = (_SUM_ULPS_PER_NODE * sizes[1] + _NODE_ULPS) * _EPS
     q_scale = (0.5 * n * m / k) ** (1.0 / n)
-    return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, pot.p, agree)
+    return (c_m, b_hi, b_lo, u, W, beta, round_rel, q_scale, 2.0 / n, k, p, agree)
 
 
 # error_model "numpy": called inside `batch._gj_batch`'s prange loop (no exception there).

@@ -22,7 +22,8 @@ import numpy as np
 
 import reference_impl.exact._generic_law as _generic_law
 from reference_impl.errors import HCVInputError
-from reference_impl.theory.laws import DampingLaw, law_from_dict
+from reference_impl.exact._oneshot_cache import cached_law
+from reference_impl.theory.laws import DampingLaw
 
 __all__ = ["Route", "batch_other", "prepare_other", "route", "solve_other"]
 
@@ -55,7 +56,8 @@ def route(law, zeta, what: str = "zeta") -> Route:
     """
     if law is None:
         return Route("harmonic map", zeta, None)
-    dl = law_from_dict(law)
+    # Read once per exact table (`_oneshot_cache`): a one-shot call in a loop reads it once.
+    dl = cached_law(law)
     if np.any(np.asarray(zeta, dtype=float) != 0):
         if what == "zeta":
             raise HCVInputError(

@@ -39,6 +39,16 @@ _VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TOPS_KEPT = 64
 
 
+def _validated_below(pot: Potential, E: float) -> bool:
+    """True when an energy >= E was validated for ``pot`` already (`_validated_top`): its
+    (0, q_max(E)] is checked, and only the turning point itself is left to compute."""
+    try:
+        e_c, _ = _VALIDATED[pot]
+    except (KeyError, TypeError):
+        return False
+    return E <= e_c
+
+
 def _validated_top(pot: Potential, E: float) -> float:
     """The turning point q_max(E) (m), with U' > 0 checked on (0, q_max] (assumption 3).
 

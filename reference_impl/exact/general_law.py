@@ -43,6 +43,7 @@ from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
 from reference_impl.exact._general_taylor import solve as _compiled_solve
 from reference_impl.exact._general_taylor import theta_for
+from reference_impl.exact._oneshot_cache import BoundedCache, law_key, value_key
 from reference_impl.exact._rtol import checked_rtol, taylor_tol
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
@@ -423,7 +424,29 @@ class _LawPlan(NamedTuple):
     tab: tuple | None  # (rows, lim) of another term table, for the compiled GBS kernel
 
 
+# Plans of the one-shot calls, per (potential object, m, law, rtol) (`_oneshot_cache`).
+_PLANS = BoundedCache()
+
+
 def _plan(potential, m, law, rtol=None) -> _LawPlan:
+    """The plan of (potential, m, law, rtol), kept per exact value of the four: a one-shot
+    `solve_law_impact` in a loop of speeds plans once (~1/3 of its time, issue 38). The
+    potential is keyed by identity (potentials are immutable after construction, as
+    `_validate._validated_top` assumes) and held by its plan, so its id is not reused while
+    the entry lives; an input without an exact key is planned each call."""
+    lk, mk, rk = law_key(law), value_key(m), value_key(rtol)
+    if lk is None or mk is None or rk is None:
+        return _new_plan(potential, m, law, rtol)
+    key = (id(potential), mk, lk, rk)
+    got = _PLANS.get(key)
+    if got is not None and got.potential is potential:
+        return got
+    got = _new_plan(potential, m, law, rtol)
+    _PLANS.put(key, got)
+    return got
+
+
+def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
     law = law_from_dict(law)

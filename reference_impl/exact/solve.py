@@ -37,7 +37,12 @@ from reference_impl.exact._quadrature import integrate_left_singular
 from reference_impl.exact._route import route, solve_other
 from reference_impl.exact._rtol import checked_rtol
 from reference_impl.exact._strategies import Job, choose
-from reference_impl.exact._validate import N_MAX, _check_exponent, _validated_top
+from reference_impl.exact._validate import (
+    N_MAX,
+    _check_exponent,
+    _validated_below,
+    _validated_top,
+)
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential
 from reference_impl.potentials.power import PowerLaw
@@ -438,7 +443,13 @@ def solve_impact(
         )
     # Validates the turning point and monotonicity on (0, q(E)] (the damped
     # maximum penetration is smaller, so this covers every damped path too).
-    q_top = _validated_top(potential, E)
+    # A power law whose energy is at or below one validated already: nothing is left to
+    # check, and its Gauss-Jacobi strategy does not read q_top; a strategy that does
+    # computes it on first use (`_strategies.Job.q_top`, the same value).
+    if type(potential) is PowerLaw and _validated_below(potential, E):
+        q_top = None
+    else:
+        q_top = _validated_top(potential, E)
     # The first strategy that answers integrates the impact (`_strategies`, one contract).
     _, (br, q_max, max_force) = choose(Job(potential, m, v0, osc, q_top, level, rtol))
     restitution = math.exp(-math.pi * zeta / osc.wd) if zeta < 1.0 else 0.0
