@@ -11,8 +11,22 @@ time, so a new claim's first test joins it without an edit.
 from __future__ import annotations
 
 import os
+import signal
+import threading
 
 from hypothesis import HealthCheck, settings
+
+# Ctrl-C as a terminal delivers it. A shell without job control starts a background job
+# (`cmd &`, as a CI script or `nohup ... &` may) with SIGINT ignored (POSIX), Python then
+# installs no handler, and every process the tests start inherits the ignore: the tests
+# of Ctrl-C (a compiled lane, a gate's adapter, a cluster) wait for a signal that never
+# arrives (seen: a `.ci/run` started with `&` failed two of them). A handled signal is
+# reset to the default at exec, so the processes the tests start get it too.
+if (
+    threading.current_thread() is threading.main_thread()
+    and signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+):
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 settings.register_profile(
     "ci",
