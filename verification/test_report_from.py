@@ -297,3 +297,42 @@ def test_a_document_of_the_previous_minor_renders(committed, tmp_path, capsys):
         claim="report",
         call="hcv report --from results.json (schema hcv-results/1)",
     )
+
+
+def test_a_run_rewrites_the_readme_speed_block_with_its_work_precision_paragraph(
+    committed, tmp_path, monkeypatch
+):
+    """The speed block `hcv report` writes into the README is the one `readme_table`
+    writes from the same records: bench/exact.json, startup.json and workprecision.json
+    (the main job of 2b81549 dropped the work-precision paragraph: it read only two)."""
+    from reference_impl.report.readme_table import rewrite_readme
+
+    if not (REPORTS / "bench" / "workprecision.json").is_file():
+        pytest.skip("no committed reports/bench/workprecision.json")
+    out = tmp_path / "rep"
+    _previous_report(out, committed)
+    readme = tmp_path / "README.md"
+    readme.write_text((ROOT / "README.md").read_text())
+
+    def fake_build(tmp, quick, progress, adapters, env, workers=0, carried=None, repro=None):
+        r = copy.deepcopy(committed)
+        for rel in r["figures"]:
+            shutil.copyfile(REPORTS / rel, tmp / rel)
+        (tmp / "results.json").write_text(json.dumps(r))
+        return r
+
+    monkeypatch.setattr(campaign, "_build", fake_build)
+    campaign.build_report(out, readme=readme, progress=None)
+    records = [
+        json.loads((out / "bench" / f"{n}.json").read_text())
+        for n in ("exact", "startup", "workprecision")
+    ]
+    should = rewrite_readme(committed, (ROOT / "README.md").read_text(), *records)
+    got = readme.read_text()
+    assert_true(
+        got == should and "Work-precision, ours as a curve" in got,
+        got="the README's blocks differ from readme_table's with all three records",
+        should="identical, the work-precision paragraph kept",
+        claim="report",
+        call="build_report(out, readme=README)",
+    )

@@ -255,7 +255,9 @@ def build_report(
         bench = json.loads(bench_json.read_text()) if bench_json.is_file() else None
         startup_json = Path(out) / "bench" / "startup.json"
         startup = json.loads(startup_json.read_text()) if startup_json.is_file() else None
-        readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup))
+        wp_json = Path(out) / "bench" / "workprecision.json"  # the speed block's figure
+        wp = json.loads(wp_json.read_text()) if wp_json.is_file() else None
+        readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup, wp))
         docs = ROOT / "docs" / "assemblies.md"  # its generated block, beside the README's
         if readme_path == ROOT / "README.md" and docs.is_file():
             docs.write_text(_assemblies.rewrite_docs(results, docs.read_text()))
