@@ -181,6 +181,7 @@ def workprecision_text(wp: dict) -> str:
     says of the run (impacts, blocks, load, commit)."""
     mi = wp.get("machine", {})
     n = min((p["impacts"] for p in wp.get("panels", [])), default=0)
+    drawn = wp.get("impacts_drawn", n)  # the set each panel draws (before refusals)
     load = wp.get("load_average_1min")
     load = f"{load:.1f}" if isinstance(load, int | float) else "?"
     return (
@@ -189,12 +190,13 @@ def workprecision_text(wp: dict) -> str:
         "prepared call at each `rtol` and for every peer over its tolerance ladder, per "
         "family (Hertz, a q^2 force, the sphere's cap) and law (universal, a linear "
         "dashpot), the figure below "
-        f"(`python -m benchmarks.bench_workprecision`; at least {n} impacts a panel, "
+        f"(`python -m benchmarks.bench_workprecision`; {drawn} random impacts drawn a panel, "
+        f"at least {n} kept (the rest refused by ours or without an overlap end), "
         f"{wp.get('blocks', '?')} timing block(s), load {load}, commit "
         f"{str(mi.get('commit', '?'))[:12]}"
         + (
             "; a check that it runs, not a measurement: rerun it on a quiet machine"
-            if wp.get("blocks", 0) < 3 or n < 1000
+            if wp.get("blocks", 0) < 3 or drawn < 1000
             else ""
         )
         + "). On a cap, ours runs at full accuracy whatever rtol asks (one point).\n\n"
