@@ -8,12 +8,16 @@ exact entry point (`solve`, routed by the class's ``route``), the adapter protoc
 ``implemented_law``, and a law module dropped into the package's folder. Unregistered,
 it must leave no trace (no cached solve, no row, a refusal in one line). A law
 C(q, q') nonlinear in q' goes the generic route and is checked against an mpmath truth
-on Hertz. The adapter half of the exercise is at the end of this module.
+on Hertz. The adapter half: a code registered as a built-in (one module, one registry
+line) must reach the registry's lists, ``hcv bench``, the report's side-by-side and
+calibrated variants, the chain codes and the pytest markers, and leave no trace after.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
 from pathlib import Path
 
@@ -351,3 +355,113 @@ def test_a_law_nonlinear_in_the_speed_is_within_its_bound_of_an_mpmath_truth(v0,
         claim="tool",
         call=call,
     )
+
+
+# -- the adapter half: a new built-in code is one module + its registry entry ----------------
+
+_ADAPTER_MODULE = '''
+from reference_impl.adapters._declaration import CodeInfo
+from reference_impl.adapters.reference import ReferenceAdapter
+
+
+class ExerciseAdapter(ReferenceAdapter):
+    """A new code for the exercise: the suite's Verlet under another name."""
+
+    name = "exercise_code"
+    supports_assembly = True  # declared only, so that the chain codes' list must see it
+    code_info = CodeInfo.pip(
+        name,
+        code="Exercise",
+        restitution_input="the restitution e, typed as is",
+        report_variants=(("exercise_code", 1.0),),
+        calibrated=(("exercise_code", 1.0, "zeta"),),
+    )
+'''
+_NAME = "exercise_code"
+
+
+def _register_exercise_code(registry, tmp: Path) -> None:
+    """The one registry line of a new built-in code (its module written to ``tmp``)."""
+    (tmp / "exercise_adapter.py").write_text(_ADAPTER_MODULE, encoding="utf-8")
+    if str(tmp) not in sys.path:
+        sys.path.insert(0, str(tmp))
+    registry._REGISTRY[_NAME] = "exercise_adapter:ExerciseAdapter"
+    registry._BUILTIN = (*registry._BUILTIN, _NAME)
+
+
+# What is derived at import (the side-by-side and calibrated variants, the chain codes,
+# the pytest markers) is read in a child process that registers the code (the module
+# `_register_exercise_code` wrote) first, as a built-in is registered before anything
+# imports the registry's lists.
+_CHILD = """
+import json, sys
+sys.path.insert(0, {root!r})
+sys.path.insert(0, {tmp!r})
+from reference_impl.adapters import registry
+registry._REGISTRY[{name!r}] = "exercise_adapter:ExerciseAdapter"
+registry._BUILTIN = (*registry._BUILTIN, {name!r})
+from reference_impl.bench import assembly_codes, codes
+from reference_impl.campaign import _codes
+import pytest
+seen = {{
+    "side-by-side variants": list(codes.CODES),
+    "calibrated variants": list(codes.CALIBRATED),
+    "hcv report --adapter NAME": _codes.select([{name!r}]),
+    "chain codes": list(assembly_codes.CODES),
+}}
+print("JSON", json.dumps(seen))
+pytest.main(["--markers", "-p", "no:cacheprovider", "-q"])
+"""
+
+
+def test_every_derived_place_sees_an_adapter_registered_as_a_built_in(tmp_path, monkeypatch):
+    from reference_impl.adapters import registry
+
+    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))
+    monkeypatch.setattr(registry, "_BUILTIN", registry._BUILTIN)
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    _register_exercise_code(registry, tmp_path)
+    try:
+        live = {
+            "builtin_codes": _NAME in registry.builtin_codes(),
+            "install_extras (.ci/run, nox)": _NAME in registry.install_extras(),
+            "hcv bench NAME": registry.get_adapter(_NAME).name == _NAME,
+            "hcv bench --help": f"  {_NAME}" in registry.adapter_help().splitlines(),
+        }
+    finally:
+        sys.modules.pop("exercise_adapter", None)
+    child = subprocess.run(
+        [sys.executable, "-c", _CHILD.format(root=str(ROOT), tmp=str(tmp_path), name=_NAME)],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+    )  # fmt: skip
+    line = next((ln for ln in child.stdout.splitlines() if ln.startswith("JSON ")), "JSON {}")
+    seen = json.loads(line[5:])
+    want = ["Exercise", _NAME, 1.0]
+    derived = {
+        "side-by-side variants": want in seen.get("side-by-side variants", []),
+        "calibrated variants": [*want, "zeta"] in seen.get("calibrated variants", []),
+        "hcv report --adapter NAME": want in (seen.get("hcv report --adapter NAME") or [[]])[0],
+        "chain codes": _NAME in seen.get("chain codes", []),
+        "pytest marker": f"@pytest.mark.{_NAME}: needs Exercise" in child.stdout,
+    }
+    assert_true(
+        all(live.values()) and all(derived.values()),
+        got=f"{live}; {derived}; child stderr {child.stderr[-300:]!r}",
+        should="every derived place to see the code",
+        claim="tool",
+        call="an adapter registered as a built-in",
+    )
+
+
+def test_an_adapter_unregistered_leaves_no_trace():
+    from reference_impl.adapters import registry
+
+    with pytest.raises(HCVInputError) as info:
+        registry.get_adapter(_NAME)
+    gone = {
+        "builtin_codes": _NAME not in registry.builtin_codes(),
+        "registered": _NAME not in registry.registered(),
+        "one line naming it": _NAME in str(info.value) and "\n" not in str(info.value),
+    }
+    assert_true(all(gone.values()), got=str(gone), should="no trace of the exercise's code",
+                claim="tool", call="the registry after the exercise")  # fmt: skip
