@@ -54,6 +54,22 @@ _SMOKE_EXTRA = (
 )
 
 
+def pytest_configure(config):
+    """Declare each built-in code's marker from the adapter registry (its `CodeInfo`:
+    marker, code, install line), so that a new code needs no line in pyproject.toml's
+    marker list (issue 37's change exercise)."""
+    from reference_impl.adapters.registry import builtin_codes
+
+    for info in builtin_codes().values():
+        how = (
+            f"pip install -e '.[{info.extra}]'" if info.extra else f"apt-get install -y {info.apt}"
+        )
+        config.addinivalue_line(
+            "markers",
+            f"{info.marker}: needs {info.code} ({how}); deselect with -m 'not {info.marker}'",
+        )
+
+
 def pytest_collection_modifyitems(config, items):
     """Reject a claim marker that names an unregistered claim; choose the smoke tests."""
     import pytest

@@ -123,8 +123,8 @@ def report(session: nox.Session) -> None:
 
 @nox.session(python="3.11", name="committed-report")
 def committed_report(session: nox.Session) -> None:
-    """The report committed in reports/: from a clean commit, with LAMMPS, Kratos, MuJoCo,
-    LIGGGHTS and YADE side by side (the last two from Debian: apt-get install liggghts yade), so that its provenance names HEAD without "uncommitted changes" (issue 17).
+    """The report committed in reports/: from a clean commit, with every built-in code (the registry's: LAMMPS, Kratos, MuJoCo, Drake, PyBullet,
+    LIGGGHTS and YADE) side by side (the last two from Debian: apt-get install liggghts yade), so that its provenance names HEAD without "uncommitted changes" (issue 17).
 
     Refuses to run on a dirty work tree; commit (or stash) first, then commit what it
     rewrites (reports/ and the README's generated blocks).

@@ -14,6 +14,7 @@ _ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(_ROOT))  # the checkout's reference_impl, installed or not
 
 from reference_impl import __version__  # noqa: E402
+from reference_impl.theory.laws.docs_table import fill_source  # noqa: E402
 
 project = "hidden-harmonic-verification"
 author = "hidden-harmonic-verification contributors"
@@ -65,4 +66,6 @@ def _copy_report(app, exception) -> None:
 
 
 def setup(app):
+    # The damping-law table: every registered law's row, filled in as a page is read.
+    app.connect("source-read", fill_source)
     app.connect("build-finished", _copy_report)

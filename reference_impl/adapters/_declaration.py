@@ -229,3 +229,17 @@ class CodeInfo:
     apt: str | None = None
     marker: str = ""
     test_module: str = ""
+
+    @classmethod
+    def pip(cls, name: str, **kw) -> CodeInfo:
+        """A code installed by the pip extra ``name``, whose tests are marked ``name`` in
+        ``verification/test_<name>.py`` (the convention of the codes from pip).
+
+        Parameters
+        ----------
+        name : str
+            The adapter's registry name (``"drake"``).
+        **kw
+            ``code``, ``restitution_input``, ``report_variants``, ``calibrated``.
+        """
+        return cls(extra=name, marker=name, test_module=f"verification/test_{name}.py", **kw)

@@ -84,9 +84,8 @@ class AdapterScene:
     v0 : float
         Approach speed at contact onset (m/s, > 0).
     damping : str
-        The damping law's name: "none", "universal" or another law of
-        `reference_impl.theory.laws` ("linear", "power", "polynomial", "viscoelastic",
-        "hunt-crossley").
+        The damping law's name: "none", "universal" or another registered law of
+        `reference_impl.theory.laws` (``LAWS``; ``hcv scenes --laws`` lists them).
     zeta : float
         Damping ratio of the universal law (0 for every other law).
     dt : float

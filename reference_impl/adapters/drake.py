@@ -115,7 +115,8 @@ class DrakeAdapter(ContactAdapter):
     name = "drake"
     spec_values = {"mode": MODES}
     # contract item 13: what the registry, the report and CI know of Drake
-    code_info = CodeInfo(
+    code_info = CodeInfo.pip(
+        name,  # the extra, the marker and verification/test_<name>.py
         code="Drake",
         restitution_input=(
             "proximity property hunt_crossley_dissipation d (s/m; SAP: relaxation_time, s): "
@@ -125,9 +126,6 @@ class DrakeAdapter(ContactAdapter):
         # it (tau = 2 zeta sqrt(m / k)); the Hunt-Crossley modes have no input for it
         report_variants=(("drake[mode=sap]", 1.0),),
         calibrated=(("drake[mode=lagged]", 1.0, "dissipation"),),
-        extra="drake",
-        marker="drake",
-        test_module="verification/test_drake.py",
     )
     isolate = True
 

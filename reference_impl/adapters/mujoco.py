@@ -202,7 +202,8 @@ class MujocoAdapter(ContactAdapter):
         "end": END,
     }
     # contract item 13: what the registry, the report and CI know of MuJoCo
-    code_info = CodeInfo(
+    code_info = CodeInfo.pip(
+        name,  # the extra, the marker and verification/test_<name>.py
         code="MuJoCo",
         restitution_input=(
             "geom solref = (timeconst, dampratio): the damping ratio of the linear "
@@ -212,9 +213,6 @@ class MujocoAdapter(ContactAdapter):
         calibrated=(
             ("mujoco[solref=timeconst,impedance=constant,integrator=Euler]", 1.0, "dampratio"),
         ),
-        extra="mujoco",
-        marker="mujoco",
-        test_module="verification/test_mujoco.py",
     )
     isolate = True
 

@@ -119,7 +119,8 @@ class PybulletAdapter(ContactAdapter):
     name = "pybullet"
     spec_values = {"mode": MODES}
     # contract item 13: what the registry, the report and CI know of PyBullet
-    code_info = CodeInfo(
+    code_info = CodeInfo.pip(
+        name,  # the extra, the marker and verification/test_<name>.py
         code="PyBullet",
         restitution_input=(
             "changeDynamics restitution = e (rigid contact, typed as is); soft contact: "
@@ -127,9 +128,6 @@ class PybulletAdapter(ContactAdapter):
         ),
         report_variants=(("pybullet[mode=soft]", 1.0),),
         calibrated=(("pybullet[mode=soft]", 1.0, "damping"),),
-        extra="pybullet",
-        marker="pybullet",
-        test_module="verification/test_pybullet.py",
     )
     isolate = True
     # Bullet solves each contact at the velocity level with the state at the step's end:

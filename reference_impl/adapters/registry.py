@@ -2,8 +2,10 @@
 
 An adapter spec is one of
 
-* a registered name: ``reference``, ``lammps``, ``kratos``, ``mujoco``, ``subprocess`` (see
-  `registered`), or a name a third-party package declares in the entry-point group
+* a registered name: a built-in adapter of ``_REGISTRY`` (``reference``, ``subprocess`` and
+  the contact codes, `builtin_codes`; `registered` lists them all, ``python -m
+  reference_impl.adapters.registry names`` the codes), or a name a third-party package
+  declares in the entry-point group
   ``hcv.adapters`` (as pytest plugins do), so that ``hcv bench mycode`` works after
   ``pip install mycode-hcv``::
 

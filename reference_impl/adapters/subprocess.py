@@ -16,8 +16,8 @@ Request (stdin)::
         "potential": {"family": "power", "k": 1.0879e10, "p": 1.5},
         "mass": 0.0041103,                 # effective mass, kg
         "v0": 1.0,                         # approach speed at contact onset, m/s
-        "damping": {"law": "universal",    # or "none", "linear", "power", "polynomial",
-                                           # "viscoelastic", "hunt-crossley"
+        "damping": {"law": "universal",    # or any registered law (hcv scenes --laws:
+                                           # "none", "linear", "hunt-crossley", ...)
                     "zeta": 0.1,           # C(q) = 2 zeta sqrt(m) U'(q) / sqrt(2 U(q));
                                            # 0 for every other law
                     "restitution": 0.7292, # protocol 1: exp(-pi zeta / sqrt(1 - zeta^2))

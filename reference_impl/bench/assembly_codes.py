@@ -46,7 +46,7 @@ import numpy as np
 from reference_impl.adapters._assembly_request import ChainRequest, chain_energy
 from reference_impl.adapters._lattice_request import LatticeRequest, lattice_energy
 from reference_impl.adapters.base import AdapterDeclined, ContactAdapter
-from reference_impl.adapters.registry import get_adapter
+from reference_impl.adapters.registry import builtin_codes, get_adapter, resolve_class
 from reference_impl.assembly.geometry import lattice_sites
 from reference_impl.assembly.lanes import initial_energy
 from reference_impl.assembly.model import assembly_model
@@ -78,8 +78,9 @@ __all__ = [
     "lattice_scene",
 ]
 
-# The codes of issue 39 (registry names) and the chain sizes of the table.
-CODES = ("liggghts", "yade", "lammps")
+# The codes of issue 39 (registry names): the built-in codes whose adapter runs chains
+# (`ContactAdapter.supports_assembly`), in the registry's order; and the chain sizes.
+CODES = tuple(n for n in builtin_codes() if resolve_class(n).supports_assembly)
 SIZES = (2, 3, 4, 5)
 # Sphere radius (m) of the chain: the hertz scene's 10 mm steel sphere, whose k = 1.0879e10
 # N/m^1.5 and m = 4.1103 g the chain-hertz scene has (a chain scene has no radius; the
@@ -471,7 +472,7 @@ def assembly_codes_table(
     Parameters
     ----------
     codes : sequence of str
-        Registry names (default LIGGGHTS, YADE, LAMMPS).
+        Registry names (default `CODES`: every built-in code that runs chains).
     sizes : sequence of int
         Numbers of bodies N (>= 1).
     horizon : int

@@ -159,7 +159,7 @@ def _verdict(row: dict) -> str:
 
 def advice_codes(adapters) -> tuple[str, ...]:
     """The codes among ``adapters`` (specs given to ``hcv report``) that run chains
-    (`reference_impl.bench.assembly_codes.CODES`: LIGGGHTS, YADE, LAMMPS), in order."""
+    (`reference_impl.bench.assembly_codes.CODES`: the codes whose adapter runs chains), in order."""
     names: list[str] = []
     for spec in adapters:
         target, _ = parse_spec(str(spec))

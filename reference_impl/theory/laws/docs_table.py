@@ -1,21 +1,22 @@
-"""The damping-law table of the docs, generated from the registry (issue 37).
+"""The damping-law table of the docs, generated from the registry when the site is built
+(issue 37).
 
-``docs/scenes.md`` and ``docs/adapter-protocol.md`` hold the table between the markers
-``<!-- damping-laws:start -->`` and ``<!-- damping-laws:end -->``;
-``python -m reference_impl.theory.laws.docs_table`` writes it there from `LAWS` (each
-law's `LawFamily.docs_row`), ``--check`` exits 1 when a page differs, and
-``verification/test_laws_registry.py`` fails when one does. The table is nowhere
-written by hand.
+``docs/scenes.md`` and ``docs/adapter-protocol.md`` hold only the markers
+``<!-- damping-laws:start -->`` and ``<!-- damping-laws:end -->``; Sphinx's
+``source-read`` event (`fill_source`, connected in ``docs/conf.py``) puts the table of
+every registered law between them as the page is read, so a new law's row appears with
+no line written in any page and no copy can go stale.
+``python -m reference_impl.theory.laws.docs_table`` prints the table;
+``verification/test_laws_registry.py`` fails when a page holds a hand-written copy.
 """
 
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from reference_impl.theory.laws._registry import LAWS
 
-__all__ = ["DOC_PAGES", "END", "START", "law_table", "main", "render_page"]
+__all__ = ["DOC_PAGES", "END", "START", "fill_source", "law_table", "main", "render_page"]
 
 START = "<!-- damping-laws:start -->"
 END = "<!-- damping-laws:end -->"
@@ -48,23 +49,26 @@ def render_page(text: str, where: str = "page") -> str:
     return text[: i + len(START)] + "\n" + law_table() + text[j:]
 
 
+def fill_source(app, docname: str, source: list[str]) -> None:
+    """Sphinx ``source-read`` handler: the law table into a page that has the markers.
+
+    Parameters
+    ----------
+    app : sphinx.application.Sphinx
+        Unused (the signature Sphinx calls).
+    docname : str
+        The page being read, e.g. ``"scenes"``.
+    source : list of str
+        One string, the page's text, replaced in place.
+    """
+    if START in source[0]:
+        source[0] = render_page(source[0], docname)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Write the table into `DOC_PAGES` (``--check``: only say which differ; status 1)."""
-    args = sys.argv[1:] if argv is None else argv
-    check = "--check" in args
-    root = Path(__file__).resolve().parents[3]
-    stale = []
-    for rel in DOC_PAGES:
-        path = root / rel
-        old = path.read_text(encoding="utf-8")
-        new = render_page(old, rel)
-        if new != old:
-            stale.append(rel)
-            if not check:
-                path.write_text(new, encoding="utf-8")
-    for rel in stale:
-        print(f"{rel}: {'differs from the registry' if check else 'written'}")
-    return 1 if check and stale else 0
+    """Print the table (what the built pages show)."""
+    sys.stdout.write(law_table())
+    return 0
 
 
 if __name__ == "__main__":
