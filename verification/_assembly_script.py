@@ -15,7 +15,8 @@ request; otherwise one request on stdin, one answer on stdout.
 ``--mode`` makes its assembly answers hostile: ``shape`` (one body too few), ``nan-start``
 (the first sample null), ``short`` (the first 10 steps only), ``text`` (a position as a
 string), ``dt`` (t of a step 1 % longer), ``unsupported`` (declines, on two lines),
-``error`` (reports an error), ``crash`` (20 kB of log on stderr, exit 3), ``hang``
+``error`` (reports an error), ``brackets`` (100 000 empty lists in its meta: parsed,
+each costs 20 times its text), ``crash`` (20 kB of log on stderr, exit 3), ``hang``
 (sleeps), ``no-id`` (persistent: no id), ``twice`` (persistent: every answer written
 twice), ``bad-advice`` (advice of -1 s).
 """
@@ -136,6 +137,8 @@ def answer(req: dict, mode: str, advice_scale: float) -> dict:
         out["x"][1][0] = str(out["x"][1][0])
     elif mode == "dt":
         out["t"] = [1.01 * t for t in out["t"]]
+    elif mode == "brackets":
+        out["meta"]["junk"] = [[]] * 100_000
     return out
 
 

@@ -308,6 +308,25 @@ def test_a_hanging_program_times_out_and_is_killed(persistent):
                 call=f"cmd --mode hang persistent={persistent}")  # fmt: skip
 
 
+@pytest.mark.parametrize("persistent", [False, True], ids=["one-shot", "persistent"])
+def test_an_answer_of_empty_lists_is_refused_before_it_is_parsed(persistent):
+    """An answer within its byte bound whose parsed form would cost ~20 times its text
+    (100 000 empty lists in meta) is refused from its bytes, in one line; the persistent
+    process is replaced, as for an answer over the bound."""
+    prog = f"{_SERVER if persistent else _PROGRAM} --mode brackets"
+    a = get_adapter(f"cmd[assembly=chain,persistent={persistent}]:{prog}")
+    try:
+        with pytest.raises(AdapterOutputError) as exc:
+            a.assembly(_chain(3, "both"))
+        msg = str(exc.value)
+        assert_true("the answer holds 100" in msg and "'['" in msg and "\n" not in msg
+                    and (not persistent or not a._server.alive),
+                    got=repr(msg[:300]), should="one line counting the '[', the process replaced",
+                    claim=CLAIM, call=f"cmd --mode brackets persistent={persistent}")  # fmt: skip
+    finally:
+        a.close()
+
+
 @pytest.mark.parametrize(
     ("mode", "words"),
     [("no-id", "carries id None"), ("twice", "before request")],

@@ -45,6 +45,8 @@ from reference_impl.adapters._records import AdapterDeclined, AdapterOutputError
 from reference_impl.scenes import potential_to_dict
 
 __all__ = [
+    "MAX_ANSWER",
+    "answer_guard",
     "assembly_advice",
     "assembly_answer_limit",
     "assembly_run",
@@ -54,9 +56,18 @@ __all__ = [
 
 # Bytes of one number in an answer: a float written in full (repr: 17 significant digits,
 # sign, exponent; <= 24 characters), its separator and space, and its share of a row's
-# brackets; 40 leaves room for indentation. Plus 1 MiB for meta. The caller caps it.
+# brackets; 40 leaves room for indentation. Plus 1 MiB for meta.
 _BYTES_PER_NUMBER = 40
 _SLACK = 1 << 20
+# Largest answer of one run (bytes): the 27 bodies of a 3 x 3 x 3 lattice followed for
+# the 20 000 steps of a confirmation at the default horizon write ~70 MB (an impact's
+# bound, 32 MiB, refused it). Parsed, a number costs at most ~8 times its text (a float
+# and its list slot for "1.5,"); lists, objects and strings cost up to ~20 times theirs,
+# so `answer_guard` bounds how many there are before the answer is parsed: a hostile
+# answer holds < 1 GB, a real one ~4 times its text.
+MAX_ANSWER = 96 << 20
+# Lists, objects and strings an answer may hold beyond those of t, x and v (its meta).
+_STRUCT_SLACK = 10_000
 # The first sample must be the request's start to this fraction of its scale: a program
 # that prints 15 significant digits is within 5e-15 of it, one that repr's it exactly.
 _START_RTOL = 1e-12
@@ -69,9 +80,10 @@ _STOP_RTOL = 1e-12
 _MAX_ADVICE = 16
 _MAX_NAME = 60
 
-# send(obj, limit, n_steps) -> answer object: the adapter's exchange (one-shot or
-# persistent), which adds the protocol and the options and raises on an error answer.
-Send = Callable[[dict, int, int], dict]
+# send(obj, limit, n_steps, guard) -> answer object: the adapter's exchange (one-shot or
+# persistent), which adds the protocol and the options, calls guard(raw bytes) before it
+# parses the answer, and raises on an error answer.
+Send = Callable[..., dict]
 
 
 def assembly_to_json(req: ChainRequest | LatticeRequest) -> dict:
@@ -109,12 +121,31 @@ def assembly_to_json(req: ChainRequest | LatticeRequest) -> dict:
     return out
 
 
-def assembly_answer_limit(req: ChainRequest | LatticeRequest, cap: int) -> int:
+def assembly_answer_limit(req: ChainRequest | LatticeRequest) -> int:
     """Largest answer (bytes) accepted for ``req``: t, x and v of n_steps + 1 samples
-    (`_BYTES_PER_NUMBER` each), plus `_SLACK`, at most ``cap``."""
+    (`_BYTES_PER_NUMBER` each), plus `_SLACK`, at most `MAX_ANSWER`."""
     dims = 3 if isinstance(req, LatticeRequest) else 1
     per_sample = 1 + 2 * req.n_bodies * dims
-    return min(int(cap), _SLACK + _BYTES_PER_NUMBER * per_sample * (int(req.n_steps) + 2))
+    return min(MAX_ANSWER, _SLACK + _BYTES_PER_NUMBER * per_sample * (int(req.n_steps) + 2))
+
+
+def answer_guard(req: ChainRequest | LatticeRequest) -> Callable[[bytes], None]:
+    """A check of an answer's raw bytes before it is parsed: no more lists than t, x and
+    v of ``req`` hold (one a sample, and one a body of a lattice's sample, each array)
+    and no more objects or strings than its meta needs (`_STRUCT_SLACK`), so that the
+    parsed answer costs at most ~8 times its text (`MAX_ANSWER`)."""
+    rows = 1 + (req.n_bodies if isinstance(req, LatticeRequest) else 0)
+    lists = 3 + 2 * (int(req.n_steps) + 1) * rows + _STRUCT_SLACK
+
+    def guard(raw: bytes, who: str) -> None:
+        for char, most in ((b"[", lists), (b"{", _STRUCT_SLACK), (b'"', 4 * _STRUCT_SLACK)):
+            count = raw.count(char)
+            if count > most:
+                raise AdapterOutputError(f"{who}: the answer holds {count} {char.decode()!r}, "
+                                         f"more than t, x, v and a meta of a run of "
+                                         f"{req.n_steps} steps need ({most})")  # fmt: skip
+
+    return guard
 
 
 def check_steps(t: np.ndarray, dt: float, who: str) -> None:
@@ -204,22 +235,21 @@ def _check_complete(x: np.ndarray, v: np.ndarray, req, who: str) -> None:
                              "past it or not finite")  # fmt: skip
 
 
-def assembly_run(send: Send, req: ChainRequest | LatticeRequest, who: str, kinds,
-                 cap: int) -> ChainRun | LatticeRun:  # fmt: skip
+def assembly_run(send: Send, req: ChainRequest | LatticeRequest, who: str,
+                 kinds) -> ChainRun | LatticeRun:  # fmt: skip
     """Run ``req`` through a ``cmd:`` program and return its checked run.
 
     Parameters
     ----------
     send : callable
-        ``send(obj, limit, n_steps)``: the adapter's exchange, returning the answer object.
+        ``send(obj, limit, n_steps, guard)``: the adapter's exchange, returning the answer
+        object (``guard(raw, who)`` checks its bytes before they are parsed).
     req : ChainRequest or LatticeRequest
         The run asked.
     who : str
         The program's label, for the error lines.
     kinds : collection of str
         The kinds declared (``"chain"``, ``"lattice"``).
-    cap : int
-        The adapter's largest answer (bytes) of any run.
 
     Raises
     ------
@@ -234,7 +264,7 @@ def assembly_run(send: Send, req: ChainRequest | LatticeRequest, who: str, kinds
         raise AdapterDeclined(f"{who} does not run {kind} scenes (declared assembly="
                               f"{'+'.join(sorted(kinds))})")  # fmt: skip
     obj = {"request": "assembly", "assembly": assembly_to_json(req)}
-    data = send(obj, assembly_answer_limit(req, cap), int(req.n_steps))
+    data = send(obj, assembly_answer_limit(req), int(req.n_steps), answer_guard(req))
     tail = (req.n_bodies, 3) if lattice else (req.n_bodies,)
     t = _numbers(data, "t", (), who)
     x = _numbers(data, "x", tail, who)

@@ -476,14 +476,15 @@ class SubprocessAdapter(ContactAdapter):
                     pass
         return rc, bytes(out), _tail(err.decode(errors="replace"))
 
-    def _persistent_call(self, obj: dict, limit: int) -> dict:
+    def _persistent_call(self, obj: dict, limit: int, guard=None) -> dict:
         """One request in persistent mode (the process is started on first use)."""
 
         if self._server is None:
             self._server = PersistentProcess(
                 self.argv, self.label, cwd=self.cwd, startup_timeout=self.timeout
             )
-        data = self._server.request(obj, timeout=self.timeout, limit=limit)
+        check = None if guard is None else (lambda raw: guard(raw, self.label))
+        data = self._server.request(obj, timeout=self.timeout, limit=limit, check=check)
         data.pop("id", None)
         return data
 
@@ -495,20 +496,23 @@ class SubprocessAdapter(ContactAdapter):
         obj = {"request": request, "scene": scene.to_json()}
         return self._send(obj, response_limit(scene.n_steps), int(scene.n_steps))
 
-    def _send(self, obj: dict, limit: int, n_steps: int) -> dict:
+    def _send(self, obj: dict, limit: int, n_steps: int, guard=None) -> dict:
         """One request (``obj`` with the protocol and options added) in either mode: the
-        answer object, or the skip / failure it reports. ``limit``: bytes of the answer."""
+        answer object, or the skip / failure it reports. ``limit``: bytes of the answer;
+        ``guard(raw, label)`` checks them before they are parsed."""
         obj = {"protocol": PROTOCOL, **obj}
         if self.options:
             obj["options"] = dict(self.options)
         self._n_steps = int(n_steps)
         if self.persistent:
-            return self._answer(self._persistent_call(obj, limit), "")
+            return self._answer(self._persistent_call(obj, limit, guard), "")
         payload = json.dumps(obj)
         rc, raw_bytes, stderr = self._exchange(payload.encode(), limit)
         if rc != 0:
             how = f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}"
             raise AdapterRunError(f"{self.label}: command failed, {how}", stderr)
+        if guard is not None:
+            guard(raw_bytes, self.label)
         raw = raw_bytes.decode(errors="replace")
         try:
             data = json.loads(raw)
@@ -554,7 +558,7 @@ class SubprocessAdapter(ContactAdapter):
 
     def _assembly_impl(self, request):
         """A chain or lattice run (contract item 14), checked (`_cmd_assembly.assembly_run`)."""
-        return assembly_run(self._send, request, self.label, self.assembly_kinds, _MAX_STDOUT)
+        return assembly_run(self._send, request, self.label, self.assembly_kinds)
 
     def step_advice(self, request) -> dict:
         """The program's own step advice when declared (``advice=true``), else none."""
