@@ -280,12 +280,12 @@ def test_bad_declarations_are_refused_in_one_line(args, words):
 @pytest.mark.parametrize(
     ("spec", "status", "words"),
     [(f"cmd:{_PROGRAM}", 2, "does not run assembly scenes"),
-     (f"cmd[assembly=chain]:{_PROGRAM} --mode unsupported", 2, "this code runs no such scene"),
      (f"cmd[assembly=chain]:{_PROGRAM} --mode short", 1, "the run ended after 10 of")],
 )  # fmt: skip
 def test_hcv_dt_crit_says_it_in_one_line(spec, status, words, tmp_path):
-    """Undeclared or declined: exit status 2; a code that fails: 1 (a bad declaration is
-    the same HCVInputError as the undeclared one, refused in `get_adapter`)."""
+    """Undeclared: exit status 2; a code that fails: 1 (a bad declaration is the same
+    HCVInputError, refused in `get_adapter`; a decline the same AdapterDeclined as a
+    Python code's, `test_hostile_answers_are_one_line` and test_assembly_codes*.py)."""
     r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--horizons", "50"], cwd=tmp_path)
     _one_line(r, status, words, f"hcv dt-crit chain-hertz --adapter {spec[:50]}")
 
