@@ -19,7 +19,16 @@ from types import SimpleNamespace
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["SCHEMES", "CodeInfo", "Scheme", "declared_scheme", "offset_refusal", "scheme_of"]
+__all__ = [
+    "ASSEMBLY_KINDS",
+    "SCHEMES",
+    "CodeInfo",
+    "Scheme",
+    "declared_assembly",
+    "declared_scheme",
+    "offset_refusal",
+    "scheme_of",
+]
 
 # Characters of a refused value shown in its one-line error: a hostile declaration (a
 # 4000-character scheme name in a cmd[...] spec) is named, not echoed whole.
@@ -176,6 +185,61 @@ def declared_scheme(label: str, time_scheme=None, claimed_order=None, scheme_rto
             f"scheme_rtol={_shown(scheme_rtol)} with time_scheme {scheme.name!r}"
         )
     return scheme
+
+
+# The assembly scenes a ``cmd:`` program may declare (contract item 14): chains of spheres
+# on a line and periodic lattices, as the built-in codes run them.
+ASSEMBLY_KINDS = ("chain", "lattice")
+
+
+def declared_assembly(label: str, assembly=None, advice=None) -> tuple[frozenset, bool]:
+    """The assembly scenes a ``cmd:`` program declares, ``cmd[assembly=chain+lattice]``.
+
+    The ``cmd:`` form of contract item 14's ``supports_assembly`` / ``supports_lattice``
+    (and of ``step_advice``, ``advice=true``), read before anything runs as the scheme
+    is (`declared_scheme`): a program without it is never sent an assembly request and
+    declines assembly scenes in one line, as before.
+
+    Parameters
+    ----------
+    label : str
+        The adapter's label, for the error line.
+    assembly : str or None
+        ``"chain"``, ``"lattice"`` or both joined by ``+`` (``"chain+lattice"``; a comma
+        would end the argument in ``cmd[...]``); None: no assembly scenes.
+    advice : bool or None
+        The program answers ``"advice"`` requests with its own step advice (needs
+        ``assembly``); None or False: it gives none.
+
+    Returns
+    -------
+    (frozenset of str, bool)
+        The kinds declared (a subset of `ASSEMBLY_KINDS`) and whether advice is.
+
+    Raises
+    ------
+    HCVInputError
+        One line naming the offending value (an unknown or repeated kind, an advice
+        that is not true/false, or advice without assembly).
+    """
+    if advice is not None and not isinstance(advice, bool):
+        raise HCVInputError(
+            f"adapter {_shown(label)}: advice must be true or false, got {_shown(advice)}"
+        )
+    if assembly is None:
+        if advice:
+            raise HCVInputError(
+                f"adapter {_shown(label)}: advice=true needs assembly= (the scenes advised: "
+                f"{' or '.join(ASSEMBLY_KINDS)}, joined by '+')"
+            )
+        return frozenset(), False
+    parts = assembly.split("+") if isinstance(assembly, str) else None
+    if not parts or any(p not in ASSEMBLY_KINDS for p in parts) or len(set(parts)) != len(parts):
+        raise HCVInputError(
+            f"adapter {_shown(label)}: assembly={_shown(assembly)} is not one of "
+            f"{', '.join(ASSEMBLY_KINDS)} or both joined by '+' (assembly=chain+lattice)"
+        )
+    return frozenset(parts), bool(advice)
 
 
 def offset_refusal(adapter) -> str | None:

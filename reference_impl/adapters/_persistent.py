@@ -230,8 +230,10 @@ class PersistentProcess:
         self._kill()
 
     # -- one request ------------------------------------------------------------
-    def request(self, obj: dict, timeout: float, limit: int) -> dict:
-        """Send ``obj`` (an ``"id"`` is added) and return the answer object.
+    def request(self, obj: dict, timeout: float, limit: int, check=None) -> dict:
+        """Send ``obj`` (an ``"id"`` is added) and return the answer object. ``check(raw)``,
+        when given, may refuse the answer line's bytes before they are parsed (raising
+        `AdapterOutputError`; the process is then replaced, as for an answer over ``limit``).
 
         Raises
         ------
@@ -248,6 +250,12 @@ class PersistentProcess:
         raw = self.exchange(
             line, lambda ln: ln.startswith(b"{"), timeout, limit, keep=False, rid=rid
         )[-1]
+        if check is not None:
+            try:
+                check(raw)
+            except AdapterOutputError:
+                self._kill()
+                raise
         try:
             data = json.loads(raw)
         except (json.JSONDecodeError, RecursionError, UnicodeDecodeError):

@@ -120,7 +120,9 @@ differs, the item says so (``docs/adapter-protocol.md`` has its full schema).
     own time-step advice as the code computes it (name -> dt in s; empty: the code gives
     none). Undeclared, `ContactAdapter.assembly` declines in one line ("<code> does not
     run assembly scenes"), which ``hcv dt-crit SCENE --adapter CODE`` prints with exit
-    status 2. Python adapters only (a ``cmd:`` program declines).
+    status 2. A ``cmd:`` program declares them in its brackets,
+    ``cmd[assembly=chain+lattice,advice=true]:COMMAND``, and answers JSON requests
+    (`reference_impl.adapters._cmd_assembly`); undeclared, it declines.
     The same hook takes a periodic lattice (`LatticeRequest`, in
     `reference_impl.adapters._lattice_request`: 3-D positions in a rectangular box, the
     contact list, normal contacts only) and returns a `LatticeRun` (positions and

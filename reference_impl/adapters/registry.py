@@ -292,7 +292,8 @@ def adapter_help() -> str:
         lines.append(f"  {name}: {keys}" if keys else f"  {name}")
     lines.append(
         "  cmd[sustained=true,persistent=true,timeout=S,label=NAME,cwd=DIR,"
-        "time_scheme=S,claimed_order=N,scheme_rtol=R,OPTION=V]:COMMAND"
+        "time_scheme=S,claimed_order=N,scheme_rtol=R,assembly=chain+lattice,advice=true,"
+        "OPTION=V]:COMMAND"
     )
     return "\n".join(lines)
 

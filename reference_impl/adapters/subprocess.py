@@ -96,6 +96,12 @@ line already waiting when a request is sent (written ahead) is refused. Closing 
 outlives its timeout, or a process that dies, fails that run only (one line) and
 the next run starts a fresh process (`reference_impl.adapters._persistent`).
 
+Assembly scenes (chains, lattices: contract item 14) are sent only to commands declared
+with ``cmd[assembly=chain]:COMMAND`` (``lattice``, or ``chain+lattice``; ``advice=true``
+when it also answers ``"advice"`` requests with its own step advice): request
+``"assembly"`` with an ``"assembly"`` object, answer ``t``, ``x``, ``v`` after every step
+(`reference_impl.adapters._cmd_assembly`; ``docs/adapter-protocol.md``).
+
 Failures of one run (non-zero exit, timeout, output that is not JSON or breaks
 the rules) fail that run only; the benchmark goes on with the next one. Output is
 read while the command runs and capped (`response_limit`): a command that writes
@@ -118,10 +124,10 @@ import subprocess
 import time
 from collections.abc import Mapping, Sequence
 
-import numpy as np
-
 from reference_impl._procs import kill_group
-from reference_impl.adapters._declaration import declared_scheme
+from reference_impl.adapters._cmd_assembly import assembly_advice, assembly_run
+from reference_impl.adapters._cmd_assembly import check_steps as _check_steps
+from reference_impl.adapters._declaration import declared_assembly, declared_scheme
 from reference_impl.adapters._persistent import PersistentProcess
 from reference_impl.adapters.base import (
     AdapterDeclined,
@@ -168,7 +174,7 @@ _POLL = 0.5
 # The adapter's own cmd[...] arguments (every other key is an option of the code).
 _OWN_ARGUMENTS = (
     "command", "timeout", "cwd", "label", "sustained", "persistent",
-    "time_scheme", "claimed_order", "scheme_rtol",
+    "time_scheme", "claimed_order", "scheme_rtol", "assembly", "advice",
 )  # fmt: skip
 
 
@@ -272,6 +278,11 @@ class SubprocessAdapter(ContactAdapter):
         The program's time-stepping scheme, the order it claims and, for
         ``variable-step``, its relative tolerance (contract item 12; none given:
         velocity Verlet, order 2).
+    assembly : str, optional
+        The assembly scenes the command runs, ``"chain"``, ``"lattice"`` or
+        ``"chain+lattice"`` (contract item 14; none given: it declines them).
+    advice : bool, optional
+        It also answers ``"advice"`` requests with its own step advice.
     **options
         Options of the code, sent in each request as ``"options"`` (numbers,
         booleans or text): what ``hcv calibrate`` / ``hcv sweep`` vary.
@@ -291,6 +302,8 @@ class SubprocessAdapter(ContactAdapter):
         time_scheme: str | None = None,
         claimed_order: float | None = None,
         scheme_rtol: float | None = None,
+        assembly: str | None = None,
+        advice: bool | None = None,
         **options,
     ):
         if isinstance(command, str):
@@ -358,6 +371,9 @@ class SubprocessAdapter(ContactAdapter):
         if scheme is not None:  # instance attributes, read by scheme_of as a class's are
             self.time_scheme, self.claimed_order = scheme.name, scheme.order
             self.scheme_rtol = scheme.rtol
+        kinds, self.advice = declared_assembly(self._label, assembly, advice)
+        self.assembly_kinds = tuple(k for k in ("chain", "lattice") if k in kinds)
+        self.supports_assembly, self.supports_lattice = bool(kinds), "lattice" in kinds
         self._n_steps = 0
         self._laws: dict[tuple, ImplementedLaw] = {}
 
@@ -377,6 +393,8 @@ class SubprocessAdapter(ContactAdapter):
             "time_scheme": self.time_scheme,
             "claimed_order": self.claimed_order,
             "scheme_rtol": self.scheme_rtol,
+            "assembly": "+".join(self.assembly_kinds) or None,
+            "advice": self.advice,
         }
 
     def _exchange(self, payload: bytes, limit: int) -> tuple[int, bytes, str]:
@@ -458,14 +476,15 @@ class SubprocessAdapter(ContactAdapter):
                     pass
         return rc, bytes(out), _tail(err.decode(errors="replace"))
 
-    def _persistent_call(self, obj: dict, limit: int) -> dict:
+    def _persistent_call(self, obj: dict, limit: int, guard=None) -> dict:
         """One request in persistent mode (the process is started on first use)."""
 
         if self._server is None:
             self._server = PersistentProcess(
                 self.argv, self.label, cwd=self.cwd, startup_timeout=self.timeout
             )
-        data = self._server.request(obj, timeout=self.timeout, limit=limit)
+        check = None if guard is None else (lambda raw: guard(raw, self.label))
+        data = self._server.request(obj, timeout=self.timeout, limit=limit, check=check)
         data.pop("id", None)
         return data
 
@@ -474,17 +493,26 @@ class SubprocessAdapter(ContactAdapter):
             self._server.close()
 
     def _call(self, request: str, scene: AdapterScene) -> dict:
-        obj = {"protocol": PROTOCOL, "request": request, "scene": scene.to_json()}
+        obj = {"request": request, "scene": scene.to_json()}
+        return self._send(obj, response_limit(scene.n_steps), int(scene.n_steps))
+
+    def _send(self, obj: dict, limit: int, n_steps: int, guard=None) -> dict:
+        """One request (``obj`` with the protocol and options added) in either mode: the
+        answer object, or the skip / failure it reports. ``limit``: bytes of the answer;
+        ``guard(raw, label)`` checks them before they are parsed."""
+        obj = {"protocol": PROTOCOL, **obj}
         if self.options:
             obj["options"] = dict(self.options)
-        self._n_steps = int(scene.n_steps)
+        self._n_steps = int(n_steps)
         if self.persistent:
-            return self._answer(self._persistent_call(obj, response_limit(scene.n_steps)), "")
+            return self._answer(self._persistent_call(obj, limit, guard), "")
         payload = json.dumps(obj)
-        rc, raw_bytes, stderr = self._exchange(payload.encode(), response_limit(scene.n_steps))
+        rc, raw_bytes, stderr = self._exchange(payload.encode(), limit)
         if rc != 0:
             how = f"killed by signal {-rc} ({_signame(-rc)})" if rc < 0 else f"exit status {rc}"
             raise AdapterRunError(f"{self.label}: command failed, {how}", stderr)
+        if guard is not None:
+            guard(raw_bytes, self.label)
         raw = raw_bytes.decode(errors="replace")
         try:
             data = json.loads(raw)
@@ -504,8 +532,8 @@ class SubprocessAdapter(ContactAdapter):
 
     def _answer(self, data: dict, stderr: str) -> dict:
         """The response object, or the skip / failure it reports."""
-        if "unsupported" in data:
-            raise AdapterDeclined(str(data["unsupported"])[:300])
+        if "unsupported" in data:  # one line, whatever the program wrote
+            raise AdapterDeclined(" ".join(str(data["unsupported"]).split())[:300])
         if "error" in data:
             raise AdapterRunError(
                 f"{self.label}: reported error: {str(data['error'])[:300]}", stderr
@@ -528,38 +556,18 @@ class SubprocessAdapter(ContactAdapter):
     def _sustained_impl(self, scene: AdapterScene):
         return self._run("sustained", scene)
 
+    def _assembly_impl(self, request):
+        """A chain or lattice run (contract item 14), checked (`_cmd_assembly.assembly_run`)."""
+        return assembly_run(self._send, request, self.label, self.assembly_kinds)
+
+    def step_advice(self, request) -> dict:
+        """The program's own step advice when declared (``advice=true``), else none."""
+        return assembly_advice(self._send, request, self.label) if self.advice else {}
+
     def implemented_law(self, scene: AdapterScene) -> ImplementedLaw:
         """The law declared in the last response for this scene and speed, else the scene's."""
         law = self._laws.get((scene.name, scene.v0))
         return law if law is not None else super().implemented_law(scene)
-
-
-def _check_steps(t: np.ndarray, dt: float, who: str) -> None:
-    """Rule 2, "step with exactly dt; record every step": t[i] = i dt to round-off.
-
-    The allowance at sample i is (i + 2) eps i dt (eps the float64 epsilon): t computed
-    as i * dt is within eps/2 of it; t accumulated by i additions of dt within about
-    i^2 eps dt / 4; printed with 15 or more significant digits and read back, within
-    another 2.5 eps. A code that steps with another dt (its own step, or answers made
-    for another request) misses by far more and is refused in one line naming the
-    sample (a critical step of infinity once passed that way).
-
-    Raises
-    ------
-    AdapterOutputError
-        The first sample off the grid.
-    """
-    i = np.arange(t.size, dtype=float)
-    want = i * dt
-    allowed = (i + 2.0) * np.finfo(float).eps * np.maximum(i, 1.0) * dt
-    off = np.flatnonzero(np.abs(t - want) > allowed)
-    if off.size:
-        k = int(off[0])
-        raise AdapterOutputError(
-            f"{who}: 't[{k}]' = {float(t[k])!r} s, should be {k} x dt = {float(want[k])!r} s "
-            f"(the asked step dt = {dt!r} s, to round-off: every step is dt and every step "
-            "is recorded)"
-        )
 
 
 def _check_program(prog: str, cwd: str | None) -> None:
