@@ -151,6 +151,10 @@ def test_an_energy_above_the_pole_is_refused_by_name():
     for u in (u_sup * 1.0001, np.array([0.1 * u_sup, 2.0 * u_sup])):
         with pytest.raises(NoTurningPointError, match="no turning point"):
             pot.inverse(u)
+    # turning_point compares with U(2a), kept after its first use: twice the same refusal.
+    for _ in range(2):
+        with pytest.raises(NoTurningPointError, match=f"reaches only {u_sup:.6g} J"):
+            pot.turning_point(u_sup * 1.0001)
 
 
 @pytest.mark.parametrize(
