@@ -5,7 +5,7 @@ Each strategy is a function ``plan(job) -> Answer | None`` with one contract:
 1. ``job`` is a `Job`: the potential, mass, speed, `VirtualOscillator`, the validated
    turning point q_top (every overlap of the impact lies in (0, q_top]), the
    requested tanh-sinh level (None: the solver's choice) and the requested accuracy
-   ``rtol`` (None: full; `_rtol`, read by `power_law` alone).
+   ``rtol`` (None: full; `_rtol`, read by `power_law` and, for a single cap, `fused`).
 2. It returns None when it does not apply to the job, or when it refuses it (e.g. its
    two rule sizes disagree), and has then changed nothing.
 3. Otherwise it returns an `Answer`: the `Branches` (three times and bounds on their
@@ -166,10 +166,11 @@ def split_quadrature(job: Job) -> Answer | None:
 
 
 def fused(job: Job) -> Answer | None:
-    """A compiled family in one compiled call (`_one_call.fused_impact`)."""
+    """A compiled family in one compiled call (`_one_call.fused_impact`; with ``job.rtol``,
+    a single cap's Gauss-Jacobi pair that meets it)."""
     if not job.own_rules or job.split:
         return None
-    fast = fused_impact(job.potential, job.m, job.osc, job.q_top)
+    fast = fused_impact(job.potential, job.m, job.osc, job.q_top, job.rtol)
     return None if fast is None else Answer(*fast)
 
 

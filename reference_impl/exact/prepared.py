@@ -35,7 +35,7 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._branches import _GJ_ZETA_MAX, per_potential
-from reference_impl.exact._one_call import _OK, _plan, curvature, fused_impact
+from reference_impl.exact._one_call import _OK, _is_cap, _plan, curvature, fused_impact
 from reference_impl.exact._oscillator import VirtualOscillator
 from reference_impl.exact._power_kernel import power_constants
 from reference_impl.exact._prepared_kernel import family_call, family_constants, power_call
@@ -114,7 +114,11 @@ class PreparedImpact:
             if consts is not None:
                 c_m, b_hi, b_lo, self._u, self._W, *rest = consts
                 self._c = np.array([c_m, b_hi, b_lo, *rest, stated, _TINY])
-        elif self._plan is not None:
+        elif self._plan is not None and not (
+            self._rtol is not None and _is_cap(self._plan.kernel.P)
+        ):
+            # (A cap with rtol runs `_fused`, which takes its Gauss-Jacobi pair at rtol as
+            # `solve_impact` does; the compiled call knows only full accuracy.)
             self._family = family_call(self._plan)
             if self._family is not None:
                 # A 1-tuple: the compiled call's arguments after (v0, zeta, q_top).
@@ -203,9 +207,10 @@ class PreparedImpact:
             )
         t, e, t_zf, e_zf = rise + fall, e_rise + e_fall, rise + mid, e_rise + e_mid
         # `_check_bound` (both times are finite below zeta = 1) and `_check_normal`.
+        stated = RTOL_STATED if self._rtol is None else max(self._rtol, RTOL_STATED)
         if not (
-            e <= RTOL_STATED * t
-            and e_zf <= RTOL_STATED * t_zf
+            e <= stated * t
+            and e_zf <= stated * t_zf
             and t < _INF
             and t_zf < _INF
             and q_max >= _TINY
@@ -222,7 +227,7 @@ class PreparedImpact:
         ladder), as `solve_impact`'s `fused` strategy, then `_family_result`."""
         pot, m = self.potential, self.m
         osc = VirtualOscillator(v0, zeta)
-        fast = fused_impact(pot, m, osc, q_top)
+        fast = fused_impact(pot, m, osc, q_top, self._rtol)
         if fast is None:
             return solve_impact(pot, m, v0, zeta, rtol=self._rtol)
         br, q_max, f_max = fast

@@ -214,7 +214,7 @@ class Potential(ABC):
         if not (isinstance(E, (int, float, np.floating)) and math.isfinite(E) and E > 0):
             raise HCVInputError(f"energy E must be a finite number > 0, got {E!r}")
         if math.isfinite(self.q_sup):
-            u_sup = float(self._U(np.array([self.q_sup]))[0])
+            u_sup = self._energy_sup()
             if u_sup < E:
                 raise NoTurningPointError(
                     f"U reaches only {u_sup:.6g} J at the end of its domain q = {self.q_sup:.6g} m, "
@@ -229,6 +229,11 @@ class Potential(ABC):
         if check:
             self.check_monotone(q_max)
         return q_max
+
+    def _energy_sup(self) -> float:
+        """U(q_sup) in J: the largest energy a turning point on a bounded domain can have
+        (a family may keep it: it is fixed at construction)."""
+        return float(self._U(np.array([self.q_sup]))[0])
 
     def check_monotone(self, q_max: float) -> None:
         """Check U(0) = 0 and U'(q) > 0 on a dense grid of (0, q_max].
