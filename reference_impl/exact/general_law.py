@@ -25,8 +25,10 @@ ill-conditioned in the state (issue 29).
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass
 from fractions import Fraction
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -174,8 +176,25 @@ class LawImpactSolution:
         return asdict(self)
 
 
+# (ks, ps) or None per potential object (immutable after construction): a one-shot call
+# with a new law each time still finds its potential's terms (1.6 us of ~60, issue 38).
+_TERMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _power_terms(pot: Potential):
-    """(ks, ps) when U' is a sum of power laws, else None."""
+    """(ks, ps) when U' is a sum of power laws, else None (kept per potential object;
+    computed each call for one that is not weak-referenceable)."""
+    try:
+        return _TERMS[pot]
+    except KeyError:
+        pass
+    except TypeError:
+        return _new_power_terms(pot)
+    got = _TERMS[pot] = _new_power_terms(pot)
+    return got
+
+
+def _new_power_terms(pot: Potential):
     terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
     if all(type(t) is PowerLaw for t in terms):
         return (
@@ -335,7 +354,9 @@ def _refuse_lost_return(pot: Potential, law: DampingLaw, m: float, v0: float) ->
     )
 
 
-def _law_arrays(law: DampingLaw, m: float, pot: Potential):
+def _law_arrays(law: DampingLaw, m: float, pot: Potential, extra: tuple = ()):
+    """(cs, es, sc) of the compiled kernels; ``extra`` is appended to ``sc`` (the Taylor
+    kernel's truncation and step fraction for an ``rtol``, `_general_taylor.SC_TOL`)."""
     terms = law.terms()
     cs = np.array([c for c, _ in terms], float)
     es = np.array([e for _, e in terms], float)
@@ -360,7 +381,7 @@ def _law_arrays(law: DampingLaw, m: float, pot: Potential):
     # The law says the force never vanishes before q = 0 (Hunt-Crossley: F = U' (1 + alpha
     # q'), _general_kernel): no zero-force event is searched.
     nopull = 1.0 if law.decomposition().never_pulls else 0.0
-    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull], float)
+    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull, *extra], float)
     if law.A and n < 2.0:
         raise HCVInputError(
             f"damping law {law.name!r} needs U'' finite at contact (leading exponent n >= 2, "
@@ -453,17 +474,62 @@ def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     m = positive("m", m, "solve_law_impact")
     rtol = checked_rtol(rtol, "solve_law_impact")
     _check_exponent(potential)
-    cs, es, sc = _law_arrays(law, m, potential)
-    if rtol is not None:
-        # The Taylor kernel's truncation per step for rtol, and its step fraction theta,
-        # after the scalars it reads (`_general_taylor.SC_TOL`); without them it runs at
-        # full accuracy, bit for bit.
-        tol = taylor_tol(rtol, TAYLOR_TOL)
-        sc = np.append(sc, [tol, theta_for(tol)])
+    # For an rtol, the Taylor kernel's truncation per step and its step fraction theta go
+    # after the scalars it reads (`_general_taylor.SC_TOL`); without them it runs at full
+    # accuracy, bit for bit.
+    cs, es, sc = _law_arrays(law, m, potential, () if rtol is None else _taylor_scalars(rtol))
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
     tab = table_arrays(potential) if lin is None and pk is None else None
     return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab)
+
+
+@lru_cache(maxsize=64)
+def _taylor_scalars(rtol: float) -> tuple[float, float]:
+    """(truncation per step, step fraction theta) of the Taylor kernel for ``rtol`` (a
+    checked float): the same numbers each call, kept (theta's fixed point is ~1.6 us)."""
+    tol = taylor_tol(rtol, TAYLOR_TOL)
+    return tol, theta_for(tol)
+
+
+# Where `_general_kernel.OUT_FIELDS` puts each output: the kernel's array is read as a
+# list by index (a dict of it per call was ~1 us of a ~25 us prepared call).
+(
+    _T_PEAK,
+    _Q_MAX,
+    _MAX_FORCE,
+    _PEAK_FORCE,
+    _T_ZF,
+    _W_ZF,
+    _T_END,
+    _W_END,
+    _RETURNS,
+    _ERR_T,
+    _ERR_W,
+    _N_STEPS,
+    _STATUS,
+    _STOP,
+    _ERR_ZF,
+) = (
+    OUT_FIELDS.index(f)
+    for f in (
+        "t_peak",
+        "q_max",
+        "max_force",
+        "peak_force",
+        "t_zf",
+        "w_zf",
+        "t_end",
+        "w_end",
+        "returns",
+        "err_t",
+        "err_w",
+        "n_steps",
+        "status",
+        "stop",
+        "err_zf",
+    )
+)
 
 
 def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
@@ -482,36 +548,37 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
         out = _gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
-    r = dict(zip(OUT_FIELDS, out.tolist(), strict=False))
-    if r["status"] != 0.0 or not math.isfinite(r["q_max"]):
+    r = out.tolist()
+    if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):
         raise UnsupportedError(
             f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "
             f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
         )
-    returns = r["returns"] == 1.0
-    if not returns and r["stop"] == STOP_NO_RETURN_Q:
+    returns = r[_RETURNS] == 1.0
+    if not returns and r[_STOP] == STOP_NO_RETURN_Q:
         _refuse_lost_return(potential, law, m, v0)
-    nst = int(r["n_steps"])
+    nst = int(r[_N_STEPS])
     t_scale = qE / v0
-    t_end = r["t_end"] if returns else math.inf
-    err_t = ERROR_SAFETY * r["err_t"] * t_scale + 100 * nst * _EPS * (
-        t_end if returns else r["t_zf"] if math.isfinite(r["t_zf"]) else t_scale
+    t_end = r[_T_END] if returns else math.inf
+    t_zf = r[_T_ZF]
+    err_t = ERROR_SAFETY * r[_ERR_T] * t_scale + 100 * nst * _EPS * (
+        t_end if returns else t_zf if math.isfinite(t_zf) else t_scale
     )
-    if r["err_zf"] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
-        err_t += ERROR_SAFETY * r["err_zf"]
-    err_w = ERROR_SAFETY * r["err_w"] + 100 * nst * _EPS
+    if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
+        err_t += ERROR_SAFETY * r[_ERR_ZF]
+    err_w = ERROR_SAFETY * r[_ERR_W] + 100 * nst * _EPS
     return LawImpactSolution(
         v0=v0,
         m=m,
         law=dict(plan.table),
-        max_penetration=r["q_max"],
-        max_force=r["max_force"],
-        peak_force=r["peak_force"],
-        time_of_max_penetration=r["t_peak"],
+        max_penetration=r[_Q_MAX],
+        max_force=r[_MAX_FORCE],
+        peak_force=r[_PEAK_FORCE],
+        time_of_max_penetration=r[_T_PEAK],
         contact_time=t_end,
-        restitution=-r["w_end"] / v0 if returns else 0.0,
-        contact_time_zero_force=r["t_zf"],
-        restitution_zero_force=-r["w_zf"] / v0,
+        restitution=-r[_W_END] / v0 if returns else 0.0,
+        contact_time_zero_force=t_zf,
+        restitution_zero_force=-r[_W_ZF] / v0,
         returns_to_q0=returns,
         error_time=err_t,
         error_restitution=err_w,
