@@ -5,7 +5,8 @@ Contestants per row, each a loop over the same set of distinct random impacts (s
 log-uniform in [0.05, 5] m/s, zeta uniform in [0, 0.85) for the universal law; for a
 general law, either one law for every impact or, in the rows marked "new law each",
 its strength times 10^u, u uniform in [-1, 0], per impact, as the work-precision bench
-draws them (`benchmarks._equal_error.random_impacts`), so that no one-shot cache hits):
+draws them (`benchmarks._equal_error.random_impacts`), so that no one-shot cache hits
+while the set holds more impacts than the caches keep, `_oneshot_cache.KEPT` = 64):
 
 * ``oneshot``: `reference_impl.solve` (the universal law) or `solve_law_impact`;
 * ``oneshot_uncached``: the same with the one-shot caches bypassed (the power constants'
