@@ -2,14 +2,19 @@
 strongest peer (issue 38, goals 3-4): ratios in one process, interleaved.
 
 Contestants per row, each a loop over the same set of distinct random impacts (speeds
-log-uniform in [0.05, 5] m/s, zeta uniform in [0, 0.85) for the universal law):
+log-uniform in [0.05, 5] m/s, zeta uniform in [0, 0.85) for the universal law; for a
+general law, either one law for every impact or, in the rows marked "new law each",
+its strength times 10^u, u uniform in [-1, 0], per impact, as the work-precision bench
+draws them (`benchmarks._equal_error.random_impacts`), so that no one-shot cache hits
+while the set holds more impacts than the caches keep, `_oneshot_cache.KEPT` = 64):
 
 * ``oneshot``: `reference_impl.solve` (the universal law) or `solve_law_impact`;
 * ``oneshot_uncached``: the same with the one-shot caches bypassed (the power constants'
   `_constants.__wrapped__`, `general_law._new_plan`, `law_from_dict`), for the caches'
   share in the same process and load; the lazy turning point (`_strategies.Job.q_top`)
   stays on, so for the universal law this is faster than main's path;
-* ``prepared``: `prepare(pot, m, rtol=...)` / `prepare_law`;
+* ``prepared``: `prepare(pot, m, rtol=...)` / `prepare_law` (with a new law each impact,
+  one prepared solver per impact, built outside the timing, each called once);
 * ``sundman``: the Sundman-regularised compiled DOP853 (`benchmarks.peer_sundman`, the
   strongest peer of issue 38) at the cheapest rung of its ladder whose worst relative
   error over the set (contact times and restitutions against ours at full accuracy,
@@ -44,6 +49,7 @@ from reference_impl.theory.laws import law_from_dict
 from . import peer_dop853 as plain
 from . import peer_sundman as sundman
 from ._dop853_core import OUT_FIELDS
+from ._equal_error import LOG_STRENGTH
 
 __all__ = ["main", "run"]
 
@@ -110,7 +116,8 @@ def _peer_rung(pot, law, impacts, truths, target):
     for rtol in RUNG_RTOLS:
         calls, worst, nfev = [], 0.0, 0
         for (v0, zeta), truth in zip(impacts, truths, strict=True):
-            lw = law if law is not None else {"law": "universal", "zeta": zeta}
+            # ``zeta`` is the impact's own law where the row draws one per impact
+            lw = zeta if law is not None else {"law": "universal", "zeta": zeta}
             da, z = plain.damping_table(pot, lw)
             n = sundman.sundman_n(el, da, z)
             out = np.empty(len(OUT_FIELDS))
@@ -131,11 +138,23 @@ def _peer_rung(pot, law, impacts, truths, target):
     return best or closest
 
 
-def _row(name, pot, law, blocks, n, target, seed=5):
+def _scaled(law: dict, factor: float) -> dict:
+    """``law`` with its one strength parameter (c or alpha) times ``factor``."""
+    key = "c" if "c" in law else "alpha"
+    return {**law, key: factor * law[key]}
+
+
+def _row(name, pot, law, blocks, n, target, seed=5, distinct=False):
     rng = np.random.default_rng(seed)
     v0s = 10.0 ** rng.uniform(np.log10(0.05), np.log10(5.0), n)
     zetas = rng.uniform(0.0, 0.85, n) if law is None else np.zeros(n)
     impacts = list(zip(v0s.tolist(), zetas.tolist(), strict=True))
+    if law is not None:  # each impact with its law (the same one unless ``distinct``)
+        f = 10.0 ** rng.uniform(*LOG_STRENGTH, n) if distinct else np.ones(n)
+        impacts = [
+            (v, _scaled(law, g) if distinct else law)
+            for v, g in zip(v0s.tolist(), f.tolist(), strict=True)
+        ]
     rtol = None if target < 1e-12 else target
     if law is None:
         truths = [ri.solve(pot, M, v, z).to_dict() for v, z in impacts]
@@ -149,16 +168,20 @@ def _row(name, pot, law, blocks, n, target, seed=5):
             "prepared": _loop(prep, impacts),
         }
     else:
-        truths = [general_law.solve_law_impact(pot, M, v, law).to_dict() for v, _ in impacts]
-        one = [(pot, M, v, law, rtol) for v, _ in impacts]
-        prep = general_law.prepare_law(pot, M, law, rtol=rtol)
+        truths = [general_law.solve_law_impact(pot, M, v, lw).to_dict() for v, lw in impacts]
+        one = [(pot, M, v, lw, rtol) for v, lw in impacts]
+        if distinct:
+            preps = [(general_law.prepare_law(pot, M, lw, rtol=rtol), v) for v, lw in impacts]
+        else:
+            prep = general_law.prepare_law(pot, M, law, rtol=rtol)
+            preps = [(prep, v) for v, _ in impacts]
         call = general_law.solve_law_impact
         contestants = {
             "oneshot": _loop(lambda p, m, v, lw, r: call(p, m, v, lw, rtol=r), one),
             "oneshot_uncached": _loop(
                 lambda p, m, v, lw, r: call(p, m, v, lw, rtol=r), one, uncached=True
             ),
-            "prepared": _loop(lambda v: prep(v), [(v,) for v, _ in impacts]),
+            "prepared": _loop(lambda pr, v: pr(v), preps),
         }
     peer = _peer_rung(pot, law, impacts, truths, target)
     if peer is not None:
@@ -177,17 +200,27 @@ def _row(name, pot, law, blocks, n, target, seed=5):
     return t
 
 
+# The general laws' rows: a linear dashpot and Hunt-Crossley at about e = 0.8 at 1 m/s
+# (HC: e ~ 1 - 2 alpha v0 / 3).
+DASHPOT = {"law": "linear", "c": 30.0}
+HUNT_CROSSLEY = {"law": "hunt-crossley", "alpha": 0.3}
+
+
 def run(blocks: int = 7, impacts: int = 200) -> None:
-    """Print each row's times and ratios (universal Hertz and p = 2, Hertz + dashpot)."""
+    """Print each row's times and ratios (universal Hertz and p = 2; Hertz with a dashpot
+    and Hunt-Crossley, one law for all impacts and a new law each)."""
     print(f"load before {os.getloadavg()[0]:.2f}", flush=True)
     rows = (
-        ("universal Hertz", PowerLaw(K, 1.5), None),
-        ("universal p = 2", PowerLaw(K, 2.0), None),
-        ("Hertz + linear dashpot", PowerLaw(K, 1.5), {"law": "linear", "c": 30.0}),
+        ("universal Hertz", PowerLaw(K, 1.5), None, False),
+        ("universal p = 2", PowerLaw(K, 2.0), None, False),
+        ("Hertz + linear dashpot", PowerLaw(K, 1.5), DASHPOT, False),
+        ("Hertz + dashpot, new law each", PowerLaw(K, 1.5), DASHPOT, True),
+        ("Hertz + Hunt-Crossley", PowerLaw(K, 1.5), HUNT_CROSSLEY, False),
+        ("Hertz + HC, new law each", PowerLaw(K, 1.5), HUNT_CROSSLEY, True),
     )
     for target in TARGETS:
-        for name, pot, law in rows:
-            _row(name, pot, law, blocks, impacts, target)
+        for name, pot, law, distinct in rows:
+            _row(name, pot, law, blocks, impacts, target, distinct=distinct)
     print(f"load after {os.getloadavg()[0]:.2f}", flush=True)
 
 

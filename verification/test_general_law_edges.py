@@ -19,8 +19,10 @@ from hypothesis import example, given, settings
 
 from reference_impl import PowerLaw
 from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.exact._general_contact import creeps_for_ever
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.potentials import SumPotential
+from reference_impl.theory.laws import law_from_dict
 from verification import strategies as hs
 from verification._law_oracles import hunt_crossley, hunt_crossley_contact_time, linear_oscillator
 from verification.assertions import assert_close, assert_less, assert_true
@@ -321,4 +323,30 @@ def test_drag_that_catches_the_body_in_the_exit_phase_is_no_return():
         ("contact_time_zero_force", "time_of_max_penetration"),
         ("restitution_zero_force",),
         ("max_penetration",),
+    )
+
+
+# The creep verdict (`_general_contact.creeps_for_ever`) on Hertz (n = 2.5, edge a = 0.25): the
+# plan asks it of every law (its verdict alone, `creep_verdict`), a refusal formats its phrase.
+_CREEP_CASES = (
+    ({"law": "linear", "c": 1.0}, True, "C ~ q^0 at contact, U ~ q^2.5"),
+    ({"law": "linear", "c": 0.0}, False, "undamped at contact"),
+    ({"law": "hunt-crossley", "alpha": 0.2}, False, "inertia takes over near q = 0"),
+    ({"law": "viscoelastic", "A": 1e-3}, False, "C ~ q^0.5 at contact"),
+    ({"law": "universal", "zeta": 0.5}, False, "underdamped at contact, damping ratio 0.5"),
+    ({"law": "universal", "zeta": 1.5}, True, "underdamped at contact, damping ratio 1.5"),
+)
+
+
+@pytest.mark.parametrize(("law", "never", "phrase"), _CREEP_CASES)
+def test_creep_verdict_and_its_phrase(law, never, phrase):
+    """The verdict and the phrase of a refusal, from the exponents at contact (a < 0.25:
+    never returns; a > 0.25: inertia takes over; a = 0.25: the damping ratio decides)."""
+    got = creeps_for_ever(law_from_dict(law), 0.1, PowerLaw(1e6, 1.5))
+    assert_true(
+        got[0] is never and phrase in got[1],
+        got=f"{got!r}",
+        should=f"({never}, ...{phrase}...)",
+        claim=CLAIM,
+        call=f"creeps_for_ever({law}, 0.1, PowerLaw(1e6, 1.5))",
     )

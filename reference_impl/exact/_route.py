@@ -58,7 +58,10 @@ def route(law, zeta, what: str = "zeta") -> Route:
         return Route("harmonic map", zeta, None)
     # Read once per exact table (`_oneshot_cache`): a one-shot call in a loop reads it once.
     dl = cached_law(law)
-    if np.any(np.asarray(zeta, dtype=float) != 0):
+    # A plain 0 (the default) without numpy: np.asarray on a scalar is ~4 us of a one-shot call.
+    if not ((type(zeta) is float or type(zeta) is int) and zeta == 0) and np.any(
+        np.asarray(zeta, dtype=float) != 0
+    ):
         if what == "zeta":
             raise HCVInputError(
                 f"give the damping once: zeta = {zeta!r} and law = {dl.to_dict()} both set"
@@ -75,12 +78,21 @@ def _solvers(kind: str):
     (so that a universal-law solve does not load the general-law kernels; `_generic_law`
     is light: it loads scipy only when it runs): ``(general_law, _law_batch)`` for the
     general-law solver, else ``(_generic_law, _generic_law)``."""
+    got = _SOLVERS.get(kind)
+    if got is not None:  # the import statements below cost ~0.5 us a call
+        return got
     if kind == "general":
         import reference_impl.exact._law_batch as law_batch
         import reference_impl.exact.general_law as general_law
 
-        return general_law, law_batch
-    return _generic_law, _generic_law
+        got = general_law, law_batch
+    else:
+        got = _generic_law, _generic_law
+    _SOLVERS[kind] = got
+    return got
+
+
+_SOLVERS: dict = {}
 
 
 def _no_rtol_for_generic(r: Route, rtol) -> None:

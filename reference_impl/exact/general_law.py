@@ -25,13 +25,17 @@ ill-conditioned in the state (issue 29).
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass
 from fractions import Fraction
+from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 
 from reference_impl.errors import HCVInputError, UnsupportedError
+from reference_impl.exact._general_contact import creeps_for_ever as _creeps_for_ever
+from reference_impl.exact._general_contact import law_arrays as _law_arrays
 from reference_impl.exact._general_kernel import (
     MAX_STEPS,
     OUT_FIELDS,
@@ -174,8 +178,25 @@ class LawImpactSolution:
         return asdict(self)
 
 
+# (ks, ps) or None per potential object (immutable after construction): a one-shot call
+# with a new law each time still finds its potential's terms (1.6 us of ~60, issue 38).
+_TERMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _power_terms(pot: Potential):
-    """(ks, ps) when U' is a sum of power laws, else None."""
+    """(ks, ps) when U' is a sum of power laws, else None (kept per potential object;
+    computed each call for one that is not weak-referenceable)."""
+    try:
+        return _TERMS[pot]
+    except KeyError:
+        pass
+    except TypeError:
+        return _new_power_terms(pot)
+    got = _TERMS[pot] = _new_power_terms(pot)
+    return got
+
+
+def _new_power_terms(pot: Potential):
     terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
     if all(type(t) is PowerLaw for t in terms):
         return (
@@ -268,57 +289,6 @@ def _linear_solution(v0: float, m: float, k: float, z2: Fraction, law: DampingLa
     )
 
 
-def _creeps_for_ever(law: DampingLaw, m: float, pot: Potential):
-    """Whether a return along the slow manifold near q = 0 never reaches it, and why.
-
-    With U ~ c q^n and C ~ c_a q^a at contact (a the smallest exponent among the law's
-    terms), the slow manifold is q' = -U'/C ~ q^(n-1-a). Inertia m q'' ~ q^(2n-3-2a) stays
-    negligible against U' ~ q^(n-1) as q -> 0 only for a <= (n-2)/2; then the time to q = 0,
-    int C/U' dq, diverges (a <= n - 2): the body never returns. For a > (n-2)/2 (every law
-    with n < 2, C(0) = 0 on Hooke's spring, the viscoelastic law for n > 2) inertia takes
-    over near q = 0 and the body returns, however late (viscoelastic A = 30 s on Hertz with
-    k = m = v0 = 1: e = 2.8e-8 after 499.7 s). At a = (n-2)/2 the tail is the universal
-    law's, a virtual oscillator with zeta0 = c_a / (2 sqrt(m) n sqrt(c/2)): no return iff
-    zeta0 >= 1.
-
-    Returns
-    -------
-    (bool or None, str)
-        True (never returns), False (returns), None (c unknown at a = (n-2)/2), and a
-        phrase naming the tail for a refusal.
-    """
-    n = float(pot.leading_exponent)
-    c = pot.leading_coefficient
-    leads: dict = {}
-
-    def add(e, coef):
-        key = round(float(e), 9)
-        leads[key] = leads.get(key, 0.0) + coef
-
-    cc = math.nan if c is None else float(c)
-    for cj, e in law.terms():
-        if cj > 0:
-            add(e, cj)
-    if law.alpha:
-        add(n - 1.0, law.alpha * n * cc)
-    if law.A:
-        add(n - 2.0, law.A * n * (n - 1.0) * cc)
-    if law.zeta:
-        add(n / 2.0 - 1.0, 2.0 * law.zeta * math.sqrt(m) * n * math.sqrt(cc / 2.0))
-    if not leads:
-        return False, "undamped at contact"
-    a = min(leads)
-    edge = (n - 2.0) / 2.0
-    if a < edge - 1e-9:
-        return True, f"C ~ q^{a:g} at contact, U ~ q^{n:g}"
-    if a > edge + 1e-9:
-        return False, f"C ~ q^{a:g} at contact, U ~ q^{n:g}: inertia takes over near q = 0"
-    z0 = leads[a] / (2.0 * math.sqrt(m) * n * math.sqrt(cc / 2.0))
-    if not math.isfinite(z0):
-        return None, "tail of unknown damping ratio"
-    return z0 >= 1.0, f"underdamped at contact, damping ratio {z0:.6g}"
-
-
 def _refuse_lost_return(pot: Potential, law: DampingLaw, m: float, v0: float) -> None:
     """Refuse a no-return that stopped on the overlap (_NO_RETURN_Q) where the body returns.
 
@@ -333,40 +303,6 @@ def _refuse_lost_return(pot: Potential, law: DampingLaw, m: float, v0: float) ->
         f"solve_law_impact: the body returns (law {law.to_dict()}: {why}) but its overlap "
         f"falls below 1e-10 of q_max first, out of the integrator's reach (v0 = {v0!r} m/s)"
     )
-
-
-def _law_arrays(law: DampingLaw, m: float, pot: Potential):
-    terms = law.terms()
-    cs = np.array([c for c, _ in terms], float)
-    es = np.array([e for _, e in terms], float)
-    zf = 2.0 * law.zeta * math.sqrt(m)
-    n = float(pot.leading_exponent)
-    # Leading exponent a of C ~ q^a at contact.
-    leads = [e for c, e in terms if c > 0]
-    if law.alpha:
-        leads.append(n - 1.0)
-    if law.A:
-        leads.append(n - 2.0)
-    if law.zeta:
-        leads.append(n / 2.0 - 1.0)
-    # The creep test of _general_kernel may stop a return only where the creep never ends
-    # (`_creeps_for_ever`; where c is unknown, a <= n - 2: int C / U' dq diverges).
-    never, _ = _creeps_for_ever(law, m, pot)
-    if never is None:
-        never = bool(leads) and min(leads) <= n - 2.0 + 1e-12
-    creeps = 1.0 if never else 0.0
-    # C q' outweighs U' as q -> 0 (a < n - 1): the force pulls just before q = 0.
-    pulls = 1.0 if leads and min(leads) < n - 1.0 - 1e-12 else 0.0
-    # The law says the force never vanishes before q = 0 (Hunt-Crossley: F = U' (1 + alpha
-    # q'), _general_kernel): no zero-force event is searched.
-    nopull = 1.0 if law.decomposition().never_pulls else 0.0
-    sc = np.array([m, law.alpha, law.A, zf, creeps, pulls, nopull], float)
-    if law.A and n < 2.0:
-        raise HCVInputError(
-            f"damping law {law.name!r} needs U'' finite at contact (leading exponent n >= 2, "
-            f"force exponent p >= 1); got n = {n:.6g}, where C = A U'' is infinite at q = 0"
-        )
-    return cs, es, sc
 
 
 def solve_law_impact(
@@ -453,17 +389,62 @@ def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     m = positive("m", m, "solve_law_impact")
     rtol = checked_rtol(rtol, "solve_law_impact")
     _check_exponent(potential)
-    cs, es, sc = _law_arrays(law, m, potential)
-    if rtol is not None:
-        # The Taylor kernel's truncation per step for rtol, and its step fraction theta,
-        # after the scalars it reads (`_general_taylor.SC_TOL`); without them it runs at
-        # full accuracy, bit for bit.
-        tol = taylor_tol(rtol, TAYLOR_TOL)
-        sc = np.append(sc, [tol, theta_for(tol)])
+    # For an rtol, the Taylor kernel's truncation per step and its step fraction theta go
+    # after the scalars it reads (`_general_taylor.SC_TOL`); without them it runs at full
+    # accuracy, bit for bit.
+    cs, es, sc = _law_arrays(law, m, potential, () if rtol is None else _taylor_scalars(rtol))
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
     tab = table_arrays(potential) if lin is None and pk is None else None
     return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab)
+
+
+@lru_cache(maxsize=64)
+def _taylor_scalars(rtol: float) -> tuple[float, float]:
+    """(truncation per step, step fraction theta) of the Taylor kernel for ``rtol`` (a
+    checked float): the same numbers each call, kept (theta's fixed point is ~1.6 us)."""
+    tol = taylor_tol(rtol, TAYLOR_TOL)
+    return tol, theta_for(tol)
+
+
+# Where `_general_kernel.OUT_FIELDS` puts each output: the kernel's array is read as a
+# list by index (a dict of it per call was ~1 us of a ~25 us prepared call).
+(
+    _T_PEAK,
+    _Q_MAX,
+    _MAX_FORCE,
+    _PEAK_FORCE,
+    _T_ZF,
+    _W_ZF,
+    _T_END,
+    _W_END,
+    _RETURNS,
+    _ERR_T,
+    _ERR_W,
+    _N_STEPS,
+    _STATUS,
+    _STOP,
+    _ERR_ZF,
+) = (
+    OUT_FIELDS.index(f)
+    for f in (
+        "t_peak",
+        "q_max",
+        "max_force",
+        "peak_force",
+        "t_zf",
+        "w_zf",
+        "t_end",
+        "w_end",
+        "returns",
+        "err_t",
+        "err_w",
+        "n_steps",
+        "status",
+        "stop",
+        "err_zf",
+    )
+)
 
 
 def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
@@ -482,36 +463,37 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
         out = _gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc)
     else:
         out = _python_solver()(v0, qE, potential, None, cs, es, sc)
-    r = dict(zip(OUT_FIELDS, out.tolist(), strict=False))
-    if r["status"] != 0.0 or not math.isfinite(r["q_max"]):
+    r = out.tolist()
+    if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):
         raise UnsupportedError(
             f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "
             f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
         )
-    returns = r["returns"] == 1.0
-    if not returns and r["stop"] == STOP_NO_RETURN_Q:
+    returns = r[_RETURNS] == 1.0
+    if not returns and r[_STOP] == STOP_NO_RETURN_Q:
         _refuse_lost_return(potential, law, m, v0)
-    nst = int(r["n_steps"])
+    nst = int(r[_N_STEPS])
     t_scale = qE / v0
-    t_end = r["t_end"] if returns else math.inf
-    err_t = ERROR_SAFETY * r["err_t"] * t_scale + 100 * nst * _EPS * (
-        t_end if returns else r["t_zf"] if math.isfinite(r["t_zf"]) else t_scale
+    t_end = r[_T_END] if returns else math.inf
+    t_zf = r[_T_ZF]
+    err_t = ERROR_SAFETY * r[_ERR_T] * t_scale + 100 * nst * _EPS * (
+        t_end if returns else t_zf if math.isfinite(t_zf) else t_scale
     )
-    if r["err_zf"] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
-        err_t += ERROR_SAFETY * r["err_zf"]
-    err_w = ERROR_SAFETY * r["err_w"] + 100 * nst * _EPS
+    if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
+        err_t += ERROR_SAFETY * r[_ERR_ZF]
+    err_w = ERROR_SAFETY * r[_ERR_W] + 100 * nst * _EPS
     return LawImpactSolution(
         v0=v0,
         m=m,
         law=dict(plan.table),
-        max_penetration=r["q_max"],
-        max_force=r["max_force"],
-        peak_force=r["peak_force"],
-        time_of_max_penetration=r["t_peak"],
+        max_penetration=r[_Q_MAX],
+        max_force=r[_MAX_FORCE],
+        peak_force=r[_PEAK_FORCE],
+        time_of_max_penetration=r[_T_PEAK],
         contact_time=t_end,
-        restitution=-r["w_end"] / v0 if returns else 0.0,
-        contact_time_zero_force=r["t_zf"],
-        restitution_zero_force=-r["w_zf"] / v0,
+        restitution=-r[_W_END] / v0 if returns else 0.0,
+        contact_time_zero_force=t_zf,
+        restitution_zero_force=-r[_W_ZF] / v0,
         returns_to_q0=returns,
         error_time=err_t,
         error_restitution=err_w,
