@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from reference_impl import PowerLaw, prepare, solve
+from reference_impl import Ellipsoid, PowerLaw, Sphere, prepare, solve
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.scenes import load_scene
 from reference_impl.studies.laws import hertz
@@ -88,10 +88,14 @@ def families() -> list[tuple[str, object, float]]:
 
 def trades(pot, law) -> bool:
     """Whether ``rtol`` trades anything on the path ours takes (`reference_impl.exact._rtol`):
-    a power law's Gauss-Jacobi pairs and the Taylor kernel on sums of powers. Elsewhere
-    (a cap: the fused quadrature; a general law on a cap: the GBS kernel compiled on its
-    term table, ~0.5 ms an impact) ours runs at full accuracy whatever rtol asks, and only that point is timed."""
-    return type(pot) is PowerLaw
+    a power law's Gauss-Jacobi pairs and the Taylor kernel on sums of powers; a single cap
+    under the universal law keeps its fast Gauss-Jacobi pair where its bound is within rtol
+    (`reference_impl.exact._one_call`). Elsewhere (a general law on a cap: the GBS kernel
+    compiled on its term table, ~0.5 ms an impact) ours runs at full accuracy whatever rtol
+    asks, and only that point is timed."""
+    if type(pot) is PowerLaw:
+        return True
+    return law["law"] == "universal" and isinstance(pot, (Sphere, Ellipsoid))
 
 
 def _ours(pot, m, v0, law, rtol, prepared=None):

@@ -84,13 +84,20 @@ def test_panel_records_ours_within_bounds_and_every_peer(monkeypatch, tmp_path):
     )
 
 
-def test_a_cap_is_timed_at_full_accuracy_only():
+def test_rtol_trades_on_power_laws_and_single_caps_under_the_universal_law():
     from reference_impl import Sphere
 
+    cap = Sphere(0.01, 1e8)
+    got = (
+        wp.trades(PowerLaw(1.0, 2.0), wp.LAW),
+        wp.trades(cap, wp.UNIVERSAL),
+        wp.trades(cap, wp.LAW),
+    )
     assert_true(
-        not wp.trades(Sphere(0.01, 1e8), wp.UNIVERSAL) and wp.trades(PowerLaw(1.0, 2.0), wp.LAW),
-        got="trades(sphere) or not trades(power law)",
-        should="rtol trades on power laws only (_rtol)",
+        got == (True, True, False),
+        got=f"trades(power law + law, cap universal, cap + law) = {got}",
+        should="(True, True, False): rtol trades on power laws and on a single cap's Gauss-Jacobi "
+        "pair (_one_call), not on the GBS kernel of a cap with a law",
         claim="bench",
         call="trades",
     )
