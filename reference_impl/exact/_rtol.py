@@ -11,9 +11,13 @@ most ``rtol`` on each reported time, and lets the solver spend less to reach it:
   pair, up to the full-accuracy one;
 * a general law on the Taylor kernel (`_general_taylor`): a longer step, the truncation
   per step ``taylor_tol(rtol)`` instead of `_general_taylor.TOL`; the bound is the same
-  sum of the steps' truncation estimates as at full accuracy.
+  sum of the steps' truncation estimates as at full accuracy;
+* the universal law on a single cap (a sphere or an ellipsoid, `_one_call`): with
+  ``rtol >= 1e-12`` the fused Gauss-Jacobi pair is kept where its reported bound is within
+  ``rtol / 2`` (the other half is left for the conditioning term `solve_impact` adds),
+  instead of falling to the general path where the pair disagrees at 1e-14.
 
-Every other path (the other families, the split and tanh-sinh quadratures, the
+Every other path (sums and the other families, the split and tanh-sinh quadratures, the
 overdamped tail, the linear closed form, the GBS kernel) runs at full accuracy whatever
 ``rtol`` asks: its bound is smaller, and still reported. An ``rtol`` below what full
 accuracy reaches returns the full-accuracy result and its bound (a tolerance is a

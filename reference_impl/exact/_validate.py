@@ -34,7 +34,7 @@ def _check_exponent(pot: Potential) -> float:
 
 _VALIDATED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 # Turning points kept per potential (exact values of earlier energies; a repeated speed
-# skips the numeric inverse, ~0.26 ms for a sphere). Bounded: a sweep of distinct speeds
+# skips the inverse: ~6 us for a cap in closed form, ~1 ms for a sum found numerically). Bounded: a sweep of distinct speeds
 # must not grow it without limit.
 _TOPS_KEPT = 64
 
