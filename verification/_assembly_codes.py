@@ -10,7 +10,8 @@
   one step per call) on the scene's model: what the suite's searches integrate;
 - third-party codes for ``hcv dt-crit SCENE --adapter verification._assembly_codes:NAME``:
   `VerletChainCode` (one advice) and `VerletLatticeCode` (none) built on the references,
-  `CrashingChainCode` (every run fails), `MalformedChainCode` (one body too few);
+  `CrashingChainCode` (every run fails), `MalformedChainCode` (one body too few),
+  `AbortingChainCode` and `SegfaultingChainCode` (isolated; every run kills their process);
 - checks of a real code: `code_fixture` (its adapter, one per test module), `needs` (its
   mark, and its skip where it is not installed), `dt_safe`,
   `assert_run_is_verlet` (positions and velocities against a reference),
@@ -19,7 +20,9 @@
 
 from __future__ import annotations
 
+import ctypes
 import math
+import os
 
 import numpy as np
 import pytest
@@ -51,8 +54,10 @@ __all__ = [
     "K",
     "M",
     "R",
+    "AbortingChainCode",
     "CrashingChainCode",
     "MalformedChainCode",
+    "SegfaultingChainCode",
     "VerletChainCode",
     "VerletLatticeCode",
     "assert_advice_is_the_codes",
@@ -220,6 +225,28 @@ class MalformedChainCode(VerletChainCode):
     def _assembly_impl(self, request):
         x, v, _ = verlet_chain(request)
         return {"x": x[:, :-1], "v": v[:, :-1]}
+
+
+class AbortingChainCode(VerletChainCode):
+    """A chain code in a worker process (``isolate``) whose run aborts it (SIGABRT), as a C
+    library's failed assertion does."""
+
+    name = "aborting-chain"
+    isolate = True
+
+    def _assembly_impl(self, request):
+        os.abort()
+
+
+class SegfaultingChainCode(VerletChainCode):
+    """A chain code in a worker process whose run reads address 0 (SIGSEGV), as a code's
+    C library does with a bad pointer."""
+
+    name = "segfaulting-chain"
+    isolate = True
+
+    def _assembly_impl(self, request):
+        ctypes.string_at(0)
 
 
 class VerletLatticeCode(ContactAdapter):

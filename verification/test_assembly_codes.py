@@ -185,6 +185,25 @@ def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_pa
                 call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
 
 
+@pytest.mark.parametrize(
+    ("cls", "name", "sig"),
+    [("AbortingChainCode", "aborting-chain", "SIGABRT"),
+     ("SegfaultingChainCode", "segfaulting-chain", "SIGSEGV")],
+)  # fmt: skip
+def test_hcv_dt_crit_code_that_kills_its_process_is_one_line_exit_1(cls, name, sig, tmp_path):
+    """A code that asks for isolation runs in a bench worker process, as ``hcv bench`` runs
+    it: its abort or segfault ends the worker, and hcv says so in one line naming the code."""
+    spec = f"verification._assembly_codes:{cls}"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    words = f"{name} failed: crashed (killed by signal"
+    assert_true(r.returncode == 1 and len(lines) == 1 and words in lines[0]
+                and sig in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 1 and one line with {words!r} and {sig}", claim=CLAIM,
+                call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
+
+
 # -- the codes ----------------------------------------------------------------------------
 
 
