@@ -28,7 +28,7 @@ from reference_impl.adapters.base import (
     ChainRun,
     ContactAdapter,
 )
-from reference_impl.bench.assembly_codes import chain_scene, judge_energy
+from reference_impl.bench.assembly_codes import assembly_codes_table, chain_scene, judge_energy
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.stability.criteria import EnergyGrowth
 from verification._assembly_codes import (
@@ -202,6 +202,18 @@ def test_hcv_dt_crit_code_that_kills_its_process_is_one_line_exit_1(cls, name, s
                 got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
                 should=f"exit 1 and one line with {words!r} and {sig}", claim=CLAIM,
                 call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
+
+
+def test_codes_table_gives_a_crashing_code_its_row():
+    """`assembly_codes_table` (the report's codes table) runs an isolated code in a bench
+    worker process too: the code's crash is its row's note, the suite's own numbers stay."""
+    spec = "verification._assembly_codes:SegfaultingChainCode"
+    rows = assembly_codes_table(codes=(spec,), sizes=(2,), horizon=200)
+    words = f"{spec} failed: crashed (killed by signal 11, SIGSEGV)"
+    assert_true(len(rows) == 1 and words in rows[0].note and math.isnan(rows[0].dt_crit)
+                and rows[0].dt_crit_suite > 0,
+                got=repr(rows), should=f"one row noting {words!r}, the suite's dt_crit",
+                claim=CLAIM, call=f"assembly_codes_table(codes=({spec!r},))")  # fmt: skip
 
 
 # -- the codes ----------------------------------------------------------------------------
