@@ -28,30 +28,26 @@ from reference_impl.adapters.base import (
     ChainRun,
     ContactAdapter,
 )
-from reference_impl.adapters.lammps import lammps_available
-from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
-from reference_impl.adapters.liggghts import liggghts_available
-from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
-from reference_impl.adapters.yade import yade_available
-from reference_impl.assembly.lanes import initial_energy
-from reference_impl.assembly.model import assembly_model
-from reference_impl.assembly.safe import dt_safe_conventions
-from reference_impl.assembly.search import search_ensemble
-from reference_impl.bench.assembly_codes import (
-    CODE_GRID,
-    chain_scene,
-    code_dt_crit,
-    judge_energy,
-)
+from reference_impl.bench.assembly_codes import assembly_codes_table, chain_scene, judge_energy
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.stability.criteria import EnergyGrowth
-from verification._chain_codes import verlet_chain
+from verification._assembly_codes import (
+    CLAIM,
+    K,
+    M,
+    R,
+    assert_advice_is_the_codes,
+    assert_dt_crit_in_suite_ensemble,
+    assert_run_is_verlet,
+    code_fixture,
+    dt_safe,
+    needs,
+    verlet_chain,
+)
 from verification._hcv_run import hcv
 
 from .assertions import assert_close, assert_true
 
-CLAIM = "assembly-codes"  # the codes on chain scenes (issue 39 section 4), not a paper claim
-K, M, R = 1.0879e10, 4.1103e-3, 5e-3  # chain-hertz: N/m^1.5, kg, m
 # Short runs of the position check: 300 steps at 0.05 Delta t_safe cover the striker's
 # contact, the pulse through the chain and the right wall's contact.
 STEPS, DT_FRACTION = 300, 0.05
@@ -59,6 +55,9 @@ STEPS, DT_FRACTION = 300, 0.05
 # and round-off grows over 300 steps to ~1e-15 m; a wrong k on the walls (Hertz on a wall
 # of the spheres' material is sqrt(2) stiffer) moves them by ~1e-6 m.
 X_TOL = 1e-12
+# Velocities agree to 1e-9 m/s of speeds ~1 m/s: 15 printed digits and the round-off of 300
+# steps.
+V_TOL = 1e-9
 
 
 def _request(n: int, dt: float, steps: int, walls: str = "both") -> ChainRequest:
@@ -67,8 +66,7 @@ def _request(n: int, dt: float, steps: int, walls: str = "both") -> ChainRequest
 
 
 def _dt_safe(n: int) -> float:
-    model = assembly_model(chain_scene(n))
-    return dt_safe_conventions(model, initial_energy(model))["paper"]
+    return dt_safe(chain_scene(n))
 
 
 # -- the contract, without a code ---------------------------------------------------------
@@ -150,7 +148,7 @@ def test_hcv_dt_crit_adapter_refusals_are_one_line_exit_2(args, words, tmp_path)
 
 
 def test_hcv_dt_crit_runs_a_third_party_chain_code(tmp_path):
-    spec = "verification._chain_codes:VerletChainCode"
+    spec = "verification._assembly_codes:VerletChainCode"
     r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--json", "--horizons", "500"],
             cwd=tmp_path)  # fmt: skip
     assert_true(
@@ -178,7 +176,7 @@ def test_hcv_dt_crit_runs_a_third_party_chain_code(tmp_path):
      ("MalformedChainCode", "shape (samples, 10)")],
 )  # fmt: skip
 def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_path):
-    spec = f"verification._chain_codes:{cls}"
+    spec = f"verification._assembly_codes:{cls}"
     r = hcv(["dt-crit", "chain-hertz", "--adapter", spec], cwd=tmp_path)
     lines = r.stderr.strip().splitlines()
     assert_true(r.returncode == 1 and len(lines) == 1 and words in lines[0] and not r.stdout,
@@ -187,104 +185,83 @@ def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_pa
                 call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
 
 
+@pytest.mark.parametrize(
+    ("cls", "name", "sig"),
+    [("AbortingChainCode", "aborting-chain", "SIGABRT"),
+     ("SegfaultingChainCode", "segfaulting-chain", "SIGSEGV")],
+)  # fmt: skip
+def test_hcv_dt_crit_code_that_kills_its_process_is_one_line_exit_1(cls, name, sig, tmp_path):
+    """A code that asks for isolation runs in a bench worker process, as ``hcv bench`` runs
+    it: its abort or segfault ends the worker, and hcv says so in one line naming the code."""
+    spec = f"verification._assembly_codes:{cls}"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    words = f"{name} failed: crashed (killed by signal"
+    assert_true(r.returncode == 1 and len(lines) == 1 and words in lines[0]
+                and sig in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 1 and one line with {words!r} and {sig}", claim=CLAIM,
+                call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
+
+
+def test_codes_table_gives_a_crashing_code_its_row():
+    """`assembly_codes_table` (the report's codes table) runs an isolated code in a bench
+    worker process too: the code's crash is its row's note, the suite's own numbers stay."""
+    spec = "verification._assembly_codes:SegfaultingChainCode"
+    rows = assembly_codes_table(codes=(spec,), sizes=(2,), horizon=200)
+    words = f"{spec} failed: crashed (killed by signal 11, SIGSEGV)"
+    assert_true(len(rows) == 1 and words in rows[0].note and math.isnan(rows[0].dt_crit)
+                and rows[0].dt_crit_suite > 0,
+                got=repr(rows), should=f"one row noting {words!r}, the suite's dt_crit",
+                claim=CLAIM, call=f"assembly_codes_table(codes=({spec!r},))")  # fmt: skip
+
+
 # -- the codes ----------------------------------------------------------------------------
 
 
 def _positions_match(adapter, half_step_v: bool):
     for n, walls in ((2, "both"), (3, "one")):
         req = _request(n, DT_FRACTION * _dt_safe(2), STEPS, walls)
-        run = adapter.assembly(req)
-        x, v, h = verlet_chain(req)
-        err = float(np.max(np.abs(run.x - x)))
-        assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m",
-                    should=f"<= {X_TOL:g} m", claim=CLAIM,
-                    call=f"{adapter.label} chain n={n} walls={walls}")  # fmt: skip
-        want = h if half_step_v else v
-        # 1e-9 m/s of speeds ~1 m/s: 15 printed digits and the round-off of 300 steps
-        assert_close(run.v[1:], want[1:], rtol=0, atol=1e-9, claim=CLAIM,
-                     call=f"{adapter.label} chain n={n} walls={walls} velocities")  # fmt: skip
+        assert_run_is_verlet(adapter, req, verlet_chain, half_step_v=half_step_v, x_tol=X_TOL,
+                             v_tol=V_TOL, what=f"chain n={n} walls={walls}")  # fmt: skip
 
 
 def _dt_crit_in_suite_ensemble(adapter):
-    sc = chain_scene(2)
-    safe = _dt_safe(2)
-    crit = EnergyGrowth(n_steps=2000)
-    found = code_dt_crit(adapter, sc, safe, criterion=crit)
-    ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
-    # Contacts open and close: the run is chaotic, round-off of the code (or of the last bits
-    # of the start) moves the smallest failing step within the ensemble's spread (0.50-0.52
-    # Delta t_safe at N = 2); two grid resolutions (0.02 Delta t_safe) more on either side
-    # for the k-section's bracket of each.
-    slack = 2 * CODE_GRID.resolution * safe
-    lo, hi = float(ens.dt_crit.min()) - slack, float(ens.dt_crit.max()) + slack
-    assert_true(lo <= found.dt_crit <= hi and found.evidence in ("confirmed", "domain"),
-                got=f"dt_crit {found.dt_crit:.6g} s ({found.evidence})",
-                should=f"in [{lo:.6g}, {hi:.6g}] s, the suite's ensemble", claim=CLAIM,
-                call=f"code_dt_crit {adapter.label} chain-hertz n=2")  # fmt: skip
+    assert_dt_crit_in_suite_ensemble(adapter, chain_scene(2), horizon=2000)
 
 
-@pytest.fixture(scope="module")
-def liggghts():
-    from reference_impl.adapters.liggghts import LiggghtsAdapter
-
-    a = LiggghtsAdapter(model="hertz")
-    yield a
-    a.close()
+liggghts = code_fixture("liggghts")
+lammps = code_fixture("lammps")
+yade = code_fixture("yade")
 
 
-@pytest.fixture(scope="module")
-def lammps():
-    from reference_impl.adapters.lammps import LammpsAdapter
-
-    a = LammpsAdapter()
-    yield a
-    a.close()
-
-
-@pytest.fixture(scope="module")
-def yade():
-    from reference_impl.adapters.yade import YadeAdapter
-
-    a = YadeAdapter(input="en")
-    yield a
-    a.close()
-
-
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_chain_is_velocity_verlet_of_the_scene(liggghts):
     _positions_match(liggghts, half_step_v=False)
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_chain_is_leapfrog_of_the_scene(yade):
     # leapfrog: the positions of velocity Verlet, the velocity of the half step
     _positions_match(yade, half_step_v=True)
 
 
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_dt_crit_lies_in_the_suites_ensemble(liggghts):
     _dt_crit_in_suite_ensemble(liggghts)
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_dt_crit_lies_in_the_suites_ensemble(yade):
     _dt_crit_in_suite_ensemble(yade)
 
 
-@pytest.mark.lammps
-@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+@needs("lammps")
 def test_lammps_chain_is_velocity_verlet_of_the_scene(lammps):
     _positions_match(lammps, half_step_v=False)
 
 
-@pytest.mark.lammps
-@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+@needs("lammps")
 def test_lammps_dt_crit_lies_in_the_suites_ensemble_and_it_gives_no_advice(lammps):
     _dt_crit_in_suite_ensemble(lammps)
     advice = lammps.step_advice(_request(2, 1e-8, 10))
@@ -292,37 +269,23 @@ def test_lammps_dt_crit_lies_in_the_suites_ensemble_and_it_gives_no_advice(lammp
                 claim=CLAIM, call="LammpsAdapter.step_advice")  # fmt: skip
 
 
-def _advice_is_the_codes_whatever_the_step(adapter, names):
+def _advice_is_the_codes_whatever_the_step(adapter, names, material):
     """The advice is a property of the chain, not of the step it is asked at: LIGGGHTS'
     times are dt over the fractions it prints, YADE's PWaveTimeStep reads the material."""
-    safe = _dt_safe(2)
-    a1 = adapter.step_advice(_request(2, 1e-3 * safe, 200))
-    a2 = adapter.step_advice(_request(2, 2e-3 * safe, 200))
-    assert_true(set(a1) == set(names), got=repr(sorted(a1)), should=repr(sorted(names)),
-                claim=CLAIM, call=f"{adapter.label}.step_advice")  # fmt: skip
-    for name in names:
-        assert_true(0 < a1[name] < math.inf, got=f"{name} = {a1[name]!r} s",
-                    should="a finite step > 0 s", claim=CLAIM,
-                    call=f"{adapter.label}.step_advice")  # fmt: skip
-    # 1e-6: the fractions are printed to 15 digits; LIGGGHTS' Hertz time reads the speeds
-    # after its one step, which differ by ~dt k q / m (1e-3 of the start's) between the two
-    # steps: the Rayleigh and P-wave times, which read no speed, are compared
-    for name in set(names) - {"hertz", "GlobalStiffnessTimeStepper"}:
-        assert_close(a2[name], a1[name], rtol=1e-6, claim=CLAIM,
-                     call=f"{adapter.label}.step_advice {name} at two steps")  # fmt: skip
+    assert_advice_is_the_codes(adapter, lambda dt: _request(2, dt, 200), _dt_safe(2), names,
+                               material, what="chain")  # fmt: skip
 
 
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_advice_is_its_rayleigh_and_hertz_times(liggghts):
-    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"))
+    _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"), "rayleigh")
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_advice_is_pwave_and_global_stiffness(yade):
-    _advice_is_the_codes_whatever_the_step(yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"))
+    _advice_is_the_codes_whatever_the_step(
+        yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"), "PWaveTimeStep"
+    )
 
 
 def test_docs_block_is_the_generators_table():

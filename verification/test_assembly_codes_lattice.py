@@ -20,34 +20,35 @@ import pytest
 
 from reference_impl.adapters._lattice_request import lattice_energy, lattice_run_from_mapping
 from reference_impl.adapters.base import AdapterOutputError, LatticeRequest, LatticeRun
-from reference_impl.adapters.lammps import lammps_available
-from reference_impl.adapters.liggghts import INSTALL as LIGGGHTS_INSTALL
-from reference_impl.adapters.liggghts import liggghts_available
-from reference_impl.adapters.yade import INSTALL as YADE_INSTALL
-from reference_impl.adapters.yade import yade_available
-from reference_impl.assembly.lanes import initial_energy
 from reference_impl.assembly.model import assembly_model
-from reference_impl.assembly.safe import dt_safe_conventions
-from reference_impl.assembly.search import search_ensemble
 from reference_impl.bench.assembly_codes import (
     CODE_GRID,
     LATTICE_SIZES,
     assembly_codes_table,
-    code_dt_crit,
     lattice_request,
     lattice_scene,
 )
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.scenes import scene_from_dict, scene_toml
-from reference_impl.stability.criteria import EnergyGrowth
+from verification._assembly_codes import (
+    CLAIM,
+    K,
+    M,
+    R,
+    assert_advice_is_the_codes,
+    assert_dt_crit_in_suite_ensemble,
+    assert_run_is_verlet,
+    code_fixture,
+    dt_safe,
+    kernel_lattice,
+    needs,
+    verlet_lattice,
+)
 from verification._hcv_run import hcv
-from verification._lattice_codes import kernel_lattice, verlet_lattice
 
 from .assertions import assert_close, assert_true
 
-CLAIM = "assembly-codes"  # the codes on lattice scenes (issue 39 section 4), not a paper claim
-K, M, R = 1.0879e10, 4.1103e-3, 5e-3  # the lattice-hertz scenes: N/m^1.5, kg, m
 # 300 steps at 0.05 Delta t_safe: the striker's contacts and the pulse into its neighbours.
 STEPS, DT_FRACTION = 300, 0.05
 # Positions agree with the independent Verlet to 1e-12 m: 15 printed digits (x ~ 1e-2 m:
@@ -74,11 +75,6 @@ def _scene(lattice: str, cells: int, speed: float | None = None):
     d.pop("source", None)
     d["velocities"] = float(speed)
     return scene_from_dict(d)
-
-
-def _dt_safe(sc) -> float:
-    model = assembly_model(sc)
-    return dt_safe_conventions(model, initial_energy(model))["paper"]
 
 
 def _square_toml(tmp_path):
@@ -167,7 +163,7 @@ def test_hcv_dt_crit_runs_a_third_party_lattice_code(tmp_path):
     """``hcv dt-crit LATTICE --adapter CODE``: the code's Delta t_crit by the suite's search,
     beside the suite's own (same scene, horizon, rule and grid)."""
     path = _square_toml(tmp_path)
-    spec = "verification._lattice_codes:VerletLatticeCode"
+    spec = "verification._assembly_codes:VerletLatticeCode"
     r = hcv(["dt-crit", str(path), "--adapter", spec, "--json", "--horizons", "500"],
             cwd=tmp_path)  # fmt: skip
     assert_true(r.returncode == 0, got=f"exit {r.returncode}: {r.stderr[-300:]!r}",
@@ -205,7 +201,7 @@ def test_chain_code_is_never_handed_a_lattice(tmp_path):
     """A code that sets supports_assembly but not supports_lattice (a chain code written
     before lattices) declines a lattice in one line, exit status 2, nothing run."""
     path = _square_toml(tmp_path)
-    spec = "verification._chain_codes:VerletChainCode"
+    spec = "verification._assembly_codes:VerletChainCode"
     r = hcv(["dt-crit", str(path), "--adapter", spec], cwd=tmp_path)
     lines = r.stderr.strip().splitlines()
     words = "verlet-chain does not run lattice scenes"
@@ -221,18 +217,12 @@ def test_chain_code_is_never_handed_a_lattice(tmp_path):
 def _positions_match(adapter, half_step_v: bool = False):
     for lattice, cells in LATTICE_SIZES:
         sc = _scene(lattice, cells)
-        req = lattice_request(sc, DT_FRACTION * _dt_safe(sc), STEPS)
-        run = adapter.assembly(req)
-        x, v, h = verlet_lattice(req)
-        err = float(np.max(np.abs(run.x - x)))
-        assert_true(err <= X_TOL, got=f"max |x - x_verlet| = {err:.3g} m", should=f"<= {X_TOL:g} m",
-                    claim=CLAIM, call=f"{adapter.label} {sc.name}")  # fmt: skip
-        want = h if half_step_v else v  # leapfrog: the velocity of the half step
-        assert_close(run.v[1:], want[1:], rtol=0, atol=V_TOL, claim=CLAIM,
-                     call=f"{adapter.label} {sc.name} velocities")  # fmt: skip
+        req = lattice_request(sc, DT_FRACTION * dt_safe(sc), STEPS)
+        assert_run_is_verlet(adapter, req, verlet_lattice, half_step_v=half_step_v, x_tol=X_TOL,
+                             v_tol=V_TOL, what=sc.name)  # fmt: skip
         # the scene the suite searches: its kernel, to the fixed-normal approximation
         slow = _scene(lattice, cells, SLOW_STRIKER)
-        req = lattice_request(slow, DT_FRACTION * _dt_safe(slow), STEPS)
+        req = lattice_request(slow, DT_FRACTION * dt_safe(slow), STEPS)
         run = adapter.assembly(req)
         xk = kernel_lattice(assembly_model(slow), req)
         u = float(np.max(np.abs(xk - xk[0])))
@@ -244,115 +234,61 @@ def _positions_match(adapter, half_step_v: bool = False):
 
 
 def _dt_crit_in_suite_ensemble(adapter):
-    sc = _scene("square", 4)
-    safe = _dt_safe(sc)
     # 500 steps: ~28 code runs within seconds; the suite's ensemble has the same horizon
-    crit = EnergyGrowth(n_steps=500)
-    found = code_dt_crit(adapter, sc, safe, criterion=crit)
-    ens = search_ensemble(assembly_model(sc), safe, n_lanes=16, criterion=crit, grid=CODE_GRID)
-    # Contacts open and close: round-off (or the kernel's fixed normals) moves the smallest
-    # failing step within the ensemble's spread; two grid resolutions (0.02 Delta t_safe)
-    # more on either side for the k-section's bracket of each, as for a chain.
-    slack = 2 * CODE_GRID.resolution * safe
-    lo, hi = float(ens.dt_crit.min()) - slack, float(ens.dt_crit.max()) + slack
-    assert_true(lo <= found.dt_crit <= hi and found.evidence in ("confirmed", "domain"),
-                got=f"dt_crit {found.dt_crit:.6g} s ({found.evidence})",
-                should=f"in [{lo:.6g}, {hi:.6g}] s, the suite's ensemble", claim=CLAIM,
-                call=f"code_dt_crit {adapter.label} {sc.name}")  # fmt: skip
+    assert_dt_crit_in_suite_ensemble(adapter, _scene("square", 4), horizon=500)
 
 
-@pytest.fixture(scope="module")
-def liggghts():
-    from reference_impl.adapters.liggghts import LiggghtsAdapter
-
-    a = LiggghtsAdapter(model="hertz")
-    yield a
-    a.close()
+liggghts = code_fixture("liggghts")
+yade = code_fixture("yade")
+lammps = code_fixture("lammps")
 
 
-@pytest.fixture(scope="module")
-def yade():
-    from reference_impl.adapters.yade import YadeAdapter
-
-    a = YadeAdapter(input="en")
-    yield a
-    a.close()
-
-
-@pytest.fixture(scope="module")
-def lammps():
-    from reference_impl.adapters.lammps import LammpsAdapter
-
-    a = LammpsAdapter()
-    yield a
-    a.close()
-
-
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_lattice_is_velocity_verlet_of_the_scene(liggghts):
     _positions_match(liggghts)
 
 
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_lattice_dt_crit_lies_in_the_suites_ensemble(liggghts):
     _dt_crit_in_suite_ensemble(liggghts)
 
 
 def _advice_is_the_codes_whatever_the_step(adapter, names, material):
     """The advice on the simple-cubic lattice: every name the code gives, a finite step,
-    and the ones that read only the material (``material``) the same at two steps."""
+    and the one that reads only the material (``material``) the same at two steps."""
     sc = _scene("simple-cubic", 3)
-    safe = _dt_safe(sc)
-    a1 = adapter.step_advice(lattice_request(sc, 1e-3 * safe, 200))
-    a2 = adapter.step_advice(lattice_request(sc, 2e-3 * safe, 200))
-    assert_true(set(a1) == set(names) and all(0 < t < np.inf for t in a1.values()),
-                got=repr(a1), should=f"finite steps named {sorted(names)}", claim=CLAIM,
-                call=f"{adapter.label}.step_advice lattice")  # fmt: skip
-    # 1e-6: 15 printed digits; the Rayleigh and P-wave times read the material, not the
-    # step (the Hertz time and the stepper read the speeds and contacts of the run)
-    assert_close(a2[material], a1[material], rtol=1e-6, claim=CLAIM,
-                 call=f"{adapter.label}.step_advice lattice {material} at two steps")  # fmt: skip
+    assert_advice_is_the_codes(adapter, lambda dt: lattice_request(sc, dt, 200), dt_safe(sc),
+                               names, material, what="lattice")  # fmt: skip
 
 
-@pytest.mark.liggghts
-@pytest.mark.skipif(liggghts_available() is not None,
-                    reason=f"LIGGGHTS not installed ({LIGGGHTS_INSTALL})")  # fmt: skip
+@needs("liggghts")
 def test_liggghts_lattice_advice_is_its_rayleigh_and_hertz_times(liggghts):
     _advice_is_the_codes_whatever_the_step(liggghts, ("rayleigh", "hertz"), "rayleigh")
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_lattice_is_leapfrog_of_the_scene(yade):
     # leapfrog: the positions of velocity Verlet, the velocity of the half step
     _positions_match(yade, half_step_v=True)
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_lattice_dt_crit_lies_in_the_suites_ensemble(yade):
     _dt_crit_in_suite_ensemble(yade)
 
 
-@pytest.mark.yade
-@pytest.mark.skipif(yade_available() is not None, reason=f"YADE not installed ({YADE_INSTALL})")
+@needs("yade")
 def test_yade_lattice_advice_is_pwave_and_global_stiffness(yade):
     _advice_is_the_codes_whatever_the_step(
         yade, ("PWaveTimeStep", "GlobalStiffnessTimeStepper"), "PWaveTimeStep"
     )
 
 
-@pytest.mark.lammps
-@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+@needs("lammps")
 def test_lammps_lattice_is_velocity_verlet_of_the_scene(lammps):
     _positions_match(lammps)
 
 
-@pytest.mark.lammps
-@pytest.mark.skipif(lammps_available() is not None, reason=str(lammps_available()))
+@needs("lammps")
 def test_lammps_lattice_dt_crit_lies_in_the_suites_ensemble(lammps):
     _dt_crit_in_suite_ensemble(lammps)

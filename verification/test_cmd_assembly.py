@@ -5,7 +5,7 @@ Verlet of chains and periodic lattices, nothing of the suite), in one-shot and p
 mode. Its Delta t_crit by ``hcv dt-crit SCENE --adapter 'cmd[assembly=...]:...'`` is the
 suite's kernel's on a chain (the same step, bit for bit of the search's grid) and lies in
 the suite's ensemble on a lattice (the kernel holds each contact's normal fixed); its
-positions are those of the independent Verlets of `_chain_codes` / `_lattice_codes` in
+positions are those of the independent Verlets of `_assembly_codes` in
 both modes (the request carried the scene whole); its advice is judged as a built-in
 code's. Hostile answers (wrong shapes, null or text where a number is, too few steps, a
 step not dt, a decline on two lines, a crash, a hang, no id, answers written twice) and
@@ -41,9 +41,8 @@ from reference_impl.errors import HCVInputError
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.scenes import scene_toml
 from reference_impl.stability.criteria import EnergyGrowth
-from verification._chain_codes import verlet_chain
+from verification._assembly_codes import verlet_chain, verlet_lattice
 from verification._hcv_run import hcv, processes_with
-from verification._lattice_codes import verlet_lattice
 
 from .assertions import assert_close, assert_true
 

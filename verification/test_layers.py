@@ -410,10 +410,17 @@ def test_the_run_writes_its_json_without_importing_the_renderer():
 
 
 # The rooms of bench/ (issue 37 item 4), bottom to top: the ground every study stands on,
-# the scorecard and calibration side by side (neither imports the other), the codes study
-# (which calibrates). bench/__init__.py, the face, re-exports and stands above them all.
+# the scorecard, calibration and the assembly codes' worker (`_code_worker`, issue 39)
+# side by side (none imports another), the codes studies (`codes`, which calibrates;
+# `assembly_codes`, whose codes run in that worker). bench/__init__.py, the face,
+# re-exports and stands above them all.
 BENCH_ROOMS: tuple[frozenset[str], ...] = tuple(
-    frozenset(x) for x in ({"measure", "worker"}, {"scorecard", "calibration"}, {"codes"})
+    frozenset(x)
+    for x in (
+        {"measure", "worker"},
+        {"scorecard", "calibration", "_code_worker"},
+        {"codes", "assembly_codes"},
+    )
 )
 
 

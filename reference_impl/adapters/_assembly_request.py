@@ -142,6 +142,64 @@ class ChainRun:
     meta: dict = field(default_factory=dict)
 
 
+def _checked_states(out, run_type: type, kind: str, sample: tuple, n_steps: int, who: str):
+    """The x, v arrays and meta of what a code returned for an assembly request, checked.
+
+    One check for both assembly runs (`ChainRun`, and `LatticeRun` of
+    `reference_impl.adapters._lattice_request`), so that a chain and a lattice refuse a
+    malformed return with the same words.
+
+    Parameters
+    ----------
+    out : object
+        What the code returned: an instance of ``run_type``, or a mapping with ``x``, ``v``
+        and optionally ``meta``.
+    run_type : type
+        The run class the contract names (`ChainRun` or `LatticeRun`).
+    kind : str
+        ``"chain"`` or ``"lattice"``, for the message.
+    sample : tuple of int
+        The shape of one sample: ``(N,)`` for a chain (x along the axis, m), ``(N, 3)`` for
+        a lattice (m).
+    n_steps : int
+        Steps of the request: at most n_steps + 1 samples, at least 2 (the start and one step).
+    who : str
+        The code's label, first in every message.
+
+    Returns
+    -------
+    x, v : numpy.ndarray
+        Positions (m) and velocities (m/s) as floats, shape (samples, *sample).
+    meta : dict
+        A copy of the code's meta (empty when it gave none).
+
+    Raises
+    ------
+    AdapterOutputError
+        One line: a missing key, a wrong shape, more samples than steps + 1.
+    """
+    if isinstance(out, run_type):
+        x, v, meta = out.x, out.v, out.meta
+    elif isinstance(out, dict) and "x" in out and "v" in out:
+        x, v, meta = out["x"], out["v"], out.get("meta", {})
+    else:
+        raise AdapterOutputError(f"{who}: a {kind} run must return a {run_type.__name__} or "
+                                 f"x, v; got {type(out).__name__}")  # fmt: skip
+    try:
+        x = np.asarray(x, dtype=float)
+        v = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise AdapterOutputError(f"{who}: {kind} x and v must be arrays of numbers") from None
+    if x.ndim != 1 + len(sample) or x.shape[1:] != tuple(sample) or v.shape != x.shape:
+        want = ", ".join(["samples", *map(str, sample)])
+        raise AdapterOutputError(f"{who}: {kind} x and v must have shape ({want}), "
+                                 f"got {x.shape} and {v.shape}")  # fmt: skip
+    if not 2 <= x.shape[0] <= n_steps + 1:
+        raise AdapterOutputError(f"{who}: {kind} run of {n_steps} steps returned "
+                                 f"{x.shape[0]} samples (2 to {n_steps + 1})")  # fmt: skip
+    return x, v, dict(meta)
+
+
 def chain_run_from_mapping(out, req: ChainRequest, who: str) -> ChainRun:
     """Check what a code returned for ``req`` (a `ChainRun` or a mapping with x, v, meta).
 
@@ -150,26 +208,8 @@ def chain_run_from_mapping(out, req: ChainRequest, who: str) -> ChainRun:
     AdapterOutputError
         One line: a missing key, a wrong shape, more samples than steps + 1.
     """
-    if isinstance(out, ChainRun):
-        x, v, meta = out.x, out.v, out.meta
-    elif isinstance(out, dict) and "x" in out and "v" in out:
-        x, v, meta = out["x"], out["v"], out.get("meta", {})
-    else:
-        raise AdapterOutputError(f"{who}: a chain run must return a ChainRun or x, v; "
-                                 f"got {type(out).__name__}")  # fmt: skip
-    try:
-        x = np.asarray(x, dtype=float)
-        v = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
-        raise AdapterOutputError(f"{who}: chain x and v must be arrays of numbers") from None
-    n = req.n_bodies
-    if x.ndim != 2 or x.shape[1] != n or v.shape != x.shape:
-        raise AdapterOutputError(f"{who}: chain x and v must have shape (samples, {n}), "
-                                 f"got {x.shape} and {v.shape}")  # fmt: skip
-    if not 2 <= x.shape[0] <= req.n_steps + 1:
-        raise AdapterOutputError(f"{who}: chain run of {req.n_steps} steps returned "
-                                 f"{x.shape[0]} samples (2 to {req.n_steps + 1})")  # fmt: skip
-    return ChainRun(x, v, dict(meta))
+    x, v, meta = _checked_states(out, ChainRun, "chain", (req.n_bodies,), req.n_steps, who)
+    return ChainRun(x, v, meta)
 
 
 def chain_energy(req: ChainRequest, run: ChainRun) -> np.ndarray:

@@ -25,8 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from reference_impl.adapters._assembly_request import MAX_CODE_STEPS
-from reference_impl.adapters._records import AdapterOutputError
+from reference_impl.adapters._assembly_request import MAX_CODE_STEPS, _checked_states
 from reference_impl.errors import HCVInputError
 from reference_impl.potentials.base import Potential
 
@@ -197,26 +196,8 @@ def lattice_run_from_mapping(out, req: LatticeRequest, who: str) -> LatticeRun:
     AdapterOutputError
         One line: a missing key, a wrong shape, more samples than steps + 1.
     """
-    if isinstance(out, LatticeRun):
-        x, v, meta = out.x, out.v, out.meta
-    elif isinstance(out, dict) and "x" in out and "v" in out:
-        x, v, meta = out["x"], out["v"], out.get("meta", {})
-    else:
-        raise AdapterOutputError(f"{who}: a lattice run must return a LatticeRun or x, v; "
-                                 f"got {type(out).__name__}")  # fmt: skip
-    try:
-        x = np.asarray(x, dtype=float)
-        v = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
-        raise AdapterOutputError(f"{who}: lattice x and v must be arrays of numbers") from None
-    n = req.n_bodies
-    if x.ndim != 3 or x.shape[1:] != (n, 3) or v.shape != x.shape:
-        raise AdapterOutputError(f"{who}: lattice x and v must have shape (samples, {n}, 3), "
-                                 f"got {x.shape} and {v.shape}")  # fmt: skip
-    if not 2 <= x.shape[0] <= req.n_steps + 1:
-        raise AdapterOutputError(f"{who}: lattice run of {req.n_steps} steps returned "
-                                 f"{x.shape[0]} samples (2 to {req.n_steps + 1})")  # fmt: skip
-    return LatticeRun(_unwrap(x, req), v, dict(meta))
+    x, v, meta = _checked_states(out, LatticeRun, "lattice", (req.n_bodies, 3), req.n_steps, who)
+    return LatticeRun(_unwrap(x, req), v, meta)
 
 
 def lattice_energy(req: LatticeRequest, run: LatticeRun) -> np.ndarray:

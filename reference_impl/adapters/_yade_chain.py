@@ -1,7 +1,7 @@
 """YADE on a chain of spheres (contract item 14) and its own step advice.
 
-The chain of a `ChainRequest` as a YADE user builds it (the YADE side is ``_chain`` and
-``_chain_advice`` of `reference_impl.adapters._yade_server`): spheres of one ``FrictMat``
+The chain of a `ChainRequest` as a YADE user builds it (the YADE side is ``_assembly``
+and ``_assembly_advice`` of `reference_impl.adapters._yade_server`): spheres of one ``FrictMat``
 on the x axis, ``utils.wall`` planes at the ends, Hertz-Mindlin without damping
 (``Ip2_FrictMat_FrictMat_MindlinPhys`` + ``Law2_ScGeom_MindlinPhys_Mindlin``),
 ``NewtonIntegrator(damping=0)``, no gravity.
@@ -32,7 +32,39 @@ import numpy as np
 from reference_impl.adapters._assembly_request import ChainRequest, ChainRun
 from reference_impl.adapters._records import AdapterDeclined, AdapterRunError
 
-__all__ = ["chain_scene", "parse_advice", "parse_chain"]
+__all__ = ["chain_scene", "hertz_material", "parse_advice", "parse_chain"]
+
+
+def hertz_material(req, what: str) -> dict:
+    """The server's material of an assembly: R (m), Y (Pa), density (kg/m^3), masses (kg).
+
+    Parameters
+    ----------
+    req : ChainRequest or LatticeRequest
+        The assembly.
+    what : str
+        ``"chains"`` or ``"lattices"``, for the declines.
+
+    Raises
+    ------
+    AdapterDeclined
+        The law is not Hertz (Hertz-Mindlin is U' = k q^(3/2)), or the bodies' masses
+        differ (one material).
+    """
+    pot = req.potential
+    if type(pot).__name__ != "PowerLaw" or getattr(pot, "p", None) != 1.5:
+        raise AdapterDeclined(f"yade runs Hertz {what} only (power law, p = 1.5), got {pot!r}")
+    R = float(req.radius)
+    masses = [float(m) for m in req.masses]
+    if len(set(masses)) > 1:
+        # one material, one density: PWaveTimeStep would read one body's density for all
+        raise AdapterDeclined(f"yade {what} take one mass for every body (one material)")
+    return {
+        "R": R,
+        "young": float(2.0 * 0.75 * float(pot.k) / math.sqrt(0.5 * R)),
+        "density": masses[0] / (4.0 / 3.0 * math.pi * R**3),
+        "masses": masses,
+    }
 
 
 def chain_scene(req: ChainRequest) -> dict:
@@ -41,22 +73,10 @@ def chain_scene(req: ChainRequest) -> dict:
     Raises
     ------
     AdapterDeclined
-        The law is not Hertz (Hertz-Mindlin is U' = k q^(3/2)).
+        The law is not Hertz (Hertz-Mindlin is U' = k q^(3/2)), or the masses differ.
     """
-    pot = req.potential
-    if type(pot).__name__ != "PowerLaw" or getattr(pot, "p", None) != 1.5:
-        raise AdapterDeclined(f"yade runs Hertz chains only (power law, p = 1.5), got {pot!r}")
-    R = float(req.radius)
-    vol = 4.0 / 3.0 * math.pi * R**3
-    masses = [float(m) for m in req.masses]
-    if len(set(masses)) > 1:
-        # one material, one density: PWaveTimeStep would read one body's density for all
-        raise AdapterDeclined("yade chains take one mass for every body (one material)")
     return {
-        "R": R,
-        "young": float(2.0 * 0.75 * float(pot.k) / math.sqrt(0.5 * R)),
-        "density": masses[0] / vol,
-        "masses": masses,
+        **hertz_material(req, "chains"),
         "x0": [float(x) for x in req.x0()],
         "velocities": [float(v) for v in req.velocities],
         "walls": [[float(x), int(side)] for x, side in req.wall_planes()],

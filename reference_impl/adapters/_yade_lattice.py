@@ -1,7 +1,7 @@
 """YADE on a periodic lattice of spheres (contract item 14) and its own step advice.
 
-The lattice of a `LatticeRequest` as a YADE user builds it (the YADE side is ``_lattice``
-and ``_lattice_advice`` of `reference_impl.adapters._yade_server`): ``O.periodic = True``
+The lattice of a `LatticeRequest` as a YADE user builds it (the YADE side is ``_assembly``
+and ``_assembly_advice`` of `reference_impl.adapters._yade_server`): ``O.periodic = True``
 with the request's box as ``O.cell``, spheres of one ``FrictMat`` (friction angle 0, so
 Mindlin's tangential force is zero: normal Hertz only), Hertz-Mindlin without damping,
 ``NewtonIntegrator(damping=0)``, no gravity. YADE's cell is periodic along all three axes:
@@ -17,12 +17,11 @@ as for a chain.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from reference_impl.adapters._lattice_request import LatticeRequest, LatticeRun
-from reference_impl.adapters._records import AdapterDeclined, AdapterRunError
+from reference_impl.adapters._records import AdapterRunError
+from reference_impl.adapters._yade_chain import hertz_material
 
 __all__ = ["lattice_scene", "parse_lattice"]
 
@@ -35,19 +34,8 @@ def lattice_scene(req: LatticeRequest) -> dict:
     AdapterDeclined
         The law is not Hertz, or the bodies' masses differ (one material).
     """
-    pot = req.potential
-    if type(pot).__name__ != "PowerLaw" or getattr(pot, "p", None) != 1.5:
-        raise AdapterDeclined(f"yade runs Hertz lattices only (power law, p = 1.5), got {pot!r}")
-    R = float(req.radius)
-    masses = [float(m) for m in req.masses]
-    if len(set(masses)) > 1:
-        # one material, one density: PWaveTimeStep would read one body's density for all
-        raise AdapterDeclined("yade lattices take one mass for every body (one material)")
     return {
-        "R": R,
-        "young": float(2.0 * 0.75 * float(pot.k) / math.sqrt(0.5 * R)),
-        "density": masses[0] / (4.0 / 3.0 * math.pi * R**3),
-        "masses": masses,
+        **hertz_material(req, "lattices"),
         "cell": [float(b) for b in req.box],
         "x0": req.positions.tolist(),
         "velocities": req.velocities.tolist(),

@@ -16,11 +16,13 @@ protocol, see `reference_impl.adapters._persistent`):
   body placed at each state (one step from it).
 * ``{"id": n, "op": "chain", "scene": {...}, "dt": s, "n_steps": N}`` -> ``{"id": n,
   "x": [[...], ...], "v": [[...], ...]}``: a chain of spheres on the x axis (contract item
-  14, `_chain`), positions and velocities after each step; ``"op": "chain_advice"``
+  14, `_assembly`), positions and velocities after each step; ``"op": "chain_advice"``
   -> ``{"pwave": s, "gst": s, "gst_steps": n}``: ``utils.PWaveTimeStep()`` and the
-  smallest step ``GlobalStiffnessTimeStepper`` chose along a run it drove (`_chain_advice`).
-* ``"op": "lattice"`` and ``"lattice_advice"``: the same for a periodic lattice (`_lattice`,
-  `_lattice_advice`; ``x`` and ``v`` per step are [x, y, z] per body).
+  smallest step ``GlobalStiffnessTimeStepper`` chose along a run it drove
+  (`_assembly_advice`).
+* ``"op": "lattice"`` and ``"lattice_advice"``: the same for a periodic lattice (the scene
+  has a ``cell``; ``x`` and ``v`` per step are [x, y, z] per body). One builder
+  (`_build_assembly`) sets both up.
 * anything that fails -> ``{"id": n, "error": "one line"}``; the server goes on.
 
 Traps this script avoids (found by maintainers wiring YADE by hand):
@@ -150,12 +152,20 @@ def _probe(req):
     return {"f": forces, "phys": phys}
 
 
-# A chain run ends after the first step whose kinetic energy exceeds the request's "stop"
-# (J): the suite has decided a runaway by then (ChainRequest.stop_energy).
+# An assembly run ends after the first step whose kinetic energy exceeds the request's
+# "stop" (J): the suite has decided a runaway by then (ChainRequest.stop_energy).
 
 
-def _build_chain(sc, gst=None):
-    """Reset YADE to the chain of a request (spheres on x, walls, no gravity, no damping)."""
+def _vector(a):
+    """A position or velocity of the scene as (x, y, z): a chain's are numbers along x."""
+    if isinstance(a, list):
+        return tuple(float(c) for c in a)
+    return (float(a), 0.0, 0.0)
+
+
+def _build_assembly(sc, gst=None):
+    """Reset YADE to the assembly of a request: a chain of spheres on x with its walls, or a
+    periodic lattice (``sc["cell"]``); one material, no gravity, no damping."""
     from yade import O, utils
     from yade.wrapper import (
         Bo1_Sphere_Aabb,
@@ -171,26 +181,31 @@ def _build_chain(sc, gst=None):
         NewtonIntegrator,
     )
 
+    chain = "cell" not in sc
     O.reset()
+    if not chain:
+        O.periodic = True
+        O.cell.setBox(*[float(b) for b in sc["cell"]])
     radius = float(sc["R"])
     mat = O.materials.append(
         FrictMat(young=sc["young"], poisson=0.0, frictionAngle=0.0, density=sc["density"])
     )
-    for x, side in sc["walls"]:
+    for x, side in sc.get("walls", ()):
         O.bodies.append(utils.wall(float(x), axis=0, sense=-int(side), material=mat))
     ids = []
     for x, m, v in zip(sc["x0"], sc["masses"], sc["velocities"], strict=True):
-        b = utils.sphere((float(x), 0.0, 0.0), radius, material=mat)
+        b = utils.sphere(_vector(x), radius, material=mat)
         ids.append(O.bodies.append(b))
         b.state.mass = float(m)  # the density gave it to round-off; the scene's exactly
-        b.state.vel = (float(v), 0.0, 0.0)
+        b.state.vel = _vector(v)
+    # a chain's walls need their own bound and geometry functors; a lattice has none
+    bounds = [Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()] if chain else [Bo1_Sphere_Aabb()]
+    geoms = [Ig2_Sphere_Sphere_ScGeom()] + ([Ig2_Wall_Sphere_ScGeom()] if chain else [])
     engines = [
         ForceResetter(),
-        InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()], verletDist=0.0),
+        InsertionSortCollider(bounds, verletDist=0.0),
         InteractionLoop(
-            [Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],
-            [Ip2_FrictMat_FrictMat_MindlinPhys()],
-            [Law2_ScGeom_MindlinPhys_Mindlin()],
+            geoms, [Ip2_FrictMat_FrictMat_MindlinPhys()], [Law2_ScGeom_MindlinPhys_Mindlin()]
         ),
     ]
     if gst is not None:
@@ -201,126 +216,49 @@ def _build_chain(sc, gst=None):
     return O, ids
 
 
-def _chain(req):
+def _assembly(req):
+    """``chain`` and ``lattice``: positions and velocities after each step (a chain's along x,
+    a lattice's [x, y, z] per body), up to the stop energy or a non-finite state."""
     sc = req["scene"]
-    O, ids = _build_chain(sc)
+    O, ids = _build_assembly(sc)
     O.dt = float(req["dt"])
+    dims = 3 if "cell" in sc else 1  # a chain's bodies move along x only
+
+    def read(vec):
+        return [float(vec[c]) for c in range(dims)]
+
     masses = [float(m) for m in sc["masses"]]
     stop = float(req["stop"])
-    xs = [[float(x) for x in sc["x0"]]]
-    vs = [[float(v) for v in sc["velocities"]]]
+    xs = [[read(_vector(x)) for x in sc["x0"]]]
+    vs = [[read(_vector(v)) for v in sc["velocities"]]]
     for _ in range(int(req["n_steps"])):
         O.step()
-        x = [O.bodies[i].state.pos[0] for i in ids]
-        v = [O.bodies[i].state.vel[0] for i in ids]
-        ke = sum(0.5 * m * u * u for m, u in zip(masses, v, strict=True))
-        xs.append(x)
-        vs.append(v)
-        if not all(math.isfinite(a) for a in x + v) or ke > stop:
-            break
-    return {"x": xs, "v": vs}
-
-
-def _chain_advice(req):
-    from yade import utils
-    from yade.wrapper import GlobalStiffnessTimeStepper
-
-    sc = req["scene"]
-    O, _ids = _build_chain(sc)
-    pwave = float(utils.PWaveTimeStep())
-    # the stepper as a user adds it: active, its default safety coefficient, updating each
-    # step; it sets O.dt itself, the smallest it set along the run is its advice
-    gst = GlobalStiffnessTimeStepper(active=True, timeStepUpdateInterval=1,
-                                     defaultDt=float(req["dt"]))  # fmt: skip
-    O, _ids = _build_chain(sc, gst)
-    O.dt = float(req["dt"])
-    chosen = []
-    for _ in range(int(req["n_steps"])):
-        O.step()
-        if O.interactions.countReal():
-            chosen.append(float(O.dt))
-    return {
-        "pwave": pwave,
-        "gst": min(chosen) if chosen else None,
-        "gst_steps": len(chosen),
-        "gst_safety": float(gst.timestepSafetyCoefficient),
-    }
-
-
-def _build_lattice(sc, gst=None):
-    """Reset YADE to the periodic lattice of a request (cell, spheres, no gravity or damping)."""
-    from yade import O, utils
-    from yade.wrapper import (
-        Bo1_Sphere_Aabb,
-        ForceResetter,
-        FrictMat,
-        Ig2_Sphere_Sphere_ScGeom,
-        InsertionSortCollider,
-        InteractionLoop,
-        Ip2_FrictMat_FrictMat_MindlinPhys,
-        Law2_ScGeom_MindlinPhys_Mindlin,
-        NewtonIntegrator,
-    )
-
-    O.reset()
-    O.periodic = True
-    O.cell.setBox(*[float(b) for b in sc["cell"]])
-    mat = O.materials.append(
-        FrictMat(young=sc["young"], poisson=0.0, frictionAngle=0.0, density=sc["density"])
-    )
-    ids = []
-    for x, m, v in zip(sc["x0"], sc["masses"], sc["velocities"], strict=True):
-        b = utils.sphere(tuple(float(a) for a in x), float(sc["R"]), material=mat)
-        ids.append(O.bodies.append(b))
-        b.state.mass = float(m)  # the density gave it to round-off; the scene's exactly
-        b.state.vel = tuple(float(a) for a in v)
-    engines = [
-        ForceResetter(),
-        InsertionSortCollider([Bo1_Sphere_Aabb()], verletDist=0.0),
-        InteractionLoop(
-            [Ig2_Sphere_Sphere_ScGeom()],
-            [Ip2_FrictMat_FrictMat_MindlinPhys()],
-            [Law2_ScGeom_MindlinPhys_Mindlin()],
-        ),
-    ]
-    if gst is not None:
-        engines.append(gst)
-    engines.append(NewtonIntegrator(damping=0.0, gravity=(0.0, 0.0, 0.0)))
-    O.engines = engines
-    return O, ids
-
-
-def _lattice(req):
-    sc = req["scene"]
-    O, ids = _build_lattice(sc)
-    O.dt = float(req["dt"])
-    masses = [float(m) for m in sc["masses"]]
-    stop = float(req["stop"])
-    xs = [[[float(a) for a in x] for x in sc["x0"]]]
-    vs = [[[float(a) for a in v] for v in sc["velocities"]]]
-    for _ in range(int(req["n_steps"])):
-        O.step()
-        x = [list(O.bodies[i].state.pos) for i in ids]
-        v = [list(O.bodies[i].state.vel) for i in ids]
+        x = [read(O.bodies[i].state.pos) for i in ids]
+        v = [read(O.bodies[i].state.vel) for i in ids]
         ke = sum(0.5 * m * sum(a * a for a in u) for m, u in zip(masses, v, strict=True))
         xs.append(x)
         vs.append(v)
         if not all(math.isfinite(a) for row in x + v for a in row) or ke > stop:
             break
+    if dims == 1:  # a chain answers a number per body
+        xs, vs = ([[r[0] for r in row] for row in rows] for rows in (xs, vs))
     return {"x": xs, "v": vs}
 
 
-def _lattice_advice(req):
+def _assembly_advice(req):
+    """``chain_advice`` and ``lattice_advice``: ``utils.PWaveTimeStep()`` of the assembly, and
+    the smallest step ``GlobalStiffnessTimeStepper`` set along a run it drove."""
     from yade import utils
     from yade.wrapper import GlobalStiffnessTimeStepper
 
     sc = req["scene"]
-    O, _ids = _build_lattice(sc)
+    O, _ids = _build_assembly(sc)
     pwave = float(utils.PWaveTimeStep())
-    # the stepper as for a chain (`_chain_advice`): its smallest step along a run it drove
+    # the stepper as a user adds it: active, its default safety coefficient, updating each
+    # step; it sets O.dt itself, the smallest it set along the run is its advice
     gst = GlobalStiffnessTimeStepper(active=True, timeStepUpdateInterval=1,
                                      defaultDt=float(req["dt"]))  # fmt: skip
-    O, _ids = _build_lattice(sc, gst)
+    O, _ids = _build_assembly(sc, gst)
     O.dt = float(req["dt"])
     chosen = []
     for _ in range(int(req["n_steps"])):
@@ -348,8 +286,8 @@ def _finite(obj):
 def main():
     out = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)  # whatever YADE prints from now on goes to stderr
-    handlers = {"impact": _impact, "probe": _probe, "chain": _chain, "chain_advice": _chain_advice,
-                "lattice": _lattice, "lattice_advice": _lattice_advice}  # fmt: skip
+    handlers = {"impact": _impact, "probe": _probe, "chain": _assembly, "lattice": _assembly,
+                "chain_advice": _assembly_advice, "lattice_advice": _assembly_advice}  # fmt: skip
     for line in sys.stdin:
         if not line.strip():
             continue

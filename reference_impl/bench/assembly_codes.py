@@ -31,6 +31,10 @@ hands a code the suite's own bodies in the suite's order
 3-D space), and refuses in one line a scene that asks more (tangential springs, rotation,
 bonds, a gap, damping, walls) or a skewed box (triangular, honeycomb).
 
+A code that asks for isolation (LAMMPS, LIGGGHTS) runs in a worker process of the bench
+(`reference_impl.bench._code_worker.open_code`), as ``hcv bench`` runs it: a crash of its
+library fails that code's rows, not the caller.
+
 This lives in the bench layer because it runs adapters (the layering test keeps studies
 below adapters). `assembly_codes_table` is the study; `code_dt_crit` one search.
 """
@@ -45,13 +49,14 @@ import numpy as np
 
 from reference_impl.adapters._assembly_request import ChainRequest, chain_energy
 from reference_impl.adapters._lattice_request import LatticeRequest, lattice_energy
-from reference_impl.adapters.base import AdapterDeclined, ContactAdapter
-from reference_impl.adapters.registry import builtin_codes, get_adapter, resolve_class
+from reference_impl.adapters.base import AdapterDeclined, AdapterError, ContactAdapter
+from reference_impl.adapters.registry import builtin_codes, resolve_class
 from reference_impl.assembly.geometry import lattice_sites
 from reference_impl.assembly.lanes import initial_energy
 from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.safe import dt_safe_conventions
 from reference_impl.assembly.search import search_ensemble
+from reference_impl.bench._code_worker import open_code
 from reference_impl.errors import HCVInputError
 from reference_impl.scenes import load_scene, scene_from_dict
 from reference_impl.stability.criteria import EnergyGrowth, SearchGrid
@@ -433,6 +438,10 @@ def _rows_for(code: str, adapter, scene, horizon: int, radius: float, suite: flo
         note = "; ".join([exc.declined] + ([NO_ADVICE[code]] if code in NO_ADVICE else []))
         return [AdviceRow(**base, advice="none", advice_dt=math.nan, dt_crit=math.nan,
                           factor=math.nan, safe=None, note=note)]  # fmt: skip
+    except AdapterError as exc:  # the code failed (error, bad output, crash): its row says so
+        note = f"{code} failed: {' '.join(str(exc).split())}"
+        return [AdviceRow(**base, advice="none", advice_dt=math.nan, dt_crit=math.nan,
+                          factor=math.nan, safe=None, note=note)]  # fmt: skip
     if not advice:
         note = NO_ADVICE.get(code, f"{code} gives no step advice")
         return [AdviceRow(**base, advice="none", advice_dt=math.nan, dt_crit=found.dt_crit,
@@ -458,8 +467,10 @@ def assembly_codes_table(
 ) -> list[AdviceRow]:  # fmt: skip
     """Issue 39 section 4: each code's measured Delta t_crit and its advice, per scene.
 
-    For each code (registry names; a code that is not installed, or that does not run
-    assembly scenes, gives one row per size saying so) and each N in ``sizes``: the
+    For each code (registry names or specs; a code that is not installed, that does not
+    run assembly scenes, or that fails on a scene (an error, malformed output, a crash:
+    an isolated code runs in a bench worker process, `open_code`) gives one row per size
+    saying so) and each N in ``sizes``: the
     ``base`` chain with N bodies, the code's Delta t_crit by `code_dt_crit` at
     ``horizon`` steps, the suite's own Delta t_crit of the same search, the paper's
     Delta t_safe, and one row per advice the code computes (`AdviceRow`: code, scene, N,
@@ -495,8 +506,8 @@ def assembly_codes_table(
         refs.append((safe, suite_dt_crit(sc, safe, crit, CODE_GRID)))
     rows: list[AdviceRow] = []
     for code in codes:
-        try:
-            adapter = get_adapter(code)
+        try:  # in a bench worker process where the code asks for isolation (`open_code`)
+            adapter = open_code(code)
         except HCVInputError as exc:  # not installed: the registry's one line
             for sc, (safe, suite) in zip(scenes, refs, strict=True):
                 rows.append(AdviceRow(

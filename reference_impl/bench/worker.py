@@ -2,12 +2,13 @@
 
 `WorkerExecutor` starts one worker process per adapter (multiprocessing, spawn)
 that builds the adapter from its spec and serves calls ``(variant, method,
-scene)``. Each call has a timeout: a worker that does not answer in time is
-killed, the call fails with "timeout after T s", and the next call starts a
-new worker. A worker that dies (segfault, abort, os._exit) fails the call with
-its exit status or signal. The worker's stdout and stderr (file descriptors 1
-and 2, so C libraries too) go to a file whose new lines are attached to a failed
-call. Results already received are never affected.
+scene)`` (variant None: the adapter itself, not one of its variants). Each call
+has a timeout: a worker that does not answer in time is killed, the call fails
+with "timeout after T s", and the next call starts a new worker. A worker that
+dies (segfault, abort, os._exit) fails the call with its exit status or signal.
+The worker's stdout and stderr (file descriptors 1 and 2, so C libraries too) go
+to a file whose new lines are attached to a failed call. Results already
+received are never affected.
 
 `InProcessExecutor` runs calls directly (trusted adapters, adapters that are
 themselves isolated such as the subprocess adapter, or adapter instances
@@ -85,10 +86,11 @@ class InProcessExecutor:
         self.adapter = adapter
         self.variants = adapter.variants()
 
-    def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+    def call(self, index: int | None, method: str, *args, timeout: float | None = None) -> Outcome:
         t0 = time.perf_counter()
+        target = self.adapter if index is None else self.variants[index]
         try:
-            value = getattr(self.variants[index], method)(*args)
+            value = getattr(target, method)(*args)
         except Exception as exc:  # an adapter failure is a result, never fatal
             return Outcome(
                 False,
@@ -137,7 +139,8 @@ def _worker_main(
         index, method, args = msg
         t0 = time.perf_counter()
         try:
-            value = getattr(variants[index], method)(*args)
+            # index None: the adapter itself (``hcv dt-crit --adapter`` runs the spec's adapter)
+            value = getattr(adapter if index is None else variants[index], method)(*args)
             conn.send(("ok", value, time.perf_counter() - t0))
         except BaseException as exc:
             stderr = getattr(exc, "stderr", "") or ""
@@ -295,7 +298,7 @@ class WorkerExecutor:
             self._conn.close()
         self._proc = self._conn = None
 
-    def call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+    def call(self, index: int | None, method: str, *args, timeout: float | None = None) -> Outcome:
         for path in (self._log, self._out):  # output is bounded per call (the worker appends)
             try:
                 os.truncate(path, 0)
@@ -306,7 +309,7 @@ class WorkerExecutor:
         finally:
             self._check_stdout()
 
-    def _call(self, index: int, method: str, *args, timeout: float | None = None) -> Outcome:
+    def _call(self, index: int | None, method: str, *args, timeout: float | None = None) -> Outcome:
         if self._proc is None or not self._proc.is_alive():
             failed = self._start()
             if failed is not None:

@@ -6,8 +6,11 @@ step (`reference_impl.bench.assembly_codes.code_report`), and the code's own ste
 gets a verdict. Loaded only when ``--adapter`` is given (it loads the codes' adapters).
 A code that does not run assembly scenes, a scene that is neither a chain nor a lattice the
 codes run (`reference_impl.bench.assembly_codes.lattice_request`: periodic, rectangular
-box, normal contacts only), or a code that declines the scene is one line and exit status 2; a code that fails (crash, malformed
-output) is one line and exit status 1.
+box, normal contacts only), or a code that declines the scene is one line and exit
+status 2; a code that fails (an error, malformed output, a crash) is one line naming it
+and exit status 1. The code's runs go through `reference_impl.bench._code_worker`: in a
+worker process of the bench where the adapter asks for isolation, as ``hcv bench`` runs
+it, so that a segfault or an abort of the code ends that worker, not hcv.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ import json
 import sys
 
 from reference_impl.adapters.base import AdapterDeclined, AdapterError
-from reference_impl.adapters.registry import get_adapter
+from reference_impl.bench._code_worker import open_code
 from reference_impl.bench.assembly_codes import CODE_HORIZON, code_report, lattice_request
 from reference_impl.cli._run import EXIT_FAIL, EXIT_OK
 from reference_impl.cli._tables import fmt
@@ -51,7 +54,7 @@ def run_code(args, scene, horizons: list[int] | None) -> int:
     horizons = horizons or [CODE_HORIZON]
     if len(horizons) != 1:
         raise HCVInputError(f"--adapter takes one horizon, got --horizons {horizons!r}")
-    adapter = get_adapter(args.adapter)
+    adapter = open_code(args.adapter)  # a worker process where the code asks for isolation
     try:
         if not adapter.supports_assembly:
             raise HCVInputError(f"{adapter.label} does not run assembly scenes")
@@ -59,7 +62,7 @@ def run_code(args, scene, horizons: list[int] | None) -> int:
             rep = code_report(adapter, scene, horizons[0])
         except AdapterDeclined as exc:
             raise HCVInputError(exc.declined) from None
-        except AdapterError as exc:  # the code failed (crash, malformed output): not the input
+        except AdapterError as exc:  # the code failed (error, bad output, crash): not the input
             print(f"hcv: error: {adapter.label} failed: {' '.join(str(exc).split())}",
                   file=sys.stderr)  # fmt: skip
             return EXIT_FAIL
