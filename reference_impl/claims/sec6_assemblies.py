@@ -11,6 +11,13 @@ paper's Delta t_safe (striker's mass and energy). The factor by which Delta t_sa
 reduced is that ratio where it is below 1; beside it the linear prediction sqrt(d / (2 Z)),
 the ratio of 2 / omega_max of a lattice of coordination Z in d dimensions to the single
 contact's 2 sqrt(m / k).
+
+The lattices' contacts follow their lines of centres (finite displacements,
+`reference_impl.assembly.geometry`), as LIGGGHTS, LAMMPS and YADE do: the kernel's
+positions are theirs to round-off at this striker (1e-16 m over 300 steps,
+`verification/test_assembly_codes_lattice.py`), so the lattice rows carry the codes' model
+and the verdict rests on the chains and the lattices alike (a chain's lines of centres
+cannot turn: the same in either model).
 """
 
 from __future__ import annotations
@@ -146,7 +153,8 @@ def measure(quick: bool = False) -> Measurement:
         evidence,
         f"refuted if in any case the {HOLD_QUANTILE} % point of the lanes' Delta t_crit lies "
         f"below the paper's Delta t_safe (striker's mass and energy) at any horizon "
-        f"{list(horizons)}; runaway: E_n > 100 E_0 within the horizon, confirmed at 1e6 E_0",
+        f"{list(horizons)}; runaway: E_n > 100 E_0 within the horizon, confirmed at 1e6 E_0; "
+        "contacts along their current lines of centres (the codes' model)",
         {"rows": rows, "horizons": list(horizons), "n_lanes": N_LANES, "worst": worst["case"]},
         {"case": worst["case"], "ratio_5": worst["ratio_5"], "horizon": worst["horizon"]}
         if bad
