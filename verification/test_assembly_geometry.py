@@ -18,7 +18,12 @@ import numpy as np
 import pytest
 
 from reference_impl.assembly import geometry
-from reference_impl.assembly.lanes import AssemblyModel, displacements, initial_energy
+from reference_impl.assembly.lanes import (
+    AssemblyModel,
+    cage_fraction,
+    displacements,
+    initial_energy,
+)
 from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.safe import dt_safe_conventions
 from reference_impl.assembly.search import assembly_report
@@ -123,3 +128,26 @@ def test_bonded_springs_keep_fixed_normals_and_contact_laws_follow():
     want = {True: (False, "fixed normals"), False: (True, "lines of centres")}
     assert_true(got == want, got=repr(got), should=repr(want), claim=CLAIM,
                 call="assembly_model(square, bonded).follows, assembly_report geometry")  # fmt: skip
+
+
+def test_cage_is_half_the_second_neighbours_clearance_and_a_loose_layer_leaves_it():
+    """cage = (d_2 - 2 R) / 2; at 1 m/s over 1000 steps a touching square layer (rows slide
+    freely, no pressure) comes apart, a close-packed triangular one stays caged."""
+    want = {"square": (2**0.5 - 1) * R, "triangular": (3**0.5 - 1) * R,
+            "bcc": (2 / 3**0.5 - 1) * R, "fcc": (2**0.5 - 1) * R}  # fmt: skip
+    got = {name: geometry.lattice(name, 2, M, R).cage for name in want}
+    # 1e-12: d_2 from products of sqrt(2), sqrt(3) (a few ulps), over a difference ~0.1-0.7
+    for name in want:
+        assert_close(got[name], want[name], rtol=1e-12, claim=CLAIM, call=f"lattice({name!r}).cage")
+    frac = {}
+    for name in ("square", "triangular"):
+        asm = geometry.lattice(name, 2, M, R)
+        v = np.zeros((asm.n_bodies, 2))
+        v[0] = (0.9, 0.3 * 2**0.5)  # 1 m/s, off the lattice directions
+        model = AssemblyModel(
+            asm, PowerLaw(K, 1.5), False, 0.0, 0.0, v, np.zeros((asm.n_bodies, 0))
+        )
+        frac[name] = cage_fraction(model, 0.3 * _dt_safe(model), 1000, every=10)
+    assert_true(frac["square"] > 1.0 and frac["triangular"] < 0.01, got=repr(frac),
+                should="square > 1 (left), triangular < 0.01", claim=CLAIM,
+                call="cage_fraction(2x2, 1000 steps at 0.3 Delta t_safe)")  # fmt: skip

@@ -116,6 +116,13 @@ class Assembly:
         Distance L_c between the centres of ci and cj at the sites (m), > 0 where the
         contact can follow its line of centres, 0 where its normal is fixed (a wall); None
         (a chain) for every normal fixed.
+    cage : float
+        Largest distance (m) a body may move from its site, relative to the bodies' mean
+        displacement, while no pair outside the contact list can touch: (d_2 - 2 R) / 2,
+        d_2 the distance of second neighbours (two bodies that both moved less are closer
+        than d_2 by less than d_2 - 2 R). Beyond it the fixed contact list (no contact is
+        ever made anew) is no longer the packing's, as it is in the codes (neighbour lists).
+        inf for a chain (a body meets no one but its neighbours in 1-D).
     coordination : float
         Mean number of contacts per body, walls counted (Z).
     """
@@ -131,6 +138,7 @@ class Assembly:
     tangential_ratio: float = 0.0
     rotation: bool = False
     length: np.ndarray | None = None
+    cage: float = math.inf
 
     @property
     def n_bodies(self) -> int:
@@ -226,6 +234,18 @@ def chain(masses, walls: str = "none", gap: float = 0.0) -> Assembly:
         off=np.array(off, dtype=float),
         u0=u0,
     )
+
+
+def _second_distance(name: str) -> float:
+    """Distance of second neighbours (units of the nearest-neighbour distance)."""
+    dim, cell, basis = _LATTICE_CELLS[name]
+    ds = []
+    for s, t in itertools.product(range(len(basis)), repeat=2):
+        for o in itertools.product((-2, -1, 0, 1, 2), repeat=dim):
+            d = float(np.linalg.norm((np.array(o, dtype=float) + basis[t] - basis[s]) @ cell))
+            if d > 1.0 + _NN_RTOL:
+                ds.append(d)
+    return min(ds)
 
 
 def _bond_offsets(name: str) -> list[tuple[int, int, tuple[int, ...], np.ndarray]]:
@@ -336,6 +356,7 @@ def lattice(
         tangential_ratio=float(tangential_ratio),
         rotation=bool(rotation),
         length=np.where(np.array(cj, dtype=np.int64) >= 0, spacing, 0.0),
+        cage=0.5 * (_second_distance(name) * spacing - 2.0 * float(radius)),
     )
 
 
@@ -387,8 +408,7 @@ def overlaps(asm: Assembly, u: np.ndarray, follow: bool) -> np.ndarray:
         du = uj - u[asm.ci]
         sep = np.sqrt(np.sum((lc[:, None] * asm.normal + du) ** 2, axis=1))
         # L - |L n + du| = -(2 L n.du + du.du) / (L + |L n + du|): no cancellation
-        along = asm.off - (2.0 * lc * np.sum(du * asm.normal, axis=1) + np.sum(du * du, axis=1)) / (
-            lc + sep
-        )
+        num = 2.0 * lc * np.sum(du * asm.normal, axis=1) + np.sum(du * du, axis=1)
+        along = asm.off - num / np.where(lc > 0.0, lc + sep, 1.0)  # walls: 0 / 1, not 0 / 0
         q = np.where(lc > 0.0, along, q)
     return q
