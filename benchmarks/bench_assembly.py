@@ -10,7 +10,8 @@ every lane runs every step. Figures:
 * contact updates per second of CPU time of `reference_impl.integrators.assembly_kernel`
   on one thread, against `_minimal_loop` here: the same velocity-Verlet step, forces, energy
   and runaway test written as plainly as numba allows (the Hertz law inlined, no term
-  table, no dashpot, no tangential springs, no per-call state); goal: kernel within 1.5x
+  table, no dashpot, no tangential springs, no per-call state; contacts along their lines
+  of centres, as the kernel runs a lattice); goal: kernel within 1.5x
   of it (ratio of CPU times <= 1.5);
 * wall time on 1 thread over 2 threads (numba.set_num_threads; lanes in parallel); goal
   >= 1.8 on an idle 2-core machine;
@@ -44,8 +45,9 @@ _GOAL_THREADS = 1.8
 
 
 @numba.njit(cache=True)
-def _minimal_loop(k, p, mass, ci, cj, nrm, off, dts, v0, n_steps):
-    """The same work, plainly: each lane n_steps of velocity Verlet, energy each step, serial."""
+def _minimal_loop(k, p, mass, ci, cj, nrm, off, lc, dts, v0, n_steps):
+    """The same work, plainly: each lane n_steps of velocity Verlet, energy each step, serial;
+    a contact with lc > 0 (m) along its current line of centres, one with lc = 0 along nrm."""
     n, d = v0.shape
     total = 0.0
     for L in range(dts.shape[0]):
@@ -53,6 +55,7 @@ def _minimal_loop(k, p, mass, ci, cj, nrm, off, dts, v0, n_steps):
         u = np.zeros((n, d))
         v = v0.copy()
         F = np.zeros((n, d))
+        e = np.zeros(d)
         for _ in range(n_steps):
             for b in range(n):
                 for c in range(d):
@@ -64,15 +67,28 @@ def _minimal_loop(k, p, mass, ci, cj, nrm, off, dts, v0, n_steps):
                 i = ci[c]
                 j = cj[c]
                 q = off[c]
-                for a in range(d):
-                    q += (u[i, a] - (u[j, a] if j >= 0 else 0.0)) * nrm[c, a]
+                if lc[c] > 0.0:  # q = off + L - |L n + u_j - u_i|, e its unit vector
+                    r2, dn, dd = 0.0, 0.0, 0.0
+                    for a in range(d):
+                        x = u[j, a] - u[i, a]
+                        r2 += (lc[c] * nrm[c, a] + x) ** 2
+                        dn += nrm[c, a] * x
+                        dd += x * x
+                    r = math.sqrt(r2)
+                    q -= (2.0 * lc[c] * dn + dd) / (lc[c] + r)
+                    for a in range(d):
+                        e[a] = (lc[c] * nrm[c, a] + u[j, a] - u[i, a]) / r
+                else:
+                    for a in range(d):
+                        q += (u[i, a] - (u[j, a] if j >= 0 else 0.0)) * nrm[c, a]
+                        e[a] = nrm[c, a]
                 if q > 0.0:
                     f = k * q**p
                     U += f * q / (p + 1.0)
                     for a in range(d):
-                        F[i, a] -= f * nrm[c, a]
+                        F[i, a] -= f * e[a]
                         if j >= 0:
-                            F[j, a] += f * nrm[c, a]
+                            F[j, a] += f * e[a]
             E = U
             for b in range(n):
                 for c in range(d):
@@ -123,7 +139,9 @@ def main(argv=None) -> None:
         out = run_lanes(model, dts, 1.0, **crit)
         assert np.all(out.steps == steps), "a benchmark lane stopped early"
 
-    args_min = (k, p, a.mass, a.ci, a.cj, np.ascontiguousarray(a.normal), a.off, dts,
+    lc = model.kernel_lengths()
+    lc = np.zeros(a.n_contacts) if lc is None else lc
+    args_min = (k, p, a.mass, a.ci, a.cj, np.ascontiguousarray(a.normal), a.off, lc, dts,
                 np.ascontiguousarray(model.v_init), steps)  # fmt: skip
     _minimal_loop(*args_min[:-1], 2)  # compile or load
     threads = numba.get_num_threads()

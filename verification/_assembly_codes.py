@@ -5,9 +5,8 @@
 
 - references: `verlet_chain` and `verlet_lattice`, independent velocity Verlets of a request
   (numpy, nothing of the suite's kernels; a lattice's forces along the actual line of centres
-  of each listed pair, as the codes compute them), one loop `_verlet`; `kernel_lattice`, the
-  suite's own assembly step (`reference_impl.integrators.assembly_kernel._lanes`, one lane,
-  one step per call) on the scene's model: what the suite's searches integrate;
+  of each listed pair, as the codes compute them), one loop `_verlet` (the suite's own
+  kernel on the same request is `reference_impl.assembly.lanes.displacements`);
 - third-party codes for ``hcv dt-crit SCENE --adapter verification._assembly_codes:NAME``:
   `VerletChainCode` (one advice) and `VerletLatticeCode` (none) built on the references,
   `CrashingChainCode` (every run fails), `MalformedChainCode` (one body too few),
@@ -44,8 +43,6 @@ from reference_impl.assembly.model import assembly_model
 from reference_impl.assembly.safe import dt_safe_conventions
 from reference_impl.assembly.search import search_ensemble
 from reference_impl.bench.assembly_codes import CODE_GRID, code_dt_crit
-from reference_impl.integrators.assembly_kernel import ST_PENDING, _lanes
-from reference_impl.integrators.verlet_kernel import kernel_terms
 from reference_impl.stability.criteria import EnergyGrowth
 from verification.assertions import assert_close, assert_true
 
@@ -65,7 +62,6 @@ __all__ = [
     "assert_run_is_verlet",
     "code_fixture",
     "dt_safe",
-    "kernel_lattice",
     "needs",
     "verlet_chain",
     "verlet_lattice",
@@ -153,37 +149,6 @@ def verlet_lattice(req: LatticeRequest) -> tuple[np.ndarray, np.ndarray, np.ndar
         return f
 
     return _verlet(req, req.positions.copy(), req.velocities.copy(), force, m)
-
-
-def kernel_lattice(model, req: LatticeRequest) -> np.ndarray:
-    """The suite's assembly kernel on ``model`` at the request's step: positions (m) of
-    every body after every step, shape (n_steps + 1, N, 3) (sites of ``req`` plus u)."""
-    a = model.assembly
-    fam, par = kernel_terms(model.potential)
-    n, d = a.n_bodies, a.dim
-    one = np.ones(1)
-    us, vv = np.zeros((1, n, d)), np.zeros((1, n, d))
-    ths, ws = np.zeros((1, n, 0)), np.zeros((1, n, 0))
-    Fs, Ts = np.zeros((1, n, d)), np.zeros((1, n, 0))
-    st = np.full(1, ST_PENDING, dtype=np.int64)
-    steps = np.zeros(1, dtype=np.int64)
-    e0, eend, emax, qmax = (np.zeros(1) for _ in range(4))
-    tripped = np.zeros(1, dtype=np.bool_)
-    kt = np.zeros(a.n_contacts)
-    cd = np.zeros(a.n_contacts)
-    out = [req.positions.copy()]
-    for _ in range(req.n_steps):
-        # one step per call (budget 1); a horizon far beyond the run keeps the lane going
-        _lanes(fam, par, float(model.potential.q_sup), bool(model.bonded), a.mass, np.zeros(n),
-               a.ci, a.cj, np.ascontiguousarray(a.normal), a.off, a.radius, kt, cd,
-               req.dt * one, one, np.ascontiguousarray(a.u0, dtype=float),
-               np.ascontiguousarray(model.v_init, dtype=float), np.zeros((n, 0)),
-               1e300, 1e300, 10**12, 10**12, 1,
-               us, vv, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped)  # fmt: skip
-        x = req.positions.copy()
-        x[:, :d] += us[0]
-        out.append(x)
-    return np.array(out)
 
 
 # -- codes for hcv dt-crit --adapter -------------------------------------------------------

@@ -1,24 +1,38 @@
 """The contact network of an assembly: chains and lattices as bodies, contacts and normals.
 
-An assembly is described by small displacements about a reference configuration (the
-sites of the chain or lattice): body i sits at its site plus u_i, and contact c between
-bodies i and j (j = -1: a fixed wall) has the overlap
+Body i sits at its site (of the chain or lattice) plus the displacement u_i. Contact c
+joins bodies i and j (j = -1: a fixed wall); n_c is the unit vector from i to j along
+their line of centres in the reference configuration, L_c their distance there (m) and
+off_c the overlap at the sites (-gap). Two models of the overlap are run:
 
-    q_c = off_c + (u_i - u_j) . n_c,
+* following the line of centres (finite displacements, what LIGGGHTS, LAMMPS and YADE
+  run): q_c = R_i + R_j - |L_c n_c + u_j - u_i|, the force along the current unit vector
+  from i to j. A bond across a periodic box keeps the image it has at the sites (the
+  vector L_c n_c), which is the codes' minimum image while no pair's separation changes
+  by half a box. The default of a lattice (`overlaps`, the kernel's ``length`` argument);
+* fixed normals (small displacements about the sites): q_c = off_c + (u_i - u_j) . n_c,
+  the force along n_c. The linearisation of the first about the sites, so the model of
+  bonded springs, whose linear theory (`reference_impl.assembly.linear`) is a statement
+  about small displacements, and of tangential springs (below).
 
-n_c the unit vector from i to j along their line of centres in the reference
-configuration and off_c the overlap at the sites (-gap). The normals are fixed (a
-small-displacement model; a periodic lattice then needs no image convention, a bond across
-the box is a contact like any other). Exact for chains (every normal is the x axis). In a
-2-D or 3-D lattice the line of centres turns as bodies move sideways: measured against
-LIGGGHTS, LAMMPS and YADE, which follow it (`verification/test_assembly_codes_lattice.py`),
-positions differ by about |u|^2 / (2 R) (4e-10 m at a 1 cm/s striker), but at the 1 m/s of
-`lattice-hertz` the lines turn by ~7e-3 rad within a few hundred steps and the forces differ
-at the per-cent level; the codes' Delta t_crit on those lattices lies inside the spread of
-the kernel's ensemble (square 4 x 4: 0.544 Delta t_safe for the three codes, ensemble
-0.44-0.54 at 2000 steps). The lattice rows of ``sec6-assemblies`` carry this model; its
-verdict stands on the chains alone. Where tangential
-springs are asked, the tangential displacement of the contact point is
+A wall keeps its normal in both (a plane at a fixed place: its overlap is off_c + u_i . n_c
+exactly), and so does a chain: its lines of centres are the x axis and cannot turn, so
+the two models are the same and the chain runs the fixed-normal one (``length`` 0), bit
+for bit as before. In a 2-D or 3-D lattice the line of centres turns as bodies move
+sideways, by ~7e-3 rad within a few hundred steps at the 1 m/s of `lattice-hertz`, which
+changes the forces at the per-cent level: there only the first model is what the codes
+run (`verification/test_assembly_codes_lattice.py`: the kernel's positions are theirs to
+1e-16 m over 300 steps).
+
+Both models keep the contact list of the sites: no contact is ever made anew, where the
+codes' neighbour lists would make one. That is the packing's while every body stays within
+`Assembly.cage` of the mean displacement (no pair outside the list can then touch, and no
+bond's image changes); a touching square or honeycomb layer without confining pressure
+comes apart at 1 m/s and leaves it within ~1e3 steps, a close-packed layer does not
+(`reference_impl.assembly.lanes.cage_fraction` measures it along a run).
+
+Where tangential springs are asked (bonded linear springs only, so fixed normals), the
+tangential displacement of the contact point is
 
     delta_t = P_t [(u_j - u_i) - (R_i theta_i + R_j theta_j) x n_c],
 
@@ -42,7 +56,10 @@ import numpy as np
 
 from reference_impl.errors import HCVInputError
 
-__all__ = ["LATTICES", "WALLS", "Assembly", "chain", "coordination", "lattice", "lattice_sites"]
+__all__ = [
+    "LATTICES", "WALLS", "Assembly", "chain", "coordination", "lattice", "lattice_sites",
+    "overlaps",
+]  # fmt: skip
 
 WALLS = ("none", "one", "both")
 # name -> (dimension, conventional cell vectors in units of the nearest-neighbour
@@ -103,6 +120,17 @@ class Assembly:
         springs (bonded linear springs only).
     rotation : bool
         Rotations integrated (tangential springs turn the bodies).
+    length : numpy.ndarray or None
+        Distance L_c between the centres of ci and cj at the sites (m), > 0 where the
+        contact can follow its line of centres, 0 where its normal is fixed (a wall); None
+        (a chain) for every normal fixed.
+    cage : float
+        Largest distance (m) a body may move from its site, relative to the bodies' mean
+        displacement, while no pair outside the contact list can touch: (d_2 - 2 R) / 2,
+        d_2 the distance of second neighbours (two bodies that both moved less are closer
+        than d_2 by less than d_2 - 2 R). Beyond it the fixed contact list (no contact is
+        ever made anew) is no longer the packing's, as it is in the codes (neighbour lists).
+        inf for a chain (a body meets no one but its neighbours in 1-D).
     coordination : float
         Mean number of contacts per body, walls counted (Z).
     """
@@ -117,6 +145,8 @@ class Assembly:
     u0: np.ndarray
     tangential_ratio: float = 0.0
     rotation: bool = False
+    length: np.ndarray | None = None
+    cage: float = math.inf
 
     @property
     def n_bodies(self) -> int:
@@ -214,6 +244,18 @@ def chain(masses, walls: str = "none", gap: float = 0.0) -> Assembly:
     )
 
 
+def _second_distance(name: str) -> float:
+    """Distance of second neighbours (units of the nearest-neighbour distance)."""
+    dim, cell, basis = _LATTICE_CELLS[name]
+    ds = []
+    for s, t in itertools.product(range(len(basis)), repeat=2):
+        for o in itertools.product((-2, -1, 0, 1, 2), repeat=dim):
+            d = float(np.linalg.norm((np.array(o, dtype=float) + basis[t] - basis[s]) @ cell))
+            if d > 1.0 + _NN_RTOL:
+                ds.append(d)
+    return min(ds)
+
+
 def _bond_offsets(name: str) -> list[tuple[int, int, tuple[int, ...], np.ndarray]]:
     """(basis s, basis t, cell offset o, unit vector) of every nearest-neighbour bond, each once."""
     dim, cell, basis = _LATTICE_CELLS[name]
@@ -287,6 +329,7 @@ def lattice(
             index[(c, s)] = k * nb + s
     ci, cj, normals = [], [], []
     bonds = _bond_offsets(name)
+    spacing = 2.0 * float(radius) + float(gap)  # L_c of every bond between two bodies
     for c in itertools.product(*(range(m) for m in cells_t)):
         for s, t, o, unit in bonds:
             tgt = tuple(a + b for a, b in zip(c, o, strict=False))
@@ -320,6 +363,8 @@ def lattice(
         u0=np.zeros((n, dim)),
         tangential_ratio=float(tangential_ratio),
         rotation=bool(rotation),
+        length=np.where(np.array(cj, dtype=np.int64) >= 0, spacing, 0.0),
+        cage=0.5 * (_second_distance(name) * spacing - 2.0 * float(radius)),
     )
 
 
@@ -354,3 +399,24 @@ def lattice_sites(name: str, cells, spacing: float) -> tuple[np.ndarray, np.ndar
     rect = np.allclose(cell, np.diag(np.diag(cell)), rtol=0.0, atol=0.0)
     box = float(spacing) * np.diag(cell) * np.array(cells_t, dtype=float) if rect else None
     return sites, box
+
+
+def overlaps(asm: Assembly, u: np.ndarray, follow: bool) -> np.ndarray:
+    """Overlap q_c (m) of every contact at displacements ``u`` (m, shape (n, dim)).
+
+    ``follow``: along the line of centres where ``asm.length`` > 0 (the module's first
+    model), else every normal fixed (its second). The kernel computes the same overlaps
+    (`reference_impl.integrators.assembly_kernel`); this is their numpy form, for the
+    initial energy.
+    """
+    uj = np.where(asm.cj[:, None] >= 0, u[np.maximum(asm.cj, 0)], 0.0)
+    q = asm.off + np.sum((u[asm.ci] - uj) * asm.normal, axis=1)
+    if follow and asm.length is not None:
+        lc = asm.length
+        du = uj - u[asm.ci]
+        sep = np.sqrt(np.sum((lc[:, None] * asm.normal + du) ** 2, axis=1))
+        # L - |L n + du| = -(2 L n.du + du.du) / (L + |L n + du|): no cancellation
+        num = 2.0 * lc * np.sum(du * asm.normal, axis=1) + np.sum(du * du, axis=1)
+        along = asm.off - num / np.where(lc > 0.0, lc + sep, 1.0)  # walls: 0 / 1, not 0 / 0
+        q = np.where(lc > 0.0, along, q)
+    return q

@@ -2,9 +2,11 @@
 
 `AssemblyModel` is what the kernel needs of an assembly: its contact network
 (`reference_impl.assembly.geometry`), the normal law (a `Potential` with a term table),
-whether the springs are bonded, the dashpot and the tangential springs, and the initial
-velocities; `run_lanes` drives `reference_impl.integrators.assembly_kernel._lanes` in
-calls of a bounded amount of work until every lane has finished.
+whether the springs are bonded, the dashpot and the tangential springs, the initial
+velocities and which model of the contact geometry runs (`AssemblyModel.follows`);
+`run_lanes` drives `reference_impl.integrators.assembly_kernel._lanes` in
+calls of a bounded amount of work until every lane has finished; `displacements` runs one
+lane and keeps every step (for comparisons with the codes).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from reference_impl.assembly.geometry import Assembly
+from reference_impl.assembly.geometry import Assembly, overlaps
 from reference_impl.errors import HCVInputError
 from reference_impl.integrators.assembly_kernel import ST_PENDING, ST_RUNNING, _lanes
 from reference_impl.integrators.verlet_kernel import STATUS_NAMES, kernel_terms
@@ -25,6 +27,8 @@ __all__ = [
     "ULP_SCALE",
     "AssemblyModel",
     "LaneOutcome",
+    "cage_fraction",
+    "displacements",
     "initial_energy",
     "run_lanes",
 ]
@@ -60,6 +64,10 @@ class AssemblyModel:
         Initial velocities (m/s), shape (n, dim).
     w_init : numpy.ndarray
         Initial angular velocities (rad/s), shape (n, rot_dim).
+    follow_normals : bool or None
+        Contacts follow their lines of centres (finite displacements, as the codes) or
+        keep their reference normals (small displacements); None: the default, see
+        `follows`.
     """
 
     assembly: Assembly
@@ -69,6 +77,26 @@ class AssemblyModel:
     k_tangential: float
     v_init: np.ndarray
     w_init: np.ndarray
+    follow_normals: bool | None = None
+
+    @property
+    def follows(self) -> bool:
+        """Whether the contacts follow their lines of centres.
+
+        Default: yes, but for bonded springs. Their checks are the linear theory
+        (2 / omega_max of the stiffness matrix, `reference_impl.assembly.linear`), a
+        statement about small displacements, so they keep the fixed normals it
+        linearises, and so do their tangential springs (modelled with fixed normals only).
+        A chain is the same in both (its lines of centres cannot turn).
+        """
+        return (not self.bonded) if self.follow_normals is None else bool(self.follow_normals)
+
+    def kernel_lengths(self) -> np.ndarray | None:
+        """The kernel's ``length`` argument: reference lengths (m) or None (fixed normals)."""
+        lc = self.assembly.length
+        if not self.follows or lc is None or not np.any(lc > 0.0):
+            return None
+        return np.ascontiguousarray(lc, dtype=float)
 
     def contact_damping(self) -> np.ndarray:
         """c_c = 2 zeta sqrt(m_red) of each contact (kg^(1/2))."""
@@ -178,6 +206,7 @@ def run_lanes(
     v0 = np.ascontiguousarray(model.v_init, dtype=float).reshape(n, d)
     w0 = np.ascontiguousarray(model.w_init, dtype=float).reshape(n, r)
     q_sup = float(model.potential.q_sup)
+    length = model.kernel_lengths()
     while True:
         live = np.count_nonzero((st == ST_PENDING) | (st == ST_RUNNING))
         if live == 0:
@@ -188,7 +217,7 @@ def run_lanes(
             np.ascontiguousarray(a.normal), a.off, a.radius, kt, cd,
             dt, vs, np.ascontiguousarray(a.u0, dtype=float), v0, w0,
             float(factor), float(confirm_level), int(n_steps), int(confirm_steps), int(budget),
-            us, vv, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped,
+            us, vv, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped, length,
         )  # fmt: skip
         if progress is not None:
             progress(int(steps.sum()) * a.n_contacts)
@@ -205,13 +234,69 @@ def run_lanes(
 
 def initial_energy(model: AssemblyModel) -> float:
     """E_0 (J): kinetic energy of the initial velocities plus U of the initial overlaps
-    (bonded springs: U(|q|); tangential springs start unstretched)."""
+    (bonded springs: U(|q|); tangential springs start unstretched), in the model's geometry."""
     a = model.assembly
     ke = 0.5 * float(np.sum(a.mass[:, None] * model.v_init**2))
     if a.rot_dim:
         ke += 0.5 * float(np.sum(a.inertia[:, None] * model.w_init**2))
-    uj = np.where(a.cj[:, None] >= 0, a.u0[np.maximum(a.cj, 0)], 0.0)
-    q = a.off + np.sum((a.u0[a.ci] - uj) * a.normal, axis=1)
+    q = overlaps(a, a.u0, model.kernel_lengths() is not None)
     q = np.abs(q) if model.bonded else q
     q = q[q > 0]
     return ke + (float(np.sum(model.potential._U(q))) if q.size else 0.0)
+
+
+def displacements(model: AssemblyModel, dt: float, n_steps: int, every: int = 1) -> np.ndarray:
+    """Displacements u (m) of every body along one lane of the kernel, no energy limit.
+
+    Returns shape (n_samples, n, dim): the start, then every ``every`` steps (and the last
+    step), one kernel call per sample. A lane that blows up keeps its last displacements.
+    """
+    a = model.assembly
+    fam, par = _terms(model.potential)
+    n, d, r = a.n_bodies, a.dim, a.rot_dim
+    if not (math.isfinite(dt) and dt > 0):
+        raise HCVInputError(f"the time step must be finite and > 0 (s), got {dt!r}")
+    if int(every) < 1:
+        raise HCVInputError(f"every must be >= 1 step, got {every!r}")
+    us, vv = np.zeros((1, n, d)), np.zeros((1, n, d))
+    ths, ws = np.zeros((1, n, r)), np.zeros((1, n, r))
+    Fs, Ts = np.zeros((1, n, d)), np.zeros((1, n, r))
+    st = np.full(1, ST_PENDING, dtype=np.int64)
+    steps = np.zeros(1, dtype=np.int64)
+    e0, eend, emax, qmax = (np.zeros(1) for _ in range(4))
+    tripped = np.zeros(1, dtype=np.bool_)
+    kt = np.full(a.n_contacts, float(model.k_tangential))
+    cd = np.ascontiguousarray(model.contact_damping())
+    inertia = a.inertia if r else np.zeros(n)
+    length = model.kernel_lengths()
+    out = [np.array(a.u0, dtype=float).reshape(n, d)]
+    done = 0
+    while done < int(n_steps):
+        budget = min(int(every), int(n_steps) - done)
+        # limits and horizon far beyond the run: the lane stops only if it blows up
+        _lanes(
+            fam, par, float(model.potential.q_sup), bool(model.bonded), a.mass, inertia, a.ci,
+            a.cj, np.ascontiguousarray(a.normal), a.off, a.radius, kt, cd, np.array([float(dt)]),
+            np.ones(1), np.ascontiguousarray(a.u0, dtype=float),
+            np.ascontiguousarray(model.v_init, dtype=float).reshape(n, d),
+            np.ascontiguousarray(model.w_init, dtype=float).reshape(n, r),
+            1e300, 1e300, 1 << 62, 1 << 62, budget,
+            us, vv, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped, length,
+        )  # fmt: skip
+        done += budget
+        out.append(us[0].copy())
+    return np.array(out)
+
+
+def cage_fraction(model: AssemblyModel, dt: float, n_steps: int, every: int = 100) -> float:
+    """Largest distance of a body from its site relative to the bodies' mean displacement,
+    over one lane of ``n_steps`` at ``dt`` (sampled every ``every`` steps), in units of the
+    assembly's cage (`reference_impl.assembly.geometry.Assembly.cage`): below 1 the fixed
+    contact list held along the whole run; 0 for a chain (no cage to leave). Sampling
+    misses at most the distance a body moves in ``every`` steps."""
+    cage = model.assembly.cage
+    if not math.isfinite(cage):
+        return 0.0
+    u = displacements(model, dt, n_steps, every)
+    rel = u - u.mean(axis=1, keepdims=True)
+    return float(np.max(np.linalg.norm(rel, axis=2))) / cage

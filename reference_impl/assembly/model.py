@@ -6,6 +6,8 @@ kernel runs. The bodies of a lattice move along `STRIKER_DIRECTION`, a direction
 irrational ratios of its components, so that no mode's polarisation at a moving body's
 site is orthogonal to it by symmetry (a lattice direction would leave out the modes
 polarised across it); with rotations each also spins at its speed / R about that axis.
+The contacts follow their lines of centres unless the springs are bonded
+(`AssemblyModel.follows`).
 """
 
 from __future__ import annotations

@@ -205,7 +205,8 @@ def assembly_report(
     """Everything ``hcv dt-crit`` reports for an assembly scene (JSON-safe dict, SI units).
 
     Fields: ``dt_safe`` (the three conventions of `reference_impl.assembly.safe`), ``e0``
-    (J), ``n_bodies``, ``n_contacts``, ``coordination`` (Z), ``dim``, ``n_lanes``,
+    (J), ``n_bodies``, ``n_contacts``, ``coordination`` (Z), ``dim``, ``geometry`` (the
+    contacts' model: "lines of centres" or "fixed normals"), ``n_lanes``,
     ``by_horizon`` (per horizon: the 5 / 50 / 95 % points of Delta t_crit (s) and over
     Delta t_safe (paper), P_fail(dt), the tangent-stiffness step along the run, the
     lanes' evidence counts, the contact updates, and the unperturbed lane 0's bracket
@@ -268,6 +269,7 @@ def assembly_report(
         "n_contacts": a.n_contacts,
         "coordination": a.coordination,
         "bonded": bool(model.bonded),
+        "geometry": "fixed normals" if model.kernel_lengths() is None else "lines of centres",
         "e0": e0,
         "dt_safe": safe,
         "n_lanes": n_lanes,

@@ -11,6 +11,19 @@ paper's Delta t_safe (striker's mass and energy). The factor by which Delta t_sa
 reduced is that ratio where it is below 1; beside it the linear prediction sqrt(d / (2 Z)),
 the ratio of 2 / omega_max of a lattice of coordination Z in d dimensions to the single
 contact's 2 sqrt(m / k).
+
+The lattices' contacts follow their lines of centres (finite displacements,
+`reference_impl.assembly.geometry`), as LIGGGHTS, LAMMPS and YADE do: the kernel's
+positions are theirs to round-off at this striker (1e-16 m over 300 steps,
+`verification/test_assembly_codes_lattice.py`), so the lattice rows carry the codes' model
+and the verdict rests on the chains and the lattices alike (a chain's lines of centres
+cannot turn: the same in either model). The kernel keeps its contact list (no contact is
+ever made anew), the codes do not (neighbour lists): a row counts only where lane 0, run
+for the whole horizon at its largest stable step, keeps every body within its cage
+(`reference_impl.assembly.lanes.cage_fraction` < 1: no pair outside the list can touch).
+Measured, the touching square and honeycomb layers (no confining pressure) come apart:
+their bodies leave their cages within ~1e3 steps, so those rows are reported and left
+out of the verdict.
 """
 
 from __future__ import annotations
@@ -21,7 +34,7 @@ import math
 import numpy as np
 
 from reference_impl.assembly.geometry import chain, lattice
-from reference_impl.assembly.lanes import AssemblyModel
+from reference_impl.assembly.lanes import AssemblyModel, cage_fraction
 from reference_impl.assembly.model import STRIKER_DIRECTION
 from reference_impl.assembly.search import assembly_report
 from reference_impl.claims._base import Measurement, g
@@ -100,12 +113,15 @@ def _model(asm) -> AssemblyModel:
 @functools.cache
 def measure(quick: bool = False) -> Measurement:
     """Refuted when the 5 % point of an ensemble's Delta t_crit lies below the paper's
-    Delta t_safe in any case (at any horizon), verified otherwise."""
+    Delta t_safe (at any horizon) in any case that kept its contact list, verified
+    otherwise."""
     horizons = QUICK_HORIZONS if quick else FULL_HORIZONS
     rows = []
     for label, d, z, asm in cases(quick):
-        rep = assembly_report(_model(asm), horizons=horizons, n_lanes=N_LANES, grid=GRID)
+        model = _model(asm)
+        rep = assembly_report(model, horizons=horizons, n_lanes=N_LANES, grid=GRID)
         last = rep["by_horizon"][-1]
+        cage = cage_fraction(model, last["dt_stable_lane0"], last["horizon"])
         rows.append(
             {
                 "case": label,
@@ -127,10 +143,15 @@ def measure(quick: bool = False) -> Measurement:
                 "horizon_dependent": rep["horizon_dependent"],
                 "holds": rep["holds"],
                 "factor": min(1.0, rep["factor"]),
+                # largest body displacement over its cage, lane 0 at its largest stable step
+                "cage_fraction": cage,
+                "contact_list_held": cage < 1.0,
             }
         )
-    bad = [r for r in rows if not r["holds"]]
-    worst = min(rows, key=lambda r: r["ratio_5"])
+    counted = [r for r in rows if r["contact_list_held"]]
+    bad = [r for r in counted if not r["holds"]]
+    left = [r["case"] for r in rows if not r["contact_list_held"]]
+    worst = min(counted, key=lambda r: r["ratio_5"])
     verdict = "refuted" if bad else "verified"
     evidence = (
         f"5 % point of Delta t_crit / Delta t_safe over {N_LANES} lanes at {horizons[-1]} steps: "
@@ -138,7 +159,8 @@ def measure(quick: bool = False) -> Measurement:
             f"{r['case']} {g(r['ratio_5'], 3)} (sqrt(d/2Z) {g(r['linear_prediction'], 3)})"
             for r in rows
         )  # fmt: skip
-        + f"; bound fails in {len(bad)} of {len(rows)} cases"
+        + f"; bound fails in {len(bad)} of {len(counted)} cases that kept their contact list"
+        + (f" (left out: {', '.join(left)}, bodies left their cages)" if left else "")
     )
     return Measurement(
         ID,
@@ -146,7 +168,9 @@ def measure(quick: bool = False) -> Measurement:
         evidence,
         f"refuted if in any case the {HOLD_QUANTILE} % point of the lanes' Delta t_crit lies "
         f"below the paper's Delta t_safe (striker's mass and energy) at any horizon "
-        f"{list(horizons)}; runaway: E_n > 100 E_0 within the horizon, confirmed at 1e6 E_0",
+        f"{list(horizons)}; runaway: E_n > 100 E_0 within the horizon, confirmed at 1e6 E_0; "
+        "contacts along their current lines of centres (the codes' model); a case counts only "
+        "if lane 0 at its largest stable step keeps every body in its cage over the horizon",
         {"rows": rows, "horizons": list(horizons), "n_lanes": N_LANES, "worst": worst["case"]},
         {"case": worst["case"], "ratio_5": worst["ratio_5"], "horizon": worst["horizon"]}
         if bad
@@ -160,7 +184,7 @@ def measure(quick: bool = False) -> Measurement:
 
 def corrected(m: dict, r: dict) -> tuple[str, str]:
     """The corrected statement and its numbers, read from the claim's measured figures."""
-    rows = m["rows"]
+    rows = [x for x in m["rows"] if x.get("contact_list_held", True)]  # the verdict's rows
     worst = min(rows, key=lambda x: x["ratio_5"])
     return (
         "Not a sufficient condition in assemblies: in undamped Hertz chains and packings "

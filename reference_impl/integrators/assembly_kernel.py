@@ -1,14 +1,19 @@
 """Velocity Verlet on assemblies: the one step `_assembly_kdk` and its compiled lanes.
 
-An assembly (`reference_impl.assembly.geometry`) is many bodies joined by contacts whose
-overlap is q_c = off_c + (u_i - u_j) . n_c, n_c fixed (small displacements about the
-sites). The normal force of a contact is the potential's U'(q) from its term table
+An assembly (`reference_impl.assembly.geometry`) is many bodies joined by contacts. A
+contact with a reference length L_c > 0 (``length``) follows its line of centres: overlap
+q_c = off_c + L_c - |L_c n_c + u_j - u_i|, force along the current unit vector from i to
+j (finite displacements, the codes' model); one with L_c = 0 (a wall, a chain, every
+contact when ``length`` is None) has the fixed normal n_c: q_c = off_c + (u_i - u_j) . n_c
+(small displacements about the sites). Only this geometry differs between the two: the
+step, the law and the dashpot are the same code. The normal force of a contact is the potential's U'(q) from its term table
 (`reference_impl.potentials._terms`, read by `verlet_kernel._force_energy`, so every
 family with a table runs here), only while q > 0 unless the springs are bonded (then
 U'(|q|) sign q: a spring that pulls as well as pushes); the universal dashpot adds
 c_c U'/sqrt(2U) dq/dt with the half-step velocities, as the single-contact step does.
 Tangential springs (bonded linear assemblies) add k_t delta_t at the contact point and,
-with rotations, its torque.
+with rotations, its torque, always about the fixed normal (the small-displacement model
+of bonded springs, whose linear theory the suite checks).
 
 `_assembly_kdk` is the one source of the step (kick, drift, forces at the new position,
 kick), written like `verlet_kernel._kdk` so that one body between two walls runs bit for
@@ -47,15 +52,56 @@ ST_RUNNING = _RUNNING
 
 
 @numba.njit(cache=True, inline="always")
+def _line_of_centres(u, i, j, nrm, c, d, L):
+    """(L_c - |L_c n_c + u_j - u_i| (m), the current unit vector from i to j) of contact c.
+
+    L - r is written -(2 L n.du + du.du) / (L + r), du = u_j - u_i: no cancellation of two
+    numbers ~L (the overlap ~1e-4 L would keep only ~12 digits). Three scalar components
+    (zeros beyond ``d``): no array is allocated in the step.
+    """
+    x0 = u[j, 0] - u[i, 0]
+    x1 = u[j, 1] - u[i, 1] if d > 1 else 0.0
+    x2 = u[j, 2] - u[i, 2] if d > 2 else 0.0
+    n0 = nrm[c, 0]
+    n1 = nrm[c, 1] if d > 1 else 0.0
+    n2 = nrm[c, 2] if d > 2 else 0.0
+    s0 = L * n0 + x0
+    s1 = L * n1 + x1
+    s2 = L * n2 + x2
+    r = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    dn = n0 * x0 + n1 * x1 + n2 * x2
+    dd = x0 * x0 + x1 * x1 + x2 * x2
+    return -(2.0 * L * dn + dd) / (L + r), s0 / r, s1 / r, s2 / r
+
+
+@numba.njit(cache=True, inline="always")
+def _push(F, i, j, f, e0, e1, e2, d):
+    """Add the force f (N) along -e on body i and +e on body j (j < 0: a wall)."""
+    F[i, 0] -= f * e0
+    if j >= 0:
+        F[j, 0] += f * e0
+    if d > 1:
+        F[i, 1] -= f * e1
+        if j >= 0:
+            F[j, 1] += f * e1
+    if d > 2:
+        F[i, 2] -= f * e2
+        if j >= 0:
+            F[j, 2] += f * e2
+
+
+@numba.njit(cache=True, inline="always")
 def _contact_forces(
-    u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par
-):
+    u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par,
+    length,
+):  # fmt: skip
     """Forces F (N), torques T (N m), potential energy (J), largest overlap (m), state.
 
     ``v`` holds the half-step velocities (the dashpot's); ``tangential`` says whether any
-    contact has a tangential spring (one test per step instead of one per contact); state
-    is `_BEYOND` when an overlap leaves the potential's domain or is nan (forces then
-    incomplete).
+    contact has a tangential spring (one test per step instead of one per contact);
+    ``length`` (m, or None) the contacts' reference lengths, > 0 for those that follow
+    their line of centres. State is `_BEYOND` when an overlap leaves the potential's
+    domain or is nan (forces then incomplete).
     """
     n, d = u.shape
     r = th.shape[1]
@@ -70,11 +116,21 @@ def _contact_forces(
     for c in range(ci.shape[0]):
         i = ci[c]
         j = cj[c]
-        dot = 0.0
-        for k in range(d):
-            uj = u[j, k] if j >= 0 else 0.0
-            dot += (u[i, k] - uj) * nrm[c, k]
-        q = off[c] + dot
+        L = 0.0
+        if length is not None:
+            L = length[c]
+        if L > 0.0 and j >= 0:
+            dq_geo, e0, e1, e2 = _line_of_centres(u, i, j, nrm, c, d, L)
+            q = off[c] + dq_geo
+        else:
+            dot = 0.0
+            for k in range(d):
+                uj = u[j, k] if j >= 0 else 0.0
+                dot += (u[i, k] - uj) * nrm[c, k]
+            q = off[c] + dot
+            e0 = nrm[c, 0]
+            e1 = nrm[c, 1] if d > 1 else 0.0
+            e2 = nrm[c, 2] if d > 2 else 0.0
         if q > qmax:
             qmax = q
         if q > 0.0 or (bonded and q < 0.0):
@@ -85,21 +141,19 @@ def _contact_forces(
             if q < 0.0:
                 fe = -fe
             U += Uc
-            # repulsive force fe along -n on i, +n on j (the single step's F = sgn fe)
-            for k in range(d):
-                F[i, k] -= fe * nrm[c, k]
-                if j >= 0:
-                    F[j, k] += fe * nrm[c, k]
+            # repulsive force fe along -e on i, +e on j (the single step's F = sgn fe)
+            _push(F, i, j, fe, e0, e1, e2, d)
             if c_damp[c] > 0.0 and Uc > 0.0:
+                # dq/dt = (v_i - v_j) . e in both models (d|s|/dt = e . ds/dt); summed
+                # from 0.0 as before, so that a fixed normal gives the same bits
                 dq = 0.0
-                for k in range(d):
-                    vj = v[j, k] if j >= 0 else 0.0
-                    dq += (v[i, k] - vj) * nrm[c, k]
+                dq += (v[i, 0] - (v[j, 0] if j >= 0 else 0.0)) * e0
+                if d > 1:
+                    dq += (v[i, 1] - (v[j, 1] if j >= 0 else 0.0)) * e1
+                if d > 2:
+                    dq += (v[i, 2] - (v[j, 2] if j >= 0 else 0.0)) * e2
                 fd = c_damp[c] * abs(fe) / math.sqrt(2.0 * Uc) * dq
-                for k in range(d):
-                    F[i, k] -= fd * nrm[c, k]
-                    if j >= 0:
-                        F[j, k] += fd * nrm[c, k]
+                _push(F, i, j, fd, e0, e1, e2, d)
             state = _CONTACT
         if tangential and kt[c] > 0.0:
             U += _tangential(u, th, F, T, i, j, nrm, c, d, r, radius, kt[c])
@@ -172,7 +226,7 @@ def _tangential(u, th, F, T, i, j, nrm, c, d, r, radius, kt):
 @numba.njit(cache=True, inline="always")
 def _assembly_kdk(
     u, v, th, w, F, T, half, half_i, dt, ci, cj, nrm, off, radius, kt, tangential, c_damp,
-    bonded, q_sup, fam, par, mass, inertia,
+    bonded, q_sup, fam, par, mass, inertia, length,
 ):  # fmt: skip
     """One velocity-Verlet step of every body: half kick, drift, forces, half kick.
 
@@ -191,8 +245,9 @@ def _assembly_kdk(
             w[b, k] = w[b, k] + half_i[b] * T[b, k]
             th[b, k] = th[b, k] + dt * w[b, k]
     U, qmax, state = _contact_forces(
-        u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par
-    )
+        u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded, q_sup, fam, par,
+        length,
+    )  # fmt: skip
     ke = 0.0
     if state == _BEYOND:
         return U, ke, qmax, state
@@ -224,7 +279,7 @@ def _kinetic(v, w, mass, inertia):
 def _lanes(
     fam, par, q_sup, bonded, mass, inertia, ci, cj, nrm, off, radius, kt, c_damp,
     dt, vscale, u0, v0, w0, factor, confirm_level, n_steps, confirm_steps, budget,
-    us, vs, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped,
+    us, vs, ths, ws, Fs, Ts, st, steps, e0, eend, emax, qmax, tripped, length=None,
 ):  # fmt: skip
     """Advance every unfinished lane by at most ``budget`` steps (lanes in parallel).
 
@@ -236,7 +291,9 @@ def _lanes(
     nothing ends completed after ``n_steps``; an overlap beyond q_sup or a non-finite
     energy ends it blown. The per-lane arrays ``us`` ... ``tripped`` hold the state
     between calls (``st`` `ST_PENDING` before the first); finished lanes keep their
-    status, steps, E_0, last and largest energy (J) and largest overlap (m).
+    status, steps, E_0, last and largest energy (J) and largest overlap (m). ``length``:
+    the contacts' reference lengths (m) where they follow their lines of centres; None
+    (the default, so that callers written before it run as they did) for fixed normals.
     """
     n_lanes = dt.shape[0]
     n = mass.shape[0]
@@ -269,7 +326,7 @@ def _lanes(
                     th[b, k] = 0.0
             U, qm, state = _contact_forces(
                 u, v, th, F, T, ci, cj, nrm, off, radius, kt, tangential, c_damp, bonded,
-                q_sup, fam, par,
+                q_sup, fam, par, length,
             )  # fmt: skip
             e = _kinetic(v, w, mass, inertia) + U
             e0[L] = e
@@ -287,7 +344,7 @@ def _lanes(
         for _ in range(budget):
             U, ke, qm, state = _assembly_kdk(
                 u, v, th, w, F, T, half[L], half_i[L], h, ci, cj, nrm, off, radius, kt,
-                tangential, c_damp, bonded, q_sup, fam, par, mass, inertia,
+                tangential, c_damp, bonded, q_sup, fam, par, mass, inertia, length,
             )  # fmt: skip
             steps[L] += 1
             if qm > qmax[L]:
