@@ -31,7 +31,7 @@ from reference_impl.bench.assembly_codes import LATTICE_SIZES, lattice_request, 
 from reference_impl.potentials import PowerLaw
 from reference_impl.scenes import scene_from_dict
 from reference_impl.stability.criteria import SearchGrid
-from verification._lattice_codes import verlet_lattice
+from verification._assembly_codes import verlet_lattice
 
 from .assertions import assert_close, assert_true
 
