@@ -242,8 +242,9 @@ def test_the_report_runs_the_advice_of_the_chain_codes_it_is_given():
 
 @pytest.mark.liggghts
 def test_liggghts_advice_rows_are_valid_report_rows(doc):
-    """The study's rows (LIGGGHTS on chains of 2-5) go into results.json as the schema
-    asks and are rendered; Rayleigh safe, Hertz time unsafe (issue 39 section 4)."""
+    """The study's rows (LIGGGHTS on chains of 2-5 and the two periodic lattices) go into
+    results.json as the schema asks and are rendered; Rayleigh safe, Hertz time unsafe on
+    every scene (issue 39 section 4)."""
     from reference_impl.adapters.liggghts import liggghts_available
 
     why = liggghts_available()  # None when installed, else the install line
@@ -256,12 +257,15 @@ def test_liggghts_advice_rows_are_valid_report_rows(doc):
     check_results(with_rows, "test document with LIGGGHTS's advice")
     shown = _render.markdown(with_rows)
     verdicts = {(x["advice"], x["verdict"]) for x in rows}
+    lattice_rows = [x for x in rows if x["scene"].startswith("lattice-")]
     assert_true(
-        len(rows) == 8
+        len(rows) == 12
+        and len(lattice_rows) == 4
         and verdicts == {("rayleigh", "safe"), ("hertz", "unsafe")}
         and all(f"| liggghts | {x['scene']} | {x['advice']} |" in shown for x in rows),
-        got=f"{len(rows)} rows, verdicts {sorted(verdicts)}",
-        should="8 rows (2 advices x N = 2..5): rayleigh safe, hertz unsafe, each rendered",
+        got=f"{len(rows)} rows ({len(lattice_rows)} on lattices), verdicts {sorted(verdicts)}",
+        should="12 rows (2 advices x (N = 2..5 and 2 lattices)): rayleigh safe, hertz unsafe, "
+        "each rendered",
         claim=CLAIM,
         call="code_advice(('liggghts',))",
     )

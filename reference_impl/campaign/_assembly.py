@@ -169,15 +169,18 @@ def advice_codes(adapters) -> tuple[str, ...]:
 
 
 def code_advice(names) -> list[dict]:
-    """The codes' own step advice on Hertz chains (issue 39 section 4).
+    """The codes' own step advice on Hertz chains and periodic lattices (issue 39 section 4).
 
     Runs `reference_impl.bench.assembly_codes.assembly_codes_table` for the codes
-    ``names`` (each code's measured Delta t_crit on chains of 2-5 bodies and the advice it
-    computes) and returns the rows as the report's ``assemblies.code_advice`` takes them
+    ``names`` (each code's measured Delta t_crit on chains of 2-5 bodies and on the
+    periodic lattices of `LATTICE_SIZES`, square 4 x 4 and simple-cubic 3 x 3 x 3, and the
+    advice it computes; the codes keep neighbour lists, so their lattice runs stand even
+    where the suite's fixed contact list does not) and returns the rows as the report's ``assemblies.code_advice`` takes them
     (schema ``$defs/code_advice_row``: code, scene, advice, verdict, dt_advice and dt_crit
-    in s, factor = dt_crit / dt_advice, note). Seconds per code and size.
+    in s, factor = dt_crit / dt_advice, note). Seconds per code and chain, ~10 s per code
+    and lattice (LIGGGHTS: 22 s in all, measured at load 6).
     """
-    rows = [r.to_dict() for r in assembly_codes_table(codes=tuple(names))]
+    rows = [r.to_dict() for r in assembly_codes_table(codes=tuple(names), lattices=True)]
     return [
         {
             "code": r["code"],
