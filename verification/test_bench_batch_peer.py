@@ -1,0 +1,112 @@
+"""`benchmarks.bench_batch_peer`: what its record holds (issue 38, goal 5), not how fast.
+
+Its quick mode runs (on fewer impacts still, to stay cheap), and the record must have
+every row, every field the README's batch line reads, a ratio that is the record's own
+peer time over ours at each thread count, and a goal verdict that a run on a sample below
+the issue's standard (1000 impacts, 50 against mpmath) never claims. Bad sizes are
+refused in one line, exit status 2, before any work. The speed itself is measured by the
+benchmark, never here.
+"""
+
+from __future__ import annotations
+
+import json
+
+from benchmarks import bench_batch_peer as bbp
+from verification.assertions import assert_true
+
+# Fields of a row that the README's line and a reader of the record use.
+_ROW_KEYS = {
+    "row", "potential", "m", "damping", "impacts", "threads", "ours_wall_s", "ours_cpu_s",
+    "ours_max_rel_error", "equal_error_target", "sample", "peers", "peer", "peer_rtol",
+    "peer_at_equal_error", "peer_max_rel_error", "ratio", "ratio_cpu", "us_per_impact",
+    "peer_us_per_impact", "goal", "goal_met", "goal_not_met_because", "ratio_short_of_goal",
+    "load_average_1min", "load_average_1min_after",
+}  # fmt: skip
+_RECORD_KEYS = {
+    "schema", "rows", "impacts", "blocks", "peers", "equal_error", "timing", "goal_ratio",
+    "goal_met", "load_average_1min", "load_average_1min_after", "machine",
+}  # fmt: skip
+
+
+def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(tmp_path, capsys):
+    path = tmp_path / "batch_peer.json"
+    argv = ["--quick", "--impacts", "200", "--sample", "8", "--mp-subset", "1"]
+    code = bbp.main([*argv, "--json", str(path)])
+    printed = capsys.readouterr().out
+    rec = json.loads(path.read_text()) if path.is_file() else {}
+    assert_true(
+        code == 0 and _RECORD_KEYS <= rec.keys() and rec["schema"] == bbp.SCHEMA,
+        got=f"exit {code}, keys {sorted(rec)}",
+        should=f"exit 0 and {sorted(_RECORD_KEYS)}, schema {bbp.SCHEMA}",
+        claim="bench",
+        call=f"bench_batch_peer {' '.join(argv)}",
+    )
+    assert_true(
+        [r["row"] for r in rec["rows"]] == list(bbp.ROWS) and rec["blocks"] == 1,
+        got=f"rows {[r['row'] for r in rec['rows']]}, blocks {rec['blocks']}",
+        should=f"rows {list(bbp.ROWS)}, 1 block (--quick)",
+        claim="bench",
+        call="bench_batch_peer --quick",
+    )
+    for r in rec["rows"]:
+        call = f"bench_batch_peer --quick, row {r['row']}"
+        assert_true(
+            _ROW_KEYS <= r.keys() and r["impacts"] == 200 and r["peer"] in r["peers"],
+            got=f"missing {sorted(_ROW_KEYS - r.keys())}, impacts {r.get('impacts')}",
+            should="every row field, 200 impacts, the denominator among the row's peers",
+            claim="bench",
+            call=call,
+        )
+        peer = r["peers"][r["peer"]]
+        for th, ratio in r["ratio"].items():
+            want = peer["wall_s"][th] / r["ours_wall_s"][th]
+            want_cpu = peer["cpu_s"][th] / r["ours_cpu_s"][th]
+            assert_true(
+                ratio == want and r["ratio_cpu"][th] == want_cpu and ratio > 0.0,
+                got=f"ratio {ratio!r}, CPU {r['ratio_cpu'][th]!r}",
+                should=f"{want!r} and {want_cpu!r} (the record's peer time / ours)",
+                claim="bench",
+                call=f"{call}, {th} thread(s)",
+            )
+            assert_true(
+                f"{r['row']}, 200 impacts, {th} thread(s)" in printed
+                and f"ratio {ratio:.1f}x" in printed,
+                got=printed,
+                should=f"a ratio line of {r['row']} on {th} thread(s) with {ratio:.1f}x",
+                claim="bench",
+                call=call,
+            )
+        # A sample of 8 with 1 against mpmath is a check that it runs: never the goal.
+        assert_true(
+            not r["goal_met"] and any("a check, not a measurement" in g
+                                      for g in r["goal_not_met_because"]),
+            got=f"goal_met {r['goal_met']}, because {r['goal_not_met_because']}",
+            should="not met, the small sample named as the reason",
+            claim="bench",
+            call=call,
+        )  # fmt: skip
+        assert_true(
+            peer["identical_to_serial_on_sample"] and peer["no_end"] == 0,
+            got=f"identical {peer['identical_to_serial_on_sample']}, no end {peer['no_end']}",
+            should="the serial peer's bits on the sample, every contact ended",
+            claim="bench",
+            call=call,
+        )
+
+
+def test_bad_sizes_are_refused_in_one_line(capsys):
+    for argv, word in (
+        (["--impacts", "0"], "--impacts 0"),
+        (["--quick", "--blocks", "-1"], "--blocks -1"),
+        (["--quick", "--sample", "5", "--mp-subset", "6"], "--mp-subset 6"),
+    ):
+        code = bbp.main(argv)
+        err = capsys.readouterr().err.strip()
+        assert_true(
+            code == 2 and word in err and len(err.splitlines()) == 1,
+            got=f"exit {code}, stderr {err!r}",
+            should=f"exit 2 and one line naming {word!r}",
+            claim="bench",
+            call=f"bench_batch_peer {' '.join(argv)}",
+        )
