@@ -277,7 +277,10 @@ def _verdict(row: dict, load_start) -> dict:
     reasons = [f"ratio {ratio[th]:.2f}x < {GOAL_RATIO:g}x on {th} thread(s)"
                for th in ratio if ratio[th] < GOAL_RATIO]  # fmt: skip
     if not p["at_equal_error"]:
-        reasons.append("the peer never reaches equal error (compared at its most accurate rung)")
+        reasons.append(
+            f"the peer never reaches equal error (compared at its most accurate rung: worst "
+            f"error {p['max_rel_error']:.1e} > {row['equal_error_target']:.1e} over the sample)"
+        )
     if not p["identical_to_serial_on_sample"]:
         reasons.append("the parallel peer differs from the serial one")
     if s["impacts"] < SAMPLE or s["proxy_check"]["impacts"] < MP_SUBSET:
@@ -285,6 +288,8 @@ def _verdict(row: dict, load_start) -> dict:
             f"equal error on {s['impacts']} impacts ({s['proxy_check']['impacts']} against "
             f"mpmath), fewer than {SAMPLE} ({MP_SUBSET}): a check, not a measurement"
         )
+    if row["impacts"] < IMPACTS:
+        reasons.append(f"{row['impacts']} impacts, not the issue's {IMPACTS}")
     if not s["proxy_check"]["bounds_held"]:
         reasons.append("ours broke its reported bound on the mpmath subset")
     return {

@@ -10,9 +10,14 @@ benchmark, never here.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 
+import pytest
+
 from benchmarks import bench_batch_peer as bbp
+from reference_impl.report.readme_table import speed_table
 from verification.assertions import assert_true
 
 # Fields of a row that the README's line and a reader of the record use.
@@ -29,12 +34,22 @@ _RECORD_KEYS = {
 }  # fmt: skip
 
 
-def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(tmp_path, capsys):
-    path = tmp_path / "batch_peer.json"
-    argv = ["--quick", "--impacts", "200", "--sample", "8", "--mp-subset", "1"]
-    code = bbp.main([*argv, "--json", str(path)])
-    printed = capsys.readouterr().out
-    rec = json.loads(path.read_text()) if path.is_file() else {}
+_ARGV = ["--quick", "--impacts", "200", "--sample", "8", "--mp-subset", "1"]
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    """(exit status, what it printed, its record) of one quick run on 200 impacts."""
+    path = tmp_path_factory.mktemp("bench") / "batch_peer.json"
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = bbp.main([*_ARGV, "--json", str(path)])
+    return code, out.getvalue(), json.loads(path.read_text()) if path.is_file() else {}
+
+
+def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(quick):
+    code, printed, rec = quick
+    argv = _ARGV
     assert_true(
         code == 0 and _RECORD_KEYS <= rec.keys() and rec["schema"] == bbp.SCHEMA,
         got=f"exit {code}, keys {sorted(rec)}",
@@ -93,6 +108,39 @@ def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(tmp_pa
             claim="bench",
             call=call,
         )
+
+
+def test_readme_speed_block_states_each_row_its_ratio_and_why_the_goal_is_not_met(quick):
+    """The README's speed block, given the record (`readme_table.speed_table`): a line per
+    row with ours, the peer and the ratio on each thread count as the record has them, the
+    reasons the goal is not met, and that a one-block run is a check, not a measurement."""
+    _code, _printed, rec = quick
+    bench = {"families": [], "laws": [], "batch": [], "machine": {}}
+    text = speed_table(bench, None, rec)
+    for r in rec["rows"]:
+        ratios = ", ".join(
+            f"{x:.1f}× on {th} thread{'s' if th != '1' else ''}" for th, x in r["ratio"].items()
+        )
+        for want in (
+            f"- `solve_impacts`, {r['row']} (200 impacts): ours",
+            f": ratio {ratios} (goal ≥ 10×: **not met**: ",
+            "a check, not a measurement",
+        ):
+            assert_true(
+                want in text,
+                got=text,
+                should=f"a line containing {want!r}",
+                claim="bench",
+                call=f"speed_table(batch_peer={r['row']})",
+            )
+    assert_true(
+        "benchmarks.bench_batch_peer --json reports/bench/batch_peer.json" in text
+        and "a check that it runs, not a measurement" in text,
+        got=text,
+        should="the command that measures it, and a one-block run called a check",
+        claim="bench",
+        call="speed_table(batch_peer)",
+    )
 
 
 def test_bad_sizes_are_refused_in_one_line(capsys):
