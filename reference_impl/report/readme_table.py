@@ -476,7 +476,7 @@ def main(argv=None) -> int:
         if new != readme:
             print(
                 f"readme_table: {args.readme} differs from {args.results} / {args.bench} / "
-                f"{args.startup}",
+                f"{args.startup} / {args.workprecision} / {args.batch_peer}",
                 file=sys.stderr,
             )
             return 1
