@@ -263,13 +263,17 @@ def batch_peer_text(bp: dict) -> str:
             if r["goal_met"]
             else "**not met**: " + "; ".join(_cell(g) for g in r["goal_not_met_because"])
         )
+        peers = ", ".join(
+            f"{_PEER_SHORT.get(k, k)} {r['peer_us_per_impact'][th]:.1f} µs on {th} "
+            f"thread{'s' if th != '1' else ''} (rtol {r['peer_rtol'][th]:.0e}{eq}; error "
+            f"{r['peer_max_rel_error'][th]:.1e})"
+            for th, k in r["peer"].items()
+        )
         lines.append(
             f"- `solve_impacts`, {_cell(r['row'])} ({r['impacts']} impacts): ours "
-            f"{_threads_figure(r['us_per_impact'], '.2f', ' µs')} per impact; "
-            f"{_PEER_SHORT.get(r['peer'], r['peer'])} in a parallel loop (rtol "
-            f"{r['peer_rtol']:.0e}{eq}; error {r['peer_max_rel_error']:.1e} against ours "
-            f"{r['ours_max_rel_error']:.1e}) {_threads_figure(r['peer_us_per_impact'], '.1f', ' µs')}"
-            f": ratio {_threads_figure(r['ratio'], '.1f', '×')} "
+            f"{_threads_figure(r['us_per_impact'], '.2f', ' µs')} per impact (error "
+            f"{r['ours_max_rel_error']:.1e}); the fastest peer in a parallel loop: {peers}; "
+            f"ratio {_threads_figure(r['ratio'], '.1f', '×')} "
             f"(goal ≥ {bp['goal_ratio']:g}×: {goal}; load {_load_figure(r['load_average_1min'])})"
         )
     mi = bp.get("machine", {})
