@@ -106,15 +106,27 @@ def workload(name: str, n: int) -> dict:
         rng = np.random.default_rng(_SEED)
         v = 10.0 ** rng.uniform(*_LOG_V0, n)
         z = rng.uniform(0.0, _ZETA_MAX, n)
-        return {"pot": _UNIVERSAL_POT, "m": _UNIVERSAL_M, "v": v, "zetas": z, "law": None,
-                "keys": _UNIVERSAL_KEYS}  # fmt: skip
+        return {
+            "pot": _UNIVERSAL_POT,
+            "m": _UNIVERSAL_M,
+            "v": v,
+            "zetas": z,
+            "law": None,
+            "keys": _UNIVERSAL_KEYS,
+        }
     if name not in ROWS:
         raise ValueError(f"row must be one of {ROWS}, got {name!r}")
     pot, m = hertz()
     rng = np.random.default_rng(zlib.crc32(name.encode()))
     v = 10.0 ** rng.uniform(*_LOG_V0, n)
-    return {"pot": pot, "m": m, "v": v, "zetas": None, "law": calibrated_laws()[name],
-            "keys": _LAW_KEYS}  # fmt: skip
+    return {
+        "pot": pot,
+        "m": m,
+        "v": v,
+        "zetas": None,
+        "law": calibrated_laws()[name],
+        "keys": _LAW_KEYS,
+    }
 
 
 def _impact_law(w: dict, i: int) -> dict:
@@ -146,8 +158,9 @@ def _truth_mp(w: dict):
 def _rel(got: np.ndarray, truth: np.ndarray) -> float:
     """Largest relative error (inf where an output is missing)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        e = np.where(truth != 0.0, np.abs(got / np.where(truth != 0.0, truth, 1.0) - 1.0),
-                     np.abs(got))  # fmt: skip
+        e = np.where(
+            truth != 0.0, np.abs(got / np.where(truth != 0.0, truth, 1.0) - 1.0), np.abs(got)
+        )
     e[np.isnan(e)] = np.inf
     return float(e.max()) if e.size else 0.0
 
@@ -172,8 +185,14 @@ def _equal_error(w: dict, idx: np.ndarray, ours: dict, mp_subset: int) -> dict:
         lad = set_ladder(cases[name], impacts, truths, keys, target, PEER_RTOLS)
         if lad is not None:
             peers[name] = {"label": PEER_LABELS[name], **lad, "serial": cases[name]}
-    return {"impacts": impacts, "truths": truths, "ours_err": ours_err, "proxy": proxy,
-            "target": target, "peers": peers}  # fmt: skip
+    return {
+        "impacts": impacts,
+        "truths": truths,
+        "ours_err": ours_err,
+        "proxy": proxy,
+        "target": target,
+        "peers": peers,
+    }
 
 
 def _timed(contestants: dict, threads: tuple, blocks: int) -> dict:
@@ -212,8 +231,9 @@ def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> di
     contestants, last = {"ours": ours_call}, {}
     for pname, p in eq["peers"].items():
         call = batch_call(pname, w["pot"], w["m"], w["v"], w["zetas"], w["law"])
-        batch_call(pname, w["pot"], w["m"], w["v"][:8], None if w["law"] else w["zetas"][:8],
-                   w["law"])(p["rtol"])  # compile / warm on a slice  # fmt: skip
+        batch_call(
+            pname, w["pot"], w["m"], w["v"][:8], None if w["law"] else w["zetas"][:8], w["law"]
+        )(p["rtol"])  # compile / warm on a slice
 
         def fn(call=call, rtol=p["rtol"], pname=pname):
             last[pname] = call(rtol)
@@ -234,7 +254,7 @@ def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> di
                     np.array_equal(out[i], s, equal_nan=True)
                     for i, s in zip(idx, serial, strict=True)
                 )
-            ),  # fmt: skip
+            ),
             "sample_max_rel_error_batch": _rel(
                 np.array([[outputs(out[i], w["v"][i])[k] for k in w["keys"]] for i in idx]),
                 eq["truths"],
@@ -257,7 +277,7 @@ def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> di
             "proxy_check": eq["proxy"],
             "truth": "ours one impact at a time (the proxy); checked against the "
             f"{TRUTH_DPS}-digit truth on the first {eq['proxy']['impacts']}",
-        },  # fmt: skip
+        },
         "peers": peers,
     }
     return _verdict(row, load_start)
@@ -276,8 +296,11 @@ def _verdict(row: dict, load_start) -> dict:
     s = row["sample"]
     worst = min(ratio.values())
     # Why the goal is not met, each reason on its own (empty: met).
-    reasons = [f"ratio {ratio[th]:.2f}x < {GOAL_RATIO:g}x on {th} thread(s)"
-               for th in ratio if ratio[th] < GOAL_RATIO]  # fmt: skip
+    reasons = [
+        f"ratio {ratio[th]:.2f}x < {GOAL_RATIO:g}x on {th} thread(s)"
+        for th in ratio
+        if ratio[th] < GOAL_RATIO
+    ]
     if not at_equal:
         best = min(q["max_rel_error"] for q in row["peers"].values())
         reasons.append(
@@ -385,21 +408,27 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the result to this JSON file")
     ap.add_argument(
-        "--quick", action="store_true",
+        "--quick",
+        action="store_true",
         help=f"{QUICK} impacts, 1 block, a sample of {QUICK_SAMPLE}, {QUICK_MP} against "
         "mpmath (a check that it runs); the flags below override",
-    )  # fmt: skip
+    )
     ap.add_argument("--impacts", type=int, help=f"impacts per row (default {IMPACTS})")
     ap.add_argument("--blocks", type=int, help=f"interleaved blocks (default {BLOCKS})")
     ap.add_argument("--sample", type=int, help=f"impacts of the equal-error sample ({SAMPLE})")
     ap.add_argument("--mp-subset", type=int, help=f"of them against 30 digits ({MP_SUBSET})")
     args = ap.parse_args(argv)
-    quick = (QUICK, 1, QUICK_SAMPLE, QUICK_MP) if args.quick else (IMPACTS, BLOCKS, SAMPLE,
-                                                                    MP_SUBSET)  # fmt: skip
+    quick = (
+        (QUICK, 1, QUICK_SAMPLE, QUICK_MP) if args.quick else (IMPACTS, BLOCKS, SAMPLE, MP_SUBSET)
+    )
     given = (args.impacts, args.blocks, args.sample, args.mp_subset)
     n, blocks, sample, mp = (d if g is None else g for g, d in zip(given, quick, strict=True))
-    for flag, value in (("--impacts", n), ("--blocks", blocks), ("--sample", sample),
-                        ("--mp-subset", mp)):  # fmt: skip
+    for flag, value in (
+        ("--impacts", n),
+        ("--blocks", blocks),
+        ("--sample", sample),
+        ("--mp-subset", mp),
+    ):
         if value < 1:
             print(f"bench_batch_peer: error: {flag} {value}: at least 1", file=sys.stderr)
             return 2

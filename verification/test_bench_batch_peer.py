@@ -22,16 +22,47 @@ from verification.assertions import assert_true
 
 # Fields of a row that the README's line and a reader of the record use.
 _ROW_KEYS = {
-    "row", "potential", "m", "damping", "impacts", "threads", "ours_wall_s", "ours_cpu_s",
-    "ours_max_rel_error", "equal_error_target", "sample", "peers", "peer", "peer_rtol",
-    "peer_at_equal_error", "peer_max_rel_error", "ratio", "ratio_cpu", "us_per_impact",
-    "peer_us_per_impact", "goal", "goal_met", "goal_not_met_because", "ratio_short_of_goal",
-    "load_average_1min", "load_average_1min_after",
-}  # fmt: skip
+    "row",
+    "potential",
+    "m",
+    "damping",
+    "impacts",
+    "threads",
+    "ours_wall_s",
+    "ours_cpu_s",
+    "ours_max_rel_error",
+    "equal_error_target",
+    "sample",
+    "peers",
+    "peer",
+    "peer_rtol",
+    "peer_at_equal_error",
+    "peer_max_rel_error",
+    "ratio",
+    "ratio_cpu",
+    "us_per_impact",
+    "peer_us_per_impact",
+    "goal",
+    "goal_met",
+    "goal_not_met_because",
+    "ratio_short_of_goal",
+    "load_average_1min",
+    "load_average_1min_after",
+}
 _RECORD_KEYS = {
-    "schema", "rows", "impacts", "blocks", "peers", "equal_error", "timing", "goal_ratio",
-    "goal_met", "load_average_1min", "load_average_1min_after", "machine",
-}  # fmt: skip
+    "schema",
+    "rows",
+    "impacts",
+    "blocks",
+    "peers",
+    "equal_error",
+    "timing",
+    "goal_ratio",
+    "goal_met",
+    "load_average_1min",
+    "load_average_1min_after",
+    "machine",
+}
 
 
 _ARGV = ["--quick", "--impacts", "200", "--sample", "8", "--mp-subset", "1"]
@@ -108,13 +139,13 @@ def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(quick)
             )
         # A sample of 8 with 1 against mpmath is a check that it runs: never the goal.
         assert_true(
-            not r["goal_met"] and any("a check, not a measurement" in g
-                                      for g in r["goal_not_met_because"]),
+            not r["goal_met"]
+            and any("a check, not a measurement" in g for g in r["goal_not_met_because"]),
             got=f"goal_met {r['goal_met']}, because {r['goal_not_met_because']}",
             should="not met, the small sample named as the reason",
             claim="bench",
             call=call,
-        )  # fmt: skip
+        )
         for name, peer in r["peers"].items():
             assert_true(
                 peer["identical_to_serial_on_sample"] and peer["no_end"] == 0,
