@@ -91,6 +91,10 @@ def bench(session: nox.Session) -> None:
         "--png",
         "reports/bench/workprecision.png",
     )
+    # solve_impacts against the fastest peer in a compiled parallel loop (issue 38, goal 5).
+    session.run(
+        "python", "-m", "benchmarks.bench_batch_peer", "--json", "reports/bench/batch_peer.json"
+    )
     session.run("python", "-m", "benchmarks.bench_verlet", "--json", "reports/bench/verlet.json")
     session.run(
         "python", "-m", "benchmarks.bench_assembly", "--json", "reports/bench/assembly.json"

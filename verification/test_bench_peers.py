@@ -4,16 +4,19 @@ The Sundman-regularised DOP853 (`benchmarks.peer_sundman`) and the q sqrt(q) pla
 (`benchmarks.peer_dop853.solve_dop853_sqrt`) must give every output of the exact solvers
 (both ends, q_max, U'(q_max), the peak force) to ~1e-12 at their tightest rung; the plain
 peer must give the very numbers it gave before its stepping core was shared; the rung at
-"equal error" must be chosen on the worst error over the set. No timing here (speed is
-`benchmarks/bench_exact.py`'s).
+"equal error" must be chosen on the worst error over the set; the parallel peers of
+`benchmarks.peer_batch` must give the serial peer's bits, impact by impact, whatever the
+thread count. No timing here (speed is `benchmarks/bench_exact.py`'s and
+`benchmarks/bench_batch_peer.py`'s).
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 
-from benchmarks import _equal_error, _peer_columns, _peers, peer_dop853, peer_sundman
+from benchmarks import _equal_error, _peer_columns, _peers, peer_batch, peer_dop853, peer_sundman
 from reference_impl import PowerLaw, Sphere, solve_impact
 from reference_impl.exact.general_law import solve_law_impact
 from reference_impl.potentials import SumPotential
@@ -251,3 +254,47 @@ def test_denominator_is_the_fastest_at_equal_error_else_the_most_accurate():
             claim="bench",
             call=f"fastest({ {k: c['max_rel_error'] for k, c in cols.items()} })",
         )
+
+
+# A batch of each law: speeds over the benchmark's range, distinct zetas (zeta = 0 among
+# them: the Sundman peer's N is 2 there, 4 elsewhere); two rungs of the ladder.
+_BATCH_V0 = 10.0 ** np.linspace(-1.0, 1.0, 9)
+_BATCH_LAWS = [
+    ("universal", np.linspace(0.0, 0.85, 9), None),
+    ("linear", None, {"law": "linear", "c": 2.0}),
+    ("hunt-crossley", None, {"law": "hunt-crossley", "alpha": 0.37}),
+]
+
+
+@pytest.mark.parametrize("peer", peer_batch.BATCH_PEERS)
+@pytest.mark.parametrize(("name", "zetas", "law"), _BATCH_LAWS, ids=lambda x: str(x)[:20])
+def test_parallel_peer_is_the_serial_peer_bit_for_bit(peer, name, zetas, law):
+    """bench_batch_peer's denominator must be the peer bench_exact times, run in a prange
+    loop: each row the serial call's bits (tolerances, N, turning point alike), on 1 and 2
+    threads."""
+    pot, m = _HERTZ
+    call = peer_batch.batch_call(peer, pot, m, _BATCH_V0, zetas, law)
+    case = _peers.peer_cases(pot, m)[peer]
+    threads = numba.get_num_threads()
+    try:
+        for rtol in (1e-10, 1e-14):
+            for th in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+                numba.set_num_threads(th)
+                got = call(rtol).copy()
+                for i, v0 in enumerate(_BATCH_V0):
+                    lw = law or {"law": "universal", "zeta": float(zetas[i])}
+                    want = case(float(v0), lw)(rtol)
+                    assert_true(
+                        np.array_equal(got[i], want, equal_nan=True),
+                        got=f"{got[i].tolist()}",
+                        should=f"{want.tolist()} (the serial peer's)",
+                        claim="bench",
+                        call=f"batch_call({peer!r}, {name}, {th} threads)({rtol:g})[{i}]",
+                    )
+    finally:
+        numba.set_num_threads(threads)
+
+
+def test_parallel_sundman_peer_declines_a_cap():
+    got = peer_batch.batch_call("sundman", Sphere(0.01, 1e8), 0.05, [1.0], [0.2])
+    assert_true(got is None, got=f"{got!r}", should="None", claim="bench", call="sphere")

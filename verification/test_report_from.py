@@ -303,8 +303,9 @@ def test_a_run_rewrites_the_readme_speed_block_with_its_work_precision_paragraph
     committed, tmp_path, monkeypatch
 ):
     """The speed block `hcv report` writes into the README is the one `readme_table`
-    writes from the same records: bench/exact.json, startup.json and workprecision.json
-    (the main job of 2b81549 dropped the work-precision paragraph: it read only two)."""
+    writes from the same records: bench/exact.json, startup.json, workprecision.json and
+    batch_peer.json (the main job of 2b81549 dropped the work-precision paragraph: it read
+    only two)."""
     from reference_impl.report.readme_table import rewrite_readme
 
     if not (REPORTS / "bench" / "workprecision.json").is_file():
@@ -313,6 +314,11 @@ def test_a_run_rewrites_the_readme_speed_block_with_its_work_precision_paragraph
     _previous_report(out, committed)
     readme = tmp_path / "README.md"
     readme.write_text((ROOT / "README.md").read_text())
+    # The batch against the parallel peer (issue 38, goal 5): the committed record, else
+    # one without rows, whose lines must reach the README all the same.
+    bp = out / "bench" / "batch_peer.json"
+    if not bp.is_file():
+        bp.write_text(json.dumps({"rows": [], "goal_ratio": 10.0, "blocks": 1, "machine": {}}))
 
     def fake_build(tmp, quick, progress, adapters, env, workers=0, carried=None, repro=None):
         r = copy.deepcopy(committed)
@@ -325,14 +331,16 @@ def test_a_run_rewrites_the_readme_speed_block_with_its_work_precision_paragraph
     campaign.build_report(out, readme=readme, progress=None)
     records = [
         json.loads((out / "bench" / f"{n}.json").read_text())
-        for n in ("exact", "startup", "workprecision")
+        for n in ("exact", "startup", "workprecision", "batch_peer")
     ]
     should = rewrite_readme(committed, (ROOT / "README.md").read_text(), *records)
     got = readme.read_text()
     assert_true(
-        got == should and "Work-precision, ours as a curve" in got,
-        got="the README's blocks differ from readme_table's with all three records",
-        should="identical, the work-precision paragraph kept",
+        got == should
+        and "Work-precision, ours as a curve" in got
+        and "benchmarks.bench_batch_peer --json" in got,
+        got="the README's blocks differ from readme_table's with all four records",
+        should="identical, the work-precision paragraph and the batch-peer lines kept",
         claim="report",
         call="build_report(out, readme=README)",
     )

@@ -464,10 +464,13 @@ def test_readme_speed_block_is_the_committed_benchmark():
     )
     wp_json = ROOT / "reports" / "bench" / "workprecision.json"
     wp = json.loads(wp_json.read_text()) if wp_json.is_file() else None
-    want = speed_table(json.loads(bench_json.read_text()), wp)
+    bp_json = ROOT / "reports" / "bench" / "batch_peer.json"
+    bp = json.loads(bp_json.read_text()) if bp_json.is_file() else None
+    want = speed_table(json.loads(bench_json.read_text()), wp, bp)
     assert_true(
         readme_block(readme, SPEED_START, SPEED_END) == want,
-        got="README speed block differs from reports/bench/exact.json (and workprecision.json)",
+        got="README speed block differs from reports/bench/exact.json (and workprecision.json, "
+        "batch_peer.json)",
         should="identical (run python -m reference_impl.report.readme_table)",
         claim="report",
         call="readme_table",
@@ -570,6 +573,7 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/codes.json",  # python -m benchmarks.bench_codes (docs_blocks)
         "bench/workprecision.json",  # python -m benchmarks.bench_workprecision --json
         "bench/workprecision.png",  # python -m benchmarks.bench_workprecision --png
+        "bench/batch_peer.json",  # python -m benchmarks.bench_batch_peer --json
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
     }
     stray = [

@@ -257,7 +257,11 @@ def build_report(
         startup = json.loads(startup_json.read_text()) if startup_json.is_file() else None
         wp_json = Path(out) / "bench" / "workprecision.json"  # the speed block's figure
         wp = json.loads(wp_json.read_text()) if wp_json.is_file() else None
-        readme_path.write_text(rewrite_readme(results, readme_path.read_text(), bench, startup, wp))
+        bp_json = Path(out) / "bench" / "batch_peer.json"  # the batch against the parallel peer
+        bp = json.loads(bp_json.read_text()) if bp_json.is_file() else None
+        readme_path.write_text(
+            rewrite_readme(results, readme_path.read_text(), bench, startup, wp, bp)
+        )
         docs = ROOT / "docs" / "assemblies.md"  # its generated block, beside the README's
         if readme_path == ROOT / "README.md" and docs.is_file():
             docs.write_text(_assemblies.rewrite_docs(results, docs.read_text()))

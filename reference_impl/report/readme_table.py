@@ -10,7 +10,8 @@ and error per potential family as that benchmark measured them, and, when
 ``reports/bench/startup.json`` exists, the block between ``<!-- startup:start -->`` and
 ``<!-- startup:end -->`` with the start-up times of `benchmarks.bench_startup`; the speed
 block links the work-precision figure when ``reports/bench/workprecision.json`` exists
-(`benchmarks.bench_workprecision`). ``--check``
+(`benchmarks.bench_workprecision`) and states `solve_impacts` against the parallel peer when
+``reports/bench/batch_peer.json`` exists (`benchmarks.bench_batch_peer`). ``--check``
 writes nothing and exits 1 when a block differs from what the JSON files give.
 """
 
@@ -33,6 +34,7 @@ __all__ = [
     "verdict_table",
     "speed_table",
     "workprecision_text",
+    "batch_peer_text",
     "STARTUP_START",
     "STARTUP_END",
     "startup_table",
@@ -238,11 +240,70 @@ def _batch_goal(b: dict) -> str:
     return f"**not met**: Amdahl's serial part implied: {100 * s:.0f} % of the one-thread time"
 
 
-def speed_table(bench: dict, wp: dict | None = None) -> str:
+def _threads_figure(d: dict, fmt: str, unit: str = "") -> str:
+    """'a on 1 thread, b on 2 threads' of a per-thread-count dict (keys: counts as text)."""
+    return ", ".join(
+        f"{format(v, fmt)}{unit} on {th} thread{'s' if th != '1' else ''}" for th, v in d.items()
+    )
+
+
+def _load_figure(x) -> str:
+    return f"{x:.2f}" if isinstance(x, int | float) else "?"
+
+
+def batch_peer_text(bp: dict) -> str:
+    """The lines of `benchmarks.bench_batch_peer`'s record (issue 38, goal 5): per row, ours
+    and the fastest peer run in a compiled parallel loop over the same impacts, the ratio on
+    each thread count, the goal met or why not, and how the record was measured."""
+    lines = []
+    for r in bp["rows"]:
+        eq = "" if r["peer_at_equal_error"] else ", its most accurate rung"
+        goal = (
+            "met"
+            if r["goal_met"]
+            else "**not met**: " + "; ".join(_cell(g) for g in r["goal_not_met_because"])
+        )
+        peers = ", ".join(
+            f"{_PEER_SHORT.get(k, k)} {r['peer_us_per_impact'][th]:.1f} µs on {th} "
+            f"thread{'s' if th != '1' else ''} (rtol {r['peer_rtol'][th]:.0e}{eq}; error "
+            f"{r['peer_max_rel_error'][th]:.1e})"
+            for th, k in r["peer"].items()
+        )
+        lines.append(
+            f"- `solve_impacts`, {_cell(r['row'])} ({r['impacts']} impacts): ours "
+            f"{_threads_figure(r['us_per_impact'], '.2f', ' µs')} per impact (error "
+            f"{r['ours_max_rel_error']:.1e}); the fastest peer in a parallel loop: {peers}; "
+            f"ratio {_threads_figure(r['ratio'], '.1f', '×')} "
+            f"(goal ≥ {bp['goal_ratio']:g}×: {goal}; load {_load_figure(r['load_average_1min'])})"
+        )
+    mi = bp.get("machine", {})
+    lines += [
+        "",
+        "Batches against the fastest peer (`benchmarks/peer_batch.py`: the serial peer's very "
+        "call, bit for bit, one impact per thread step of a numba `prange` loop; the rung at "
+        f"equal error: {bp.get('equal_error', '?')}). Measured by `python -m "
+        "benchmarks.bench_batch_peer --json reports/bench/batch_peer.json` "
+        f"({bp.get('timing', '?')}; {mi.get('cpu_count', '?')} cpus, load "
+        f"{_load_figure(bp.get('load_average_1min'))} before, "
+        f"{_load_figure(bp.get('load_average_1min_after'))} after, commit "
+        f"{str(mi.get('commit', '?'))[:12]}"
+        + (
+            "; a check that it runs, not a measurement: rerun it on a quiet machine"
+            if bp.get("blocks", 0) < 3
+            else ""
+        )
+        + ").",
+    ]
+    return "\n".join(lines)
+
+
+def speed_table(bench: dict, wp: dict | None = None, batch_peer: dict | None = None) -> str:
     """Markdown tables of `benchmarks.bench_exact`'s JSON: the universal law per family, the
     general laws, the batch; every ratio against the fastest peer at equal error; one line
     per row with its one-shot and prepared figures; given ``wp`` (the record of
-    `benchmarks.bench_workprecision`), the work-precision figure's paragraph."""
+    `benchmarks.bench_workprecision`), the work-precision figure's paragraph; given
+    ``batch_peer`` (the record of `benchmarks.bench_batch_peer`), its lines
+    (`batch_peer_text`)."""
     lines = [
         "| scene (universal law) | `solve_impact` | `prepare(pot, m)` call | its error | fastest "
         "peer at equal error | its error | ratio (peer / prepared) | scipy DOP853 (rtol "
@@ -284,6 +345,8 @@ def speed_table(bench: dict, wp: dict | None = None) -> str:
             f"{'yes' if b['bit_identical_to_1_thread'] else '**no**'}; goal {_cell(b['goal'])}: "
             f"{_batch_goal(b)})"
         )
+    if batch_peer is not None:
+        lines += ["", batch_peer_text(batch_peer)]
     mi = bench.get("machine", {})
     after = bench.get("load_average_1min_after")
     lines += ["", "Each row, one-shot and prepared:", "", *_row_sentences(bench)]
@@ -371,13 +434,14 @@ def rewrite_readme(
     bench: dict | None = None,
     startup: dict | None = None,
     wp: dict | None = None,
+    batch_peer: dict | None = None,
 ) -> str:
     """The README with only its verdict block (and, given ``bench``, its speed block, with
-    the work-precision paragraph given ``wp``; given ``startup``, its start-up block)
-    replaced."""
+    the work-precision paragraph given ``wp`` and the batch-peer lines given
+    ``batch_peer``; given ``startup``, its start-up block) replaced."""
     new = _replace(readme_text, START, END, verdict_table(results))
     if bench is not None:
-        new = _replace(new, SPEED_START, SPEED_END, speed_table(bench, wp))
+        new = _replace(new, SPEED_START, SPEED_END, speed_table(bench, wp, batch_peer))
     if startup is not None:
         new = _replace(new, STARTUP_START, STARTUP_END, startup_table(startup))
     return new
@@ -394,6 +458,7 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--workprecision", default=str(ROOT / "reports" / "bench" / "workprecision.json")
     )
+    ap.add_argument("--batch-peer", default=str(ROOT / "reports" / "bench" / "batch_peer.json"))
     ap.add_argument("--check", action="store_true", help="write nothing; exit 1 if out of date")
     args = ap.parse_args(argv)
     try:
@@ -405,7 +470,9 @@ def main(argv=None) -> int:
         startup = json.loads(startup_path.read_text()) if startup_path.is_file() else None
         wp_path = Path(args.workprecision)
         wp = json.loads(wp_path.read_text()) if wp_path.is_file() else None
-        new = rewrite_readme(results, readme, bench, startup, wp)
+        bp_path = Path(args.batch_peer)
+        bp = json.loads(bp_path.read_text()) if bp_path.is_file() else None
+        new = rewrite_readme(results, readme, bench, startup, wp, bp)
     except (OSError, ValueError, KeyError, HCVInputError) as exc:
         print(f"readme_table: error: {exc}", file=sys.stderr)
         return 2
@@ -413,7 +480,7 @@ def main(argv=None) -> int:
         if new != readme:
             print(
                 f"readme_table: {args.readme} differs from {args.results} / {args.bench} / "
-                f"{args.startup}",
+                f"{args.startup} / {args.workprecision} / {args.batch_peer}",
                 file=sys.stderr,
             )
             return 1
