@@ -26,6 +26,7 @@ import copy
 import json
 import os
 import shutil
+import socket
 import sys
 from html.parser import HTMLParser
 from pathlib import Path
@@ -39,7 +40,7 @@ from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
 from reference_impl.report import _erratum, _render, check_results, read_results, render_from
 from reference_impl.report._inputs import MAX_BYTES, PNG_SIGNATURE
-from reference_impl.report._text import safe_href
+from reference_impl.report._text import markdown_text, safe_href
 from reference_impl.report.readme_table import verdict_table
 from verification.assertions import assert_true
 from verification.strategies import json_mutations
@@ -195,6 +196,16 @@ def _poison(case: str, doc: dict, src: Path, outside: Path) -> str:
         target.unlink()
         os.mkfifo(target)
         return "not a regular file"
+    if case == "a directory as a figure":
+        target.unlink()
+        target.mkdir()
+        return f"$.figures[{i}]: 'figures/steps_lammps.png' is not a regular file"
+    if case == "a socket as a figure":
+        target.unlink()
+        sock = socket.socket(socket.AF_UNIX)  # closed with the test; the name stays bound
+        sock.bind(str(target))
+        sock.close()
+        return f"$.figures[{i}]: 'figures/steps_lammps.png' is not a regular file"
     if case == "scorecard a link out":
         (src / "bench").mkdir()
         (src / "bench" / f"{doc['adapters'][0]['adapter']}.json").symlink_to(
@@ -217,6 +228,8 @@ PATH_CASES = [
     "text file named .png",
     "oversized figure",
     "FIFO as a figure",
+    "a directory as a figure",  # was "hcv: error: 4: Is a directory" (os.fdopen's message)
+    "a socket as a figure",  # was "... No such device or address" (open's ENXIO)
     "scorecard a link out",
 ]
 
@@ -352,6 +365,31 @@ def test_links_and_markup_of_a_results_file_are_neutralised(committed, tmp_path)
 
 
 @pytest.mark.parametrize(
+    "text",
+    [
+        "x\n> [r]: javascript:alert(1)\n\n[y][r]",  # a definition inside a block quote
+        "x\n- [r]: javascript:alert(1)\n\n[y][r]",  # inside a list item
+        "x\n1. [r]: javascript:alert(1)\n\n[y][r]",  # inside an ordered list item
+        "[r\\]]: javascript:alert(1)\n\n[y][r\\]]",  # an escaped "]" in the label
+        "[r\\\\]: javascript:alert(1)\n\n[y][r\\\\]",  # an escaped backslash before "]"
+        "> > [r]: javascript:alert(1)\n\n[y][r]",  # nested block quotes
+    ],
+)
+def test_a_link_definition_in_any_container_stays_text(text):
+    """CommonMark reads a link reference definition inside block quotes and list items too,
+    and it defines the label for the whole page: each was a live javascript: link of
+    index.md and erratum.md (the rule escaped only a definition at a line's start)."""
+    page = _markdown_html(markdown_text(text))
+    assert_true(
+        "href" not in page,
+        got=repr(page),
+        should="no link (the definition shown as text)",
+        claim=CLAIM,
+        call=f"markdown_text({text!r}) rendered by CommonMark",
+    )
+
+
+@pytest.mark.parametrize(
     "target, safe",
     [
         ("repro/thm1_period.py", True),
@@ -478,6 +516,45 @@ def test_a_number_out_of_range_is_one_line_naming_its_json_path(
     out = tmp_path / "out"
     code, err, _ = _run_from(src, out, capsys)
     _refused(code, err, out, needle, [], [], f"hcv report --from ({where} = {literal[:8]}...)")
+
+
+@pytest.mark.parametrize(
+    "case, needle",
+    [
+        # json.loads reads "\\ud800" as a lone surrogate: the pages could not be written
+        # (UnicodeEncodeError, a traceback, after the checks had passed).
+        ("a lone surrogate in the title", "$.title: 'a\\ud800b' holds a lone surrogate"),
+        ("a lone surrogate in a key", "$.figure_captions: 'x\\udfffy.png' holds a lone"),
+        # Python keeps the last of a repeated key, other readers the first, and the file is
+        # copied as it is: another reader of the copy would see the poisoned figures.
+        ("figures given twice", "not JSON (the key 'figures' is given twice in one object)"),
+        # int() of a 5000-digit minor raised ValueError (Python's 4300-digit limit).
+        ("a 5000-digit minor version", "has schema 'hcv-results/1.999"),
+        # Each listed figure is read, checked and copied: 1e5 repeats of one ran past 120 s.
+        ("a figure listed 100000 times", "$.figures: lists an entry twice"),
+    ],
+)
+def test_unwritable_text_repeated_keys_and_endless_lists_are_one_line(
+    committed, tmp_path, capsys, case, needle
+):
+    doc = copy.deepcopy(committed)
+    if case == "a lone surrogate in the title":
+        doc["title"] = "@LONE@"
+    elif case == "a lone surrogate in a key":
+        doc["figure_captions"]["@LONE@"] = "a caption"
+    elif case == "a 5000-digit minor version":
+        doc["schema"] = "hcv-results/1." + "9" * 5000
+    elif case == "a figure listed 100000 times":
+        doc["figures"] += ["figures/fig1.png"] * 100_000
+    src = _source(tmp_path, doc)
+    text = json.dumps(doc)
+    text = text.replace('"@LONE@"', '"a\\ud800b"' if "title" in case else '"x\\udfffy.png"')
+    if case == "figures given twice":
+        text = text.replace('"figures": [', '"figures": ["/proc/self/environ"], "figures": [', 1)
+    (src / "results.json").write_text(text)
+    out = tmp_path / "out"
+    code, err, _ = _run_from(src, out, capsys)
+    _refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
 
 
 @settings(

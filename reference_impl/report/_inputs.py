@@ -106,12 +106,17 @@ def _read(folder: Path, name: str, rel: str, field: str, png: bool, head_only: b
         except OSError as exc:
             if exc.errno == errno.ELOOP:
                 raise _refuse(field, rel, "is a symbolic link") from None
+            if exc.errno == errno.ENXIO:  # a socket: open() fails before fstat can tell
+                raise _refuse(field, rel, "is not a regular file") from None
             why = f"is missing ({folder / name})" if exc.errno == errno.ENOENT else exc.strerror
             raise _refuse(field, rel, why, own=False) from None
+        # Checked on the bare descriptor: os.fdopen itself fails on a directory, with a
+        # message naming the descriptor, not the field.
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            os.close(fd)
+            raise _refuse(field, rel, "is not a regular file")
         with os.fdopen(fd, "rb") as f:
-            st = os.fstat(f.fileno())
-            if not stat.S_ISREG(st.st_mode):
-                raise _refuse(field, rel, "is not a regular file")
             if st.st_size > MAX_BYTES:
                 raise _refuse(field, rel, f"is {st.st_size} bytes, over the bound of {MAX_BYTES}")
             data = f.read(len(PNG_SIGNATURE) if head_only else MAX_BYTES + 1)

@@ -140,7 +140,9 @@ def _version(schema) -> tuple[int, int] | None:
     prefix = SCHEMA.split("/")[0] + "/"
     if not isinstance(schema, str) or not schema.startswith(prefix):
         return None
-    m = re.fullmatch(r"(\d+)(?:\.(\d+))?", schema[len(prefix) :], re.ASCII)
+    # At most 9 digits a number: int() of a longer one may exceed Python's 4300-digit
+    # limit (a traceback), and no version of this file will have more.
+    m = re.fullmatch(r"(\d{1,9})(?:\.(\d{1,9}))?", schema[len(prefix) :], re.ASCII)
     return None if m is None else (int(m[1]), int(m[2] or 0))
 
 
@@ -205,6 +207,8 @@ def _describe(err) -> str:
         if want.startswith("^steps_"):
             return f"{_quote(x)} is not steps_NAME.png (a figure of the report, in figures/)"
         return f"{_quote(x)} does not match {want}"
+    if kind == "uniqueItems":
+        return "lists an entry twice"
     if kind in ("minItems", "maxItems", "minProperties", "maxProperties"):
         word = "at least" if kind.startswith("min") else "at most"
         return f"has {len(x)} entries, should have {word} {want}"
@@ -228,17 +232,34 @@ def _first_error(results):
     return best_match(err.context) if err.validator in ("oneOf", "anyOf") and err.context else err
 
 
+def _not_utf8(text: str) -> bool:
+    """True for a string UTF-8 cannot encode: a lone surrogate (JSON's ``"\\ud800"``)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return True
+    return False
+
+
 def _out_of_range(doc) -> tuple[str, object] | None:
-    """(JSON path, value) of the first number that is not a finite double, or None.
+    """(JSON path, value) of the first number that is not a finite double, or of the first
+    string or key that is not UTF-8 text; None when there is none.
 
     Strict JSON has no infinity, but ``1e999`` parses to one and a 400-digit integer
     cannot become a float: the renderer formats numbers as floats, so both are refused
-    here (a results file writes infinities as the strings "inf" and "-inf")."""
+    here (a results file writes infinities as the strings "inf" and "-inf"). JSON's
+    ``\\ud800`` escape parses to a lone surrogate, which no page can be written with
+    (the pages are UTF-8 files)."""
     stack = [((), doc)]
     while stack:
         path, x = stack.pop()
         if isinstance(x, dict):
+            bad_key = next((k for k in x if _not_utf8(k)), None)
+            if bad_key is not None:
+                return _json_path(path), bad_key
             stack += [((*path, k), v) for k, v in reversed(x.items())]
+        elif isinstance(x, str) and _not_utf8(x):
+            return _json_path(path), x
         elif isinstance(x, list):
             stack += [((*path, i), v) for i, v in reversed(list(enumerate(x)))]
         elif isinstance(x, float) and not math.isfinite(x):
@@ -317,6 +338,11 @@ def check_results(results, source: str = "results", base=None) -> dict:
         )
     big = _out_of_range(results)
     if big is not None:
+        if isinstance(big[1], str):
+            raise HCVInputError(
+                f"{source}: {big[0]}: {_quote(big[1])} holds a lone surrogate, "
+                f"not UTF-8 text ({SCHEMA})"
+            )
         shown = f"a {len(str(abs(big[1])))}-digit integer" if isinstance(big[1], int) else big[1]
         raise HCVInputError(f"{source}: {big[0]}: is {shown}, not a finite number ({SCHEMA})")
     err = _first_error(results)
@@ -337,6 +363,17 @@ def _refuse_constant(token):
     raise ValueError(f"non-standard JSON constant {token}")
 
 
+def _unique_keys(pairs: list) -> dict:
+    """An object's members as a dict; a key given twice is refused: Python keeps the last,
+    other readers the first, so a copy of the file would mean another document to them."""
+    doc = dict(pairs)
+    if len(doc) != len(pairs):
+        seen: set = set()
+        twice = next(k for k, _ in pairs if k in seen or seen.add(k))
+        raise ValueError(f"the key {_quote(twice)} is given twice in one object")
+    return doc
+
+
 def read_results(path, label: str = "--from", files: bool = True) -> dict:
     """Read and check a results.json (strict JSON, its figures beside it); one line otherwise.
 
@@ -353,8 +390,8 @@ def read_results(path, label: str = "--from", files: bool = True) -> dict:
     Raises
     ------
     HCVInputError
-        Not a regular readable file, over `RESULTS_MAX_BYTES`, not UTF-8 strict JSON, or a
-        document `check_results` refuses.
+        Not a regular readable file, over `RESULTS_MAX_BYTES`, not UTF-8 strict JSON (a key
+        given twice in one object included), or a document `check_results` refuses.
     """
     path = Path(path)
     name = f"{label} {str(path)!r}"
@@ -375,7 +412,7 @@ def read_results(path, label: str = "--from", files: bool = True) -> dict:
     except UnicodeDecodeError:
         raise HCVInputError(f"{name}: not UTF-8 text") from None
     try:
-        doc = json.loads(text, parse_constant=_refuse_constant)
+        doc = json.loads(text, parse_constant=_refuse_constant, object_pairs_hook=_unique_keys)
     except ValueError as exc:
         raise HCVInputError(f"{name}: not JSON ({' '.join(str(exc).split())[:200]})") from None
     except RecursionError:

@@ -10,7 +10,11 @@ README's verdict table; the file is shared and may come from anyone, so:
 * in Markdown (`markdown_text`) raw HTML cannot open: ``<`` before a letter, ``/``, ``!``
   or ``?`` (CommonMark's raw HTML and autolinks) is written ``&lt;`` and shows as text, an
   unsafe ``[text](target)`` has its ``(`` escaped, and a link reference definition
-  (``[x]: target`` at the start of a line) its ``[``. In HTML every string is escaped
+  its ``[``: a ``[label]`` (escaped brackets allowed in it) followed by ``:``, at the
+  start of a line or of the text, after any block quote and list markers (CommonMark reads
+  a definition inside ``> `` and ``- `` too, and it defines the label for the whole page;
+  the writer applies `markdown_text` to each whole line it composes, so its own ``:`` is
+  seen). In HTML every string is escaped
   (`html.escape`) by the writer.
 
 Inside a Markdown code span ``&lt;`` shows as written: a hostile string may render
@@ -34,8 +38,13 @@ _HTTP = re.compile(r"https?://[A-Za-z0-9.-]+(:[0-9]{1,5})?([/?#][A-Za-z0-9_.~/#?
 _TAG_START = re.compile(r"<(?=[A-Za-z/!?])")
 # A Markdown inline link's "](" and its destination (up to a space or a parenthesis).
 _MD_LINK = re.compile(r"\]\((\s*<?)([^\s()<>]*)")
-# A link reference definition "[label]: ..." at the start of a line (up to 3 spaces).
-_MD_DEFINITION = re.compile(r"(?m)^( {0,3})\[(?=[^\]]*\]:)")
+# A link reference definition "[label]: ..." at the start of a line or of the text, after
+# any block quote (">") and list ("-", "+", "*", "1.", "1)") markers: the "[" of a label
+# (no unescaped bracket inside, backslash escapes allowed) that a ":" follows.
+_MD_DEFINITION = re.compile(
+    r"(?m)^((?:[ \t]*(?:>|(?:[-+*]|\d{1,9}[.)])(?=[ \t])))*[ \t]*)"
+    r"\[(?=(?:[^\[\]\\]|\\[\s\S])*\]:)"
+)
 
 
 def safe_href(target: str) -> bool:
