@@ -117,3 +117,43 @@ class NoisyJump(NoisyDashpot):
 
     def _shift(self) -> float:
         return super()._shift() - (self.DROP if self.gain > self.JUMP_AT else 0.0)
+
+
+class FlakyDashpot(LinearDashpot):
+    """`LinearDashpot` whose every `EVERY`-th run ends in NaN velocities: a code that fails
+    intermittently (a lost process, a race), deterministic otherwise. The count is per
+    class (`reset`), so a test sees the same failures every time."""
+
+    name = "flaky-dashpot"
+    EVERY = 3
+    _runs = 0
+
+    @classmethod
+    def reset(cls) -> None:
+        cls._runs = 0
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        tr = super()._impact_impl(scene)
+        type(self)._runs += 1
+        if type(self)._runs % self.EVERY:
+            return tr
+        v = np.array(tr.v, dtype=float)
+        v[-1] = np.nan
+        return Trajectory(tr.t, tr.q, v, tr.force)
+
+
+class BrokenAbove(LinearDashpot):
+    """`LinearDashpot` whose every run fails (NaN velocities) above gain `FAIL_ABOVE`,
+    which the bracket of the target 0.5 (met at gain 0.433) needs: it fails twice there,
+    so that bracket is lost, and the message must not call the target out of reach."""
+
+    name = "broken-above"
+    FAIL_ABOVE = 0.3
+
+    def _impact_impl(self, scene: AdapterScene) -> Trajectory:
+        tr = super()._impact_impl(scene)
+        if self.gain <= self.FAIL_ABOVE:
+            return tr
+        v = np.array(tr.v, dtype=float)
+        v[-1] = np.nan
+        return Trajectory(tr.t, tr.q, v, tr.force)

@@ -343,23 +343,36 @@ def calibrate(
     seen: dict[float, tuple[float, str]] = {}  # value -> (restitution, what it was)
     why: dict[float, str] = {}  # value -> the failure or the decline
 
+    retried: list[float] = []  # values whose first run failed and second answered
+
+    def run_once(x: float) -> None:
+        if progress is not None:
+            progress()
+        try:
+            tr, _law, err = _run(*setup(x), timeout, isolate)
+        except _Declined as exc:
+            seen[x], why[x] = (math.nan, _DECLINED), str(exc)
+            return
+        res.evaluations += 1
+        if tr is None:
+            seen[x], why[x] = (math.nan, _FAILED), err
+        else:
+            got, read = _quantity(tr, v0, end)
+            seen[x] = (got, _MEASURED if read else _NO_REBOUND)
+            if not math.isfinite(got):
+                seen[x], why[x] = (got, _FAILED), "no restitution measured"
+
     def value_at(x: float) -> float:
         if x not in seen:
-            if progress is not None:
-                progress()
-            try:
-                tr, _law, err = _run(*setup(x), timeout, isolate)
-            except _Declined as exc:
-                seen[x], why[x] = (math.nan, _DECLINED), str(exc)
-                return math.nan
-            res.evaluations += 1
-            if tr is None:
-                seen[x], why[x] = (math.nan, _FAILED), err
-            else:
-                got, read = _quantity(tr, v0, end)
-                seen[x] = (got, _MEASURED if read else _NO_REBOUND)
-                if not math.isfinite(got):
-                    seen[x], why[x] = (got, _FAILED), "no restitution measured"
+            run_once(x)
+            # A failed run is run once more: a code that fails intermittently (a lost
+            # process, a NaN every few runs) answers the second time, and one failure
+            # then neither ends a bracket nor reads as "out of reach"; a value that fails
+            # twice is failed.
+            if seen[x][1] == _FAILED:
+                run_once(x)
+                if seen[x][1] != _FAILED:
+                    retried.append(x)
         return seen[x][0]
 
     def fresh(x: float) -> float:
@@ -435,6 +448,13 @@ def calibrate(
         if not any(abs(root - r) <= _XRTOL * max(abs(root), abs(r)) for r in roots):
             roots.append(root)
     notes = _notes(param, seen, why, n, jumps, lost)
+    if retried:
+        notes.append(
+            f"{len(retried)} run(s) failed and answered when run again, at {param} = "
+            + ", ".join(f"{x:.6g}" for x in sorted(retried)[:3])
+            + (", ..." if len(retried) > 3 else "")
+            + ": the code fails intermittently"
+        )
     res.notes = notes
     measured = [v for v, what in seen.values() if what in (_MEASURED, _NO_REBOUND)]
     if measured:
@@ -446,7 +466,15 @@ def calibrate(
             if measured
             else "no run there returned a restitution"
         )
-        verdict = "is out of reach"
+        failed = sorted(x for x, (_v, what) in seen.items() if what == _FAILED)
+        # "Out of reach" is a finding only where every run answered: a run that failed
+        # twice leaves the response unknown there, and the target may lie behind it.
+        verdict = (
+            f"was not found (runs failed twice at {len(failed)} value(s) of {param}, from "
+            f"{failed[0]:.6g} to {failed[-1]:.6g}: the target may lie there)"
+            if failed
+            else "is out of reach"
+        )
         if noisy_misses:  # noisy, and off the target by more than the noise all the same
             worst = max(noisy_misses, key=lambda sp: sp.std)
             res.noise = worst.std
@@ -463,8 +491,16 @@ def calibrate(
     root = min(roots)
     tr, law, err = _run(*setup(root), timeout, isolate)
     res.evaluations += 1
-    if tr is None:
-        res.message = f"the run at the root {param} = {root!r} failed: {err}"
+
+    def answered(tr) -> bool:
+        return tr is not None and math.isfinite(_quantity(tr, v0, end)[0])
+
+    if not answered(tr):  # a failed confirming run is run once more, as in value_at
+        tr, law, err = _run(*setup(root), timeout, isolate)
+        res.evaluations += 1
+    if not answered(tr):
+        failure = err if tr is None else "no restitution measured"
+        res.message = f"the run at the root {param} = {root!r} failed twice: {failure}"
         return res
     res.found, res.value, res.values = True, float(root), sorted(roots)
     res.metrics = _metrics(tr, law, sc, v0)
