@@ -566,6 +566,7 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/general_taylor.json",  # python -m benchmarks.bench_general_taylor
         "bench/sweep.json",  # python -m benchmarks.bench_sweep
         "bench/sweep_assembly.json",  # python -m benchmarks.bench_sweep_assembly
+        "bench/assembly.json",  # python -m benchmarks.bench_assembly --json
         "bench/device_scaling.json",  # benchmarks/device_scaling.py (16-core machine)
         "bench/verlet.json",  # python -m benchmarks.bench_verlet
         "bench/startup.json",  # python -m benchmarks.bench_startup
