@@ -10,6 +10,7 @@
 - third-party codes for ``hcv dt-crit SCENE --adapter verification._assembly_codes:NAME``:
   `VerletChainCode` (one advice) and `VerletLatticeCode` (none) built on the references,
   `CrashingChainCode` (every run fails), `MalformedChainCode` (one body too few),
+  `QuittingChainCode` (every run stops half-way, below the stop energy),
   `AbortingChainCode` and `SegfaultingChainCode` (isolated; every run kills their process);
 - checks of a real code: `code_fixture` (its adapter, one per test module), `needs` (its
   mark, and its skip where it is not installed), `dt_safe`,
@@ -54,6 +55,7 @@ __all__ = [
     "AbortingChainCode",
     "CrashingChainCode",
     "MalformedChainCode",
+    "QuittingChainCode",
     "SegfaultingChainCode",
     "VerletChainCode",
     "VerletLatticeCode",
@@ -190,6 +192,18 @@ class MalformedChainCode(VerletChainCode):
     def _assembly_impl(self, request):
         x, v, _ = verlet_chain(request)
         return {"x": x[:, :-1], "v": v[:, :-1]}
+
+
+class QuittingChainCode(VerletChainCode):
+    """A chain code whose every run stops half-way without running away (a code that
+    quietly gives up): judged on the steps it ran, every step would read as stable."""
+
+    name = "quitting-chain"
+
+    def _assembly_impl(self, request):
+        x, v, _ = verlet_chain(request)
+        half = max(2, (request.n_steps + 1) // 2)
+        return {"x": x[:half], "v": v[:half]}
 
 
 class AbortingChainCode(VerletChainCode):

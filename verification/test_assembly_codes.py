@@ -173,7 +173,8 @@ def test_hcv_dt_crit_runs_a_third_party_chain_code(tmp_path):
 @pytest.mark.parametrize(
     ("cls", "words"),
     [("CrashingChainCode", "segmentation fault (simulated)"),
-     ("MalformedChainCode", "shape (samples, 10)")],
+     ("MalformedChainCode", "shape (samples, 10)"),
+     ("QuittingChainCode", "not past the stop energy")],
 )  # fmt: skip
 def test_hcv_dt_crit_chain_code_that_fails_is_one_line_exit_1(cls, words, tmp_path):
     spec = f"verification._assembly_codes:{cls}"

@@ -49,7 +49,12 @@ import numpy as np
 
 from reference_impl.adapters._assembly_request import ChainRequest, chain_energy
 from reference_impl.adapters._lattice_request import LatticeRequest, lattice_energy
-from reference_impl.adapters.base import AdapterDeclined, AdapterError, ContactAdapter
+from reference_impl.adapters.base import (
+    AdapterDeclined,
+    AdapterError,
+    AdapterOutputError,
+    ContactAdapter,
+)
 from reference_impl.adapters.registry import builtin_codes, resolve_class
 from reference_impl.assembly.geometry import lattice_sites
 from reference_impl.assembly.lanes import initial_energy
@@ -340,7 +345,9 @@ def code_dt_crit(
         out = adapter.assembly(req)
         work["runs"] += 1
         work["steps"] += out.x.shape[0] - 1
-        return code_energy(req, out)
+        e = code_energy(req, out)
+        _check_complete(e, steps, stop, adapter.label, dt)
+        return e
 
     def evaluate(need: dict) -> dict:
         rows: dict = {}
@@ -362,6 +369,26 @@ def code_dt_crit(
         runs=work["runs"],
         steps=work["steps"],
         wall_s=time.perf_counter() - t0,
+    )
+
+
+# A run may end early only past the stop energy: the code judges its own kinetic energy,
+# the suite the energy of the samples it printed (15 digits; a leapfrog's half-step
+# velocities), and a runaway grows by orders of magnitude a step: 1e-3 below still counts.
+_STOP_RTOL = 1e-3
+
+
+def _check_complete(e: np.ndarray, steps: int, stop: float, who: str, dt: float) -> None:
+    """Refuse (`AdapterOutputError`, one line) a run that ended before ``steps`` steps
+    below ``stop`` with a finite energy: judged on the steps it ran, a code that quietly
+    gave up would read as stable (`reference_impl.adapters._cmd_assembly`'s rule)."""
+    done = len(e) - 1
+    if done >= steps or not math.isfinite(e[-1]) or e[-1] >= (1.0 - _STOP_RTOL) * stop:
+        return
+    raise AdapterOutputError(
+        f"{who}: the run at dt = {dt:.6g} s ended after {done} of {steps} steps with energy "
+        f"{e[-1]:.6g} J, not past the stop energy {stop:.6g} J; a code records every step "
+        "unless its run is past the stop energy or not finite"
     )
 
 
