@@ -159,13 +159,13 @@ def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
             "goal_s": None,
         },
         {
-            "name": "hcv solve hertz-damped, NUMBA_DISABLE_JIT=1 (not bit for bit)",
+            "name": "hcv solve hertz-damped, NUMBA_DISABLE_JIT=1 (measured only)",
             "argv": [*hcv, "solve", "hertz-damped"],
             "goal_s": None,
             "env": {"NUMBA_DISABLE_JIT": "1"},
         },
         {
-            "name": "hcv solve hertz-damped, numba replaced by a stand-in (not bit for bit)",
+            "name": "hcv solve hertz-damped, numba replaced by a stand-in (measured only)",
             "argv": [*hcv, "solve", "hertz-damped"],
             "goal_s": None,
             "env": {"PYTHONPATH": _NO_NUMBA_PATH},
