@@ -358,6 +358,7 @@ class _LawPlan(NamedTuple):
     lin: tuple | None  # (k, zeta^2) of the linear oscillator, solved in closed form
     pk: tuple | None  # (ks, ps) of a sum of power laws, for the compiled kernels
     tab: tuple | None  # (rows, lim) of another term table, for the compiled GBS kernel
+    inv: tuple | None = None  # (n, k, 1/n) of a single `PowerLaw`: its inverse inline (`_top`)
 
 
 # Plans of the one-shot calls, per (potential object, m, law, rtol) (`_oneshot_cache`).
@@ -396,7 +397,38 @@ def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
     tab = table_arrays(potential) if lin is None and pk is None else None
-    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab)
+    inv = _inline_inverse(potential)
+    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab, inv)
+
+
+def _inline_inverse(potential):
+    """(n, k, 1/n) of a `PowerLaw` itself (not a subclass, which may change its inverse),
+    else None: `_top` then forms its turning point inline."""
+    if type(potential) is not PowerLaw:
+        return None
+    n = potential.leading_exponent
+    return n, potential.k, 1.0 / n
+
+
+def _top(plan: _LawPlan, E: float) -> float:
+    """`_validate._validated_top` of ``E`` (m), bit for bit, for every potential.
+
+    For a `PowerLaw` it is ``PowerLaw._inverse`` of ``[E]`` without its layers (~3 us of a
+    ~20 us prepared call, issue 38): the same float operations, (n E) / k in floats (each
+    correctly rounded, as numpy's elementwise multiply and divide) and then numpy's ``**``
+    on a one-element array, which is not Python's pow (numpy's vectorised power differs
+    from libm's in the last bit for ~5 % of arguments on AVX-512 machines) and for 1/n =
+    0.5 is numpy's sqrt. Nothing is left to check there: U' = k q^p > 0 (``check_monotone``
+    is empty) and U is unbounded; a turning point that is not a positive float (overflow,
+    underflow) goes the checked way, which refuses it in its one line.
+    """
+    inv = plan.inv
+    if inv is None:
+        return _validated_top(plan.potential, E)
+    q = float((np.array([inv[0] * E / inv[1]]) ** inv[2])[0])
+    if 0.0 < q < math.inf:
+        return q
+    return _validated_top(plan.potential, E)
 
 
 @lru_cache(maxsize=64)
@@ -453,7 +485,7 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
     E = 0.5 * m * v0 * v0
     if not (math.isfinite(E) and E > 0):
         raise HCVInputError(f"kinetic energy m v0^2 / 2 = {E!r} J is not a positive float64")
-    qE = _validated_top(potential, E)
+    qE = _top(plan, E)
     if plan.lin is not None:
         return _linear_solution(v0, m, plan.lin[0], plan.lin[1], law)
     cs, es, sc = plan.cs, plan.es, plan.sc
@@ -482,7 +514,11 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
     if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
         err_t += ERROR_SAFETY * r[_ERR_ZF]
     err_w = ERROR_SAFETY * r[_ERR_W] + 100 * nst * _EPS
-    return LawImpactSolution(
+    # The frozen dataclass's __init__ sets these fields one by one through
+    # object.__setattr__ (~2 us of a ~20 us call); it has no __post_init__, so filling the
+    # new instance's __dict__ gives the same object (`test_general_law_prepared`).
+    sol = _NEW(LawImpactSolution)
+    sol.__dict__.update(
         v0=v0,
         m=m,
         law=dict(plan.table),
@@ -499,6 +535,10 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
         error_restitution=err_w,
         n_steps=nst,
     )
+    return sol
+
+
+_NEW = object.__new__
 
 
 class PreparedLaw:

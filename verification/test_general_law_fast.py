@@ -1,0 +1,97 @@
+"""The general-law solver's short cuts (issue 38, goal 4) give what the long way gives, bit for
+bit, and refuse what it refuses, in the same line.
+
+* `general_law._top`: a `PowerLaw`'s turning point formed inline, against
+  `_validate._validated_top` (numpy's power, not Python's: they differ in the last bit for a
+  few per cent of arguments on AVX-512 machines, so a Python ``**`` here would fail);
+* the solution filled without the frozen dataclass's ``__init__``, against that ``__init__``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from reference_impl import PowerLaw
+from reference_impl.errors import HCVInputError
+from reference_impl.exact import general_law as gl
+from reference_impl.exact._validate import _validated_top
+from verification.assertions import assert_true
+
+M = 0.1
+
+
+@pytest.mark.parametrize("p", [1.5, 1.0, 2.0, 0.5, 3.0])
+def test_inline_turning_point_is_validated_top_bit_for_bit(p):
+    """p = 1 takes numpy's square root (``** 0.5``), the others its vectorised power."""
+    pot = PowerLaw(1e6, p)
+    plan = gl._plan(pot, M, {"law": "hunt-crossley", "alpha": 0.3})
+    energies = 10.0 ** np.random.default_rng(7).uniform(-12.0, 6.0, 3000)
+    bad = [E for E in energies.tolist() if gl._top(plan, E) != _validated_top(pot, E)]
+    assert_true(
+        not bad,
+        got=f"{len(bad)} energies whose turning point differs, first {bad[:1]}",
+        should="none (the inline inverse is PowerLaw._inverse's operations)",
+        claim="general-law",
+        call=f"_top(plan of {pot!r}, E)",
+    )
+
+
+def test_a_subclass_of_power_law_keeps_its_own_inverse():
+    class Doubled(PowerLaw):
+        def _inverse(self, u):
+            return 2.0 * super()._inverse(u)
+
+    plan = gl._plan(Doubled(1e6, 1.5), M, {"law": "linear", "c": 3.0})
+    assert_true(
+        plan.inv is None,
+        got=str(plan.inv),
+        should="None (only PowerLaw itself is inverted inline)",
+        claim="general-law",
+        call="_plan(Doubled(...))",
+    )
+
+
+def test_a_turning_point_out_of_float_range_is_refused_as_before():
+    """k = 1e-300 at 1e6 m/s: n E / k overflows; the inline inverse hands it to the check."""
+    pot = PowerLaw(1e-300, 1.5)
+    E = 0.5 * M * 1e6 * 1e6
+    with pytest.raises(HCVInputError) as want:
+        _validated_top(pot, E)
+    with pytest.raises(HCVInputError) as got:
+        gl.solve_law_impact(pot, M, 1e6, {"law": "linear", "c": 3.0})
+    assert_true(
+        str(got.value) == str(want.value),
+        got=str(got.value),
+        should=str(want.value),
+        claim="general-law",
+        call=f"solve_law_impact({pot!r}, {M}, 1e6, linear)",
+    )
+
+
+@pytest.mark.parametrize(
+    "law", [{"law": "linear", "c": 30.0}, {"law": "hunt-crossley", "alpha": 0.3}]
+)
+def test_the_solution_is_the_dataclass_built_by_its_init(law):
+    sol = gl.solve_law_impact(PowerLaw(1e6, 1.5), M, 0.7, law)
+    names = [f.name for f in dataclasses.fields(gl.LawImpactSolution)]
+    built = gl.LawImpactSolution(**{k: getattr(sol, k) for k in names})
+    same = (
+        list(vars(sol)) == names
+        and not hasattr(gl.LawImpactSolution, "__post_init__")
+        and sol == built
+        and repr(sol) == repr(built)
+        and all(math.isfinite(getattr(sol, k)) for k in ("contact_time", "restitution"))
+    )
+    assert_true(
+        same,
+        got=repr(sol),
+        should=f"{built!r}, fields in the dataclass's order",
+        claim="general-law",
+        call=f"solve_law_impact(Hertz, {M}, 0.7, {law})",
+    )
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        sol.contact_time = 1.0
