@@ -18,7 +18,9 @@ import pytest
 from reference_impl import PowerLaw
 from reference_impl.errors import HCVInputError
 from reference_impl.exact import general_law as gl
+from reference_impl.exact._law_table import fast_law
 from reference_impl.exact._validate import _validated_top
+from reference_impl.theory.laws import law_from_dict
 from verification.assertions import assert_true
 
 M = 0.1
@@ -55,6 +57,7 @@ def test_a_subclass_of_power_law_keeps_its_own_inverse():
     )
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # the checked inverse's
 def test_a_turning_point_out_of_float_range_is_refused_as_before():
     """k = 1e-300 at 1e6 m/s: n E / k overflows; the inline inverse hands it to the check."""
     pot = PowerLaw(1e-300, 1.5)
@@ -95,3 +98,86 @@ def test_the_solution_is_the_dataclass_built_by_its_init(law):
     )
     with pytest.raises(dataclasses.FrozenInstanceError):
         sol.contact_time = 1.0
+
+
+# Every registered family's table (as scenes give it) and one of each value the checks refuse.
+_TABLES = [
+    {"law": "none"},
+    {"law": "universal", "zeta": 0.3},
+    {"law": "linear", "c": 30.0},
+    {"law": "linear", "c": 0.0},
+    {"law": "power", "c": 2.0, "exponent": 0.25},
+    {"law": "power", "exponent": 0.5, "c": 2.0},  # keys in another order
+    {"law": "viscoelastic", "A": 1e-4},
+    {"law": "hunt-crossley", "alpha": 0.3},
+]
+_REFUSED = [math.nan, math.inf, -math.inf, -1.0, -1e-300, True, "30", None, [30.0]]
+
+
+@pytest.mark.parametrize("table", _TABLES, ids=lambda t: "-".join(map(str, t.values())))
+def test_fast_law_is_law_from_dict(table):
+    got, want = fast_law(table), law_from_dict(table)
+    same = (
+        got is not None
+        and got == want
+        and list(got.params) == list(want.params)
+        and got.decomposition() == want.decomposition()
+        and got.to_dict() == want.to_dict()
+        and vars(got) == vars(want)
+    )
+    assert_true(
+        same,
+        got=repr(got),
+        should=f"{want!r} with its decomposition {want.decomposition()}",
+        claim="general-law",
+        call=f"fast_law({table})",
+    )
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        {"law": "polynomial", "c": [1.0, 2.0]},  # coefficient lists: the long way
+        {"law": "linear", "c": 30},  # an int: law_from_dict makes it a float
+        {"law": "linear", "c": np.float64(30.0)},
+        {"c": 30.0},  # no name: law "none", which refuses c
+        {"law": "linear", "c": 30.0, "alpha": 0.1},
+        {"law": "linear"},
+        {"law": "lineer", "c": 30.0},
+        {"law": 3, "c": 30.0},
+    ],
+    ids=str,
+)
+def test_fast_law_leaves_the_rest_to_law_from_dict(table):
+    assert_true(
+        fast_law(table) is None,
+        got=repr(fast_law(table)),
+        should="None (law_from_dict builds or refuses it)",
+        claim="general-law",
+        call=f"fast_law({table})",
+    )
+
+
+@pytest.mark.parametrize("value", _REFUSED, ids=repr)
+def test_a_refused_value_gets_the_same_one_line(value):
+    """The one-shot call refuses as law_from_dict refuses, in one line naming the value."""
+    table = {"law": "hunt-crossley", "alpha": value}
+    with pytest.raises(HCVInputError) as want:
+        law_from_dict(table)
+    with pytest.raises(HCVInputError) as got:
+        gl.solve_law_impact(PowerLaw(1e6, 1.5), M, 1.0, table, rtol=1e-8)
+    msg = str(got.value)
+    assert_true(
+        fast_law(table) is None and msg == str(want.value),
+        got=msg,
+        should=str(want.value),
+        claim="general-law",
+        call=f"solve_law_impact(Hertz, {M}, 1.0, {table})",
+    )
+    assert_true(
+        "\n" not in msg and repr(value) in msg,
+        got=msg,
+        should=f"one line naming {value!r}",
+        claim="general-law",
+        call=f"solve_law_impact(Hertz, {M}, 1.0, {table})",
+    )

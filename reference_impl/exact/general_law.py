@@ -47,6 +47,7 @@ from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
 from reference_impl.exact._general_taylor import solve as _compiled_solve
 from reference_impl.exact._general_taylor import theta_for
+from reference_impl.exact._law_table import fast_law
 from reference_impl.exact._oneshot_cache import BoundedCache, law_key, value_key
 from reference_impl.exact._rtol import checked_rtol, taylor_tol
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -386,7 +387,7 @@ def _plan(potential, m, law, rtol=None) -> _LawPlan:
 def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     if not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
-    law = law_from_dict(law)
+    law = fast_law(law) or law_from_dict(law)
     m = positive("m", m, "solve_law_impact")
     rtol = checked_rtol(rtol, "solve_law_impact")
     _check_exponent(potential)
