@@ -181,3 +181,30 @@ def test_a_refused_value_gets_the_same_one_line(value):
         claim="general-law",
         call=f"solve_law_impact(Hertz, {M}, 1.0, {table})",
     )
+
+
+@pytest.mark.parametrize("rtol", [None, 1e-8])
+def test_a_body_that_never_returns_keeps_its_fields(rtol):
+    """The universal law at zeta = 1.4 on Hertz creeps back and never reaches q = 0 (the
+    kernel stops on the overlap; `_refuse_lost_return` lets it pass): the fields of that
+    row are reported, not refused or left void (an early version of the compiled fields
+    returned NaN there, and no other test saw it)."""
+    pot, law = PowerLaw(1e6, 1.5), {"law": "universal", "zeta": 1.396390548343099}
+    sol = gl.solve_law_impact(pot, M, 1.728698069272725, law, rtol=rtol)
+    ok = (
+        sol.returns_to_q0 is False
+        and sol.contact_time == math.inf
+        and sol.restitution == 0.0
+        and 0.0 < sol.time_of_max_penetration < sol.contact_time_zero_force < math.inf
+        and 0.0 < sol.restitution_zero_force < 1.0
+        and 0.0 < sol.max_penetration < math.inf
+        and 0.0 < sol.error_time < math.inf
+        and sol.n_steps > 0
+    )
+    assert_true(
+        ok,
+        got=str(sol.to_dict()),
+        should="no return, contact time inf, finite zero-force end and bounds",
+        claim="general-law",
+        call=f"solve_law_impact({pot!r}, {M}, 1.7287, {law}, rtol={rtol})",
+    )
