@@ -129,6 +129,12 @@ def case_model(asm) -> AssemblyModel:
     return AssemblyModel(asm, pot, False, 0.0, 0.0, v, np.zeros((asm.n_bodies, 0)))
 
 
+def _steps(n: int) -> str:
+    """A horizon as the issue writes it: 1e6 for 1 000 000 steps, else with separators."""
+    k = len(str(n)) - 1
+    return f"1e{k}" if n == 10**k else f"{n:,}"
+
+
 def record_settings() -> dict:
     """The claim's settings as the long-horizon record holds them (JSON-ready): lanes, the
     search grid (units of Delta t_safe), the runaway criterion, the potential (N/m^p), the
@@ -219,7 +225,7 @@ def merge_record(rows: list[dict], record: dict | None, why: str | None = None):
     """
     where = "reports/" + RECORD_PATH.name
     if record is None:
-        note = f"{LONG_HORIZON:.0e} record ignored: {why}" if why else None
+        note = f"{_steps(LONG_HORIZON)} record ignored: {why}" if why else None
         return [dict(r) for r in rows], {"source": where, "merged": [], "note": note}
     out, merged = [], []
     for r in rows:
@@ -303,7 +309,7 @@ def measurement_from_rows(rows: list[dict], horizons, long: dict | None = None) 
     verdict = "refuted" if bad else "verified"
     if merged:
         src = (
-            f"; {LONG_HORIZON:.0e}-step horizon of {', '.join(merged)} from the record "
+            f"; {_steps(LONG_HORIZON)}-step horizon of {', '.join(merged)} from the record "
             f"{long['source']} (commit {long['commit'][:12]}"
             + (", uncommitted changes" if long.get("git_dirty") else "")
             + f", {long['date']})"
@@ -318,7 +324,7 @@ def measurement_from_rows(rows: list[dict], horizons, long: dict | None = None) 
     evidence = (
         f"5 % point of Delta t_crit / Delta t_safe over {N_LANES} lanes at the longest horizon: "
         + ", ".join(
-            f"{r['case']} {g(r['ratio_5'], 3)} at {r['horizon']:.0e} "
+            f"{r['case']} {g(r['ratio_5'], 3)} at {_steps(r['horizon'])} "
             f"(sqrt(d/2Z) {g(r['linear_prediction'], 3)})"
             for r in rows
         )  # fmt: skip
@@ -346,7 +352,7 @@ def measurement_from_rows(rows: list[dict], horizons, long: dict | None = None) 
         else None,
         headline=(
             f"Delta t_crit (5 %) / Delta t_safe down to {g(worst['ratio_5'], 3)} "
-            f"({worst['case']}, {worst['horizon']:.0e} steps); reduce by that factor"
+            f"({worst['case']}, {_steps(worst['horizon'])} steps); reduce by that factor"
         ),
     )
 
@@ -359,7 +365,7 @@ def corrected(m: dict, r: dict) -> tuple[str, str]:
         "Not a sufficient condition in assemblies: in undamped Hertz chains and packings "
         f"velocity Verlet runs away below Delta t_safe; take Delta t <= {g(worst['ratio_5'], 3)} "
         f"Delta t_safe (the smallest measured 5 % point, {worst['case']}, "
-        f"{worst['horizon']} steps), and expect the linear scaling sqrt(d / (2 Z)).",
+        f"{_steps(worst['horizon'])} steps), and expect the linear scaling sqrt(d / (2 Z)).",
         "; ".join(
             f"{x['case']}: {g(x['ratio_5'], 3)} (linear {g(x['linear_prediction'], 3)})"
             for x in rows
