@@ -238,7 +238,7 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
 
         def tick(done: int, total: int) -> None:
-            print(f"assemblies at {LONG_HORIZON:.0e} steps: {done}/{total} lane groups done, "
+            print(f"assemblies at {LONG_HORIZON:,} steps: {done}/{total} lane groups done, "
                   f"{time.perf_counter() - t0:.0f} s", flush=True)  # fmt: skip
 
         rec = run_record(args.cases, workers=args.workers, why=args.why, progress=tick)
