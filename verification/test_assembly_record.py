@@ -200,6 +200,7 @@ _TAMPERED = [
     ("null lane", _set("cases.0.dt_crit.5", None), "not a number"),
     ("negative lane", _set("cases.0.dt_crit.5", -1e-6), "should be finite and > 0"),
     ("zero lane", _set("cases.0.dt_crit.5", 0.0), "should be finite and > 0"),
+    ("huge integer", _set("cases.0.dt_crit.5", 10**400), "not a finite float"),
     ("bool for a count", _set("cases.0.n_bodies", True), "n_bodies"),
     ("wrong lanes", _drop_lane, f"{N - 1} lanes, should be {N}"),
     ("wrong lane count setting", _set("settings.n_lanes", 16), "settings.n_lanes"),

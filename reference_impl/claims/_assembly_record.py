@@ -59,7 +59,10 @@ def _num(x, what: str, *, positive: bool = True) -> float:
     """A finite number (> 0, or >= 0 when not ``positive``) from the record."""
     if isinstance(x, bool) or not isinstance(x, (int, float)):
         raise _Bad(f"{what} is {x!r}, not a number")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:  # an integer beyond any float
+        raise _Bad(f"{what} is an integer of {len(str(x))} digits, not a finite float") from None
     if not math.isfinite(v) or (v <= 0 if positive else v < 0):
         raise _Bad(f"{what} is {x!r}, should be finite and {'> 0' if positive else '>= 0'}")
     return v
