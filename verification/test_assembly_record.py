@@ -24,6 +24,7 @@ from reference_impl.assembly.search import reference_step
 from reference_impl.campaign import assembly_long
 from reference_impl.claims import _assembly_record as rec_mod
 from reference_impl.claims import sec6_assemblies as claim_mod
+from reference_impl.errors import HCVInputError
 from reference_impl.report._assemblies import assemblies_blocks
 from reference_impl.report._blocks import markdown_lines
 from reference_impl.report._files import swap_in
@@ -510,3 +511,52 @@ def test_full_measurement_reads_the_record(tmp_path, monkeypatch, tampered):
         call="sec6_assemblies.measure(quick=False) on one case, record "
         + ("tampered" if tampered else "valid"),
     )
+
+
+def _later_run() -> dict:
+    """A later run's record (`run_record`'s form) of the five-body chain alone."""
+    new = _synthetic(1.15, 1.30)
+    new["cases"][0] = {**new["cases"][0], "case": "chain N=5, walls both",
+                       **_SHAPES["chain N=5, walls both"]}  # fmt: skip
+    extra = {"machine": {}, "load_average_start": [1.0, 1.0, 1.0], "workers": 2,
+             "load_average_end": [1.0, 1.0, 1.0], "wall_s": 1.0, "cpu_s": 1.0}  # fmt: skip
+    return {**new, **extra, "commit": "fedcba9876543210", "date": "2026-01-02T00:00:00Z",
+            "left_out": [{"case": CHEAP, "why": "not run"}]}  # fmt: skip
+
+
+def test_a_later_run_is_added_with_its_own_provenance(tmp_path):
+    """`--add-to`: the five-body chain measured later joins the record with its own commit
+    and date; the claim reads both, and the evidence and the report name each run."""
+    both = assembly_long.add_to(_synthetic(), _later_run())
+    record, why = rec_mod.read_record(
+        _write(tmp_path, both), claim_mod.record_settings(), _EXPECTED
+    )
+    rows, long = claim_mod.merge_record(_rows(), record, why)
+    m = claim_mod.measurement_from_rows(rows, claim_mod.FULL_HORIZONS, long)
+    want = (
+        "(chain N=2, walls both: commit 0123456789ab, 2026-01-01T00:00:00Z; chain N=5, walls "
+        "both: commit fedcba987654, 2026-01-02T00:00:00Z)"
+    )
+    assert_true(
+        why is None
+        and both["left_out"] == []
+        and [a["cases"] for a in both["added"]] == [["chain N=5, walls both"]]
+        and all(r["from_record"] for r in rows)
+        and want in m.evidence
+        and "chain N=5, walls both at commit fedcba987654, 2026-01-02" in _section(m.figures),
+        got=f"note {why!r}, left out {both['left_out']}, evidence {m.evidence[-220:]!r}",
+        should=f"both cases merged, nothing left out, the evidence holding {want!r}",
+        claim=CLAIM,
+        call="assembly_long.add_to(first run, later run) then read_record",
+    )
+
+
+def test_a_later_run_cannot_replace_a_recorded_case():
+    again = _later_run()
+    again["cases"][0]["case"] = CHEAP
+    with pytest.raises(HCVInputError, match="already in the record"):
+        assembly_long.add_to(_synthetic(), again)
+    other = _later_run()
+    other["settings"] = {**other["settings"], "n_lanes": 16}
+    with pytest.raises(HCVInputError, match="other settings"):
+        assembly_long.add_to(_synthetic(), other)

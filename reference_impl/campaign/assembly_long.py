@@ -39,13 +39,16 @@ from reference_impl.assembly.lanes import cage_fraction
 from reference_impl.assembly.safe import tangent_step
 from reference_impl.assembly.search import Ensemble, reference_step, search_ensemble
 from reference_impl.claims import sec6_assemblies as claim
-from reference_impl.claims._assembly_record import LONG_HORIZON, RECORD_PATH, SCHEMA
+from reference_impl.claims._assembly_record import LONG_HORIZON, RECORD_PATH, SCHEMA, read_record
 from reference_impl.errors import HCVInputError
 from reference_impl.provenance import machine_info
 from reference_impl.stability.criteria import EnergyGrowth
 from reference_impl.sweep import run_cases
 
-__all__ = ["LANE_GROUP", "LEFT_OUT", "long_cases", "main", "run_group", "run_record"]
+__all__ = [
+    "LANE_GROUP", "LEFT_OUT", "add_to", "check_old", "expected_cases", "long_cases", "main",
+    "run_group", "run_record",
+]  # fmt: skip
 
 # Lanes per sweep case: 4 cases per ensemble of 32, so that 2 workers share even the
 # largest case (a 4 x 4 lattice, minutes) and the last cases to finish are short.
@@ -224,6 +227,53 @@ def run_record(labels=None, *, workers: int = 2, horizon: int = LONG_HORIZON, wh
     }
 
 
+def expected_cases() -> dict:
+    """The claim's cases as its reader checks a record (shape, Delta t_safe in s)."""
+    out = {}
+    for label, d, z, asm in claim.cases():
+        _, safe, _ = reference_step(claim.case_model(asm))
+        out[label] = {"n_bodies": asm.n_bodies, "n_contacts": asm.n_contacts, "dim": d,
+                      "coordination": z, "dt_safe": safe["paper"]}  # fmt: skip
+    return out
+
+
+def check_old(path) -> dict:
+    """The record at ``path`` as the claim would read it (`HCVInputError` when it would
+    ignore it), as its JSON."""
+    _, why = read_record(path, claim.record_settings(), expected_cases())
+    if why is not None:
+        raise HCVInputError(f"--add-to {path}: the claim would ignore it ({why})")
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def add_to(old: dict, new: dict) -> dict:
+    """The record ``old`` with the cases of the later run ``new`` added (`run_record`'s
+    dicts): each added case carries its run's ``commit``, ``date`` and ``git_dirty``, the
+    run is listed in ``added`` (commit, date, machine, load, workers, seconds, cases), and
+    its cases leave ``left_out``. The first run's provenance stays at the top.
+
+    Raises
+    ------
+    HCVInputError
+        A case of ``new`` already in ``old``, or another horizon or settings.
+    """
+    have = {c["case"] for c in old["cases"]}
+    labels = [c["case"] for c in new["cases"]]
+    again = [x for x in labels if x in have]
+    if again:
+        raise HCVInputError(f"--add-to: {again[0]!r} is already in the record")
+    if new["settings"] != old["settings"] or new["horizon"] != old["horizon"]:
+        raise HCVInputError("--add-to: the record was measured with other settings or horizon")
+    run = {k: new[k] for k in ("commit", "date", "git_dirty")}
+    keys = ("machine", "load_average_start", "load_average_end", "workers", "wall_s", "cpu_s")
+    return {
+        **old,
+        "cases": [*old["cases"], *({**c, **run} for c in new["cases"])],
+        "left_out": [x for x in old["left_out"] if x["case"] not in labels],
+        "added": [*old.get("added", []), {**run, **{k: new[k] for k in keys}, "cases": labels}],
+    }
+
+
 def main(argv=None) -> int:
     """The command line (see the module docstring); returns the exit status."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -231,6 +281,7 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=2, help="Dask worker processes (0: here)")
     ap.add_argument("--cases", nargs="+", metavar="LABEL", help="a subset of the cases")
     ap.add_argument("--why", default="", help="why the other counted cases are not run")
+    ap.add_argument("--add-to", metavar="PATH", help="add the cases to this record (a later run)")
     args = ap.parse_args(argv)
     try:
         if args.workers < 0:
@@ -241,18 +292,20 @@ def main(argv=None) -> int:
             print(f"assemblies at {LONG_HORIZON:,} steps: {done}/{total} lane groups done, "
                   f"{time.perf_counter() - t0:.0f} s", flush=True)  # fmt: skip
 
-        rec = run_record(args.cases, workers=args.workers, why=args.why, progress=tick)
+        old = check_old(args.add_to) if args.add_to else None
+        ran = run_record(args.cases, workers=args.workers, why=args.why, progress=tick)
+        rec = ran if old is None else add_to(old, jsonable(ran))
     except HCVInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     # strict JSON: an infinite value is written "inf" (the claim refuses the record then)
     atomic_write(Path(args.out), json.dumps(jsonable(rec), indent=1, allow_nan=False) + "\n")
-    for c in rec["cases"]:
+    for c in ran["cases"]:
         print(f"{c['case']}: 5/50/95 % of Delta t_crit / Delta t_safe "
               f"{c['ratio']['5']:.4g} / {c['ratio']['50']:.4g} / {c['ratio']['95']:.4g}, "
               f"cage {c['cage_fraction']:.3g}, {c['cpu_s']:.0f} s CPU")  # fmt: skip
-    print(f"wrote {args.out} ({rec['cpu_s']:.0f} s CPU, {rec['wall_s']:.0f} s wall, load "
-          f"{rec['load_average_start']} -> {rec['load_average_end']})")  # fmt: skip
+    print(f"wrote {args.out} ({ran['cpu_s']:.0f} s CPU, {ran['wall_s']:.0f} s wall, load "
+          f"{ran['load_average_start']} -> {ran['load_average_end']})")  # fmt: skip
     return 0
 
 

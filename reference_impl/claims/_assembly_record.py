@@ -21,7 +21,10 @@ perturbation), ``left_out`` (cases of the claim not run, each ``case`` and ``why
 ``dt_crit`` and ``dt_stable`` (per lane, s), ``evidence`` (per lane), ``quantiles`` (5 / 50
 / 95 % of Delta t_crit, s), ``ratio`` (the same over Delta t_safe), ``p_fail`` ([dt (s),
 fraction of lanes failed]), ``dt_tangent`` (s), ``q_run`` (m), ``cage_fraction`` (lane 0
-at its largest stable step over the horizon), ``contact_updates`` and ``cpu_s``.
+at its largest stable step over the horizon), ``contact_updates``, ``cpu_s``, and optionally
+``commit``, ``date`` and ``git_dirty`` of the run that measured it where that is not the
+record's first run (``added``: the later runs of ``--add-to``, each with its commit, date,
+machine, load, cases and seconds).
 """
 
 from __future__ import annotations
@@ -119,6 +122,18 @@ def ensemble_of(case: dict) -> Ensemble:
     )
 
 
+def _short(v, what: str) -> str:
+    if not isinstance(v, str) or not v or len(v) > 64:
+        raise _Bad(f"{what} is {str(v)[:40]!r}, not a short string")
+    return v
+
+
+def _dirty(v, what: str):
+    if v is not None and not isinstance(v, bool):
+        raise _Bad(f"{what} is {v!r}, not true, false or null")
+    return v
+
+
 def _case(case, expected: dict, n_lanes: int) -> tuple[str, dict]:
     """(label, the case checked) of one record case against the claim's ``expected``."""
     if not isinstance(case, dict):
@@ -160,6 +175,12 @@ def _case(case, expected: dict, n_lanes: int) -> tuple[str, dict]:
         ),  # fmt: skip
         "cpu_s": _num(_field(case, "cpu_s", label), f"{label}: cpu_s", positive=False),
     }
+    # The run that measured the case, where it is not the record's first (`--add-to`).
+    for key in ("commit", "date"):
+        if key in case:
+            out[key] = _short(case[key], f"{label}: {key}")
+    if "git_dirty" in case:
+        out["git_dirty"] = _dirty(case["git_dirty"], f"{label}: git_dirty")
     # The stored quantiles must be those of the stored lanes (the search's own rule).
     qs = ensemble_of(out).quantiles()
     stored = _field(case, "quantiles", label)
@@ -187,8 +208,9 @@ def read_record(path, settings: dict, expected: dict) -> tuple[dict | None, str 
     Returns
     -------
     (dict or None, str or None)
-        The record (``horizon``, ``commit``, ``date``, ``git_dirty``, ``cases``: label ->
-        checked case, ``left_out``: label -> why) and None; or None and one line why it is
+        The record (``horizon``, ``commit``, ``date``, ``git_dirty`` of its first run,
+        ``cases``: label -> checked case, each with the ``commit``, ``date`` and
+        ``git_dirty`` of its own run, ``left_out``: label -> why) and None; or None and one line why it is
         ignored (missing, not JSON, another schema, settings, lane count, a number that is
         not finite or positive, an unknown case, ...).
     """
@@ -214,15 +236,8 @@ def _read(path: Path, settings: dict, expected: dict) -> dict:
         if got.get(key) != settings.get(key):
             raise _Bad(f"settings.{key} is {str(got.get(key))[:80]}, the claim's is "
                        f"{str(settings.get(key))[:80]}")  # fmt: skip
-    meta = {}
-    for key in ("commit", "date"):
-        v = _field(data, key, "the record")
-        if not isinstance(v, str) or not v or len(v) > 64:
-            raise _Bad(f"{key} is {str(v)[:40]!r}, not a short string")
-        meta[key] = v
-    dirty = _field(data, "git_dirty", "the record")
-    if dirty is not None and not isinstance(dirty, bool):
-        raise _Bad(f"git_dirty is {dirty!r}, not true, false or null")
+    meta = {key: _short(_field(data, key, "the record"), key) for key in ("commit", "date")}
+    dirty = _dirty(_field(data, "git_dirty", "the record"), "git_dirty")
     n_lanes = settings["n_lanes"]
     cases = _field(data, "cases", "the record")
     if not isinstance(cases, list) or not cases:
@@ -232,6 +247,9 @@ def _read(path: Path, settings: dict, expected: dict) -> dict:
         label, case = _case(c, expected, n_lanes)
         if label in out:
             raise _Bad(f"case {label!r} appears twice")
+        case.setdefault("commit", meta["commit"])
+        case.setdefault("date", meta["date"])
+        case.setdefault("git_dirty", dirty)
         out[label] = case
     left = _field(data, "left_out", "the record")
     if not isinstance(left, list):

@@ -231,7 +231,9 @@ def merge_record(rows: list[dict], record: dict | None, why: str | None = None):
         ``horizon_dependent`` the median at the longest below the 5 % point at the shortest
         (as `assembly_report`), ``cage_fraction`` the larger of the two runs'. And the
         ``long_horizon`` summary: ``source``, ``horizon``, ``commit``, ``date``,
-        ``git_dirty``, ``merged`` (case labels), ``left_out`` (label -> why), ``note`` (the
+        ``git_dirty`` (of the record's first run), ``merged`` (case labels), ``runs`` (the
+        runs that measured them: ``commit``, ``date``, ``git_dirty``, ``cases``),
+        ``left_out`` (label -> why), ``note`` (the
         one line "1e6 record ignored: <why>", or None).
     """
     where = "reports/" + RECORD_PATH.name
@@ -239,6 +241,7 @@ def merge_record(rows: list[dict], record: dict | None, why: str | None = None):
         note = f"{_steps(LONG_HORIZON)} record ignored: {why}" if why else None
         return [dict(r) for r in rows], {"source": where, "merged": [], "note": note}
     out, merged = [], []
+    runs: list = []  # ((commit, date, git_dirty), cases) of the runs that measured them
     for r in rows:
         case = record["cases"].get(r["case"])
         if case is None:
@@ -271,6 +274,10 @@ def merge_record(rows: list[dict], record: dict | None, why: str | None = None):
             }
         )  # fmt: skip
         merged.append(r["case"])
+        run = (case["commit"], case["date"], case["git_dirty"])
+        if not runs or runs[-1][0] != run:
+            runs.append((run, []))
+        runs[-1][1].append(r["case"])
     info = {
         "source": where,
         "horizon": LONG_HORIZON,
@@ -278,10 +285,27 @@ def merge_record(rows: list[dict], record: dict | None, why: str | None = None):
         "date": record["date"],
         "git_dirty": record["git_dirty"],
         "merged": merged,
+        "runs": [
+            {"commit": c, "date": d, "git_dirty": dirty, "cases": names}
+            for (c, d, dirty), names in runs
+        ],
         "left_out": dict(record["left_out"]),
         "note": None,
     }
     return out, info
+
+
+def _provenance(long: dict) -> str:
+    """The record's run(s) for the evidence: "commit X, date", or per run its cases too."""
+    runs = long.get("runs") or [dict(long, cases=long["merged"])]
+
+    def one(run: dict) -> str:
+        dirty = ", uncommitted changes" if run.get("git_dirty") else ""
+        return f"commit {run['commit'][:12]}{dirty}, {run['date']}"
+
+    if len(runs) == 1:
+        return one(runs[0])
+    return "; ".join(f"{', '.join(run['cases'])}: {one(run)}" for run in runs)
 
 
 @functools.cache
@@ -321,9 +345,7 @@ def measurement_from_rows(rows: list[dict], horizons, long: dict | None = None) 
     if merged:
         src = (
             f"; {_steps(LONG_HORIZON)}-step horizon of {', '.join(merged)} from the record "
-            f"{long['source']} (commit {long['commit'][:12]}"
-            + (", uncommitted changes" if long.get("git_dirty") else "")
-            + f", {long['date']})"
+            f"{long['source']} ({_provenance(long)})"
             + "".join(
                 f"; {c} not in that record ({why})"
                 for c, why in (long.get("left_out") or {}).items()

@@ -133,16 +133,24 @@ def _record_sentence(long: dict | None) -> str:
     if not long:
         return ""
     if long.get("merged"):
-        dirty = ", with uncommitted changes" if long.get("git_dirty") else ""
+        runs = long.get("runs") or [dict(long, cases=long["merged"])]
+
+        def run(x: dict) -> str:
+            dirty = ", with uncommitted changes" if x.get("git_dirty") else ""
+            return f"commit {str(x['commit'])[:12]}{dirty}, {x['date']}"
+
+        when = (
+            f"at {run(runs[0])}"
+            if len(runs) == 1
+            else "; ".join(f"{', '.join(x['cases'])} at {run(x)}" for x in runs)
+        )
         left = "; ".join(f"{c}: {why}" for c, why in (long.get("left_out") or {}).items())
         return (
             f" The {int(long['horizon']):,}-step horizon (marked “record”) of "
             f"{', '.join(long['merged'])} is not measured in this run but read from the record "
             f"`{long['source']}` (written by `python -m reference_impl.campaign.assembly_long` "
-            f"at commit {str(long['commit'])[:12]}{dirty}, {long['date']}: the claim's lanes, "
-            "grid and criterion), after its settings were checked against the claim's"
-            + (f"; not in it: {left}" if left else "")
-            + "."
+            f"{when}: the claim's lanes, grid and criterion), after its settings were checked "
+            "against the claim's" + (f"; not in it: {left}" if left else "") + "."
         )
     if long.get("note"):
         return f" The long-horizon record was not used ({long['note']}): shorter horizons only."
