@@ -28,8 +28,6 @@ dT/ds = 0 for N > 1, so the exit's location error does not reach them), the tota
 force F = f + c W through 0 after the turning point (the zero-force end; read as
 F / rho^j0, j0 the lowest degree, so that it keeps its sign near rho = 0 instead of
 vanishing), and dF/ds through 0 from above (a peak of the force).
-The zero-force search skips a step on which an interval bound proves the force positive
-(`_force_stays_positive`), where it could find nothing: the same results, bit for bit.
 
 Step and error. The radius of convergence r is estimated by the root test over the
 last `WIN` coefficients of rho, W and T, each relative to its size; the step is
@@ -43,13 +41,16 @@ Measured on the study's Hertz laws (v0 = 1 m/s): 9-10 steps, 2-4e-16 relative er
 every output against the 30-digit truth, the kernel ~14x faster than the GBS kernel
 (`benchmarks.bench_general_taylor`).
 
+The zero-force search skips a step on which an interval bound proves the force positive
+(`_taylor_scan.force_stays_positive`), where it could find nothing: the same results, bit
+for bit.
+
 The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk cache of
 this module is keyed by this file alone: a change of `_general_kernel` (or
 `_general_step`) leaves this module's cached machine code running the old kernel until
 this file changes too (measured: the hand-over tests then differ from the kernel), so
 such a change comes with a line here. Last: the near-critical error control (2026-11-26);
-the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); the
-zero-force scan skipped where the force provably stays positive (2026-11-29).
+the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29).
 """
 
 from __future__ import annotations
@@ -98,8 +99,7 @@ MAX_STEPS = 24
 # threshold of no return): rho decays without crossing 0 there, and a root found at
 # round-off level would be no exit.
 _NO_RETURN_Q = 1e-10
-# Samples per step for the sign changes of the zero-force and peak-force functions
-# (NS + 1 points, a multiple of 3: `solve_taylor` evaluates them three at a time).
+# Samples per step for the sign changes of the zero-force and peak-force functions.
 NS = 8
 # N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
 _INT_TOL = 1e-12
@@ -523,19 +523,14 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         scan_zf = past and not zf_found and not _force_stays_positive(F, C, j0, D, R, W, x_end)
         if scan_peak or scan_zf:
             # rho and W on the NS + 1 points x_end i / NS in one pass (independent chains)
-            # (three points at a time, their six Horner chains in registers: the same
-            # operations as one point at a time, ~0.05 us less per step than arrays)
-            for i in range(0, NS + 1, 3):
-                x0, x1, x2 = x_end * i / NS, x_end * (i + 1) / NS, x_end * (i + 2) / NS
-                r0_, r1_, r2_ = R[K], R[K], R[K]
-                w0_, w1_, w2_ = W[K], W[K], W[K]
-                for k in range(K - 1, -1, -1):
-                    rk, wk = R[k], W[k]
-                    r0_, r1_, r2_ = r0_ * x0 + rk, r1_ * x1 + rk, r2_ * x2 + rk
-                    w0_, w1_, w2_ = w0_ * x0 + wk, w1_ * x1 + wk, w2_ * x2 + wk
-                xs[i], xs[i + 1], xs[i + 2] = x0, x1, x2
-                rs[i], rs[i + 1], rs[i + 2] = r0_, r1_, r2_
-                ws[i], ws[i + 1], ws[i + 2] = w0_, w1_, w2_
+            for i in range(NS + 1):
+                xs[i] = x_end * i / NS
+                rs[i] = R[K]
+                ws[i] = W[K]
+            for k in range(K - 1, -1, -1):
+                for i in range(NS + 1):
+                    rs[i] = rs[i] * xs[i] + R[k]
+                    ws[i] = ws[i] * xs[i] + W[k]
         if scan_peak:  # dG/ds through 0 from above
             gp = _dforce(F, C, N, D, rs[0], ws[0])
             for i in range(1, NS + 1):

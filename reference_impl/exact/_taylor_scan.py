@@ -5,8 +5,8 @@ every step after the turning point until the zero-force end is found. On a step 
 interval bound proves it positive at every point, as evaluated, no sample can be <= 0 and
 the scan finds no sign change: it is skipped, every result bit for bit
 (`verification/test_general_taylor_scan.py` compares the kernel with its twin that never
-skips). Measured: it skips 3 of the ~4 scans of a linear dashpot impact on Hertz and ~5.7 of
-the ~6 of Hunt-Crossley (the zero force of a pure Hunt-Crossley law never comes).
+skips). Measured on Hertz: it skips 3 of the ~4 scans of a linear-dashpot impact (all but
+the step of the zero-force end), 5.7 of the ~6 of a Hunt-Crossley one.
 """
 
 from __future__ import annotations
