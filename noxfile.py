@@ -125,6 +125,14 @@ def report(session: nox.Session) -> None:
     )
 
 
+@nox.session(python="3.11", name="assemblies-1e6")
+def assemblies_1e6(session: nox.Session) -> None:
+    """The assemblies claim's 1e6-step record, reports/assemblies_1e6.json (issue 39; ~20 min
+    of CPU on 2 workers); the report reads it and never rewrites it. Commit the file."""
+    session.install("-e", ".[sweep]")
+    session.run("python", "-m", "reference_impl.campaign.assembly_long", *session.posargs)
+
+
 @nox.session(python="3.11", name="committed-report")
 def committed_report(session: nox.Session) -> None:
     """The report committed in reports/: from a clean commit, with every built-in code (the registry's: LAMMPS, Kratos, MuJoCo, Drake, PyBullet,

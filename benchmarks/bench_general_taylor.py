@@ -60,6 +60,9 @@ def _with_kernel(fn):
     module's namespace (what the one-line import change gives)."""
     ns = dict(vars(_gl))
     ns["_compiled_solve"] = fn
+    # the call runs the Taylor kernel and its fields in one compiled call (issue 38): the
+    # same fields from ``fn``'s row
+    ns["_solve_formed"] = lambda v0, q_e, *arrays: _gl._form(fn(v0, q_e, *arrays), v0, q_e)
     for name in ("_solve_planned", "solve_law_impact"):
         f = getattr(_gl, name)
         ns[name] = types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)

@@ -15,12 +15,21 @@ the same law as ``family = "power"`` (warm, each in a new process); ``hcv report
 child), which a loaded machine inflates far less than wall; each row records which
 (``goal_basis``) and both verdicts.
 
+``hcv solve hertz`` (the undamped universal scene) has the same goal.
+
 Where the solve's time goes, each in a new process and measured the same way (no goal):
-Python itself, ``import numpy``, ``import numba``, numba's one-time set-up of its CPU target
-(the registries that its first compiled call loads, cached or not; it imports scipy.linalg
-for BLAS), and the same solve with ``NUMBA_DISABLE_JIT=1`` (the kernels interpreted: what
-avoiding numba would buy; measured only, its quadrature error bound differs from the
-compiled one in the last digits, so it is no path for users).
+Python itself, ``import numpy``, ``import numba``, ``import scipy.linalg`` (what numba's
+target imports to find BLAS), numba's one-time set-up of its CPU target (the registries that
+its first compiled call loads, cached or not), the same solve with ``NUMBA_DISABLE_JIT=1``
+(numba imported, the kernels interpreted), and the same solve with numba replaced by the
+stand-in ``benchmarks/_no_numba`` (numba never imported, the kernels interpreted: what a
+path free of numba would cost). Both interpreted runs are measured only: ``interpreted``
+in the record compares their ``--json`` output with the compiled one's for each solve scene
+(``identical``, else the differing fields), since they are not bit for bit everywhere.
+``phases`` takes the warm solve apart inside one process (`benchmarks._startup_phases`:
+the CPU of each import, numba's target set-up, each compiled function's cache load, the
+command), the median of ``--repeats`` processes, and the exit (the process's CPU from
+outside minus what it spent up to its end).
 
 Python's bytecode cache is part of a warm install (pip writes it; an editable install
 writes it on first import): ``PYTHONDONTWRITEBYTECODE`` is removed from the children's
@@ -105,6 +114,12 @@ _NUMBA_SETUP = (
 )
 
 
+# PYTHONPATH of the runs without numba: the stand-in first, then the repository.
+_NO_NUMBA_PATH = os.pathsep.join((str(ROOT / "benchmarks" / "_no_numba"), str(ROOT)))
+# The solve scenes whose interpreted output is compared and whose phases are measured.
+_SOLVE_SCENES = ("hertz-damped", "hertz")
+
+
 def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
     hcv = [sys.executable, "-m", "reference_impl.cli"]
     cases = [
@@ -122,21 +137,38 @@ def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
             "goal_s": GOAL_SOLVE_CPU_S,
             "goal_basis": "cpu",
         },
+        {
+            "name": "hcv solve hertz",
+            "argv": [*hcv, "solve", "hertz"],
+            "goal_s": GOAL_SOLVE_CPU_S,
+            "goal_basis": "cpu",
+        },
         # Where the solve's time goes (no goal): the floor, numpy, numba's import, numba's
         # target set-up on its first compiled call, and the solve with no compiled kernel.
         {"name": "python -c pass", "argv": [sys.executable, "-c", "pass"], "goal_s": None},
         {"name": "import numpy", "argv": [sys.executable, "-c", "import numpy"], "goal_s": None},
         {"name": "import numba", "argv": [sys.executable, "-c", "import numba"], "goal_s": None},
         {
+            "name": "import scipy.linalg",
+            "argv": [sys.executable, "-c", "import scipy.linalg.cython_blas"],
+            "goal_s": None,
+        },
+        {
             "name": "import numba + its CPU target set-up",
             "argv": [sys.executable, "-c", _NUMBA_SETUP],
             "goal_s": None,
         },
         {
-            "name": "hcv solve hertz-damped, NUMBA_DISABLE_JIT=1 (not bit for bit)",
+            "name": "hcv solve hertz-damped, NUMBA_DISABLE_JIT=1 (measured only)",
             "argv": [*hcv, "solve", "hertz-damped"],
             "goal_s": None,
             "env": {"NUMBA_DISABLE_JIT": "1"},
+        },
+        {
+            "name": "hcv solve hertz-damped, numba replaced by a stand-in (measured only)",
+            "argv": [*hcv, "solve", "hertz-damped"],
+            "goal_s": None,
+            "env": {"PYTHONPATH": _NO_NUMBA_PATH},
         },
         {
             "name": "hcv dt-crit (power q^2.5/2.5)",
@@ -286,6 +318,78 @@ def _row(case: dict, base_env: dict, cache: Path, repeats: int) -> dict:
     return row
 
 
+def _json_fields(text: str) -> dict:
+    """``hcv solve --json``'s results, one ``v0=...:key`` entry per value (exact floats)."""
+    out = {}
+    for row in json.loads(text)["results"]:
+        for key, value in row.items():
+            out[f"v0={row['v0']!r}:{key}"] = value
+    return out
+
+
+def _interpreted(base_env: dict, cache: Path) -> list[dict]:
+    """For each solve scene: is its ``--json`` output with the kernels interpreted (numba
+    disabled, or never imported) the compiled one, bit for bit? The differing fields if not."""
+    rows = []
+    hcv = [sys.executable, "-m", "reference_impl.cli"]
+    env = {**base_env, "HCV_CACHE_DIR": str(cache)}
+    modes = {
+        "NUMBA_DISABLE_JIT=1": {"NUMBA_DISABLE_JIT": "1"},
+        "stand-in, no numba": {"PYTHONPATH": _NO_NUMBA_PATH},
+    }
+    for scene in _SOLVE_SCENES:
+        argv = [*hcv, "solve", scene, "--json"]
+        compiled = subprocess.run(argv, env=env, cwd=ROOT, capture_output=True, text=True)
+        want = _json_fields(compiled.stdout)
+        for mode, extra in modes.items():
+            r = subprocess.run(argv, env={**env, **extra}, cwd=ROOT, capture_output=True, text=True)
+            got = _json_fields(r.stdout)
+            differ = sorted(k for k in want if got.get(k) != want[k])
+            rows.append({"scene": scene, "mode": mode, "identical": not differ, "differ": differ})
+            print(f"interpreted {scene:14s} {mode:22s} "
+                  f"{'bit for bit' if not differ else 'differs: ' + ', '.join(differ)}",
+                  flush=True)  # fmt: skip
+    return rows
+
+
+def _phases(base_env: dict, cache: Path, repeats: int) -> dict:
+    """`benchmarks._startup_phases` for each solve scene in ``repeats`` new processes: the
+    median CPU of each phase, the exit (from outside minus the child's own total)."""
+    env = {**base_env, "HCV_CACHE_DIR": str(cache)}
+    out = {}
+    for scene in _SOLVE_SCENES:
+        runs = []
+        for _ in range(repeats):
+            argv = [sys.executable, "-m", "benchmarks._startup_phases", scene]
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            r = subprocess.run(argv, env=env, cwd=ROOT, capture_output=True, text=True)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            if r.returncode != 0:
+                raise RuntimeError(f"{' '.join(argv)} exited {r.returncode}: {r.stderr[-500:]}")
+            rec = json.loads(r.stdout)
+            outside = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            rec["phases"]["exit (outside - inside)"] = outside - rec["total"]
+            rec["outside"] = outside
+            runs.append(rec)
+        names = list(runs[0]["phases"])
+        loads = sorted({k for rec in runs for k in rec["cache_loads"]})
+        out[scene] = {
+            "phases_cpu_s": {k: statistics.median(r["phases"][k] for r in runs) for k in names},
+            "cache_loads_cpu_s": {
+                k: statistics.median(r["cache_loads"].get(k, 0.0) for r in runs) for k in loads
+            },
+            "total_cpu_s": statistics.median(r["outside"] for r in runs),
+            "runs": runs,
+        }
+        print(f"phases of hcv solve {scene} (median of {repeats}, CPU s):", flush=True)
+        for k, v in out[scene]["phases_cpu_s"].items():
+            print(f"  {k:48s} {v:6.3f}", flush=True)
+        for k, v in out[scene]["cache_loads_cpu_s"].items():
+            print(f"    cache load {k:58s} {v:6.3f}", flush=True)
+        print(f"  {'total (from outside)':48s} {out[scene]['total_cpu_s']:6.3f}", flush=True)
+    return out
+
+
 def run(repeats: int = 3, report: bool = False, docs: bool = False) -> dict:
     """Time the start-up commands (or, with ``docs``, the docs' longer commands); the record."""
     with tempfile.TemporaryDirectory(prefix="hcv-bench-startup-") as tmp:
@@ -301,11 +405,18 @@ def run(repeats: int = 3, report: bool = False, docs: bool = False) -> dict:
         load_before = os.getloadavg()[0]
         cases = _docs_cases(tmp) if docs else _cases(scenes, tmp / "report" if report else None)
         rows = [_row(case, base_env, tmp / f"cache-{i}", repeats) for i, case in enumerate(cases)]
+        extra = {}
+        if not docs:  # on the cache the compiled solve filled (its row's)
+            solve_row = [c["name"] for c in cases].index("hcv solve hertz-damped")
+            solve_cache = tmp / f"cache-{solve_row}"
+            extra["interpreted"] = _interpreted(base_env, solve_cache)
+            extra["phases"] = _phases(base_env, solve_cache, repeats)
         load_after = os.getloadavg()[0]
     record = {
         "benchmark": "docs-commands" if docs else "startup",
         "repeats": repeats,
         "cases": rows,
+        **extra,
         "load_average_1min": {"before": load_before, "after": load_after},
         "machine": machine_info(),
         "generated_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),

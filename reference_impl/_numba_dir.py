@@ -35,7 +35,7 @@ _COMPILED_SOURCES = (
     "_atomic.py", "_cache.py", "_expr_cache.py", "_jit.py", "_numba_dir.py", "_stored.py", "_version.py",
     "errors.py",
     "exact/_branches.py", "exact/_cap_nodes.py", "exact/_general_contact.py", "exact/_general_kernel.py", "exact/_general_rows.py", "exact/_general_step.py",
-    "exact/_general_taylor.py", "exact/_law_batch.py",
+    "exact/_general_fields.py", "exact/_general_taylor.py", "exact/_law_batch.py", "exact/_law_table.py",
     "exact/_nodes.py", "exact/_one_call.py", "exact/_oneshot_cache.py", "exact/_oscillator.py",
     "exact/_power_kernel.py",
     "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_rtol.py", "exact/_split.py",

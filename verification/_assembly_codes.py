@@ -11,7 +11,8 @@
   `VerletChainCode` (one advice) and `VerletLatticeCode` (none) built on the references,
   `CrashingChainCode` (every run fails), `MalformedChainCode` (one body too few),
   `QuittingChainCode` (every run stops half-way, below the stop energy),
-  `AbortingChainCode` and `SegfaultingChainCode` (isolated; every run kills their process);
+  `AbortingChainCode` and `SegfaultingChainCode` (isolated; every run kills their process),
+  `SleepingChainCode` (isolated; every run sleeps an hour: ``--timeout``);
 - checks of a real code: `code_fixture` (its adapter, one per test module), `needs` (its
   mark, and its skip where it is not installed), `dt_safe`,
   `assert_run_is_verlet` (positions and velocities against a reference),
@@ -23,6 +24,8 @@ from __future__ import annotations
 import ctypes
 import math
 import os
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -226,6 +229,19 @@ class SegfaultingChainCode(VerletChainCode):
 
     def _assembly_impl(self, request):
         ctypes.string_at(0)
+
+
+class SleepingChainCode(VerletChainCode):
+    """A chain code in a worker process whose run never ends (a code stuck in a loop): it
+    writes its process id to ``sleeping-chain.pid`` in the working directory, then sleeps,
+    so that a test can see the worker killed at ``hcv dt-crit --timeout``."""
+
+    name = "sleeping-chain"
+    isolate = True
+
+    def _assembly_impl(self, request):
+        Path("sleeping-chain.pid").write_text(str(os.getpid()))
+        time.sleep(3600)
 
 
 class VerletLatticeCode(ContactAdapter):

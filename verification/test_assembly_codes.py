@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,7 +29,10 @@ from reference_impl.adapters.base import (
     ChainRun,
     ContactAdapter,
 )
+from reference_impl.bench._code_worker import RUN_TIMEOUT_S
 from reference_impl.bench.assembly_codes import assembly_codes_table, chain_scene, judge_energy
+from reference_impl.bench.scorecard.tolerances import default_tolerances
+from reference_impl.cli import _parser
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.stability.criteria import EnergyGrowth
 from verification._assembly_codes import (
@@ -203,6 +207,66 @@ def test_hcv_dt_crit_code_that_kills_its_process_is_one_line_exit_1(cls, name, s
                 got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
                 should=f"exit 1 and one line with {words!r} and {sig}", claim=CLAIM,
                 call=f"hcv dt-crit chain-hertz --adapter {spec}")  # fmt: skip
+
+
+def test_hcv_dt_crit_kills_a_code_at_its_timeout_in_one_line_exit_2(tmp_path):
+    """An isolated code whose run never ends: at ``--timeout`` its worker process is
+    killed and hcv stops with one line "... timed out after N s", exit status 2 (on main
+    there was no --timeout and no limit: the run waited for the code forever)."""
+    spec = "verification._assembly_codes:SleepingChainCode"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--timeout", "1"], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    pid_file = tmp_path / "sleeping-chain.pid"
+    pid = pid_file.read_text() if pid_file.exists() else None
+    # hcv has exited: the killed worker was reaped, no process with its id is left
+    alive = pid is not None and Path(f"/proc/{pid}").exists()
+    words = "sleeping-chain timed out after 1 s"
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout
+                and pid is not None and not alive,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}, worker {pid} alive {alive}",
+                should=f"exit 2, one line with {words!r}, the worker gone", claim=CLAIM,
+                call=f"hcv dt-crit chain-hertz --adapter {spec} --timeout 1")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [(["--timeout", "0"], "--timeout: '0' is not in (0, 86400] seconds"),
+     (["--timeout", "nan"], "--timeout: 'nan' is not in (0, 86400] seconds"),
+     (["--timeout", "1e6"], "--timeout: '1e6' is not in (0, 86400] seconds"),
+     (["--timeout", "soon"], "--timeout: 'soon' is not a number of seconds")],
+)  # fmt: skip
+def test_hcv_dt_crit_refuses_a_bad_timeout_before_any_code_runs(args, words, tmp_path):
+    spec = "verification._assembly_codes:SleepingChainCode"
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, *args], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0]
+                and not (tmp_path / "sleeping-chain.pid").exists(),
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 2, one line with {words!r}, no run started", claim=CLAIM,
+                call=f"hcv dt-crit --adapter {spec} {' '.join(args)}")  # fmt: skip
+
+
+def test_hcv_dt_crit_refuses_a_timeout_without_a_code(tmp_path):
+    r = hcv(["dt-crit", "hertz", "--timeout", "5"], cwd=tmp_path)
+    lines = r.stderr.strip().splitlines()
+    words = "--timeout '5' bounds the runs of a code: it needs --adapter CODE"
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout,
+                got=f"exit {r.returncode}, stderr {r.stderr[-300:]!r}",
+                should=f"exit 2 and one line with {words!r}", claim=CLAIM,
+                call="hcv dt-crit hertz --timeout 5")  # fmt: skip
+
+
+def test_dt_crit_timeout_default_is_the_bench_run_timeout(capsys):
+    """One default for a code's run: hcv dt-crit --adapter's is hcv bench's [run] timeout,
+    and ``hcv dt-crit --help`` states it."""
+    bench = default_tolerances()["run"]["timeout"]
+    with pytest.raises(SystemExit):
+        _parser(("dt-crit",)).parse_args(["dt-crit", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert_true(RUN_TIMEOUT_S == bench and f"(default {RUN_TIMEOUT_S:g}," in text,
+                got=f"RUN_TIMEOUT_S {RUN_TIMEOUT_S}, bench {bench}, help {text[-300:]!r}",
+                should="equal, and the help saying the default", claim=CLAIM,
+                call="hcv dt-crit --help")  # fmt: skip
 
 
 def test_codes_table_gives_a_crashing_code_its_row():

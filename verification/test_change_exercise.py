@@ -24,8 +24,6 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import Phase, given, settings
-from hypothesis import strategies as st
 
 from reference_impl.adapters import AdapterScene
 from reference_impl.adapters.subprocess import law_from_json
@@ -46,6 +44,7 @@ from reference_impl.theory.laws import (
 )
 from reference_impl.theory.laws.docs_table import DOC_PAGES, fill_source
 from verification._hcv_run import hcv
+from verification._scratch_laws import QuarterPower, one_draw
 from verification.assertions import assert_less, assert_true
 from verification.strategies import law_cases
 
@@ -66,17 +65,10 @@ TRUTH_DPS = 20
 CALL = "a law registered at runtime"
 
 
-class _Quarter(LawFamily):
-    """The exercise's law: C = c q^(1/4) (the route "general")."""
+class _Quarter(QuarterPower):
+    """The exercise's law: C = c q^(1/4) (the route "general"), under its own name."""
 
     name = "exercise-quarter"
-    params = (Param("c", "N s m^-1.25"),)
-    formula = "c q^(1/4)"
-    strength = "c"
-
-    @classmethod
-    def decompose(cls, params):
-        return Decomposition(terms=((params["c"], 0.25),))
 
 
 class _RateQuarter(LawFamily):
@@ -91,19 +83,6 @@ class _RateQuarter(LawFamily):
     @classmethod
     def C(cls, params, pot, m, q, qdot, ns=np):
         return params["c"] * q**0.25 * abs(qdot)
-
-
-def _one_draw(strategy):
-    """One example of ``strategy``, drawn inside a test."""
-    out = []
-
-    @settings(max_examples=1, database=None, phases=(Phase.generate,))
-    @given(st.data())
-    def run(data):
-        out.append(data.draw(strategy))
-
-    run()
-    return out[0]
 
 
 def _scene(name: str, extra: str = "c = 1000.0\n") -> str:
@@ -140,7 +119,7 @@ def quarter():
 
 def test_every_derived_place_sees_a_law_registered_at_runtime(quarter, capsys):
     name = quarter.name
-    pot, m, v0, drawn = _one_draw(law_cases(name))
+    pot, m, v0, drawn = one_draw(law_cases(name))
     scene = parse_scene(_scene(name, "restitution = 0.7\nrestitution_speed = 1.0\n"), "<t>")
     solved = solve(HERTZ, M, V0, law=scene.law.to_dict())
     # The same C written as the built-in power law: the route and the kernels are the
@@ -192,7 +171,7 @@ def test_an_unregistered_law_leaves_no_trace(capsys):
         "law_family": lambda: law_family(name),
         "solve (the one-shot cache)": lambda: solve(HERTZ, M, V0, law=law),
         "prepare": lambda: prepare(HERTZ, M, law=law),
-        "law_cases": lambda: _one_draw(law_cases(name)),
+        "law_cases": lambda: one_draw(law_cases(name)),
         "scene": lambda: parse_scene(_scene(name), "<t>"),
     }
     for where, call in refusals.items():

@@ -93,3 +93,71 @@ def test_dt_crit_gate_passes_when_the_bound_holds_everywhere(capsys):
     assert gate_status(rows) == 0 and "gate: pass" in capsys.readouterr().out
     rows[1]["holds"] = False
     assert gate_status(rows) == 1 and "fails at v0 = 2 m/s" in capsys.readouterr().out
+
+
+class _Stdout:
+    """A stdout whose ``isatty`` answers ``tty`` (or raises, as a closed file does)."""
+
+    def __init__(self, tty):
+        self.tty = tty
+
+    def isatty(self):
+        if self.tty is None:
+            raise ValueError("I/O operation on closed file")
+        return self.tty
+
+    def write(self, text):
+        return len(text)
+
+    def flush(self):
+        pass
+
+
+def test_rich_is_skipped_only_where_it_would_find_no_terminal(monkeypatch):
+    """`_tables._may_be_terminal` says no only where rich's own ``Console().is_terminal``
+    says no, over its environment variables and the tty (a closed stdout included): a pipe
+    skips rich's import (issue 38 goal 7), a terminal still gets rich's table."""
+    from rich.console import Console
+
+    from reference_impl.cli import _tables
+
+    seen = []
+    for tty_compatible in (None, "0", "1", "x"):
+        for force_color in (None, "", "1"):
+            for tty in (False, True, None):
+                for name, value in (
+                    ("TTY_COMPATIBLE", tty_compatible),
+                    ("FORCE_COLOR", force_color),
+                ):
+                    if value is None:
+                        monkeypatch.delenv(name, raising=False)
+                    else:
+                        monkeypatch.setenv(name, value)
+                monkeypatch.setattr(sys, "stdout", _Stdout(tty))
+                ours, rich = _tables._may_be_terminal(), Console().is_terminal
+                seen.append((tty_compatible, force_color, tty, ours, rich))
+    wrong = [s for s in seen if s[4] and not s[3]]  # rich a terminal, ours skipping it
+    skipped = [s for s in seen if not s[3]]
+    assert_true(not wrong and len(skipped) >= 6,
+                got=f"wrong {wrong}, skipped {len(skipped)} of {len(seen)}",
+                should="no terminal skipped, the pipes without overrides skipped",
+                claim=CLAIM, call="_may_be_terminal()")  # fmt: skip
+
+
+def test_a_piped_table_imports_no_rich():
+    """Off a terminal the table is plain text and rich is not imported (on main it was,
+    only to learn that stdout is no terminal: ~0.05 s of hcv solve's CPU)."""
+    code = (
+        "import sys; from reference_impl.cli._tables import print_transposed; "
+        "print_transposed('t', [{'v0': 1.0, 'a': 2.5}], [('a', 'A [s]')], 'v0', 'v0 [m/s]'); "
+        "print('rich' in sys.modules, file=sys.stderr)"
+    )
+    env = {k: v for k, v in _ENV.items() if k not in ("FORCE_COLOR", "TTY_COMPATIBLE")}
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                       text=True, timeout=60)  # fmt: skip
+    lines = r.stdout.splitlines()
+    assert_true(r.returncode == 0 and r.stderr.strip() == "False" and lines[0] == "t"
+                and lines[1].split() == ["v0", "[m/s]", "1"] and lines[3].split() == ["A", "[s]", "2.5"],
+                got=f"exit {r.returncode}, stdout {r.stdout!r}, stderr {r.stderr[-200:]!r}",
+                should="the plain table, rich not imported", claim=CLAIM,
+                call="print_transposed(...) piped")  # fmt: skip

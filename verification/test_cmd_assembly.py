@@ -308,6 +308,32 @@ def test_a_hanging_program_times_out_and_is_killed(persistent):
 
 
 @pytest.mark.parametrize("persistent", [False, True], ids=["one-shot", "persistent"])
+def test_hcv_dt_crit_timeout_kills_a_sleeping_program_in_one_line(persistent, tmp_path):
+    """``hcv dt-crit --adapter 'cmd:...' --timeout 1`` on a program that sleeps: its
+    process is killed at 1 s (the spec set no timeout of its own, so --timeout is its
+    limit) and hcv stops with one line, exit status 2, no process left. On main there was
+    no --timeout (argparse's usage lines) and the program had 60 s."""
+    tag = uuid.uuid4().hex  # names this test's processes among everyone's
+    prog = f"{_SERVER if persistent else _PROGRAM} --mode hang --tag {tag}"
+    spec = f"cmd[assembly=chain,persistent={persistent}]:{prog}"
+    t0 = time.monotonic()
+    r = hcv(["dt-crit", "chain-hertz", "--adapter", spec, "--timeout", "1", "--horizons", "50"],
+            cwd=tmp_path)  # fmt: skip
+    took = time.monotonic() - t0
+    lines = r.stderr.strip().splitlines()
+    left = processes_with(prog)
+    words = "timed out after 1 s"
+    # 1 s of timeout, one more for a persistent start-up, hcv's own start; 30 s bounds a
+    # loaded machine while staying far below the program's former 60 s
+    assert_true(r.returncode == 2 and len(lines) == 1 and words in lines[0] and not r.stdout
+                and not left and took < 30,
+                got=f"exit {r.returncode} after {took:.1f} s, stderr {r.stderr[-300:]!r}, "
+                f"left {left}",
+                should=f"exit 2, one line with {words!r}, no process left", claim=CLAIM,
+                call=f"hcv dt-crit --adapter cmd --mode hang --timeout 1 persistent={persistent}")  # fmt: skip
+
+
+@pytest.mark.parametrize("persistent", [False, True], ids=["one-shot", "persistent"])
 def test_an_answer_of_empty_lists_is_refused_before_it_is_parsed(persistent):
     """An answer within its byte bound whose parsed form would cost ~20 times its text
     (100 000 empty lists in meta) is refused from its bytes, in one line; the persistent

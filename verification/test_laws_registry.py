@@ -18,8 +18,6 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import Phase, given, settings
-from hypothesis import strategies as st
 
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._general_law_mp import solve_law_impact_mp
@@ -29,7 +27,6 @@ from reference_impl.scenes import parse_scene
 from reference_impl.tasks import solve_scene
 from reference_impl.theory.laws import (
     LAWS,
-    Decomposition,
     LawFamily,
     Param,
     is_harmonic,
@@ -39,6 +36,7 @@ from reference_impl.theory.laws import (
     unregister_law,
 )
 from reference_impl.theory.laws.docs_table import DOC_PAGES, END, START, fill_source, law_table
+from verification._scratch_laws import QuarterPower, one_draw
 from verification.assertions import assert_close, assert_less, assert_true
 from verification.strategies import law_cases
 
@@ -55,19 +53,6 @@ E_SOLVE_TOL = 1e-9
 GENERIC_BOUND_MAX = 1e-7
 
 
-class QuarterPower(LawFamily):
-    """The change exercise: C = c q^(1/4) (Tsuji's exponent, any potential)."""
-
-    name = "test-quarter"
-    params = (Param("c", "N s m^-1.25"),)
-    formula = "c q^(1/4)"
-    strength = "c"
-
-    @classmethod
-    def decompose(cls, params):
-        return Decomposition(terms=((params["c"], 0.25),))
-
-
 class QuadraticDrag(LawFamily):
     """C(q, q') = b |q'|: a drag force b q'|q'|, nonlinear in q' (the generic route)."""
 
@@ -80,19 +65,6 @@ class QuadraticDrag(LawFamily):
     @classmethod
     def C(cls, params, pot, m, q, qdot, ns=np):
         return params["b"] * abs(qdot) + 0 * q
-
-
-def _one_draw(strategy):
-    """One example of ``strategy``, drawn inside a test (errors propagate as raised)."""
-    out = []
-
-    @settings(max_examples=1, database=None, phases=(Phase.generate,))
-    @given(st.data())
-    def run(data):
-        out.append(data.draw(strategy))
-
-    run()
-    return out[0]
 
 
 @pytest.fixture
@@ -186,7 +158,7 @@ def test_a_law_defined_in_a_test_is_a_scene_law_with_a_solved_strength(quarter):
 
 
 def test_a_law_defined_in_a_test_is_drawn_and_listed(quarter):
-    pot, m, v0, law = _one_draw(law_cases("test-quarter"))
+    pot, m, v0, law = one_draw(law_cases("test-quarter"))
     assert_true(
         law["law"] == "test-quarter" and law["c"] > 0,
         got=str(law),
@@ -213,7 +185,7 @@ def test_a_law_defined_in_a_test_is_drawn_and_listed(quarter):
         lambda: solve(HERTZ, M, V0, law={"law": "hunt_crossley", "alpha": 1.0}),
         lambda: solve_batch(HERTZ, M, [V0], law={"law": "hunt_crossley", "alpha": 1.0}),
         lambda: prepare(HERTZ, M, law={"law": "hunt_crossley", "alpha": 1.0}),
-        lambda: _one_draw(law_cases("hunt_crossley")),
+        lambda: one_draw(law_cases("hunt_crossley")),
         lambda: parse_scene(_SCENE.replace("test-quarter", "hunt_crossley"), "<t>"),
     ],
     ids=["law_from_dict", "law_family", "is_harmonic", "solve", "solve_batch", "prepare",

@@ -344,3 +344,46 @@ def test_the_command_table_gives_each_commands_own_help():
         claim="tool",
         call="hcv --help (cli.COMMANDS against each command's add_parser)",
     )
+
+
+_FREEZE_PROBE = """
+import gc, sys
+from reference_impl.cli import main
+sys.argv = ["hcv", *sys.argv[1:]]
+code = main()
+print("FROZEN", gc.get_freeze_count(), code, file=sys.stderr)
+"""
+
+
+@pytest.mark.parametrize(
+    "args, frozen",
+    [(("scenes",), True), (("solve", "--rtol", "x", "hertz"), True),
+     (("report", "--from", "no-such.json"), False)],
+)  # fmt: skip
+def test_a_command_process_freezes_its_heap_before_it_exits(args, frozen, tmp_path):
+    """``hcv solve``, ``dt-crit`` and ``scenes`` freeze their heap as they return, a
+    refusal included (the interpreter's final collections then skip numba's registries,
+    `cli._FROZEN_AT_EXIT`); a command that starts processes (``report``) does not. On main
+    no command froze anything (the count stayed 0)."""
+    r = subprocess.run([sys.executable, "-c", _FREEZE_PROBE, *args], capture_output=True,
+                       text=True, timeout=120, cwd=tmp_path)  # fmt: skip
+    line = next((s for s in r.stderr.splitlines() if s.startswith("FROZEN")), None)
+    ok = line is not None and (int(line.split()[1]) > 0) == frozen
+    assert_true(ok, got=f"{line!r} (stderr {r.stderr[-200:]!r})",
+                should=f"frozen {frozen}", claim="startup",
+                call=f"hcv {' '.join(args)}")  # fmt: skip
+
+
+def test_main_with_argv_leaves_the_callers_heap_alone(capsys):
+    """`main(argv)` (tests, scripts: the process goes on) never freezes its caller's heap."""
+    import gc
+
+    from reference_impl.cli import main
+
+    before = gc.get_freeze_count()
+    code = main(["scenes"])
+    capsys.readouterr()
+    assert_true(code == 0 and gc.get_freeze_count() == before,
+                got=f"exit {code}, freeze count {before} -> {gc.get_freeze_count()}",
+                should="exit 0, the count unchanged", claim="startup",
+                call="main(['scenes'])")  # fmt: skip

@@ -9,15 +9,30 @@ abort, ``os._exit``) ends the worker, not the caller, and fails the call as one
 `AdapterRunError` saying how the worker died ("crashed (killed by signal 11, SIGSEGV)").
 A code that is trusted or isolated in its own way (the reference; YADE, a program
 behind a pipe) runs in-process as before.
+
+**Timeout.** Each run of the code (one chain or lattice, or its step advice) has
+``timeout`` seconds (default `RUN_TIMEOUT_S`, ``hcv dt-crit --timeout``): a worker that has
+not answered by then is killed, and the call fails as one `AdapterTimeout` ("timed out after
+N s"). A code behind a pipe that declares ``timeout_given`` (``cmd:``, YADE) gets the same
+limit unless its spec set its own, as ``hcv bench`` gives it the bench's per-run timeout;
+its own timeout kills its process. A code that runs in-process with neither (the
+reference) bounds its runs itself.
 """
 
 from __future__ import annotations
 
 from reference_impl.adapters.base import AdapterDeclined, AdapterRunError
 from reference_impl.adapters.registry import get_adapter
+from reference_impl.adapters.subprocess import AdapterTimeout
 from reference_impl.bench.worker import WorkerExecutor
 
-__all__ = ["open_code"]
+__all__ = ["RUN_TIMEOUT_S", "open_code"]
+
+# Seconds allowed for one run of a code, as ``hcv bench`` allows one ([run] timeout of
+# `reference_impl/bench/scorecard/tolerances.toml`; verification/test_assembly_codes.py
+# holds them equal): a chain of ten bodies over the default 2000 steps takes well under a
+# second in every built-in code, a LAMMPS start-up included.
+RUN_TIMEOUT_S = 60.0
 
 
 class _WorkerCode:
@@ -26,21 +41,28 @@ class _WorkerCode:
     It answers what `reference_impl.bench.assembly_codes` asks of a code (``name``,
     ``label``, ``supports_assembly``, ``supports_lattice``, ``assembly``,
     ``step_advice``, ``close``); the worker builds the adapter from the same spec and
-    runs the adapter itself (not one of its variants), with no timeout of its own (the
-    codes bound their runs, as in-process).
+    runs the adapter itself (not one of its variants); each call has ``timeout`` seconds,
+    after which the worker process is killed.
     """
 
-    def __init__(self, executor: WorkerExecutor):
+    def __init__(self, executor: WorkerExecutor, timeout: float):
         self._executor = executor
+        self.timeout = timeout
         parent = executor.adapter  # the parent-side copy: names and flags, it runs nothing
         self.name, self.label = parent.name, parent.label
         self.supports_assembly = parent.supports_assembly
         self.supports_lattice = parent.supports_lattice
 
     def _call(self, method: str, request):
-        out = self._executor.call(None, method, request)
+        out = self._executor.call(None, method, request, timeout=self.timeout)
         if out.ok:
             return out.value
+        if out.timed_out:  # the executor has killed the worker; the next call starts one
+            raise AdapterTimeout(
+                f"{self.label}: a run timed out after {self.timeout:g} s; its worker process "
+                "was killed",
+                out.stderr,
+            )
         if out.declined:  # a decline stays one: the caller's input, not the code's failure
             raise AdapterDeclined(out.declined)
         raise AdapterRunError(out.error, out.stderr)
@@ -53,7 +75,8 @@ class _WorkerCode:
         AdapterDeclined
             The code declines the request.
         AdapterRunError
-            The code raised, returned malformed output or its worker died (one line).
+            The code raised, returned malformed output or its worker died (one line);
+            `AdapterTimeout` when the run outlived the timeout (the worker killed).
         """
         return self._call("assembly", request)
 
@@ -69,13 +92,17 @@ class _WorkerCode:
         return f"<isolated {self.label}>"
 
 
-def open_code(spec: str):
+def open_code(spec: str, timeout: float = RUN_TIMEOUT_S):
     """The code named by ``spec``, ready for assembly runs, isolated as the gate isolates it.
 
     Parameters
     ----------
     spec : str
         An adapter spec (a registry name, ``module:Class``, ...).
+    timeout : float
+        Seconds allowed for each run (s, finite, > 0; the caller checks it): the worker is
+        killed after it; a ``cmd:`` or YADE code whose spec set no timeout of its own
+        gets it as its own.
 
     Returns
     -------
@@ -90,6 +117,9 @@ def open_code(spec: str):
     """
     adapter = get_adapter(spec)
     if not adapter.isolate:
+        # as hcv bench gives such a code its per-run timeout (scorecard.runner)
+        if getattr(adapter, "timeout_given", True) is False:
+            adapter.timeout = float(timeout)
         return adapter
     adapter.close()
-    return _WorkerCode(WorkerExecutor(spec))
+    return _WorkerCode(WorkerExecutor(spec), float(timeout))

@@ -11,6 +11,7 @@ handled the same way, with "hcv: terminated (SIGTERM)" and exit status 143.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
 from collections.abc import Iterable, Sequence
@@ -101,6 +102,16 @@ def _chosen(argv: Sequence[str]) -> tuple[str, ...]:
 # that a daemonised adapter is still ours to kill at the end (reference_impl._procs).
 _SPAWNING = ("bench", "sweep", "report")
 
+# Commands whose process ends as they return, with nothing of theirs left to finalise (no
+# process, file or pool of theirs outlives `run`): their heap is frozen (`gc.freeze`)
+# before the interpreter exits. Its final garbage collections then skip the ~10^5 objects
+# numba's typing and lowering registries made, a quarter of a second of CPU of a warm
+# `hcv solve` and `hcv dt-crit` on 2 cores (issue 38 goal 7, measured by
+# benchmarks/bench_startup.py); objects are still freed by their reference counts, and
+# atexit handlers (the private compile cache's removal) run as before. Only a process that
+# ends after `main` (argv None) is frozen: a caller's own heap is left alone.
+_FROZEN_AT_EXIT = ("solve", "dt-crit", "scenes")
+
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``hcv`` console script; returns the exit status.
@@ -131,6 +142,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 _procs.kill_descendants()
         if code == EXIT_INTERRUPTED and _procs.terminated() is not None:
             code = 128 + _procs.terminated()  # a command that reported the interrupt itself
+        if args.command in _FROZEN_AT_EXIT:
+            gc.freeze()  # the process exits next (see _FROZEN_AT_EXIT)
         return code
 
 

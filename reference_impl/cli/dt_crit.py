@@ -66,6 +66,13 @@ def add_parser(subparsers) -> None:
         "default 2000) and a verdict on the code's own step advice",
     )
     d.add_argument(
+        "--timeout",
+        metavar="SECONDS",
+        help="with --adapter: seconds allowed for each run of the code (a chain or lattice, or "
+        "its step advice); the code's process is killed at it and hcv stops with one line "
+        "(default 60, hcv bench's per-run timeout; a cmd: spec's own timeout= wins)",
+    )
+    d.add_argument(
         "--gate",
         action="store_true",
         help="exit 1 when the dt_safe bound fails at any speed (a step-size check for CI)",
@@ -78,12 +85,13 @@ def run(args) -> int:
     from reference_impl.scenes import load_scene
     from reference_impl.tasks import search_assembly_scene, search_loaded_scene
 
+    timeout = _timeout(getattr(args, "timeout", None), getattr(args, "adapter", None))
     scene = load_scene(args.scene)
     if getattr(args, "adapter", None) is not None:
         # a contact code on a chain or lattice (issue 39 §4), in its own module: it loads the codes
         from reference_impl.cli._dt_crit_code import run_code
 
-        return run_code(args, scene, _horizons(args.horizons))
+        return run_code(args, scene, _horizons(args.horizons), timeout)
     if scene.kind in ("chain", "lattice"):
         return _run_assembly(args, scene, search_assembly_scene)
     # The progress bar goes to stderr, so it is shown with --json too when stderr is a terminal.
@@ -104,6 +112,29 @@ def run(args) -> int:
     if getattr(args, "gate", False):
         return gate_status(rows, to=sys.stderr if args.json else sys.stdout)
     return EXIT_OK
+
+
+# Longest --timeout accepted (s): a day, the bound of hcv bench's [run] timeout.
+_MAX_TIMEOUT_S = 86400.0
+
+
+def _timeout(text: str | None, adapter: str | None) -> float | None:
+    """``--timeout`` in seconds (None: the default of `reference_impl.bench._code_worker`);
+    refused in one line, before the scene is read, when it is not a number in (0, 1 day]
+    or is given without ``--adapter`` (it would bound nothing)."""
+    if text is None:
+        return None
+    if adapter is None:
+        raise HCVInputError(
+            f"--timeout {text!r} bounds the runs of a code: it needs --adapter CODE"
+        )
+    try:
+        v = float(text)
+    except ValueError:
+        raise HCVInputError(f"--timeout: {text.strip()!r} is not a number of seconds") from None
+    if not 0.0 < v <= _MAX_TIMEOUT_S:  # nan fails the test
+        raise HCVInputError(f"--timeout: {text.strip()!r} is not in (0, 86400] seconds")
+    return v
 
 
 def _horizons(text: str | None) -> list[int] | None:

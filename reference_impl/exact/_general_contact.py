@@ -61,10 +61,12 @@ def creep_verdict(law: DampingLaw, m: float, pot: Potential):
         The verdict; a, the exponent of C at contact (None: undamped there); n; zeta0
         where a = (n-2)/2, else None.
     """
-    n = float(pot.leading_exponent)
-    c = pot.leading_coefficient
+    return _verdict(law.decomposition(), m, float(pot.leading_exponent), pot.leading_coefficient)
+
+
+def _verdict(d, m: float, n: float, c):
+    """`creep_verdict` of the decomposition ``d`` on U ~ c q^n (c None: unknown)."""
     cc = math.nan if c is None else float(c)
-    d = law.decomposition()
     leads: dict = {}
     for cj, e in d.terms:
         if cj > 0:
@@ -112,7 +114,7 @@ def law_arrays(law: DampingLaw, m: float, pot: Potential, extra: tuple = ()):
         leads.append(n / 2.0 - 1.0)
     # The creep test of _general_kernel may stop a return only where the creep never ends
     # (`creeps_for_ever`; where c is unknown, a <= n - 2: int C / U' dq diverges).
-    never = creep_verdict(law, m, pot)[0]
+    never = _verdict(d, m, n, pot.leading_coefficient)[0]
     if never is None:
         never = bool(leads) and min(leads) <= n - 2.0 + 1e-12
     creeps = 1.0 if never else 0.0

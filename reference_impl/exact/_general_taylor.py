@@ -27,7 +27,7 @@ W = 0 (maximum penetration), rho = 0 (exit: T and W are stationary in s there,
 dT/ds = 0 for N > 1, so the exit's location error does not reach them), the total
 force F = f + c W through 0 after the turning point (the zero-force end; read as
 F / rho^j0, j0 the lowest degree, so that it keeps its sign near rho = 0 instead of
-vanishing), and dF/ds through 0 from above (a peak of the force).
+vanishing; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), and dF/ds through 0 from above (a peak of the force).
 
 Step and error. The radius of convergence r is estimated by the root test over the
 last `WIN` coefficients of rho, W and T, each relative to its size; the step is
@@ -50,7 +50,8 @@ this module is keyed by this file alone: a change of `_general_kernel` (or
 `_general_step`) leaves this module's cached machine code running the old kernel until
 this file changes too (measured: the hand-over tests then differ from the kernel), so
 such a change comes with a line here. Last: the near-critical error control (2026-11-26);
-the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29).
+the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
+zero-force scan for a law that never pulls, the samples four at a time (2026-11-29).
 """
 
 from __future__ import annotations
@@ -262,6 +263,37 @@ def _horner(c, x):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _samples(R, W, x_end, xs, rs, ws):
+    """rho and W at the NS + 1 points x_end i / NS (Horner from c[K] down, as `_horner`),
+    four points at a time in registers (eight independent chains)."""
+    for i in range(NS + 1):
+        xs[i] = x_end * i / NS
+    i = 0
+    while i + 4 <= NS + 1:
+        x0, x1, x2, x3 = xs[i], xs[i + 1], xs[i + 2], xs[i + 3]
+        r0 = r1 = r2 = r3 = R[K]
+        w0 = w1 = w2 = w3 = W[K]
+        for k in range(K - 1, -1, -1):
+            rk = R[k]
+            wk = W[k]
+            r0 = r0 * x0 + rk
+            r1 = r1 * x1 + rk
+            r2 = r2 * x2 + rk
+            r3 = r3 * x3 + rk
+            w0 = w0 * x0 + wk
+            w1 = w1 * x1 + wk
+            w2 = w2 * x2 + wk
+            w3 = w3 * x3 + wk
+        rs[i], rs[i + 1], rs[i + 2], rs[i + 3] = r0, r1, r2, r3
+        ws[i], ws[i + 1], ws[i + 2], ws[i + 3] = w0, w1, w2, w3
+        i += 4
+    while i < NS + 1:
+        rs[i] = _horner(R, xs[i])
+        ws[i] = _horner(W, xs[i])
+        i += 1
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
     P (flat, rows of K + 1) receives the series of the powers rho^j."""
@@ -453,6 +485,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     Fs = m * v0 * v0 / L  # force unit
     exit_tol = _STATIONARY if N > 1 else _ULPS
     creeps = sc[4] == 1.0
+    nopull = sc[6] == 1.0
     q_top = 1.0
     monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
     for j in range(D + 1):
@@ -519,18 +552,13 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             r_hi = _horner(R, x_from if past else x_end)
             ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
         scan_peak = not (monotone and ub <= peak)
-        # (not where the force provably stays positive on the whole step: nothing to find)
-        scan_zf = past and not zf_found and not _force_stays_positive(F, C, j0, D, R, W, x_end)
+        # no zero-force end where the law says the force never vanishes before q = 0
+        # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact;
+        # nor on a step where the force provably stays positive (nothing to find there)
+        scan_zf = past and not zf_found and not nopull
+        scan_zf = scan_zf and not _force_stays_positive(F, C, j0, D, R, W, x_end)
         if scan_peak or scan_zf:
-            # rho and W on the NS + 1 points x_end i / NS in one pass (independent chains)
-            for i in range(NS + 1):
-                xs[i] = x_end * i / NS
-                rs[i] = R[K]
-                ws[i] = W[K]
-            for k in range(K - 1, -1, -1):
-                for i in range(NS + 1):
-                    rs[i] = rs[i] * xs[i] + R[k]
-                    ws[i] = ws[i] * xs[i] + W[k]
+            _samples(R, W, x_end, xs, rs, ws)
         if scan_peak:  # dG/ds through 0 from above
             gp = _dforce(F, C, N, D, rs[0], ws[0])
             for i in range(1, NS + 1):

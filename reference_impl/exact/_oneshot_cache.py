@@ -28,6 +28,7 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 
+from reference_impl.exact._law_table import fast_law
 from reference_impl.theory.laws import DampingLaw, law_from_dict
 from reference_impl.theory.laws._registry import LAWS
 
@@ -153,6 +154,7 @@ def cached_law(law, *, where: str = "damping") -> DampingLaw:
         return law_from_dict(law, where=where)
     got = _LAWS.get(key)
     if got is None:
-        got = law_from_dict(law, where=where)
+        # the plain table without the generic layers, equal; law_from_dict builds or refuses the rest
+        got = fast_law(law) or law_from_dict(law, where=where)
         _LAWS.put(key, got)
     return got

@@ -80,6 +80,8 @@ def checked_rtol(rtol, call: str = "solve"):
     """
     if rtol is None:
         return None
+    if type(rtol) is float and 0.0 < rtol <= RTOL_MAX:  # the common case, without the checks
+        return rtol
     # A number, not a string or a bool that float() would take.
     r = float(rtol) if is_real_number(rtol) else math.nan
     if not (0.0 < r <= RTOL_MAX):

@@ -36,17 +36,20 @@ import numpy as np
 from reference_impl.errors import HCVInputError, UnsupportedError
 from reference_impl.exact._general_contact import creeps_for_ever as _creeps_for_ever
 from reference_impl.exact._general_contact import law_arrays as _law_arrays
-from reference_impl.exact._general_kernel import (
-    MAX_STEPS,
-    OUT_FIELDS,
-    STOP_NO_RETURN_Q,
-    python_solver,
-)
+from reference_impl.exact._general_fields import ERROR_SAFETY
+from reference_impl.exact._general_fields import FAILED as _FAILED
+from reference_impl.exact._general_fields import OK as _OK
+from reference_impl.exact._general_fields import form as _form
+from reference_impl.exact._general_fields import solve_formed as _solve_formed
+from reference_impl.exact._general_kernel import MAX_STEPS, python_solver
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
-from reference_impl.exact._general_taylor import solve as _compiled_solve
+
+# the Taylor kernel under the name _law_batch and benchmarks.bench_general_taylor import
+from reference_impl.exact._general_taylor import solve as _compiled_solve  # noqa: F401
 from reference_impl.exact._general_taylor import theta_for
+from reference_impl.exact._law_table import fast_law
 from reference_impl.exact._oneshot_cache import BoundedCache, law_key, value_key
 from reference_impl.exact._rtol import checked_rtol, taylor_tol
 from reference_impl.exact._validate import _check_exponent, _validated_top
@@ -57,10 +60,6 @@ from reference_impl.theory.laws import DampingLaw, law_from_dict
 
 __all__ = ["ERROR_SAFETY", "LawImpactSolution", "PreparedLaw", "prepare_law", "solve_law_impact"]
 
-# The bound reported is this multiple of the summed local error estimates (each the
-# difference of the order-16 and order-14 extrapolants, itself an over-estimate of the
-# order-16 error taken), plus round-off: a few hundred operations per step at 1 ulp.
-ERROR_SAFETY = 10.0
 _EPS = np.finfo(float).eps
 
 _SOLVERS: dict = {}
@@ -358,6 +357,7 @@ class _LawPlan(NamedTuple):
     lin: tuple | None  # (k, zeta^2) of the linear oscillator, solved in closed form
     pk: tuple | None  # (ks, ps) of a sum of power laws, for the compiled kernels
     tab: tuple | None  # (rows, lim) of another term table, for the compiled GBS kernel
+    inv: tuple | None = None  # (n, k, 1/n) of a single `PowerLaw`: its inverse inline (`_top`)
 
 
 # Plans of the one-shot calls, per (potential object, m, law, rtol) (`_oneshot_cache`).
@@ -383,9 +383,10 @@ def _plan(potential, m, law, rtol=None) -> _LawPlan:
 
 
 def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
-    if not isinstance(potential, Potential):
+    # (a PowerLaw first: the abstract class's isinstance is ~1/30 of planning a new law)
+    if type(potential) is not PowerLaw and not isinstance(potential, Potential):
         raise HCVInputError(f"potential must be a Potential, got {potential!r}")
-    law = law_from_dict(law)
+    law = fast_law(law) or law_from_dict(law)
     m = positive("m", m, "solve_law_impact")
     rtol = checked_rtol(rtol, "solve_law_impact")
     _check_exponent(potential)
@@ -396,7 +397,38 @@ def _new_plan(potential, m, law, rtol=None) -> _LawPlan:
     lin = _linear_ratio(potential, law, m)
     pk = _power_terms(potential) if lin is None else None
     tab = table_arrays(potential) if lin is None and pk is None else None
-    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab)
+    inv = _inline_inverse(potential)
+    return _LawPlan(potential, m, law, law.to_dict(), cs, es, sc, lin, pk, tab, inv)
+
+
+def _inline_inverse(potential):
+    """(n, k, 1/n) of a `PowerLaw` itself (not a subclass, which may change its inverse),
+    else None: `_top` then forms its turning point inline."""
+    if type(potential) is not PowerLaw:
+        return None
+    n = potential.leading_exponent
+    return n, potential.k, 1.0 / n
+
+
+def _top(plan: _LawPlan, E: float) -> float:
+    """`_validate._validated_top` of ``E`` (m), bit for bit, for every potential.
+
+    For a `PowerLaw` it is ``PowerLaw._inverse`` of ``[E]`` without its layers (~3 us of a
+    ~20 us prepared call, issue 38): the same float operations, (n E) / k in floats (each
+    correctly rounded, as numpy's elementwise multiply and divide) and then numpy's ``**``
+    on a one-element array, which is not Python's pow (numpy's vectorised power differs
+    from libm's in the last bit for ~5 % of arguments on AVX-512 machines) and for 1/n =
+    0.5 is numpy's sqrt. Nothing is left to check there: U' = k q^p > 0 (``check_monotone``
+    is empty) and U is unbounded; a turning point that is not a positive float (overflow,
+    underflow) goes the checked way, which refuses it in its one line.
+    """
+    inv = plan.inv
+    if inv is None:
+        return _validated_top(plan.potential, E)
+    q = float((np.array([inv[0] * E / inv[1]]) ** inv[2])[0])
+    if 0.0 < q < math.inf:
+        return q
+    return _validated_top(plan.potential, E)
 
 
 @lru_cache(maxsize=64)
@@ -407,98 +439,56 @@ def _taylor_scalars(rtol: float) -> tuple[float, float]:
     return tol, theta_for(tol)
 
 
-# Where `_general_kernel.OUT_FIELDS` puts each output: the kernel's array is read as a
-# list by index (a dict of it per call was ~1 us of a ~25 us prepared call).
-(
-    _T_PEAK,
-    _Q_MAX,
-    _MAX_FORCE,
-    _PEAK_FORCE,
-    _T_ZF,
-    _W_ZF,
-    _T_END,
-    _W_END,
-    _RETURNS,
-    _ERR_T,
-    _ERR_W,
-    _N_STEPS,
-    _STATUS,
-    _STOP,
-    _ERR_ZF,
-) = (
-    OUT_FIELDS.index(f)
-    for f in (
-        "t_peak",
-        "q_max",
-        "max_force",
-        "peak_force",
-        "t_zf",
-        "w_zf",
-        "t_end",
-        "w_end",
-        "returns",
-        "err_t",
-        "err_w",
-        "n_steps",
-        "status",
-        "stop",
-        "err_zf",
-    )
-)
-
-
 def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
     potential, m, law = plan.potential, plan.m, plan.law
     v0 = positive("v0", v0, "solve_law_impact")
     E = 0.5 * m * v0 * v0
     if not (math.isfinite(E) and E > 0):
         raise HCVInputError(f"kinetic energy m v0^2 / 2 = {E!r} J is not a positive float64")
-    qE = _validated_top(potential, E)
+    qE = _top(plan, E)
     if plan.lin is not None:
         return _linear_solution(v0, m, plan.lin[0], plan.lin[1], law)
     cs, es, sc = plan.cs, plan.es, plan.sc
+    # The fields from the kernel's row (`_general_fields.form`), in the Taylor kernel's own
+    # compiled call where it runs
     if plan.pk is not None:
-        out = _compiled_solve(v0, qE, plan.pk[0], plan.pk[1], cs, es, sc)
+        f = _solve_formed(v0, qE, plan.pk[0], plan.pk[1], cs, es, sc)
     elif plan.tab is not None:  # the GBS kernel compiled on the term table (full accuracy)
-        out = _gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc)
+        f = _form(_gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc), v0, qE)
     else:
-        out = _python_solver()(v0, qE, potential, None, cs, es, sc)
-    r = out.tolist()
-    if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):
-        raise UnsupportedError(
-            f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "
-            f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
-        )
-    returns = r[_RETURNS] == 1.0
-    if not returns and r[_STOP] == STOP_NO_RETURN_Q:
-        _refuse_lost_return(potential, law, m, v0)
-    nst = int(r[_N_STEPS])
-    t_scale = qE / v0
-    t_end = r[_T_END] if returns else math.inf
-    t_zf = r[_T_ZF]
-    err_t = ERROR_SAFETY * r[_ERR_T] * t_scale + 100 * nst * _EPS * (
-        t_end if returns else t_zf if math.isfinite(t_zf) else t_scale
-    )
-    if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
-        err_t += ERROR_SAFETY * r[_ERR_ZF]
-    err_w = ERROR_SAFETY * r[_ERR_W] + 100 * nst * _EPS
-    return LawImpactSolution(
+        f = _form(_python_solver()(v0, qE, potential, None, cs, es, sc), v0, qE)
+    if f[0] != _OK:
+        if f[0] == _FAILED:
+            raise UnsupportedError(
+                f"solve_law_impact: integration did not finish within {MAX_STEPS} steps "
+                f"(law {law.to_dict()}, v0 = {v0!r} m/s); please report this case"
+            )
+        _refuse_lost_return(potential, law, m, v0)  # returns where the creep never ends
+    # The frozen dataclass's __init__ sets these fields one by one through
+    # object.__setattr__ (~2 us of a ~20 us call); it has no __post_init__, so filling the
+    # new instance's __dict__ gives the same object (`test_general_law_fast`).
+    sol = _NEW(LawImpactSolution)
+    sol.__dict__.update(
         v0=v0,
         m=m,
         law=dict(plan.table),
-        max_penetration=r[_Q_MAX],
-        max_force=r[_MAX_FORCE],
-        peak_force=r[_PEAK_FORCE],
-        time_of_max_penetration=r[_T_PEAK],
-        contact_time=t_end,
-        restitution=-r[_W_END] / v0 if returns else 0.0,
-        contact_time_zero_force=t_zf,
-        restitution_zero_force=-r[_W_ZF] / v0,
-        returns_to_q0=returns,
-        error_time=err_t,
-        error_restitution=err_w,
-        n_steps=nst,
+        max_penetration=f[1],
+        max_force=f[2],
+        peak_force=f[3],
+        time_of_max_penetration=f[4],
+        contact_time=f[5],
+        restitution=f[6],
+        contact_time_zero_force=f[7],
+        restitution_zero_force=f[8],
+        returns_to_q0=f[9],
+        error_time=f[10],
+        error_restitution=f[11],
+        n_steps=f[12],
     )
+    return sol
+
+
+_NEW = object.__new__
 
 
 class PreparedLaw:

@@ -117,10 +117,44 @@ def _h(item) -> int:
     return int(item[0])
 
 
-def _by_horizon(row: dict) -> str:
-    """The 5 % point at each horizon: "1e4: 0.31; 1e5: 0.25"."""
+def _by_horizon(row: dict, long: dict | None) -> str:
+    """The 5 % point at each horizon: "10,000: 0.31; 100,000: 0.25"; the horizon read from
+    the long-horizon record marked "(record)"."""
     parts = sorted(row["ratio_by_horizon"].items(), key=_h)
-    return "; ".join(f"{int(h):,}: {_num(q['5'], 3)}" for h, q in parts)
+    rec = str(long.get("horizon")) if long and row.get("from_record") else None
+    return "; ".join(
+        f"{int(h):,}: {_num(q['5'], 3)}" + (" (record)" if h == rec else "") for h, q in parts
+    )
+
+
+def _record_sentence(long: dict | None) -> str:
+    """Which horizon came from the long-horizon record (its commit and date), or why the
+    record was ignored; empty when the measurement read none (a quick run)."""
+    if not long:
+        return ""
+    if long.get("merged"):
+        runs = long.get("runs") or [dict(long, cases=long["merged"])]
+
+        def run(x: dict) -> str:
+            dirty = ", with uncommitted changes" if x.get("git_dirty") else ""
+            return f"commit {str(x['commit'])[:12]}{dirty}, {x['date']}"
+
+        when = (
+            f"at {run(runs[0])}"
+            if len(runs) == 1
+            else "; ".join(f"{', '.join(x['cases'])} at {run(x)}" for x in runs)
+        )
+        left = "; ".join(f"{c}: {why}" for c, why in (long.get("left_out") or {}).items())
+        return (
+            f" The {int(long['horizon']):,}-step horizon (marked “record”) of "
+            f"{', '.join(long['merged'])} is not measured in this run but read from the record "
+            f"`{long['source']}` (written by `python -m reference_impl.campaign.assembly_long` "
+            f"{when}: the claim's lanes, grid and criterion), after its settings were checked "
+            "against the claim's" + (f"; not in it: {left}" if left else "") + "."
+        )
+    if long.get("note"):
+        return f" The long-horizon record was not used ({long['note']}): shorter horizons only."
+    return ""
 
 
 def _nonlinear(rows: list[dict], measured: dict) -> list:
@@ -140,7 +174,7 @@ def _nonlinear(rows: list[dict], measured: dict) -> list:
                 _num(x["ratio_95"], 3),
                 _num(x["linear_prediction"], 3),
                 _num(x["tangent_ratio"], 3),
-                _by_horizon(x),
+                _by_horizon(x, measured.get("long_horizon")),
                 "yes" if x["horizon_dependent"] else "no",
                 "yes" if x["holds"] else "NO",
             ]
@@ -163,6 +197,7 @@ def _nonlinear(rows: list[dict], measured: dict) -> list:
             "the single contact's 2√(m/k)); the tangent step is 2/ω_max of the assembly "
             "linearised at the stiffest contact met. Horizon-dependent: the median at the "
             "longest horizon lies below the 5 % point at the shortest."
+            + _record_sentence(measured.get("long_horizon"))
         ),
         T(
             [

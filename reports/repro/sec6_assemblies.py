@@ -8,7 +8,8 @@ first struck at 1 m/s; 32 lanes whose initial speed differs in its last bits; a 
 away when E_n > 100 E_0 within 1000 steps and then exceeds 1e6 E_0 within 10000. Each
 lane's smallest failing step is found by a scan in steps of 0.05 Delta t_safe and a
 bisection; the 5 % point of the 32 values over Delta t_safe is compared by side of 1 with
-the suite's (the suite's full report runs longer horizons, where the step only falls).
+the suite's (the suite's full report runs longer horizons, 1e4 and 1e5 steps, and reads
+1e6 from the record reports/assemblies_1e6.json; the step only falls with the horizon).
 The linear prediction sqrt(d / (2 Z)) is the textbook coordination of each lattice, and a
 bonded linear chain between walls checks this loop against 2 / omega_max, omega_max =
 2 sqrt(k/m) sin(N pi / (2N + 2)). Only numpy.
