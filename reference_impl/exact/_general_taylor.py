@@ -41,6 +41,10 @@ Measured on the study's Hertz laws (v0 = 1 m/s): 9-10 steps, 2-4e-16 relative er
 every output against the 30-digit truth, the kernel ~14x faster than the GBS kernel
 (`benchmarks.bench_general_taylor`).
 
+The zero-force search skips a step on which an interval bound proves the force positive
+(`_taylor_scan.force_stays_positive`), where it could find nothing: the same results, bit
+for bit.
+
 The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk cache of
 this module is keyed by this file alone: a change of `_general_kernel` (or
 `_general_step`) leaves this module's cached machine code running the old kernel until
@@ -59,6 +63,7 @@ import numpy as np
 
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
 
 __all__ = [
     "K",
@@ -548,8 +553,10 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
         scan_peak = not (monotone and ub <= peak)
         # no zero-force end where the law says the force never vanishes before q = 0
-        # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact
+        # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact;
+        # nor on a step where the force provably stays positive (nothing to find there)
         scan_zf = past and not zf_found and not nopull
+        scan_zf = scan_zf and not _force_stays_positive(F, C, j0, D, R, W, x_end)
         if scan_peak or scan_zf:
             _samples(R, W, x_end, xs, rs, ws)
         if scan_peak:  # dG/ds through 0 from above
