@@ -95,7 +95,7 @@ def _check_against_truth(pot, m, v0, law):
     assert_true(
         sol.returns_to_q0,
         got=f"no return for {law} (v0 = {v0})",
-        should="a return (the drawn strength gamma <= 0.35 returns)",
+        should="a return (law_cases draws only returning bodies)",
         claim="general-law",
         call=call,
     )
