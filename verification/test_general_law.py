@@ -13,7 +13,7 @@ import math
 
 import mpmath
 import pytest
-from hypothesis import Phase, given, settings
+from hypothesis import Phase, example, given, settings
 from hypothesis import strategies as st
 
 from reference_impl import PowerLaw, solve_impact, solve_impacts
@@ -86,6 +86,12 @@ def _check_against_truth(pot, m, v0, law):
         )
 
 
+# Draws every run checks (hypothesis's explicit phase): C = c on U' = k q^3 at gamma = 0.2,
+# the strategy's bound where a law may creep, its slowest return (e = 0.23; the body creeps
+# for ever from gamma = 0.296, see `strategies._CREEP_GAMMA`).
+_PINNED = {"linear": [(PowerLaw(1e4, 3.0), 1.0, 1.0, {"law": "linear", "c": 4.756828460010884})]}
+
+
 @pytest.mark.parametrize("name", [n for n in LAWS if n != "none"])
 def test_law_against_30_digit_truth(name):
     # No shrinking: each truth run costs seconds, and the failing draw is printed as is.
@@ -94,6 +100,8 @@ def test_law_against_30_digit_truth(name):
     def run(case):
         _check_against_truth(*case)
 
+    for case in _PINNED.get(name, ()):
+        run = example(case)(run)
     run()
 
 
