@@ -13,7 +13,7 @@ import math
 from hypothesis import strategies as st
 
 from reference_impl.potentials import Ellipsoid, PowerLaw, Sphere, SumPotential
-from reference_impl.theory.laws import law_family
+from reference_impl.theory.laws import law_family, law_from_dict
 
 __all__ = [
     "log_uniform",
@@ -336,6 +336,19 @@ __all__ += [
 # Laws drawn on a sum of powers (Hooke + Hertz) too: those checked there against the truth
 # since issue 18 (the others on one power law).
 _SUM_LAWS = ("linear", "hunt-crossley")
+# The strength gamma (C ~ 2 gamma sqrt(m K) at the elastic turning point): below critical
+# damping at the turning point, where every law returns the body unless it may creep.
+_GAMMA = 0.35
+# Where the law may creep (`_may_creep`: a term c q^a, a <= n - 2, only on U' = k q^3 among
+# the drawn exponents), a strong law never returns the body: with C = c on U' = k q^3 (the
+# scaled equation depends on gamma alone) it returns up to gamma = 0.2959 (e = 1.1e-4,
+# DOP853 at rtol 1e-12) and creeps for ever from 0.2960, where the 30-digit truth runs out
+# of steps; the random profile drew such cases (~1 % of linear draws: the likely cause of
+# one-off "no return" failures of test_law_against_30_digit_truth[linear]). Near that bound
+# e -> 0, and the goal 1e-12 relative to e is not a float64 goal (gamma 0.2955: e = 9e-4,
+# the solver's absolute error 1.6e-16 is 1.8e-13 of e). Below 0.2, 18000 draws (linear,
+# power, polynomial, two seeds) all returned, the lowest e 0.096.
+_CREEP_GAMMA = 0.2
 
 
 @st.composite
@@ -360,10 +373,21 @@ def law_cases(draw, name):
     v0 = draw(log_uniform(1e-2, 10.0))
     qE = pot.turning_point(0.5 * m * v0 * v0)
     K = float(pot.dU(qE)) / qE  # secant stiffness at the elastic turning point, N/m
-    gamma = draw(st.floats(0.01, 0.35))
-    c_ref = 2.0 * gamma * math.sqrt(m * K)  # kg/s
     u = tuple(draw(st.floats(0.0, 1.0, exclude_max=True)) for _ in range(4))
+    g_max = _CREEP_GAMMA if _may_creep(fam, pot, qE, K, m, u) else _GAMMA
+    gamma = draw(st.floats(0.01, g_max))
+    c_ref = 2.0 * gamma * math.sqrt(m * K)  # kg/s
     return pot, m, v0, {"law": name, **fam.example(c_ref, qE, K, m, u)}
+
+
+def _may_creep(fam, pot, qE, K, m, u) -> bool:
+    """Whether the law's shape ``u`` on ``pot`` has a term c q^a with a <= n - 2 (U' ~ q^n):
+    there the overdamped tail dq/dt = -U'/C ~ -q^(n-a) never reaches q = 0 in finite time,
+    so a strong enough law stops the body short of q = 0 (it creeps for ever)."""
+    if isinstance(pot, SumPotential) or fam.route == "harmonic map":
+        return False  # Hooke's term leads (n = 1), or Hertz with the harmonic map's laws
+    law = law_from_dict({"law": fam.name, **fam.example(1.0, qE, K, m, u)})
+    return any(c > 0 and a <= pot.p - 2.0 for c, a in law.decomposition().terms)
 
 
 __all__ += ["law_cases"]

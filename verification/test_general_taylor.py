@@ -1,9 +1,10 @@
 """The Taylor general-law kernel (`reference_impl.exact._general_taylor`, issue 27 goal 3).
 
-It is checked through `solve_law_impact` with its compiled kernel switched to the
-Taylor one (the same wrapper, so the same error bounds are reported), against the
-30-digit truth (`_general_law_mp`) within its own bounds, against the GBS kernel on
-many generated laws, and for its hand-over to the GBS kernel outside its domain.
+It is checked through `solve_law_impact` (whose kernel it is, its fields formed in the
+same compiled call) against the 30-digit truth (`_general_law_mp`) within its own
+bounds, against the GBS kernel (its row formed by `_general_fields.form`, as
+`solve_law_impact` forms another kernel's row) on many generated laws, and for its
+hand-over to the GBS kernel outside its domain.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ import pytest
 from hypothesis import Phase, given, settings
 
 from reference_impl import PowerLaw
-from reference_impl.errors import UnsupportedError
 from reference_impl.exact import general_law as gl
+from reference_impl.exact._general_fields import FAILED, form
 from reference_impl.exact._general_kernel import solve as gbs_kernel
 from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact._general_taylor import solve as taylor_kernel
@@ -48,16 +49,37 @@ _BOUNDED = (
 _UNBOUNDED = ("max_penetration", "max_force", "peak_force")
 
 
-def _bound_to(kernel):
-    """`solve_law_impact` with its name ``_compiled_solve`` bound to ``kernel`` (the one-line
-    switch; `general_law` itself stays as it is)."""
-    f = gl.solve_law_impact
-    ns = dict(vars(gl))
-    ns["_compiled_solve"] = kernel
-    return types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
+# The Taylor kernel is `solve_law_impact`'s own: its fields are formed in the kernel's
+# compiled call (`_general_fields.solve_formed`), so the module name `_compiled_solve` that
+# a first version of this module rebound is no longer read, and the "GBS" side of
+# `test_taylor_agrees_with_gbs_kernel` was the Taylor kernel too (a test that could not
+# fail). The GBS kernel's side is now its own row, formed as `solve_law_impact` forms a row.
+solve_taylor_law = gl.solve_law_impact
+# `LawImpactSolution`'s names of the fields `_general_fields.form` returns after its flag
+_FORM_KEYS = (
+    "max_penetration",
+    "max_force",
+    "peak_force",
+    "time_of_max_penetration",
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "returns_to_q0",
+    "error_time",
+    "error_restitution",
+    "n_steps",
+)
 
 
-solve_taylor_law = _bound_to(taylor_kernel)
+def _gbs_solution(pot, m, v0, law):
+    """The GBS kernel's fields of one impact (a namespace of `LawImpactSolution`'s names),
+    or None where it does not finish (`_general_fields.FAILED`)."""
+    args = _kernel_args(pot, m, v0, law)
+    f = form(gbs_kernel(*args), v0, args[1])
+    if f[0] == FAILED:
+        return None
+    return types.SimpleNamespace(**dict(zip(_FORM_KEYS, f[1:], strict=True)))
 
 
 def _key(pot):
@@ -95,7 +117,7 @@ def _check_against_truth(pot, m, v0, law):
     assert_true(
         sol.returns_to_q0,
         got=f"no return for {law} (v0 = {v0})",
-        should="a return (the drawn strength gamma <= 0.35 returns)",
+        should="a return (law_cases draws only returning bodies)",
         claim="general-law",
         call=call,
     )
@@ -122,11 +144,10 @@ def test_taylor_agrees_with_gbs_kernel(name):
     def run(case):
         pot, m, v0, law = case
         a = solve_taylor_law(pot, m, v0, law)
-        try:
-            b = gl.solve_law_impact(pot, m, v0, law)
-        except UnsupportedError:
+        b = _gbs_solution(pot, m, v0, law)
+        if b is None:
             # the GBS kernel's own failure (found: Hunt-Crossley on Hooke + Hertz, the exit
-            # of a pulling force; being fixed in general_law): the truth judges this case
+            # of a pulling force): the truth judges this case
             _check_against_truth(pot, m, v0, law)
             return
         call = f"{CALL}({pot!r}, m={m!r}, v0={v0!r}, {law})"
@@ -213,3 +234,34 @@ def test_taylor_hands_over_outside_its_domain(pot, m, v0, law):
         claim="general-law",
         call=call,
     )
+
+
+# Found by `test_taylor_agrees_with_gbs_kernel` once its GBS side was the GBS kernel
+# (2000 random draws a law: 2 power, 5 polynomial, 3 viscoelastic cases outside the summed
+# bounds), judged here by the 30-digit truth. Known bugs, open: strict, so a fix shows.
+@pytest.mark.xfail(
+    strict=True,
+    reason="Taylor kernel: a negligible constant term of C (c0 = 1.3e-36 kg/s) moves its "
+    "zero-force end by 1.4e-5 s (4.5e10 x its bound; the GBS kernel meets the truth)",
+)
+def test_taylor_zero_force_end_with_a_negligible_constant_damping():
+    pot, m, v0 = PowerLaw(10000000000.0, 2.0), 0.4198101044567141, 0.07010714804177136
+    _check_against_truth(
+        pot, m, v0, {"law": "polynomial", "c": [1.257595069969804e-36, 143375.46932818808]}
+    )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="GBS kernel: restitution 1.6e-12 from the truth, 1.8 x its own bound (C = c q^1.5 "
+    "on U' = k q^2; the Taylor kernel meets the truth exactly)",
+)
+def test_gbs_restitution_within_its_bound():
+    case = (PowerLaw(10000.0, 2.0), 0.0391126800133978, 1.0)
+    law = {"law": "power", "c": 21.930700561278762, "exponent": 1.5}
+    sol = _gbs_solution(*case, law)
+    tr = _truth(_key(case[0]), case[1], case[2], _law_key(law))
+    call = f"GBS kernel ({case[0]!r}, m={case[1]!r}, v0={case[2]!r}, {law})"
+    for key, bound in _BOUNDED:
+        err = abs(getattr(sol, key) - float(tr[key]))
+        assert_less(err, getattr(sol, bound), claim="general-law", call=call, what=key)
