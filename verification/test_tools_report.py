@@ -576,6 +576,7 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/workprecision.png",  # python -m benchmarks.bench_workprecision --png
         "bench/batch_peer.json",  # python -m benchmarks.bench_batch_peer --json
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
+        "assemblies_1e6.json",  # python -m reference_impl.campaign.assembly_long
     }
     stray = [
         f
