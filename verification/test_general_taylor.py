@@ -261,17 +261,32 @@ def test_taylor_zero_force_end_with_a_negligible_constant_damping(pot, m, v0, c)
     _check_against_truth(pot, m, v0, {"law": "polynomial", "c": c})
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="GBS kernel: restitution 1.6e-12 from the truth, 1.8 x its own bound (C = c q^1.5 "
-    "on U' = k q^2; the Taylor kernel meets the truth exactly)",
+# The GBS kernel's (fixed): its last phase-2 step ended at q / |w| / 10 from q = 0, a branch
+# point of q(t) (C ~ q^1.5; U' ~ q^1.5 on Hertz), where its error estimate said 5e-15 and the
+# error of w was 1.6e-12 (restitution 1.8 x its bound); now 2e-14 off. The viscoelastic case,
+# found by a sweep of law_cases against the Taylor kernel, was 8.2 x its bound (now 0.02 x).
+# Both fail on main (the first was a strict xfail there; the second checked by stash).
+@pytest.mark.parametrize(
+    "pot, m, v0, law",
+    [
+        (
+            PowerLaw(10000.0, 2.0),
+            0.0391126800133978,
+            1.0,
+            {"law": "power", "c": 21.930700561278762, "exponent": 1.5},
+        ),
+        (
+            PowerLaw(9131565.950810451, 1.5),
+            0.07088710277930858,
+            0.01374742299270142,
+            {"law": "viscoelastic", "A": 0.0001149013062637917},
+        ),
+    ],
 )
-def test_gbs_restitution_within_its_bound():
-    case = (PowerLaw(10000.0, 2.0), 0.0391126800133978, 1.0)
-    law = {"law": "power", "c": 21.930700561278762, "exponent": 1.5}
-    sol = _gbs_solution(*case, law)
-    tr = _truth(_key(case[0]), case[1], case[2], _law_key(law))
-    call = f"GBS kernel ({case[0]!r}, m={case[1]!r}, v0={case[2]!r}, {law})"
+def test_gbs_restitution_within_its_bound(pot, m, v0, law):
+    sol = _gbs_solution(pot, m, v0, law)
+    tr = _truth(_key(pot), m, v0, _law_key(law))
+    call = f"GBS kernel ({pot!r}, m={m!r}, v0={v0!r}, {law})"
     for key, bound in _BOUNDED:
         err = abs(getattr(sol, key) - float(tr[key]))
         assert_less(err, getattr(sol, bound), claim="general-law", call=call, what=key)

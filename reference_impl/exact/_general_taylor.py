@@ -53,7 +53,8 @@ this module is keyed by this file alone: a change of `_general_kernel` (or
 this file changes too (measured: the hand-over tests then differ from the kernel), so
 such a change comes with a line here. Last: the near-critical error control (2026-11-26);
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
-zero-force scan for a law that never pulls, the samples four at a time (2026-11-29).
+zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
+GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29).
 """
 
 from __future__ import annotations
