@@ -71,6 +71,15 @@ HC_LOG_X = 10.0
 MAX_STEPS = 20000
 # Illinois iterations of an event location (converges superlinearly: ~8 suffice).
 MAX_EVENT_ITER = 60
+# Longest phase-2 step on the way out, as a fraction of q / |w| (the time to q = 0, where
+# q^p and q^a of U' and C are not analytic: a branch point of q(t), w(t)). The step's error
+# estimate (the order-12 entry's difference) holds where the extrapolation is in its
+# asymptotic regime, i.e. where the solution's radius of convergence at every point of the
+# step exceeds the step: its end must stay at least h from the branch point, h <= d - h,
+# so h <= d / 2. At 0.9 the end came within d / 10, a radius of 1/9 of the step: estimate
+# 5e-15, true error of w 1.6e-12 (C = c q^1.5 on k q^2); at 0.5 the restitution is 2e-14
+# off with the same bound (30 steps instead of 28).
+_EXIT_REACH = 0.5
 
 OUT_FIELDS = (
     "t_peak",
@@ -371,8 +380,9 @@ def solve(v0, qE, ks, ps, cs, es, sc):
                 if nUq > m * w * w and Cq > _CREEP_RATIO * m * abs(w):
                     out[13] = STOP_CREEP
                     break
-            # the next step must not jump past q = 0 (and be refused as NaN forever)
-            h = min(h, 0.9 * q / abs(w))
+            # the next step must not jump past q = 0 (and be refused as NaN forever), nor
+            # end so near it that its error estimate no longer holds (`_EXIT_REACH`)
+            h = min(h, _EXIT_REACH * q / abs(w))
     if mode2 == 2:
         # In time, a position error dq moves the return by dq / |w| (|w| ~ 1/alpha on the
         # return, v0 / (alpha v0)), and a speed error dw the peak by dw m / U'(q_max)

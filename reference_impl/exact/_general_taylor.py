@@ -27,7 +27,9 @@ W = 0 (maximum penetration), rho = 0 (exit: T and W are stationary in s there,
 dT/ds = 0 for N > 1, so the exit's location error does not reach them), the total
 force F = f + c W through 0 after the turning point (the zero-force end; read as
 F / rho^j0, j0 the lowest degree, so that it keeps its sign near rho = 0 instead of
-vanishing; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), and dF/ds through 0 from above (a peak of the force).
+vanishing; at the exit its sign is read at rho = 0 exactly, not at the exit root's
+round-off; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), and dF/ds
+through 0 from above (a peak of the force).
 
 Step and error. The radius of convergence r is estimated by the root test over the
 last `WIN` coefficients of rho, W and T, each relative to its size; the step is
@@ -51,7 +53,8 @@ this module is keyed by this file alone: a change of `_general_kernel` (or
 this file changes too (measured: the hand-over tests then differ from the kernel), so
 such a change comes with a line here. Last: the near-critical error control (2026-11-26);
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
-zero-force scan for a law that never pulls, the samples four at a time (2026-11-29).
+zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
+GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29).
 """
 
 from __future__ import annotations
@@ -574,6 +577,14 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                 if xs[i] <= x_from:
                     continue
                 gi = _force(F, C, j0, D, rs[i], ws[i])[1]
+                if exiting and i == NS and gi > 0.0:
+                    # The last sample is the exit, rho = 0 within its root's bracket (found:
+                    # rho = -5.6e-17). Where a negligible lowest term sets j0 (C = c0 + c1 q,
+                    # c0 = 1.3e-36 kg/s: C[0] W ~ 3e-39), that round-off times the next term
+                    # (~1e-18) outweighs it and reads the force at the exit > 0, hiding the
+                    # crossing before it: the sign is read at rho = 0 exactly, the exit, where
+                    # G / rho^j0 = F[j0] + C[j0] W. A sample read <= 0 is kept (bit for bit).
+                    gi = _force(F, C, j0, D, 0.0, ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
                     xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi, _ULPS)
                     out[4] = _horner(T, xr) * L / v0
