@@ -59,9 +59,12 @@ def committed():
     return json.loads(RECORD.read_text())
 
 
-@pytest.mark.parametrize("first", [0, N - 1])
+# Lanes 1 and N - 1, not lane 0: the group holding lane 0 also runs the claim's cage
+# check over the whole 1e6 steps (~26 s); a perturbed lane alone takes ~1.5 s and shows
+# the record is the search's output as well.
+@pytest.mark.parametrize("first", [1, N - 1])
 def test_record_lanes_are_the_claims_search_bit_for_bit(committed, first):
-    """Lane 0 and the last lane of the two-body chain, searched again through the
+    """Lanes 1 and the last lane of the two-body chain, searched again through the
     campaign's group function (the claim's model, grid, criterion), equal the record."""
     case = next(c for c in committed["cases"] if c["case"] == CHEAP)
     got = assembly_long.run_group((CHEAP, first, 1, committed["horizon"]))
@@ -386,6 +389,10 @@ def test_quick_measurement_does_not_read_the_record(monkeypatch):
         raise AssertionError("quick read the record")
 
     monkeypatch.setattr(claim_mod, "read_record", refuse)
+    # One quick case is enough to see which path the measurement takes (all of them take
+    # ~65 s, and test_sec6_assemblies measures them already).
+    real_cases = claim_mod.cases
+    monkeypatch.setattr(claim_mod, "cases", lambda quick=False: real_cases(quick)[:1])
     m = claim_mod.measure.__wrapped__(True)
     assert_true(
         "long_horizon" not in m.figures and "record" not in m.evidence,
