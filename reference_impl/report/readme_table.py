@@ -25,6 +25,7 @@ from pathlib import Path
 from reference_impl.errors import HCVInputError
 from reference_impl.report._schema import read_results
 from reference_impl.report._text import markdown_text
+from reference_impl.report._wp_goals import goals_text
 
 __all__ = [
     "START",
@@ -353,7 +354,7 @@ def speed_table(bench: dict, wp: dict | None = None, batch_peer: dict | None = N
     after = bench.get("load_average_1min_after")
     lines += ["", "Each row, one-shot and prepared:", "", *_row_sentences(bench)]
     if wp is not None:
-        lines += ["", workprecision_text(wp)]
+        lines += ["", workprecision_text(wp), "", goals_text(wp)]
     lines += [
         "",
         "Error = the largest relative error over both ends' contact time and restitution and "
