@@ -22,10 +22,12 @@ Python itself, ``import numpy``, ``import numba``, ``import scipy.linalg`` (what
 target imports to find BLAS), numba's one-time set-up of its CPU target (the registries that
 its first compiled call loads, cached or not), the same solve with ``NUMBA_DISABLE_JIT=1``
 (numba imported, the kernels interpreted), and the same solve with numba replaced by the
-stand-in ``benchmarks/_no_numba`` (numba never imported, the kernels interpreted: what a
-path free of numba would cost). Both interpreted runs are measured only: ``interpreted``
-in the record compares their ``--json`` output with the compiled one's for each solve scene
-(``identical``, else the differing fields), since they are not bit for bit everywhere.
+stand-in of `benchmarks._numba_standin` (numba never imported, the kernels interpreted:
+what a path free of numba would cost; written into the run's temporary directory, and
+checked to be what ``import numba`` finds there). Both interpreted runs are measured only:
+``interpreted`` in the record compares their ``--json`` output with the compiled one's for
+each solve scene (``identical``, else the differing fields), since they are not bit for bit
+everywhere.
 ``phases`` takes the warm solve apart inside one process (`benchmarks._startup_phases`:
 the CPU of each import, numba's target set-up, each compiled function's cache load, the
 command), the median of ``--repeats`` processes, and the exit (the process's CPU from
@@ -61,6 +63,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from . import _numba_standin
 from ._machine import machine_info
 from ._record import write_json
 
@@ -114,13 +117,31 @@ _NUMBA_SETUP = (
 )
 
 
-# PYTHONPATH of the runs without numba: the stand-in first, then the repository.
-_NO_NUMBA_PATH = os.pathsep.join((str(ROOT / "benchmarks" / "_no_numba"), str(ROOT)))
 # The solve scenes whose interpreted output is compared and whose phases are measured.
 _SOLVE_SCENES = ("hertz-damped", "hertz")
 
 
-def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
+def _standin_path(directory: Path, base_env: dict) -> str:
+    """Write the numba stand-in under ``directory`` (inside the run's temporary directory,
+    removed with it) and return the ``PYTHONPATH`` of the runs without numba: the stand-in
+    first, then the repository. A child's ``import numba`` must find the stand-in, else the
+    row would time compiled numba under the stand-in's name: checked once, here."""
+    path = _numba_standin.pythonpath(_numba_standin.write(directory), str(ROOT))
+    probe = [sys.executable, "-c", "import numba; print(numba.__version__)"]
+    r = subprocess.run(
+        probe, env={**base_env, "PYTHONPATH": path}, cwd=ROOT, capture_output=True, text=True
+    )
+    if r.stdout.strip() != _numba_standin.VERSION:
+        raise RuntimeError(
+            f"import numba with the stand-in first on PYTHONPATH found version "
+            f"{r.stdout.strip() or r.stderr.strip()[-200:]!r}, should be {_numba_standin.VERSION!r}"
+        )
+    return path
+
+
+def _cases(scenes: Path, report_out: Path | None, no_numba_path: str) -> list[dict]:
+    """The start-up rows; ``no_numba_path`` is the ``PYTHONPATH`` of the run without numba
+    (the stand-in's directory first, `_standin_path`)."""
     hcv = [sys.executable, "-m", "reference_impl.cli"]
     cases = [
         {"name": "hcv --help", "argv": [*hcv, "--help"], "goal_s": GOAL_INSTANT_S},
@@ -168,7 +189,7 @@ def _cases(scenes: Path, report_out: Path | None) -> list[dict]:
             "name": "hcv solve hertz-damped, numba replaced by a stand-in (measured only)",
             "argv": [*hcv, "solve", "hertz-damped"],
             "goal_s": None,
-            "env": {"PYTHONPATH": _NO_NUMBA_PATH},
+            "env": {"PYTHONPATH": no_numba_path},
         },
         {
             "name": "hcv dt-crit (power q^2.5/2.5)",
@@ -327,7 +348,7 @@ def _json_fields(text: str) -> dict:
     return out
 
 
-def _interpreted(base_env: dict, cache: Path) -> list[dict]:
+def _interpreted(base_env: dict, cache: Path, no_numba_path: str) -> list[dict]:
     """For each solve scene: is its ``--json`` output with the kernels interpreted (numba
     disabled, or never imported) the compiled one, bit for bit? The differing fields if not."""
     rows = []
@@ -335,7 +356,7 @@ def _interpreted(base_env: dict, cache: Path) -> list[dict]:
     env = {**base_env, "HCV_CACHE_DIR": str(cache)}
     modes = {
         "NUMBA_DISABLE_JIT=1": {"NUMBA_DISABLE_JIT": "1"},
-        "stand-in, no numba": {"PYTHONPATH": _NO_NUMBA_PATH},
+        "stand-in, no numba": {"PYTHONPATH": no_numba_path},
     }
     for scene in _SOLVE_SCENES:
         argv = [*hcv, "solve", scene, "--json"]
@@ -403,13 +424,15 @@ def run(repeats: int = 3, report: bool = False, docs: bool = False) -> dict:
         base_env = {k: v for k, v in os.environ.items() if k not in drop}
         base_env.update(PYTHONPATH=str(ROOT))
         load_before = os.getloadavg()[0]
-        cases = _docs_cases(tmp) if docs else _cases(scenes, tmp / "report" if report else None)
+        no_numba = None if docs else _standin_path(tmp / "numba-standin", base_env)
+        report_out = tmp / "report" if report else None
+        cases = _docs_cases(tmp) if docs else _cases(scenes, report_out, no_numba)
         rows = [_row(case, base_env, tmp / f"cache-{i}", repeats) for i, case in enumerate(cases)]
         extra = {}
         if not docs:  # on the cache the compiled solve filled (its row's)
             solve_row = [c["name"] for c in cases].index("hcv solve hertz-damped")
             solve_cache = tmp / f"cache-{solve_row}"
-            extra["interpreted"] = _interpreted(base_env, solve_cache)
+            extra["interpreted"] = _interpreted(base_env, solve_cache, no_numba)
             extra["phases"] = _phases(base_env, solve_cache, repeats)
         load_after = os.getloadavg()[0]
     record = {

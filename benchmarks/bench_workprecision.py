@@ -1,7 +1,8 @@
 """Work-precision of the exact solvers and their peers: CPU time against achieved error (issue 38, goal 2).
 
 Ours is a curve since the solvers take ``rtol`` (`reference_impl.exact._rtol`): for each
-panel (a potential family and a damping law) and each rtol of `OURS_RTOLS` (1e-6 ..
+panel (`PANELS`: each family under the universal law and a linear dashpot, and Hertz under
+Hunt-Crossley) and each rtol of `OURS_RTOLS` (1e-6 ..
 1e-14, then None: full accuracy), the one-shot call (``solve(pot, m, v0, zeta, rtol=)``
 or ``solve(pot, m, v0, law=, rtol=)``) and the prepared call (``prepare(pot, m,
 rtol=)``, built outside the timing, as the peers' tables are) over a set of random
@@ -49,7 +50,20 @@ from ._peers import PEER_LABELS, peer_cases
 from ._record import write_json
 from .bench_exact import _interleaved, _load
 
-__all__ = ["OURS_RTOLS", "PEER_RTOLS", "SCHEMA", "figure", "main", "panel", "run", "trades"]
+__all__ = [
+    "HUNT_CROSSLEY",
+    "LAW",
+    "OURS_RTOLS",
+    "PEER_RTOLS",
+    "SCHEMA",
+    "UNIVERSAL",
+    "figure",
+    "main",
+    "panel",
+    "panels",
+    "run",
+    "trades",
+]
 
 SCHEMA = "hcv-bench-workprecision/1"
 # Ours: the accuracy asked, 1e-6 .. 1e-14, then full accuracy (None).
@@ -71,7 +85,14 @@ ERROR_FLOOR = 1e-16
 # (e ~ 0.8 at 1 m/s on Hertz), scaled 0.1-1x per impact by `random_impacts`; every peer
 # runs it on every family (Hunt-Crossley, alpha U', has no peer on a cap).
 LAW = {"law": "linear", "c": 26.75}
+# Hunt-Crossley, on Hertz only (no peer runs alpha U' on a cap): the README's law table's
+# strength (`bench_exact.LAW_BATCH`, the calibrated 0.373 s/m rounded: e ~ 0.8 at 1 m/s),
+# scaled 0.1-1x per impact as `LAW` is. Every peer runs it on Hertz (C = alpha k q^1.5 is a
+# row of their damping tables; Sundman N = 2).
+HUNT_CROSSLEY = {"law": "hunt-crossley", "alpha": 0.37}
 UNIVERSAL = {"law": "universal", "zeta": 0.0}
+# The laws of each family's panels, by the family's name in `families` (default: both).
+_LAWS_OF = {"Hertz p=1.5": (UNIVERSAL, LAW, HUNT_CROSSLEY)}
 
 
 def families() -> list[tuple[str, object, float]]:
@@ -83,6 +104,16 @@ def families() -> list[tuple[str, object, float]]:
         ("Hertz p=1.5", pot, m),
         ("power p=2", PowerLaw(pot.k, 2.0), m),
         ("sphere (cap)", sphere.potential, sphere.mass),
+    ]
+
+
+def panels() -> list[tuple[str, object, float, dict]]:
+    """(family, potential, m [kg], law) of every panel, in the record's order: each family
+    of `families` under the universal law and `LAW`, Hertz also under `HUNT_CROSSLEY`."""
+    return [
+        (family, pot, m, law)
+        for family, pot, m in families()
+        for law in _LAWS_OF.get(family, (UNIVERSAL, LAW))
     ]
 
 
@@ -133,7 +164,7 @@ def _solver_for(pot, m, law, rtol):
 def panel(family, pot, m, law, impacts: int, blocks: int, mp_subset: int) -> dict:
     """One family and law: ours (one-shot, prepared) and every peer, time against error."""
     name = f"wp {family} {law['law']}"
-    drawn = random_impacts(name, LAW if law["law"] != "universal" else UNIVERSAL, impacts)
+    drawn = random_impacts(name, law, impacts)  # the universal law's zeta is drawn
     # The proxy truth: ours at full accuracy; impacts it refuses leave the set (counted).
     kept, sols = [], []
     for v0, lw in drawn:
@@ -202,7 +233,7 @@ def panel(family, pot, m, law, impacts: int, blocks: int, mp_subset: int) -> dic
             p["us"] = t[(who, p["rtol"])] * 1e6 / n
     return {
         "family": family,
-        "law": law["law"] if law["law"] == "universal" else dict(LAW),
+        "law": law["law"] if law["law"] == "universal" else dict(law),
         "potential": repr(pot),
         "m": m,
         "impacts": n,
@@ -237,13 +268,12 @@ def _peer_pass(calls, rtol):
 
 
 def run(impacts: int = IMPACTS, blocks: int = 5, mp_subset: int = 0) -> dict:
-    """Every panel (`families` x universal law and `LAW`); the record of `SCHEMA`."""
+    """Every panel of `panels`; the record of `SCHEMA`."""
     load0 = _load()
-    panels = []
-    for family, pot, m in families():
-        for law in (UNIVERSAL, LAW):
-            panels.append(panel(family, pot, m, law, impacts, blocks, mp_subset))
-            print(f"  {family}, {panels[-1]['law']}: {panels[-1]['impacts']} impacts", flush=True)
+    done = []
+    for family, pot, m, law in panels():
+        done.append(panel(family, pot, m, law, impacts, blocks, mp_subset))
+        print(f"  {family}, {done[-1]['law']}: {done[-1]['impacts']} impacts", flush=True)
     return {
         "schema": SCHEMA,
         "keys": list(KEYS),
@@ -258,7 +288,7 @@ def run(impacts: int = IMPACTS, blocks: int = 5, mp_subset: int = 0) -> dict:
         "truth": "ours at full accuracy (proxy); checked against 30 digits on "
         f"{mp_subset} impacts per panel where a 30-digit truth exists (power laws and their "
         "sums; a cap with a dashpot has none: unchecked, said in its panel)",
-        "panels": panels,
+        "panels": done,
         "load_average_1min": load0,
         "load_average_1min_after": _load(),
         "machine": machine_info(),
@@ -275,8 +305,18 @@ _STYLE = {
 }
 
 
+def _law_title(law) -> str:
+    """A panel's law as its title says it (the record's ``law``: "universal" or a dict)."""
+    if law == "universal":
+        return "universal law"
+    if law["law"] == "hunt-crossley":
+        return f"Hunt-Crossley, α = {law['alpha']:g} s/m"
+    return f"{law['law']} dashpot"
+
+
 def figure(record: dict, path) -> None:
-    """The log-log figure: one panel per family (columns) and law (rows)."""
+    """The log-log figure: one panel per family (columns) and law (rows); a law run on fewer
+    families (Hunt-Crossley: Hertz alone) leaves cells empty, and the legend takes them."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -289,8 +329,11 @@ def figure(record: dict, path) -> None:
         len(laws), len(fams), figsize=(4.2 * len(fams), 3.6 * len(laws)), squeeze=False
     )
     floor = record["error_floor"]
+    used = set()
     for p in panels:
-        ax = axes[laws.index(str(p["law"]))][fams.index(p["family"])]
+        cell = (laws.index(str(p["law"])), fams.index(p["family"]))
+        used.add(cell)
+        ax = axes[cell[0]][cell[1]]
         for who, pts in p["curves"].items():
             if not pts:
                 continue
@@ -299,19 +342,25 @@ def figure(record: dict, path) -> None:
             y = [q["us"] for q in pts]
             ls = "--" if who == "prepared" else "-"
             ax.loglog(x, y, ls, color=color, marker=marker, ms=4, lw=1.2, label=label)
-        law = "universal law" if p["law"] == "universal" else f"{p['law']['law']} dashpot"
-        ax.set_title(f"{p['family']}, {law}", fontsize=9)
+        ax.set_title(f"{p['family']}, {_law_title(p['law'])}", fontsize=9)
         ax.set_xlim(3e-17, 3e-5)
         ax.invert_xaxis()
         ax.grid(True, which="major", alpha=0.3)
         ax.set_xlabel(f"largest relative error, {p['impacts']} impacts")
         ax.set_ylabel("CPU time per impact [µs]")
-    handles, labels = {}, {}
+    handles = {}
     for ax in axes.flat:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(lab, h)
-            labels[lab] = lab
-    fig.legend(handles.values(), labels.values(), loc="lower center", ncol=3, fontsize=8)
+    empty = [axes[i][j] for i in range(len(laws)) for j in range(len(fams)) if (i, j) not in used]
+    for ax in empty:
+        ax.axis("off")
+    if empty:  # the legend in the first empty cell, one entry a line: no room lost below
+        empty[0].legend(handles.values(), handles.keys(), loc="center", fontsize=8)
+        bottom = 0.0
+    else:
+        fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=3, fontsize=8)
+        bottom = 0.07
     fig.suptitle(
         "Work-precision: time per impact against achieved error "
         f"(commit {str(record['machine'].get('commit', '?'))[:12]}, "
@@ -319,7 +368,7 @@ def figure(record: dict, path) -> None:
         f"errors below {floor:.0e}, the proxy truth's resolution, drawn at it)",
         fontsize=10,
     )
-    fig.tight_layout(rect=(0, 0.07, 1, 0.96))
+    fig.tight_layout(rect=(0, bottom, 1, 0.96))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

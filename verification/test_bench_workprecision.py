@@ -25,6 +25,33 @@ def _no_timer(contestants, blocks):
     return dict.fromkeys(contestants, 1e-3)
 
 
+def _check_ours_and_peers(p: dict, call: str) -> None:
+    """Ours within its reported bound at every rtol and the bound within the rtol; every
+    compiled peer with most rungs of its ladder, each with a finite error."""
+    ours = p["curves"]["ours"]
+    # An rtol below what full accuracy reaches gets the full-accuracy result (`_rtol`).
+    full = ours[-1]["max_rel_bound"]
+    for q in ours:
+        ok = q["max_rel_error"] <= q["max_rel_bound"] + _PROXY
+        ok &= q["rtol"] is None or q["max_rel_bound"] <= max(q["rtol"], full)
+        assert_true(
+            ok,
+            got=f"error {q['max_rel_error']:.3g}, bound {q['max_rel_bound']:.3g}",
+            should=f"error <= bound (+ the proxy's) and bound <= max(rtol, full's {full:.3g})",
+            claim="bench",
+            call=f"{call} ours at rtol {q['rtol']}",
+        )
+    for peer in ("dop853", "dop853_sqrt", "sundman"):
+        pts = p["curves"].get(peer, [])
+        assert_true(
+            len(pts) > 10 and all(math.isfinite(q["max_rel_error"]) for q in pts),
+            got=f"{len(pts)} points",
+            should="most rungs of the ladder, each with a finite error",
+            claim="bench",
+            call=f"{call} {peer}",
+        )
+
+
 def test_panel_records_ours_within_bounds_and_every_peer(monkeypatch, tmp_path):
     monkeypatch.setattr(wp, "_interleaved", _no_timer)
     pot, m = PowerLaw(1e9, 1.5), 0.0041
@@ -37,28 +64,7 @@ def test_panel_records_ours_within_bounds_and_every_peer(monkeypatch, tmp_path):
         claim="bench",
         call="panel(Hertz, universal)",
     )
-    # An rtol below what full accuracy reaches gets the full-accuracy result (`_rtol`).
-    full = ours[-1]["max_rel_bound"]
-    for q in ours:
-        call = f"panel(Hertz, universal) ours at rtol {q['rtol']}"
-        ok = q["max_rel_error"] <= q["max_rel_bound"] + _PROXY
-        ok &= q["rtol"] is None or q["max_rel_bound"] <= max(q["rtol"], full)
-        assert_true(
-            ok,
-            got=f"error {q['max_rel_error']:.3g}, bound {q['max_rel_bound']:.3g}",
-            should=f"error <= bound (+ the proxy's) and bound <= max(rtol, full's {full:.3g})",
-            claim="bench",
-            call=call,
-        )
-    for peer in ("dop853", "dop853_sqrt", "sundman"):
-        pts = p["curves"].get(peer, [])
-        assert_true(
-            len(pts) > 10 and all(math.isfinite(q["max_rel_error"]) for q in pts),
-            got=f"{len(pts)} points",
-            should="most rungs of the ladder, each with a finite error",
-            claim="bench",
-            call=f"panel(Hertz, universal) {peer}",
-        )
+    _check_ours_and_peers(p, "panel(Hertz, universal)")
     assert_true(
         all(q["us"] == 1e-3 * 1e6 / p["impacts"] for q in ours),
         got=str([q["us"] for q in ours]),
@@ -100,4 +106,79 @@ def test_rtol_trades_on_power_laws_and_single_caps_under_the_universal_law():
         "pair (_one_call), not on the GBS kernel of a cap with a law",
         claim="bench",
         call="trades",
+    )
+
+
+def test_hunt_crossley_panel_draws_its_own_law_and_every_peer_runs_it(monkeypatch, tmp_path):
+    """Goal 2's "per family and law": Hertz + Hunt-Crossley (alpha 0.37 s/m, the README's
+    law table's) is a panel, its impacts are of its law (on 9d4f9ac `panel` drew the linear
+    dashpot whatever law it was given, and recorded that), ours within its bounds at every
+    rtol, its 30-digit check held, and every peer with points; the figure and the README's
+    paragraph take the record."""
+    from reference_impl.report.readme_table import workprecision_text
+    from reference_impl.studies.laws import hertz
+
+    monkeypatch.setattr(wp, "_interleaved", _no_timer)
+    pot, m = hertz()
+    got = [(f, lw) for f, _, _, lw in wp.panels() if lw["law"] == "hunt-crossley"]
+    assert_true(
+        got == [("Hertz p=1.5", {"law": "hunt-crossley", "alpha": 0.37})],
+        got=str(got),
+        should="one panel: Hertz p=1.5 under Hunt-Crossley, alpha 0.37",
+        claim="bench",
+        call="panels()",
+    )
+    drawn = []
+    real_draw = wp.random_impacts
+
+    def draw(*args):
+        out = real_draw(*args)
+        drawn.extend(out)
+        return out
+
+    monkeypatch.setattr(wp, "random_impacts", draw)
+    p = wp.panel("Hertz p=1.5", pot, m, wp.HUNT_CROSSLEY, 8, 1, 1)
+    laws = {lw["law"] for _, lw in drawn}
+    alphas = [lw["alpha"] for _, lw in drawn]
+    assert_true(
+        p["law"] == wp.HUNT_CROSSLEY
+        and laws == {"hunt-crossley"}
+        and all(0.037 <= a <= 0.37 for a in alphas),
+        got=f"recorded {p['law']}, drew laws {laws}, alphas {alphas}",
+        should="Hunt-Crossley recorded and drawn, alpha 0.1-1x 0.37 s/m (LOG_STRENGTH)",
+        claim="bench",
+        call="panel(Hertz, hunt-crossley)",
+    )
+    proxy = p["proxy_check"]
+    assert_true(
+        proxy["impacts"] == 1 and proxy["bounds_held"] is True,
+        got=str(proxy),
+        should="1 impact checked at 30 digits, within ours' reported bounds",
+        claim="bench",
+        call="panel(Hertz, hunt-crossley) proxy_check",
+    )
+    _check_ours_and_peers(p, "panel(Hertz, hunt-crossley)")
+    linear = dict(p, law=dict(wp.LAW), curves={"ours": p["curves"]["ours"]})
+    universal = dict(p, law="universal", curves={"ours": p["curves"]["ours"]})
+    record = {
+        "panels": [universal, linear, dict(universal, family="power p=2"), p],
+        "error_floor": wp.ERROR_FLOOR,
+        "machine": {"commit": "test"},
+        "load_average_1min": 0.0,
+        "blocks": 1,
+    }
+    png = tmp_path / "wp.png"
+    wp.figure(record, png)  # 3 laws x 2 families: the legend in the empty cell
+    text = workprecision_text(record)
+    assert_true(
+        png.is_file()
+        and png.stat().st_size > 10_000
+        and "and law (universal, a linear dashpot; Hunt-Crossley on Hertz)" in text
+        and wp._law_title(p["law"]) == "Hunt-Crossley, α = 0.37 s/m",
+        got=f"png {png.stat().st_size if png.is_file() else 'none'} bytes; "
+        f"title {wp._law_title(p['law'])!r}; {text[:400]!r}",
+        should="a PNG, the panel titled 'Hunt-Crossley, α = 0.37 s/m', and the README's "
+        "paragraph naming 'Hunt-Crossley on Hertz'",
+        claim="bench",
+        call="figure, workprecision_text",
     )

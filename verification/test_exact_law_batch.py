@@ -8,15 +8,17 @@ benchmarks/bench_exact.py and benchmarks/device_scaling.py.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numba
 import numpy as np
 import pytest
 
 from reference_impl import PowerLaw, solve_impacts
 from reference_impl.errors import HCVInputError
-from reference_impl.exact import _law_batch
+from reference_impl.exact import _general_fields, _law_batch
 from reference_impl.exact._validate import _validated_top
-from reference_impl.exact.general_law import prepare_law, solve_law_impact
+from reference_impl.exact.general_law import LawImpactSolution, prepare_law, solve_law_impact
 from reference_impl.potentials import SumPotential
 from verification.assertions import assert_true
 
@@ -29,6 +31,14 @@ LAWS = (
     {"law": "viscoelastic", "A": 1.23e-6},
     {"law": "hunt-crossley", "alpha": 0.37},
     {"law": "hunt-crossley", "alpha": 5.0},
+)
+# What a batch returns, read off the solution itself (not the module's own list, so that a
+# field the batch dropped would be missed here): every field of `LawImpactSolution` but its
+# inputs and the two that `solve_impacts` documents it does not return.
+_INPUTS = ("v0", "m", "law")
+_SOLUTION = tuple(f.name for f in dataclasses.fields(LawImpactSolution))
+BATCH_FIELDS = tuple(
+    k for k in _SOLUTION if k not in (*_INPUTS, "time_of_max_penetration", "n_steps")
 )
 # Rising and falling speeds: the validation of `_validate._validated_top` is cached per
 # potential, and no result may depend on it (each speed is compared with a fresh object).
@@ -43,7 +53,23 @@ def _serial(make, m, law):
     """The reference: one `solve_law_impact` per speed, each on a fresh potential ``make()``
     (a result depends on its own inputs only, not on the speeds solved before)."""
     sols = [solve_law_impact(make(), m, v, law) for v in SPEEDS]
-    return {key: np.array([float(getattr(s, key)) for s in sols]) for key in _law_batch.LAW_FIELDS}
+    return {key: np.array([float(getattr(s, key)) for s in sols]) for key in BATCH_FIELDS}
+
+
+def test_batch_fields_are_the_solutions_and_form_names_them_in_its_order():
+    """`form`'s tuple after its flag is the solution's fields less its inputs, in order
+    (`general_law` fills the solution by position, `_law_batch` picks its columns by these
+    names), and the batch returns exactly `BATCH_FIELDS`."""
+    got = (_general_fields.FORMED, _law_batch.LAW_FIELDS)
+    want = (tuple(k for k in _SOLUTION if k not in _INPUTS), BATCH_FIELDS)
+    returned = tuple(solve_impacts(PowerLaw(1e9, 1.5), 0.0041, [1.0], law=LAWS[0]))
+    assert_true(
+        got == want and returned == BATCH_FIELDS,
+        got=f"FORMED {got[0]}, LAW_FIELDS {got[1]}, solve_impacts returns {returned}",
+        should=f"FORMED {want[0]}, LAW_FIELDS and the keys {want[1]}",
+        claim="solve_impacts",
+        call="_general_fields.FORMED, _law_batch.LAW_FIELDS",
+    )
 
 
 def test_law_batch_kernel_is_parallel():
@@ -122,7 +148,7 @@ def test_law_batch_rows_that_never_return():
     sols = [solve_law_impact(PowerLaw(1e9, 1.5), m, v, law) for v in speeds]  # fresh objects
     assert not sols[0].returns_to_q0 and sols[1].returns_to_q0, "workload lost its creep"
     got = solve_impacts(PowerLaw(1e9, 1.5), m, np.array(speeds), law=law)
-    for key in _law_batch.LAW_FIELDS:
+    for key in BATCH_FIELDS:
         ref = np.array([float(getattr(s, key)) for s in sols])
         assert_true(
             got[key].tobytes() == ref.tobytes(),

@@ -18,7 +18,7 @@ from hypothesis import Phase, given, settings
 
 from reference_impl import PowerLaw
 from reference_impl.exact import general_law as gl
-from reference_impl.exact._general_fields import FAILED, form
+from reference_impl.exact._general_fields import FAILED, FORMED, form
 from reference_impl.exact._general_kernel import solve as gbs_kernel
 from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact._general_taylor import solve as taylor_kernel
@@ -55,21 +55,6 @@ _UNBOUNDED = ("max_penetration", "max_force", "peak_force")
 # `test_taylor_agrees_with_gbs_kernel` was the Taylor kernel too (a test that could not
 # fail). The GBS kernel's side is now its own row, formed as `solve_law_impact` forms a row.
 solve_taylor_law = gl.solve_law_impact
-# `LawImpactSolution`'s names of the fields `_general_fields.form` returns after its flag
-_FORM_KEYS = (
-    "max_penetration",
-    "max_force",
-    "peak_force",
-    "time_of_max_penetration",
-    "contact_time",
-    "restitution",
-    "contact_time_zero_force",
-    "restitution_zero_force",
-    "returns_to_q0",
-    "error_time",
-    "error_restitution",
-    "n_steps",
-)
 
 
 def _gbs_solution(pot, m, v0, law):
@@ -79,7 +64,7 @@ def _gbs_solution(pot, m, v0, law):
     f = form(gbs_kernel(*args), v0, args[1])
     if f[0] == FAILED:
         return None
-    return types.SimpleNamespace(**dict(zip(_FORM_KEYS, f[1:], strict=True)))
+    return types.SimpleNamespace(**dict(zip(FORMED, f[1:], strict=True)))
 
 
 def _key(pot):

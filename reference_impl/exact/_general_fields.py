@@ -21,7 +21,7 @@ import numpy as np
 from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_NO_RETURN_Q
 from reference_impl.exact._general_taylor import solve as _taylor_solve
 
-__all__ = ["ERROR_SAFETY", "FAILED", "LOST", "OK", "form", "solve_formed"]
+__all__ = ["ERROR_SAFETY", "FAILED", "FORMED", "LOST", "OK", "form", "solve_formed"]
 
 # The bound reported is this multiple of the summed local error estimates (each the
 # difference of the order-16 and order-14 extrapolants, itself an over-estimate of the
@@ -32,6 +32,23 @@ _EPS = float(np.finfo(float).eps)
 # not finite: nothing formed); no return, stopped on the overlap (`STOP_NO_RETURN_Q`:
 # formed, kept only where `general_law._refuse_lost_return` lets it pass).
 OK, FAILED, LOST = 0, 1, 2
+# What `form` returns after its flag, by `LawImpactSolution`'s names and in its order (the
+# solution's fields less its inputs v0, m and law; `verification/test_exact_law_batch.py`
+# checks it): where its callers read the tuple by name.
+FORMED = (
+    "max_penetration",
+    "max_force",
+    "peak_force",
+    "time_of_max_penetration",
+    "contact_time",
+    "restitution",
+    "contact_time_zero_force",
+    "restitution_zero_force",
+    "returns_to_q0",
+    "error_time",
+    "error_restitution",
+    "n_steps",
+)
 
 (
     _T_PEAK,
@@ -80,9 +97,9 @@ def form(r, v0, q_e):  # pragma: no cover - compiled
     tuple
         (flag, q_max [m], max_force [N], peak_force [N], t_peak [s], t_end [s],
         restitution, t_zf [s], restitution_zero_force, returns_to_q0, error_time [s],
-        error_restitution, n_steps): flag `OK`; `LOST` (no return, stopped on the overlap:
-        the fields are formed, the caller refuses them unless the creep never ends);
-        `FAILED` with the rest void.
+        error_restitution, n_steps), after the flag the fields `FORMED` names: flag `OK`;
+        `LOST` (no return, stopped on the overlap: the fields are formed, the caller
+        refuses them unless the creep never ends); `FAILED` with the rest void.
     """
     nan = math.nan
     if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):

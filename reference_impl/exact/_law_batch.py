@@ -1,22 +1,24 @@
 """Many speeds of one general damping law on every core: the ``law=`` branch of `solve_impacts`.
 
-`solve_law_impact` of each speed, bit for bit (test), with the compiled integration of
-the speeds (`general_law._compiled_solve`, the kernel `solve_law_impact` itself calls) run
-by a numba ``prange`` loop, one speed per thread step, so that neither the thread count
-nor the schedule changes a bit (issue 27, goal 4). Each speed's validated top ``qE``
-(`_validate._validated_top`: the speed's own turning point, whatever was solved before)
-comes from one vectorised inverse of every energy, bit for bit the per-speed value (`_tops`;
-a refusal is raised by the per-speed loop, in order, as the serial loop raises it). What
-else is not compiled stays as in `solve_law_impact`, one speed after another, in order:
+`solve_law_impact` of each speed, bit for bit (test), with the compiled call of the
+speeds (`_general_fields.solve_formed`: the Taylor kernel and the fields formed from its
+row, the call `solve_law_impact` itself makes) run by a numba ``prange`` loop, one speed
+per thread step, so that neither the thread count nor the schedule changes a bit (issue
+27, goal 4). Each speed's validated top ``qE`` (`_validate._validated_top`: the speed's
+own turning point, whatever was solved before) comes from one vectorised inverse of every
+energy, bit for bit the per-speed value (`_tops`; a refusal is raised by the per-speed
+loop, in order, as the serial loop raises it). What else is not compiled stays as in
+`solve_law_impact`, one speed after another, in order:
 
 * the linear oscillator in closed form and the potentials without a compiled kernel
   (sphere, ellipsoid, expression): the whole impact, by `prepare_law`,
 * an integration that did not finish: `prepare_law`'s call of that speed again, which
   raises the message of `solve_law_impact`; a lost return: `general_law._refuse_lost_return`.
 
-The bounds and fields are formed from each kernel row, in the same loop, as
-`general_law._solve_planned` forms them, the same float operations (`_fields`; the test
-compares every field with `solve_law_impact` bit for bit, so the two cannot drift apart unseen).
+The bounds and fields are formed from each kernel row in that same compiled call, by the
+one function that forms them for `solve_law_impact` (`_general_fields.form`); `_fields`
+only puts them in the speed's column (the test compares every field with
+`solve_law_impact` bit for bit).
 
 Where the time goes (issue 38 goal 5, 100 000 Hertz impacts, linear dashpot and
 Hunt-Crossley, one thread): the compiled loop is all but ~1 % of a batch (the planning,
@@ -30,55 +32,22 @@ the kernel's own arithmetic, the same for a single call.
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_NO_RETURN_Q
+from reference_impl.exact._general_fields import FAILED, FORMED, solve_formed
 from reference_impl.exact._validate import _validated_top
-from reference_impl.exact.general_law import (
-    ERROR_SAFETY,
-    _compiled_solve,
-    _refuse_lost_return,
-    prepare_law,
-)
+from reference_impl.exact.general_law import _refuse_lost_return, prepare_law
 
 __all__ = ["LAW_FIELDS", "solve_law_batch"]
 
-# Fields of the returned dict (`LawImpactSolution`'s names), as floats.
-LAW_FIELDS = (
-    "max_penetration",
-    "max_force",
-    "peak_force",
-    "contact_time",
-    "restitution",
-    "contact_time_zero_force",
-    "restitution_zero_force",
-    "returns_to_q0",
-    "error_time",
-    "error_restitution",
-)
-_EPS = np.finfo(float).eps
+# Fields of the returned dict, as floats: `solve_law_impact`'s as `form` gives them
+# (`FORMED`: `LawImpactSolution`'s names, in its order), less the time of q_max and the step
+# count, which a batch does not return.
+LAW_FIELDS = tuple(k for k in FORMED if k not in ("time_of_max_penetration", "n_steps"))
 # Speeds per chunk of the parallel loop (~20-200 us each: the hand-out costs far less).
 _CHUNK = 4
-# The compiled integration `solve_law_impact` calls (bound once; a global of the loop below).
-_SOLVE = _compiled_solve
-
-
-# Columns of the kernel's row (`OUT_FIELDS`), as integers: globals the loop below reads.
-_Q_MAX, _MAX_FORCE, _PEAK_FORCE = (
-    OUT_FIELDS.index(k) for k in ("q_max", "max_force", "peak_force")
-)
-_T_ZF, _W_ZF, _T_END, _W_END = (OUT_FIELDS.index(k) for k in ("t_zf", "w_zf", "t_end", "w_end"))
-_RETURNS, _STATUS, _STOP = (OUT_FIELDS.index(k) for k in ("returns", "status", "stop"))
-_N_STEPS, _ERR_T, _ERR_ZF, _ERR_W = (
-    OUT_FIELDS.index(k) for k in ("n_steps", "err_t", "err_zf", "err_w")
-)
-# What `_solve_rows` says of a speed: fields formed; not finished within the step budget;
-# lost its return (`STOP_NO_RETURN_Q`): both raised by `_finish`, in the order of the speeds.
-_OK, _FAILED, _LOST = 0, 1, 2
 
 
 # Cached (its first compile takes seconds). It compiles in the kernel of other modules:
@@ -86,47 +55,38 @@ _OK, _FAILED, _LOST = 0, 1, 2
 # (`reference_impl._numba_dir._COMPILED_SOURCES`, this file included), so a change of
 # that kernel selects a fresh directory instead of reusing this machine code.
 # error_model "numpy" on this loop and all it calls: an exception inside a prange loop
-# cannot be carried out and poisoned every later call (issue 36); inf/NaN fails `_fields`.
+# cannot be carried out and poisoned every later call (issue 36); inf/NaN fails `form`.
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover - compiled
-    """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its `_OK`,
-    `_FAILED` or `_LOST` (one speed per thread step: no bit depends on the threads)."""
+    """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its flag of
+    `_general_fields.form` (one speed per thread step: no bit depends on the threads): `OK`;
+    `FAILED` (not finished within the step budget) and `LOST` (lost its return) are raised
+    by `_finish`, in the order of the speeds."""
     for i in numba.prange(v.shape[0]):
-        flags[i] = _fields(_SOLVE(v[i], q_top[i], ks, ps, cs, es, sc), v[i], q_top[i], out[:, i])
+        flags[i] = _fields(solve_formed(v[i], q_top[i], ks, ps, cs, es, sc), out[:, i])
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fields(r, v0, q_e, col):  # pragma: no cover - compiled
-    """``col`` = the `LAW_FIELDS` of one speed from its kernel row ``r``, as
-    `general_law._solve_planned` forms them (the same float operations in the same order:
-    the test compares every field with `solve_law_impact` bit for bit); returns its flag.
+def _fields(f, col):  # pragma: no cover - compiled
+    """``col`` = the `LAW_FIELDS` of one speed from `_general_fields.form`'s tuple ``f`` (its
+    fields by `FORMED`'s names, `solve_law_impact`'s own numbers); returns its flag.
 
-    Formed here, in the parallel loop, and not by numpy on the whole batch afterwards
+    Placed here, in the parallel loop, and not by numpy on the whole batch afterwards
     (~0.25 ms for 2000 speeds, serial: 1 % of the batch on one thread)."""
-    returns = r[_RETURNS] == 1.0
-    nst = 100.0 * np.trunc(r[_N_STEPS])  # 100 * int(n_steps), exact
-    t_scale = q_e / v0
-    t_end = r[_T_END] if returns else math.inf
-    t_zf = r[_T_ZF]
-    tail = t_end if returns else (t_zf if math.isfinite(t_zf) else t_scale)
-    err_t = ERROR_SAFETY * r[_ERR_T] * t_scale + nst * _EPS * tail
-    if r[_ERR_ZF] > 0.0:  # the zero-force instant's own sensitivity (_general_kernel)
-        err_t += ERROR_SAFETY * r[_ERR_ZF]
-    col[0] = r[_Q_MAX]
-    col[1] = r[_MAX_FORCE]
-    col[2] = r[_PEAK_FORCE]
+    (flag, q_max, max_force, peak_force, _t_peak, t_end, e, t_zf, e_zf, returns, err_t, err_w,
+     _n_steps) = f  # fmt: skip
+    # In `LAW_FIELDS`' order (the test compares each field with solve_law_impact by name).
+    col[0] = q_max
+    col[1] = max_force
+    col[2] = peak_force
     col[3] = t_end
-    col[4] = -r[_W_END] / v0 if returns else 0.0
+    col[4] = e
     col[5] = t_zf
-    col[6] = -r[_W_ZF] / v0
+    col[6] = e_zf
     col[7] = 1.0 if returns else 0.0
     col[8] = err_t
-    col[9] = ERROR_SAFETY * r[_ERR_W] + nst * _EPS
-    if r[_STATUS] != 0.0 or not math.isfinite(r[_Q_MAX]):
-        return _FAILED
-    if not returns and r[_STOP] == STOP_NO_RETURN_Q:
-        return _LOST
-    return _OK
+    col[9] = err_w
+    return flag
 
 
 def solve_law_batch(
@@ -224,7 +184,7 @@ def _finish(out: np.ndarray, v: np.ndarray, flags: np.ndarray, prepared) -> None
     """The speeds `_solve_rows` flagged, in order, as the serial loop meets them."""
     plan = prepared._plan
     for i in np.flatnonzero(flags):
-        if flags[i] == _FAILED:
+        if flags[i] == FAILED:
             # Not finished within the step budget: the single call raises its message.
             _store(out, i, prepared(float(v[i])))
         else:

@@ -179,6 +179,31 @@ def _row_sentences(bench: dict) -> list[str]:
     return out
 
 
+# The laws every family of `benchmarks.bench_workprecision` runs under (the paragraph names
+# them once); a law of the record run on fewer families is named with those families.
+_WP_GRID_LAWS = ("universal", "linear")
+_WP_FAMILY = {
+    "Hertz p=1.5": "Hertz",
+    "power p=2": "a q^2 force",
+    "sphere (cap)": "the sphere's cap",
+}
+_WP_LAW = {"hunt-crossley": "Hunt-Crossley"}
+
+
+def _wp_other_laws(wp: dict) -> str:
+    """'; Hunt-Crossley on Hertz' for each law of the record's panels beyond `_WP_GRID_LAWS`
+    (empty when there is none)."""
+    by_law: dict[str, list[str]] = {}
+    for p in wp.get("panels", []):
+        law = p.get("law")
+        name = law.get("law") if isinstance(law, dict) else law
+        if name is None or name in _WP_GRID_LAWS:
+            continue
+        fam = p.get("family", "?")
+        by_law.setdefault(name, []).append(_WP_FAMILY.get(fam, fam))
+    return "".join(f"; {_WP_LAW.get(k, k)} on {', '.join(fams)}" for k, fams in by_law.items())
+
+
 def workprecision_text(wp: dict) -> str:
     """The paragraph linking `benchmarks.bench_workprecision`'s figure, with what its record
     says of the run (impacts, blocks, load, commit)."""
@@ -192,7 +217,7 @@ def workprecision_text(wp: dict) -> str:
         "error achieved over random impacts, from 1e-6 to 1e-15, for the one-shot and the "
         "prepared call at each `rtol` and for every peer over its tolerance ladder, per "
         "family (Hertz, a q^2 force, the sphere's cap) and law (universal, a linear "
-        "dashpot), the figure below "
+        f"dashpot{markdown_text(_wp_other_laws(wp))}), the figure below "
         f"(`python -m benchmarks.bench_workprecision`; {drawn} random impacts drawn a panel, "
         f"at least {n} kept (the rest refused by ours or without an overlap end), "
         f"{wp.get('blocks', '?')} timing block(s), load {load}, commit "
