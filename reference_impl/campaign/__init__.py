@@ -37,7 +37,15 @@ from reference_impl._format import g, jsonable
 from reference_impl.bench.scorecard._json import result_to_dict
 from reference_impl.bench.scorecard.compare import plot_speed_error
 from reference_impl.bench.scorecard.runner import run_bench
-from reference_impl.campaign import _assembly, _codes, _environment, _map, _steps, _truths
+from reference_impl.campaign import (
+    _assembly,
+    _codes,
+    _drawing,
+    _environment,
+    _map,
+    _steps,
+    _truths,
+)
 from reference_impl.claims import (
     CLAIMS,
     VERDICTS,
@@ -433,17 +441,29 @@ def _build(
             background[0].shutdown(wait=False, cancel_futures=True)
 
     wp = timed("speed against error", wp_summary.run_wp, quick, say)
-    families = wp_summary.scene_families()
+    # Its figures (the largest drawing of the report) are drawn in a forked process while
+    # the stages below run here (`_drawing`): the same function on the same data.
+    wp_draw = (wp, fig_dir, _scene_info(), wp_summary.scene_families())
+    drawing = _drawing.start(_wp.wp_figures, *wp_draw)
+    try:
+        law_rows = timed("damping laws: restitution against speed", laws.laws_results, quick)
+        timed("damping laws: figure", _laws.laws_figure, law_rows, fig_dir / _laws.FIGURE)
+        # Assemblies: the nonlinear table and P_fail curves are the claim's measurement (run
+        # with the claims above); this stage adds the linear closed forms and the figures.
+        asm_linear = timed("assemblies: linear closed forms", _assembly.linear_checks, quick)
+        asm_rows = measured[sec6_assemblies.ID].figures["rows"]
+        asm_figs = timed("assemblies: figures", _assemblies.assemblies_figures, asm_rows, fig_dir)
+    except BaseException:
+        _drawing.cancel(drawing)
+        raise
     wp_figs = timed(
-        "speed against error: figures", _wp.wp_figures, wp, fig_dir, _scene_info(), families
+        "speed against error: figures"
+        + (" (waiting for the background process)" if drawing else ""),
+        _drawing.finish,
+        drawing,
+        _wp.wp_figures,
+        *wp_draw,
     )
-    law_rows = timed("damping laws: restitution against speed", laws.laws_results, quick)
-    timed("damping laws: figure", _laws.laws_figure, law_rows, fig_dir / _laws.FIGURE)
-    # Assemblies: the nonlinear table and P_fail curves are the claim's measurement (run
-    # with the claims above); this stage adds the linear closed forms and the figures.
-    asm_linear = timed("assemblies: linear closed forms", _assembly.linear_checks, quick)
-    asm_rows = measured[sec6_assemblies.ID].figures["rows"]
-    asm_figs = timed("assemblies: figures", _assemblies.assemblies_figures, asm_rows, fig_dir)
 
     tests = _scan.claim_tests()
     claims = []
