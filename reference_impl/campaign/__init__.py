@@ -37,7 +37,15 @@ from reference_impl._format import g, jsonable
 from reference_impl.bench.scorecard._json import result_to_dict
 from reference_impl.bench.scorecard.compare import plot_speed_error
 from reference_impl.bench.scorecard.runner import run_bench
-from reference_impl.campaign import _assembly, _codes, _environment, _map, _steps
+from reference_impl.campaign import (
+    _assembly,
+    _codes,
+    _drawing,
+    _environment,
+    _map,
+    _steps,
+    _truths,
+)
 from reference_impl.claims import (
     CLAIMS,
     VERDICTS,
@@ -337,6 +345,7 @@ def _build(
     chain_codes = _assembly.advice_codes(adapters)
     n_stages = len(CLAIMS) - 1 + 9 + 2 + 2 + len(adapters) + (2 if adapters else 0)
     n_stages += 1 if chain_codes else 0
+    n_stages += 1 if workers == 0 else 0  # waiting for the truths computed in the background
     stage = [0]
 
     loads: dict[str, list] = {}  # the load beside every timing (issue 41)
@@ -360,6 +369,14 @@ def _build(
     # error study runs afterwards, alone.
     # With workers > 0 the map runs on a local Dask cluster after the claims instead.
     background = _map.start_map(quick) if workers == 0 else None
+    # Behind the map's searches, the same processes compute the 30-digit truths of the
+    # speed-against-error study (`_truths`: ~3/4 of its CPU time, none of it timed).
+    truths = None
+    if background is not None:
+        try:
+            truths = _truths.submit_truths(background[0], quick)
+        except (OSError, RuntimeError):  # a broken pool: the study computes them itself
+            truths = None
 
     measured: dict = {}
     try:
@@ -392,34 +409,61 @@ def _build(
             background[0].shutdown(wait=False, cancel_futures=True)
         raise
 
-    dmap = None
-    if background is not None:
-        try:
-            dmap = timed(
-                "critical-step map (waiting for the background processes)",
-                _map.finish_map,
-                background,
-            )
-        except Exception:  # a broken worker: measure here instead
-            dmap = None
-    if dmap is None:
-        dmap = timed("critical-step map", _map.run_map, quick, say, workers)
-    measured[sec6.ID] = sec6.verdict_from_map(dmap)
-    timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")
-    sens = timed("critical step against the criterion", sensitivity.run_sensitivity, quick)
+    try:
+        dmap = None
+        if background is not None:
+            try:
+                dmap = timed(
+                    "critical-step map (waiting for the background processes)",
+                    _map.finish_map,
+                    background,
+                    close=truths is None,
+                )
+            except Exception:  # a broken worker: measure here instead
+                dmap = None
+        if dmap is None:
+            dmap = timed("critical-step map", _map.run_map, quick, say, workers)
+        measured[sec6.ID] = sec6.verdict_from_map(dmap)
+        timed("critical-step map: figure", _dtmap.map_figure, dmap, fig_dir / "dt_crit_map.png")
+        sens = timed("critical step against the criterion", sensitivity.run_sensitivity, quick)
+        if truths is not None:
+            try:  # all of them before the timed study starts: nothing runs beside its timings
+                timed(
+                    "speed against error: truths (waiting for the background processes)",
+                    _truths.collect_truths,
+                    truths,
+                    quick,
+                )
+            except Exception:  # a broken worker: the study computes the truths itself
+                pass
+    finally:
+        if truths is not None:
+            background[0].shutdown(wait=False, cancel_futures=True)
 
     wp = timed("speed against error", wp_summary.run_wp, quick, say)
-    families = wp_summary.scene_families()
+    # Its figures (the largest drawing of the report) are drawn in a forked process while
+    # the stages below run here (`_drawing`): the same function on the same data.
+    wp_draw = (wp, fig_dir, _scene_info(), wp_summary.scene_families())
+    drawing = _drawing.start(_wp.wp_figures, *wp_draw)
+    try:
+        law_rows = timed("damping laws: restitution against speed", laws.laws_results, quick)
+        timed("damping laws: figure", _laws.laws_figure, law_rows, fig_dir / _laws.FIGURE)
+        # Assemblies: the nonlinear table and P_fail curves are the claim's measurement (run
+        # with the claims above); this stage adds the linear closed forms and the figures.
+        asm_linear = timed("assemblies: linear closed forms", _assembly.linear_checks, quick)
+        asm_rows = measured[sec6_assemblies.ID].figures["rows"]
+        asm_figs = timed("assemblies: figures", _assemblies.assemblies_figures, asm_rows, fig_dir)
+    except BaseException:
+        _drawing.cancel(drawing)
+        raise
     wp_figs = timed(
-        "speed against error: figures", _wp.wp_figures, wp, fig_dir, _scene_info(), families
+        "speed against error: figures"
+        + (" (waiting for the background process)" if drawing else ""),
+        _drawing.finish,
+        drawing,
+        _wp.wp_figures,
+        *wp_draw,
     )
-    law_rows = timed("damping laws: restitution against speed", laws.laws_results, quick)
-    timed("damping laws: figure", _laws.laws_figure, law_rows, fig_dir / _laws.FIGURE)
-    # Assemblies: the nonlinear table and P_fail curves are the claim's measurement (run
-    # with the claims above); this stage adds the linear closed forms and the figures.
-    asm_linear = timed("assemblies: linear closed forms", _assembly.linear_checks, quick)
-    asm_rows = measured[sec6_assemblies.ID].figures["rows"]
-    asm_figs = timed("assemblies: figures", _assemblies.assemblies_figures, asm_rows, fig_dir)
 
     tests = _scan.claim_tests()
     claims = []

@@ -37,8 +37,12 @@ def start_map(quick: bool):
         return None
 
 
-def finish_map(background) -> pd.DataFrame:
-    """The map's table from the background searches (`dt_crit_map_on_cluster`'s table)."""
+def finish_map(background, close: bool = True) -> pd.DataFrame:
+    """The map's table from the background searches (`dt_crit_map_on_cluster`'s table).
+
+    ``close=False`` leaves the pool running for the work queued behind the searches
+    (`reference_impl.campaign._truths`); its owner shuts it down.
+    """
     pool, futures = background
     try:
         frame = map_frame([f.result() for f in futures])
@@ -47,7 +51,8 @@ def finish_map(background) -> pd.DataFrame:
         # no running one is waited for (shutdown() would wait up to a search's length).
         pool.shutdown(wait=False, cancel_futures=True)
         raise
-    pool.shutdown()
+    if close:
+        pool.shutdown()
     return frame
 
 

@@ -42,6 +42,7 @@ __all__ = [
     "default_scenes",
     "family_scenes",
     "ground_truth",
+    "remember_truth",
     "ivp_method",
     "resolve_method",
     "verlet_row",
@@ -149,6 +150,11 @@ class GroundTruth:
 _TRUTH_CACHE: dict[tuple, GroundTruth] = {}
 
 
+def _truth_key(sc: WPScene, dps: int) -> tuple:
+    """`_TRUTH_CACHE`'s key of a scene's truth at ``dps`` digits."""
+    return (repr(sc.potential), sc.m, sc.v0, sc.zeta, dps)
+
+
 def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
     """30-digit truth for scalars and for q at instants t(s_j), s_j nodes in virtual time.
 
@@ -156,7 +162,7 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
     evaluates the potential's ``_U``, ``_dU`` with mpmath numbers (every family
     supports it) and ``_inverse`` on floats (seeds only).
     """
-    key = (repr(sc.potential), sc.m, sc.v0, sc.zeta, dps)
+    key = _truth_key(sc, dps)
     if key in _TRUTH_CACHE:
         return _TRUTH_CACHE[key]
 
@@ -197,6 +203,17 @@ def ground_truth(sc: WPScene, dps: int = _TRUTH_DPS) -> GroundTruth:
     )
     _TRUTH_CACHE[key] = out
     return out
+
+
+def remember_truth(sc: WPScene, truth: GroundTruth, dps: int = _TRUTH_DPS) -> None:
+    """Keep ``truth``, computed by `ground_truth` (sc, dps) in another process, as this
+    process's: `ground_truth` then returns it instead of computing it again.
+
+    `hcv report` computes the truths in its background processes beside the claims, so
+    that its timed study (`work_precision`) finds them here; a truth is a deterministic
+    function of the scene, so the rows are the same either way.
+    """
+    _TRUTH_CACHE[_truth_key(sc, dps)] = truth
 
 
 def _median_time(fn: Callable[[], object]) -> float:

@@ -28,6 +28,7 @@ __all__ = [
     "TARGETS",
     "family_summary",
     "max_error",
+    "report_scenes",
     "run_wp",
     "scene_families",
     "settings_text",
@@ -122,10 +123,14 @@ def family_summary(rows: list[dict]) -> list[dict]:
     return out
 
 
+def report_scenes(quick: bool) -> list:
+    """The scenes `run_wp` runs (`default_scenes`; quick: without `QUICK_SKIP`)."""
+    return [s for s in default_scenes() if not (quick and s.name in QUICK_SKIP)]
+
+
 def run_wp(quick: bool, progress=None) -> pd.DataFrame:
     """`work_precision` with the report's Verlet points (quick: without `QUICK_SKIP`)."""
-    scenes = [s for s in default_scenes() if not (quick and s.name in QUICK_SKIP)]
-    return work_precision(scenes, quick=quick, progress=progress)
+    return work_precision(report_scenes(quick), quick=quick, progress=progress)
 
 
 def max_error(r) -> float:
