@@ -47,14 +47,16 @@ The zero-force search skips a step on which an interval bound proves the force p
 (`_taylor_scan.force_stays_positive`), where it could find nothing: the same results, bit
 for bit.
 
-The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk cache of
-this module is keyed by this file alone: a change of `_general_kernel` (or
-`_general_step`) leaves this module's cached machine code running the old kernel until
-this file changes too (measured: the hand-over tests then differ from the kernel), so
-such a change comes with a line here. Last: the near-critical error control (2026-11-26);
+The compiled `solve` calls the GBS kernel's compiled `solve` and the polynomial helpers of
+`_taylor_poly`, and numba's disk cache of this module is keyed by this file alone: a change
+of `_general_kernel`, `_general_step` or `_taylor_poly` leaves this module's cached machine
+code running the old code until this file changes too (measured: the hand-over tests then
+differ from the kernel), so such a change comes with a line here (all of them are in
+`reference_impl._numba_dir._COMPILED_SOURCES` too, which selects a fresh cache directory). Last: the near-critical error control (2026-11-26);
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
 zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
-GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29).
+GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
+polynomial helpers moved to `_taylor_poly`, unchanged (2026-11-29).
 """
 
 from __future__ import annotations
@@ -66,6 +68,12 @@ import numpy as np
 
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._taylor_poly import NS, K
+from reference_impl.exact._taylor_poly import horner as _horner
+from reference_impl.exact._taylor_poly import poly as _poly
+from reference_impl.exact._taylor_poly import poly_d as _poly_d
+from reference_impl.exact._taylor_poly import rw as _rw
+from reference_impl.exact._taylor_poly import samples as _samples
 from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
 
 __all__ = [
@@ -81,9 +89,6 @@ __all__ = [
     "theta_for",
 ]
 
-# Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
-# measured fewest operations near K = 30 (8-10 steps per Hertz impact).
-K = 30
 # Coefficients (the last WIN of each series) in the root test of the radius: the series
 # at the onset of an undamped Hertz contact has only every fifth coefficient nonzero
 # (rho'' = -2 a rho^4), and a window of 12 sees two of them.
@@ -103,8 +108,6 @@ MAX_STEPS = 24
 # threshold of no return): rho decays without crossing 0 there, and a root found at
 # round-off level would be no exit.
 _NO_RETURN_Q = 1e-10
-# Samples per step for the sign changes of the zero-force and peak-force functions.
-NS = 8
 # N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
 _INT_TOL = 1e-12
 # Event brackets, relative: two ulps where the output moves with the root (the time of
@@ -238,65 +241,6 @@ def _inv_radius(R, W, T, pw):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _poly(c, lo, hi, x):
-    """sum_{j=lo}^{hi} c[j] x^(j - lo) (Horner)."""
-    acc = 0.0
-    for j in range(hi, lo - 1, -1):
-        acc = acc * x + c[j]
-    return acc
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _poly_d(c, hi, x):
-    """(p(x), p'(x)) of sum_{j=0}^{hi} c[j] x^j."""
-    p = 0.0
-    dp = 0.0
-    for j in range(hi, -1, -1):
-        dp = dp * x + p
-        p = p * x + c[j]
-    return p, dp
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _horner(c, x):
-    acc = c[K]
-    for k in range(K - 1, -1, -1):
-        acc = acc * x + c[k]
-    return acc
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _samples(R, W, x_end, xs, rs, ws):
-    """rho and W at the NS + 1 points x_end i / NS (Horner from c[K] down, as `_horner`),
-    four points at a time in registers (eight independent chains)."""
-    for i in range(NS + 1):
-        xs[i] = x_end * i / NS
-    i = 0
-    while i + 4 <= NS + 1:
-        x0, x1, x2, x3 = xs[i], xs[i + 1], xs[i + 2], xs[i + 3]
-        r0 = r1 = r2 = r3 = R[K]
-        w0 = w1 = w2 = w3 = W[K]
-        for k in range(K - 1, -1, -1):
-            rk = R[k]
-            wk = W[k]
-            r0 = r0 * x0 + rk
-            r1 = r1 * x1 + rk
-            r2 = r2 * x2 + rk
-            r3 = r3 * x3 + rk
-            w0 = w0 * x0 + wk
-            w1 = w1 * x1 + wk
-            w2 = w2 * x2 + wk
-            w3 = w3 * x3 + wk
-        rs[i], rs[i + 1], rs[i + 2], rs[i + 3] = r0, r1, r2, r3
-        ws[i], ws[i + 1], ws[i + 2], ws[i + 3] = w0, w1, w2, w3
-        i += 4
-    while i < NS + 1:
-        rs[i] = _horner(R, xs[i])
-        ws[i] = _horner(W, xs[i])
-        i += 1
-
-
-@numba.njit(cache=True, error_model="numpy")
 def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
     P (flat, rows of K + 1) receives the series of the powers rho^j."""
@@ -332,26 +276,6 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
         W[n + 1] = -(cw + fn) * _RECIP[n]
         R[n + 1] = W[n] * _RECIP[n]
         T[n + 1] = N * P[(N - 1) * M + n] * _RECIP[n]
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _rw(R, W, x):
-    """(rho, W) at x: even and odd coefficients as four Horner chains in x^2 (half the
-    latency of one chain: the events evaluate the step's polynomials at ~100 points)."""
-    x2 = x * x
-    ke = K - (K % 2)  # highest even index
-    ko = K - 1 + (K % 2)  # highest odd index
-    re = R[ke]
-    we = W[ke]
-    ro = R[ko]
-    wo = W[ko]
-    for k in range(ke - 2, -1, -2):
-        re = re * x2 + R[k]
-        we = we * x2 + W[k]
-    for k in range(ko - 2, 0, -2):
-        ro = ro * x2 + R[k]
-        wo = wo * x2 + W[k]
-    return re + x * ro, we + x * wo
 
 
 @numba.njit(cache=True, error_model="numpy")
