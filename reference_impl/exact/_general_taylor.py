@@ -2,7 +2,9 @@
 
 One impact m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i and C any law of
 `reference_impl.theory.laws` whose exponents are multiples of 1/N (N <= `N_MAX`):
-Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji.
+Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji; and,
+through `integrate` with a factor y = (1 - beta rho^N)^alpha on U' (and on C's part
+alpha_HC U'), a single volumetric cap (`_taylor_cap`).
 The same signature and outputs (`OUT_FIELDS`) as `_general_kernel.solve`; cases
 outside that set, creeping returns (overdamped: no return) and contacts longer than
 `MAX_STEPS` steps are handed to it.
@@ -49,14 +51,15 @@ for bit.
 
 The compiled `solve` calls the GBS kernel's compiled `solve` and the polynomial helpers of
 `_taylor_poly`, and numba's disk cache of this module is keyed by this file alone: a change
-of `_general_kernel`, `_general_step` or `_taylor_poly` leaves this module's cached machine
+of `_general_kernel`, `_general_step`, `_taylor_poly` or `_taylor_force` leaves this module's cached machine
 code running the old code until this file changes too (measured: the hand-over tests then
 differ from the kernel), so such a change comes with a line here (all of them are in
 `reference_impl._numba_dir._COMPILED_SOURCES` too, which selects a fresh cache directory). Last: the near-critical error control (2026-11-26);
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
 zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
 GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
-polynomial helpers moved to `_taylor_poly`, unchanged (2026-11-29).
+polynomial helpers moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
+and the force and event functions in `_taylor_force` (2026-11-29).
 """
 
 from __future__ import annotations
@@ -66,24 +69,31 @@ import math
 import numba
 import numpy as np
 
-from reference_impl.exact._general_kernel import OUT_FIELDS
+from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_CREEP
 from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._taylor_force import cap_series as _cap_series
+from reference_impl.exact._taylor_force import dforce as _dforce
+from reference_impl.exact._taylor_force import event as _event
+from reference_impl.exact._taylor_force import fc as _fc
+from reference_impl.exact._taylor_force import force as _force
+from reference_impl.exact._taylor_force import root as _root
 from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_poly import horner as _horner
 from reference_impl.exact._taylor_poly import poly as _poly
-from reference_impl.exact._taylor_poly import poly_d as _poly_d
-from reference_impl.exact._taylor_poly import rw as _rw
 from reference_impl.exact._taylor_poly import samples as _samples
 from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
 
 __all__ = [
+    "DEG_MAX",
     "K",
     "MAX_STEPS",
     "N_MAX",
     "OUT_FIELDS",
     "SC_TOL",
+    "as_int",
     "THETA",
     "TOL",
+    "integrate",
     "solve",
     "solve_taylor",
     "theta_for",
@@ -116,8 +126,6 @@ _INT_TOL = 1e-12
 # where dT/ds = N rho^(N-1) and dW/ds = -N rho^(N-1) G vanish): 1e-18 of the step.
 _ULPS = 4.5e-16
 _STATIONARY = 1e-9
-# Root iterations (Illinois: superlinear; a float bracket needs < 2 x 53 halvings).
-_ROOT_ITER = 120
 
 
 def theta_for(tol: float) -> float:
@@ -144,6 +152,9 @@ def _as_int(x):
     if r < 0 or abs(x - r) > _INT_TOL * max(1.0, abs(x)):
         return -1
     return int(r)
+
+
+as_int = _as_int  # for the cap's model (`_taylor_cap`)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -241,10 +252,16 @@ def _inv_radius(R, W, T, pw):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
+def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
-    P (flat, rows of K + 1) receives the series of the powers rho^j."""
+    P (flat, rows of K + 1) receives the series of the powers rho^j.
+
+    With a cap's factor (``cp[0]`` = beta != 0, `_cap_factor`), f = FN y and c = CN + CYN y
+    with y = (1 - beta rho^N)^cp[1]: X's rows receive the series of h = 1 - beta rho^N, y
+    (the power recurrence k h0 y_k = sum_{j=1..k} (alpha j - (k - j)) h_j y_(k-j)), and
+    the polynomial parts FN and CYN before their product with y."""
     R[0], W[0], T[0] = r0, w0, t0
+    hb, ha = cp[0], cp[1]
     M = K + 1
     for n in range(K):
         P[M + n] = R[n]
@@ -269,6 +286,8 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
         cn = 0.0
         for ii in range(cidx.shape[0]):
             cn += CN[cidx[ii]] * P[cidx[ii] * M + n]
+        if hb != 0.0:  # a cap: f = (FN) y, c = CN + (CYN) y (not taken for sums of powers)
+            fn, cn = _cap_series(n, N, M, P, fn, cn, CYN, cyidx, hb, ha, X)
         CS[n] = cn
         cw = 0.0
         for i in range(n + 1):
@@ -279,75 +298,10 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _force(F, C, j0, D, r, w):
-    """(G, G / rho^j0) with G = f(rho) + c(rho) W, the scaled total force."""
-    g0 = _poly(F, j0, D, r) + _poly(C, j0, D, r) * w
-    rj = 1.0
-    for _ in range(j0):
-        rj *= r
-    return g0 * rj, g0
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _dforce(F, C, N, D, r, w):
-    """dG/ds = (f'(rho) + c'(rho) W) W - c(rho) N rho^(N-1) G."""
-    f, df = _poly_d(F, D, r)
-    c, dc = _poly_d(C, D, r)
-    G = f + c * w
-    rn = 1.0
-    for _ in range(N - 1):
-        rn *= r
-    return (df + dc * w) * w - c * N * rn * G
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _event(kind, R, W, F, C, N, j0, D, x):
-    """Event functions at x along the step: 0 rho, 1 W, 2 G / rho^j0, 3 dG/ds."""
-    if kind == 0:
-        return _horner(R, x)
-    if kind == 1:
-        return _horner(W, x)
-    r, w = _rw(R, W, x)
-    if kind == 2:
-        return _force(F, C, j0, D, r, w)[1]
-    return _dforce(F, C, N, D, r, w)
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb, rtol):
-    """x in [a, b] where event ``kind`` goes from ga > 0 to gb <= 0 (Illinois), to a
-    bracket of rtol relative (two ulps, 4.5e-16, where the output moves with x)."""
-    side = 0
-    x = b
-    for _ in range(_ROOT_ITER):
-        x = (a * gb - b * ga) / (gb - ga)
-        if not (a < x < b):
-            x = 0.5 * (a + b)
-        g = _event(kind, R, W, F, C, N, j0, D, x)
-        if g > 0.0:
-            a, ga = x, g
-            if side == 1:
-                gb *= 0.5
-            side = 1
-        else:
-            b, gb = x, g
-            if side == -1:
-                ga *= 0.5
-            side = -1
-        # two ulps: the bracket cannot shrink further
-        if b - a <= rtol * max(abs(a), abs(b)) or g == 0.0:
-            break
-    return x
-
-
-@numba.njit(cache=True, error_model="numpy")
 def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     """One impact into ``out`` (`OUT_FIELDS`); returns 0, or 1 when the case is not for
     this method (exponents, degree, no return within MAX_STEPS): ``out`` is then void."""
     m = sc[0]
-    tol, theta = TOL, THETA
-    if sc.shape[0] > SC_TOL:
-        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
     N = _common_n(ks, ps, cs, es, sc)
     if N == 0:
         return 1
@@ -355,27 +309,60 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     F, C = _model(v0, L, N, ks, ps, cs, es, sc)
     if F.shape[0] == 0:
         return 1
+    if integrate(v0, L, N, F, C, np.zeros(F.shape[0]), np.zeros(2), sc, out) != 0:
+        return 1
+    qm = out[1]
+    fm = 0.0
+    for i in range(ks.shape[0]):
+        fm += ks[i] * qm ** ps[i]
+    out[2] = fm
+    out[9] = out[9] * L / qE
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def integrate(v0, L, N, F, C, CY, cp, sc, out):
+    """One impact of the scaled model into ``out`` (`OUT_FIELDS` but ``max_force``, out[2],
+    left to the caller); returns 0, or 1 when the case is not for this method (no return
+    within MAX_STEPS, a radius not finite): ``out`` is then void.
+
+    ``L`` is the scale of q (m), ``N`` the power q = L rho^N, ``F``, ``C`` and ``CY`` the
+    polynomials in rho (by degree, `DEG_MAX` + 1) of the scaled U', C and of C's part
+    multiplied by the cap's factor, ``cp`` = (beta, alpha) that factor
+    y = (1 - beta rho^N)^alpha (beta = 0: sums of powers, y = 1, CY = 0: every operation
+    as before the factor), ``sc`` the law's scalars (`_general_contact.law_arrays`)."""
+    m = sc[0]
+    tol, theta = TOL, THETA
+    if sc.shape[0] > SC_TOL:
+        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
+    capped = cp[0] != 0.0
     D = 0
     j0 = DEG_MAX
     for j in range(DEG_MAX + 1):
-        if F[j] != 0.0 or C[j] != 0.0:
+        if F[j] != 0.0 or C[j] != 0.0 or CY[j] != 0.0:
             D = j
             j0 = min(j0, j)
     # the right-hand side's polynomials N rho^(N-1) f and N rho^(N-1) c
     DN = D + N - 1
     FN = np.zeros(DN + 1)
     CN = np.zeros(DN + 1)
+    CYN = np.zeros(DN + 1)
     nf = 0
     nc = 0
+    ny = 0
     for j in range(D + 1):
         FN[j + N - 1] = N * F[j]
         CN[j + N - 1] = N * C[j]
+        CYN[j + N - 1] = N * CY[j]
         nf += F[j] != 0.0
         nc += C[j] != 0.0
+        ny += CY[j] != 0.0
     fidx = np.empty(nf, np.int64)
     cidx = np.empty(nc, np.int64)
+    cyidx = np.empty(ny, np.int64)
     nf = 0
     nc = 0
+    ny = 0
     need = np.zeros(DN + 2, np.bool_)
     for j in range(DN + 1):
         if FN[j] != 0.0:
@@ -386,7 +373,13 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             cidx[nc] = j
             nc += 1
             need[j] = True
+        if CYN[j] != 0.0:
+            cyidx[ny] = j
+            ny += 1
+            need[j] = True
     need[N - 1] = True
+    if capped:  # h = 1 - beta rho^N reads the series of rho^N
+        need[N] = True
     # powers of rho by squaring (even) or one more factor (odd), lowest first
     for j in range(DN, 1, -1):
         if need[j]:
@@ -409,6 +402,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     R = np.zeros(K + 1)
     W = np.zeros(K + 1)
     T = np.zeros(K + 1)
+    X = np.zeros((4, K + 1))  # the cap's series (`_cap_series`)
     Fs = m * v0 * v0 / L  # force unit
     exit_tol = _STATIONARY if N > 1 else _ULPS
     creeps = sc[4] == 1.0
@@ -416,14 +410,15 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     q_top = 1.0
     monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
     for j in range(D + 1):
-        if F[j] < 0.0 or C[j] < 0.0:
+        if F[j] < 0.0 or C[j] < 0.0 or CY[j] < 0.0:
             monotone = False
+    # (a cap's f has a negative coefficient, and y decreases: monotone is False there)
     pw = np.empty(K + 1)
     xs = np.empty(NS + 1)
     rs = np.empty(NS + 1)
     ws = np.empty(NS + 1)
     r0, w0, t0 = 0.0, 1.0, 0.0
-    peak = C[0]  # the force just after contact, C(0) v0
+    peak = C[0] + CY[0] if capped else C[0]  # the force just after contact, C(0) v0
     past = False
     zf_found = False
     errsum = 0.0
@@ -437,9 +432,24 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             if q0 <= _NO_RETURN_Q * q_top:
                 return 1
             if q0 <= 0.1 * q_top:
-                if _poly(F, 0, D, r0) * q0 > w0 * w0 and _poly(C, 0, D, r0) * q0 > 100.0 * abs(w0):
+                f0, c0 = _fc(F, C, CY, cp, N, D, r0)
+                if f0 * q0 > w0 * w0 and c0 * q0 > 100.0 * abs(w0):
+                    if capped and zf_found:
+                        # A cap reports the no-return itself, as the GBS kernel does
+                        # (STOP_CREEP: the same test, its zero-force end already found);
+                        # the sums of powers hand it over, as before (bit for bit).
+                        out[3] = peak * Fs
+                        out[6] = math.inf
+                        out[7] = 0.0
+                        out[8] = 0.0
+                        out[9] = errsum
+                        out[10] = errsum
+                        out[11] = step - 1
+                        out[12] = 0.0
+                        out[13] = STOP_CREEP
+                        return 0
                     return 1
-        _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0)
+        _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X)
         inv = _inv_radius(R, W, T, pw)
         if not (inv > 0.0 and inv < math.inf):
             return 1
@@ -450,24 +460,33 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         exiting = False
         was_past = past
         if not past and _horner(W, h) < 0.0:
-            x = _root(1, R, W, F, C, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
+            x = _root(1, R, W, F, C, CY, cp, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
             rm = _horner(R, x)
             out[0] = _horner(T, x) * L / v0
-            qm = L * rm**N
-            out[1] = qm
-            fm = 0.0
-            for i in range(ks.shape[0]):
-                fm += ks[i] * qm ** ps[i]
-            out[2] = fm
+            out[1] = L * rm**N
             # F at the turning point is U'(q_max): a value of F, so the peak is at least that
             # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
-            peak = max(peak, _poly(F, 0, D, rm))
+            peak = max(peak, _fc(F, C, CY, cp, N, D, rm)[0])
             past = True
             q_top = rm**N
             x_from = x
         if past and _horner(R, h) <= 0.0:
             x_end = _root(
-                0, R, W, F, C, N, j0, D, x_from, h, _horner(R, x_from), _horner(R, h), exit_tol
+                0,
+                R,
+                W,
+                F,
+                C,
+                CY,
+                cp,
+                N,
+                j0,
+                D,
+                x_from,
+                h,
+                _horner(R, x_from),
+                _horner(R, h),
+                exit_tol,
             )
             exiting = True
         # peak force: dG/ds through 0 from above, on NS samples of [0, x_end], unless
@@ -478,29 +497,33 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         else:
             r_hi = _horner(R, x_from if past else x_end)
             ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
-        scan_peak = not (monotone and ub <= peak)
+        scan_peak = not (monotone and ub <= peak)  # (a cap: never monotone, ub not read)
         # no zero-force end where the law says the force never vanishes before q = 0
         # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact;
         # nor on a step where the force provably stays positive (nothing to find there)
         scan_zf = past and not zf_found and not nopull
-        scan_zf = scan_zf and not _force_stays_positive(F, C, j0, D, R, W, x_end)
+        # (its interval bound reads F and C alone: a cap's step is always scanned)
+        scan_zf = scan_zf and (capped or not _force_stays_positive(F, C, j0, D, R, W, x_end))
         if scan_peak or scan_zf:
             _samples(R, W, x_end, xs, rs, ws)
         if scan_peak:  # dG/ds through 0 from above
-            gp = _dforce(F, C, N, D, rs[0], ws[0])
+            gp = _dforce(F, C, CY, cp, N, D, rs[0], ws[0])
             for i in range(1, NS + 1):
-                gi = _dforce(F, C, N, D, rs[i], ws[i])
+                gi = _dforce(F, C, CY, cp, N, D, rs[i], ws[i])
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY)
-                    peak = max(peak, _force(F, C, j0, D, _horner(R, xr), _horner(W, xr))[0])
+                    xr = _root(
+                        3, R, W, F, C, CY, cp, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY
+                    )
+                    rx, wx = _horner(R, xr), _horner(W, xr)
+                    peak = max(peak, _force(F, C, CY, cp, N, j0, D, rx, wx)[0])
                 gp = gi
         if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
-            gp = _event(2, R, W, F, C, N, j0, D, x_from)
+            gp = _event(2, R, W, F, C, CY, cp, N, j0, D, x_from)
             xp = x_from
             for i in range(1, NS + 1):
                 if xs[i] <= x_from:
                     continue
-                gi = _force(F, C, j0, D, rs[i], ws[i])[1]
+                gi = _force(F, C, CY, cp, N, j0, D, rs[i], ws[i])[1]
                 if exiting and i == NS and gi > 0.0:
                     # The last sample is the exit, rho = 0 within its root's bracket (found:
                     # rho = -5.6e-17). Where a negligible lowest term sets j0 (C = c0 + c1 q,
@@ -508,9 +531,9 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                     # (~1e-18) outweighs it and reads the force at the exit > 0, hiding the
                     # crossing before it: the sign is read at rho = 0 exactly, the exit, where
                     # G / rho^j0 = F[j0] + C[j0] W. A sample read <= 0 is kept (bit for bit).
-                    gi = _force(F, C, j0, D, 0.0, ws[i])[1]
+                    gi = _force(F, C, CY, cp, N, j0, D, 0.0, ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi, _ULPS)
+                    xr = _root(2, R, W, F, C, CY, cp, N, j0, D, xp, xs[i], gp, gi, _ULPS)
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
@@ -526,7 +549,10 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                 # dT/ds = 1 at the exit: an error e in rho moves it by e / |W| in s, so T by
                 # as much and W by |dW/ds| e / |W| (for N > 1 both are stationary there)
                 err_t += errsum / abs(we)
-                err_w += abs(CN[0] * we + FN[0]) * errsum / abs(we)
+                dw = CN[0] * we + FN[0]
+                if capped:  # y = 1 at rho = 0
+                    dw += CYN[0] * we
+                err_w += abs(dw) * errsum / abs(we)
             if not zf_found:  # the force never pulls: the two ends coincide
                 out[4] = t_end
                 out[5] = w_end
@@ -534,7 +560,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             out[6] = t_end
             out[7] = w_end
             out[8] = 1.0
-            out[9] = err_t * L / qE  # in units of qE / v0, as the GBS kernel's
+            out[9] = err_t  # scaled; the caller's * L / qE: units of qE / v0, as the GBS kernel's
             out[10] = err_w
             out[11] = step
             out[12] = 0.0
