@@ -2,7 +2,7 @@
 
 There is no 30-digit truth for a cap under a damping law yet, so the new path is checked
 against the GBS kernel on the same term table (`_general_kernel`, an independent
-integrator: extrapolation in t, not series in the Sundman variable): over 1200 random
+integrator: extrapolation in t, not series in the Sundman variable): over 1500 random
 impacts (speeds 0.01-10 m/s log-uniform, linear, power, polynomial and Hunt-Crossley
 laws, spheres and ellipsoids) every time and restitution agrees within the sum of both
 reported bounds; ``rtol`` is honoured (the bound is at most rtol of the time, and the
@@ -54,10 +54,16 @@ _RESTITUTIONS = ("e", "e_zf")
 # which both kernels meet (measured here: <= 2e-14 at full accuracy).
 GOAL_RTOL = 1e-12
 N_IMPACTS = 1200
-# Share of the drawn impacts the Taylor path must take itself (measured 2026-11-29: the
-# rest are creeping returns beyond its MAX_STEPS, handed to the GBS kernel): the
-# comparison must not be vacuous.
-MIN_TAKEN = 0.5
+# And on the workprecision panel's sphere (sphere-damped: R = 1 cm, Kn = 1e8, m = 0.0327
+# kg) with its linear dashpot 26.75 N s/m scaled 0.1-1x, 0.01-3 m/s (q_E <= a): heavily
+# damped, many of them creep back and never return (the no-return verdict compared too).
+N_PANEL = 300
+# Share of the drawn impacts the Taylor path must take itself (measured 2026-11-29: 1489
+# of 1500; the rest creep back slower than `_general_taylor._CREEP_STEPS` allows and are
+# handed over): the comparison must not be vacuous.
+MIN_TAKEN = 0.9
+# Share of the panel's impacts that must be creeping no-returns (measured: 250 of 300).
+MIN_NO_RETURN = 0.2
 
 
 def _laws(rng):
@@ -95,9 +101,14 @@ def _impacts():
     the number drawn."""
     rng = np.random.default_rng(20261129)
     got = []
-    for _ in range(N_IMPACTS):
-        pot, law, m = _pots(rng), _laws(rng), 0.03
-        v0 = 10.0 ** rng.uniform(-2.0, 1.0)
+    for i in range(N_IMPACTS + N_PANEL):
+        if i < N_IMPACTS:
+            pot, law, m = _pots(rng), _laws(rng), 0.03
+            v0 = 10.0 ** rng.uniform(-2.0, 1.0)
+        else:
+            pot, m = Sphere(R=0.01, Kn=1e8), 0.0327
+            law = {"law": "linear", "c": 26.75 * rng.uniform(0.1, 1.0)}
+            v0 = 10.0 ** rng.uniform(-2.0, math.log10(3.0))
         p = _plan(pot, m, law)
         qe = gl._top(p, 0.5 * m * v0 * v0)
         out = np.full(len(OUT_FIELDS), np.nan)
@@ -110,9 +121,17 @@ def _impacts():
 
 def test_taylor_takes_most_impacts():
     taken = len(_impacts())
+    creep = sum(1 for label, (_, t), _g in _impacts() if not t["returns"])
     assert_true(
-        taken >= MIN_TAKEN * N_IMPACTS,
-        got=f"{taken} of {N_IMPACTS} impacts by the Taylor path",
+        creep >= MIN_NO_RETURN * N_PANEL,
+        got=f"{creep} no-returns compared",
+        should=f">= {MIN_NO_RETURN:.0%} of the panel's {N_PANEL} impacts",
+        claim=CLAIM,
+        call=CALL,
+    )
+    assert_true(
+        taken >= MIN_TAKEN * (N_IMPACTS + N_PANEL),
+        got=f"{taken} of {N_IMPACTS + N_PANEL} impacts by the Taylor path",
         should=f"at least {MIN_TAKEN:.0%} (else the agreement below proves little)",
         claim=CLAIM,
         call=CALL,
