@@ -55,8 +55,9 @@ _RESTITUTIONS = ("e", "e_zf")
 GOAL_RTOL = 1e-12
 N_IMPACTS = 1200
 # And on the workprecision panel's sphere (sphere-damped: R = 1 cm, Kn = 1e8, m = 0.0327
-# kg) with its linear dashpot 26.75 N s/m scaled 0.1-1x, 0.01-3 m/s (q_E <= a): heavily
-# damped, many of them creep back and never return (the no-return verdict compared too).
+# kg) with its linear dashpot 26.75 N s/m scaled 0.1-1x, 0.01-5.5 m/s (q_E up to 1.6 a,
+# U(2a) is reached at 5.9 m/s): heavily damped, many of them creep back and never return
+# (the no-return verdict compared too).
 N_PANEL = 300
 # Share of the drawn impacts the Taylor path must take itself (measured 2026-11-29: 1489
 # of 1500; the rest creep back slower than `_general_taylor._CREEP_STEPS` allows and are
@@ -108,7 +109,7 @@ def _impacts():
         else:
             pot, m = Sphere(R=0.01, Kn=1e8), 0.0327
             law = {"law": "linear", "c": 26.75 * rng.uniform(0.1, 1.0)}
-            v0 = 10.0 ** rng.uniform(-2.0, math.log10(3.0))
+            v0 = 10.0 ** rng.uniform(-2.0, math.log10(5.5))
         p = _plan(pot, m, law)
         qe = gl._top(p, 0.5 * m * v0 * v0)
         out = np.full(len(OUT_FIELDS), np.nan)
@@ -184,21 +185,36 @@ def test_cap_taylor_agrees_with_gbs_within_both_bounds():
 def test_rtol_is_honoured(rtol):
     rng = np.random.default_rng(7)
     steps = []
-    for i in range(40):
-        pot, law, m = _pots(rng), _laws(rng), 0.03
-        v0 = 10.0 ** rng.uniform(-2.0, 1.0)
+    for i in range(60):
+        if i % 2 == 0:
+            pot, law, m = _pots(rng), _laws(rng), 0.03
+            v0 = 10.0 ** rng.uniform(-2.0, 1.0)
+        else:  # the panel's sphere: heavily damped, slow exits (N = 1 redone with N = 2)
+            pot, m = Sphere(R=0.01, Kn=1e8), 0.0327
+            law = {"law": "linear", "c": 26.75 * rng.uniform(0.1, 1.0)}
+            v0 = 10.0 ** rng.uniform(-1.0, math.log10(5.5))
         full = gl.solve_law_impact(pot, m, v0, law)
         loose = gl.solve_law_impact(pot, m, v0, law, rtol=rtol)
         steps.append((loose.n_steps, full.n_steps))
         label = f"{pot!r} {law} v0={v0!r} rtol={rtol} (case {i})"
+        # rtol is asked of the contact times (as `benchmarks.bench_workprecision` reads
+        # it: the one error_time over the shorter end; t_peak shares that bound)
+        end = min(full.contact_time, full.contact_time_zero_force)
+        assert_true(
+            loose.error_time <= rtol * end,
+            got=f"bound {loose.error_time:.3g} s",
+            should=f"<= rtol x the shorter contact time ({rtol * end:.3g} s)",
+            claim=CLAIM,
+            call=f"solve_law_impact {label}",
+        )
         for k in ("time_of_max_penetration", "contact_time_zero_force", "contact_time"):
             a, b = getattr(loose, k), getattr(full, k)
             if not math.isfinite(a):
                 continue
             assert_true(
-                loose.error_time <= rtol * b and abs(a - b) <= loose.error_time + full.error_time,
-                got=f"{k} {a!r} (full {b!r}), bound {loose.error_time:.3g}",
-                should=f"a bound <= rtol x the time ({rtol * b:.3g}) holding the full answer",
+                abs(a - b) <= loose.error_time + full.error_time,
+                got=f"{k} {a!r} (full {b!r})",
+                should=f"within both bounds {loose.error_time + full.error_time:.3g} s",
                 claim=CLAIM,
                 call=f"solve_law_impact {label}",
             )
@@ -215,7 +231,7 @@ def _bits(row):
     return np.asarray(row).view(np.int64)
 
 
-@pytest.mark.parametrize("case", ["viscoelastic", "zeta", "deep", "two-rows"], ids=lambda c: c)
+@pytest.mark.parametrize("case", ["viscoelastic", "zeta", "two-rows"], ids=lambda c: c)
 def test_cases_outside_go_to_gbs_bit_for_bit(case):
     pot, m, v0 = Sphere(R=0.01, Kn=1e8), 0.0327, 1.0
     law = {"law": "linear", "c": 2.0}
@@ -223,22 +239,12 @@ def test_cases_outside_go_to_gbs_bit_for_bit(case):
         law = {"law": "viscoelastic", "A": 1e-4}
     elif case == "zeta":
         law = {"law": "universal", "zeta": 0.3}
-    elif case == "deep":  # turning point beyond a = R: the branch point of h^alpha nears
-        v0 = 4.5  # q_E ~ 1.3 a (U(a) = 0.20 J, U(2a) = 0.57 J)
     else:
         pot = SumPotential(pot, Sphere(R=0.02, Kn=1e8))
     rows, lim = table_arrays(pot)
     p = _plan(pot, m, {"law": "linear", "c": 2.0})
     cs, es, sc = law_arrays(law_from_dict(law), m, pot)
     qe = gl._top(p, 0.5 * m * v0 * v0)
-    if case == "deep":
-        assert_true(
-            qe > rows[0, 3],
-            got=f"q_E = {qe!r}",
-            should=f"> a = {rows[0, 3]!r}",
-            claim=CLAIM,
-            call=CALL,
-        )
     out = np.full(len(OUT_FIELDS), np.nan)
     rc = solve_cap_taylor(v0, qe, rows, cs, es, sc, out)
     got = cap_kernel(v0, qe, rows, lim, cs, es, sc)

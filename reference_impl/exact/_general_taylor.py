@@ -416,10 +416,11 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
     for j in range(D + 1):
         if F[j] < 0.0 or C[j] < 0.0 or (CY[j] < 0.0 and not capped):
             monotone = False
-    if capped:
+    if capped and cp[0] <= 1.0 / 3.0:
         # A cap's F has a negative coefficient, but f = U' grows with q up to q = a (V and
-        # S = V' do), and the contact stays below q_E <= a (`_taylor_cap`): monotone there
-        # where C's coefficients are >= 0 (CY = alpha_HC F y grows as f does).
+        # S = V' do), and the contact stays below q = L, i.e. rho <= 1, within q = a where
+        # beta = L / (3a) <= 1/3 (`_taylor_cap`): monotone there where C's coefficients
+        # are >= 0 (CY = alpha_HC F y grows as f does). Deeper, the peak is always scanned.
         monotone = True
         for j in range(D + 1):
             if C[j] < 0.0:
@@ -433,6 +434,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
     past = False
     zf_found = False
     errsum = 0.0
+    err_zf = 0.0
     step = 0
     while True:
         step += 1
@@ -460,8 +462,10 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
                         out[6] = math.inf
                         out[7] = 0.0
                         out[8] = 0.0
-                        out[9] = errsum
-                        out[10] = errsum
+                        # the bound of the outputs, all set by the zero-force end: the
+                        # steps after it only confirm the verdict
+                        out[9] = err_zf
+                        out[10] = err_zf
                         out[11] = step - 1
                         out[12] = 0.0
                         out[13] = STOP_CREEP
@@ -556,6 +560,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
+                    err_zf = errsum
                     break
                 gp, xp = gi, xs[i]
         if exiting:
