@@ -1,7 +1,7 @@
 """The Taylor kernel on a volumetric cap (`reference_impl.exact._taylor_cap`, issue 38 goal 4).
 
-There is no 30-digit truth for a cap under a damping law yet, so the new path is checked
-against the GBS kernel on the same term table (`_general_kernel`, an independent
+The new path is checked against the 30-digit truth (`_general_law_mp`, extended to a cap
+row) on a handful of impacts, and against the GBS kernel on the same term table (`_general_kernel`, an independent
 integrator: extrapolation in t, not series in the Sundman variable): over 1500 random
 impacts (speeds 0.01-10 m/s log-uniform, linear, power, polynomial and Hunt-Crossley
 laws, spheres and ellipsoids) every time and restitution agrees within the sum of both
@@ -19,11 +19,13 @@ import numpy as np
 import pytest
 
 from reference_impl import Ellipsoid, Sphere
+from reference_impl.errors import HCVInputError
 from reference_impl.exact import general_law as gl
 from reference_impl.exact._general_contact import law_arrays
 from reference_impl.exact._general_fields import form
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as gbs_kernel
+from reference_impl.exact._general_law_mp import solve_law_impact_mp
 from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._taylor_cap import solve as cap_kernel
 from reference_impl.exact._taylor_cap import solve_cap_taylor
@@ -256,3 +258,60 @@ def test_cases_outside_go_to_gbs_bit_for_bit(case):
         claim=CLAIM,
         call=f"{CALL} {case}",
     )
+
+
+# Against the 30-digit truth (`_general_law_mp` on a cap row: the same factor's power
+# recurrence in mpmath, an independent series in t in the middle stretch), ~1 s each:
+# the returning impacts on every output with a bound, and a no-return's zero-force end.
+_TRUTH_CASES = [
+    (Sphere(R=0.01, Kn=1e8), 0.0327, 1.0, {"law": "hunt-crossley", "alpha": 0.2}, False),
+    (Sphere(R=0.01, Kn=1e8), 0.0327, 5.0, {"law": "linear", "c": 3.0}, False),
+    (
+        Ellipsoid(a=0.01, b=0.012, c=0.008, Kn=1e9),
+        0.03,
+        0.5,
+        {"law": "power", "c": 300.0, "exponent": 1.0},
+        False,
+    ),
+    (Sphere(R=0.01, Kn=1e8), 0.0327, 0.3, {"law": "linear", "c": 26.75}, True),
+]
+
+
+@pytest.mark.parametrize("case", range(len(_TRUTH_CASES)))
+def test_cap_taylor_against_30_digit_truth(case):
+    pot, m, v0, law, creeps = _TRUTH_CASES[case]
+    s = gl.solve_law_impact(pot, m, v0, law)
+    assert_true(
+        s.returns_to_q0 != creeps and s.n_steps < 200,
+        got=f"returns_to_q0 = {s.returns_to_q0}, {s.n_steps} steps",
+        should=f"{not creeps}, by the Taylor path (< 200 steps; the GBS kernel takes more)",
+        claim=CLAIM,
+        call=f"solve_law_impact({pot!r}, {law}, v0={v0})",
+    )
+    truth = solve_law_impact_mp(pot, m, v0, law, dps=30, zero_force_only=creeps)
+    keys = [("time_of_max_penetration", "error_time"), ("contact_time_zero_force", "error_time")]
+    keys += [("restitution_zero_force", "error_restitution")]
+    if not creeps:
+        keys += [("contact_time", "error_time"), ("restitution", "error_restitution")]
+    for k, b in keys:
+        d = abs(getattr(s, k) - float(truth[k]))
+        assert_true(
+            d <= getattr(s, b),
+            got=f"|{k} - truth| = {d:.3g}",
+            should=f"<= its bound {b} = {getattr(s, b):.3g}",
+            claim=CLAIM,
+            call=f"solve_law_impact({pot!r}, {law}, v0={v0})",
+        )
+    r = abs(s.max_penetration / float(truth["max_penetration"]) - 1.0)
+    assert_true(
+        r <= GOAL_RTOL,
+        got=f"relative error {r:.3g} of max_penetration",
+        should=f"<= {GOAL_RTOL:g}",
+        claim=CLAIM,
+        call=f"solve_law_impact({pot!r}, {law}, v0={v0})",
+    )
+
+
+def test_truth_refuses_a_cap_law_outside_its_reach():
+    with pytest.raises(HCVInputError, match="viscoelastic"):
+        solve_law_impact_mp(Sphere(R=0.01, Kn=1e8), 0.0327, 1.0, {"law": "viscoelastic", "A": 1e-4})
