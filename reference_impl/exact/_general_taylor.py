@@ -146,6 +146,8 @@ THETA = theta_for(TOL)
 # asked, `reference_impl.exact._rtol.taylor_tol`): sc[SC_TOL], sc[SC_TOL + 1]. An ``sc`` of
 # SC_TOL entries (no rtol) runs at TOL and THETA, bit for bit as before the argument.
 SC_TOL = 7
+# A sum of powers has no cap factor (`integrate`: cp None, CY = 0, read as a constant).
+_NO_CY = np.zeros(DEG_MAX + 1)
 _RECIP = 1.0 / np.arange(1.0, K + 1.0)  # 1 / (n + 1): a multiply, not a divide, in the recurrences
 
 
@@ -260,12 +262,11 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx,
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
     P (flat, rows of K + 1) receives the series of the powers rho^j.
 
-    With a cap's factor (``cp[0]`` = beta != 0, `_cap_factor`), f = FN y and c = CN + CYN y
-    with y = (1 - beta rho^N)^cp[1]: X's rows receive the series of h = 1 - beta rho^N, y
+    With a cap's factor (``cp`` = (beta, alpha), `_taylor_force.cap_factor`; None for a
+    sum of powers), f = FN y and c = CN + CYN y with y = (1 - beta rho^N)^alpha: X's rows receive the series of h = 1 - beta rho^N, y
     (the power recurrence k h0 y_k = sum_{j=1..k} (alpha j - (k - j)) h_j y_(k-j)), and
     the polynomial parts FN and CYN before their product with y."""
     R[0], W[0], T[0] = r0, w0, t0
-    hb, ha = cp[0], cp[1]
     M = K + 1
     for n in range(K):
         P[M + n] = R[n]
@@ -290,8 +291,10 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx,
         cn = 0.0
         for ii in range(cidx.shape[0]):
             cn += CN[cidx[ii]] * P[cidx[ii] * M + n]
-        if hb != 0.0:  # a cap: f = (FN) y, c = CN + (CYN) y (not taken for sums of powers)
-            fn, cn = _cap_series(n, N, M, P, fn, cn, CYN, cyidx, hb, ha, X)
+        # a cap: f = (FN) y, c = CN + (CYN) y; a sum of powers passes cp = None, a branch
+        # numba prunes when it compiles that case (measured: the branch cost ~1 us of ~22)
+        if cp is not None:
+            fn, cn = _cap_series(n, N, M, P, fn, cn, CYN, cyidx, cp[0], cp[1], X)
         CS[n] = cn
         cw = 0.0
         for i in range(n + 1):
@@ -313,7 +316,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     F, C = _model(v0, L, N, ks, ps, cs, es, sc)
     if F.shape[0] == 0:
         return 1
-    if integrate(v0, L, N, F, C, np.zeros(F.shape[0]), np.zeros(2), sc, out) != 0:
+    if integrate(v0, L, N, F, C, _NO_CY, None, sc, out, None) != 0:
         return 1
     qm = out[1]
     fm = 0.0
@@ -325,7 +328,7 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def integrate(v0, L, N, F, C, CY, cp, sc, out):
+def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
     """One impact of the scaled model into ``out`` (`OUT_FIELDS` but ``max_force``, out[2],
     left to the caller); returns 0, or 1 when the case is not for this method (no return
     within MAX_STEPS, a radius not finite): ``out`` is then void.
@@ -333,13 +336,14 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
     ``L`` is the scale of q (m), ``N`` the power q = L rho^N, ``F``, ``C`` and ``CY`` the
     polynomials in rho (by degree, `DEG_MAX` + 1) of the scaled U', C and of C's part
     multiplied by the cap's factor, ``cp`` = (beta, alpha) that factor
-    y = (1 - beta rho^N)^alpha (beta = 0: sums of powers, y = 1, CY = 0: every operation
-    as before the factor), ``sc`` the law's scalars (`_general_contact.law_arrays`)."""
+    y = (1 - beta rho^N)^alpha (None: sums of powers, y = 1, CY = 0: every operation as
+    before the factor, the cap's branches pruned when numba compiles it), ``sc`` the law's scalars (`_general_contact.law_arrays`), ``X``
+    the cap's work array, shape (4, K + 1) (`_cap_series`), or None for a sum of powers."""
     m = sc[0]
     tol, theta = TOL, THETA
     if sc.shape[0] > SC_TOL:
         tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
-    capped = cp[0] != 0.0
+    capped = cp is not None
     D = 0
     j0 = DEG_MAX
     for j in range(DEG_MAX + 1):
@@ -406,7 +410,6 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
     R = np.zeros(K + 1)
     W = np.zeros(K + 1)
     T = np.zeros(K + 1)
-    X = np.zeros((4, K + 1))  # the cap's series (`_cap_series`)
     Fs = m * v0 * v0 / L  # force unit
     exit_tol = _STATIONARY if N > 1 else _ULPS
     creeps = sc[4] == 1.0
@@ -416,7 +419,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out):
     for j in range(D + 1):
         if F[j] < 0.0 or C[j] < 0.0 or (CY[j] < 0.0 and not capped):
             monotone = False
-    if capped and cp[0] <= 1.0 / 3.0:
+    if cp is not None and cp[0] <= 1.0 / 3.0:
         # A cap's F has a negative coefficient, but f = U' grows with q up to q = a (V and
         # S = V' do), and the contact stays below q = L, i.e. rho <= 1, within q = a where
         # beta = L / (3a) <= 1/3 (`_taylor_cap`): monotone there where C's coefficients

@@ -54,7 +54,7 @@ from reference_impl.exact._general_fields import form
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._general_rows import cap_derivs
-from reference_impl.exact._general_taylor import DEG_MAX, N_MAX, as_int, integrate
+from reference_impl.exact._general_taylor import DEG_MAX, N_MAX, K, as_int, integrate
 from reference_impl.potentials._terms import TERM_CAP
 
 __all__ = ["solve", "solve_cap_taylor", "solve_formed"]
@@ -136,7 +136,7 @@ def _cap_run(v0, qE, rows, cs, es, sc, out, start):
     cp = np.empty(2)
     cp[0] = L / (3.0 * a)
     cp[1] = alpha
-    if integrate(v0, L, N, F, C, CY, cp, sc, out) != 0:
+    if integrate(v0, L, N, F, C, CY, cp, sc, out, np.zeros((4, K + 1))) != 0:
         return 0
     out[2] = cap_derivs(out[1], False, False, False, Kn, alpha, a, c0)[1]
     out[9] = out[9] * L / qE

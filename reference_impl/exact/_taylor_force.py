@@ -4,8 +4,9 @@ Split from `reference_impl.exact._general_taylor` (its stepping stays there): th
 total force G = f(rho) + c(rho) W of a step (`force`, its derivative in s `dforce`), the
 event functions and their root (`event`, `root`: Illinois on a step's polynomials), and,
 for a volumetric cap (`reference_impl.exact._taylor_cap`), the factor y = h^alpha,
-h = 1 - beta rho^N on U' (``cp`` = (beta, alpha); beta = 0 for sums of powers, where
-every function runs the operations it ran before the factor, bit for bit): its value
+h = 1 - beta rho^N on U' (``cp`` = (beta, alpha); None for sums of powers, where every
+function runs the operations it ran before the factor, bit for bit: numba compiles that
+case with the cap's branches pruned): its value
 (`cap_factor`), (f, c) at a point (`fc`) and its Taylor series (`cap_series`).
 """
 
@@ -57,10 +58,10 @@ def cap_series(n, N, M, P, fn, cn, CYN, cyidx, hb, ha, X):
 @numba.njit(cache=True, error_model="numpy")
 def cap_factor(cp, N, r):
     """(y, dy/drho) of the cap's factor y = h^alpha, h = 1 - beta rho^N (``cp`` = (beta,
-    alpha)); (1, 0) for sums of powers (beta = 0)."""
-    hb, ha = cp[0], cp[1]
-    if hb == 0.0:
+    alpha)); (1, 0) for sums of powers (``cp`` None)."""
+    if cp is None:
         return 1.0, 0.0
+    hb, ha = cp[0], cp[1]
     rn1 = 1.0
     for _ in range(N - 1):
         rn1 *= r
@@ -72,7 +73,7 @@ def cap_factor(cp, N, r):
 @numba.njit(cache=True, error_model="numpy")
 def fc(F, C, CY, cp, N, D, r):
     """(f, c) at rho: the scaled U' and C (with a cap's factor, f = F y, c = C + CY y)."""
-    if cp[0] == 0.0:
+    if cp is None:
         return _poly(F, 0, D, r), _poly(C, 0, D, r)
     y = cap_factor(cp, N, r)[0]
     return _poly(F, 0, D, r) * y, _poly(C, 0, D, r) + _poly(CY, 0, D, r) * y
@@ -81,7 +82,7 @@ def fc(F, C, CY, cp, N, D, r):
 @numba.njit(cache=True, error_model="numpy")
 def force(F, C, CY, cp, N, j0, D, r, w):
     """(G, G / rho^j0) with G = f(rho) + c(rho) W, the scaled total force."""
-    if cp[0] == 0.0:
+    if cp is None:
         g0 = _poly(F, j0, D, r) + _poly(C, j0, D, r) * w
     else:
         y = cap_factor(cp, N, r)[0]
@@ -97,7 +98,7 @@ def dforce(F, C, CY, cp, N, D, r, w):
     """dG/ds = (f'(rho) + c'(rho) W) W - c(rho) N rho^(N-1) G."""
     f, df = _poly_d(F, D, r)
     c, dc = _poly_d(C, D, r)
-    if cp[0] != 0.0:  # f = F y, c = C + CY y
+    if cp is not None:  # f = F y, c = C + CY y
         y, dy = cap_factor(cp, N, r)
         cy, dcy = _poly_d(CY, D, r)
         f, df = f * y, df * y + f * dy
