@@ -34,7 +34,7 @@ round-off; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), an
 through 0 from above (a peak of the force).
 
 Step and error. The radius of convergence r is estimated by the root test over the
-last `WIN` coefficients of rho, W and T, each relative to its size; the step is
+last `_taylor_poly.WIN` coefficients of rho, W and T, each relative to its size; the step is
 h = theta r with theta^(K+1) / (1 - theta) = `TOL`, the sum of a geometric tail of
 the series beyond order K: its truncation, relative to the state (a looser truncation
 when the caller asks for less, ``rtol``: `SC_TOL`). The error sums
@@ -58,7 +58,7 @@ differ from the kernel), so such a change comes with a line here (all of them ar
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
 zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
 GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
-polynomial helpers moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
+polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
 and the force and event functions in `_taylor_force` (2026-11-29).
 """
 
@@ -79,6 +79,7 @@ from reference_impl.exact._taylor_force import force as _force
 from reference_impl.exact._taylor_force import root as _root
 from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_poly import horner as _horner
+from reference_impl.exact._taylor_poly import inv_radius as _inv_radius
 from reference_impl.exact._taylor_poly import samples as _samples
 from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
 
@@ -98,10 +99,6 @@ __all__ = [
     "theta_for",
 ]
 
-# Coefficients (the last WIN of each series) in the root test of the radius: the series
-# at the onset of an undamped Hertz contact has only every fifth coefficient nonzero
-# (rho'' = -2 a rho^4), and a window of 12 sees two of them.
-WIN = 12
 # Truncation per step relative to the state (the tail of the series beyond order K).
 TOL = 1e-16
 # Largest common denominator N of the exponents (q = L rho^N) and largest degree in rho.
@@ -234,27 +231,6 @@ def _model(v0, L, N, ks, ps, cs, es, sc):
                 return f[:0], c[:0]
             c[d] += cs[j] * L ** (es[j] + 1.0) / (m * v0)
     return f, c
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _inv_radius(R, W, T, pw):
-    """1 / r, r = min over the last WIN coefficients c_k of rho, W, T of (|c_0|+ / |c_k|)^(1/k),
-    with |c_0|+ = max(1, |c_0|) (the root test; pow only where a coefficient beats the
-    current estimate: pw[k] holds inv^k)."""
-    inv = 0.0
-    for k in range(K - WIN + 1, K + 1):
-        pw[k] = 0.0
-    for c in (R, W, T):
-        sz = max(1.0, abs(c[0]))
-        for k in range(K, K - WIN, -1):
-            a = abs(c[k]) / sz
-            if a > pw[k]:
-                inv = a ** (1.0 / k)
-                p = inv ** (K - WIN + 1)
-                for kk in range(K - WIN + 1, K + 1):
-                    pw[kk] = p
-                    p *= inv
-    return inv
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -1,8 +1,9 @@
 """The Taylor kernel's polynomials: its series order, its Horner evaluations (issue 38).
 
 Split from `reference_impl.exact._general_taylor` (which was over the size limit) so
-that the kernel's stepping and events stay in one module: the series order `K`, the
-samples per step `NS`, and the evaluations of a step's Taylor polynomials (`horner`,
+that the kernel's stepping stays in one module: the series order `K`, the samples per
+step `NS`, the radius estimate of a step's series (`inv_radius`, the root test over the
+last `WIN` coefficients), and the evaluations of a step's Taylor polynomials (`horner`,
 the four-point `samples`, the even/odd `rw`) and of the law's polynomials in rho
 (`poly`, `poly_d`). Moved unchanged: every result bit for bit.
 """
@@ -11,13 +12,17 @@ from __future__ import annotations
 
 import numba
 
-__all__ = ["K", "NS", "horner", "poly", "poly_d", "rw", "samples"]
+__all__ = ["K", "NS", "WIN", "horner", "inv_radius", "poly", "poly_d", "rw", "samples"]
 
 # Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
 # measured fewest operations near K = 30 (8-10 steps per Hertz impact).
 K = 30
 # Samples per step for the sign changes of the zero-force and peak-force functions.
 NS = 8
+# Coefficients (the last WIN of each series) in the root test of the radius: the series
+# at the onset of an undamped Hertz contact has only every fifth coefficient nonzero
+# (rho'' = -2 a rho^4), and a window of 12 sees two of them.
+WIN = 12
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -97,3 +102,24 @@ def rw(R, W, x):
         ro = ro * x2 + R[k]
         wo = wo * x2 + W[k]
     return re + x * ro, we + x * wo
+
+
+@numba.njit(cache=True, error_model="numpy")
+def inv_radius(R, W, T, pw):
+    """1 / r, r = min over the last WIN coefficients c_k of rho, W, T of (|c_0|+ / |c_k|)^(1/k),
+    with |c_0|+ = max(1, |c_0|) (the root test; pow only where a coefficient beats the
+    current estimate: pw[k] holds inv^k)."""
+    inv = 0.0
+    for k in range(K - WIN + 1, K + 1):
+        pw[k] = 0.0
+    for c in (R, W, T):
+        sz = max(1.0, abs(c[0]))
+        for k in range(K, K - WIN, -1):
+            a = abs(c[k]) / sz
+            if a > pw[k]:
+                inv = a ** (1.0 / k)
+                p = inv ** (K - WIN + 1)
+                for kk in range(K - WIN + 1, K + 1):
+                    pw[kk] = p
+                    p *= inv
+    return inv
