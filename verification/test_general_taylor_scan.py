@@ -31,13 +31,21 @@ CLAIM = "solve_law_impact (Taylor kernel)"
 SPEEDS = (0.03, 0.1, 0.4, 1.0, 3.0, 10.0, 30.0)
 
 
-def _rebound(bound):
-    """`solve_taylor`'s Python source with its `_force_stays_positive` replaced by ``bound``
-    (run as Python, the compiled helpers it calls stay compiled)."""
-    f = gt.solve_taylor.py_func
+def _rebind(fn, **names):
+    """``fn``'s Python source with the module globals ``names`` replaced."""
+    f = fn.py_func
     ns = dict(vars(gt))
-    ns["_force_stays_positive"] = bound
+    ns.update(names)
     return types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
+
+
+def _rebound(bound, jit=None):
+    """`solve_taylor` whose stepping (`integrate`) has its `_force_stays_positive` replaced
+    by ``bound`` (run as Python, the compiled helpers they call stay compiled; ``jit``:
+    both compiled by it)."""
+    wrap = jit or (lambda f: f)
+    stepping = wrap(_rebind(gt.integrate, _force_stays_positive=bound))
+    return wrap(_rebind(gt.solve_taylor, integrate=stepping))
 
 
 @numba.njit(error_model="numpy")
@@ -49,7 +57,7 @@ def _never(F, C, j0, D, R, W, x):  # pragma: no cover - compiled
 def _never_skips():
     """The kernel that never skips the scan, compiled as `solve_taylor` is (the same float
     operations: a Python run differs in a few bits, e.g. its pow for rho**N)."""
-    return numba.njit(error_model="numpy")(_rebound(_never))
+    return _rebound(_never, numba.njit(error_model="numpy"))
 
 
 def _rows(solver, law, rtol):

@@ -1,7 +1,9 @@
 """30-digit truth for `reference_impl.exact.general_law`: Taylor-series integration in analytic variables.
 
 m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i (power laws and their sums) and
-any law of `reference_impl.theory.laws`, integrated by a Taylor method whose series are
+any law of `reference_impl.theory.laws`, or U' of one volumetric cap (a sphere, an
+ellipsoid: U' = sum_i a_i q^p_i times y = (1 - q / (3a))^alpha, y's series by the
+power recurrence, as `_taylor_cap`) with a law of C(q) or Hunt-Crossley, integrated by a Taylor method whose series are
 built exactly (recurrences for products, reciprocals and powers; no numerical
 differentiation) at dps + 10 digits. A Taylor method needs a right-hand side
 analytic at each expansion point, which q^1.5 and q^0.25 are not at q = 0. So, as
@@ -31,6 +33,7 @@ from fractions import Fraction
 import mpmath
 
 from reference_impl.errors import HCVInputError
+from reference_impl.potentials._terms import TERM_CAP, term_rows
 from reference_impl.potentials.base import Potential, SumPotential
 from reference_impl.potentials.power import PowerLaw
 from reference_impl.theory.laws import law_from_dict
@@ -79,16 +82,42 @@ def _deriv_series(c):
     return [c[k] * k for k in range(1, len(c))]
 
 
+def _pow_rec(H, Y, k, alpha):
+    """Coefficient k >= 1 of Y = H^alpha from H and Y[:k] (k H_0 Y_k =
+    sum_{j=1..k} (alpha j - (k - j)) H_j Y_(k-j))."""
+    return mpmath.fsum((alpha * j - (k - j)) * H[j] * Y[k - j] for j in range(1, k + 1)) / (
+        k * H[0]
+    )
+
+
+def _cap_of(pot):
+    """(Kn, alpha, a, c0) of a potential whose table is one cap row, else None."""
+    rows = term_rows(pot)
+    if rows is None or len(rows) != 1 or rows[0][0] != TERM_CAP:
+        return None
+    return rows[0][1:]
+
+
 class _Model:
-    """Scaled model: F(Q) = sum a_i Q^p_i, C(Q) = sum of the law's terms (see module)."""
+    """Scaled model: F(Q) = sum a_i Q^p_i (times y = (1 - beta Q)^alpha for a cap),
+    C(Q) = sum of the law's terms (see module)."""
 
     def __init__(self, pot, m, v0, law, L, N):
-        terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
         mm, vv = mpmath.mpf(m), mpmath.mpf(v0)
         self.N = N
-        self.F = [
-            (mpmath.mpf(t.k) * L ** (mpmath.mpf(t.p) + 1) / (mm * vv * vv), t.p) for t in terms
-        ]
+        self.cap = _cap_of(pot)
+        if self.cap is not None:
+            # U' = Kn V^alpha S, V = c0 a L^2 Q^2 (1 - beta Q), S = c0 L Q (2a - L Q),
+            # beta = L / (3a): F = B Q^(2 alpha + 1) (2a - L Q) y, y = (1 - beta Q)^alpha
+            Kn, al, a, c0 = (mpmath.mpf(x) for x in self.cap)
+            B = Kn * (c0 * a * L * L) ** al * c0 * L * L / (mm * vv * vv)
+            self.F = [(2 * a * B, 2 * float(self.cap[1]) + 1), (-L * B, 2 * float(self.cap[1]) + 2)]
+            self.beta, self.alpha = L / (3 * a), al
+        else:
+            terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
+            self.F = [
+                (mpmath.mpf(t.k) * L ** (mpmath.mpf(t.p) + 1) / (mm * vv * vv), t.p) for t in terms
+            ]
         self.C = [(mpmath.mpf(c) * L ** (mpmath.mpf(e) + 1) / (mm * vv), e) for c, e in law.terms()]
         self.hc = mpmath.mpf(law.alpha) * vv
         if law.A:
@@ -102,16 +131,30 @@ class _Model:
     def exps(self):
         return sorted({p for _, p in self.F} | {e for _, e in self.C})
 
-    def FC_k(self, P, k):
-        """Coefficient k of F and C given power series P[e] (each up to order k)."""
+    def FC_k(self, P, k, Qs=None, work=None):
+        """Coefficient k of F and C given power series P[e] (each up to order k); for a cap
+        also the series Qs of Q (up to order k) and ``work`` (its lists, kept across k)."""
         Fk = mpmath.fsum(a * P[p][k] for a, p in self.F)
+        if self.cap is not None:
+            Fk = self._cap_k(Fk, [-self.beta * x for x in Qs], k, work)
         Ck = mpmath.fsum(c * P[e][k] for c, e in self.C)
         if self.hc:
             Ck += self.hc * Fk
         return Fk, Ck
 
+    def _cap_k(self, Fk, bq, k, work):
+        """Coefficient k of (polynomial part, coefficient Fk) x y, y = (1 + bq)^alpha with
+        bq the series of -beta Q (or -beta rho^N); ``work`` = [poly part, H, Y]."""
+        Fp, H, Y = work
+        Fp.append(Fk)
+        H.append(1 + bq[0] if k == 0 else bq[k])
+        Y.append(H[0] ** self.alpha if k == 0 else _pow_rec(H, Y, k, self.alpha))
+        return _conv(Fp, Y, k)
+
     def FC_at(self, Q):
         F = mpmath.fsum(a * Q ** mpmath.mpf(p) for a, p in self.F)
+        if self.cap is not None:
+            F *= (1 - self.beta * Q) ** self.alpha
         C = mpmath.fsum(c * (Q ** mpmath.mpf(e) if e else 1) for c, e in self.C)
         return F, C + self.hc * F
 
@@ -121,8 +164,9 @@ def _mid_series(model, Q0, V0, K):
     exps = model.exps()
     P = {e: [Q0 ** mpmath.mpf(e) if e else mpmath.mpf(1)] for e in exps}
     Q, V, Fs, Cs, G = [Q0], [V0], [], [], []
+    work = ([], [], [])
     for k in range(K):
-        Fk, Ck = model.FC_k(P, k)
+        Fk, Ck = model.FC_k(P, k, Q, work)
         Fs.append(Fk)
         Cs.append(Ck)
         CVk = _conv(Cs, V, k)
@@ -157,6 +201,10 @@ def _rho_series(model, rc, sign, V0, S0, K):
     for a, p in model.F:
         ps = pow_series(int(round(N * p)))
         Fser = [x + a * y for x, y in zip(Fser, ps, strict=False)]
+    if model.cap is not None:  # times y = (1 - beta rho^N)^alpha
+        bq = [-model.beta * x for x in pow_series(N)]
+        work = ([], [], [])
+        Fser = [model._cap_k(Fser[k], bq, k, work) for k in range(K + 1)]
     Cser = [mpmath.mpf(0)] * (K + 1)
     for c, e in model.C:
         ps = pow_series(int(round(N * e)))
@@ -247,8 +295,9 @@ def solve_law_impact_mp(
 
     Parameters
     ----------
-    pot : PowerLaw or SumPotential of PowerLaw
-        U'(q) = sum k_i q^p_i.
+    pot : PowerLaw, SumPotential of PowerLaw, or a potential of one cap row
+        U'(q) = sum k_i q^p_i, or a sphere's or ellipsoid's cap (`potentials.volumetric`;
+        not with the viscoelastic or the universal law).
     m, v0 : float
         Mass (kg) and approach speed (m/s).
     law : DampingLaw or dict
@@ -272,12 +321,23 @@ def solve_law_impact_mp(
     # exp(-(alpha/m) int U' dt), ~1e-70 at alpha v0 = 160), so the two ends coincide; a
     # search would find the working precision's round-off instead.
     search_zf = not law.decomposition().never_pulls
+    cap = _cap_of(pot)
     terms = pot.terms if isinstance(pot, SumPotential) else (pot,)
-    if not all(type(t) is PowerLaw for t in terms):
-        raise HCVInputError("general-law truth: power-law potentials (and sums of them) only")
+    if cap is not None:
+        if law.A or law.zeta:
+            raise HCVInputError(
+                "general-law truth on a cap: laws of C(q) and Hunt-Crossley only "
+                f"(got {law.name!r})"
+            )
+        ps = [2 * float(cap[1]) + 1, 2 * float(cap[1]) + 2]
+    elif not all(type(t) is PowerLaw for t in terms):
+        raise HCVInputError(
+            "general-law truth: power-law potentials (and sums of them) or one cap only"
+        )
+    else:
+        ps = [t.p for t in terms]
     if law.zeta and len(terms) != 1:
         raise HCVInputError("general-law truth: the universal law for a single power law only")
-    ps = [t.p for t in terms]
     ex = list(ps) + [e for _, e in law.terms()]
     if law.A:
         ex += [p - 1 for p in ps]

@@ -29,7 +29,7 @@ import numpy as np
 
 from reference_impl.potentials._terms import TERM_CAP, TERM_POWER, term_rows
 
-__all__ = ["fc_rows", "table_arrays"]
+__all__ = ["cap_derivs", "fc_rows", "table_arrays"]
 
 
 def table_arrays(pot) -> tuple[np.ndarray, np.ndarray] | None:
@@ -64,7 +64,7 @@ def table_arrays(pot) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _cap(q, need_U, need_2, need_3, Kn, alpha, a, c0):
+def cap_derivs(q, need_U, need_2, need_3, Kn, alpha, a, c0):
     """(U, U', U'', U''') of one cap row at q (J, N, N/m, N/m^2); U, U'' and U''' only
     where asked (``need_*``, else 0: each costs a pow, and a step's right-hand side needs
     U' alone for most laws).
@@ -133,7 +133,7 @@ def fc_rows(q, full, rows, lim, cs, es, sc):
     d3U = 0.0
     for i in range(rows.shape[0]):
         if rows[i, 0] == TERM_CAP:
-            u, d1, d2, d3 = _cap(
+            u, d1, d2, d3 = cap_derivs(
                 q, need_U, need_2, need_3, rows[i, 1], rows[i, 2], rows[i, 3], rows[i, 4]
             )
         else:  # TERM_POWER: U = k q^n / n, U' = k q^p

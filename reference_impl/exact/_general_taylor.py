@@ -2,7 +2,9 @@
 
 One impact m q'' + C(q) q' + U'(q) = 0 with U' = sum k_i q^p_i and C any law of
 `reference_impl.theory.laws` whose exponents are multiples of 1/N (N <= `N_MAX`):
-Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji.
+Hertz with every law of the table (N = 2; the universal law N = 4), Hooke, Tsuji; and,
+through `integrate` with a factor y = (1 - beta rho^N)^alpha on U' (and on C's part
+alpha_HC U'), a single volumetric cap (`_taylor_cap`).
 The same signature and outputs (`OUT_FIELDS`) as `_general_kernel.solve`; cases
 outside that set, creeping returns (overdamped: no return) and contacts longer than
 `MAX_STEPS` steps are handed to it.
@@ -32,7 +34,7 @@ round-off; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), an
 through 0 from above (a peak of the force).
 
 Step and error. The radius of convergence r is estimated by the root test over the
-last `WIN` coefficients of rho, W and T, each relative to its size; the step is
+last `_taylor_poly.WIN` coefficients of rho, W and T, each relative to its size; the step is
 h = theta r with theta^(K+1) / (1 - theta) = `TOL`, the sum of a geometric tail of
 the series beyond order K: its truncation, relative to the state (a looser truncation
 when the caller asks for less, ``rtol``: `SC_TOL`). The error sums
@@ -47,14 +49,17 @@ The zero-force search skips a step on which an interval bound proves the force p
 (`_taylor_scan.force_stays_positive`), where it could find nothing: the same results, bit
 for bit.
 
-The compiled `solve` calls the GBS kernel's compiled `solve`, and numba's disk cache of
-this module is keyed by this file alone: a change of `_general_kernel` (or
-`_general_step`) leaves this module's cached machine code running the old kernel until
-this file changes too (measured: the hand-over tests then differ from the kernel), so
-such a change comes with a line here. Last: the near-critical error control (2026-11-26);
+The compiled `solve` calls the GBS kernel's compiled `solve` and the polynomial helpers of
+`_taylor_poly`, and numba's disk cache of this module is keyed by this file alone: a change
+of `_general_kernel`, `_general_step`, `_taylor_poly` or `_taylor_force` leaves this module's cached machine
+code running the old code until this file changes too (measured: the hand-over tests then
+differ from the kernel), so such a change comes with a line here (all of them are in
+`reference_impl._numba_dir._COMPILED_SOURCES` too, which selects a fresh cache directory). Last: the near-critical error control (2026-11-26);
 the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29); no
 zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
-GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29).
+GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
+polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
+and the force and event functions in `_taylor_force` (2026-11-29).
 """
 
 from __future__ import annotations
@@ -64,30 +69,36 @@ import math
 import numba
 import numpy as np
 
-from reference_impl.exact._general_kernel import OUT_FIELDS
+from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_CREEP
 from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._taylor_force import cap_series as _cap_series
+from reference_impl.exact._taylor_force import dforce as _dforce
+from reference_impl.exact._taylor_force import event as _event
+from reference_impl.exact._taylor_force import fc as _fc
+from reference_impl.exact._taylor_force import force as _force
+from reference_impl.exact._taylor_force import root as _root
+from reference_impl.exact._taylor_poly import NS, K
+from reference_impl.exact._taylor_poly import horner as _horner
+from reference_impl.exact._taylor_poly import inv_radius as _inv_radius
+from reference_impl.exact._taylor_poly import samples as _samples
 from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
 
 __all__ = [
+    "DEG_MAX",
     "K",
     "MAX_STEPS",
     "N_MAX",
     "OUT_FIELDS",
     "SC_TOL",
+    "as_int",
     "THETA",
     "TOL",
+    "integrate",
     "solve",
     "solve_taylor",
     "theta_for",
 ]
 
-# Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
-# measured fewest operations near K = 30 (8-10 steps per Hertz impact).
-K = 30
-# Coefficients (the last WIN of each series) in the root test of the radius: the series
-# at the onset of an undamped Hertz contact has only every fifth coefficient nonzero
-# (rho'' = -2 a rho^4), and a window of 12 sees two of them.
-WIN = 12
 # Truncation per step relative to the state (the tail of the series beyond order K).
 TOL = 1e-16
 # Largest common denominator N of the exponents (q = L rho^N) and largest degree in rho.
@@ -99,12 +110,15 @@ DEG_MAX = 48
 # estimates no longer bound it (measured: 5e-14 s against a bound of 4e-15 s after 39
 # steps, near-critical linear dashpot on Hooke + Hertz): handed to the GBS kernel.
 MAX_STEPS = 24
+# A cap's creeping return (no return: `_taylor_cap`), after its zero-force end: steps
+# until the no-return test, which only confirms that verdict (the outputs are all set by
+# then; the bound sums every step). Measured on sphere-damped with a dashpot 26.75 N s/m:
+# 21 steps at 1 m/s, 47 at 0.3, 125 at 0.1 (the GBS kernel: 130 and 303 at the first two).
+_CREEP_STEPS = 400
 # Overlap (fraction of q_max) at which a return is handed over (the GBS kernel's
 # threshold of no return): rho decays without crossing 0 there, and a root found at
 # round-off level would be no exit.
 _NO_RETURN_Q = 1e-10
-# Samples per step for the sign changes of the zero-force and peak-force functions.
-NS = 8
 # N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
 _INT_TOL = 1e-12
 # Event brackets, relative: two ulps where the output moves with the root (the time of
@@ -113,8 +127,6 @@ _INT_TOL = 1e-12
 # where dT/ds = N rho^(N-1) and dW/ds = -N rho^(N-1) G vanish): 1e-18 of the step.
 _ULPS = 4.5e-16
 _STATIONARY = 1e-9
-# Root iterations (Illinois: superlinear; a float bracket needs < 2 x 53 halvings).
-_ROOT_ITER = 120
 
 
 def theta_for(tol: float) -> float:
@@ -131,6 +143,8 @@ THETA = theta_for(TOL)
 # asked, `reference_impl.exact._rtol.taylor_tol`): sc[SC_TOL], sc[SC_TOL + 1]. An ``sc`` of
 # SC_TOL entries (no rtol) runs at TOL and THETA, bit for bit as before the argument.
 SC_TOL = 7
+# A sum of powers has no cap factor (`integrate`: cp None, CY = 0, read as a constant).
+_NO_CY = np.zeros(DEG_MAX + 1)
 _RECIP = 1.0 / np.arange(1.0, K + 1.0)  # 1 / (n + 1): a multiply, not a divide, in the recurrences
 
 
@@ -141,6 +155,9 @@ def _as_int(x):
     if r < 0 or abs(x - r) > _INT_TOL * max(1.0, abs(x)):
         return -1
     return int(r)
+
+
+as_int = _as_int  # for the cap's model (`_taylor_cap`)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -217,89 +234,14 @@ def _model(v0, L, N, ks, ps, cs, es, sc):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inv_radius(R, W, T, pw):
-    """1 / r, r = min over the last WIN coefficients c_k of rho, W, T of (|c_0|+ / |c_k|)^(1/k),
-    with |c_0|+ = max(1, |c_0|) (the root test; pow only where a coefficient beats the
-    current estimate: pw[k] holds inv^k)."""
-    inv = 0.0
-    for k in range(K - WIN + 1, K + 1):
-        pw[k] = 0.0
-    for c in (R, W, T):
-        sz = max(1.0, abs(c[0]))
-        for k in range(K, K - WIN, -1):
-            a = abs(c[k]) / sz
-            if a > pw[k]:
-                inv = a ** (1.0 / k)
-                p = inv ** (K - WIN + 1)
-                for kk in range(K - WIN + 1, K + 1):
-                    pw[kk] = p
-                    p *= inv
-    return inv
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _poly(c, lo, hi, x):
-    """sum_{j=lo}^{hi} c[j] x^(j - lo) (Horner)."""
-    acc = 0.0
-    for j in range(hi, lo - 1, -1):
-        acc = acc * x + c[j]
-    return acc
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _poly_d(c, hi, x):
-    """(p(x), p'(x)) of sum_{j=0}^{hi} c[j] x^j."""
-    p = 0.0
-    dp = 0.0
-    for j in range(hi, -1, -1):
-        dp = dp * x + p
-        p = p * x + c[j]
-    return p, dp
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _horner(c, x):
-    acc = c[K]
-    for k in range(K - 1, -1, -1):
-        acc = acc * x + c[k]
-    return acc
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _samples(R, W, x_end, xs, rs, ws):
-    """rho and W at the NS + 1 points x_end i / NS (Horner from c[K] down, as `_horner`),
-    four points at a time in registers (eight independent chains)."""
-    for i in range(NS + 1):
-        xs[i] = x_end * i / NS
-    i = 0
-    while i + 4 <= NS + 1:
-        x0, x1, x2, x3 = xs[i], xs[i + 1], xs[i + 2], xs[i + 3]
-        r0 = r1 = r2 = r3 = R[K]
-        w0 = w1 = w2 = w3 = W[K]
-        for k in range(K - 1, -1, -1):
-            rk = R[k]
-            wk = W[k]
-            r0 = r0 * x0 + rk
-            r1 = r1 * x1 + rk
-            r2 = r2 * x2 + rk
-            r3 = r3 * x3 + rk
-            w0 = w0 * x0 + wk
-            w1 = w1 * x1 + wk
-            w2 = w2 * x2 + wk
-            w3 = w3 * x3 + wk
-        rs[i], rs[i + 1], rs[i + 2], rs[i + 3] = r0, r1, r2, r3
-        ws[i], ws[i + 1], ws[i + 2], ws[i + 3] = w0, w1, w2, w3
-        i += 4
-    while i < NS + 1:
-        rs[i] = _horner(R, xs[i])
-        ws[i] = _horner(W, xs[i])
-        i += 1
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
+def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X):
     """Taylor coefficients 0..K of (rho, W, T) at (r0, w0, t0); FN, CN = N rho^(N-1) f, c;
-    P (flat, rows of K + 1) receives the series of the powers rho^j."""
+    P (flat, rows of K + 1) receives the series of the powers rho^j.
+
+    With a cap's factor (``cp`` = (beta, alpha), `_taylor_force.cap_factor`; None for a
+    sum of powers), f = FN y and c = CN + CYN y with y = (1 - beta rho^N)^alpha: X's rows receive the series of h = 1 - beta rho^N, y
+    (the power recurrence k h0 y_k = sum_{j=1..k} (alpha j - (k - j)) h_j y_(k-j)), and
+    the polynomial parts FN and CYN before their product with y."""
     R[0], W[0], T[0] = r0, w0, t0
     M = K + 1
     for n in range(K):
@@ -325,6 +267,10 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
         cn = 0.0
         for ii in range(cidx.shape[0]):
             cn += CN[cidx[ii]] * P[cidx[ii] * M + n]
+        # a cap: f = (FN) y, c = CN + (CYN) y; a sum of powers passes cp = None, a branch
+        # numba prunes when it compiles that case (measured: the branch cost ~1 us of ~22)
+        if cp is not None:
+            fn, cn = _cap_series(n, N, M, P, fn, cn, CYN, cyidx, cp[0], cp[1], X)
         CS[n] = cn
         cw = 0.0
         for i in range(n + 1):
@@ -335,95 +281,10 @@ def _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _rw(R, W, x):
-    """(rho, W) at x: even and odd coefficients as four Horner chains in x^2 (half the
-    latency of one chain: the events evaluate the step's polynomials at ~100 points)."""
-    x2 = x * x
-    ke = K - (K % 2)  # highest even index
-    ko = K - 1 + (K % 2)  # highest odd index
-    re = R[ke]
-    we = W[ke]
-    ro = R[ko]
-    wo = W[ko]
-    for k in range(ke - 2, -1, -2):
-        re = re * x2 + R[k]
-        we = we * x2 + W[k]
-    for k in range(ko - 2, 0, -2):
-        ro = ro * x2 + R[k]
-        wo = wo * x2 + W[k]
-    return re + x * ro, we + x * wo
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _force(F, C, j0, D, r, w):
-    """(G, G / rho^j0) with G = f(rho) + c(rho) W, the scaled total force."""
-    g0 = _poly(F, j0, D, r) + _poly(C, j0, D, r) * w
-    rj = 1.0
-    for _ in range(j0):
-        rj *= r
-    return g0 * rj, g0
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _dforce(F, C, N, D, r, w):
-    """dG/ds = (f'(rho) + c'(rho) W) W - c(rho) N rho^(N-1) G."""
-    f, df = _poly_d(F, D, r)
-    c, dc = _poly_d(C, D, r)
-    G = f + c * w
-    rn = 1.0
-    for _ in range(N - 1):
-        rn *= r
-    return (df + dc * w) * w - c * N * rn * G
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _event(kind, R, W, F, C, N, j0, D, x):
-    """Event functions at x along the step: 0 rho, 1 W, 2 G / rho^j0, 3 dG/ds."""
-    if kind == 0:
-        return _horner(R, x)
-    if kind == 1:
-        return _horner(W, x)
-    r, w = _rw(R, W, x)
-    if kind == 2:
-        return _force(F, C, j0, D, r, w)[1]
-    return _dforce(F, C, N, D, r, w)
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _root(kind, R, W, F, C, N, j0, D, a, b, ga, gb, rtol):
-    """x in [a, b] where event ``kind`` goes from ga > 0 to gb <= 0 (Illinois), to a
-    bracket of rtol relative (two ulps, 4.5e-16, where the output moves with x)."""
-    side = 0
-    x = b
-    for _ in range(_ROOT_ITER):
-        x = (a * gb - b * ga) / (gb - ga)
-        if not (a < x < b):
-            x = 0.5 * (a + b)
-        g = _event(kind, R, W, F, C, N, j0, D, x)
-        if g > 0.0:
-            a, ga = x, g
-            if side == 1:
-                gb *= 0.5
-            side = 1
-        else:
-            b, gb = x, g
-            if side == -1:
-                ga *= 0.5
-            side = -1
-        # two ulps: the bracket cannot shrink further
-        if b - a <= rtol * max(abs(a), abs(b)) or g == 0.0:
-            break
-    return x
-
-
-@numba.njit(cache=True, error_model="numpy")
 def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     """One impact into ``out`` (`OUT_FIELDS`); returns 0, or 1 when the case is not for
     this method (exponents, degree, no return within MAX_STEPS): ``out`` is then void."""
     m = sc[0]
-    tol, theta = TOL, THETA
-    if sc.shape[0] > SC_TOL:
-        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
     N = _common_n(ks, ps, cs, es, sc)
     if N == 0:
         return 1
@@ -431,27 +292,61 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     F, C = _model(v0, L, N, ks, ps, cs, es, sc)
     if F.shape[0] == 0:
         return 1
+    if integrate(v0, L, N, F, C, _NO_CY, None, sc, out, None) != 0:
+        return 1
+    qm = out[1]
+    fm = 0.0
+    for i in range(ks.shape[0]):
+        fm += ks[i] * qm ** ps[i]
+    out[2] = fm
+    out[9] = out[9] * L / qE
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
+    """One impact of the scaled model into ``out`` (`OUT_FIELDS` but ``max_force``, out[2],
+    left to the caller); returns 0, or 1 when the case is not for this method (no return
+    within MAX_STEPS, a radius not finite): ``out`` is then void.
+
+    ``L`` is the scale of q (m), ``N`` the power q = L rho^N, ``F``, ``C`` and ``CY`` the
+    polynomials in rho (by degree, `DEG_MAX` + 1) of the scaled U', C and of C's part
+    multiplied by the cap's factor, ``cp`` = (beta, alpha) that factor
+    y = (1 - beta rho^N)^alpha (None: sums of powers, y = 1, CY = 0: every operation as
+    before the factor, the cap's branches pruned when numba compiles it), ``sc`` the law's scalars (`_general_contact.law_arrays`), ``X``
+    the cap's work array, shape (4, K + 1) (`_cap_series`), or None for a sum of powers."""
+    m = sc[0]
+    tol, theta = TOL, THETA
+    if sc.shape[0] > SC_TOL:
+        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
+    capped = cp is not None
     D = 0
     j0 = DEG_MAX
     for j in range(DEG_MAX + 1):
-        if F[j] != 0.0 or C[j] != 0.0:
+        if F[j] != 0.0 or C[j] != 0.0 or CY[j] != 0.0:
             D = j
             j0 = min(j0, j)
     # the right-hand side's polynomials N rho^(N-1) f and N rho^(N-1) c
     DN = D + N - 1
     FN = np.zeros(DN + 1)
     CN = np.zeros(DN + 1)
+    CYN = np.zeros(DN + 1)
     nf = 0
     nc = 0
+    ny = 0
     for j in range(D + 1):
         FN[j + N - 1] = N * F[j]
         CN[j + N - 1] = N * C[j]
+        CYN[j + N - 1] = N * CY[j]
         nf += F[j] != 0.0
         nc += C[j] != 0.0
+        ny += CY[j] != 0.0
     fidx = np.empty(nf, np.int64)
     cidx = np.empty(nc, np.int64)
+    cyidx = np.empty(ny, np.int64)
     nf = 0
     nc = 0
+    ny = 0
     need = np.zeros(DN + 2, np.bool_)
     for j in range(DN + 1):
         if FN[j] != 0.0:
@@ -462,7 +357,13 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             cidx[nc] = j
             nc += 1
             need[j] = True
+        if CYN[j] != 0.0:
+            cyidx[ny] = j
+            ny += 1
+            need[j] = True
     need[N - 1] = True
+    if capped:  # h = 1 - beta rho^N reads the series of rho^N
+        need[N] = True
     # powers of rho by squaring (even) or one more factor (odd), lowest first
     for j in range(DN, 1, -1):
         if need[j]:
@@ -492,18 +393,35 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     q_top = 1.0
     monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
     for j in range(D + 1):
-        if F[j] < 0.0 or C[j] < 0.0:
+        if F[j] < 0.0 or C[j] < 0.0 or (CY[j] < 0.0 and not capped):
             monotone = False
+    if cp is not None and cp[0] <= 1.0 / 3.0:
+        # A cap's F has a negative coefficient, but f = U' grows with q up to q = a (V and
+        # S = V' do), and the contact stays below q = L, i.e. rho <= 1, within q = a where
+        # beta = L / (3a) <= 1/3 (`_taylor_cap`): monotone there where C's coefficients
+        # are >= 0 (CY = alpha_HC F y grows as f does). Deeper, the peak is always scanned.
+        monotone = True
+        for j in range(D + 1):
+            if C[j] < 0.0:
+                monotone = False
     pw = np.empty(K + 1)
     xs = np.empty(NS + 1)
     rs = np.empty(NS + 1)
     ws = np.empty(NS + 1)
     r0, w0, t0 = 0.0, 1.0, 0.0
-    peak = C[0]  # the force just after contact, C(0) v0
+    peak = C[0] + CY[0] if capped else C[0]  # the force just after contact, C(0) v0
     past = False
     zf_found = False
     errsum = 0.0
-    for step in range(1, MAX_STEPS + 1):
+    err_zf = 0.0
+    step = 0
+    while True:
+        step += 1
+        # A cap's creeping return, its zero-force end found, may take up to _CREEP_STEPS to
+        # reach the no-return test (stiff: the step is limited by m / C); an exit after
+        # MAX_STEPS is handed over (its bound is not the summed estimates: MAX_STEPS)
+        if step > MAX_STEPS and not (capped and creeps and zf_found and step <= _CREEP_STEPS):
+            return 1
         if past and creeps:
             # Creeping back along the slow manifold of an overdamped law (w ~ -U'/C, U' q >
             # m w^2, C q > 100 m |w|, as in the GBS kernel), where C ~ q^a with a <= n - 2
@@ -513,9 +431,26 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             if q0 <= _NO_RETURN_Q * q_top:
                 return 1
             if q0 <= 0.1 * q_top:
-                if _poly(F, 0, D, r0) * q0 > w0 * w0 and _poly(C, 0, D, r0) * q0 > 100.0 * abs(w0):
+                f0, c0 = _fc(F, C, CY, cp, N, D, r0)
+                if f0 * q0 > w0 * w0 and c0 * q0 > 100.0 * abs(w0):
+                    if capped and zf_found:
+                        # A cap reports the no-return itself, as the GBS kernel does
+                        # (STOP_CREEP: the same test, its zero-force end already found);
+                        # the sums of powers hand it over, as before (bit for bit).
+                        out[3] = peak * Fs
+                        out[6] = math.inf
+                        out[7] = 0.0
+                        out[8] = 0.0
+                        # the bound of the outputs, all set by the zero-force end: the
+                        # steps after it only confirm the verdict
+                        out[9] = err_zf
+                        out[10] = err_zf
+                        out[11] = step - 1
+                        out[12] = 0.0
+                        out[13] = STOP_CREEP
+                        return 0
                     return 1
-        _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0)
+        _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X)
         inv = _inv_radius(R, W, T, pw)
         if not (inv > 0.0 and inv < math.inf):
             return 1
@@ -526,57 +461,71 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
         exiting = False
         was_past = past
         if not past and _horner(W, h) < 0.0:
-            x = _root(1, R, W, F, C, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
+            x = _root(1, R, W, F, C, CY, cp, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
             rm = _horner(R, x)
             out[0] = _horner(T, x) * L / v0
-            qm = L * rm**N
-            out[1] = qm
-            fm = 0.0
-            for i in range(ks.shape[0]):
-                fm += ks[i] * qm ** ps[i]
-            out[2] = fm
+            out[1] = L * rm**N
             # F at the turning point is U'(q_max): a value of F, so the peak is at least that
             # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
-            peak = max(peak, _poly(F, 0, D, rm))
+            peak = max(peak, _fc(F, C, CY, cp, N, D, rm)[0])
             past = True
             q_top = rm**N
             x_from = x
         if past and _horner(R, h) <= 0.0:
             x_end = _root(
-                0, R, W, F, C, N, j0, D, x_from, h, _horner(R, x_from), _horner(R, h), exit_tol
+                0,
+                R,
+                W,
+                F,
+                C,
+                CY,
+                cp,
+                N,
+                j0,
+                D,
+                x_from,
+                h,
+                _horner(R, x_from),
+                _horner(R, h),
+                exit_tol,
             )
             exiting = True
         # peak force: dG/ds through 0 from above, on NS samples of [0, x_end], unless
         # G cannot exceed the peak so far on this step (f and c grow with rho >= 0):
         # before the turning point G <= f(rho_hi) + c(rho_hi) w0, after it G <= f(r0).
         if was_past:
-            ub = _poly(F, 0, D, r0)
+            ub = _fc(F, C, CY, cp, N, D, r0)[0]
         else:
             r_hi = _horner(R, x_from if past else x_end)
-            ub = _poly(F, 0, D, r_hi) + _poly(C, 0, D, r_hi) * w0
+            f_hi, c_hi = _fc(F, C, CY, cp, N, D, r_hi)
+            ub = f_hi + c_hi * w0
         scan_peak = not (monotone and ub <= peak)
         # no zero-force end where the law says the force never vanishes before q = 0
         # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact;
         # nor on a step where the force provably stays positive (nothing to find there)
         scan_zf = past and not zf_found and not nopull
-        scan_zf = scan_zf and not _force_stays_positive(F, C, j0, D, R, W, x_end)
+        # (its interval bound reads F and C alone: a cap's step is always scanned)
+        scan_zf = scan_zf and (capped or not _force_stays_positive(F, C, j0, D, R, W, x_end))
         if scan_peak or scan_zf:
             _samples(R, W, x_end, xs, rs, ws)
         if scan_peak:  # dG/ds through 0 from above
-            gp = _dforce(F, C, N, D, rs[0], ws[0])
+            gp = _dforce(F, C, CY, cp, N, D, rs[0], ws[0])
             for i in range(1, NS + 1):
-                gi = _dforce(F, C, N, D, rs[i], ws[i])
+                gi = _dforce(F, C, CY, cp, N, D, rs[i], ws[i])
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(3, R, W, F, C, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY)
-                    peak = max(peak, _force(F, C, j0, D, _horner(R, xr), _horner(W, xr))[0])
+                    xr = _root(
+                        3, R, W, F, C, CY, cp, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY
+                    )
+                    rx, wx = _horner(R, xr), _horner(W, xr)
+                    peak = max(peak, _force(F, C, CY, cp, N, j0, D, rx, wx)[0])
                 gp = gi
         if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
-            gp = _event(2, R, W, F, C, N, j0, D, x_from)
+            gp = _event(2, R, W, F, C, CY, cp, N, j0, D, x_from)
             xp = x_from
             for i in range(1, NS + 1):
                 if xs[i] <= x_from:
                     continue
-                gi = _force(F, C, j0, D, rs[i], ws[i])[1]
+                gi = _force(F, C, CY, cp, N, j0, D, rs[i], ws[i])[1]
                 if exiting and i == NS and gi > 0.0:
                     # The last sample is the exit, rho = 0 within its root's bracket (found:
                     # rho = -5.6e-17). Where a negligible lowest term sets j0 (C = c0 + c1 q,
@@ -584,15 +533,18 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                     # (~1e-18) outweighs it and reads the force at the exit > 0, hiding the
                     # crossing before it: the sign is read at rho = 0 exactly, the exit, where
                     # G / rho^j0 = F[j0] + C[j0] W. A sample read <= 0 is kept (bit for bit).
-                    gi = _force(F, C, j0, D, 0.0, ws[i])[1]
+                    gi = _force(F, C, CY, cp, N, j0, D, 0.0, ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(2, R, W, F, C, N, j0, D, xp, xs[i], gp, gi, _ULPS)
+                    xr = _root(2, R, W, F, C, CY, cp, N, j0, D, xp, xs[i], gp, gi, _ULPS)
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
+                    err_zf = errsum
                     break
                 gp, xp = gi, xs[i]
         if exiting:
+            if step > MAX_STEPS:
+                return 1
             t_end = _horner(T, x_end) * L / v0
             we = _horner(W, x_end)
             w_end = we * v0
@@ -602,7 +554,10 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
                 # dT/ds = 1 at the exit: an error e in rho moves it by e / |W| in s, so T by
                 # as much and W by |dW/ds| e / |W| (for N > 1 both are stationary there)
                 err_t += errsum / abs(we)
-                err_w += abs(CN[0] * we + FN[0]) * errsum / abs(we)
+                dw = CN[0] * we + FN[0]
+                if capped:  # y = 1 at rho = 0
+                    dw += CYN[0] * we
+                err_w += abs(dw) * errsum / abs(we)
             if not zf_found:  # the force never pulls: the two ends coincide
                 out[4] = t_end
                 out[5] = w_end
@@ -610,13 +565,12 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
             out[6] = t_end
             out[7] = w_end
             out[8] = 1.0
-            out[9] = err_t * L / qE  # in units of qE / v0, as the GBS kernel's
+            out[9] = err_t  # scaled; the caller's * L / qE: units of qE / v0, as the GBS kernel's
             out[10] = err_w
             out[11] = step
             out[12] = 0.0
             return 0
         r0, w0, t0 = _horner(R, h), _horner(W, h), _horner(T, h)
-    return 1
 
 
 @numba.njit(cache=True, error_model="numpy")

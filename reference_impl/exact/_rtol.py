@@ -9,7 +9,8 @@ most ``rtol`` on each reported time, and lets the solver spend less to reach it:
   ``rtol`` on every branch and the bound of each time (the pair's difference plus
   round-off, as at full accuracy) is at most ``rtol`` of it; otherwise the next larger
   pair, up to the full-accuracy one;
-* a general law on the Taylor kernel (`_general_taylor`): a longer step, the truncation
+* a general law on the Taylor kernel (`_general_taylor`; on a single cap,
+  `_taylor_cap`): a longer step, the truncation
   per step ``taylor_tol(rtol)`` instead of `_general_taylor.TOL`; the bound is the same
   sum of the steps' truncation estimates as at full accuracy;
 * the universal law on a single cap (a sphere or an ellipsoid, `_one_call`): with

@@ -7,8 +7,9 @@ law keeps its exact quadrature (`reference_impl.exact.solve.solve_impact`); this
 integrates the others (method: `reference_impl.exact._general_kernel`), compiled with
 numba for sums of power laws (Hooke, Hertz, power, sum: the Taylor kernel
 `_general_taylor`, else GBS) and for the other families with a term table of power
-and cap rows (sphere, ellipsoid, their sums: the GBS kernel on the table,
-`_general_rows`), and in plain Python for the rest (a saturating force, an expression
+and cap rows (a single cap, sphere or ellipsoid: the Taylor kernel with the cap's
+factor, `_taylor_cap`; their sums and the laws it does not cover: the GBS kernel on the
+table, `_general_rows`), and in plain Python for the rest (a saturating force, an expression
 without a table; ~300x slower than compiled, same method).
 
 Both ends of contact are reported (see `LawImpactSolution`), with an error bound
@@ -42,7 +43,6 @@ from reference_impl.exact._general_fields import OK as _OK
 from reference_impl.exact._general_fields import form as _form
 from reference_impl.exact._general_fields import solve_formed as _solve_formed
 from reference_impl.exact._general_kernel import MAX_STEPS, python_solver
-from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._general_rows import table_arrays
 from reference_impl.exact._general_taylor import TOL as TAYLOR_TOL
 
@@ -52,6 +52,7 @@ from reference_impl.exact._general_taylor import theta_for
 from reference_impl.exact._law_table import fast_law
 from reference_impl.exact._oneshot_cache import BoundedCache, law_key, value_key
 from reference_impl.exact._rtol import checked_rtol, taylor_tol
+from reference_impl.exact._taylor_cap import solve_formed as _cap_formed
 from reference_impl.exact._validate import _check_exponent, _validated_top
 from reference_impl.potentials._checks import positive
 from reference_impl.potentials.base import Potential, SumPotential
@@ -453,8 +454,10 @@ def _solve_planned(plan: _LawPlan, v0) -> LawImpactSolution:
     # compiled call where it runs
     if plan.pk is not None:
         f = _solve_formed(v0, qE, plan.pk[0], plan.pk[1], cs, es, sc)
-    elif plan.tab is not None:  # the GBS kernel compiled on the term table (full accuracy)
-        f = _form(_gbs_solve(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc), v0, qE)
+    elif plan.tab is not None:
+        # a single cap row: the Taylor kernel (`_taylor_cap`, honours rtol); any other
+        # table, or a case it hands over: the GBS kernel compiled on it (full accuracy)
+        f = _cap_formed(v0, qE, plan.tab[0], plan.tab[1], cs, es, sc)
     else:
         f = _form(_python_solver()(v0, qE, potential, None, cs, es, sc), v0, qE)
     if f[0] != _OK:
