@@ -121,12 +121,18 @@ def trades(pot, law) -> bool:
     """Whether ``rtol`` trades anything on the path ours takes (`reference_impl.exact._rtol`):
     a power law's Gauss-Jacobi pairs and the Taylor kernel on sums of powers; a single cap
     under the universal law keeps its fast Gauss-Jacobi pair where its bound is within rtol
-    (`reference_impl.exact._one_call`). Elsewhere (a general law on a cap: the GBS kernel
-    compiled on its term table, ~0.5 ms an impact) ours runs at full accuracy whatever rtol
-    asks, and only that point is timed."""
+    (`reference_impl.exact._one_call`), and under a law of C(q) or Hunt-Crossley runs the
+    Taylor kernel with its cap factor (`reference_impl.exact._taylor_cap`). Elsewhere (the
+    viscoelastic and zeta laws on a cap: the GBS kernel on its term table) ours runs at full
+    accuracy whatever rtol asks, and only that point is timed."""
     if type(pot) is PowerLaw:
         return True
-    return law["law"] == "universal" and isinstance(pot, (Sphere, Ellipsoid))
+    return isinstance(pot, (Sphere, Ellipsoid)) and law["law"] in _CAP_TAYLOR_LAWS
+
+
+# The laws a single cap runs on the Taylor kernel (`_taylor_cap`'s docstring), or by its
+# Gauss-Jacobi pair (universal); the others stay on the GBS kernel at full accuracy.
+_CAP_TAYLOR_LAWS = ("universal", "linear", "power", "polynomial", "hunt-crossley")
 
 
 def _ours(pot, m, v0, law, rtol, prepared=None):
@@ -199,7 +205,7 @@ def panel(family, pot, m, law, impacts: int, blocks: int, mp_subset: int) -> dic
                     KEYS,
                     law_bound_ok,
                 )
-            except HCVInputError as exc:  # a cap + dashpot: no 30-digit truth exists
+            except HCVInputError as exc:  # no 30-digit truth (a viscoelastic or zeta law on a cap)
                 proxy = {"impacts": 0, "bounds_held": None, "unchecked_because": str(exc)}
     contestants, curves = {}, {"ours": [], "prepared": []}
     for rtol in OURS_RTOLS if trades(pot, law) else (None,):
@@ -287,7 +293,8 @@ def run(impacts: int = IMPACTS, blocks: int = 5, mp_subset: int = 0) -> dict:
         "blocks, median, per impact",
         "truth": "ours at full accuracy (proxy); checked against 30 digits on "
         f"{mp_subset} impacts per panel where a 30-digit truth exists (power laws and their "
-        "sums; a cap with a dashpot has none: unchecked, said in its panel)",
+        "sums, a single cap under a law of C(q) or Hunt-Crossley; elsewhere unchecked, said in "
+        "its panel)",
         "panels": done,
         "load_average_1min": load0,
         "load_average_1min_after": _load(),

@@ -227,9 +227,10 @@ def workprecision_text(wp: dict) -> str:
             if wp.get("blocks", 0) < 3 or drawn < 1000
             else ""
         )
-        + "). On a cap with a damping law, ours runs at full accuracy whatever rtol asks "
-        "(one point); a cap under the universal law keeps its fast Gauss-Jacobi pair where "
-        "its bound is within rtol.\n\n"
+        + "). On a cap, a law of C(q) or Hunt-Crossley runs the Taylor kernel with the "
+        "cap's factor (1 - q/3a)^alpha and trades with rtol (the viscoelastic and zeta laws "
+        "stay on the GBS kernel at full accuracy: one point); under the universal law a cap "
+        "keeps its fast Gauss-Jacobi pair where its bound is within rtol.\n\n"
         "![Work-precision: CPU time per impact against the largest relative error, ours "
         "(one-shot and prepared) and each peer, per family and law]"
         "(reports/bench/workprecision.png)"
