@@ -90,23 +90,46 @@ def test_panel_records_ours_within_bounds_and_every_peer(monkeypatch, tmp_path):
     )
 
 
-def test_rtol_trades_on_power_laws_and_single_caps_under_the_universal_law():
+def test_rtol_trades_on_power_laws_and_single_caps_but_not_on_the_gbs_kernel():
     from reference_impl import Sphere
+    from reference_impl.exact.general_law import solve_law_impact
 
     cap = Sphere(0.01, 1e8)
+    visco = {"law": "viscoelastic", "A": 1e-4}
     got = (
         wp.trades(PowerLaw(1.0, 2.0), wp.LAW),
         wp.trades(cap, wp.UNIVERSAL),
         wp.trades(cap, wp.LAW),
+        wp.trades(cap, wp.HUNT_CROSSLEY),
+        wp.trades(cap, visco),
     )
     assert_true(
-        got == (True, True, False),
-        got=f"trades(power law + law, cap universal, cap + law) = {got}",
-        should="(True, True, False): rtol trades on power laws and on a single cap's Gauss-Jacobi "
-        "pair (_one_call), not on the GBS kernel of a cap with a law",
+        got == (True, True, True, True, False),
+        got=f"trades(power law + law, cap universal, cap + dashpot, cap + HC, cap + visco) = {got}",
+        should="(True, True, True, True, False): rtol trades on power laws, on a single cap's "
+        "Gauss-Jacobi pair (_one_call) and its Taylor kernel (_taylor_cap), not on the GBS "
+        "kernel of a cap with the viscoelastic law",
         claim="bench",
         call="trades",
     )
+    # What trades() says is what the solver does: on a cap, rtol moves a law's answer
+    # (fewer Taylor steps) exactly where trades() is True (m of the sphere-damped scene;
+    # speeds where each law returns: a tenth of the panel's dashpot, whose full strength
+    # stops the sphere short of q = 0 at these speeds).
+    m = 0.0327
+    for law in ({**wp.LAW, "c": wp.LAW["c"] / 10}, wp.HUNT_CROSSLEY, visco):
+        moved = [
+            solve_law_impact(cap, m, v0, law).contact_time
+            != solve_law_impact(cap, m, v0, law, rtol=1e-6).contact_time
+            for v0 in (0.5, 3.0)
+        ]
+        assert_true(
+            all(moved) == wp.trades(cap, law) and any(moved) == all(moved),
+            got=f"rtol 1e-6 moved contact_time at v0 = 0.5, 3.0: {moved}",
+            should=f"{wp.trades(cap, law)} at both, as trades() says",
+            claim="bench",
+            call=f"solve_law_impact(cap, {m}, v0, {law}, rtol=1e-6)",
+        )
 
 
 def test_hunt_crossley_panel_draws_its_own_law_and_every_peer_runs_it(monkeypatch, tmp_path):

@@ -47,9 +47,15 @@ def test_met_and_ratios_by_hand():
     rows, left = _rows(p)
     assert left == []
     r8, r14 = rows[("universal", 1e-8)], rows[("universal", 1e-14)]
-    assert (r8["ratio_one_shot"], r8["ratio_prepared"]) == (5.0, 12.5), f"got {r8}, should be 5x, 12.5x [1e-8]"
-    assert (r14["ratio_one_shot"], r14["ratio_prepared"]) == (20.0, 50.0), f"got {r14}, should be 20x, 50x [1e-14]"
-    assert r8["verdict"] == r14["verdict"] == "met", f"got {r8['verdict']}, {r14['verdict']}, should be met [goal 3]"
+    assert (r8["ratio_one_shot"], r8["ratio_prepared"]) == (5.0, 12.5), (
+        f"got {r8}, should be 5x, 12.5x [1e-8]"
+    )
+    assert (r14["ratio_one_shot"], r14["ratio_prepared"]) == (20.0, 50.0), (
+        f"got {r14}, should be 20x, 50x [1e-14]"
+    )
+    assert r8["verdict"] == r14["verdict"] == "met", (
+        f"got {r8['verdict']}, {r14['verdict']}, should be met [goal 3]"
+    )
 
 
 def test_cheapest_point_within_the_accuracy():
@@ -63,14 +69,20 @@ def test_cheapest_point_within_the_accuracy():
     rows, _ = _rows(p)
     r8, r14 = rows[("linear", 1e-8)], rows[("linear", 1e-14)]
     assert (r8["peer"], r8["ours_us"], r8["prepared_us"]) == ("b", 30.0, 15.0), f"got {r8} [1e-8]"
-    assert (r14["peer"], r14["ours_us"], r14["prepared_us"]) == ("b", 35.0, 20.0), f"got {r14} [1e-14]"
+    assert (r14["peer"], r14["ours_us"], r14["prepared_us"]) == ("b", 35.0, 20.0), (
+        f"got {r14} [1e-14]"
+    )
     # 40 / 15 = 2.67 >= 2 and 40 / 30 = 1.33 >= 1: met; 90 / 35 = 2.57 >= 2, 90 / 20 = 4.5 >= 3.
-    assert r8["verdict"] == "met" and r14["verdict"] == "met", f"got {r8['verdict']}, {r14['verdict']}"
+    assert r8["verdict"] == "met" and r14["verdict"] == "met", (
+        f"got {r8['verdict']}, {r14['verdict']}"
+    )
 
 
 def test_short_ratio_is_not_met_with_its_figures():
     # The cap + dashpot case of the record: ours slower than the peer at 1e-8.
-    p = _panel({"law": "linear", "c": 1.0}, [(0.0, 255.0)], [(0.0, 230.0)], {"dop": [(1e-9, 123.0)]})
+    p = _panel(
+        {"law": "linear", "c": 1.0}, [(0.0, 255.0)], [(0.0, 230.0)], {"dop": [(1e-9, 123.0)]}
+    )
     r8 = _rows(p)[0][("linear", 1e-8)]
     assert r8["verdict"] == "not met", f"got {r8['verdict']}, should be not met [0.48x < 1x]"
     assert "0.48× < 1×" in r8["why"] and "0.53× < 2×" in r8["why"], f"got {r8['why']!r}"
@@ -80,7 +92,9 @@ def test_no_peer_at_the_accuracy_is_not_judged_and_names_the_closest():
     p = _panel("universal", [(0.0, 10.0)], [(0.0, 5.0)], {"s": [(6.2e-14, 285.0), (1e-9, 50.0)]})
     r14 = _rows(p)[0][("universal", 1e-14)]
     assert r14["verdict"] == "not judged" and r14["peer"] is None, f"got {r14}"
-    assert "s, 6.2e-14 at 285 µs" in r14["why"], f"got {r14['why']!r}, should name the closest point"
+    assert "s, 6.2e-14 at 285 µs" in r14["why"], (
+        f"got {r14['why']!r}, should name the closest point"
+    )
 
 
 def test_ours_not_reaching_the_accuracy_is_not_met():
@@ -90,7 +104,9 @@ def test_ours_not_reaching_the_accuracy_is_not_met():
 
 
 def test_unchecked_panel_is_said():
-    p = _panel({"law": "linear", "c": 1.0}, [(0.0, 5.0)], [(0.0, 2.0)], {"d": [(0.0, 50.0)]}, checked=False)
+    p = _panel(
+        {"law": "linear", "c": 1.0}, [(0.0, 5.0)], [(0.0, 2.0)], {"d": [(0.0, 50.0)]}, checked=False
+    )
     text = goals_text({"panels": [p]})
     assert text.count("no 30-digit check") == 2, f"got {text!r}, should flag both rows"
 
@@ -107,7 +123,10 @@ def test_committed_record_reads_whole():
         goals = GOALS["universal" if r["law"] == "universal" else "law"]
         assert (r["accuracy"], r["goal_one_shot"], r["goal_prepared"]) in goals, f"got {r}"
         if r["verdict"] == "met":
-            assert r["ratio_one_shot"] >= r["goal_one_shot"] and r["ratio_prepared"] >= r["goal_prepared"], f"got {r}"
+            assert (
+                r["ratio_one_shot"] >= r["goal_one_shot"]
+                and r["ratio_prepared"] >= r["goal_prepared"]
+            ), f"got {r}"
 
 
 @pytest.mark.parametrize(
@@ -116,10 +135,19 @@ def test_committed_record_reads_whole():
         ("not a panel", "not an object"),
         ({"curves": "x"}, "no 'ours'"),
         ({"curves": {"ours": [], "prepared": []}}, "no peer curve"),
-        ({"curves": {"ours": [{"max_rel_error": math.nan, "us": 1.0}], "prepared": [], "p": []}}, "nan"),
+        (
+            {"curves": {"ours": [{"max_rel_error": math.nan, "us": 1.0}], "prepared": [], "p": []}},
+            "nan",
+        ),
         ({"curves": {"ours": [{"max_rel_error": 0.0, "us": "1"}], "prepared": [], "p": []}}, "'1'"),
-        ({"curves": {"ours": [{"max_rel_error": 0.0, "us": -1.0}], "prepared": [], "p": []}}, "negative"),
-        ({"curves": {"ours": [{"max_rel_error": True, "us": 1.0}], "prepared": [], "p": []}}, "True"),
+        (
+            {"curves": {"ours": [{"max_rel_error": 0.0, "us": -1.0}], "prepared": [], "p": []}},
+            "negative",
+        ),
+        (
+            {"curves": {"ours": [{"max_rel_error": True, "us": 1.0}], "prepared": [], "p": []}},
+            "True",
+        ),
         ({"curves": {"ours": {}, "prepared": [], "p": []}}, "not a list"),
         ({"curves": {"ours": [1], "prepared": [], "p": []}}, "not an object"),
     ],
@@ -139,8 +167,13 @@ def test_record_without_panels(wp):
 
 
 def test_record_text_is_not_html_or_a_column_break():
-    p = _panel("universal", [(0.0, 10.0)], [(0.0, 5.0)], {"<img src=x>|": [(1e-15, 500.0)]},
-               family="<script>alert(1)</script> | x")
+    p = _panel(
+        "universal",
+        [(0.0, 10.0)],
+        [(0.0, 5.0)],
+        {"<img src=x>|": [(1e-15, 500.0)]},
+        family="<script>alert(1)</script> | x",
+    )
     text = goals_text({"panels": [p]})
     assert "<script" not in text and "<img" not in text, f"got {text!r}, should escape HTML"
     row = [ln for ln in text.splitlines() if ln.startswith("| &lt;script")]

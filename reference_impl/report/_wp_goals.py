@@ -78,8 +78,15 @@ def _panel_row(panel: dict) -> list[dict]:
         one, prep = _cheapest(pts["ours"], acc), _cheapest(pts["prepared"], acc)
         at = {k: _cheapest(v, acc) for k, v in peers.items()}
         at = {k: v for k, v in at.items() if v is not None}
-        row = {"accuracy": acc, "goal_one_shot": g_one, "goal_prepared": g_prep,
-               "ours_us": one, "prepared_us": prep, "peer": None, "peer_us": None}
+        row = {
+            "accuracy": acc,
+            "goal_one_shot": g_one,
+            "goal_prepared": g_prep,
+            "ours_us": one,
+            "prepared_us": prep,
+            "peer": None,
+            "peer_us": None,
+        }
         if at:
             name = min(at, key=at.get)
             row.update(peer=name, peer_us=at[name])
@@ -148,8 +155,14 @@ def goal_rows(wp: dict) -> tuple[list[dict], list[str]]:
         law = panel.get("law")
         law_name = law if isinstance(law, str) else str((law or {}).get("law", law))
         for r in prs:
-            rows.append({"family": str(panel.get("family", "?")), "law": law_name,
-                         "unchecked": unchecked, **r})
+            rows.append(
+                {
+                    "family": str(panel.get("family", "?")),
+                    "law": law_name,
+                    "unchecked": unchecked,
+                    **r,
+                }
+            )
     return rows, left_out
 
 
