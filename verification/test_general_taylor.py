@@ -14,7 +14,7 @@ import types
 
 import numpy as np
 import pytest
-from hypothesis import Phase, given, settings
+from hypothesis import Phase, example, given, settings
 
 from reference_impl import PowerLaw
 from reference_impl.exact import general_law as gl
@@ -47,6 +47,19 @@ _BOUNDED = (
     ("restitution_zero_force", "error_restitution"),
 )
 _UNBOUNDED = ("max_penetration", "max_force", "peak_force")
+# Draws that the random profile once found, run every time (Phase.explicit): a zero-force
+# end at a tiny overlap 5e-10 s before the exit (k q^3, C = c0 + c1 q, c0 ~ 0), which the
+# truth's exit step missed (`test_general_law_zf_exit` holds more such cases). law_cases
+# draws a weight near 0 for both c0 and c1 rarely; changing its draws would move every
+# derandomised draw of the law tests, so the case is named here instead.
+_EXPLICIT = {
+    "polynomial": (
+        PowerLaw(56796532.80788986, 3.0),
+        0.0015724852401864868,
+        0.010952265788383615,
+        {"law": "polynomial", "c": [3.6e-291, 1.5393784782598136e-13]},
+    ),
+}
 
 
 # The Taylor kernel is `solve_law_impact`'s own: its fields are formed in the kernel's
@@ -93,6 +106,8 @@ def test_taylor_against_30_digit_truth(name):
     def run(case):
         _check_against_truth(*case)
 
+    if name in _EXPLICIT:
+        run = example(_EXPLICIT[name])(run)
     run()
 
 

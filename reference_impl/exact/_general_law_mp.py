@@ -19,7 +19,10 @@ in the float solver, three stretches:
 3. exit: rho decreasing to 0, (w, t) analytic in rho.
 
 Events (w = 0, F = U' + C w = 0 after it, dF = 0 for the peak force) are located
-on each step's series with `mpmath.findroot`. Scaled variables (q / L, w / v0,
+on each step's series by bisection; on the exit's steps the zero-force function is
+F / rho^j0 formed term by term from the model (`_Model.G_low`), whose sign holds down
+to rho = 0 (a series summed there is at its round-off, which hid a zero force at a
+tiny overlap just before the exit). Scaled variables (q / L, w / v0,
 t v0 / L, L the elastic turning point) keep every unknown O(1). The step is chosen
 from the last two series coefficients so that the truncation is below 10^-(dps+8).
 Cases whose body does not return are refused (not a truth case).
@@ -128,6 +131,8 @@ class _Model:
                 (2 * mpmath.mpf(law.zeta) * mpmath.sqrt(a * (mpmath.mpf(p) + 1) / 2), (p - 1) / 2)
             )
 
+        self._low = None  # `G_low`'s terms, formed on its first call
+
     def exps(self):
         return sorted({p for _, p in self.F} | {e for _, e in self.C})
 
@@ -150,6 +155,31 @@ class _Model:
         H.append(1 + bq[0] if k == 0 else bq[k])
         Y.append(H[0] ** self.alpha if k == 0 else _pow_rec(H, Y, k, self.alpha))
         return _conv(Fp, Y, k)
+
+    def G_low(self, r, V):
+        """G / rho^j0 at rho = r >= 0 with speed V: sum_d (F_d y + C_d V) rho^(d - j0) over
+        the degrees d in rho of F and C (q = L rho^N), j0 the lowest.
+
+        Term by term, so that it keeps its sign at rho = 0 exactly (the exit: F_j0 + C_j0 V),
+        where the series G of an exit step sums O(1) coefficients to a value at the working
+        precision's round-off (~1e-45), which outweighs the force of a tiny overlap (C = c0 +
+        c1 q with c0 = 3.6e-291: G(0) = c0 V ~ -1e-290) and can hide a zero-force end just
+        before the exit (found: q = 1.9e-8 L, 5e-10 s before it on k q^3)."""
+        if self._low is None:  # F and C by degree in rho, from the lowest
+            terms = {}
+            for a, p in self.F:
+                d = int(round(self.N * p))
+                f, c = terms.get(d, (0, 0))
+                terms[d] = (f + a, c)
+            for c_, e in self.C:
+                d = int(round(self.N * e))
+                f, c = terms.get(d, (0, 0))
+                terms[d] = (f, c + c_)
+            j0 = min(d for d, (f, c) in terms.items() if f != 0 or c != 0)
+            self._low = [(d - j0, f, c) for d, (f, c) in sorted(terms.items())]
+        y = (1 - self.beta * r**self.N) ** self.alpha if self.cap is not None else 1
+        # C's Hunt-Crossley part hc F y: G = F y (1 + hc V) + C V
+        return mpmath.fsum((f * y * (1 + self.hc * V) + c * V) * r**e for e, f, c in self._low)
 
     def FC_at(self, Q):
         F = mpmath.fsum(a * Q ** mpmath.mpf(p) for a, p in self.F)
@@ -243,17 +273,19 @@ def _step(series_list, tol, h_max):
 
 
 def _root(poly, lo, hi):
-    """Root of a series with a sign change on [lo, hi], by bisection to the working precision.
+    """Root of a series (or a function of h) with a sign change on [lo, hi], by bisection
+    to the working precision.
 
     (A secant-type `findroot` fails its residual test on the tiny force values near the
     exit, e.g. C = c q, where F = q (k sqrt(q) + c w) and the end point is a root too.)
     """
-    glo = _horner(poly, lo)
+    g = poly if callable(poly) else (lambda x: _horner(poly, x))
+    glo = g(lo)
     for _ in range(mpmath.mp.prec + 4):
         mid = (lo + hi) / 2
         if mid in (lo, hi):
             break
-        gm = _horner(poly, mid)
+        gm = g(mid)
         if gm == 0:
             return mid
         if (gm > 0) == (glo > 0):
@@ -264,16 +296,24 @@ def _root(poly, lo, hi):
 
 
 def _first_crossing(poly, h):
-    """Bracket of the first + to - sign change of a series on [0, h] (32 samples), or None."""
+    """Bracket of the first + to - sign change of a series (or a function of h) on [0, h]
+    (32 samples), or None."""
+    ev = poly if callable(poly) else (lambda x: _horner(poly, x))
     xs = [h * j / 32 for j in range(33)]
-    prev = _horner(poly, xs[0])
+    prev = ev(xs[0])
     for j in range(1, 33):
-        g = _horner(poly, xs[j])
+        g = ev(xs[j])
         if prev > 0 and g < 0:
             return xs[j - 1], xs[j]
         if g > 0:
             prev = g
     return None
+
+
+def _exit_force(model, r, Vs):
+    """G / rho^j0 along an exit step from rho = r (`_Model.G_low`), as a function of the
+    step's variable x: rho = r - x, 0 exactly at the end of the last step (x = h = r)."""
+    return lambda x: model.G_low(r - x, _horner(Vs, x))
 
 
 def _maxima(Gc, h, best):
@@ -425,10 +465,14 @@ def solve_law_impact_mp(
             if h >= r * (1 - mpmath.mpf(10) ** (-dps - 5)):
                 h = r
             peak = _maxima(Gs, h, peak)
-            br = _first_crossing(Gs, h) if search_zf and t_zf is None and Gs[0] > 0 else None
-            if br is not None:
-                x = _root(Gs, *br)
-                t_zf, V_zf = _horner(Ss, x), _horner(Vs, x)
+            if search_zf and t_zf is None:
+                # the zero-force function G / rho^j0 from the model term by term (`G_low`),
+                # not the series Gs: its sign holds down to rho = 0 exactly, the last step's end
+                gz = _exit_force(model, r, Vs)
+                br = _first_crossing(gz, h) if gz(0) > 0 else None
+                if br is not None:
+                    x = _root(gz, *br)
+                    t_zf, V_zf = _horner(Ss, x), _horner(Vs, x)
             V, S, r = _horner(Vs, h), _horner(Ss, h), r - h
         if t_zf is None:  # the force never pulls: the two ends coincide
             t_zf, V_zf = S, V

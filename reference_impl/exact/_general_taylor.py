@@ -30,7 +30,7 @@ dT/ds = 0 for N > 1, so the exit's location error does not reach them), the tota
 force F = f + c W through 0 after the turning point (the zero-force end; read as
 F / rho^j0, j0 the lowest degree, so that it keeps its sign near rho = 0 instead of
 vanishing; at the exit its sign is read at rho = 0 exactly, not at the exit root's
-round-off; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), and dF/ds
+round-off; its root checked, `_taylor_force.zero_force_root`; not searched where the law never pulls, ``sc[6]``: Hunt-Crossley), and dF/ds
 through 0 from above (a peak of the force).
 
 Step and error. The radius of convergence r is estimated by the root test over the
@@ -59,7 +59,8 @@ the truncation per step read from ``sc`` when an ``rtol`` is asked (2026-11-29);
 zero-force scan for a law that never pulls, the samples four at a time (2026-11-29); the
 GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
 polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
-and the force and event functions in `_taylor_force` (2026-11-29).
+and the force and event functions in `_taylor_force` (2026-11-29); the zero-force end's
+root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29).
 """
 
 from __future__ import annotations
@@ -77,6 +78,7 @@ from reference_impl.exact._taylor_force import event as _event
 from reference_impl.exact._taylor_force import fc as _fc
 from reference_impl.exact._taylor_force import force as _force
 from reference_impl.exact._taylor_force import root as _root
+from reference_impl.exact._taylor_force import zero_force_root as _zf_root
 from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_poly import horner as _horner
 from reference_impl.exact._taylor_poly import inv_radius as _inv_radius
@@ -535,7 +537,8 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
                     # G / rho^j0 = F[j0] + C[j0] W. A sample read <= 0 is kept (bit for bit).
                     gi = _force(F, C, CY, cp, N, j0, D, 0.0, ws[i])[1]
                 if gp > 0.0 and gi <= 0.0:
-                    xr = _root(2, R, W, F, C, CY, cp, N, j0, D, xp, xs[i], gp, gi, _ULPS)
+                    ends = exiting and i == NS  # the bracket ends at the exit
+                    xr = _zf_root(R, W, F, C, CY, cp, N, j0, D, xp, xs[i], gp, gi, _ULPS, ends)
                     out[4] = _horner(T, xr) * L / v0
                     out[5] = _horner(W, xr) * v0
                     zf_found = True
