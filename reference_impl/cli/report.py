@@ -40,8 +40,8 @@ def add_parser(subparsers) -> None:
         action="store_true",
         # Measured (issue 20) by benchmarks/bench_startup.py --report, each in a new process
         # on a quiet 2-core machine (reports/bench/startup.json): wall, CPU of every process.
-        help="smaller study (measured on 2 quiet cores, 2026-11-29: 44 s wall and 63 s CPU "
-        "once compiled, 156 s wall the first time after installing)",
+        help="smaller study (measured on 2 cores at load 1.5-1.8, 2026-11-29: 35 s wall and 59 s CPU "
+        "once compiled, 150 s wall the first time after installing)",
     )
     rp.add_argument(
         "--force",
