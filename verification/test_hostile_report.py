@@ -1,21 +1,17 @@
-"""Hostile results files: the report embeds only its own figures and trusts no string (issue 36).
+"""Hostile results files: the report trusts no string (issue 36).
 
 A results.json is the file users share, and ``hcv report`` carries the previous one's
-code sections, so it may come from anyone (a pull request). Three classes, each refused
-in one line naming the JSON path of the field, exit status 2, nothing written, and no
-file outside the report opened:
+code sections, so it may come from anyone (a pull request). Two classes here (the third,
+paths, is ``test_hostile_report_paths.py``):
 
-1. paths: a figure that is not ``figures/NAME.png`` inside the report, a regular file
-   (not a link), at most 20 MiB, with the PNG signature (``/proc/self/environ``,
-   ``/dev/zero``, ``../x.png``, absolute paths, links out, a text file named .png, an
-   oversized file, a FIFO), through ``hcv report --from`` and through the carry;
 2. links and markup: only relative links inside the report and http(s) links survive;
    raw ``<script>``/``<iframe>`` shows as text in index.html, index.md, erratum.md and
    the README's verdict table (the Markdown is rendered by markdown-it, CommonMark, with
    raw HTML on and every link allowed, so what a Markdown viewer would make of it shows);
 3. the schema: malformed documents (empty claims, ``adapters: [1]``, missing keys, wrong
    types) and random deletions and type swaps of the committed document's fields
-   (Hypothesis) give one line or a rendered report, never a traceback.
+   (Hypothesis) give one line naming the JSON path of the field (exit status 2, nothing
+   written) or a rendered report, never a traceback.
 
 Fast: nothing is measured; each case renders the committed results at most once.
 """
@@ -24,258 +20,34 @@ from __future__ import annotations
 
 import copy
 import json
-import os
-import shutil
-import socket
-import sys
 from html.parser import HTMLParser
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from markdown_it import MarkdownIt
 
-from reference_impl.campaign import _carry
-from reference_impl.cli import main
 from reference_impl.errors import HCVInputError
 from reference_impl.report import _erratum, _render, check_results, read_results, render_from
-from reference_impl.report._inputs import MAX_BYTES, PNG_SIGNATURE
 from reference_impl.report._text import markdown_text, safe_href
 from reference_impl.report.readme_table import verdict_table
+from verification._hostile_report_cases import (
+    BASE,
+    CLAIM,
+    COMMITTED,
+    REPORTS,
+    committed_copy,
+    refused,
+    run_from,
+    source,
+)
 from verification.assertions import assert_true
 from verification.strategies import json_mutations
-
-ROOT = Path(__file__).resolve().parents[1]
-REPORTS = ROOT / "reports"
-CLAIM = "report"
-
-# ----------------------------------------------------------------------------------
-# What the process opens (audit hook "open": open(), os.open(), io; inert unless recording)
-# ----------------------------------------------------------------------------------
-_OPENED: list[tuple[str, bool]] | None = None
-
-
-def _audit(event: str, args) -> None:
-    """Record (path, follows its last link) of each open: open(), io, os.open."""
-    if _OPENED is not None and event == "open" and isinstance(args[0], (str, bytes, os.PathLike)):
-        flags = args[2] if len(args) > 2 and isinstance(args[2], int) else 0
-        _OPENED.append((os.fsdecode(args[0]), not flags & os.O_NOFOLLOW))
-
-
-sys.addaudithook(_audit)
-
-
-def _opened_outside(opened, outside: list[str]) -> list[str]:
-    """The absolute paths opened that are, or lie in, one of ``outside``: the links of the
-    path resolved, its last one too unless opened with O_NOFOLLOW (which refuses a link).
-
-    A path opened relative to a directory descriptor (the report's own reads) is relative
-    to a directory opened, and checked here, before it."""
-    roots = {os.path.realpath(p) for p in outside} | set(outside)
-    hits = []
-    for p, follows in opened:
-        if not os.path.isabs(p):
-            continue
-        head, tail = os.path.split(p)
-        where = os.path.realpath(p) if follows else os.path.join(os.path.realpath(head), tail)
-        if any(c == r or c.startswith(r.rstrip("/") + "/") for c in (p, where) for r in roots):
-            hits.append(p)
-    return hits
-
-
-def _trimmed(doc: dict) -> dict:
-    """The committed document with every list cut to its first 3 items (the claims and
-    the figures whole: the renderer looks claims up by id and figures by name), so that a
-    case validates and renders in milliseconds; it is a valid document all the same."""
-
-    def cut(x):
-        if isinstance(x, dict):
-            return {k: cut(v) for k, v in x.items()}
-        return [cut(v) for v in x[:3]] if isinstance(x, list) else x
-
-    return {k: (v if k in ("claims", "figures") else cut(v)) for k, v in doc.items()}
-
-
-_COMMITTED = REPORTS / "results.json"
-_BASE = _trimmed(json.loads(_COMMITTED.read_text())) if _COMMITTED.is_file() else {"schema": "x"}
 
 
 @pytest.fixture
 def committed():
     """A fresh copy of the (trimmed) committed results."""
-    if not _COMMITTED.is_file():
-        pytest.skip("reports/results.json not generated")
-    return copy.deepcopy(_BASE)
-
-
-@pytest.fixture
-def outside(tmp_path_factory):
-    """A directory outside every report, holding a secret PNG and a secret scorecard."""
-    d = tmp_path_factory.mktemp("outside")
-    (d / "secret.png").write_bytes(PNG_SIGNATURE + b"SECRET-PNG")
-    (d / "secret.json").write_text('{"SECRET": 1}')
-    return d
-
-
-def _source(tmp_path: Path, doc: dict) -> Path:
-    """A report directory ``in/`` holding ``doc`` as results.json and the committed figures."""
-    src = tmp_path / "in"
-    (src / "figures").mkdir(parents=True)
-    for rel in doc["figures"] if isinstance(doc.get("figures"), list) else []:
-        if isinstance(rel, str) and (REPORTS / rel).is_file() and rel.startswith("figures/"):
-            shutil.copyfile(REPORTS / rel, src / rel)
-    (src / "results.json").write_text(json.dumps(doc))
-    return src
-
-
-def _run_from(src: Path, out: Path, capsys) -> tuple[int, list[str], list[str]]:
-    """``hcv report --from src/results.json --out out``: exit status, stderr lines, files opened."""
-    global _OPENED
-    _OPENED = []
-    try:
-        code = main(["report", "--from", str(src / "results.json"), "--out", str(out)])
-    finally:
-        opened, _OPENED = _OPENED, None
-    return code, capsys.readouterr().err.strip().splitlines(), opened
-
-
-def _refused(code, err, out: Path, needle: str, opened, outside, call: str) -> None:
-    leaked = _opened_outside(opened, outside)
-    assert_true(
-        code == 2 and len(err) == 1 and needle in err[0] and not out.exists() and not leaked,
-        got=f"exit {code}, stderr {err}, output written: {out.exists()}, opened outside: {leaked}",
-        should=f"exit 2, one line naming {needle!r}, nothing written, nothing outside opened",
-        claim=CLAIM,
-        call=call,
-    )
-
-
-# ----------------------------------------------------------------------------------
-# 1. paths
-# ----------------------------------------------------------------------------------
-def _steps_index(doc, name="steps_lammps.png") -> int:
-    return doc["figures"].index(f"figures/{name}")
-
-
-def _poison(case: str, doc: dict, src: Path, outside: Path) -> str:
-    """Make ``case`` in the document or the files; return the needle the refusal must name."""
-    steps = "$.steps_per_contact[0].figure"
-    figure = {
-        "steps figure /proc/self/environ": "/proc/self/environ",
-        "steps figure /dev/zero": "/dev/zero",
-        "steps figure ../x.png": "../x.png",
-        "steps figure absolute": str(outside / "secret.png"),
-        "steps figure not listed": "steps_nowhere.png",
-        "steps figure with a final newline": "steps_lammps.png\n",
-    }
-    if case in figure:
-        doc["steps_per_contact"][0]["figure"] = figure[case]
-        return steps
-    if case == "figures entry absolute":
-        doc["figures"].append(str(outside / "secret.png"))
-        return f"$.figures[{len(doc['figures']) - 1}]"
-    i = _steps_index(doc)
-    target = src / "figures" / "steps_lammps.png"
-    if case == "figure a link out":
-        target.unlink()
-        target.symlink_to(outside / "secret.png")
-        return f"$.figures[{i}]"
-    if case == "figures/ a link out":
-        shutil.copytree(src / "figures", outside / "figs")
-        shutil.rmtree(src / "figures")
-        (src / "figures").symlink_to(outside / "figs")
-        return "$.figures[0]"
-    if case == "text file named .png":
-        target.write_text("SECRET text, not an image")
-        return "no PNG signature"
-    if case == "oversized figure":
-        with open(target, "r+b") as f:  # sparse: cheap to make, 1 byte over the bound
-            f.truncate(MAX_BYTES + 1)
-        return "over the bound"
-    if case == "FIFO as a figure":
-        target.unlink()
-        os.mkfifo(target)
-        return "not a regular file"
-    if case == "a directory as a figure":
-        target.unlink()
-        target.mkdir()
-        return f"$.figures[{i}]: 'figures/steps_lammps.png' is not a regular file"
-    if case == "a socket as a figure":
-        target.unlink()
-        sock = socket.socket(socket.AF_UNIX)  # closed with the test; the name stays bound
-        sock.bind(str(target))
-        sock.close()
-        return f"$.figures[{i}]: 'figures/steps_lammps.png' is not a regular file"
-    if case == "scorecard a link out":
-        (src / "bench").mkdir()
-        (src / "bench" / f"{doc['adapters'][0]['adapter']}.json").symlink_to(
-            outside / "secret.json"
-        )
-        return "$.adapters[0].adapter"
-    raise AssertionError(case)
-
-
-PATH_CASES = [
-    "steps figure /proc/self/environ",
-    "steps figure /dev/zero",
-    "steps figure ../x.png",
-    "steps figure absolute",
-    "steps figure not listed",
-    "steps figure with a final newline",
-    "figures entry absolute",
-    "figure a link out",
-    "figures/ a link out",
-    "text file named .png",
-    "oversized figure",
-    "FIFO as a figure",
-    "a directory as a figure",  # was "hcv: error: 4: Is a directory" (os.fdopen's message)
-    "a socket as a figure",  # was "... No such device or address" (open's ENXIO)
-    "scorecard a link out",
-]
-
-
-@pytest.mark.parametrize("case", PATH_CASES)
-def test_a_path_outside_the_rule_is_refused_and_nothing_outside_is_read(
-    committed, tmp_path, outside, capsys, case
-):
-    if not committed["steps_per_contact"]:
-        pytest.skip("the committed report has no contact codes")
-    doc = copy.deepcopy(committed)
-    src = _source(tmp_path, doc)
-    needle = _poison(case, doc, src, outside)
-    (src / "results.json").write_text(json.dumps(doc))
-    out = tmp_path / "out"
-    code, err, opened = _run_from(src, out, capsys)
-    targets = [str(outside), "/proc/self/environ", f"/proc/{os.getpid()}/environ", "/dev/zero"]
-    _refused(code, err, out, needle, opened, targets, f"hcv report --from ({case})")
-
-
-@pytest.mark.parametrize("case", ["steps figure /proc/self/environ", "figure a link out"])
-def test_a_poisoned_previous_report_is_not_carried(committed, tmp_path, outside, case):
-    """The carry reads the previous results.json as --from does: nothing is carried (so
-    nothing is embedded in the next report), and the line says which field."""
-    if not committed["adapters"]:
-        pytest.skip("the committed report has no contact codes")
-    doc = copy.deepcopy(committed)
-    out = _source(tmp_path, doc)
-    needle = _poison(case, doc, out, outside)
-    (out / "results.json").write_text(json.dumps(doc))
-    global _OPENED
-    _OPENED = []
-    try:
-        data, note = _carry(out, [])
-    finally:
-        opened, _OPENED = _OPENED, None
-    leaked = _opened_outside(
-        opened, [str(outside), "/proc/self/environ", f"/proc/{os.getpid()}/environ"]
-    )
-    assert_true(
-        data is None and needle in note and "\n" not in note and not leaked,
-        got=f"carried {None if data is None else sorted(data)}; note {note!r}; opened {leaked}",
-        should=f"nothing carried, the note naming {needle!r}, nothing outside opened",
-        claim=CLAIM,
-        call=f"campaign._carry ({case})",
-    )
+    return committed_copy()
 
 
 # ----------------------------------------------------------------------------------
@@ -341,7 +113,7 @@ def _markdown_html(text: str) -> str:
 
 def test_links_and_markup_of_a_results_file_are_neutralised(committed, tmp_path):
     doc = _hostile_doc(committed)
-    src = _source(tmp_path, doc)
+    src = source(tmp_path, doc)
     out = tmp_path / "out"
     render_from(src / "results.json", out)
     pages = {
@@ -487,10 +259,10 @@ def test_a_malformed_document_is_one_line_naming_its_json_path(
         pytest.skip("the committed report has no contact codes")
     doc = copy.deepcopy(committed)
     _malform(case, doc)
-    src = _source(tmp_path, doc)
+    src = source(tmp_path, doc)
     out = tmp_path / "out"
-    code, err, _ = _run_from(src, out, capsys)
-    _refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
+    code, err, _ = run_from(src, out, capsys)
+    refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
 
 
 @pytest.mark.parametrize(
@@ -511,11 +283,11 @@ def test_a_number_out_of_range_is_one_line_naming_its_json_path(
     else:
         doc["fig1"]["runs"][0]["v0"] = "@BIG@"
         needle = "$.fig1.runs[0].v0"
-    src = _source(tmp_path, doc)
+    src = source(tmp_path, doc)
     (src / "results.json").write_text(json.dumps(doc).replace('"@BIG@"', literal))
     out = tmp_path / "out"
-    code, err, _ = _run_from(src, out, capsys)
-    _refused(code, err, out, needle, [], [], f"hcv report --from ({where} = {literal[:8]}...)")
+    code, err, _ = run_from(src, out, capsys)
+    refused(code, err, out, needle, [], [], f"hcv report --from ({where} = {literal[:8]}...)")
 
 
 @pytest.mark.parametrize(
@@ -546,15 +318,15 @@ def test_unwritable_text_repeated_keys_and_endless_lists_are_one_line(
         doc["schema"] = "hcv-results/1." + "9" * 5000
     elif case == "a figure listed 100000 times":
         doc["figures"] += ["figures/fig1.png"] * 100_000
-    src = _source(tmp_path, doc)
+    src = source(tmp_path, doc)
     text = json.dumps(doc)
     text = text.replace('"@LONE@"', '"a\\ud800b"' if "title" in case else '"x\\udfffy.png"')
     if case == "figures given twice":
         text = text.replace('"figures": [', '"figures": ["/proc/self/environ"], "figures": [', 1)
     (src / "results.json").write_text(text)
     out = tmp_path / "out"
-    code, err, _ = _run_from(src, out, capsys)
-    _refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
+    code, err, _ = run_from(src, out, capsys)
+    refused(code, err, out, needle, [], [], f"hcv report --from ({case})")
 
 
 @settings(
@@ -564,10 +336,10 @@ def test_unwritable_text_repeated_keys_and_endless_lists_are_one_line(
     database=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
-@given(doc=json_mutations(_BASE))
+@given(doc=json_mutations(BASE))
 def test_random_deletions_and_type_swaps_are_refused_or_rendered(doc):
     """Each example: one line (HCVInputError) or a rendered report, never another error."""
-    if not _COMMITTED.is_file():
+    if not COMMITTED.is_file():
         pytest.skip("reports/results.json not generated")
     try:
         check_results(doc)
@@ -594,7 +366,7 @@ def test_random_deletions_and_type_swaps_are_refused_or_rendered(doc):
 def test_the_committed_document_validates_with_its_files(committed):
     back = read_results(REPORTS / "results.json")
     assert_true(
-        back == json.loads(_COMMITTED.read_text()),
+        back == json.loads(COMMITTED.read_text()),
         got="read_results(reports/results.json) refused or changed it",
         should="the committed results.json valid against results.schema.json, figures checked",
         claim=CLAIM,

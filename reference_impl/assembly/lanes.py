@@ -96,7 +96,9 @@ class AssemblyModel:
         lc = self.assembly.length
         if not self.follows or lc is None or not np.any(lc > 0.0):
             return None
-        return np.ascontiguousarray(lc, dtype=float)
+        # A writable copy always, as ``vs`` in `run_lanes`: numba compiles _lanes once per
+        # read-only/writable pattern of its arguments, and the assembly's arrays may be either.
+        return np.array(lc, dtype=float, order="C")
 
     def contact_damping(self) -> np.ndarray:
         """c_c = 2 zeta sqrt(m_red) of each contact (kg^(1/2))."""
@@ -187,7 +189,10 @@ def run_lanes(
     a = model.assembly
     fam, par = _terms(model.potential)
     dt = np.ascontiguousarray(np.atleast_1d(np.asarray(dt, dtype=float)))
-    vs = np.ascontiguousarray(np.broadcast_to(np.asarray(vscale, dtype=float), dt.shape))
+    # Always a fresh writable copy: ascontiguousarray kept broadcast_to's read-only view
+    # for an array of dt's shape but copied a scalar, and numba compiles _lanes once per
+    # kind (read-only or not), ~25 s each on a cold cache.
+    vs = np.array(np.broadcast_to(np.asarray(vscale, dtype=float), dt.shape), order="C")
     nl, n, d, r = dt.size, a.n_bodies, a.dim, a.rot_dim
     if nl * n > MAX_LANE_BODIES:
         raise HCVInputError(f"{nl} lanes of {n} bodies is more than {MAX_LANE_BODIES} at once")

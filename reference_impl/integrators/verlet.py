@@ -95,6 +95,16 @@ __all__ = [
 # ----------------------------------------------------------------------------
 # public interface
 # ----------------------------------------------------------------------------
+def _lane_array(x, n: int, dtype) -> np.ndarray:
+    """``x`` broadcast to ``n`` lanes as a writable C-contiguous array of ``dtype``.
+
+    Writable always, a copy where needed: numba compiles the lane kernel once per pattern
+    of read-only and writable arguments (~3-20 s each on a cold cache), and
+    ``ascontiguousarray(broadcast_to(x))`` was read-only for an array of n lanes but a
+    writable copy for a scalar, so the suite's callers made 7 kernels of one."""
+    return np.require(np.broadcast_to(np.asarray(x, dtype=dtype), (n,)), dtype, ["C", "W"])
+
+
 @dataclass
 class LaneBatch:
     """The lanes of one engine call (all arrays have one entry per lane).
@@ -139,19 +149,19 @@ class LaneBatch:
 
     def __post_init__(self):
         n = np.asarray(self.dt).shape[0]
-        self.dt = np.ascontiguousarray(self.dt, dtype=np.float64)
-        self.y0 = np.ascontiguousarray(np.broadcast_to(self.y0, (n,)), dtype=np.float64)
-        self.v0 = np.ascontiguousarray(np.broadcast_to(self.v0, (n,)), dtype=np.float64)
-        self.gap = np.ascontiguousarray(np.broadcast_to(self.gap, (n,)), dtype=np.float64)
-        self.e_limit = np.ascontiguousarray(np.broadcast_to(self.e_limit, (n,)), dtype=np.float64)
-        self.e_final = np.ascontiguousarray(np.broadcast_to(self.e_final, (n,)), dtype=np.float64)
-        self.max_steps = np.ascontiguousarray(np.broadcast_to(self.max_steps, (n,)), dtype=np.int64)
+        self.dt = _lane_array(self.dt, n, np.float64)
+        self.y0 = _lane_array(self.y0, n, np.float64)
+        self.v0 = _lane_array(self.v0, n, np.float64)
+        self.gap = _lane_array(self.gap, n, np.float64)
+        self.e_limit = _lane_array(self.e_limit, n, np.float64)
+        self.e_final = _lane_array(self.e_final, n, np.float64)
+        self.max_steps = _lane_array(self.max_steps, n, np.int64)
         g = np.zeros(n, dtype=np.int64) if self.group is None else self.group
-        self.group = np.ascontiguousarray(np.broadcast_to(g, (n,)), dtype=np.int64)
+        self.group = _lane_array(g, n, np.int64)
         ec = self.e_limit if self.e_confirm is None else self.e_confirm
-        self.e_confirm = np.ascontiguousarray(np.broadcast_to(ec, (n,)), dtype=np.float64)
+        self.e_confirm = _lane_array(ec, n, np.float64)
         cs = self.max_steps if self.confirm_steps is None else self.confirm_steps
-        self.confirm_steps = np.ascontiguousarray(np.broadcast_to(cs, (n,)), dtype=np.int64)
+        self.confirm_steps = _lane_array(cs, n, np.int64)
         if np.any(~(self.dt > 0)) or np.any(~np.isfinite(self.dt)):
             raise HCVInputError("every lane time step must be finite and > 0")
         if np.any(self.max_steps < 1):
