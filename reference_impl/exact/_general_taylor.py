@@ -61,7 +61,8 @@ GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
 polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
 and the force and event functions in `_taylor_force` (2026-11-29); the zero-force end's
 root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29); a
-step's end read once, its three series in one pass, `_taylor_poly.horner3` (2026-11-29).
+step's end read once, its three series in one pass, `_taylor_poly.horner3` (2026-11-29); the
+scans' ninth sample with points 4-8 in `_taylor_poly.samples` (2026-11-29).
 """
 
 from __future__ import annotations
