@@ -15,20 +15,28 @@ Rows (`ROWS`), each over the same `IMPACTS` impacts for ours and the peers:
   (`reference_impl.studies.laws.calibrated_laws`: e = 0.8 at 1 m/s), the linear dashpot
   and Hunt-Crossley; speeds log-uniform in 0.1 .. 10 m/s, seeded by the row's name.
 
+Ours' rung: the loosest ``rtol`` of the short ladder `OURS_RTOLS` (None: full accuracy,
+then 1e-12, 1e-11, ...; walked until the first rung over the floor) whose worst relative
+error over the sample (against the proxy below, every output) is <= `EQUAL_ERROR_FLOOR`,
+the freedom the work-precision bench gives ours (a looser rtol only lengthens the Taylor
+kernel's steps). The ratio and the goal use ours at that rung; ours at full accuracy is
+timed beside it and recorded with its own ratio (``ours_full``).
+
 Equal error, as `benchmarks.bench_exact` chooses it (`benchmarks._equal_error.set_ladder`):
 on a sample of `SAMPLE` impacts spread evenly over the batch, each peer's rung is the
 cheapest of the ladder `bench_exact.PEER_RTOLS` whose WORST relative error over every
 output (both ends' time and restitution, q_max; the peak force for a general law) and
-every sampled impact is <= max(ours, `bench_exact.EQUAL_ERROR_FLOOR`), or its most
+every sampled impact is <= max(ours at its rung, `bench_exact.EQUAL_ERROR_FLOOR`), or its most
 accurate rung (``peer_at_equal_error`` False) when none gets there. Truth: the proxy the
 work-precision bench uses, ours one impact at a time (`solve_impact`, `solve_law_impact`),
 checked against the 30-digit truth on the first `MP_SUBSET` sampled impacts
-(`benchmarks._equal_error.check_proxy`); ours' batch error is its error against that proxy
-over the sample. The parallel peer's rows are checked bit for bit against the serial
+(`benchmarks._equal_error.check_proxy`); ours' batch error (at each rung) is its error
+against that proxy over the sample. The parallel peer's rows are checked bit for bit against the serial
 peer on the sample.
 
-Timing: each contestant (ours, each peer at its rung) called on the whole batch, in turn,
-at each thread count, block after block (interleaved); wall and CPU time
+Timing: each contestant (ours at its rung, ours at full accuracy where that rung is
+looser, each peer at its rung) called on the whole batch, in turn, at each thread count
+(``--threads``, default 1 and 2), block after block (interleaved); wall and CPU time
 (`time.process_time`, every thread of the process) of each call, median of the blocks.
 The ratio is the peer's wall time over ours at the same thread count; the denominator is
 the fastest peer at equal error on that many threads, else the most accurate. The record
@@ -36,7 +44,7 @@ the fastest peer at equal error on that many threads, else the most accurate. Th
 run and of each row.
 
 Run: ``python -m benchmarks.bench_batch_peer [--json FILE] [--quick] [--impacts N]
-[--blocks N] [--sample N] [--mp-subset N]``: ~15 min on a quiet 2-core machine (the peers
+[--blocks N] [--sample N] [--mp-subset N] [--threads 1,2,4,...]``: ~15 min on a quiet 2-core machine (the peers
 take ~100-200 us an impact); ``--quick`` (`QUICK` impacts, 1 block, a sample of
 `QUICK_SAMPLE`, `QUICK_MP` checked against mpmath) is a check that it runs, not a
 measurement (< 60 s with a warm compile cache).
@@ -68,15 +76,20 @@ from ._record import write_json
 from .bench_exact import _UNIVERSAL_KEYS, EQUAL_ERROR_FLOOR, PEER_RTOLS, TRUTH_DPS
 from .peer_batch import BATCH_PEERS, batch_call
 
-__all__ = ["GOAL_RATIO", "ROWS", "SCHEMA", "main", "run"]
+__all__ = ["GOAL_RATIO", "OURS_RTOLS", "ROWS", "SCHEMA", "main", "run"]
 
-SCHEMA = "hcv-bench-batch-peer/1"
+# /2: ours timed at its rung of OURS_RTOLS (ours_rtol, ours_rungs) with full accuracy beside
+# it (ours_full); the thread counts chosen (--threads).
+SCHEMA = "hcv-bench-batch-peer/2"
 GOAL_RATIO = 10.0  # issue 38, goal 5
 ROWS = ("universal", "linear", "hunt-crossley")
 IMPACTS = 100_000  # the issue's batch
 SAMPLE = 1000  # equal error over this many (`benchmarks._equal_error.IMPACTS`, the minimum)
 MP_SUBSET = 50  # of them checked against the 30-digit truth (the issue's minimum)
 BLOCKS = 3
+# Ours' ladder, most accurate first (None: full accuracy, ~1e-15; measured on 20 000 Hertz
+# speeds against it: 1e-11 moves the outputs by at most 7e-15 (linear) / 1.4e-14 (HC)).
+OURS_RTOLS = (None, 1e-12, 1e-11, 1e-10)
 QUICK, QUICK_SAMPLE, QUICK_MP = 10_000, 100, 2
 # The universal row: `benchmarks.bench_exact.batch_workloads`'s first workload.
 _UNIVERSAL_POT, _UNIVERSAL_M, _SEED, _ZETA_MAX = PowerLaw(1.0e9, 1.5), 0.0041, 12345, 0.85
@@ -90,8 +103,24 @@ def _load() -> float | None:
 
 
 def _threads() -> tuple[int, ...]:
-    """1 and 2 threads (1 alone where numba may use one)."""
+    """1 and 2 threads (1 alone where numba may use one): the default of ``--threads``."""
     return tuple(sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}))
+
+
+def _parse_threads(text: str) -> tuple[int, ...]:
+    """``--threads`` "1,2,4": sorted distinct counts, each 1 .. numba's thread pool; a bad
+    count raises ValueError naming it."""
+    top = numba.config.NUMBA_NUM_THREADS
+    counts = set()
+    for part in text.split(","):
+        try:
+            n = int(part)
+        except ValueError:
+            raise ValueError(f"--threads {text}: {part.strip()!r} is not a count") from None
+        if not 1 <= n <= top:
+            raise ValueError(f"--threads {text}: {n} outside 1 .. {top} (numba's threads)")
+        counts.add(n)
+    return tuple(sorted(counts))
 
 
 def workload(name: str, n: int) -> dict:
@@ -127,11 +156,27 @@ def _impact_law(w: dict, i: int) -> dict:
     return {"law": "universal", "zeta": float(w["zetas"][i])} if w["law"] is None else w["law"]
 
 
-def _ours_call(w: dict):
+def _ours_call(w: dict, rtol: float | None = None):
     pot, m, v = w["pot"], w["m"], w["v"]
     if w["law"] is None:
-        return lambda: solve_impacts(pot, m, v, w["zetas"])
-    return lambda: solve_impacts(pot, m, v, law=w["law"])
+        return lambda: solve_impacts(pot, m, v, w["zetas"], rtol=rtol)
+    return lambda: solve_impacts(pot, m, v, law=w["law"], rtol=rtol)
+
+
+def _ours_rung(w: dict, idx: np.ndarray, truths: np.ndarray, full: dict) -> tuple:
+    """(rtol, its arrays, [{rtol, max_rel_error}] of the rungs tried): the loosest rung of
+    `OURS_RTOLS`, walked from full accuracy to the first over `EQUAL_ERROR_FLOOR`, whose
+    worst error over the sample is within it (full accuracy where none is)."""
+    keys = w["keys"]
+    pick, arrays, tried = None, full, []
+    for rtol in OURS_RTOLS:
+        got = full if rtol is None else _ours_call(w, rtol)()
+        err = _rel(np.array([[float(got[k][i]) for k in keys] for i in idx]), truths)
+        tried.append({"rtol": rtol, "max_rel_error": err})
+        if err > EQUAL_ERROR_FLOOR:
+            break
+        pick, arrays = rtol, got
+    return pick, arrays, tried
 
 
 def _one(w: dict, i: int):
@@ -160,12 +205,15 @@ def _rel(got: np.ndarray, truth: np.ndarray) -> float:
 
 
 def _equal_error(w: dict, idx: np.ndarray, ours: dict, mp_subset: int) -> dict:
-    """The sample's proxy truth, ours' batch error on it, the proxy's check, and each
-    peer's rung at equal error (with its serial call at that rung, for the bit check)."""
+    """The sample's proxy truth, ours' rung and batch error on it (``ours``: its arrays at
+    full accuracy), the proxy's check, and each peer's rung at equal error (with its serial
+    call at that rung, for the bit check)."""
     keys = w["keys"]
     sols = [_one(w, int(i)) for i in idx]
     truths = np.array([[float(getattr(s, k)) for k in keys] for s in sols])
-    ours_err = _rel(np.array([[float(ours[k][i]) for k in keys] for i in idx]), truths)
+    full_err = _rel(np.array([[float(ours[k][i]) for k in keys] for i in idx]), truths)
+    ours_rtol, _arrays, rungs = _ours_rung(w, idx, truths, ours)
+    ours_err = next(r["max_rel_error"] for r in rungs if r["rtol"] == ours_rtol)
     impacts = [(float(w["v"][i]), _impact_law(w, int(i))) for i in idx]
     subset = [(v, lw, s) for (v, lw), s in zip(impacts[:mp_subset], sols[:mp_subset], strict=True)]
     bound_ok = universal_bound_ok if w["law"] is None else law_bound_ok
@@ -183,6 +231,9 @@ def _equal_error(w: dict, idx: np.ndarray, ours: dict, mp_subset: int) -> dict:
         "impacts": impacts,
         "truths": truths,
         "ours_err": ours_err,
+        "ours_full_err": full_err,
+        "ours_rtol": ours_rtol,
+        "ours_rungs": rungs,
         "proxy": proxy,
         "target": target,
         "peers": peers,
@@ -213,16 +264,20 @@ def _denominator(peers: dict, th: str) -> str:
     return min(peers, key=lambda k: (peers[k]["max_rel_error"], peers[k]["wall_s"][th]))
 
 
-def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> dict:
-    """One row: ours and every parallel peer on the same ``n`` impacts (module docstring)."""
+def batch_row(
+    name: str, n: int, blocks: int, sample: int, mp_subset: int, threads: tuple | None = None
+) -> dict:
+    """One row: ours and every parallel peer on the same ``n`` impacts (module docstring),
+    on each count of ``threads`` (default `_threads`)."""
     load_start = _load()
-    threads = _threads()
+    threads = threads or _threads()
     w = workload(name, n)
-    ours_call = _ours_call(w)
-    ours = ours_call()  # compile and warm; its arrays are the ones timed below
+    ours = _ours_call(w)()  # compile and warm at full accuracy
     idx = np.unique(np.linspace(0, n - 1, min(sample, n)).astype(np.int64))
     eq = _equal_error(w, idx, ours, mp_subset)
-    contestants, last = {"ours": ours_call}, {}
+    contestants, last = {"ours": _ours_call(w, eq["ours_rtol"])}, {}
+    if eq["ours_rtol"] is not None:  # full accuracy timed beside the rung
+        contestants["ours_full"] = _ours_call(w)
     for pname, p in eq["peers"].items():
         call = batch_call(pname, w["pot"], w["m"], w["v"], w["zetas"], w["law"])
         batch_call(
@@ -254,6 +309,7 @@ def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> di
                 eq["truths"],
             ),
         }
+    full = "ours_full" if "ours_full" in contestants else "ours"
     row = {
         "row": name,
         "potential": repr(w["pot"]),
@@ -262,9 +318,16 @@ def batch_row(name: str, n: int, blocks: int, sample: int, mp_subset: int) -> di
         "impacts": n,
         "log10_v0_range": list(_LOG_V0),
         "threads": list(threads),
+        "ours_rtol": eq["ours_rtol"],
+        "ours_rungs": eq["ours_rungs"],
         "ours_wall_s": {str(th): t[("ours", th)][0] for th in threads},
         "ours_cpu_s": {str(th): t[("ours", th)][1] for th in threads},
         "ours_max_rel_error": eq["ours_err"],
+        "ours_full": {
+            "max_rel_error": eq["ours_full_err"],
+            "wall_s": {str(th): t[(full, th)][0] for th in threads},
+            "cpu_s": {str(th): t[(full, th)][1] for th in threads},
+        },
         "equal_error_target": eq["target"],
         "sample": {
             "impacts": int(idx.size),
@@ -286,6 +349,12 @@ def _verdict(row: dict, load_start) -> dict:
     p = {th: row["peers"][k] for th, k in pick.items()}
     ratio = {th: p[th]["wall_s"][th] / ours[th] for th in ours}
     ratio_cpu = {th: p[th]["cpu_s"][th] / row["ours_cpu_s"][th] for th in ours}
+    full = row["ours_full"]  # ours at full accuracy against the same peers, for the record
+    full = {
+        **full,
+        "us_per_impact": {th: 1e6 * full["wall_s"][th] / row["impacts"] for th in ours},
+        "ratio": {th: p[th]["wall_s"][th] / full["wall_s"][th] for th in ours},
+    }
     at_equal = any(q["at_equal_error"] for q in row["peers"].values())
     s = row["sample"]
     worst = min(ratio.values())
@@ -315,6 +384,7 @@ def _verdict(row: dict, load_start) -> dict:
     n = row["impacts"]
     return {
         **row,
+        "ours_full": full,
         "peer": pick,
         "peer_rtol": {th: q["rtol"] for th, q in p.items()},
         "peer_at_equal_error": at_equal,
@@ -332,10 +402,13 @@ def _verdict(row: dict, load_start) -> dict:
     }
 
 
-def run(impacts=IMPACTS, blocks=BLOCKS, sample=SAMPLE, mp_subset=MP_SUBSET, rows=ROWS) -> dict:
-    """Every row of ``rows``; the record (format `SCHEMA`)."""
+def run(
+    impacts=IMPACTS, blocks=BLOCKS, sample=SAMPLE, mp_subset=MP_SUBSET, rows=ROWS, threads=None
+) -> dict:
+    """Every row of ``rows`` on each count of ``threads`` (default `_threads`); the record
+    (format `SCHEMA`)."""
     load_before = _load()
-    out = [batch_row(r, impacts, blocks, sample, mp_subset) for r in rows]
+    out = [batch_row(r, impacts, blocks, sample, mp_subset, threads) for r in rows]
     return {
         "schema": SCHEMA,
         "rows": out,
@@ -343,7 +416,9 @@ def run(impacts=IMPACTS, blocks=BLOCKS, sample=SAMPLE, mp_subset=MP_SUBSET, rows
         "blocks": blocks,
         "peers": list(BATCH_PEERS),
         "peer_rtols": list(PEER_RTOLS),
+        "ours_rtols": list(OURS_RTOLS),
         "equal_error": (
+            f"ours at the loosest rtol of {list(OURS_RTOLS)} within {EQUAL_ERROR_FLOOR:g}; "
             f"peer's largest relative error over every output and each of {sample} impacts "
             f"of the batch <= max(ours, {EQUAL_ERROR_FLOOR:g}); truth: ours one at a time, "
             f"checked against the {TRUTH_DPS}-digit truth on {mp_subset} of them"
@@ -371,6 +446,17 @@ def print_result(res: dict) -> None:
                 f" {r['ratio'][th]:.1f}x (CPU {r['ratio_cpu'][th]:.1f}x); load"
                 f" {r['load_average_1min']:.2f} -> {r['load_average_1min_after']:.2f}"
             )
+        full = r["ours_full"]
+        print(
+            f"  ours at rtol {r['ours_rtol']} (loosest of {[g['rtol'] for g in r['ours_rungs']]}"
+            f" within {EQUAL_ERROR_FLOOR:g}); at full accuracy "
+            + ", ".join(
+                f"{full['us_per_impact'][th]:.2f} us/impact, ratio {full['ratio'][th]:.1f}x on"
+                f" {th} thread(s)"
+                for th in full["ratio"]
+            )
+            + f", error {full['max_rel_error']:.1e}"
+        )
         print(
             f"  errors over {r['sample']['impacts']} sampled: ours {r['ours_max_rel_error']:.1e}"
             f" (target {r['equal_error_target']:.1e}); "
@@ -411,7 +497,15 @@ def main(argv=None) -> int:
     ap.add_argument("--blocks", type=int, help=f"interleaved blocks (default {BLOCKS})")
     ap.add_argument("--sample", type=int, help=f"impacts of the equal-error sample ({SAMPLE})")
     ap.add_argument("--mp-subset", type=int, help=f"of them against 30 digits ({MP_SUBSET})")
+    ap.add_argument(
+        "--threads", help=f"thread counts, e.g. 1,2,4,16 (default {','.join(map(str, _threads()))})"
+    )
     args = ap.parse_args(argv)
+    try:
+        threads = _threads() if args.threads is None else _parse_threads(args.threads)
+    except ValueError as exc:
+        print(f"bench_batch_peer: error: {exc}", file=sys.stderr)
+        return 2
     quick = (
         (QUICK, 1, QUICK_SAMPLE, QUICK_MP) if args.quick else (IMPACTS, BLOCKS, SAMPLE, MP_SUBSET)
     )
@@ -432,7 +526,7 @@ def main(argv=None) -> int:
             file=sys.stderr,
         )
         return 2
-    res = run(n, blocks, sample, mp)
+    res = run(n, blocks, sample, mp, threads=threads)
     print_result(res)
     if args.json:
         write_json(args.json, res, default=_json_default)

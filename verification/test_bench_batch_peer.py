@@ -23,6 +23,9 @@ from verification.assertions import assert_true
 # Fields of a row that the README's line and a reader of the record use.
 _ROW_KEYS = {
     "row",
+    "ours_rtol",
+    "ours_rungs",
+    "ours_full",
     "potential",
     "m",
     "damping",
@@ -55,6 +58,7 @@ _RECORD_KEYS = {
     "impacts",
     "blocks",
     "peers",
+    "ours_rtols",
     "equal_error",
     "timing",
     "goal_ratio",
@@ -156,6 +160,69 @@ def test_quick_record_has_every_row_and_its_ratio_from_the_measured_times(quick)
             )
 
 
+def test_ours_rung_is_the_loosest_within_the_floor_and_full_accuracy_is_beside_it(quick):
+    """Ours is timed at the loosest rung of `OURS_RTOLS` (walked from full accuracy to the
+    first over the floor) whose error is within `EQUAL_ERROR_FLOOR`, that error is the one the
+    peers are held to, and full accuracy is recorded beside it with its own ratio."""
+    _code, printed, rec = quick
+    for r in rec["rows"]:
+        call = f"bench_batch_peer --quick, row {r['row']}"
+        rungs = r["ours_rungs"]
+        within = [g["max_rel_error"] <= bbp.EQUAL_ERROR_FLOOR for g in rungs]
+        # every rung tried but the last is within the floor; the last is the first over it
+        # unless the ladder ran out
+        walked = all(within[:-1]) and (not within[-1] or len(rungs) == len(bbp.OURS_RTOLS))
+        pick = [g["rtol"] for g, ok in zip(rungs, within, strict=True) if ok]
+        want_rtol = pick[-1] if pick else None
+        want_err = next(g["max_rel_error"] for g in rungs if g["rtol"] == want_rtol)
+        assert_true(
+            [g["rtol"] for g in rungs] == list(bbp.OURS_RTOLS[: len(rungs)])
+            and walked
+            and r["ours_rtol"] == want_rtol
+            and r["ours_max_rel_error"] == want_err
+            and r["equal_error_target"] >= want_err,
+            got=f"rtol {r['ours_rtol']}, error {r['ours_max_rel_error']!r}, rungs {rungs}",
+            should=f"rtol {want_rtol} (the loosest within {bbp.EQUAL_ERROR_FLOOR:g}), its "
+            f"error {want_err!r}, a target at least that",
+            claim="bench",
+            call=call,
+        )
+        full = r["ours_full"]
+        for th, ratio in full["ratio"].items():
+            peer = r["peers"][r["peer"][th]]
+            want = peer["wall_s"][th] / full["wall_s"][th]
+            same = r["ours_rtol"] is not None or full["wall_s"][th] == r["ours_wall_s"][th]
+            assert_true(
+                ratio == want and same and full["max_rel_error"] == rungs[0]["max_rel_error"],
+                got=f"full-accuracy ratio {ratio!r} on {th} thread(s), error "
+                f"{full['max_rel_error']!r}",
+                should=f"{want!r} (the same peer's time / ours at full accuracy), its error "
+                f"{rungs[0]['max_rel_error']!r} (the first rung), ours' own time where the "
+                "rung is full accuracy",
+                claim="bench",
+                call=call,
+            )
+        assert_true(
+            f"ours at rtol {r['ours_rtol']}" in printed and "at full accuracy" in printed,
+            got=printed,
+            should=f"a line naming ours' rtol {r['ours_rtol']} and its full-accuracy time",
+            claim="bench",
+            call=call,
+        )
+
+
+def test_thread_counts_are_parsed_and_a_bad_one_refused():
+    top = bbp.numba.config.NUMBA_NUM_THREADS
+    got = bbp._parse_threads("2,1,1")
+    assert_true(
+        got == (1, 2) or top < 2,
+        got=f"{got}",
+        should="(1, 2): sorted, distinct",
+        claim="bench",
+        call="_parse_threads('2,1,1')",
+    )
+
+
 def test_readme_speed_block_states_each_row_its_ratio_and_why_the_goal_is_not_met(quick):
     """The README's speed block, given the record (`readme_table.speed_table`): a line per
     row with ours, the peer and the ratio on each thread count as the record has them, the
@@ -194,6 +261,9 @@ def test_bad_sizes_are_refused_in_one_line(capsys):
         (["--impacts", "0"], "--impacts 0"),
         (["--quick", "--blocks", "-1"], "--blocks -1"),
         (["--quick", "--sample", "5", "--mp-subset", "6"], "--mp-subset 6"),
+        (["--quick", "--threads", "1,0"], "0 outside"),
+        (["--quick", "--threads", "1,x"], "'x' is not a count"),
+        (["--quick", "--threads", "100000"], "100000 outside"),
     ):
         code = bbp.main(argv)
         err = capsys.readouterr().err.strip()

@@ -60,7 +60,9 @@ zero-force scan for a law that never pulls, the samples four at a time (2026-11-
 GBS kernel's exit steps end no nearer q = 0 than their length (2026-11-29); the
 polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2026-11-29); the cap's factor
 and the force and event functions in `_taylor_force` (2026-11-29); the zero-force end's
-root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29).
+root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29); a
+step's end read once, its three series in one pass, `_taylor_poly.horner3` (2026-11-29); the
+scans' ninth sample with points 4-8 in `_taylor_poly.samples` (2026-11-29).
 """
 
 from __future__ import annotations
@@ -81,6 +83,7 @@ from reference_impl.exact._taylor_force import root as _root
 from reference_impl.exact._taylor_force import zero_force_root as _zf_root
 from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_poly import horner as _horner
+from reference_impl.exact._taylor_poly import horner3 as _horner3
 from reference_impl.exact._taylor_poly import inv_radius as _inv_radius
 from reference_impl.exact._taylor_poly import samples as _samples
 from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
@@ -457,15 +460,17 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
         if not (inv > 0.0 and inv < math.inf):
             return 1
         h = theta / inv
+        rh, wh, th = _horner3(R, W, T, h)  # the step's end, read by the tests below
         errsum += tol * max(1.0, abs(t0))
         x_end = h
         x_from = 0.0
         exiting = False
         was_past = past
-        if not past and _horner(W, h) < 0.0:
-            x = _root(1, R, W, F, C, CY, cp, N, j0, D, 0.0, h, W[0], _horner(W, h), _ULPS)
-            rm = _horner(R, x)
-            out[0] = _horner(T, x) * L / v0
+        rm = 0.0
+        if not past and wh < 0.0:
+            x = _root(1, R, W, F, C, CY, cp, N, j0, D, 0.0, h, W[0], wh, _ULPS)
+            rm, _, tm = _horner3(R, W, T, x)
+            out[0] = tm * L / v0
             out[1] = L * rm**N
             # F at the turning point is U'(q_max): a value of F, so the peak is at least that
             # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
@@ -473,7 +478,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
             past = True
             q_top = rm**N
             x_from = x
-        if past and _horner(R, h) <= 0.0:
+        if past and rh <= 0.0:
             x_end = _root(
                 0,
                 R,
@@ -488,7 +493,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
                 x_from,
                 h,
                 _horner(R, x_from),
-                _horner(R, h),
+                rh,
                 exit_tol,
             )
             exiting = True
@@ -498,7 +503,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
         if was_past:
             ub = _fc(F, C, CY, cp, N, D, r0)[0]
         else:
-            r_hi = _horner(R, x_from if past else x_end)
+            r_hi = rm if past else rh  # x_end = h before the turning point
             f_hi, c_hi = _fc(F, C, CY, cp, N, D, r_hi)
             ub = f_hi + c_hi * w0
         scan_peak = not (monotone and ub <= peak)
@@ -573,7 +578,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
             out[11] = step
             out[12] = 0.0
             return 0
-        r0, w0, t0 = _horner(R, h), _horner(W, h), _horner(T, h)
+        r0, w0, t0 = rh, wh, th
 
 
 @numba.njit(cache=True, error_model="numpy")

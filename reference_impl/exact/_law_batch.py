@@ -24,10 +24,16 @@ Where the time goes (issue 38 goal 5, 100 000 Hertz impacts, linear dashpot and
 Hunt-Crossley, one thread): the compiled loop is all but ~1 % of a batch (the planning,
 the vectorised tops and `_finish` are each < 0.1 us an impact; chunks of 4, 64 or numba's
 equal shares time alike), and in it the Taylor kernel (`_general_taylor`, K = 30: 9 steps
-a linear-dashpot impact, 9-14 Hunt-Crossley, none handed to the GBS kernel) spends ~45 %
-on the series' recurrences (latency-bound convolutions), ~15 % on the step's radius and
-~30 % on the event scans; its ~18 small arrays cost ~0.3 us an impact. What is left is
-the kernel's own arithmetic, the same for a single call.
+a linear-dashpot impact, 10 Hunt-Crossley on average, none handed to the GBS kernel).
+Re-measured on 20 000 Hertz speeds (0.1-10 m/s, one thread, by variants of the kernel:
+a part run twice or not at all; 2026-11-29), of ~17 us an impact: the series'
+recurrences ~8 us (~47 %: a series costs ~0.85 us; four partial sums per convolution,
+or the oldest terms summed first, measured slower, +2 us), the event scans and their
+roots ~4 us (~25 %: 4 peak scans a linear-dashpot impact, 3 before the turning point,
+and 1.1 zero-force scans; 4.8 peak scans a Hunt-Crossley one, 4.1 before it), the step's
+radius ~0.7 us (~4 %), the turning point's and the exit's roots ~0.3 us each; 18 more
+small arrays an impact cost nothing measurable (< 0.05 us). What is left is the kernel's
+own arithmetic, the same for a single call.
 """
 
 from __future__ import annotations

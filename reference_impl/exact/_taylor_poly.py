@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numba
 
-__all__ = ["K", "NS", "WIN", "horner", "inv_radius", "poly", "poly_d", "rw", "samples"]
+__all__ = ["K", "NS", "WIN", "horner", "horner3", "inv_radius", "poly", "poly_d", "rw", "samples"]
 
 # Series order: work per step ~ K^2, steps ~ 1 / log(1 / theta) with theta = TOL^(1/(K+1));
 # measured fewest operations near K = 30 (8-10 steps per Hertz impact).
@@ -54,13 +54,50 @@ def horner(c, x):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def horner3(R, W, T, x):
+    """(`horner` of R, W and T at x): the three chains interleaved, each `horner`'s own
+    operations in its order (bit for bit), at the latency of one (a chain of K dependent
+    multiply-adds, ~80 ns: the step's ends were five such chains one after another)."""
+    r = R[K]
+    w = W[K]
+    t = T[K]
+    for k in range(K - 1, -1, -1):
+        r = r * x + R[k]
+        w = w * x + W[k]
+        t = t * x + T[k]
+    return r, w, t
+
+
+@numba.njit(cache=True, error_model="numpy")
 def samples(R, W, x_end, xs, rs, ws):
     """rho and W at the NS + 1 points x_end i / NS (Horner from c[K] down, as `horner`),
-    four points at a time in registers (eight independent chains)."""
+    four or five points at a time in registers (eight or ten independent chains; for
+    NS = 8, points 4-8 together: the ninth point alone was two more chains' latency)."""
     for i in range(NS + 1):
         xs[i] = x_end * i / NS
     i = 0
-    while i + 4 <= NS + 1:
+    last = NS + 1
+    if NS + 1 == 9:  # four points, then five (ten chains): no ninth point alone after them
+        x0, x1, x2, x3, x4 = xs[4], xs[5], xs[6], xs[7], xs[8]
+        r0 = r1 = r2 = r3 = r4 = R[K]
+        w0 = w1 = w2 = w3 = w4 = W[K]
+        for k in range(K - 1, -1, -1):
+            rk = R[k]
+            wk = W[k]
+            r0 = r0 * x0 + rk
+            r1 = r1 * x1 + rk
+            r2 = r2 * x2 + rk
+            r3 = r3 * x3 + rk
+            r4 = r4 * x4 + rk
+            w0 = w0 * x0 + wk
+            w1 = w1 * x1 + wk
+            w2 = w2 * x2 + wk
+            w3 = w3 * x3 + wk
+            w4 = w4 * x4 + wk
+        rs[4], rs[5], rs[6], rs[7], rs[8] = r0, r1, r2, r3, r4
+        ws[4], ws[5], ws[6], ws[7], ws[8] = w0, w1, w2, w3, w4
+        last = 4  # points 0-3 below
+    while i + 4 <= last:
         x0, x1, x2, x3 = xs[i], xs[i + 1], xs[i + 2], xs[i + 3]
         r0 = r1 = r2 = r3 = R[K]
         w0 = w1 = w2 = w3 = W[K]
@@ -78,7 +115,7 @@ def samples(R, W, x_end, xs, rs, ws):
         rs[i], rs[i + 1], rs[i + 2], rs[i + 3] = r0, r1, r2, r3
         ws[i], ws[i + 1], ws[i + 2], ws[i + 3] = w0, w1, w2, w3
         i += 4
-    while i < NS + 1:
+    while i < last:
         rs[i] = horner(R, xs[i])
         ws[i] = horner(W, xs[i])
         i += 1

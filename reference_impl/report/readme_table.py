@@ -298,10 +298,19 @@ def batch_peer_text(bp: dict) -> str:
             f"{r['peer_max_rel_error'][th]:.1e})"
             for th, k in r["peer"].items()
         )
+        # a record of schema /2 holds ours' rung and its full-accuracy time beside it
+        full = r.get("ours_full")
+        rung = (
+            ""
+            if full is None or r.get("ours_rtol") is None
+            else f", rtol {r['ours_rtol']:.0e}; at full accuracy "
+            f"{_threads_figure(full['us_per_impact'], '.2f', ' µs')}, error "
+            f"{full['max_rel_error']:.1e}, ratio {_threads_figure(full['ratio'], '.1f', '×')}"
+        )
         lines.append(
             f"- `solve_impacts`, {_cell(r['row'])} ({r['impacts']} impacts): ours "
             f"{_threads_figure(r['us_per_impact'], '.2f', ' µs')} per impact (error "
-            f"{r['ours_max_rel_error']:.1e}); the fastest peer in a parallel loop: {peers}; "
+            f"{r['ours_max_rel_error']:.1e}{rung}); the fastest peer in a parallel loop: {peers}; "
             f"ratio {_threads_figure(r['ratio'], '.1f', '×')} "
             f"(goal ≥ {bp['goal_ratio']:g}×: {goal}; load {_load_figure(r['load_average_1min'])})"
         )
