@@ -123,6 +123,16 @@ def _parse_threads(text: str) -> tuple[int, ...]:
     return tuple(sorted(counts))
 
 
+def _parse_rows(text: str) -> tuple[str, ...]:
+    """``--rows`` "linear,hunt-crossley": the rows in `ROWS`' order; an unknown name raises
+    ValueError naming it."""
+    names = [part.strip() for part in text.split(",")]
+    for name in names:
+        if name not in ROWS:
+            raise ValueError(f"--rows {text}: {name!r} is not one of {', '.join(ROWS)}")
+    return tuple(r for r in ROWS if r in names)
+
+
 def workload(name: str, n: int) -> dict:
     """The row's potential, mass, speeds and damping (``zetas`` or ``law``), and its keys."""
     if name == "universal":
@@ -500,9 +510,15 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--threads", help=f"thread counts, e.g. 1,2,4,16 (default {','.join(map(str, _threads()))})"
     )
+    ap.add_argument(
+        "--rows",
+        help=f"rows to run, comma-separated, of {','.join(ROWS)} (default all; a many-core "
+        "run can leave out the universal row, whose peers take longest on one thread)",
+    )
     args = ap.parse_args(argv)
     try:
         threads = _threads() if args.threads is None else _parse_threads(args.threads)
+        rows = ROWS if args.rows is None else _parse_rows(args.rows)
     except ValueError as exc:
         print(f"bench_batch_peer: error: {exc}", file=sys.stderr)
         return 2
@@ -526,7 +542,7 @@ def main(argv=None) -> int:
             file=sys.stderr,
         )
         return 2
-    res = run(n, blocks, sample, mp, threads=threads)
+    res = run(n, blocks, sample, mp, rows=rows, threads=threads)
     print_result(res)
     if args.json:
         write_json(args.json, res, default=_json_default)

@@ -223,6 +223,17 @@ def test_thread_counts_are_parsed_and_a_bad_one_refused():
     )
 
 
+def test_rows_are_parsed_in_the_table_order():
+    got = bbp._parse_rows("hunt-crossley, linear")
+    assert_true(
+        got == ("linear", "hunt-crossley"),
+        got=f"{got}",
+        should="('linear', 'hunt-crossley'): ROWS' order, spaces dropped",
+        claim="bench",
+        call="_parse_rows('hunt-crossley, linear')",
+    )
+
+
 def test_readme_speed_block_states_each_row_its_ratio_and_why_the_goal_is_not_met(quick):
     """The README's speed block, given the record (`readme_table.speed_table`): a line per
     row with ours, the peer and the ratio on each thread count as the record has them, the
@@ -264,6 +275,7 @@ def test_bad_sizes_are_refused_in_one_line(capsys):
         (["--quick", "--threads", "1,0"], "0 outside"),
         (["--quick", "--threads", "1,x"], "'x' is not a count"),
         (["--quick", "--threads", "100000"], "100000 outside"),
+        (["--quick", "--rows", "linear,viscous"], "'viscous' is not one of"),
     ):
         code = bbp.main(argv)
         err = capsys.readouterr().err.strip()
