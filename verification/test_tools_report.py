@@ -295,6 +295,7 @@ def test_committed_report_files_are_in_its_manifest():
         "bench/workprecision.json",  # python -m benchmarks.bench_workprecision --json
         "bench/workprecision.png",  # python -m benchmarks.bench_workprecision --png
         "bench/batch_peer.json",  # python -m benchmarks.bench_batch_peer --json
+        "bench/batch_peer_16cores.json",  # bench_batch_peer --threads 1,4,16 (16-core machine)
         "bench/mujoco_calibrate.json",  # python -m reference_impl.campaign.mujoco_table
         "assemblies_1e6.json",  # python -m reference_impl.campaign.assembly_long
     }
