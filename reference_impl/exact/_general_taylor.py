@@ -62,7 +62,7 @@ polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2
 and the force and event functions in `_taylor_force` (2026-11-29); the zero-force end's
 root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29); a
 step's end read once, its three series in one pass, `_taylor_poly.horner3` (2026-11-29); the
-scans' ninth sample with points 4-8 in `_taylor_poly.samples` (2026-11-29).
+scans' ninth sample with points 4-8 in `_taylor_poly.samples`; `law_exponents_fit` (2026-11-29).
 """
 
 from __future__ import annotations
@@ -99,6 +99,7 @@ __all__ = [
     "THETA",
     "TOL",
     "integrate",
+    "law_exponents_fit",
     "solve",
     "solve_taylor",
     "theta_for",
@@ -178,12 +179,20 @@ def _common_n(ks, ps, cs, es, sc):
                 ok = False
             if zf != 0.0 and _as_int(N * (ps[i] - 1.0) / 2.0) < 0:
                 ok = False
-        for j in range(cs.shape[0]):
-            if cs[j] != 0.0 and _as_int(N * es[j]) < 0:
-                ok = False
+        if not law_exponents_fit(N, cs, es):
+            ok = False
         if ok:
             return N
     return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def law_exponents_fit(N, cs, es):
+    """N e_j an integer for every term c_j q^e_j of C, c_j != 0 (also the cap's N test)."""
+    for j in range(cs.shape[0]):
+        if cs[j] != 0.0 and _as_int(N * es[j]) < 0:
+            return False
+    return True
 
 
 @numba.njit(cache=True, error_model="numpy")

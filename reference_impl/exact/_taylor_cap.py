@@ -54,7 +54,14 @@ from reference_impl.exact._general_fields import form
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._general_rows import cap_derivs
-from reference_impl.exact._general_taylor import DEG_MAX, N_MAX, K, as_int, integrate
+from reference_impl.exact._general_taylor import (
+    DEG_MAX,
+    N_MAX,
+    K,
+    as_int,
+    integrate,
+    law_exponents_fit,
+)
 from reference_impl.potentials._terms import TERM_CAP
 
 __all__ = ["solve", "solve_cap_taylor", "solve_formed"]
@@ -72,11 +79,7 @@ _SLOW_EXIT = 0.1
 def _cap_n(alpha, cs, es, start):
     """Smallest N in [start, N_MAX] with 2 N alpha and every N e_j (c_j != 0) integers, or 0."""
     for N in range(start, N_MAX + 1):
-        ok = as_int(2.0 * N * alpha) >= 0
-        for j in range(cs.shape[0]):
-            if cs[j] != 0.0 and as_int(N * es[j]) < 0:
-                ok = False
-        if ok:
+        if as_int(2.0 * N * alpha) >= 0 and law_exponents_fit(N, cs, es):
             return N
     return 0
 
