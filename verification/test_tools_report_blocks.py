@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from reference_impl.report.readme_table import readme_block
+from reference_impl.report.readme_table import batch_goal, readme_block
 from verification.assertions import assert_true
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -296,4 +296,40 @@ def test_speed_block_says_by_how_much_a_goal_is_not_met():
             should=f"a line containing {want!r}",
             claim="report",
             call="speed_table",
+        )
+
+
+def test_a_batch_row_no_peer_reaches_is_not_judged_and_a_short_one_not_met():
+    """Goal 5's verdict per batch row (`readme_table.batch_goal`): "not judged" only where
+    the single reason is that no peer reaches equal error; a ratio short of the goal, alone
+    or beside it, is "not met"; no reason is "met"."""
+    no_peer = "no peer reaches equal error (each compared at its most accurate rung)"
+    short = "ratio 8.90x < 10x on 1 thread(s)"
+    cases = (
+        ({"goal_met": True, "peer_at_equal_error": True, "goal_not_met_because": []}, "met"),
+        (
+            {"goal_met": False, "peer_at_equal_error": False, "goal_not_met_because": [no_peer]},
+            f"not judged: {no_peer}",
+        ),
+        (
+            {"goal_met": False, "peer_at_equal_error": True, "goal_not_met_because": [short]},
+            f"**not met**: {short}",
+        ),
+        (
+            {
+                "goal_met": False,
+                "peer_at_equal_error": False,
+                "goal_not_met_because": [short, no_peer],
+            },
+            f"**not met**: {short}; {no_peer}",
+        ),
+    )
+    for row, want in cases:
+        got = batch_goal(row)
+        assert_true(
+            got == want,
+            got=repr(got),
+            should=repr(want),
+            claim="bench",
+            call=f"batch_goal({row['goal_not_met_because']})",
         )

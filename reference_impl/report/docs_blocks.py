@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from reference_impl.errors import HCVInputError
-from reference_impl.report.readme_table import readme_block
+from reference_impl.report.readme_table import batch_goal, readme_block
 
 __all__ = [
     "BLOCKS",
@@ -304,7 +304,7 @@ def batch_sixteen_cores(records: dict) -> str:
         full = r.get("ours_full", {}).get("ratio", {})
         full_txt = ", ".join(f"{full[t]:.1f}×" for t in ths if t in full)
         names = sorted({r["peer"][t] for t in ths})
-        verdict = "met" if r["goal_met"] else "**not met**: " + "; ".join(r["goal_not_met_because"])
+        verdict = batch_goal(r)
         rows.append(
             f"{r['row']}: ours at rtol {r['ours_rtol']} (error {r['ours_max_rel_error']:.1e}) "
             f"{ours} µs an impact on {', '.join(ths)} threads, the fastest peer "

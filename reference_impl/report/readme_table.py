@@ -35,6 +35,7 @@ __all__ = [
     "verdict_table",
     "speed_table",
     "workprecision_text",
+    "batch_goal",
     "batch_peer_text",
     "STARTUP_START",
     "STARTUP_END",
@@ -280,6 +281,20 @@ def _load_figure(x) -> str:
     return f"{x:.2f}" if isinstance(x, int | float) else "?"
 
 
+def batch_goal(r: dict) -> str:
+    """A row of `benchmarks.bench_batch_peer`'s record judged against goal 5: "met"; "not
+    judged" where the one reason is that no peer reaches equal error (the ratio is then
+    against the peer's most accurate rung, less accurate than ours: the goal, a ratio at
+    equal error, cannot be read, as `_wp_goals` says of a panel no peer reaches); else
+    "not met", with every reason."""
+    why = "; ".join(_cell(g) for g in r["goal_not_met_because"])
+    if r["goal_met"]:
+        return "met"
+    if not r["peer_at_equal_error"] and len(r["goal_not_met_because"]) == 1:
+        return f"not judged: {why}"
+    return f"**not met**: {why}"
+
+
 def batch_peer_text(bp: dict) -> str:
     """The lines of `benchmarks.bench_batch_peer`'s record (issue 38, goal 5): per row, ours
     and the fastest peer run in a compiled parallel loop over the same impacts, the ratio on
@@ -287,11 +302,7 @@ def batch_peer_text(bp: dict) -> str:
     lines = []
     for r in bp["rows"]:
         eq = "" if r["peer_at_equal_error"] else ", its most accurate rung"
-        goal = (
-            "met"
-            if r["goal_met"]
-            else "**not met**: " + "; ".join(_cell(g) for g in r["goal_not_met_because"])
-        )
+        goal = batch_goal(r)
         peers = ", ".join(
             f"{_PEER_SHORT.get(k, k)} {r['peer_us_per_impact'][th]:.1f} µs on {th} "
             f"thread{'s' if th != '1' else ''} (rtol {r['peer_rtol'][th]:.0e}{eq}; error "
