@@ -178,3 +178,25 @@ def test_a_missing_record_is_named(tmp_path):
     first = sorted({r for b in docs_blocks.BLOCKS for r in b.records})[0]
     with pytest.raises(HCVInputError, match=rf"reports/bench/{re.escape(first)}"):
         docs_blocks.load_records(tmp_path)
+
+
+def test_a_hostile_16_core_batch_record_is_escaped_or_refused():
+    """The 16-core batch record is input: HTML and a link in its text reach the page escaped;
+    a string where a time should be is refused (TypeError/ValueError, which `main` turns into
+    one line and exit 2), never printed as a figure."""
+    records = docs_blocks.load_records(ROOT)
+    bad = copy.deepcopy(records)
+    rec = bad["batch_peer_16cores.json"]
+    rec["rows"][0]["row"] = "<script>alert(1)</script>"
+    rec["machine"]["cpu"] = "[x](javascript:alert(1))"
+    text = docs_blocks.batch_sixteen_cores(bad)
+    assert_true(
+        "<script>" not in text and "](javascript:" not in text,
+        got=text[:300],
+        should="no raw <script> and no javascript: link on the page",
+        claim="docs",
+        call="docs_blocks.batch_sixteen_cores(HTML in row and cpu)",
+    )
+    rec["rows"][0]["us_per_impact"] = dict.fromkeys(rec["rows"][0]["us_per_impact"], "fast")
+    with pytest.raises((TypeError, ValueError)):
+        docs_blocks.batch_sixteen_cores(bad)

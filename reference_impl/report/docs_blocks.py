@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from reference_impl.errors import HCVInputError
+from reference_impl.report._text import markdown_text
 from reference_impl.report.readme_table import batch_goal, readme_block
 
 __all__ = [
@@ -293,33 +294,36 @@ def batch_sixteen_cores(records: dict) -> str:
     """performance: goal 5's batch against the parallel peer on a 16-core machine
     (`benchmarks.bench_batch_peer --threads`, batch_peer_16cores.json)."""
     rec = records["batch_peer_16cores.json"]
+    # The record is input: its text reaches the page through markdown_text (no raw HTML, no
+    # unsafe link), its numbers through a float format (a string there fails in one line).
+    md = markdown_text
     mi = rec["machine"]
-    tree = rec.get("tree", {}).get("commit") or mi["commit"]
+    tree = md(rec.get("tree", {}).get("commit") or mi["commit"])
     rows = []
     for r in rec["rows"]:
         ths = list(r["ratio"])
         ours = ", ".join(f"{r['us_per_impact'][t]:.2f}" for t in ths)
         peer = ", ".join(f"{r['peer_us_per_impact'][t]:.1f}" for t in ths)
         ratio = ", ".join(f"{r['ratio'][t]:.1f}×" for t in ths)
-        full = r.get("ours_full", {}).get("ratio", {})
+        full = r.get("ours_full", {}).get("ratio", {})  # absent in a /1 record: not stated
         full_txt = ", ".join(f"{full[t]:.1f}×" for t in ths if t in full)
-        names = sorted({r["peer"][t] for t in ths})
-        verdict = batch_goal(r)
+        names = ", ".join(md(k) for k in sorted({r["peer"][t] for t in ths}))
+        rtol = "full accuracy" if r["ours_rtol"] is None else f"rtol {r['ours_rtol']:.0e}"
         rows.append(
-            f"{r['row']}: ours at rtol {r['ours_rtol']} (error {r['ours_max_rel_error']:.1e}) "
-            f"{ours} µs an impact on {', '.join(ths)} threads, the fastest peer "
-            f"({', '.join(names)}) {peer} µs: **{ratio}**"
+            f"{md(r['row'])}: ours at {rtol} (error {r['ours_max_rel_error']:.1e}) "
+            f"{ours} µs an impact on {md(', '.join(ths))} threads, the fastest peer "
+            f"({names}) {peer} µs: **{ratio}**"
             + (f" (ours at full accuracy: {full_txt})" if full_txt else "")
-            + f"; goal ≥ {rec['goal_ratio']:g}× {verdict}"
+            + f"; goal ≥ {rec['goal_ratio']:g}× {batch_goal(r)}"
         )
     loads = [x for run in rec.get("runs", []) for x in run.get("load", [])]
     load = f"load {min(loads):.1f}–{max(loads):.1f}" if loads else "load not recorded"
     return (
-        f"**On {mi['cpu_count']} cores** (`python -m benchmarks.bench_batch_peer --rows ROW "
-        f"--threads 1,4,16 --blocks {rec['blocks']}`, one run per row on a lent "
-        f"{mi['cpu_count']}-core machine, {mi.get('cpu', '?')}, Python {mi['python']}, numba "
-        f"{mi['packages'].get('numba')}, {load}, tree {tree[:7]}; numbers from "
-        "`reports/bench/batch_peer_16cores.json`): "
+        f"**On {mi['cpu_count']:d} cores** (`python -m benchmarks.bench_batch_peer --rows ROW "
+        f"--threads 1,4,16 --blocks {rec['blocks']:d}`, one run per row on a lent "
+        f"{mi['cpu_count']:d}-core machine, {md(mi.get('cpu', 'processor not recorded'))}, "
+        f"Python {md(mi['python'])}, numba {md(mi['packages'].get('numba'))}, {load}, tree "
+        f"{tree[:7]}; numbers from `reports/bench/batch_peer_16cores.json`): "
         + "; ".join(rows)
         + ". The README judges goal 5 on the 2-core record (`reports/bench/batch_peer.json`, "
         "above); this one shows the ratio on more threads and another processor."
@@ -430,7 +434,7 @@ def main(argv=None) -> int:
         records = load_records()
         pages = {p: (ROOT / p).read_text() for p in sorted({b.page for b in BLOCKS})}
         new = {p: rewrite_page(t, p, records) for p, t in pages.items()}
-    except (OSError, KeyError, HCVInputError) as exc:
+    except (OSError, KeyError, TypeError, ValueError, HCVInputError) as exc:
         print(f"docs_blocks: error: {exc}", file=sys.stderr)
         return 2
     if args.check:
