@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from reference_impl.exact import _general_taylor as gt
-from reference_impl.exact import _law_batch, _taylor_scan
+from reference_impl.exact import _law_batch, _taylor_scan, _taylor_step
 from reference_impl.exact.general_law import prepare_law
 from reference_impl.studies.laws import calibrated_laws, hertz
 from verification.assertions import assert_true
@@ -31,21 +31,22 @@ CLAIM = "solve_law_impact (Taylor kernel)"
 SPEEDS = (0.03, 0.1, 0.4, 1.0, 3.0, 10.0, 30.0)
 
 
-def _rebind(fn, **names):
-    """``fn``'s Python source with the module globals ``names`` replaced."""
+def _rebind(fn, module, **names):
+    """``fn``'s Python source with the globals ``names`` of its ``module`` replaced."""
     f = fn.py_func
-    ns = dict(vars(gt))
+    ns = dict(vars(module))
     ns.update(names)
     return types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__, f.__closure__)
 
 
 def _rebound(bound, jit=None):
-    """`solve_taylor` whose stepping (`integrate`) has its `_force_stays_positive` replaced
-    by ``bound`` (run as Python, the compiled helpers they call stay compiled; ``jit``:
-    both compiled by it)."""
+    """`solve_taylor` whose step (`_taylor_step.after`, called by `integrate`) has its
+    `_force_stays_positive` replaced by ``bound`` (run as Python, the compiled helpers they
+    call stay compiled; ``jit``: all three compiled by it)."""
     wrap = jit or (lambda f: f)
-    stepping = wrap(_rebind(gt.integrate, _force_stays_positive=bound))
-    return wrap(_rebind(gt.solve_taylor, integrate=stepping))
+    step = wrap(_rebind(_taylor_step.after, _taylor_step, _force_stays_positive=bound))
+    stepping = wrap(_rebind(gt.integrate, gt, _after=step))
+    return wrap(_rebind(gt.solve_taylor, gt, integrate=stepping))
 
 
 @numba.njit(error_model="numpy")

@@ -72,21 +72,23 @@ import math
 import numba
 import numpy as np
 
-from reference_impl.exact._general_kernel import OUT_FIELDS, STOP_CREEP
+from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._taylor_force import cap_series as _cap_series
-from reference_impl.exact._taylor_force import dforce as _dforce
-from reference_impl.exact._taylor_force import event as _event
-from reference_impl.exact._taylor_force import fc as _fc
-from reference_impl.exact._taylor_force import force as _force
-from reference_impl.exact._taylor_force import root as _root
-from reference_impl.exact._taylor_force import zero_force_root as _zf_root
-from reference_impl.exact._taylor_poly import NS, K
-from reference_impl.exact._taylor_poly import horner as _horner
-from reference_impl.exact._taylor_poly import horner3 as _horner3
-from reference_impl.exact._taylor_poly import inv_radius as _inv_radius
-from reference_impl.exact._taylor_poly import samples as _samples
-from reference_impl.exact._taylor_scan import force_stays_positive as _force_stays_positive
+from reference_impl.exact._taylor_poly import K
+from reference_impl.exact._taylor_step import (
+    GO_ON,
+    MAX_STEPS,  # steps before the GBS kernel takes over
+    NPK,
+    NST,
+    ST_R,
+    ST_T,
+    ST_W,
+)
+from reference_impl.exact._taylor_step import after as _after
+from reference_impl.exact._taylor_step import before as _before
+from reference_impl.exact._taylor_step import constants as _constants
+from reference_impl.exact._taylor_step import start as _start
 
 __all__ = [
     "DEG_MAX",
@@ -96,6 +98,11 @@ __all__ = [
     "OUT_FIELDS",
     "SC_TOL",
     "as_int",
+    "common_n",
+    "finish_row",
+    "model",
+    "scale",
+    "series_plan",
     "THETA",
     "TOL",
     "integrate",
@@ -110,29 +117,8 @@ TOL = 1e-16
 # Largest common denominator N of the exponents (q = L rho^N) and largest degree in rho.
 N_MAX = 8
 DEG_MAX = 48
-# A contact takes 8-14 steps (measured: calibrated Hertz laws 9-10, the universal law on
-# Hertz 13). More steps mean a slow, creeping return (near-critical or overdamped), where
-# an error in rho is integrated into T over a long stretch of s and the summed local
-# estimates no longer bound it (measured: 5e-14 s against a bound of 4e-15 s after 39
-# steps, near-critical linear dashpot on Hooke + Hertz): handed to the GBS kernel.
-MAX_STEPS = 24
-# A cap's creeping return (no return: `_taylor_cap`), after its zero-force end: steps
-# until the no-return test, which only confirms that verdict (the outputs are all set by
-# then; the bound sums every step). Measured on sphere-damped with a dashpot 26.75 N s/m:
-# 21 steps at 1 m/s, 47 at 0.3, 125 at 0.1 (the GBS kernel: 130 and 303 at the first two).
-_CREEP_STEPS = 400
-# Overlap (fraction of q_max) at which a return is handed over (the GBS kernel's
-# threshold of no return): rho decays without crossing 0 there, and a root found at
-# round-off level would be no exit.
-_NO_RETURN_Q = 1e-10
 # N e is taken as an integer within this (the exponents are decimal fractions like 1.5, 0.25).
 _INT_TOL = 1e-12
-# Event brackets, relative: two ulps where the output moves with the root (the time of
-# q_max, the zero-force end); 1e-9 where it is stationary there, so that a location error
-# d moves it by ~d^2 (the peak force at dF/ds = 0; T and W at the exit rho = 0 for N > 1,
-# where dT/ds = N rho^(N-1) and dW/ds = -N rho^(N-1) G vanish): 1e-18 of the step.
-_ULPS = 4.5e-16
-_STATIONARY = 1e-9
 
 
 def theta_for(tol: float) -> float:
@@ -167,7 +153,7 @@ as_int = _as_int  # for the cap's model (`_taylor_cap`)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _common_n(ks, ps, cs, es, sc):
+def common_n(ks, ps, cs, es, sc):
     """Smallest N <= N_MAX making every exponent of f and c an integer multiple of 1/N, or 0."""
     A, zf = sc[2], sc[3]
     for N in range(1, N_MAX + 1):
@@ -196,7 +182,7 @@ def law_exponents_fit(N, cs, es):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _scale(v0, qE, ks, ps, m):
+def scale(v0, qE, ks, ps, m):
     """The elastic turning point L: sum k L^(p+1) / (p+1) = m v0^2 / 2 (Newton from qE >= L)."""
     E = 0.5 * m * v0 * v0
     if ks.shape[0] == 1:
@@ -217,7 +203,7 @@ def _scale(v0, qE, ks, ps, m):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _model(v0, L, N, ks, ps, cs, es, sc):
+def model(v0, L, N, ks, ps, cs, es, sc):
     """Scaled polynomials f(rho) (U') and c(rho) (C), by degree; None-like (empty) if unfit."""
     m, alpha, A, zf = sc[0], sc[1], sc[2], sc[3]
     f = np.zeros(DEG_MAX + 1)
@@ -299,41 +285,37 @@ def solve_taylor(v0, qE, ks, ps, cs, es, sc, out):
     """One impact into ``out`` (`OUT_FIELDS`); returns 0, or 1 when the case is not for
     this method (exponents, degree, no return within MAX_STEPS): ``out`` is then void."""
     m = sc[0]
-    N = _common_n(ks, ps, cs, es, sc)
+    N = common_n(ks, ps, cs, es, sc)
     if N == 0:
         return 1
-    L = _scale(v0, qE, ks, ps, m)
-    F, C = _model(v0, L, N, ks, ps, cs, es, sc)
+    L = scale(v0, qE, ks, ps, m)
+    F, C = model(v0, L, N, ks, ps, cs, es, sc)
     if F.shape[0] == 0:
         return 1
     if integrate(v0, L, N, F, C, _NO_CY, None, sc, out, None) != 0:
         return 1
+    finish_row(out, ks, ps, L, qE)
+    return 0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def finish_row(out, ks, ps, L, qE):
+    """A sum of powers' row once integrated: U'(q_max), and the time bound in units of qE / v0."""
     qm = out[1]
     fm = 0.0
     for i in range(ks.shape[0]):
         fm += ks[i] * qm ** ps[i]
     out[2] = fm
     out[9] = out[9] * L / qE
-    return 0
 
 
 @numba.njit(cache=True, error_model="numpy")
-def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
-    """One impact of the scaled model into ``out`` (`OUT_FIELDS` but ``max_force``, out[2],
-    left to the caller); returns 0, or 1 when the case is not for this method (no return
-    within MAX_STEPS, a radius not finite): ``out`` is then void.
-
-    ``L`` is the scale of q (m), ``N`` the power q = L rho^N, ``F``, ``C`` and ``CY`` the
-    polynomials in rho (by degree, `DEG_MAX` + 1) of the scaled U', C and of C's part
-    multiplied by the cap's factor, ``cp`` = (beta, alpha) that factor
-    y = (1 - beta rho^N)^alpha (None: sums of powers, y = 1, CY = 0: every operation as
-    before the factor, the cap's branches pruned when numba compiles it), ``sc`` the law's scalars (`_general_contact.law_arrays`), ``X``
-    the cap's work array, shape (4, K + 1) (`_cap_series`), or None for a sum of powers."""
-    m = sc[0]
-    tol, theta = TOL, THETA
-    if sc.shape[0] > SC_TOL:
-        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
-    capped = cp is not None
+def series_plan(N, F, C, CY, capped):
+    """What the series of the scaled model F, C, CY (by degree in rho) need: the highest
+    and lowest degree D, j0 of its terms; the right-hand side's polynomials FN, CN, CYN
+    (N rho^(N-1) times f, c and the cap's part); the degrees of their nonzero terms fidx,
+    cidx, cyidx; and ``plan``, the powers of rho whose series are formed, lowest first
+    (each by squaring, or one more factor of rho)."""
     D = 0
     j0 = DEG_MAX
     for j in range(DEG_MAX + 1):
@@ -394,200 +376,47 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
         if need[j]:
             plan[npl] = j
             npl += 1
+    return D, j0, FN, CN, CYN, fidx, cidx, cyidx, plan
+
+
+@numba.njit(cache=True, error_model="numpy")
+def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
+    """One impact of the scaled model into ``out`` (`OUT_FIELDS` but ``max_force``, out[2],
+    left to the caller); returns 0, or 1 when the case is not for this method (no return
+    within MAX_STEPS, a radius not finite): ``out`` is then void.
+
+    ``L`` is the scale of q (m), ``N`` the power q = L rho^N, ``F``, ``C`` and ``CY`` the
+    polynomials in rho (by degree, `DEG_MAX` + 1) of the scaled U', C and of C's part
+    multiplied by the cap's factor, ``cp`` = (beta, alpha) that factor
+    y = (1 - beta rho^N)^alpha (None: sums of powers, y = 1, CY = 0: every operation as
+    before the factor, the cap's branches pruned when numba compiles it), ``sc`` the law's scalars (`_general_contact.law_arrays`), ``X``
+    the cap's work array, shape (4, K + 1) (`_cap_series`), or None for a sum of powers."""
+    tol, theta = TOL, THETA
+    if sc.shape[0] > SC_TOL:
+        tol, theta = sc[SC_TOL], sc[SC_TOL + 1]
+    capped = cp is not None
+    D, j0, FN, CN, CYN, fidx, cidx, cyidx, plan = series_plan(N, F, C, CY, capped)
+    DN = D + N - 1
     P = np.zeros((max(DN, 1) + 1) * (K + 1))  # row j: the series of rho^j
     P[0] = 1.0
     CS = np.zeros(K + 1)
     R = np.zeros(K + 1)
     W = np.zeros(K + 1)
     T = np.zeros(K + 1)
-    Fs = m * v0 * v0 / L  # force unit
-    exit_tol = _STATIONARY if N > 1 else _ULPS
-    creeps = sc[4] == 1.0
-    nopull = sc[6] == 1.0
-    q_top = 1.0
-    monotone = True  # f and c non-decreasing in rho >= 0 (every coefficient >= 0)
-    for j in range(D + 1):
-        if F[j] < 0.0 or C[j] < 0.0 or (CY[j] < 0.0 and not capped):
-            monotone = False
-    if cp is not None and cp[0] <= 1.0 / 3.0:
-        # A cap's F has a negative coefficient, but f = U' grows with q up to q = a (V and
-        # S = V' do), and the contact stays below q = L, i.e. rho <= 1, within q = a where
-        # beta = L / (3a) <= 1/3 (`_taylor_cap`): monotone there where C's coefficients
-        # are >= 0 (CY = alpha_HC F y grows as f does). Deeper, the peak is always scanned.
-        monotone = True
-        for j in range(D + 1):
-            if C[j] < 0.0:
-                monotone = False
-    pw = np.empty(K + 1)
-    xs = np.empty(NS + 1)
-    rs = np.empty(NS + 1)
-    ws = np.empty(NS + 1)
-    r0, w0, t0 = 0.0, 1.0, 0.0
-    peak = C[0] + CY[0] if capped else C[0]  # the force just after contact, C(0) v0
-    past = False
-    zf_found = False
-    errsum = 0.0
-    err_zf = 0.0
-    step = 0
+    work = np.empty((4, K + 1))  # the radius' powers; the samples' points, rho and W
+    pk = np.empty(NPK)
+    _constants(pk, v0, L, N, F, C, CY, cp, D, sc, tol, theta)
+    st = np.empty(NST)
+    _start(st, C[0] + CY[0] if capped else C[0])  # the force just after contact, C(0) v0
     while True:
-        step += 1
-        # A cap's creeping return, its zero-force end found, may take up to _CREEP_STEPS to
-        # reach the no-return test (stiff: the step is limited by m / C); an exit after
-        # MAX_STEPS is handed over (its bound is not the summed estimates: MAX_STEPS)
-        if step > MAX_STEPS and not (capped and creeps and zf_found and step <= _CREEP_STEPS):
-            return 1
-        if past and creeps:
-            # Creeping back along the slow manifold of an overdamped law (w ~ -U'/C, U' q >
-            # m w^2, C q > 100 m |w|, as in the GBS kernel), where C ~ q^a with a <= n - 2
-            # never lets it reach q = 0: rho only decays, and a root found at round-off
-            # level would be no exit. The GBS kernel reports these cases (no return).
-            q0 = r0**N
-            if q0 <= _NO_RETURN_Q * q_top:
-                return 1
-            if q0 <= 0.1 * q_top:
-                f0, c0 = _fc(F, C, CY, cp, N, D, r0)
-                if f0 * q0 > w0 * w0 and c0 * q0 > 100.0 * abs(w0):
-                    if capped and zf_found:
-                        # A cap reports the no-return itself, as the GBS kernel does
-                        # (STOP_CREEP: the same test, its zero-force end already found);
-                        # the sums of powers hand it over, as before (bit for bit).
-                        out[3] = peak * Fs
-                        out[6] = math.inf
-                        out[7] = 0.0
-                        out[8] = 0.0
-                        # the bound of the outputs, all set by the zero-force end: the
-                        # steps after it only confirm the verdict
-                        out[9] = err_zf
-                        out[10] = err_zf
-                        out[11] = step - 1
-                        out[12] = 0.0
-                        out[13] = STOP_CREEP
-                        return 0
-                    return 1
+        code = _before(st, pk, N, F, C, CY, cp, D, out)
+        if code != GO_ON:
+            return code
+        r0, w0, t0 = st[ST_R], st[ST_W], st[ST_T]
         _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X)
-        inv = _inv_radius(R, W, T, pw)
-        if not (inv > 0.0 and inv < math.inf):
-            return 1
-        h = theta / inv
-        rh, wh, th = _horner3(R, W, T, h)  # the step's end, read by the tests below
-        errsum += tol * max(1.0, abs(t0))
-        x_end = h
-        x_from = 0.0
-        exiting = False
-        was_past = past
-        rm = 0.0
-        if not past and wh < 0.0:
-            x = _root(1, R, W, F, C, CY, cp, N, j0, D, 0.0, h, W[0], wh, _ULPS)
-            rm, _, tm = _horner3(R, W, T, x)
-            out[0] = tm * L / v0
-            out[1] = L * rm**N
-            # F at the turning point is U'(q_max): a value of F, so the peak is at least that
-            # (where C(q_max) = 0 it is the peak, at a stationary point on the step's edge)
-            peak = max(peak, _fc(F, C, CY, cp, N, D, rm)[0])
-            past = True
-            q_top = rm**N
-            x_from = x
-        if past and rh <= 0.0:
-            x_end = _root(
-                0,
-                R,
-                W,
-                F,
-                C,
-                CY,
-                cp,
-                N,
-                j0,
-                D,
-                x_from,
-                h,
-                _horner(R, x_from),
-                rh,
-                exit_tol,
-            )
-            exiting = True
-        # peak force: dG/ds through 0 from above, on NS samples of [0, x_end], unless
-        # G cannot exceed the peak so far on this step (f and c grow with rho >= 0):
-        # before the turning point G <= f(rho_hi) + c(rho_hi) w0, after it G <= f(r0).
-        if was_past:
-            ub = _fc(F, C, CY, cp, N, D, r0)[0]
-        else:
-            r_hi = rm if past else rh  # x_end = h before the turning point
-            f_hi, c_hi = _fc(F, C, CY, cp, N, D, r_hi)
-            ub = f_hi + c_hi * w0
-        scan_peak = not (monotone and ub <= peak)
-        # no zero-force end where the law says the force never vanishes before q = 0
-        # (Hunt-Crossley, sc[6], as the GBS kernel): its scan was ~1/6 of such an impact;
-        # nor on a step where the force provably stays positive (nothing to find there)
-        scan_zf = past and not zf_found and not nopull
-        # (its interval bound reads F and C alone: a cap's step is always scanned)
-        scan_zf = scan_zf and (capped or not _force_stays_positive(F, C, j0, D, R, W, x_end))
-        if scan_peak or scan_zf:
-            _samples(R, W, x_end, xs, rs, ws)
-        if scan_peak:  # dG/ds through 0 from above
-            gp = _dforce(F, C, CY, cp, N, D, rs[0], ws[0])
-            for i in range(1, NS + 1):
-                gi = _dforce(F, C, CY, cp, N, D, rs[i], ws[i])
-                if gp > 0.0 and gi <= 0.0:
-                    xr = _root(
-                        3, R, W, F, C, CY, cp, N, j0, D, xs[i - 1], xs[i], gp, gi, _STATIONARY
-                    )
-                    rx, wx = _horner(R, xr), _horner(W, xr)
-                    peak = max(peak, _force(F, C, CY, cp, N, j0, D, rx, wx)[0])
-                gp = gi
-        if scan_zf:  # zero-force end: G / rho^j0 through 0 after the turning point
-            gp = _event(2, R, W, F, C, CY, cp, N, j0, D, x_from)
-            xp = x_from
-            for i in range(1, NS + 1):
-                if xs[i] <= x_from:
-                    continue
-                gi = _force(F, C, CY, cp, N, j0, D, rs[i], ws[i])[1]
-                if exiting and i == NS and gi > 0.0:
-                    # The last sample is the exit, rho = 0 within its root's bracket (found:
-                    # rho = -5.6e-17). Where a negligible lowest term sets j0 (C = c0 + c1 q,
-                    # c0 = 1.3e-36 kg/s: C[0] W ~ 3e-39), that round-off times the next term
-                    # (~1e-18) outweighs it and reads the force at the exit > 0, hiding the
-                    # crossing before it: the sign is read at rho = 0 exactly, the exit, where
-                    # G / rho^j0 = F[j0] + C[j0] W. A sample read <= 0 is kept (bit for bit).
-                    gi = _force(F, C, CY, cp, N, j0, D, 0.0, ws[i])[1]
-                if gp > 0.0 and gi <= 0.0:
-                    ends = exiting and i == NS  # the bracket ends at the exit
-                    xr = _zf_root(R, W, F, C, CY, cp, N, j0, D, xp, xs[i], gp, gi, _ULPS, ends)
-                    out[4] = _horner(T, xr) * L / v0
-                    out[5] = _horner(W, xr) * v0
-                    zf_found = True
-                    err_zf = errsum
-                    break
-                gp, xp = gi, xs[i]
-        if exiting:
-            if step > MAX_STEPS:
-                return 1
-            t_end = _horner(T, x_end) * L / v0
-            we = _horner(W, x_end)
-            w_end = we * v0
-            err_t = errsum
-            err_w = errsum
-            if N == 1:
-                # dT/ds = 1 at the exit: an error e in rho moves it by e / |W| in s, so T by
-                # as much and W by |dW/ds| e / |W| (for N > 1 both are stationary there)
-                err_t += errsum / abs(we)
-                dw = CN[0] * we + FN[0]
-                if capped:  # y = 1 at rho = 0
-                    dw += CYN[0] * we
-                err_w += abs(dw) * errsum / abs(we)
-            if not zf_found:  # the force never pulls: the two ends coincide
-                out[4] = t_end
-                out[5] = w_end
-            out[3] = peak * Fs
-            out[6] = t_end
-            out[7] = w_end
-            out[8] = 1.0
-            out[9] = err_t  # scaled; the caller's * L / qE: units of qE / v0, as the GBS kernel's
-            out[10] = err_w
-            out[11] = step
-            out[12] = 0.0
-            return 0
-        r0, w0, t0 = rh, wh, th
+        code = _after(st, pk, R, W, T, work, N, F, C, CY, cp, j0, D, CN, FN, CYN, out)
+        if code != GO_ON:
+            return code
 
 
 @numba.njit(cache=True, error_model="numpy")
