@@ -39,7 +39,7 @@ _COMPILED_SOURCES = (
     "exact/_nodes.py", "exact/_one_call.py", "exact/_oneshot_cache.py", "exact/_oscillator.py",
     "exact/_power_kernel.py",
     "exact/_prepared_kernel.py", "exact/_quadrature.py", "exact/_rtol.py", "exact/_split.py",
-    "exact/_strategies.py", "exact/_sums.py", "exact/_tail.py", "exact/_taylor_cap.py", "exact/_taylor_force.py", "exact/_taylor_poly.py", "exact/_taylor_scan.py", "exact/_taylor_step.py",
+    "exact/_strategies.py", "exact/_sums.py", "exact/_tail.py", "exact/_taylor_cap.py", "exact/_taylor_force.py", "exact/_taylor_poly.py", "exact/_taylor_scan.py", "exact/_taylor_step.py", "exact/_taylor_lanes.py", "exact/_taylor_lanes_series.py",
     "exact/_truth.py",
     "exact/_validate.py", "exact/batch.py", "exact/general_law.py", "exact/prepared.py",
     "exact/solve.py",

@@ -75,7 +75,7 @@ import numpy as np
 from reference_impl.exact._general_kernel import OUT_FIELDS
 from reference_impl.exact._general_kernel import solve as _gbs_solve
 from reference_impl.exact._taylor_force import cap_series as _cap_series
-from reference_impl.exact._taylor_poly import K
+from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_step import (
     GO_ON,
     MAX_STEPS,  # steps before the GBS kernel takes over
@@ -403,7 +403,10 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
     R = np.zeros(K + 1)
     W = np.zeros(K + 1)
     T = np.zeros(K + 1)
-    work = np.empty((4, K + 1))  # the radius' powers; the samples' points, rho and W
+    pw = np.empty(K + 1)
+    xs = np.empty(NS + 1)
+    rs = np.empty(NS + 1)
+    ws = np.empty(NS + 1)
     pk = np.empty(NPK)
     _constants(pk, v0, L, N, F, C, CY, cp, D, sc, tol, theta)
     st = np.empty(NST)
@@ -414,7 +417,7 @@ def integrate(v0, L, N, F, C, CY, cp, sc, out, X):
             return code
         r0, w0, t0 = st[ST_R], st[ST_W], st[ST_T]
         _series(N, FN, CN, fidx, cidx, plan, P, CS, R, W, T, r0, w0, t0, CYN, cyidx, cp, X)
-        code = _after(st, pk, R, W, T, work, N, F, C, CY, cp, j0, D, CN, FN, CYN, out)
+        code = _after(st, pk, R, W, T, pw, xs, rs, ws, N, F, C, CY, cp, j0, D, CN, FN, CYN, out)
         if code != GO_ON:
             return code
 

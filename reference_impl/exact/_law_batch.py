@@ -42,7 +42,9 @@ import numba
 import numpy as np
 
 from reference_impl.errors import HCVInputError
-from reference_impl.exact._general_fields import FAILED, FORMED, solve_formed
+from reference_impl.exact._general_fields import FAILED, FORMED, form, solve_formed
+from reference_impl.exact._general_kernel import OUT_FIELDS
+from reference_impl.exact._taylor_lanes import solve_lanes
 from reference_impl.exact._validate import _validated_top
 from reference_impl.exact.general_law import _refuse_lost_return, prepare_law
 
@@ -52,8 +54,9 @@ __all__ = ["LAW_FIELDS", "solve_law_batch"]
 # (`FORMED`: `LawImpactSolution`'s names, in its order), less the time of q_max and the step
 # count, which a batch does not return.
 LAW_FIELDS = tuple(k for k in FORMED if k not in ("time_of_max_penetration", "n_steps"))
-# Speeds per chunk of the parallel loop (~20-200 us each: the hand-out costs far less).
-_CHUNK = 4
+# Speeds per chunk of the parallel loop, run side by side in the Taylor kernel's lanes
+# (~2 ms each: the hand-out costs far less; the lanes idle only as a chunk drains).
+_CHUNK = 128
 
 
 # Cached (its first compile takes seconds). It compiles in the kernel of other modules:
@@ -65,11 +68,23 @@ _CHUNK = 4
 @numba.njit(cache=True, parallel=True, error_model="numpy")
 def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover - compiled
     """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its flag of
-    `_general_fields.form` (one speed per thread step: no bit depends on the threads): `OK`;
-    `FAILED` (not finished within the step budget) and `LOST` (lost its return) are raised
-    by `_finish`, in the order of the speeds."""
-    for i in numba.prange(v.shape[0]):
-        flags[i] = _fields(solve_formed(v[i], q_top[i], ks, ps, cs, es, sc), out[:, i])
+    `_general_fields.form` (`_CHUNK` speeds per thread step, side by side in the Taylor
+    kernel's lanes, `_taylor_lanes`: no bit depends on the threads, the lanes or the
+    chunks): `OK`; `FAILED` (not finished within the step budget) and `LOST` (lost its
+    return) are raised by `_finish`, in the order of the speeds."""
+    n = v.shape[0]
+    for c in numba.prange((n + _CHUNK - 1) // _CHUNK):
+        lo = c * _CHUNK
+        hi = min(n, lo + _CHUNK)
+        rows = np.empty((hi - lo, len(OUT_FIELDS)))
+        codes = np.empty(hi - lo, np.int64)
+        solve_lanes(v[lo:hi], q_top[lo:hi], ks, ps, cs, es, sc, rows, codes)
+        for j in range(hi - lo):
+            i = lo + j
+            if codes[j] == 0:  # the row `solve_taylor` gives, formed as `solve_formed` forms it
+                flags[i] = _fields(form(rows[j], v[i], q_top[i]), out[:, i])
+            else:  # not for the lanes: the single call (the GBS kernel included)
+                flags[i] = _fields(solve_formed(v[i], q_top[i], ks, ps, cs, es, sc), out[:, i])
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -137,9 +152,9 @@ def solve_law_batch(
         return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
     q_top = _tops(plan, prepared, v)
     flags = np.empty(v.size, dtype=np.int8)
-    # Speeds cost unequal step counts: small chunks handed out as threads free up, not
-    # one equal share each (rows do not depend on who computes them).
-    with numba.parallel_chunksize(_CHUNK):
+    # Speeds cost unequal step counts: chunks handed out one by one as threads free up,
+    # not one equal share each (rows do not depend on who computes them).
+    with numba.parallel_chunksize(1):
         _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, out, flags)
     _finish(out, v, flags, prepared)
     return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}

@@ -39,6 +39,7 @@ __all__ = [
     "GO_ON",
     "MAX_STEPS",
     "NPK",
+    "PK_L",
     "NST",
     "ST_R",
     "ST_T",
@@ -82,6 +83,7 @@ NST = 10
 # and three flags (0/1): f and c grow with rho, the law never pulls, it may creep.
 _V0, _L, _FS, _TOL, _THETA, _EXIT_TOL, _MONO, _NOPULL, _CREEPS = range(9)
 NPK = 9
+PK_L = _L
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -112,7 +114,7 @@ def start(st, peak):
     st[_QTOP] = 1.0
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def before(st, pk, N, F, C, CY, cp, D, out):
     """The head of a step: counts it; returns 1 past the step budget or on a creeping
     return handed over, 0 on a cap's no-return (``out`` complete), else `GO_ON`."""
@@ -158,8 +160,8 @@ def before(st, pk, N, F, C, CY, cp, D, out):
     return GO_ON
 
 
-@numba.njit(cache=True, error_model="numpy")
-def after(st, pk, R, W, T, work, N, F, C, CY, cp, j0, D, CN, FN, CYN, out):
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def after(st, pk, R, W, T, pw, xs, rs, wsm, N, F, C, CY, cp, j0, D, CN, FN, CYN, out):
     """The rest of a step, its series R, W, T known: the step size from their radius, the
     turning point, the exit, the peak-force and zero-force scans; returns 1 where the
     radius is not finite (hand over), 0 at the exit (``out`` complete), else `GO_ON` with
@@ -177,7 +179,6 @@ def after(st, pk, R, W, T, work, N, F, C, CY, cp, j0, D, CN, FN, CYN, out):
     past = st[_PAST] == 1.0
     zf_found = st[_ZF] == 1.0
     step = int(st[_STEP])
-    pw, xs, rs, wsm = work[0], work[1], work[2], work[3]
     inv = _inv_radius(R, W, T, pw)
     if not (inv > 0.0 and inv < math.inf):
         return 1
