@@ -195,3 +195,31 @@ def test_law_batch_tops_are_each_speeds_own_in_one_inverse(make):
         claim="solve_impacts",
         call=f"_law_batch._tops({type(pot).__name__}, 300 speeds)",
     )
+
+
+def test_law_batch_over_several_chunks_is_solve_law_impact_bit_for_bit():
+    """More speeds than a chunk of the parallel loop (`_law_batch._CHUNK`), each chunk's
+    speeds side by side in the Taylor kernel's lanes: every field of every speed as its own
+    `solve_law_impact`, on one thread and on all (chunks, lanes and threads change no bit)."""
+    n = 2 * _law_batch._CHUNK + 45
+    v = 10.0 ** np.random.default_rng(38).uniform(-1.0, 1.0, n)
+    law = LAWS[4]
+    pot, m = _hertz()
+    sols = [solve_law_impact(pot, m, float(x), law) for x in v]
+    want = {key: np.array([float(getattr(s, key)) for s in sols]) for key in BATCH_FIELDS}
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(threads)
+            got = solve_impacts(PowerLaw(1e9, 1.5), m, v, law=law)
+            for key, ref in want.items():
+                bad = np.flatnonzero(got[key].view(np.int64) != ref.view(np.int64))
+                assert_true(
+                    bad.size == 0,
+                    got=f"{key} differs at {bad.size} speeds, first v0 = {v[bad[:1]]}: {got[key][bad[:1]]}",
+                    should=f"{ref[bad[:1]]} (solve_law_impact per speed, bit for bit)",
+                    claim="solve_impacts",
+                    call=f"solve_impacts(hertz, {m}, {n} speeds, law={law}) on {threads} threads",
+                )
+    finally:
+        numba.set_num_threads(before)
