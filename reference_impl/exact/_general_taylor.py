@@ -309,7 +309,7 @@ def finish_row(out, ks, ps, L, qE):
     out[9] = out[9] * L / qE
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def series_plan(N, F, C, CY, capped):
     """What the series of the scaled model F, C, CY (by degree in rho) need: the highest
     and lowest degree D, j0 of its terms; the right-hand side's polynomials FN, CN, CYN

@@ -86,7 +86,7 @@ NPK = 9
 PK_L = _L
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def constants(pk, v0, L, N, F, C, CY, cp, D, sc, tol, theta):
     """``pk`` = the impact's constants (`NPK`; ``sc`` the law's scalars, ``tol`` and
     ``theta`` the truncation per step and its fraction of the radius)."""
@@ -101,7 +101,7 @@ def constants(pk, v0, L, N, F, C, CY, cp, D, sc, tol, theta):
     pk[_CREEPS] = 1.0 if sc[4] == 1.0 else 0.0
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def start(st, peak):
     """The carried numbers at the onset: rho 0, W 1, T 0, the force just after contact."""
     st[ST_R], st[ST_W], st[ST_T] = 0.0, 1.0, 0.0
