@@ -49,6 +49,10 @@ The zero-force search skips a step on which an interval bound proves the force p
 (`_taylor_scan.force_stays_positive`), where it could find nothing: the same results, bit
 for bit.
 
+A step after its series (radius, events, scans, exit) is `_taylor_step`'s, its carried
+numbers in a small array, so that the batch can step several impacts side by side with
+the same operations (`_taylor_lanes`: their series in one pass).
+
 The compiled `solve` calls the GBS kernel's compiled `solve` and the polynomial helpers of
 `_taylor_poly`, and numba's disk cache of this module is keyed by this file alone: a change
 of `_general_kernel`, `_general_step`, `_taylor_poly` or `_taylor_force` leaves this module's cached machine
@@ -62,7 +66,7 @@ polynomial helpers and the radius estimate moved to `_taylor_poly`, unchanged (2
 and the force and event functions in `_taylor_force` (2026-11-29); the zero-force end's
 root checked and bisected where Illinois fails, `_taylor_force.zero_force_root` (2026-11-29); a
 step's end read once, its three series in one pass, `_taylor_poly.horner3` (2026-11-29); the
-scans' ninth sample with points 4-8 in `_taylor_poly.samples`; `law_exponents_fit` (2026-11-29).
+scans' ninth sample with points 4-8 in `_taylor_poly.samples`; `law_exponents_fit` (2026-11-29); the step after its series in `_taylor_step` (2026-11-30).
 """
 
 from __future__ import annotations
