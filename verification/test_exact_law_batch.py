@@ -9,6 +9,7 @@ benchmarks/bench_exact.py and benchmarks/device_scaling.py.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import numba
 import numpy as np
@@ -198,21 +199,24 @@ def test_law_batch_tops_are_each_speeds_own_in_one_inverse(make):
 
 
 def test_law_batch_over_several_chunks_is_solve_law_impact_bit_for_bit():
-    """More speeds than a chunk of the parallel loop (`_law_batch._CHUNK`), each chunk's
-    speeds side by side in the Taylor kernel's lanes: every field of every speed as its own
-    `solve_law_impact`, on one thread and on all (chunks, lanes and threads change no bit)."""
-    n = 2 * _law_batch._CHUNK + 45
-    v = 10.0 ** np.random.default_rng(38).uniform(-1.0, 1.0, n)
+    """More speeds than the largest chunk of the parallel loop (`_law_batch._CHUNK`), each
+    chunk's speeds side by side in the Taylor kernel's lanes, and batches too small for the
+    lanes (`_LANES_FROM`): every field of every speed as its own `solve_law_impact`, on one
+    thread and on all (chunks, lanes and threads change no bit)."""
+    v = 10.0 ** np.random.default_rng(38).uniform(-1.0, 1.0, 2 * _law_batch._CHUNK + 45)
     law = LAWS[4]
     pot, m = _hertz()
     sols = [solve_law_impact(pot, m, float(x), law) for x in v]
-    want = {key: np.array([float(getattr(s, key)) for s in sols]) for key in BATCH_FIELDS}
+    every = {key: np.array([float(getattr(s, key)) for s in sols]) for key in BATCH_FIELDS}
     before = numba.get_num_threads()
     try:
-        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+        for threads, n in itertools.product(
+            sorted({1, numba.config.NUMBA_NUM_THREADS}), (v.size, 1, 3, 4, 9)
+        ):
             numba.set_num_threads(threads)
-            got = solve_impacts(PowerLaw(1e9, 1.5), m, v, law=law)
-            for key, ref in want.items():
+            got = solve_impacts(PowerLaw(1e9, 1.5), m, v[:n], law=law)
+            for key, ref in every.items():
+                ref = ref[:n]
                 bad = np.flatnonzero(got[key].view(np.int64) != ref.view(np.int64))
                 assert_true(
                     bad.size == 0,
@@ -223,3 +227,18 @@ def test_law_batch_over_several_chunks_is_solve_law_impact_bit_for_bit():
                 )
     finally:
         numba.set_num_threads(before)
+
+
+def test_law_batch_chunks_leave_every_thread_several():
+    """Chunks of at most `_CHUNK` speeds, at least `LANES` (a chunk fills the lanes), and at
+    least `_CHUNKS_PER_THREAD` of them per thread where the batch allows it."""
+    cases = ((100_000, 2, 128), (100_000, 16, 128), (2000, 2, 128), (130, 2, 17), (6, 2, 8))
+    for n, threads, want in cases:
+        got = _law_batch._chunk(n, threads)
+        assert_true(
+            got == want,
+            got=f"{got} speeds a chunk",
+            should=f"{want}",
+            claim="solve_impacts",
+            call=f"_law_batch._chunk({n}, {threads})",
+        )

@@ -1,7 +1,7 @@
 """Many speeds of one general damping law on every core: the ``law=`` branch of `solve_impacts`.
 
 `solve_law_impact` of each speed, bit for bit (test), run by a numba ``prange`` loop over
-chunks of `_CHUNK` speeds: in a chunk, the Taylor kernel steps `_taylor_lanes.LANES`
+chunks of up to `_CHUNK` speeds (`_chunk`): in a chunk, the Taylor kernel steps `_taylor_lanes.LANES`
 speeds side by side (`_taylor_lanes`: their series in one pass, each lane's operations
 the single call's), and each row is formed into its fields as the single call forms it
 (`_general_fields.form`); a speed the lanes do not take runs the single call's compiled
@@ -49,7 +49,7 @@ import numpy as np
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._general_fields import FAILED, FORMED, form, solve_formed
 from reference_impl.exact._general_kernel import OUT_FIELDS
-from reference_impl.exact._taylor_lanes import solve_lanes
+from reference_impl.exact._taylor_lanes import LANES, solve_lanes
 from reference_impl.exact._validate import _validated_top
 from reference_impl.exact.general_law import _refuse_lost_return, prepare_law
 
@@ -62,6 +62,13 @@ LAW_FIELDS = tuple(k for k in FORMED if k not in ("time_of_max_penetration", "n_
 # Speeds per chunk of the parallel loop, run side by side in the Taylor kernel's lanes
 # (~2 ms each: the hand-out costs far less; the lanes idle only as a chunk drains).
 _CHUNK = 128
+# Chunks per thread at least, where the batch is small enough to need smaller chunks: the
+# speeds' costs differ (8-24 steps), and equal shares would leave a thread idle at the end.
+_CHUNKS_PER_THREAD = 4
+# Fewer speeds than this in a chunk run one at a time: a round of the lanes costs the
+# series of all of them (~0.36 us a lane, eight lanes), one speed alone ~0.85 us, so the
+# lanes gain from ~3.4 busy lanes on.
+_LANES_FROM = 4
 
 
 # Cached (its first compile takes seconds). It compiles in the kernel of other modules:
@@ -71,19 +78,20 @@ _CHUNK = 128
 # error_model "numpy" on this loop and all it calls: an exception inside a prange loop
 # cannot be carried out and poisoned every later call (issue 36); inf/NaN fails `form`.
 @numba.njit(cache=True, parallel=True, error_model="numpy")
-def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags):  # pragma: no cover - compiled
+def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags, chunk):  # pragma: no cover - compiled
     """``out[:, i]`` = the `LAW_FIELDS` of speed ``v[i]`` and ``flags[i]`` its flag of
-    `_general_fields.form` (`_CHUNK` speeds per thread step, side by side in the Taylor
+    `_general_fields.form` (``chunk`` speeds per thread step, side by side in the Taylor
     kernel's lanes, `_taylor_lanes`: no bit depends on the threads, the lanes or the
     chunks): `OK`; `FAILED` (not finished within the step budget) and `LOST` (lost its
     return) are raised by `_finish`, in the order of the speeds."""
     n = v.shape[0]
-    for c in numba.prange((n + _CHUNK - 1) // _CHUNK):
-        lo = c * _CHUNK
-        hi = min(n, lo + _CHUNK)
+    for c in numba.prange((n + chunk - 1) // chunk):
+        lo = c * chunk
+        hi = min(n, lo + chunk)
         rows = np.empty((hi - lo, len(OUT_FIELDS)))
-        codes = np.empty(hi - lo, np.int64)
-        solve_lanes(v[lo:hi], q_top[lo:hi], ks, ps, cs, es, sc, rows, codes)
+        codes = np.ones(hi - lo, np.int64)  # 1: the single call
+        if hi - lo >= _LANES_FROM:
+            solve_lanes(v[lo:hi], q_top[lo:hi], ks, ps, cs, es, sc, rows, codes)
         for j in range(hi - lo):
             i = lo + j
             if codes[j] == 0:  # the row `solve_taylor` gives, formed as `solve_formed` forms it
@@ -160,9 +168,20 @@ def solve_law_batch(
     # Speeds cost unequal step counts: chunks handed out one by one as threads free up,
     # not one equal share each (rows do not depend on who computes them).
     with numba.parallel_chunksize(1):
-        _solve_rows(v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, out, flags)
+        _solve_rows(
+            v, q_top, plan.pk[0], plan.pk[1], plan.cs, plan.es, plan.sc, out, flags,
+            _chunk(v.size, numba.get_num_threads()),
+        )  # fmt: skip
     _finish(out, v, flags, prepared)
     return {key: out[j].reshape(shape) for j, key in enumerate(LAW_FIELDS)}
+
+
+def _chunk(n: int, threads: int) -> int:
+    """Speeds per chunk of the parallel loop: `_CHUNK`, or fewer where that would give a
+    thread fewer than `_CHUNKS_PER_THREAD` chunks, down to `_taylor_lanes.LANES` (the
+    rows do not depend on it)."""
+    want = -(-n // (_CHUNKS_PER_THREAD * max(1, threads)))
+    return int(min(_CHUNK, max(LANES, want)))
 
 
 def _store(out: np.ndarray, i: int, sol) -> None:
