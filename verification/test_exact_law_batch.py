@@ -232,7 +232,7 @@ def test_law_batch_over_several_chunks_is_solve_law_impact_bit_for_bit():
 def test_law_batch_chunks_leave_every_thread_several():
     """Chunks of at most `_CHUNK` speeds, at least `LANES` (a chunk fills the lanes), and at
     least `_CHUNKS_PER_THREAD` of them per thread where the batch allows it."""
-    cases = ((100_000, 2, 128), (100_000, 16, 128), (2000, 2, 128), (130, 2, 17), (6, 2, 8))
+    cases = ((100_000, 2, 128), (100_000, 16, 128), (2000, 2, 63), (300, 2, 10), (130, 2, 8))
     for n, threads, want in cases:
         got = _law_batch._chunk(n, threads)
         assert_true(

@@ -62,9 +62,11 @@ LAW_FIELDS = tuple(k for k in FORMED if k not in ("time_of_max_penetration", "n_
 # Speeds per chunk of the parallel loop, run side by side in the Taylor kernel's lanes
 # (~2 ms each: the hand-out costs far less; the lanes idle only as a chunk drains).
 _CHUNK = 128
-# Chunks per thread at least, where the batch is small enough to need smaller chunks: the
-# speeds' costs differ (8-24 steps), and equal shares would leave a thread idle at the end.
-_CHUNKS_PER_THREAD = 4
+# Chunks per thread at least, where the batch is small enough to need smaller chunks: a
+# thread that ends first waits, on average, half a chunk for the others (2000 speeds on 2
+# threads in chunks of 128: ~6 % of the call), while a chunk's lanes drain for about one
+# impact's steps (~1 impact of series work a chunk, ~1.5 % of a chunk of 64).
+_CHUNKS_PER_THREAD = 16
 # Fewer speeds than this in a chunk run one at a time: a round of the lanes costs the
 # series of all of them (~0.36 us a lane, eight lanes), one speed alone ~0.85 us, so the
 # lanes gain from ~3.4 busy lanes on.
