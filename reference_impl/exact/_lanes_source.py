@@ -56,6 +56,16 @@ def _lines(fmt: str, indent: int) -> list[str]:
     return [" " * indent + fmt.format(l=lane) for lane in range(LANES)]
 
 
+def _weighted(acc: str, idx: str, coef: str) -> list[str]:
+    """Each lane's ``acc`` = sum over the degrees d of ``idx`` of ``coef``[lane, d] times
+    coefficient n of rho^d."""
+    out = _lines(acc + "{l} = 0.0", 8)
+    out.append(f"        for ii in range({idx}.shape[0]):")
+    out.append(f"            d = {idx}[ii]")
+    out.append("            a = d * _M + n")
+    return out + _lines(acc + "{l} += " + coef + "[{l}, d] * P[{l}, a]", 12)
+
+
 def source() -> str:
     """The text of `_taylor_lanes_series` (`TARGET`)."""
     out = [_HEAD.format(lanes=LANES)]
@@ -85,16 +95,7 @@ def source() -> str:
     out += _lines("s{l} += P[{l}, a] * R[{l}, b]", 20)
     out.append("            a = j * _M + n")
     out += _lines("P[{l}, a] = s{l}", 12)
-    out += _lines("f{l} = 0.0", 8)
-    out.append("        for ii in range(fidx.shape[0]):")
-    out.append("            d = fidx[ii]")
-    out.append("            a = d * _M + n")
-    out += _lines("f{l} += FN[{l}, d] * P[{l}, a]", 12)
-    out += _lines("c{l} = 0.0", 8)
-    out.append("        for ii in range(cidx.shape[0]):")
-    out.append("            d = cidx[ii]")
-    out.append("            a = d * _M + n")
-    out += _lines("c{l} += CN[{l}, d] * P[{l}, a]", 12)
+    out += _weighted("f", "fidx", "FN") + _weighted("c", "cidx", "CN")
     out += _lines("CS[{l}, n] = c{l}", 8)
     out += _lines("w{l} = 0.0", 8)
     out.append("        for i in range(n + 1):")
