@@ -26,10 +26,12 @@ _WEIGHTS = {"w", "W", "w_diff", "w_coarse"}
 # of the overdamped tail (a third rule, on x instead of s, with its own bisection).
 _OTHER_RULES = {"_tail.py"}
 # The general-law solver integrates the equation of motion (Taylor series, GBS), no
-# quadrature rule; its W is a Taylor coefficient array.
+# quadrature rule; its W is a Taylor coefficient array (also in the lanes' series, which
+# form the same recurrences for several impacts at once).
 _NO_QUADRATURE = {
     "_general_kernel.py",
     "_general_taylor.py",
+    "_taylor_lanes_series.py",
     "general_law.py",
     "_general_law_mp.py",
 }
