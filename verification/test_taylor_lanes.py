@@ -78,6 +78,14 @@ def _check(prepared, v, label):
         claim=CLAIM,
         call=f"{CALL}({label}, {v.size} speeds)",
     )
+    handed = codes == _taylor_lanes.HANDED
+    assert_true(
+        np.all(want_codes[handed] == 1),
+        got=f"speeds {v[handed & (want_codes != 1)][:3]} handed to the GBS kernel by a lane",
+        should="only speeds the single Taylor call hands over too",
+        claim=CLAIM,
+        call=f"{CALL}({label})",
+    )
     # a speed the single call finishes goes to the single call only for another structure
     first = _structure(prepared, v[np.flatnonzero(done)[0]], tops[np.flatnonzero(done)[0]])
     for i in np.flatnonzero(~done & (want_codes == 0)):
@@ -106,7 +114,7 @@ def test_generated_series_is_its_generators_text():
 @pytest.mark.parametrize("name", tuple(calibrated_laws()))
 def test_lanes_are_the_single_call_bit_for_bit(name, rtol):
     """Every law of the study on Hertz, 203 speeds over four decades (not a multiple of the
-    lanes: the last round runs part-empty), the slowest creeping (handed over)."""
+    lanes: the last round runs part-empty)."""
     pot, m = hertz()
     prepared = prepare_law(pot, m, calibrated_laws()[name], rtol=rtol)
     codes = _check(prepared, _speeds(203, 38), f"hertz, {name}, rtol {rtol}")
@@ -146,3 +154,18 @@ def test_a_sum_of_powers_in_lanes():
         SumPotential(PowerLaw(3e5, 1.0), PowerLaw(1e9, 1.5)), 0.01, calibrated_laws()["linear"]
     )
     _check(prepared, _speeds(37, 5), "hooke + hertz, linear")
+
+
+def test_a_creeping_return_is_handed_over_as_the_single_call_hands_it():
+    """Hertz + a strong constant dashpot: the slow speeds creep back and never reach q = 0,
+    which the Taylor method hands to the GBS kernel (`HANDED`), as `solve_taylor` does."""
+    prepared = prepare_law(PowerLaw(1e9, 1.5), 1e-3, {"law": "linear", "c": 50.0})
+    v = np.array([1e-4, 1.0, 3e-4, 0.1, 2e-4, 0.5, 0.05, 0.02, 5e-4])
+    codes = _check(prepared, v, "hertz, linear c = 50")
+    assert_true(
+        np.count_nonzero(codes == _taylor_lanes.HANDED) >= 3,
+        got=f"codes {codes}",
+        should="at least the creeping speeds 1e-4, 2e-4, 3e-4 m/s handed over",
+        claim=CLAIM,
+        call=f"{CALL}(hertz, linear c = 50)",
+    )

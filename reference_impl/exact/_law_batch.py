@@ -49,7 +49,8 @@ import numpy as np
 from reference_impl.errors import HCVInputError
 from reference_impl.exact._general_fields import FAILED, FORMED, form, solve_formed
 from reference_impl.exact._general_kernel import OUT_FIELDS
-from reference_impl.exact._taylor_lanes import LANES, solve_lanes
+from reference_impl.exact._general_kernel import solve as _gbs_solve
+from reference_impl.exact._taylor_lanes import HANDED, LANES, solve_lanes
 from reference_impl.exact._validate import _validated_top
 from reference_impl.exact.general_law import _refuse_lost_return, prepare_law
 
@@ -98,6 +99,10 @@ def _solve_rows(v, q_top, ks, ps, cs, es, sc, out, flags, chunk):  # pragma: no 
             i = lo + j
             if codes[j] == 0:  # the row `solve_taylor` gives, formed as `solve_formed` forms it
                 flags[i] = _fields(form(rows[j], v[i], q_top[i]), out[:, i])
+            elif codes[j] == HANDED:  # `solve_taylor` hands it over alike: the GBS kernel's row
+                flags[i] = _fields(
+                    form(_gbs_solve(v[i], q_top[i], ks, ps, cs, es, sc), v[i], q_top[i]), out[:, i]
+                )
             else:  # not for the lanes: the single call (the GBS kernel included)
                 flags[i] = _fields(solve_formed(v[i], q_top[i], ks, ps, cs, es, sc), out[:, i])
 

@@ -9,10 +9,13 @@ events and scans). A lane whose impact ends takes the next speed. Every lane's o
 are the single impact's (`_general_taylor.solve_taylor`), so each row is bit for bit that
 of `_general_taylor.solve` (test), whatever lane, neighbours or order.
 
-An impact that is not for the Taylor method (exponents, degree; no return within the
-step budget; a radius not finite), or whose series differ in structure from the first
-(a coefficient that is zero at one speed only), is marked for the single call
-(`codes` 1), which runs it as `_general_taylor.solve` does, the GBS kernel included.
+An impact whose series differ in structure from the first (a coefficient that is zero
+at one speed only), or whose model is not for the Taylor method (exponents, degree), is
+marked for the single call (`codes` 1), which runs it as `_general_taylor.solve` does.
+One the Taylor method hands over on the way (no return within the step budget; a radius
+not finite) is marked `HANDED` (2): `solve_taylor` hands it over alike, bit for bit, so
+its row is the GBS kernel's (`_general_taylor.solve`), without running the Taylor steps
+again.
 
 Measured (Hertz, 20 000 speeds 0.1-10 m/s, one thread): the series were ~47 % of an
 impact, ~0.85 us each; side by side they cost ~0.36 us a lane.
@@ -43,7 +46,10 @@ from reference_impl.exact._taylor_lanes_series import LANES, series_lanes
 from reference_impl.exact._taylor_poly import NS, K
 from reference_impl.exact._taylor_step import GO_ON, NPK, NST, PK_L, after, before, constants, start
 
-__all__ = ["LANES", "solve_lanes"]
+__all__ = ["HANDED", "LANES", "solve_lanes"]
+
+# `codes` of a speed that the Taylor method handed over in its lane (`solve_lanes`).
+HANDED = 2
 
 _NF = len(OUT_FIELDS)
 _DN_MAX = DEG_MAX + N_MAX  # the right-hand side's degree: D + N - 1 < DEG_MAX + N_MAX
@@ -53,7 +59,8 @@ _DN_MAX = DEG_MAX + N_MAX  # the right-hand side's degree: D + N - 1 < DEG_MAX +
 def solve_lanes(v, q_top, ks, ps, cs, es, sc, rows, codes):  # pragma: no cover - compiled
     """``rows[i]`` = the kernel row (`OUT_FIELDS`) of speed ``v[i]`` (m/s, its turning point
     ``q_top[i]`` m) and ``codes[i]`` 0, as `_general_taylor.solve_taylor` gives them; or
-    ``codes[i]`` 1 where that speed is for the single call (``rows[i]`` void).
+    ``codes[i]`` 1 where that speed is for the single call, `HANDED` where the Taylor
+    method handed it over as `solve_taylor` does (``rows[i]`` void for both).
 
     ``ks``, ``ps``, ``cs``, ``es``, ``sc``: the law's arrays (`_general_contact.law_arrays`)."""
     n = v.shape[0]
@@ -159,11 +166,13 @@ def solve_lanes(v, q_top, ks, ps, cs, es, sc, rows, codes):  # pragma: no cover 
 @numba.njit(cache=True, error_model="numpy")
 def _end(lane, code, i, who, rows, codes, ks, ps, pk, q_top):  # pragma: no cover - compiled
     """Lane ``lane``'s speed ``i`` ends with ``code`` (0: its row finished as `solve_taylor`
-    finishes it; 1: for the single call, its row void); the lane is idle."""
+    finishes it; 1: handed over by the Taylor method, `HANDED`, its row void); the lane is
+    idle."""
     if code == 0:
         finish_row(rows[i], ks, ps, pk[lane, PK_L], q_top[i])
         codes[i] = 0
     else:
+        codes[i] = HANDED
         for k in range(_NF):
             rows[i, k] = math.nan
     who[lane] = -1
